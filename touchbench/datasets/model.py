@@ -1,0 +1,294 @@
+"""The touch dataset model: :class:`SensorSpec` and :class:`TouchDataset`.
+
+A capture is one gesture performance: a ``(T, H, W)`` array of frames, frames
+first, in the sensor's native dtype. Sensors that are not grids (Flagg's fur
+sensor: channels x, y, pressure, fur) are stored as ``H = 1`` and
+``W = len(channels)`` with the channel names in the spec, so every capture in
+touchbench is three-dimensional and feature code has one shape to handle.
+
+A dataset is stored as one Parquet file: one row per capture with the
+metadata columns, ``n_frames`` and the flattened frames as a list column in
+the native dtype; the sensor, name and dtype live in the schema metadata.
+Saving and loading keeps the same arrays, dtypes and content hash.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from ..errors import DataError
+
+FORMAT_VERSION = 1
+REQUIRED_META = ("capture_id", "subject", "gesture")
+
+
+@dataclass(frozen=True)
+class SensorSpec:
+    """What a sensor is: grid, frame rate, value range and polarity.
+
+    ``grid`` is ``(H, W)``; for a channel sensor it is ``(1, C)`` and
+    ``channels`` names the C channels. ``value_range`` is the inclusive range
+    of valid values (the ADC range); ``higher_is_more_pressure`` says the
+    polarity of the stored values (touchbench readers convert to True).
+    """
+
+    name: str
+    grid: tuple[int, int]
+    frame_rate: float
+    value_range: tuple[float, float] = (0.0, 1023.0)
+    higher_is_more_pressure: bool = True
+    channels: tuple[str, ...] | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "grid", tuple(int(g) for g in self.grid))
+        object.__setattr__(self, "value_range", tuple(float(v) for v in self.value_range))
+        if self.channels is not None:
+            object.__setattr__(self, "channels", tuple(self.channels))
+        h, w = self.grid
+        if h < 1 or w < 1:
+            raise ValueError(f"sensor {self.name!r}: grid must be at least 1 x 1, got {self.grid}")
+        if not self.frame_rate > 0:
+            raise ValueError(f"sensor {self.name!r}: frame_rate must be positive")
+        lo, hi = self.value_range
+        if not lo < hi:
+            raise ValueError(f"sensor {self.name!r}: value_range must have low < high")
+        if self.channels is not None and (h != 1 or w != len(self.channels)):
+            raise ValueError(f"sensor {self.name!r}: a channel sensor has grid (1, n_channels)")
+
+    @property
+    def n_cells(self) -> int:
+        return self.grid[0] * self.grid[1]
+
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        d["grid"] = list(self.grid)
+        d["value_range"] = list(self.value_range)
+        d["channels"] = None if self.channels is None else list(self.channels)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "SensorSpec":
+        d = dict(d)
+        d["grid"] = tuple(d["grid"])
+        d["value_range"] = tuple(d["value_range"])
+        if d.get("channels") is not None:
+            d["channels"] = tuple(d["channels"])
+        return cls(**d)
+
+
+def _hash_meta(h: "hashlib._Hash", meta: pd.DataFrame) -> None:
+    """Feed a canonical form of the metadata table into ``h``.
+
+    Numeric and boolean columns are hashed as their float64/int64 bytes,
+    everything else as the JSON list of its ``str`` values (missing values
+    as null), so the hash does not depend on pandas' choice between object
+    and string dtypes.
+    """
+    for col in meta.columns:
+        s = meta[col]
+        h.update(b"\x00col\x00" + str(col).encode())
+        if pd.api.types.is_bool_dtype(s):
+            h.update(b"bool" + s.to_numpy(dtype=np.int8).tobytes())
+        elif pd.api.types.is_integer_dtype(s) and not s.isna().any():
+            h.update(b"int" + s.to_numpy(dtype=np.int64).tobytes())
+        elif pd.api.types.is_float_dtype(s):
+            h.update(b"float" + s.to_numpy(dtype=np.float64).tobytes())
+        else:
+            vals = [None if (v is None or (isinstance(v, float) and np.isnan(v))) else str(v) for v in s.tolist()]
+            h.update(b"str" + json.dumps(vals).encode())
+
+
+@dataclass
+class TouchDataset:
+    """Ragged captures + a metadata table + a sensor spec + a content hash.
+
+    ``captures[i]`` is a ``(T_i, H, W)`` array; ``meta.iloc[i]`` describes it
+    and has at least ``capture_id`` (unique), ``subject`` and ``gesture``.
+    Any other column (substrate, cover, variant, session, group, split...)
+    is kept as given. The content hash covers every value, dtype, shape,
+    label and the sensor spec, not the dataset's name.
+    """
+
+    name: str
+    captures: list[np.ndarray]
+    meta: pd.DataFrame
+    sensor: SensorSpec
+    _hash: str | None = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        self.meta = self.meta.reset_index(drop=True)
+        if len(self.captures) != len(self.meta):
+            raise ValueError(f"dataset {self.name!r}: {len(self.captures)} captures but {len(self.meta)} metadata rows")
+        missing = [c for c in REQUIRED_META if c not in self.meta.columns]
+        if missing:
+            raise ValueError(f"dataset {self.name!r}: metadata lacks column(s) {missing}")
+        if self.meta["capture_id"].duplicated().any():
+            dup = self.meta["capture_id"][self.meta["capture_id"].duplicated()].iloc[0]
+            raise ValueError(f"dataset {self.name!r}: capture_id {dup!r} occurs more than once")
+        h, w = self.sensor.grid
+        for i, c in enumerate(self.captures):
+            if c.ndim != 3 or c.shape[1:] != (h, w):
+                raise ValueError(
+                    f"dataset {self.name!r}: capture {self.meta['capture_id'].iloc[i]!r} has shape "
+                    f"{c.shape}, sensor {self.sensor.name!r} expects (T, {h}, {w})"
+                )
+
+    # ------------------------------------------------------------------ basics
+    def __len__(self) -> int:
+        return len(self.captures)
+
+    @property
+    def n_frames(self) -> np.ndarray:
+        return np.array([c.shape[0] for c in self.captures], dtype=np.int64)
+
+    @property
+    def labels(self) -> np.ndarray:
+        return self.meta["gesture"].to_numpy()
+
+    @property
+    def content_hash(self) -> str:
+        if self._hash is None:
+            h = hashlib.sha256()
+            h.update(json.dumps(self.sensor.to_dict(), sort_keys=True).encode())
+            _hash_meta(h, self.meta)
+            for c in self.captures:
+                a = np.ascontiguousarray(c)
+                h.update(f"{a.dtype.str}{a.shape}".encode())
+                h.update(a.tobytes())
+            self._hash = h.hexdigest()
+        return self._hash
+
+    def subset(self, index: Iterable[int] | np.ndarray, name: str | None = None) -> "TouchDataset":
+        """The captures at ``index`` (positions), in that order."""
+        idx = np.asarray(list(index) if not isinstance(index, np.ndarray) else index)
+        if idx.dtype == bool:
+            idx = np.flatnonzero(idx)
+        return TouchDataset(
+            name=name or self.name,
+            captures=[self.captures[i] for i in idx],
+            meta=self.meta.iloc[idx].reset_index(drop=True),
+            sensor=self.sensor,
+        )
+
+    def with_name(self, name: str) -> "TouchDataset":
+        return TouchDataset(name, self.captures, self.meta, self.sensor, self._hash)
+
+    # ------------------------------------------------------------- parquet io
+    def to_parquet(self, path: str | Path) -> Path:
+        """Write atomically (temporary file + rename): no half-written file."""
+        path = Path(path)
+        dtypes = {c.dtype.str for c in self.captures}
+        if len(dtypes) > 1:
+            raise ValueError(f"dataset {self.name!r}: captures have mixed dtypes {sorted(dtypes)}")
+        dtype = np.dtype(dtypes.pop()) if dtypes else np.dtype(np.float64)
+        n = np.array([c.shape[0] for c in self.captures], dtype=np.int64)
+        flat = (
+            np.concatenate([np.ascontiguousarray(c).reshape(-1) for c in self.captures])
+            if self.captures
+            else np.zeros(0, dtype=dtype)
+        )
+        cells = self.sensor.n_cells
+        offsets = np.concatenate([[0], np.cumsum(n * cells)]).astype(np.int64)
+        frames = pa.LargeListArray.from_arrays(pa.array(offsets), pa.array(flat))
+        table = pa.Table.from_pandas(self.meta, preserve_index=False)
+        table = table.append_column("n_frames", pa.array(n)).append_column("frames", frames)
+        info = {
+            "format_version": FORMAT_VERSION,
+            "name": self.name,
+            "sensor": self.sensor.to_dict(),
+            "dtype": dtype.str,
+            "content_hash": self.content_hash,
+        }
+        table = table.replace_schema_metadata({**(table.schema.metadata or {}), b"touchbench": json.dumps(info).encode()})
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        os.close(fd)
+        try:
+            pq.write_table(table, tmp)
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+        return path
+
+    @classmethod
+    def from_parquet(cls, path: str | Path, verify: bool = False) -> "TouchDataset":
+        """Load a dataset written by :meth:`to_parquet`.
+
+        ``verify=True`` recomputes the content hash and refuses a file whose
+        content no longer matches the hash it was written with.
+        """
+        path = Path(path)
+        if not path.exists():
+            raise DataError("no such dataset file", path)
+        try:
+            table = pq.read_table(path)
+        except Exception as e:  # pyarrow raises several types for a bad file
+            raise DataError(f"not a readable Parquet file ({e})", path) from None
+        raw = (table.schema.metadata or {}).get(b"touchbench")
+        if raw is None or "frames" not in table.column_names:
+            raise DataError("not a touchbench dataset (no touchbench metadata or frames column)", path)
+        info = json.loads(raw)
+        sensor = SensorSpec.from_dict(info["sensor"])
+        dtype = np.dtype(info["dtype"])
+        frames = table.column("frames").combine_chunks()
+        values = frames.values.to_numpy(zero_copy_only=False).astype(dtype, copy=False)
+        offsets = frames.offsets.to_numpy()
+        n = table.column("n_frames").to_numpy()
+        h, w = sensor.grid
+        captures = [values[offsets[i]:offsets[i + 1]].reshape(int(n[i]), h, w) for i in range(len(n))]
+        meta = table.drop_columns(["frames", "n_frames"]).to_pandas()
+        ds = cls(name=info["name"], captures=captures, meta=meta, sensor=sensor, _hash=None if verify else info["content_hash"])
+        if verify and ds.content_hash != info["content_hash"]:
+            raise DataError("content does not match the hash it was saved with (file corrupted or edited)", path)
+        return ds
+
+    # ----------------------------------------------------------------- summary
+    def info(self) -> dict[str, Any]:
+        """Counts and ranges for ``touchbench data info``."""
+        n = self.n_frames
+        lo = min((float(c.min()) for c in self.captures if c.size), default=float("nan"))
+        hi = max((float(c.max()) for c in self.captures if c.size), default=float("nan"))
+        out: dict[str, Any] = {
+            "name": self.name,
+            "captures": len(self),
+            "sensor": self.sensor.to_dict(),
+            "dtype": self.captures[0].dtype.name if self.captures else None,
+            "subjects": int(self.meta["subject"].nunique()),
+            "gestures": int(self.meta["gesture"].nunique()),
+            "frames_per_capture": {"min": int(n.min()) if len(n) else 0, "median": float(np.median(n)) if len(n) else 0.0, "max": int(n.max()) if len(n) else 0},
+            "value_range": [lo, hi],
+            "content_hash": self.content_hash,
+            "by_subject": {str(k): int(v) for k, v in self.meta["subject"].value_counts().sort_index().items()},
+            "by_gesture": {str(k): int(v) for k, v in self.meta["gesture"].value_counts().sort_index().items()},
+        }
+        if "split" in self.meta.columns:
+            out["by_split"] = {str(k): int(v) for k, v in self.meta["split"].value_counts().sort_index().items()}
+        return out
+
+
+def concat(datasets: Sequence[TouchDataset], name: str) -> TouchDataset:
+    """Stack datasets that share a sensor."""
+    if not datasets:
+        raise ValueError("nothing to concatenate")
+    sensor = datasets[0].sensor
+    for d in datasets[1:]:
+        if d.sensor != sensor:
+            raise ValueError(f"cannot concatenate {d.name!r}: sensor differs from {datasets[0].name!r}")
+    return TouchDataset(
+        name=name,
+        captures=[c for d in datasets for c in d.captures],
+        meta=pd.concat([d.meta for d in datasets], ignore_index=True),
+        sensor=sensor,
+    )

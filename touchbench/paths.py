@@ -1,0 +1,33 @@
+"""Where touchbench finds the shared data and keeps its caches.
+
+- Shared data (real HAART): ``$TOUCHBENCH_DATA_DIR`` if set, else the first
+  ``shared/data`` found beside the repository or the working directory
+  (``../shared/data`` from a checkout, as in CI).
+- Cache: ``$TOUCHBENCH_CACHE_DIR`` if set, else the user's cache directory
+  (``~/.cache/touchbench`` on Linux).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import platformdirs
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+
+
+def data_dir() -> Path:
+    env = os.environ.get("TOUCHBENCH_DATA_DIR")
+    if env:
+        return Path(env)
+    for base in (REPO_ROOT, Path.cwd()):
+        for cand in (base.parent / "shared" / "data", base / "shared" / "data"):
+            if cand.is_dir():
+                return cand
+    return REPO_ROOT.parent / "shared" / "data"
+
+
+def cache_dir() -> Path:
+    env = os.environ.get("TOUCHBENCH_CACHE_DIR")
+    return Path(env) if env else Path(platformdirs.user_cache_dir("touchbench"))

@@ -1,0 +1,101 @@
+"""One registry pattern for everything registered: datasets, scenes, feature
+sets, classifiers and splitters.
+
+A registry is a closed set of names. Entries are added by a decorator at
+import time; YAML and the command line can only name what is registered,
+never import an arbitrary Python path. Looking up an unknown name raises
+:class:`~touchbench.errors.UnknownNameError` with the nearest names.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass, field
+from typing import Any, Callable, Generic, Iterator, TypeVar
+
+from .errors import UnknownNameError
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class Entry(Generic[T]):
+    """A registered object with its one-line description and free-form tags."""
+
+    name: str
+    obj: T
+    description: str
+    tags: dict[str, Any] = field(default_factory=dict)
+
+
+class Registry(Generic[T]):
+    """A named, closed set of factories (classes or functions).
+
+    >>> CLASSES = Registry("colour")
+    >>> @CLASSES.register("red", description="the colour red")
+    ... def red(): return "#f00"
+    >>> CLASSES.create("red")
+    '#f00'
+    """
+
+    def __init__(self, kind: str, loader: Callable[[], None] | None = None):
+        self.kind = kind
+        self._entries: dict[str, Entry[T]] = {}
+        self._loader = loader
+        self._loaded = loader is None
+
+    def _ensure_loaded(self) -> None:
+        # Modules that register entries are imported lazily, on first use,
+        # so that `import touchbench` stays cheap and optional extras
+        # (torch, aeon) are only imported when their entry is used.
+        if not self._loaded:
+            self._loaded = True
+            assert self._loader is not None
+            self._loader()
+
+    def register(self, name: str, *, description: str, **tags: Any) -> Callable[[T], T]:
+        def deco(obj: T) -> T:
+            if name in self._entries:
+                raise ValueError(f"{self.kind} {name!r} is registered twice")
+            self._entries[name] = Entry(name, obj, description, dict(tags))
+            return obj
+
+        return deco
+
+    def entry(self, name: str) -> Entry[T]:
+        self._ensure_loaded()
+        try:
+            return self._entries[name]
+        except KeyError:
+            raise UnknownNameError(self._unknown_message(name)) from None
+
+    def _unknown_message(self, name: str) -> str:
+        close = difflib.get_close_matches(str(name), list(self._entries), n=3, cutoff=0.5)
+        hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
+        known = ", ".join(sorted(self._entries))
+        return f"unknown {self.kind} {name!r}{hint} (known: {known})"
+
+    def get(self, name: str) -> T:
+        return self.entry(name).obj
+
+    def create(self, name: str, /, **params: Any) -> Any:
+        """Call the registered factory with ``params``."""
+        return self.get(name)(**params)
+
+    def __contains__(self, name: object) -> bool:
+        self._ensure_loaded()
+        return name in self._entries
+
+    def names(self) -> list[str]:
+        self._ensure_loaded()
+        return sorted(self._entries)
+
+    def entries(self) -> Iterator[Entry[T]]:
+        self._ensure_loaded()
+        for name in sorted(self._entries):
+            yield self._entries[name]
+
+    def suggest(self, name: str) -> str:
+        """The message an unknown ``name`` gets (for schema validators)."""
+        self._ensure_loaded()
+        return self._unknown_message(name)
