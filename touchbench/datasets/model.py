@@ -29,7 +29,7 @@ import pyarrow.parquet as pq
 
 from ..errors import DataError
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 REQUIRED_META = ("capture_id", "subject", "gesture")
 
 
@@ -125,6 +125,9 @@ class TouchDataset:
     meta: pd.DataFrame
     sensor: SensorSpec
     _hash: str | None = field(default=None, repr=False, compare=False)
+    #: where the data came from and what the reader did (placeholders found,
+    #: window used...); saved with the dataset, not part of the content hash.
+    provenance: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         self.meta = self.meta.reset_index(drop=True)
@@ -182,7 +185,7 @@ class TouchDataset:
         )
 
     def with_name(self, name: str) -> "TouchDataset":
-        return TouchDataset(name, self.captures, self.meta, self.sensor, self._hash)
+        return TouchDataset(name, self.captures, self.meta, self.sensor, self._hash, self.provenance)
 
     # ------------------------------------------------------------- parquet io
     def to_parquet(self, path: str | Path) -> Path:
@@ -193,14 +196,9 @@ class TouchDataset:
             raise ValueError(f"dataset {self.name!r}: captures have mixed dtypes {sorted(dtypes)}")
         dtype = np.dtype(dtypes.pop()) if dtypes else np.dtype(np.float64)
         n = np.array([c.shape[0] for c in self.captures], dtype=np.int64)
-        flat = (
-            np.concatenate([np.ascontiguousarray(c).reshape(-1) for c in self.captures])
-            if self.captures
-            else np.zeros(0, dtype=dtype)
-        )
-        cells = self.sensor.n_cells
-        offsets = np.concatenate([[0], np.cumsum(n * cells)]).astype(np.int64)
-        frames = pa.LargeListArray.from_arrays(pa.array(offsets), pa.array(flat))
+        # One binary blob per capture in native byte order; dtype and grid are
+        # in the schema metadata. Read back with one frombuffer (fast loads).
+        frames = pa.array([np.ascontiguousarray(c, dtype=dtype).tobytes() for c in self.captures], type=pa.large_binary())
         table = pa.Table.from_pandas(self.meta, preserve_index=False)
         table = table.append_column("n_frames", pa.array(n)).append_column("frames", frames)
         info = {
@@ -209,13 +207,14 @@ class TouchDataset:
             "sensor": self.sensor.to_dict(),
             "dtype": dtype.str,
             "content_hash": self.content_hash,
+            "provenance": self.provenance,
         }
         table = table.replace_schema_metadata({**(table.schema.metadata or {}), b"touchbench": json.dumps(info).encode()})
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
         os.close(fd)
         try:
-            pq.write_table(table, tmp)
+            pq.write_table(table, tmp, compression="zstd", use_dictionary=[c for c in table.column_names if c != "frames"])
             os.replace(tmp, path)
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
@@ -243,13 +242,22 @@ class TouchDataset:
         sensor = SensorSpec.from_dict(info["sensor"])
         dtype = np.dtype(info["dtype"])
         frames = table.column("frames").combine_chunks()
-        values = frames.values.to_numpy(zero_copy_only=False).astype(dtype, copy=False)
-        offsets = frames.offsets.to_numpy()
         n = table.column("n_frames").to_numpy()
         h, w = sensor.grid
-        captures = [values[offsets[i]:offsets[i + 1]].reshape(int(n[i]), h, w) for i in range(len(n))]
+        if len(frames):
+            _, offsets_buf, data_buf = frames.buffers()
+            offsets = np.frombuffer(offsets_buf, dtype=np.int64)[frames.offset:frames.offset + len(frames) + 1]
+            values = np.frombuffer(data_buf, dtype=np.uint8)
+            captures = [
+                values[offsets[i]:offsets[i + 1]].view(dtype).reshape(int(n[i]), h, w) for i in range(len(n))
+            ]
+        else:
+            captures = []
         meta = table.drop_columns(["frames", "n_frames"]).to_pandas()
-        ds = cls(name=info["name"], captures=captures, meta=meta, sensor=sensor, _hash=None if verify else info["content_hash"])
+        ds = cls(
+            name=info["name"], captures=captures, meta=meta, sensor=sensor,
+            _hash=None if verify else info["content_hash"], provenance=info.get("provenance", {}),
+        )
         if verify and ds.content_hash != info["content_hash"]:
             raise DataError("content does not match the hash it was saved with (file corrupted or edited)", path)
         return ds
@@ -275,6 +283,8 @@ class TouchDataset:
         }
         if "split" in self.meta.columns:
             out["by_split"] = {str(k): int(v) for k, v in self.meta["split"].value_counts().sort_index().items()}
+        if self.provenance:
+            out["provenance"] = self.provenance
         return out
 
 

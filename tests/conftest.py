@@ -1,0 +1,47 @@
+"""Shared fixtures. Real-data tests use ``real_haart_dir``: it fails (not
+skips) when CI=true and ../shared/data/haart is missing."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from touchbench.paths import data_dir
+
+
+def _haart_dir():
+    d = data_dir() / "haart"
+    if not (d / "raw").is_dir():
+        msg = f"real HAART data not found at {d} (set TOUCHBENCH_DATA_DIR)"
+        if os.environ.get("CI", "").lower() == "true":
+            pytest.fail(msg)
+        pytest.skip(msg)
+    return d
+
+
+@pytest.fixture(scope="session")
+def real_haart_dir():
+    return _haart_dir()
+
+
+@pytest.fixture(scope="session")
+def tb_cache(tmp_path_factory):
+    """A cache directory shared by the session's tests (not the user's)."""
+    d = tmp_path_factory.mktemp("tbcache")
+    os.environ["TOUCHBENCH_CACHE_DIR"] = str(d)
+    return d
+
+
+@pytest.fixture(scope="session")
+def real_haart(real_haart_dir, tb_cache):
+    from touchbench.datasets import load_dataset
+
+    return load_dataset("haart", cache_dir=tb_cache)
+
+
+@pytest.fixture(scope="session")
+def real_haart_challenge(real_haart_dir, tb_cache):
+    from touchbench.datasets import load_dataset
+
+    return load_dataset("haart-challenge", cache_dir=tb_cache)

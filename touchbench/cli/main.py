@@ -1,0 +1,38 @@
+"""The ``touchbench`` command: a click group whose subcommands live in one
+module per area (``cli/data.py``, ``cli/features.py``, ...)."""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+import click
+
+from .. import __version__
+from ..errors import TouchbenchError
+
+# (module, attribute) of each subcommand; one line per area.
+_COMMANDS: list[tuple[str, str]] = [
+    ("touchbench.cli.data", "data"),
+]
+
+
+class _Group(click.Group):
+    """Turns a TouchbenchError anywhere below into one clear line and exit 2."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except TouchbenchError as e:
+            click.echo(f"error: {e}", err=True)
+            sys.exit(2)
+
+
+@click.group(cls=_Group)
+@click.version_option(__version__, prog_name="touchbench")
+def cli() -> None:
+    """touchbench: benchmark social touch gesture recognition."""
+
+
+for _mod, _attr in _COMMANDS:
+    cli.add_command(getattr(importlib.import_module(_mod), _attr))

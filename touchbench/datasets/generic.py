@@ -1,0 +1,85 @@
+"""A reader for users' own sensors: a long-format CSV or Parquet table.
+
+One row per frame: a capture id column, a frame index column, metadata
+columns (``subject`` and ``gesture`` required; any others are kept, and must
+be constant within a capture), and one column per cell, H x W of them, in
+row-major order. The user gives the grid shape and frame rate. Cell columns
+are those named in ``cells``, or else every column whose name is a common
+prefix followed by a number (``cell1``.., ``ch1``.., ``c0``..), ordered by
+that number.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+
+from ..errors import DataError
+from .model import SensorSpec, TouchDataset
+from .tables import find_column, numeric, read_table, runs
+
+
+def _cell_columns(df: pd.DataFrame, n_cells: int, path: Path) -> list[str]:
+    groups: dict[str, list[tuple[int, str]]] = {}
+    for c in df.columns:
+        m = re.fullmatch(r"(.*?)(\d+)", c)
+        if m:
+            groups.setdefault(m.group(1), []).append((int(m.group(2)), c))
+    fits = [sorted(v) for v in groups.values() if len(v) == n_cells]
+    if len(fits) != 1:
+        raise DataError(
+            f"cannot tell the {n_cells} cell columns apart (name them with cells=...); "
+            f"numbered column groups: { {k: len(v) for k, v in groups.items()} }", path, 1)
+    return [c for _, c in fits[0]]
+
+
+def read_long_table(
+    path: str | Path,
+    grid: tuple[int, int],
+    frame_rate: float,
+    *,
+    name: str | None = None,
+    capture_col: str = "capture_id",
+    frame_col: str = "frame",
+    cells: Sequence[str] | None = None,
+    value_range: tuple[float, float] = (0.0, 1023.0),
+    sensor_name: str = "custom",
+) -> TouchDataset:
+    path = Path(path)
+    sensor = SensorSpec(name=sensor_name, grid=grid, frame_rate=frame_rate, value_range=value_range)
+    df = read_table(path)
+    cap = find_column(df, (capture_col,), path, "capture id")
+    fr = find_column(df, (frame_col,), path, "frame index")
+    for req in ("subject", "gesture"):
+        find_column(df, (req,), path, req)
+    cell_cols = list(cells) if cells is not None else _cell_columns(df, sensor.n_cells, path)
+    missing = [c for c in cell_cols if c not in df.columns]
+    if missing:
+        raise DataError(f"cell columns not found: {missing[:5]}", path, 1)
+    if len(cell_cols) != sensor.n_cells:
+        raise DataError(f"{len(cell_cols)} cell columns for a {grid[0]} x {grid[1]} grid ({sensor.n_cells} cells)", path, 1)
+    values = numeric(df, cell_cols, path, lo=value_range[0], hi=value_range[1])
+    frame = numeric(df, [fr], path, integer=True)[:, 0]
+    first = frame[0]
+    bounds = runs(df[[cap]], frame - first + 1, path, frame_col)  # frames may count from 0 or 1
+    meta_cols = [c for c in df.columns if c not in set(cell_cols) | {fr}]
+    rows, captures = [], []
+    for a, b in bounds:
+        block = df.iloc[a:b][meta_cols]
+        varying = [c for c in meta_cols if block[c].nunique(dropna=False) > 1]
+        if varying:
+            i = a + int(np.flatnonzero((block[varying[0]] != block[varying[0]].iloc[0]).to_numpy())[0])
+            raise DataError(f"metadata column {varying[0]!r} changes inside capture {df[cap].iloc[a]!r}", path, i + 2)
+        rows.append(block.iloc[0].to_dict())
+        captures.append(values[a:b].reshape(b - a, *grid))
+    meta = pd.DataFrame(rows).rename(columns={cap: "capture_id"})
+    for c in ("capture_id", "subject", "gesture"):
+        meta[c] = meta[c].astype(str)
+    if meta["capture_id"].duplicated().any():
+        dup = meta["capture_id"][meta["capture_id"].duplicated()].iloc[0]
+        raise DataError(f"capture {dup!r} appears in two separate runs of rows", path)
+    return TouchDataset(name or path.stem, captures, meta, sensor)
