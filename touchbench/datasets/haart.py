@@ -168,9 +168,7 @@ def parse_recording(data: bytes, path: Path) -> np.ndarray:
 
 def _locate_bad_line(text: str, path: Path) -> None:
     for i, line in enumerate(text.splitlines(), start=1):
-        if not line.strip():
-            if i <= LINES_USED:
-                raise DataError("empty line inside the recording", path, i)
+        if not line.strip():  # blank lines are skipped, as by the parser
             continue
         fields = line.split(",")
         if len(fields) != RAW_SIDE:
@@ -312,7 +310,7 @@ def build_haart(raw: Path) -> TouchDataset:
             else "test" if r.participant in test else "none"
             for r in kept
         ],
-        "source": [f"{r.path.parent.name}/{r.path.name}" for r in kept],
+        "source": [f"{r.path.parent.name}/{r.path.name.removesuffix('.gz')}" for r in kept],
     })
     ds = TouchDataset("haart", [corrected_window(arrays[r.key]) for r in kept], meta, HAART_SENSOR)
     ds.provenance = {

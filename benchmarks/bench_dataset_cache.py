@@ -1,0 +1,38 @@
+"""Cold conversion and warm (cached) load of the real HAART datasets.
+
+Prints the median of several warm loads in a fresh cache directory.
+Usage: python benchmarks/bench_dataset_cache.py [--repeats 7]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import tempfile
+import time
+
+from touchbench.datasets import load_dataset
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeats", type=int, default=7)
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as cache:
+        for name in ("haart", "haart-challenge"):
+            t = time.perf_counter()
+            ds = load_dataset(name, cache_dir=cache)
+            cold = time.perf_counter() - t
+            warm = []
+            for _ in range(args.repeats):
+                t = time.perf_counter()
+                again = load_dataset(name, cache_dir=cache)
+                warm.append(time.perf_counter() - t)
+            assert again.content_hash == ds.content_hash
+            print(f"{name:16s} captures={len(ds)}  cold (parse raw + write cache) {cold:6.2f} s  "
+                  f"warm load median {statistics.median(warm) * 1000:6.0f} ms  (min {min(warm) * 1000:.0f}, "
+                  f"max {max(warm) * 1000:.0f}, n={args.repeats})")
+
+
+if __name__ == "__main__":
+    main()

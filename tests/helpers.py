@@ -1,0 +1,43 @@
+"""Small builders shared by tests (not fixtures: plain functions)."""
+
+from __future__ import annotations
+
+import gzip
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from touchbench.datasets.model import SensorSpec, TouchDataset
+
+
+def make_dataset(n_subjects=3, gestures=("pat", "stroke"), reps=2, frames=20, grid=(4, 4), dtype=np.uint16, seed=0,
+                 name="toy", **extra_cols) -> TouchDataset:
+    rng = np.random.default_rng(seed)
+    caps, rows = [], []
+    for s in range(n_subjects):
+        for g in gestures:
+            for r in range(reps):
+                t = frames if np.isscalar(frames) else int(rng.integers(*frames))
+                caps.append(rng.integers(0, 1024, size=(t, *grid)).astype(dtype))
+                rows.append({"capture_id": f"s{s:02d}-{g}-{r}", "subject": f"s{s:02d}", "gesture": g, "repetition": r})
+    meta = pd.DataFrame(rows)
+    for k, v in extra_cols.items():
+        meta[k] = v
+    return TouchDataset(name, caps, meta, SensorSpec("toy", grid, 50.0))
+
+
+def write_recording(path: Path, lines: list[str], gz: bool = False) -> Path:
+    text = "\n".join(lines) + "\n"
+    if gz:
+        path = path.with_name(path.name + ".gz")
+        path.write_bytes(gzip.compress(text.encode()))
+    else:
+        path.write_text(text)
+    return path
+
+
+def random_recording(seed: int, n_lines: int = 5400) -> list[str]:
+    rng = np.random.default_rng(seed)
+    a = rng.integers(0, 1024, size=(n_lines, 10))
+    return [",".join(str(v) for v in row) for row in a]
