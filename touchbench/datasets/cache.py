@@ -13,12 +13,12 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from ..paths import cache_dir as default_cache_dir
-from .model import TouchDataset
+from .model import FORMAT_VERSION, TouchDataset
 
 
 def source_key(reader_version: str, files: Sequence[Path]) -> str:
     """SHA-256 over the reader version and each file's name and content hash."""
-    h = hashlib.sha256(reader_version.encode())
+    h = hashlib.sha256(f"{reader_version}\0format{FORMAT_VERSION}".encode())
     for f in sorted(files, key=lambda p: (p.parent.name, p.name)):
         h.update(f"\0{f.parent.name}/{f.name}\0".encode())
         h.update(hashlib.sha256(f.read_bytes()).digest())

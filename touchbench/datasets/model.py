@@ -239,6 +239,10 @@ class TouchDataset:
         if raw is None or "frames" not in table.column_names:
             raise DataError("not a touchbench dataset (no touchbench metadata or frames column)", path)
         info = json.loads(raw)
+        if info.get("format_version") != FORMAT_VERSION:
+            raise DataError(
+                f"written by another touchbench storage format (version {info.get('format_version')}, "
+                f"this version reads {FORMAT_VERSION}); convert it again", path)
         sensor = SensorSpec.from_dict(info["sensor"])
         dtype = np.dtype(info["dtype"])
         frames = table.column("frames").combine_chunks()
