@@ -60,13 +60,23 @@ def test_haart_corrected_window_values(real_haart, real_haart_dir):
 
 
 @pytest.mark.realdata
-def test_longer_files_use_first_5400_lines(real_haart, real_haart_dir):
-    # 140729-3curveshortpat has 10800 lines; frames past 540 must never be read
-    lines = _lines(_raw_file(real_haart_dir, 3, "curveshortpat"))
-    assert len(lines) == 10800
-    cap = real_haart.captures[list(real_haart.meta["capture_id"]).index("s03-curve-short-pat")]
+@pytest.mark.parametrize("participant, stem, n_lines", [(3, "curveshortpat", 10800), (7, "nonelongscratch", 8100), (7, "nonefurrub", 7780)])
+def test_longer_files_use_first_5400_lines(real_haart, real_haart_dir, participant, stem, n_lines):
+    # the README's three long files: frames past 540 must never be read
+    lines = _lines(_raw_file(real_haart_dir, participant, stem))
+    assert len(lines) == n_lines
+    row = real_haart.meta[(real_haart.meta["subject"] == f"s{participant:02d}") & (real_haart.meta["source"].str.endswith(stem + ".csv"))]
+    assert len(row) == 1
+    cap = real_haart.captures[row.index[0]]
     last = lines[485 * 10:486 * 10]
     assert cap[431].tolist() == [[1023 - last[r][c] for c in range(1, 9)] for r in range(1, 9)]
+
+
+@pytest.mark.realdata
+def test_participant_1_files_without_csv_suffix(real_haart, real_haart_dir):
+    names = [p.name for p in (real_haart_dir / "raw" / "140729-1").iterdir()]
+    assert all(not n.endswith(".csv.gz") for n in names if n != "note.txt")
+    assert (real_haart.meta["subject"] == "s01").sum() == 84
 
 
 @pytest.mark.realdata
