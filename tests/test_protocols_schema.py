@@ -1,0 +1,143 @@
+"""Protocol files: the schema, its shorthands and grids, and one clear error per mistake.
+
+Every invalid protocol must fail at parse time, naming the file, the line
+and the field (the lines below are counted by hand in the YAML texts).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from touchbench.engine.testing import random_dataset, components_for_tests
+from touchbench.protocols.schema import ProtocolError, expand_grid, load_protocol, parse_protocol
+
+BASE = """\
+name: t
+dataset: data.parquet
+scheme: loso
+features:
+  - [test-mean]
+classifiers:
+  - test-logreg
+"""
+
+
+@pytest.fixture(autouse=True)
+def components(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with components_for_tests():
+        random_dataset().to_parquet(tmp_path / "data.parquet")
+        yield
+
+
+def error(text: str) -> str:
+    with pytest.raises(ProtocolError) as e:
+        parse_protocol(text, "protocols/x.yaml")
+    return str(e.value)
+
+
+def test_valid_protocol_and_shorthands():
+    p = parse_protocol(BASE, "protocols/x.yaml")
+    assert p.name == "t" and p.dataset.name == "data.parquet" and p.scheme.name == "loso"
+    assert p.target == "gesture" and p.seed == 0 and p.repetitions == 1
+    assert [c.label for c in p.combinations()] == ["test-mean"]
+    assert [c.label for c in p.classifier_entries()] == ["test-logreg"]
+
+
+def test_name_defaults_to_file_stem(tmp_path):
+    f = tmp_path / "my-proto.yaml"
+    f.write_text(BASE.replace("name: t\n", ""))
+    assert load_protocol(f).name == "my-proto"
+
+
+def test_combinations_each_alone_then_combined():
+    text = BASE.replace("  - [test-mean]\n", "  - test-mean\n  - [test-centered]\n  - [test-mean, test-centered]\n")
+    p = parse_protocol(text, "x.yaml")
+    assert [c.label for c in p.combinations()] == ["test-mean", "test-centered", "test-mean+test-centered"]
+    assert p.combinations()[2].names == ["test-mean", "test-centered"]
+
+
+def test_grid_expands_to_labelled_entries():
+    assert expand_grid({"a": 1, "b": {"grid": [2, 3]}, "c": {"grid": ["x", "y"]}}) == [
+        {"a": 1, "b": 2, "c": "x"}, {"a": 1, "b": 2, "c": "y"}, {"a": 1, "b": 3, "c": "x"}, {"a": 1, "b": 3, "c": "y"}]
+    assert expand_grid({"layers": [10, 20]}) == [{"layers": [10, 20]}]  # a plain list is a value, not a grid
+    text = BASE.replace("  - test-logreg\n", "  - {name: test-forest, params: {n_estimators: {grid: [3, 5]}, max_features: 0.5}}\n")
+    entries = parse_protocol(text, "x.yaml").classifier_entries()
+    assert [e.label for e in entries] == ["test-forest(n_estimators=3)", "test-forest(n_estimators=5)"]
+    assert entries[1].params == {"n_estimators": 5, "max_features": 0.5}
+    text = BASE.replace("[test-mean]", "[{name: test-mean, params: {scale: {grid: [1, 2]}}}]")
+    assert [c.label for c in parse_protocol(text, "x.yaml").combinations()] == ["test-mean(scale=1)", "test-mean(scale=2)"]
+
+
+def test_content_hash_ignores_comments_and_description():
+    a = parse_protocol(BASE, "x.yaml")
+    b = parse_protocol("# a comment\n" + BASE + "description: words\n", "x.yaml")
+    c = parse_protocol(BASE + "seed: 3\n", "x.yaml")
+    assert a.content_hash == b.content_hash != c.content_hash
+    assert a.text_hash != b.text_hash
+
+
+@pytest.mark.parametrize("text,expected", [
+    (BASE.replace("[test-mean]", "[test-maen]"),
+     "protocols/x.yaml:5: features[0][0].name: unknown feature set 'test-maen'; did you mean 'test-mean'"),
+    (BASE + "  - name: test-logerg\n",
+     "protocols/x.yaml:8: classifiers[1].name: unknown classifier 'test-logerg'; did you mean 'test-logreg'"),
+    (BASE.replace("scheme: loso\n", ""), "protocols/x.yaml:1: scheme: missing required field"),
+    (BASE + "seed: ten\n", "protocols/x.yaml:8: seed: Input should be a valid integer"),
+    (BASE + "repetitions: 0\n", "protocols/x.yaml:8: repetitions: Input should be greater than or equal to 1, got 0"),
+    (BASE.replace("scheme: loso", "scheme: loos"),
+     "protocols/x.yaml:3: scheme.name: unknown evaluation scheme 'loos'; did you mean 'loso'?"),
+    (BASE.replace("dataset: data.parquet", "dataset:\n  name: data.parquet\n  filters:\n    gesture: []"),
+     "protocols/x.yaml:5: dataset.filters.gesture: the gesture filter is empty"),
+    (BASE + "clasifiers: []\n", "protocols/x.yaml:8: clasifiers: unknown field; did you mean 'classifiers'?"),
+    (BASE.replace("scheme: loso", "scheme:\n  name: kfold\n  k: 1"),
+     "protocols/x.yaml:5: scheme.k: Input should be greater than or equal to 2, got 1"),
+    (BASE.replace("scheme: loso", "scheme:\n  name: kfold\n  kk: 3"),
+     "protocols/x.yaml:5: scheme.kk: unknown field; did you mean 'k'?"),
+    (BASE.replace("scheme: loso", "scheme:\n  name: early\n  base: {name: kfold, k: x}\n  frames: [3]"),
+     "protocols/x.yaml:5: scheme.base.k: Input should be a valid integer"),
+    (BASE.replace("scheme: loso", "scheme:\n  name: early\n  base: loso"),
+     "protocols/x.yaml:3: scheme: give exactly one of 'frames'"),
+    (BASE.replace("  - test-logreg", "  - {name: test-forest, params: {n_estimator: 3}}"),
+     "protocols/x.yaml:7: classifiers[0].params.n_estimator: unknown parameter 'n_estimator' for classifier "
+     "'test-forest'; did you mean 'n_estimators'?"),
+    (BASE.replace("  - test-logreg", "  - {name: test-logreg, params: {random_state: 3}}"),
+     "protocols/x.yaml:7: classifiers[0].params.random_state: random_state is derived from the protocol's seed"),
+    (BASE.replace("[test-mean]", "[{name: test-mean, params: {scal: 2}}]"),
+     "protocols/x.yaml:5: features[0][0].params.scal: unknown parameter 'scal' for feature set 'test-mean'; did you mean 'scale'?"),
+    (BASE + "expected:\n  results:\n    - {features: [test-centered], classifier: test-logreg, value: 50}\n",
+     "protocols/x.yaml:10: expected.results[0].features: no feature combination ['test-centered'] in this protocol"),
+    (BASE + "  - [oops\n", "protocols/x.yaml:9: invalid YAML"),
+    (BASE + "target: subject\n", "protocols/x.yaml:8: target: target 'subject' (person identification) needs each test"),
+    (BASE + "target: person\n", "protocols/x.yaml:8: target: Input should be 'gesture' or 'subject', got 'person'"),
+    (BASE.replace("data.parquet", "haartt"), "protocols/x.yaml:2: dataset.name: unknown dataset 'haartt'; did you mean 'haart'"),
+    (BASE.replace("data.parquet", "missing/file.parquet"), "protocols/x.yaml:2: dataset.name: no dataset file 'missing/file.parquet'"),
+    (BASE.replace("  - test-logreg", "  - {name: test-forest, params: {n_estimators: {grid: []}}}"),
+     "protocols/x.yaml:7: classifiers[0].params.n_estimators.grid: a grid must be a non-empty list"),
+    (BASE.replace("  - [test-mean]", "  - []"), "protocols/x.yaml:5: features[0]: this feature combination is empty"),
+    (BASE.replace("  - [test-mean]", "  - 3"), "protocols/x.yaml:5: features[0]: Input should be a valid list"),
+    (BASE.replace("classifiers:\n  - test-logreg\n", "classifiers: []\n"), "protocols/x.yaml:6: classifiers: List should have at least 1 item"),
+    (BASE.replace("name: t", "name: a/b"), "protocols/x.yaml:1: name: name 'a/b' must be letters, digits"),
+    ("", "protocols/x.yaml: the protocol is empty"),
+    ("- a\n- b\n", "protocols/x.yaml:1: a protocol is a mapping"),
+])
+def test_invalid_protocol_one_clear_message(text, expected):
+    msg = error(text)
+    assert msg.startswith(expected), msg
+    assert "\n" not in msg  # one mistake, one line
+
+
+def test_unknown_gaus_classifier_suggests_the_real_name():
+    from touchbench.classifiers import CLASSIFIERS
+
+    if "gaus-rf" not in CLASSIFIERS:
+        pytest.fail("gaus-rf is not registered")
+    msg = error(BASE + "  - name: gaus-fr\n")
+    assert msg.startswith("protocols/x.yaml:8: classifiers[1].name: unknown classifier 'gaus-fr'; did you mean 'gaus-rf'")
+
+
+def test_several_mistakes_are_all_listed():
+    msg = error(BASE.replace("[test-mean]", "[test-maen]").replace("scheme: loso", "scheme: loos"))
+    lines = msg.splitlines()
+    assert len(lines) == 2
+    assert lines[0].startswith("protocols/x.yaml:3: scheme.name") or lines[1].startswith("protocols/x.yaml:3: scheme.name")

@@ -1,0 +1,93 @@
+"""``touchbench protocols``: validate a protocol file, list the shipped protocols."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+import yaml
+
+from ..paths import REPO_ROOT
+from ..protocols.schema import ProtocolError, load_protocol
+
+
+def protocol_dirs() -> list[Path]:
+    """``protocols/`` of the current directory and of the checkout (deduplicated)."""
+    out: list[Path] = []
+    for base in (Path.cwd(), REPO_ROOT):
+        d = (base / "protocols").resolve()
+        if d.is_dir() and d not in out:
+            out.append(d)
+    return out
+
+
+def find_protocol(ref: str) -> Path:
+    """A protocol file path, or a name looked up in protocols/ and protocols/papers/."""
+    p = Path(ref)
+    if p.is_file():
+        return p
+    for d in protocol_dirs():
+        for sub in (d, d / "papers"):
+            for cand in (sub / ref, sub / f"{ref}.yaml", sub / f"{ref}.yml"):
+                if cand.is_file():
+                    return cand
+    raise ProtocolError(f"{ref}: no such protocol file (nor a protocol of that name in protocols/ or protocols/papers/)")
+
+
+def _description(path: Path) -> str:
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except Exception:
+        return "(not valid YAML)"
+    if not isinstance(data, dict):
+        return "(not a protocol)"
+    text = str(data.get("description") or "").strip()
+    return text.splitlines()[0] if text else ""
+
+
+@click.group()
+def protocols() -> None:
+    """Protocol files: validate them, list the shipped ones."""
+
+
+@protocols.command("validate")
+@click.argument("file")
+@click.option("--schema-only", is_flag=True, help="Check the file alone; do not load the dataset or build the folds.")
+def validate(file: str, schema_only: bool) -> None:
+    """Validate FILE: schema, names, parameters, and (unless --schema-only)
+    the dataset filters and the folds of the scheme. Nothing is computed."""
+    path = find_protocol(file)
+    proto = load_protocol(path)
+    combos = proto.combinations()
+    clfs = proto.classifier_entries()
+    click.echo(f"{path}: valid protocol {proto.name!r}: scheme {proto.scheme.name}, "
+               f"{len(combos)} feature combination(s) x {len(clfs)} classifier(s)")
+    if schema_only:
+        return
+    from ..engine.runner import plan_run
+
+    plan = plan_run(proto)
+    ds = plan.dataset
+    click.echo(f"dataset {proto.dataset.name}: {len(ds)} captures after filters, "
+               f"{ds.meta['subject'].nunique()} subjects, {ds.meta[proto.target].nunique()} {proto.target} classes")
+    click.echo(f"{plan.n_folds} fold(s) x {len(combos)} x {len(clfs)} = {len(plan.tasks)} task(s)")
+    for n in plan.notes:
+        click.echo(f"note: {n}")
+
+
+@protocols.command("list")
+def list_() -> None:
+    """Protocols in protocols/ and protocols/papers/, with their descriptions."""
+    found = False
+    for d in protocol_dirs():
+        for sub in (d, d / "papers"):
+            files = sorted(sub.glob("*.yaml")) + sorted(sub.glob("*.yml"))
+            for f in files:
+                found = True
+                try:
+                    rel = f.relative_to(Path.cwd())
+                except ValueError:
+                    rel = f
+                click.echo(f"{str(rel):48s} {_description(f)}")
+    if not found:
+        click.echo("no protocols found (looked in protocols/ and protocols/papers/)")

@@ -1,0 +1,424 @@
+"""The run engine: protocol -> plan of tasks -> parallel execution -> reports.
+
+``plan_run`` does every check that needs the data before any work: it loads
+the dataset, applies the protocol's filters (unknown columns or values are
+refused with the protocol line), checks the target, builds the folds of every
+repetition (a scheme that cannot be evaluated is refused with the scheme's
+message) and turns (repetition x fold x feature combination x classifier)
+into :class:`~touchbench.engine.tasks.Task` objects with stable ids.
+
+``run_plan`` then
+
+1. skips finished tasks (their scores fragment exists; ``force`` recomputes,
+   ``retry_failed`` reruns failed ones),
+2. computes the fold-independent features of the pending tasks once, into
+   the on-disk feature cache (``engine.cache``),
+3. runs the pending tasks, in parallel with joblib when ``jobs > 1``, each
+   result written as soon as it arrives (one atomic fragment per task),
+4. merges the fragments into ``scores`` / ``predictions`` / ``confusion``
+   and writes ``manifest.json``.
+
+A rerun of a finished run loads the dataset, rebuilds the plan, sees that
+every task is finished and the reports are current, and does nothing else.
+
+Identity and seeds: a task id is a hash of everything that determines its
+result (dataset content hash, target, scheme and its parameters, repetition,
+fold name and indices, the feature sets with parameters and code version,
+the classifier with parameters, the protocol seed, and the touchbench, numpy
+and scikit-learn versions). The classifier's ``random_state`` is
+``derive_seed(seed, "task", repetition, fold, features, classifier)``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import sys
+import time
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from .. import __version__
+from ..datasets.model import TouchDataset
+from ..errors import TouchbenchError
+from ..paths import cache_dir
+from ..protocols.schema import Protocol, _suggest, canonical_json, load_protocol, resolve_dataset_ref
+from ..protocols.seeding import derive_seed
+from ..protocols.splits import SplitError
+from ..results.manifest import now_iso, update_manifest
+from ..results.store import ResultStore
+from ..results.summary import check_expected, summarize
+from .cache import FeatureCache, code_version, crop_captures
+from .tasks import RunContext, SetSpec, Task, execute_task, make_feature_set
+
+__all__ = ["Plan", "RunResult", "default_results_dir", "plan_run", "run_plan", "run_protocol"]
+
+
+def _versions() -> dict[str, str]:
+    import sklearn
+
+    return {"touchbench": __version__, "numpy": np.__version__, "scikit-learn": sklearn.__version__}
+
+
+def default_results_dir(protocol: Protocol) -> Path:
+    """``results/<protocol name>/`` under the current directory."""
+    return Path("results") / protocol.name
+
+
+@dataclass
+class Plan:
+    protocol: Protocol
+    dataset: TouchDataset
+    dataset_ref: str
+    source_hash: str
+    tasks: list[Task]
+    notes: list[str]
+    run_id: str
+    cache_root: Path
+    n_folds: int = 0
+
+    @property
+    def task_ids(self) -> list[str]:
+        return [t.task_id for t in self.tasks]
+
+    @property
+    def ids_hash(self) -> str:
+        return hashlib.sha256("\n".join(self.task_ids).encode()).hexdigest()[:16]
+
+
+@dataclass
+class RunResult:
+    out: Path
+    run_id: str
+    n_tasks: int
+    n_ran: int
+    n_skipped: int
+    n_failed: int
+    noop: bool
+    seconds: float
+    scores: pd.DataFrame
+    summary: pd.DataFrame
+    expected: list[dict[str, Any]]
+    notes: list[str] = field(default_factory=list)
+
+
+# ----------------------------------------------------------------- dataset
+def _load(protocol: Protocol) -> TouchDataset:
+    from ..datasets import load_dataset
+
+    ref = resolve_dataset_ref(protocol)
+    try:
+        return load_dataset(ref, **protocol.dataset.options)
+    except TouchbenchError:
+        raise
+    except TypeError as e:
+        raise protocol.error_at(("dataset", "options"), f"the loader of {ref!r} rejects the options: {e}") from None
+    except Exception as e:
+        raise protocol.error_at(("dataset", "name"), f"cannot load {ref!r}: {type(e).__name__}: {e}") from None
+
+
+def apply_filters(protocol: Protocol, ds: TouchDataset) -> TouchDataset:
+    """Keep the captures the protocol's ``filters`` keep and ``exclude`` does not drop."""
+    meta = ds.meta
+    keep = np.ones(len(meta), dtype=bool)
+    for field_name, spec, include in (("filters", protocol.dataset.filters, True), ("exclude", protocol.dataset.exclude, False)):
+        for col, values in spec.items():
+            if col not in meta.columns:
+                raise protocol.error_at(
+                    ("dataset", field_name, col),
+                    f"the dataset has no metadata column {col!r}{_suggest(col, list(map(str, meta.columns)))} "
+                    f"(columns: {', '.join(map(str, meta.columns))})",
+                )
+            col_vals = np.array([None if pd.isna(v) else str(v) for v in meta[col].tolist()], dtype=object)
+            present = sorted({v for v in col_vals if v is not None})
+            for i, v in enumerate(values):
+                if v not in present:
+                    raise protocol.error_at(
+                        ("dataset", field_name, col, i),
+                        f"{col} {v!r} is not in the dataset{_suggest(v, present)} (values: {', '.join(present)})",
+                    )
+            hit = np.isin(col_vals, values)
+            keep &= hit if include else ~hit
+    if not keep.any():
+        raise protocol.error_at(("dataset",), "the filters leave no captures")
+    if keep.all():
+        return ds
+    return ds.subset(np.flatnonzero(keep))
+
+
+# ----------------------------------------------------------------- planning
+def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: TouchDataset | None = None) -> Plan:
+    """Every check that needs the data, then the list of tasks (no work done)."""
+    from ..features import FEATURES
+
+    cache_root = Path(cache_root) if cache_root is not None else cache_dir() / "features"
+    full = dataset if dataset is not None else _load(protocol)
+    ds = apply_filters(protocol, full)
+    target = protocol.target
+    if target not in ds.meta.columns:
+        raise protocol.error_at(("target",), f"the dataset has no {target!r} column")
+    if ds.meta[target].isna().any():
+        raise protocol.error_at(("target",), f"{int(ds.meta[target].isna().sum())} captures have no {target!r} value")
+    classes = sorted({str(v) for v in ds.meta[target]})
+    if len(classes) < 2:
+        raise protocol.error_at(("target",), f"after the filters the target {target!r} has a single value {classes}: nothing to classify")
+
+    # feature sets must build with their parameters and this dataset's sensor
+    for i, combo in enumerate(protocol.features):
+        for j, ref in enumerate(combo):
+            from ..protocols.schema import expand_grid
+
+            for p in expand_grid(ref.params):
+                try:
+                    make_feature_set(ref.name, p, ds.sensor)
+                except Exception as e:
+                    raise protocol.error_at(("features", i, j), f"feature set {ref.name!r} rejects {p}: {type(e).__name__}: {e}") from None
+
+    versions = _versions()
+    combos = protocol.combinations()
+    clfs = protocol.classifier_entries()
+    set_info: dict[tuple, tuple[bool, str]] = {}
+    for c in combos:
+        for name, params in c.sets:
+            cls = FEATURES.get(name)
+            set_info[(name, canonical_json(params))] = (bool(getattr(cls, "fold_dependent", True)), code_version(cls))
+
+    notes: list[str] = []
+    tasks: list[Task] = []
+    n_folds = 0
+    scheme_json = canonical_json({"name": protocol.scheme.name, **protocol.scheme.params})
+    for r in range(protocol.repetitions):
+        splitter = protocol.splitter(r)
+        try:
+            folds = splitter.split(ds.meta)
+        except SplitError as e:
+            raise protocol.error_at(("scheme",), str(e)) from None
+        prefix = f"repetition {r}: " if protocol.repetitions > 1 else ""
+        notes += [prefix + n for n in splitter.notes_]
+        n_folds += len(folds)
+        for fold in folds:
+            crop_frames = fold.crop.n_frames(ds.sensor.frame_rate) if fold.crop is not None else None
+            idx_hash = hashlib.sha256(fold.train.tobytes() + b"|" + fold.test.tobytes()).hexdigest()[:16]
+            for combo in combos:
+                sets = []
+                for name, params in combo.sets:
+                    dep, ver = set_info[(name, canonical_json(params))]
+                    sets.append(SetSpec(
+                        name=name, params=params, fold_dependent=dep,
+                        key_full=None if dep else FeatureCache.key(ds.content_hash, name, params, ver, None),
+                        key_crop=None if dep or crop_frames is None else FeatureCache.key(ds.content_hash, name, params, ver, crop_frames),
+                    ))
+                for clf in clfs:
+                    identity = {
+                        "dataset": ds.content_hash, "target": target, "scheme": scheme_json, "repetition": r,
+                        "fold": fold.name, "indices": idx_hash, "crop": [crop_frames, bool(fold.crop and fold.crop.train)],
+                        "features": [[n, p, set_info[(n, canonical_json(p))][1]] for n, p in combo.sets],
+                        "classifier": [clf.name, clf.params], "seed": protocol.seed, "versions": versions,
+                    }
+                    task_id = hashlib.sha256(canonical_json(identity).encode()).hexdigest()[:20]
+                    seed = derive_seed(protocol.seed, "task", r, fold.name, combo.label, clf.label)
+                    base = {
+                        "task_id": task_id, "protocol": protocol.name, "dataset": protocol.dataset.name,
+                        "dataset_hash": ds.content_hash, "target": target, "scheme": protocol.scheme.name,
+                        "repetition": r, "fold": fold.name, "fold_group": fold.group,
+                        "early_frames": np.float64(crop_frames) if crop_frames is not None else np.nan,
+                        "features": combo.label, "feature_sets": "+".join(combo.names),
+                        "feature_params": canonical_json([[n, p] for n, p in combo.sets]),
+                        "classifier": clf.label, "classifier_name": clf.name,
+                        "classifier_params": canonical_json(clf.params), "seed": seed,
+                        "n_train": int(len(fold.train)), "n_test": int(len(fold.test)),
+                    }
+                    tasks.append(Task(
+                        task_id=task_id, repetition=r, fold=fold, features_label=combo.label, sets=tuple(sets),
+                        classifier_label=clf.label, classifier_name=clf.name, classifier_params=clf.params,
+                        seed=seed, crop_frames=crop_frames, base_row=base,
+                    ))
+    ids = [t.task_id for t in tasks]
+    if len(set(ids)) != len(ids):
+        raise protocol.error_at(("features",), "two entries of the protocol describe the same task (duplicate combination or classifier)")
+    run_id = hashlib.sha256(canonical_json(
+        {"protocol": protocol.content_hash, "dataset": ds.content_hash, "versions": versions}).encode()).hexdigest()[:12]
+    return Plan(protocol=protocol, dataset=ds, dataset_ref=resolve_dataset_ref(protocol), source_hash=full.content_hash,
+                tasks=tasks, notes=list(dict.fromkeys(notes)), run_id=run_id, cache_root=cache_root, n_folds=n_folds)
+
+
+# ----------------------------------------------------------------- progress
+class _Progress:
+    """A rich progress bar on a terminal; silent otherwise."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled
+        self._p = None
+
+    def __enter__(self) -> "_Progress":
+        if self.enabled:
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+            self._p = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                               TimeElapsedColumn(), TimeRemainingColumn(), console=Console(stderr=True), transient=False)
+            self._p.__enter__()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._p is not None:
+            self._p.__exit__(*exc)
+
+    def add(self, description: str, total: int):
+        return self._p.add_task(description, total=total) if self._p is not None else None
+
+    def advance(self, tid, n: int = 1) -> None:
+        if self._p is not None and tid is not None:
+            self._p.advance(tid, n)
+
+
+# ----------------------------------------------------------------- running
+def _fill_cache(plan: Plan, pending: list[Task], jobs: int, progress: _Progress, setup=None) -> None:
+    ds = plan.dataset
+    cache = FeatureCache(plan.cache_root)
+    needed: dict[str, tuple[str, dict, int | None]] = {}
+    for t in pending:
+        crop_train = t.fold.crop is not None and t.fold.crop.train
+        for s in t.sets:
+            if s.fold_dependent:
+                continue
+            if not crop_train:
+                needed.setdefault(s.key_full, (s.name, s.params, None))
+            if s.key_crop is not None:
+                needed.setdefault(s.key_crop, (s.name, s.params, t.crop_frames))
+    for key, (name, params, crop) in needed.items():
+        if cache.has(key) and cache.load(key) is not None:
+            continue
+        caps = crop_captures(ds.captures, crop)
+        label = name + (f" (first {crop} frames)" if crop is not None else "")
+        tid = progress.add(f"features {label}", len(caps))
+        cache.compute(
+            key, partial(make_feature_set, name, params, ds.sensor), caps, jobs=jobs,
+            info={"dataset_hash": ds.content_hash, "name": name, "params": params, "crop": crop},
+            on_chunk=lambda n, tid=tid: progress.advance(tid, n), setup=setup,
+        )
+
+
+def _dataset_copy(plan: Plan) -> Path:
+    """A Parquet copy of the (filtered) dataset for parallel workers."""
+    path = plan.cache_root.parent / "engine-datasets" / f"{plan.dataset.content_hash[:32]}.parquet"
+    if not path.is_file():
+        plan.dataset.to_parquet(path)
+    return path
+
+
+def _reports_current(store: ResultStore, plan: Plan) -> bool:
+    m = store.read_manifest()
+    if not m:
+        return False
+    if m.get("run", {}).get("run_id") != plan.run_id or m.get("tasks", {}).get("ids_hash") != plan.ids_hash:
+        return False
+    if m.get("tasks", {}).get("merged") != len(plan.tasks):
+        return False
+    return all(p.is_file() for p in (store.scores_path, store.predictions_path, store.confusion_path))
+
+
+def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force: bool = False,
+             retry_failed: bool = False, progress: bool | None = None, worker_setup=None) -> RunResult:
+    """Execute the pending tasks of ``plan`` and write the reports (see the module docstring).
+
+    ``worker_setup`` is a picklable function each worker process calls once
+    before its first task (to register plug-in components in the workers).
+    """
+    t_start = time.perf_counter()
+    started_at = now_iso()
+    protocol = plan.protocol
+    out = Path(out) if out is not None else default_results_dir(protocol)
+    store = ResultStore(out)
+    store.clean_stale_temporaries()
+    if jobs == -1 or jobs == 0:
+        import os
+
+        jobs = os.cpu_count() or 1
+    if jobs < 1:
+        raise TouchbenchError(f"--jobs must be at least 1, got {jobs}")
+    if force:
+        store.forget(plan.task_ids)
+    finished = store.finished()
+    pending = [t for t in plan.tasks
+               if t.task_id not in finished or (retry_failed and finished[t.task_id] == "failed")]
+    show = sys.stderr.isatty() if progress is None else progress
+
+    if not pending and _reports_current(store, plan):
+        scores = pd.read_parquet(store.scores_path)
+        preds = None
+        if protocol.expected is not None:
+            preds = pd.read_parquet(store.predictions_path, columns=["task_id", "true", "predicted"])
+        return RunResult(out=out, run_id=plan.run_id, n_tasks=len(plan.tasks), n_ran=0, n_skipped=len(plan.tasks),
+                         n_failed=int((scores["status"] == "failed").sum()), noop=True,
+                         seconds=time.perf_counter() - t_start, scores=scores, summary=summarize(scores),
+                         expected=check_expected(protocol.expected, scores, preds), notes=plan.notes)
+
+    n_ran = 0
+    with _Progress(show) as prog:
+        if pending:
+            _fill_cache(plan, pending, jobs, prog, worker_setup)
+            ds_path = _dataset_copy(plan) if jobs > 1 and len(pending) > 1 else None
+            ctx = RunContext(plan.dataset, protocol.target, plan.cache_root, ds_path, setup=worker_setup)
+            tid = prog.add(f"{protocol.name}: tasks", len(pending))
+            if jobs == 1 or len(pending) == 1:
+                results = (execute_task(t, ctx) for t in pending)
+            else:
+                from joblib import Parallel, delayed
+
+                results = Parallel(n_jobs=jobs, return_as="generator_unordered")(
+                    delayed(execute_task)(t, ctx) for t in pending)
+            for row, preds in results:
+                if preds is not None:
+                    preds.insert(0, "run_id", plan.run_id)
+                row["run_id"] = plan.run_id
+                store.write_task(row["task_id"], row, preds)
+                n_ran += 1
+                prog.advance(tid)
+
+    stamp = {"run_id": plan.run_id, "protocol": protocol.name, "protocol_hash": protocol.text_hash}
+    merged = store.merge(plan.task_ids, stamp)
+    scores = merged["scores"]
+    expected = check_expected(protocol.expected, scores, merged["predictions"])
+    status = store.finished()
+    n_failed = sum(1 for t in plan.task_ids if status.get(t) == "failed")
+    session = {"started_at": started_at, "finished_at": now_iso(), "jobs": jobs, "ran": n_ran,
+               "skipped": len(plan.tasks) - len(pending), "force": force,
+               "seconds": round(time.perf_counter() - t_start, 3)}
+    manifest = update_manifest(
+        store.read_manifest(),
+        run={"run_id": plan.run_id, "results_dir": str(out)},
+        protocol={"name": protocol.name, "path": str(protocol.path) if protocol.path else None,
+                  "text": protocol.text, "text_hash": protocol.text_hash, "content_hash": protocol.content_hash,
+                  "seed": protocol.seed, "repetitions": protocol.repetitions, "scheme": protocol.scheme.name},
+        dataset={"ref": protocol.dataset.name, "resolved": plan.dataset_ref, "hash": plan.dataset.content_hash,
+                 "source_hash": plan.source_hash, "captures": len(plan.dataset),
+                 "filters": protocol.dataset.filters, "exclude": protocol.dataset.exclude,
+                 "sensor": plan.dataset.sensor.to_dict()},
+        session=session,
+        tasks={"total": len(plan.tasks), "merged": len(scores), "failed": n_failed, "folds": plan.n_folds,
+               "ids_hash": plan.ids_hash, "task_ids": plan.task_ids},
+        notes=plan.notes,
+        expected=expected,
+    )
+    store.write_manifest(manifest)
+    return RunResult(out=out, run_id=plan.run_id, n_tasks=len(plan.tasks), n_ran=n_ran,
+                     n_skipped=len(plan.tasks) - len(pending), n_failed=n_failed, noop=False,
+                     seconds=time.perf_counter() - t_start, scores=scores, summary=summarize(scores),
+                     expected=expected, notes=plan.notes)
+
+
+def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None, *, jobs: int = 1,
+                 force: bool = False, retry_failed: bool = False, progress: bool | None = None,
+                 cache_root: str | Path | None = None, dataset: TouchDataset | None = None,
+                 worker_setup=None) -> RunResult:
+    """Validate, plan and run a protocol (a :class:`Protocol` or a file path)."""
+    if not isinstance(protocol, Protocol):
+        protocol = load_protocol(protocol)
+    plan = plan_run(protocol, cache_root=cache_root, dataset=dataset)
+    return run_plan(plan, out, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
+                    worker_setup=worker_setup)

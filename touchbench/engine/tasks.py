@@ -1,0 +1,348 @@
+"""One task: (repetition, fold, feature combination, classifier) -> scores and predictions.
+
+A task is independent of every other: it reads the dataset (shared,
+read-only), the fold's indices and the feature cache, fits the combination's
+fold-dependent feature sets and the classifier on the training fold only,
+predicts the test fold and measures its timings. It returns one scores row
+and one predictions table; it never raises for an error of the feature set
+or classifier: that error becomes a ``failed`` row (the run goes on).
+
+Determinism: the classifier's ``random_state`` is the task's ``seed``
+(derived from the protocol seed and the task's identity), and every task
+runs with BLAS / OpenMP / torch limited to one thread, so the predictions do
+not depend on ``--jobs`` or on which worker ran the task.
+
+Labels: the classifier is fitted on integer codes ``0..C-1`` of the classes
+present in the training fold (sorted), which every estimator accepts
+(XGBoost needs contiguous codes), and predictions are decoded back.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import inspect
+import time
+import traceback
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+import pandas as pd
+
+from ..datasets.model import SensorSpec, TouchDataset
+from ..protocols.splits import Fold, fold_notes
+from .cache import FeatureCache, crop_captures
+
+__all__ = ["RunContext", "SetSpec", "Task", "execute_task", "make_feature_set", "single_thread"]
+
+LATENCY_REPEATS = 5
+
+
+def make_feature_set(name: str, params: dict[str, Any], sensor: SensorSpec | None):
+    """Build the registered feature set, passing ``sensor`` when its constructor takes it."""
+    from ..features import FEATURES
+
+    cls = FEATURES.get(name)
+    kwargs = dict(params)
+    try:
+        if sensor is not None and "sensor" in inspect.signature(cls).parameters:
+            kwargs["sensor"] = sensor
+    except (TypeError, ValueError):
+        pass
+    return cls(**kwargs)
+
+
+def _accepts(fn: Any, name: str) -> bool:
+    try:
+        return name in inspect.signature(fn).parameters
+    except (TypeError, ValueError):
+        return False
+
+
+@contextlib.contextmanager
+def single_thread():
+    """BLAS/OpenMP and torch limited to one thread (deterministic, no oversubscription)."""
+    import sys
+
+    from threadpoolctl import threadpool_limits
+
+    torch = sys.modules.get("torch")
+    prev = torch.get_num_threads() if torch is not None else None
+    with threadpool_limits(limits=1):
+        if torch is not None:
+            torch.set_num_threads(1)
+        try:
+            yield
+        finally:
+            if torch is not None and prev is not None:
+                torch.set_num_threads(prev)
+
+
+_SETUP_DONE: set = set()
+
+
+def run_setup(setup: Callable[[], None] | None) -> None:
+    """Call a worker set-up function once per process (a picklable module-level function)."""
+    if setup is None:
+        return
+    key = (getattr(setup, "__module__", ""), getattr(setup, "__qualname__", repr(setup)))
+    if key not in _SETUP_DONE:
+        setup()
+        _SETUP_DONE.add(key)
+
+
+@dataclass(frozen=True)
+class SetSpec:
+    """One feature set of a task's combination, with its cache keys."""
+
+    name: str
+    params: dict[str, Any]
+    fold_dependent: bool
+    key_full: str | None = None  # cache key of the uncut captures
+    key_crop: str | None = None  # cache key of the cut captures (early scheme)
+
+
+@dataclass(frozen=True)
+class Task:
+    task_id: str
+    repetition: int
+    fold: Fold
+    features_label: str
+    sets: tuple[SetSpec, ...]
+    classifier_label: str
+    classifier_name: str
+    classifier_params: dict[str, Any]
+    seed: int
+    crop_frames: int | None = None  # resolved from fold.crop with the sensor's frame rate
+    base_row: dict[str, Any] = field(default_factory=dict)
+
+
+class RunContext:
+    """What every task shares: the dataset, its labels and the feature cache.
+
+    Pickled for parallel workers without the dataset itself: a worker loads
+    it once from ``dataset_path`` (a Parquet copy in the cache) and keeps it
+    for the following tasks.
+    """
+
+    _loaded: dict[str, TouchDataset] = {}
+
+    def __init__(self, dataset: TouchDataset, target: str, cache_root: Path, dataset_path: Path | None = None,
+                 setup: Callable[[], None] | None = None):
+        self.dataset_hash = dataset.content_hash
+        self.dataset_path = dataset_path
+        self.target = target
+        self.cache_root = Path(cache_root)
+        self.setup = setup
+        self._dataset: TouchDataset | None = dataset
+        RunContext._loaded[self.dataset_hash] = dataset
+
+    def ensure_setup(self) -> None:
+        """Run ``setup`` (e.g. registering plug-in components) once per process."""
+        run_setup(self.setup)
+
+    def __getstate__(self) -> dict[str, Any]:
+        d = dict(self.__dict__)
+        d["_dataset"] = None
+        return d
+
+    @property
+    def dataset(self) -> TouchDataset:
+        if self._dataset is None:
+            ds = RunContext._loaded.get(self.dataset_hash)
+            if ds is None:
+                assert self.dataset_path is not None, "a worker needs the dataset's Parquet copy"
+                ds = TouchDataset.from_parquet(self.dataset_path)
+                RunContext._loaded = {self.dataset_hash: ds}  # one dataset per worker
+            self._dataset = ds
+        return self._dataset
+
+    @property
+    def cache(self) -> FeatureCache:
+        return FeatureCache(self.cache_root)
+
+    def labels(self) -> np.ndarray:
+        return np.array([str(v) for v in self.dataset.meta[self.target].tolist()], dtype=object)
+
+
+# ----------------------------------------------------------------- metrics
+def metrics(y_true: np.ndarray, y_pred: np.ndarray) -> dict[str, float]:
+    """Accuracy, balanced accuracy (mean recall over the true classes) and macro F1.
+
+    Macro F1 averages over the classes present in truth or prediction
+    (a class neither present nor predicted has no F1). Computed with
+    scikit-learn; its warnings for absent classes are silenced (the fold's
+    notes describe them).
+    """
+    from sklearn.metrics import balanced_accuracy_score, f1_score
+
+    yt = np.asarray(y_true).astype(str)
+    yp = np.asarray(y_pred).astype(str)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return {
+            "accuracy": float(np.mean(yt == yp)),
+            "balanced_accuracy": float(balanced_accuracy_score(yt, yp)),
+            "macro_f1": float(f1_score(yt, yp, average="macro", labels=sorted(set(yt) | set(yp)), zero_division=0)),
+        }
+
+
+# ----------------------------------------------------------------- features
+def _fold_features(task: Task, ctx: RunContext, y_train: np.ndarray):
+    """Training and test matrices of the task's combination, the fitted sets and timings."""
+    ds = ctx.dataset
+    fold = task.fold
+    crop_train = fold.crop is not None and fold.crop.train
+    n = task.crop_frames
+    train_caps = test_caps = None
+    X_tr, X_te, fitted = [], [], []
+    per_capture = 0.0
+    fit_seconds = 0.0
+    cache = ctx.cache
+    for s in task.sets:
+        if not s.fold_dependent:
+            k_tr = s.key_crop if crop_train else s.key_full
+            k_te = s.key_crop if n is not None else s.key_full
+            got_tr = cache.load(k_tr)
+            got_te = got_tr if k_te == k_tr else cache.load(k_te)
+            if got_tr is None or got_te is None:
+                raise RuntimeError(f"feature cache entry for {s.name!r} is missing (was the cache cleared during the run?)")
+            X_tr.append(np.asarray(got_tr[0][fold.train], dtype=np.float64))
+            X_te.append(np.asarray(got_te[0][fold.test], dtype=np.float64))
+            per_capture += float(got_te[1].get("seconds_per_capture", np.nan))
+            fitted.append(None)  # built lazily for the latency measurement
+        else:
+            if train_caps is None:
+                train_caps = crop_captures([ds.captures[i] for i in fold.train], n if crop_train else None)
+                test_caps = crop_captures([ds.captures[i] for i in fold.test], n)
+            fs = make_feature_set(s.name, s.params, ds.sensor)
+            t0 = time.perf_counter()
+            fs.fit(train_caps, y_train)
+            fit_seconds += time.perf_counter() - t0
+            X_tr.append(np.asarray(fs.transform(train_caps), dtype=np.float64))
+            t0 = time.perf_counter()
+            X_te.append(np.asarray(fs.transform(test_caps), dtype=np.float64))
+            per_capture += (time.perf_counter() - t0) / max(1, len(test_caps))
+            fitted.append(fs)
+    return np.hstack(X_tr), np.hstack(X_te), fitted, per_capture, fit_seconds
+
+
+def _latency_sets(task: Task, ctx: RunContext, fitted: list, y_train: np.ndarray) -> list:
+    """Fitted feature sets for one-capture latency (fold-independent ones fitted on a few captures)."""
+    ds = ctx.dataset
+    out = []
+    for s, fs in zip(task.sets, fitted):
+        if fs is None:
+            fs = make_feature_set(s.name, s.params, ds.sensor)
+            few = [ds.captures[i] for i in task.fold.train[:2]]
+            fs.fit(few, y_train[:2])
+        out.append(fs)
+    return out
+
+
+def _measure_latency(sets: list, capture: np.ndarray, predict) -> float:
+    """Median milliseconds for features + predict of one capture, after one warm-up call."""
+
+    def once():
+        x = np.hstack([np.asarray(fs.transform([capture]), dtype=np.float64) for fs in sets])
+        if predict is not None:
+            predict(x)
+
+    once()
+    times = []
+    for _ in range(LATENCY_REPEATS):
+        t0 = time.perf_counter()
+        once()
+        times.append(time.perf_counter() - t0)
+    return 1000.0 * float(np.median(times))
+
+
+# ----------------------------------------------------------------- the task
+def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFrame | None]:
+    """Run one task; a feature or classifier error becomes a ``failed`` row."""
+    from ..classifiers import make_classifier
+
+    ctx.ensure_setup()
+    row = dict(task.base_row)
+    row.update(status="ok", error="", accuracy=np.nan, balanced_accuracy=np.nan, macro_f1=np.nan,
+               feature_seconds_per_capture=np.nan, feature_fit_seconds=np.nan, fit_seconds=np.nan,
+               predict_seconds=np.nan, latency_ms=np.nan, n_classes_train=0)
+    ds = ctx.dataset
+    y = ctx.labels()
+    fold = task.fold
+    y_train, y_test = y[fold.train], y[fold.test]
+    notes = list(fold.notes) + fold_notes(fold, y)
+    preds = None
+    try:
+        with single_thread(), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            X_tr, X_te, fitted, per_capture, feat_fit = _fold_features(task, ctx, y_train)
+            row["feature_seconds_per_capture"] = per_capture
+            row["feature_fit_seconds"] = feat_fit
+            classes = np.array(sorted(set(y_train)), dtype=object)
+            row["n_classes_train"] = int(len(classes))
+            code = {c: i for i, c in enumerate(classes)}
+            c_train = np.array([code[v] for v in y_train], dtype=np.int64)
+            proba = None
+            est = None
+            if len(classes) == 1:
+                t0 = time.perf_counter()
+                y_pred = np.array([classes[0]] * len(fold.test), dtype=object)
+                row["fit_seconds"] = 0.0
+                row["predict_seconds"] = time.perf_counter() - t0
+            else:
+                est = make_classifier(task.classifier_name, random_state=task.seed, **task.classifier_params)
+                fit_kw = {}
+                if _accepts(est.fit, "groups"):
+                    fit_kw["groups"] = np.array([str(v) for v in ds.meta["subject"].to_numpy()[fold.train]], dtype=object)
+                t0 = time.perf_counter()
+                est.fit(X_tr, c_train, **fit_kw)
+                row["fit_seconds"] = time.perf_counter() - t0
+                t0 = time.perf_counter()
+                p_codes = np.asarray(est.predict(X_te))
+                row["predict_seconds"] = time.perf_counter() - t0
+                y_pred = classes[p_codes.astype(np.int64)]
+                if hasattr(est, "predict_proba"):
+                    try:
+                        P = np.asarray(est.predict_proba(X_te), dtype=np.float64)
+                        est_classes = getattr(est, "classes_", np.arange(P.shape[1]))
+                        proba = {str(classes[int(c)]): P[:, j] for j, c in enumerate(est_classes)}
+                    except Exception:  # probabilities are optional
+                        proba = None
+            row.update(metrics(y_test, y_pred))
+            # latency: features + predict for one capture, after warm-up
+            lat_sets = _latency_sets(task, ctx, fitted, y_train)
+            cap = ds.captures[int(fold.test[0])]
+            if task.crop_frames is not None:
+                cap = cap[: task.crop_frames]
+            row["latency_ms"] = _measure_latency(lat_sets, cap, None if est is None else est.predict)
+        meta = ds.meta.iloc[fold.test]
+        preds = pd.DataFrame({
+            "task_id": task.task_id,
+            "repetition": task.repetition,
+            "fold": fold.name,
+            "fold_group": fold.group,
+            "early_frames": np.float64(task.crop_frames) if task.crop_frames is not None else np.nan,
+            "features": task.features_label,
+            "classifier": task.classifier_label,
+            "capture_id": meta["capture_id"].astype(str).to_numpy(),
+            "subject": meta["subject"].astype(str).to_numpy(),
+            "gesture": meta["gesture"].astype(str).to_numpy(),
+            "true": y_test.astype(str),
+            "predicted": y_pred.astype(str),
+            "correct": (y_test.astype(str) == y_pred.astype(str)),
+        })
+        if proba is not None:
+            for label in sorted(proba):
+                preds[f"proba_{label}"] = proba[label]
+    except Exception as e:  # the task fails, the run goes on
+        tb = traceback.format_exc(limit=-3)
+        row["status"] = "failed"
+        row["error"] = f"{type(e).__name__}: {e}\n{tb}"
+        preds = None
+    row["notes"] = "; ".join(dict.fromkeys(notes))
+    row["finished_at"] = pd.Timestamp.now(tz="UTC").isoformat()
+    return row, preds
+

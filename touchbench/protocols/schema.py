@@ -1,0 +1,734 @@
+"""The protocol file: a YAML document validated by a pydantic schema.
+
+A protocol names everything a benchmark run needs::
+
+    name: haart-loso-msd-rf            # default: the file name without .yaml
+    description: one line shown by `touchbench protocols list`
+    dataset:                           # or just `dataset: haart`
+      name: haart                      # registered name, scene:NAME, or a .parquet path
+      filters: {gesture: [pat, rub]}   # keep only these values (any metadata column)
+      exclude: {subject: [s03]}        # drop these values
+      options: {}                      # keyword arguments of the loader / scene generator
+    target: gesture                    # or subject (person identification, Flagg 2012)
+    scheme: {name: loso}               # or just `scheme: loso`; parameters beside name
+    features:                          # a list of combinations; each is concatenated
+      - [msd]
+      - [sd, bmh]
+      - [{name: smmhh, params: {...}}]
+    classifiers:
+      - gaus-rf
+      - {name: gaus-rf, params: {n_estimators: 100}, label: rf100}
+      - {name: cnn, params: {epochs: {grid: [10, 20]}}}   # a grid: one entry per value
+    seed: 0                            # every randomness is derived from it
+    repetitions: 1                     # the whole evaluation repeated with derived seeds
+    expected:                          # optional: the paper's numbers, in percent
+      metric: accuracy
+      tolerance: 3.0                   # percentage points
+      results:
+        - {features: [msd], classifier: gaus-rf, value: 54.82}
+
+**Parameter grids.** A feature or classifier parameter written
+``{grid: [v1, v2, ...]}`` expands to one entry per value (the cartesian
+product when several parameters have grids). Expanded entries are labelled
+``name(param=value)``. A plain list is a list-valued parameter, never a grid.
+
+**Errors.** The YAML is composed with node positions, so every error names
+the file, the line and the field: ``protocols/x.yaml:12: classifiers[1].name:
+unknown classifier 'gaus-fr'; did you mean 'gaus-rf'?``. Validation happens
+in passes: the shape (pydantic), then the scheme's own parameters (each
+scheme has a pydantic ``Params`` model), feature and classifier parameter
+names (against the constructors; classifiers are built once with their
+parameters), and the ``expected`` references. Checks that need the data
+(filter values, metadata columns) run in :mod:`touchbench.engine.runner`
+before any work and report through :meth:`Protocol.error_at`.
+"""
+
+from __future__ import annotations
+
+import copy
+import difflib
+import hashlib
+import inspect
+import itertools
+import json
+import re
+import typing
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
+
+from ..errors import TouchbenchError
+from .splits import SPLITTERS, Splitter, SplitError
+
+__all__ = [
+    "ClassifierEntry",
+    "FeatureCombination",
+    "Protocol",
+    "ProtocolError",
+    "canonical_json",
+    "expand_grid",
+    "load_protocol",
+    "parse_protocol",
+]
+
+METRICS = ("accuracy", "balanced_accuracy", "macro_f1")
+_NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
+
+
+class ProtocolError(TouchbenchError):
+    """An invalid protocol: every line names the file, line and field."""
+
+    def __init__(self, message: str, issues: list[tuple[str, int | None, str, str]] | None = None):
+        super().__init__(message)
+        self.issues = issues or []
+
+
+# ----------------------------------------------------------------- helpers
+def canonical_json(obj: Any) -> str:
+    """JSON with sorted keys, for hashing and for the ``params`` columns."""
+    return json.dumps(obj, sort_keys=True, separators=(",", ":"), default=str)
+
+
+def _is_grid(v: Any) -> bool:
+    return isinstance(v, dict) and set(v) == {"grid"}
+
+
+def expand_grid(params: dict[str, Any]) -> list[dict[str, Any]]:
+    """Expand ``{p: {grid: [a, b]}}`` values into one parameter dict per combination.
+
+    >>> expand_grid({"a": 1, "b": {"grid": [2, 3]}})
+    [{'a': 1, 'b': 2}, {'a': 1, 'b': 3}]
+    """
+    keys = [k for k, v in params.items() if _is_grid(v)]
+    if not keys:
+        return [dict(params)]
+    out = []
+    for combo in itertools.product(*(params[k]["grid"] for k in keys)):
+        d = dict(params)
+        d.update(zip(keys, combo))
+        out.append(d)
+    return out
+
+
+def _fmt_value(v: Any) -> str:
+    return json.dumps(v, default=str) if not isinstance(v, str) else v
+
+
+def _label(name: str, params: dict[str, Any], keys: list[str] | None = None) -> str:
+    keys = sorted(params) if keys is None else keys
+    if not keys:
+        return name
+    return f"{name}(" + ",".join(f"{k}={_fmt_value(params[k])}" for k in keys) + ")"
+
+
+def _suggest(word: str, choices: list[str]) -> str:
+    close = difflib.get_close_matches(str(word), choices, n=3, cutoff=0.5)
+    return f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
+
+
+# ----------------------------------------------------------------- YAML with lines
+def _line_map(text: str) -> dict[tuple, int]:
+    """Path (tuple of keys / indices) -> 1-based line of every YAML node."""
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.YAMLError:
+        return {}
+    out: dict[tuple, int] = {}
+
+    def walk(node: yaml.Node, path: tuple) -> None:
+        out.setdefault(path, node.start_mark.line + 1)
+        if isinstance(node, yaml.MappingNode):
+            for k, v in node.value:
+                p = path + (str(k.value),)
+                out[p] = k.start_mark.line + 1
+                walk(v, p)
+        elif isinstance(node, yaml.SequenceNode):
+            for i, v in enumerate(node.value):
+                p = path + (i,)
+                out[p] = v.start_mark.line + 1
+                walk(v, p)
+
+    if root is not None:
+        walk(root, ())
+    return out
+
+
+def _loc_str(loc: tuple) -> str:
+    s = ""
+    for part in loc:
+        if isinstance(part, int):
+            s += f"[{part}]"
+        else:
+            s += ("." if s else "") + str(part)
+    return s or "(top level)"
+
+
+# ----------------------------------------------------------------- models
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+def _registry_check(reg, name: str) -> str:
+    if name not in reg:
+        raise ValueError(reg.suggest(name))
+    return name
+
+
+class FeatureRef(_Model):
+    """One feature set of a combination: a registered name and its parameters."""
+
+    name: str
+    params: dict[str, Any] = Field(default_factory=dict)
+
+    @field_validator("name")
+    @classmethod
+    def _known(cls, v: str) -> str:
+        from ..features import FEATURES
+
+        return _registry_check(FEATURES, v)
+
+
+class ClassifierSpec(_Model):
+    """A classifier entry: registered name, parameters (may hold grids), label."""
+
+    name: str
+    params: dict[str, Any] = Field(default_factory=dict)
+    label: str | None = None
+
+    @field_validator("name")
+    @classmethod
+    def _known(cls, v: str) -> str:
+        from ..classifiers import CLASSIFIERS
+
+        return _registry_check(CLASSIFIERS, v)
+
+
+def _coerce_str_list(v: Any) -> Any:
+    if isinstance(v, (str, int, float, bool)):
+        return [str(v)]
+    if isinstance(v, list):
+        return [x if isinstance(x, (dict, list)) else str(x) for x in v]
+    return v
+
+
+class DatasetSpec(_Model):
+    """Which captures: a dataset reference and metadata filters."""
+
+    name: str = Field(min_length=1)
+    filters: dict[str, list[str]] = Field(default_factory=dict)
+    exclude: dict[str, list[str]] = Field(default_factory=dict)
+    options: dict[str, Any] = Field(default_factory=dict)
+
+    @field_validator("filters", "exclude", mode="before")
+    @classmethod
+    def _lists(cls, v: Any) -> Any:
+        if isinstance(v, dict):
+            return {k: _coerce_str_list(x) for k, x in v.items()}
+        return v
+
+
+
+class SchemeSpec(BaseModel):
+    """``name`` of a registered scheme; the other keys are its parameters."""
+
+    model_config = ConfigDict(extra="allow")
+    name: str
+
+    @field_validator("name")
+    @classmethod
+    def _known(cls, v: str) -> str:
+        return _registry_check(SPLITTERS, v)
+
+    @property
+    def params(self) -> dict[str, Any]:
+        return dict(self.model_extra or {})
+
+
+class ExpectedResult(_Model):
+    """One number from a paper: a feature combination x classifier, in percent."""
+
+    features: list[str] = Field(min_length=1)
+    classifier: str
+    value: float
+    metric: Literal["accuracy", "balanced_accuracy", "macro_f1"] | None = None
+    tolerance: float | None = Field(default=None, ge=0)
+    group: str | None = None
+    source: str | None = None
+
+    @field_validator("features", mode="before")
+    @classmethod
+    def _split(cls, v: Any) -> Any:
+        if isinstance(v, str):
+            return v.split("+")
+        return v
+
+
+class Expected(_Model):
+    """Paper numbers the report compares against (``value`` in percent)."""
+
+    metric: Literal["accuracy", "balanced_accuracy", "macro_f1"] = "accuracy"
+    tolerance: float = Field(default=3.0, ge=0)
+    aggregate: Literal["mean", "pooled"] = "mean"
+    source: str | None = None
+    results: list[ExpectedResult] = Field(min_length=1)
+
+
+class FeatureCombination(BaseModel):
+    """An expanded feature combination: concatenation of (name, params) sets."""
+
+    label: str
+    sets: list[tuple[str, dict[str, Any]]]
+
+    @property
+    def names(self) -> list[str]:
+        return [n for n, _ in self.sets]
+
+
+class ClassifierEntry(BaseModel):
+    """An expanded classifier entry (one value of every grid)."""
+
+    label: str
+    name: str
+    params: dict[str, Any]
+
+
+class Protocol(_Model):
+    """A validated protocol. Build with :func:`load_protocol` / :func:`parse_protocol`."""
+
+    name: str
+    description: str = ""
+    dataset: DatasetSpec
+    target: Literal["gesture", "subject"] = "gesture"
+    scheme: SchemeSpec
+    features: list[list[FeatureRef]] = Field(min_length=1)
+    classifiers: list[ClassifierSpec] = Field(min_length=1)
+    seed: int = 0
+    repetitions: int = Field(default=1, ge=1)
+    expected: Expected | None = None
+
+    _path: Path | None = PrivateAttr(default=None)
+    _text: str = PrivateAttr(default="")
+    _lines: dict[tuple, int] = PrivateAttr(default_factory=dict)
+
+    @field_validator("name")
+    @classmethod
+    def _name_ok(cls, v: str) -> str:
+        if not _NAME_RE.match(v):
+            raise ValueError(f"name {v!r} must be letters, digits, '.', '_' or '-' (it names the results folder)")
+        return v
+
+    @model_validator(mode="before")
+    @classmethod
+    def _shorthands(cls, d: Any) -> Any:
+        if not isinstance(d, dict):
+            return d
+        d = dict(d)
+        if isinstance(d.get("dataset"), str):
+            d["dataset"] = {"name": d["dataset"]}
+        if isinstance(d.get("scheme"), str):
+            d["scheme"] = {"name": d["scheme"]}
+        feats = d.get("features")
+        if isinstance(feats, list):
+            out = []
+            for combo in feats:
+                if isinstance(combo, (str, dict)):
+                    combo = [combo]
+                if isinstance(combo, list):
+                    combo = [{"name": f} if isinstance(f, str) else f for f in combo]
+                out.append(combo)
+            d["features"] = out
+        clfs = d.get("classifiers")
+        if isinstance(clfs, list):
+            d["classifiers"] = [{"name": c} if isinstance(c, str) else c for c in clfs]
+        return d
+
+
+    # ----------------------------------------------------------- accessors
+    @property
+    def path(self) -> Path | None:
+        return self._path
+
+    @property
+    def text(self) -> str:
+        return self._text
+
+    @property
+    def text_hash(self) -> str:
+        """SHA-256 of the protocol file's text."""
+        return hashlib.sha256(self._text.encode()).hexdigest()
+
+    def content(self) -> dict[str, Any]:
+        """The validated protocol as plain data (what determines results)."""
+        return self.model_dump(mode="json", exclude={"description", "expected"})
+
+    @property
+    def content_hash(self) -> str:
+        return hashlib.sha256(canonical_json(self.content()).encode()).hexdigest()
+
+    def line_of(self, loc: tuple) -> int | None:
+        return _best_line(self._lines, loc)
+
+    def error_at(self, loc: tuple, message: str) -> ProtocolError:
+        """A :class:`ProtocolError` at field ``loc`` (for checks that need the data)."""
+        return _make_error(self._path, self._lines, [(loc, message)])
+
+    def combinations(self) -> list[FeatureCombination]:
+        """Feature combinations with parameter grids expanded."""
+        out = []
+        for combo in self.features:
+            per_set = []
+            for ref in combo:
+                grid_keys = [k for k, v in ref.params.items() if _is_grid(v)]
+                per_set.append([(ref.name, p, grid_keys) for p in expand_grid(ref.params)])
+            for choice in itertools.product(*per_set):
+                sets = [(n, p) for n, p, _ in choice]
+                label = "+".join(_label(n, p, sorted(g)) if g else n for n, p, g in choice)
+                out.append(FeatureCombination(label=label, sets=sets))
+        # Entries that differ only in non-grid parameters get labels with all parameters.
+        labels = [c.label for c in out]
+        for c in out:
+            if labels.count(c.label) > 1:
+                c.label = "+".join(_label(n, p) for n, p in c.sets)
+        return out
+
+    def classifier_entries(self) -> list[ClassifierEntry]:
+        """Classifier entries with parameter grids expanded."""
+        out = []
+        for spec in self.classifiers:
+            grid_keys = sorted(k for k, v in spec.params.items() if _is_grid(v))
+            for p in expand_grid(spec.params):
+                base = spec.label or spec.name
+                label = _label(base, p, grid_keys) if grid_keys else base
+                out.append(ClassifierEntry(label=label, name=spec.name, params=p))
+        labels = [c.label for c in out]
+        for c in out:
+            if labels.count(c.label) > 1:
+                c.label = _label(c.label, c.params)
+        return out
+
+    def splitter(self, repetition: int = 0) -> Splitter:
+        """The scheme, seeded for ``repetition``."""
+        from .seeding import derive_seed
+        from .splits import make_splitter
+
+        params = self.scheme.params
+        return make_splitter(self.scheme.name, target=self.target,
+                             random_state=derive_seed(self.seed, "split", repetition), **params)
+
+
+# ----------------------------------------------------------------- error mapping
+def _best_line(lines: dict[tuple, int], loc: tuple) -> int | None:
+    best = lines.get((), None)
+    prefix: tuple = ()
+    for part in loc:
+        cand = prefix + (part if isinstance(part, int) else str(part),)
+        if cand in lines:
+            prefix = cand
+            best = lines[cand]
+        else:
+            break
+    return best
+
+
+def _make_error(path: Path | None, lines: dict[tuple, int], issues: list[tuple[tuple, str]]) -> ProtocolError:
+    where = str(path) if path is not None else "<protocol>"
+    rows, out = [], []
+    for loc, msg in issues:
+        line = _best_line(lines, loc) if loc else None
+        loc_s = _loc_str(loc)
+        rows.append((where, line, loc_s, msg))
+        out.append(f"{where}{':' + str(line) if line else ''}: {loc_s}: {msg}")
+    return ProtocolError("\n".join(out), rows)
+
+
+def _model_fields_at(model: type[BaseModel], loc: tuple) -> list[str] | None:
+    """Field names of the model reached by walking ``loc`` through annotations."""
+    tp: Any = model
+    for part in loc:
+        tp = _unwrap(tp, part)
+        if tp is None:
+            return None
+    if isinstance(tp, type) and issubclass(tp, BaseModel):
+        return list(tp.model_fields)
+    return None
+
+
+def _unwrap(tp: Any, part: Any) -> Any:
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, getattr(__import__("types"), "UnionType", None)):
+        args = [a for a in typing.get_args(tp) if a is not type(None)]
+        return _unwrap(args[0], part) if len(args) == 1 else None
+    if isinstance(tp, type) and issubclass(tp, BaseModel):
+        f = tp.model_fields.get(str(part))
+        return None if f is None else f.annotation
+    if origin in (list, tuple) and isinstance(part, int):
+        return typing.get_args(tp)[0]
+    if origin is dict:
+        return typing.get_args(tp)[1]
+    return None
+
+
+def _pydantic_issues(err: ValidationError, model: type[BaseModel], prefix: tuple = ()) -> list[tuple[tuple, str]]:
+    issues = []
+    for e in err.errors():
+        loc = tuple(e["loc"])
+        kind = e["type"]
+        msg = e["msg"]
+        if msg.startswith("Value error, "):
+            msg = msg[len("Value error, "):]
+        if kind == "missing":
+            msg = "missing required field"
+        elif kind == "extra_forbidden":
+            fields = _model_fields_at(model, loc[:-1]) or []
+            msg = f"unknown field{_suggest(str(loc[-1]), fields)}"
+            if fields:
+                msg += f" (allowed: {', '.join(fields)})"
+        elif kind not in ("value_error", "assertion_error"):
+            value = e.get("input")
+            if isinstance(value, (str, int, float, bool)) or value is None:
+                msg = f"{msg}, got {value!r}"
+        issues.append((prefix + loc, msg))
+    return issues
+
+
+# ----------------------------------------------------------------- deeper passes
+def _scheme_issues(spec: dict[str, Any], target: str, prefix: tuple) -> list[tuple[tuple, str]]:
+    name = spec.get("name")
+    if not isinstance(name, str) or name not in SPLITTERS:
+        return [(prefix + ("name",), SPLITTERS.suggest(str(name)))]
+    cls = SPLITTERS.get(name)
+    params = {k: v for k, v in spec.items() if k != "name"}
+    try:
+        validated = cls.Params.model_validate(params)
+    except ValidationError as e:
+        return _pydantic_issues(e, cls.Params, prefix)
+    if name == "early":
+        base = dict(validated.base)
+        if not isinstance(base.get("name"), str):
+            return [(prefix + ("base",), "base must name a scheme: base: {name: loso}")]
+        issues = _scheme_issues(base, target, prefix + ("base",))
+        if issues:
+            return issues
+    return []
+
+
+def _accepted_params(obj: Any) -> tuple[list[str], bool]:
+    """Parameter names a constructor / factory accepts, and whether it takes **kwargs."""
+    names: list[str] = []
+    var_kw = False
+    try:
+        sig = inspect.signature(obj)
+    except (TypeError, ValueError):
+        return names, True
+    for p in sig.parameters.values():
+        if p.kind is inspect.Parameter.VAR_KEYWORD:
+            var_kw = True
+        elif p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY):
+            names.append(p.name)
+    return names, var_kw
+
+
+def _shape_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
+    """Empty filters and empty feature combinations (named by their key / index)."""
+    issues = []
+    for col, values in protocol.dataset.filters.items():
+        if not values:
+            issues.append((("dataset", "filters", col),
+                           f"the {col} filter is empty: it would leave no captures; "
+                           "list the values to keep, or remove the filter"))
+    for i, combo in enumerate(protocol.features):
+        if not combo:
+            issues.append((("features", i), "this feature combination is empty: list at least one feature set"))
+    return issues
+
+
+def _feature_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
+    from ..features import FEATURES
+
+    issues = []
+    for i, combo in enumerate(protocol.features):
+        for j, ref in enumerate(combo):
+            cls = FEATURES.get(ref.name)
+            names, var_kw = _accepted_params(cls)
+            names = [n for n in names if n not in ("self",)]
+            for k, v in ref.params.items():
+                loc = ("features", i, j, "params", k)
+                if k == "sensor":
+                    issues.append((loc, "the engine passes the dataset's sensor; do not set 'sensor'"))
+                elif not var_kw and k not in names:
+                    issues.append((loc, f"unknown parameter {k!r} for feature set {ref.name!r}"
+                                        f"{_suggest(k, names)} (accepted: {', '.join(n for n in names if n != 'sensor') or 'none'})"))
+                elif _is_grid(v) and not (isinstance(v["grid"], list) and v["grid"]):
+                    issues.append((loc + ("grid",), "a grid must be a non-empty list of values"))
+    return issues
+
+
+def _classifier_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
+    from ..classifiers import CLASSIFIERS
+
+    issues = []
+    for i, spec in enumerate(protocol.classifiers):
+        factory = CLASSIFIERS.get(spec.name)
+        names, var_kw = _accepted_params(factory)
+        bad = False
+        for k, v in spec.params.items():
+            loc = ("classifiers", i, "params", k)
+            if k == "random_state":
+                issues.append((loc, "random_state is derived from the protocol's seed; set 'seed' instead"))
+                bad = True
+            elif _is_grid(v) and not (isinstance(v["grid"], list) and v["grid"]):
+                issues.append((loc + ("grid",), "a grid must be a non-empty list of values"))
+                bad = True
+        if var_kw:
+            # The factory forwards **params to an estimator: its get_params() names them.
+            try:
+                est = factory(random_state=0)
+                names = sorted(set(names) | set(getattr(est, "get_params", lambda: {})()))
+            except Exception:  # pragma: no cover - a broken factory is reported at construction below
+                pass
+        known = [n for n in names if n not in ("random_state",)]
+        for k in spec.params:
+            if k != "random_state" and known and k not in names:
+                issues.append((("classifiers", i, "params", k),
+                               f"unknown parameter {k!r} for classifier {spec.name!r}{_suggest(k, known)}"))
+                bad = True
+        if bad:
+            continue
+        for p in expand_grid(spec.params):
+            try:
+                factory(random_state=0, **p)
+            except Exception as e:  # any construction error is a protocol error
+                issues.append((("classifiers", i, "params"), f"classifier {spec.name!r} rejects {p}: {type(e).__name__}: {e}"))
+                break
+    return issues
+
+
+def _expected_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
+    if protocol.expected is None:
+        return []
+    combos = protocol.combinations()
+    by_names = {"+".join(c.names) for c in combos} | {c.label for c in combos}
+    clfs = protocol.classifier_entries()
+    clf_names = {c.label for c in clfs} | {c.name for c in clfs} | {s.label for s in protocol.classifiers if s.label}
+    issues = []
+    for i, r in enumerate(protocol.expected.results):
+        key = "+".join(r.features)
+        if key not in by_names:
+            issues.append((("expected", "results", i, "features"),
+                           f"no feature combination {r.features} in this protocol{_suggest(key, sorted(by_names))}"))
+        if r.classifier not in clf_names:
+            issues.append((("expected", "results", i, "classifier"),
+                           f"no classifier {r.classifier!r} in this protocol{_suggest(r.classifier, sorted(clf_names))}"))
+    return issues
+
+
+def _target_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
+    try:
+        protocol.splitter(0).check_target()
+    except SplitError as e:
+        return [(("target",), str(e))]
+    except Exception as e:
+        return [(("scheme",), f"{type(e).__name__}: {e}")]
+    return []
+
+
+def _dataset_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
+    ref = protocol.dataset.name
+    if ref.startswith("scene:"):
+        try:
+            from ..scenes import SCENES  # the scene registry (optional at import time)
+        except Exception:
+            return []
+        scene = ref[len("scene:"):]
+        if scene and not scene.endswith((".yaml", ".yml")) and scene not in SCENES:
+            return [(("dataset", "name"), SCENES.suggest(scene))]
+        return []
+    looks_like_path = ref.endswith(".parquet") or "/" in ref or "\\" in ref
+    if looks_like_path:
+        p = _resolve_path(protocol, ref)
+        if not p.is_file():
+            return [(("dataset", "name"), f"no dataset file {ref!r} (looked for {p})")]
+        return []
+    from ..datasets import DATASETS
+
+    if ref not in DATASETS:
+        return [(("dataset", "name"), DATASETS.suggest(ref) + "; or write scene:NAME or a .parquet path")]
+    return []
+
+
+def _resolve_path(protocol: Protocol, ref: str) -> Path:
+    p = Path(ref)
+    if not p.is_absolute() and protocol.path is not None and not p.exists():
+        cand = protocol.path.parent / p
+        if cand.exists():
+            return cand
+    return p
+
+
+def resolve_dataset_ref(protocol: Protocol) -> str:
+    """The dataset reference with relative paths resolved against the protocol's folder."""
+    ref = protocol.dataset.name
+    if ref.startswith("scene:"):
+        return ref
+    if ref.endswith(".parquet") or "/" in ref:
+        return str(_resolve_path(protocol, ref))
+    return ref
+
+
+# ----------------------------------------------------------------- entry points
+def parse_protocol(text: str, path: str | Path | None = None, *, deep: bool = True) -> Protocol:
+    """Validate protocol ``text``; ``path`` names it in errors.
+
+    ``deep=False`` skips the checks that build classifiers (for listing).
+    """
+    p = Path(path) if path is not None else None
+    where = str(p) if p is not None else "<protocol>"
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as e:
+        mark = getattr(e, "problem_mark", None)
+        line = f":{mark.line + 1}" if mark is not None else ""
+        problem = getattr(e, "problem", None) or str(e)
+        raise ProtocolError(f"{where}{line}: invalid YAML: {problem}") from None
+    if data is None:
+        raise ProtocolError(f"{where}: the protocol is empty")
+    if not isinstance(data, dict):
+        raise ProtocolError(f"{where}:1: a protocol is a mapping of fields (name, dataset, scheme, ...), got {type(data).__name__}")
+    lines = _line_map(text)
+    data = copy.deepcopy(data)
+    if "name" not in data and p is not None:
+        data["name"] = p.stem.replace(".yaml", "")
+    try:
+        proto = Protocol.model_validate(data)
+    except ValidationError as e:
+        raise _make_error(p, lines, _pydantic_issues(e, Protocol)) from None
+    proto._path = p
+    proto._text = text
+    proto._lines = lines
+    issues = _shape_issues(proto)
+    issues += _scheme_issues({"name": proto.scheme.name, **proto.scheme.params}, proto.target, ("scheme",))
+    issues += _dataset_issues(proto)
+    issues += _feature_issues(proto)
+    if deep:
+        issues += _classifier_issues(proto)
+    if not issues:
+        issues += _expected_issues(proto)
+    if not issues:
+        issues += _target_issues(proto)
+    if issues:
+        raise _make_error(p, lines, issues)
+    return proto
+
+
+def load_protocol(path: str | Path, *, deep: bool = True) -> Protocol:
+    """Read and validate a protocol file (see the module docstring)."""
+    p = Path(path)
+    if not p.is_file():
+        raise ProtocolError(f"{p}: no such protocol file")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ProtocolError(f"{p}: not a UTF-8 text file") from None
+    return parse_protocol(text, p, deep=deep)

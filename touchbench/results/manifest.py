@@ -1,0 +1,92 @@
+"""``manifest.json``: what a results directory was produced with.
+
+touchbench version, git revision (and whether the working tree had
+uncommitted changes), versions of the packages results depend on, platform,
+CPU count, the protocol's text and hashes, the dataset's reference and hash,
+and the start and end of every session that worked on the run (a resumed
+run has several sessions; ``started_at`` is the first one's start and
+``finished_at`` the last one's end).
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import subprocess
+import sys
+from datetime import datetime, timezone
+from importlib import metadata
+from typing import Any
+
+from .. import __version__
+from ..paths import REPO_ROOT
+
+__all__ = ["PACKAGES", "git_revision", "now_iso", "package_versions", "platform_info", "update_manifest"]
+
+PACKAGES = (
+    "numpy", "scipy", "scikit-learn", "pandas", "pyarrow", "joblib", "pydantic", "PyYAML",
+    "PyWavelets", "xgboost", "xgboost-cpu", "torch", "threadpoolctl",
+)
+
+
+def now_iso() -> str:
+    return datetime.now(timezone.utc).isoformat(timespec="seconds")
+
+
+def package_versions() -> dict[str, str | None]:
+    """Installed versions (``None`` when not installed), read without importing."""
+    out: dict[str, str | None] = {"python": platform.python_version()}
+    for name in PACKAGES:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = None
+    return out
+
+
+def git_revision() -> dict[str, Any]:
+    """``{"revision": sha or None, "dirty": bool or None}`` of the touchbench checkout."""
+    try:
+        rev = subprocess.run(["git", "rev-parse", "HEAD"], cwd=REPO_ROOT, capture_output=True, text=True, timeout=10)
+        if rev.returncode != 0:
+            return {"revision": None, "dirty": None}
+        st = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=REPO_ROOT,
+                            capture_output=True, text=True, timeout=10)
+        return {"revision": rev.stdout.strip(), "dirty": bool(st.stdout.strip()) if st.returncode == 0 else None}
+    except (OSError, subprocess.SubprocessError):
+        return {"revision": None, "dirty": None}
+
+
+def platform_info() -> dict[str, Any]:
+    return {
+        "platform": platform.platform(),
+        "machine": platform.machine(),
+        "processor": platform.processor() or None,
+        "python": sys.version.split()[0],
+        "cpu_count": os.cpu_count(),
+    }
+
+
+def update_manifest(previous: dict[str, Any] | None, *, run: dict[str, Any], protocol: dict[str, Any],
+                    dataset: dict[str, Any], session: dict[str, Any], tasks: dict[str, Any],
+                    notes: list[str], expected: list[dict[str, Any]] | None = None) -> dict[str, Any]:
+    """A manifest for this run, keeping the sessions of ``previous`` when it is the same run."""
+    sessions = []
+    if previous and previous.get("run", {}).get("run_id") == run.get("run_id"):
+        sessions = list(previous.get("sessions", []))
+    sessions.append(session)
+    return {
+        "touchbench_version": __version__,
+        "git": git_revision(),
+        "packages": package_versions(),
+        "platform": platform_info(),
+        "run": run,
+        "protocol": protocol,
+        "dataset": dataset,
+        "started_at": sessions[0].get("started_at"),
+        "finished_at": session.get("finished_at"),
+        "sessions": sessions,
+        "tasks": tasks,
+        "notes": notes,
+        "expected": expected or [],
+    }

@@ -1,0 +1,255 @@
+"""The result store: one Parquet fragment per task, written atomically, merged on read.
+
+Layout of a results directory (``results/<protocol name>/`` by default)::
+
+    fragments/<task_id>.predictions.parquet   one row per test capture
+    fragments/<task_id>.scores.parquet        one row: the task's scores (written last)
+    scores.parquet  predictions.parquet  confusion.parquet  manifest.json
+
+A task is finished when its scores fragment exists: the predictions fragment
+is written first, the scores fragment second, each to a temporary file that
+is renamed into place, so a run killed at any point leaves either a finished
+task or no trace of it (a stray predictions fragment is overwritten when the
+task is run again). The merged files are derived from the fragments of the
+tasks the protocol currently names; they are rewritten, atomically, at the
+end of every run that changed something. Fragments of tasks a protocol no
+longer names (after an edit) stay in ``fragments/`` but are not merged.
+
+Merged tables are stamped with the current ``run_id`` and protocol hash at
+merge time, so adding a classifier to a protocol reuses the finished tasks
+and the report describes the protocol as it is now.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+from typing import Any, Iterable
+
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+__all__ = ["ResultStore", "atomic_write_bytes", "atomic_write_parquet", "confusion_table"]
+
+# Columns of the scores table, in order (the engine fills them).
+SCORE_COLUMNS = [
+    "run_id", "task_id", "protocol", "protocol_hash", "dataset", "dataset_hash", "target", "scheme",
+    "repetition", "fold", "fold_group", "early_frames", "features", "feature_sets", "feature_params", "classifier",
+    "classifier_name", "classifier_params", "seed", "n_train", "n_test", "n_classes_train",
+    "accuracy", "balanced_accuracy", "macro_f1",
+    "feature_seconds_per_capture", "feature_fit_seconds", "fit_seconds", "predict_seconds", "latency_ms",
+    "status", "error", "notes", "finished_at",
+]
+PREDICTION_COLUMNS = [
+    "run_id", "task_id", "repetition", "fold", "fold_group", "early_frames", "features", "classifier",
+    "capture_id", "subject", "gesture", "true", "predicted", "correct",
+]
+
+
+def atomic_write_bytes(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file and a rename."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def atomic_write_parquet(path: Path, df: pd.DataFrame) -> None:
+    """Write ``df`` as Parquet through a temporary file and a rename."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    table = pa.Table.from_pandas(df, preserve_index=False)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        pq.write_table(table, tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _read_parquet(path: Path) -> pd.DataFrame:
+    return pq.read_table(path).to_pandas()
+
+
+def _concat(frames: list[pd.DataFrame], columns: list[str]) -> pd.DataFrame:
+    frames = [f for f in frames if len(f)]
+    if not frames:
+        return pd.DataFrame(columns=columns)
+    df = pd.concat(frames, ignore_index=True, sort=False)
+    front = [c for c in columns if c in df.columns]
+    rest = [c for c in df.columns if c not in front]
+    return df[front + sorted(rest)]
+
+
+def confusion_table(predictions: pd.DataFrame, scores: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Counts per true / predicted label, per task and pooled.
+
+    ``scope == "task"`` rows have the task's ``task_id`` and ``fold``;
+    ``scope == "pooled"`` rows sum over every fold and repetition of one
+    configuration (feature combination x classifier x early length) and have
+    an empty ``task_id`` / ``fold``.
+    """
+    cols = ["run_id", "scope", "task_id", "fold", "features", "classifier", "early_frames", "true", "predicted", "count"]
+    if predictions.empty:
+        return pd.DataFrame(columns=cols)
+    p = predictions.copy()
+    p["early_frames"] = p["early_frames"].fillna(-1)
+    keys = ["run_id", "task_id", "fold", "features", "classifier", "early_frames", "true", "predicted"]
+    per_task = p.groupby(keys, dropna=False, sort=True).size().rename("count").reset_index()
+    per_task.insert(1, "scope", "task")
+    pooled_keys = ["run_id", "features", "classifier", "early_frames", "true", "predicted"]
+    pooled = p.groupby(pooled_keys, dropna=False, sort=True).size().rename("count").reset_index()
+    pooled.insert(1, "scope", "pooled")
+    pooled["task_id"] = ""
+    pooled["fold"] = ""
+    out = pd.concat([per_task[cols], pooled[cols]], ignore_index=True)
+    out["early_frames"] = out["early_frames"].astype("float64").where(out["early_frames"] >= 0)
+    out["count"] = out["count"].astype("int64")
+    return out
+
+
+class ResultStore:
+    """Fragments and merged reports of one results directory."""
+
+    def __init__(self, root: str | Path):
+        self.root = Path(root)
+        self.fragments = self.root / "fragments"
+
+    # ----------------------------------------------------------- paths
+    def scores_fragment(self, task_id: str) -> Path:
+        return self.fragments / f"{task_id}.scores.parquet"
+
+    def predictions_fragment(self, task_id: str) -> Path:
+        return self.fragments / f"{task_id}.predictions.parquet"
+
+    @property
+    def scores_path(self) -> Path:
+        return self.root / "scores.parquet"
+
+    @property
+    def predictions_path(self) -> Path:
+        return self.root / "predictions.parquet"
+
+    @property
+    def confusion_path(self) -> Path:
+        return self.root / "confusion.parquet"
+
+    @property
+    def manifest_path(self) -> Path:
+        return self.root / "manifest.json"
+
+    # ----------------------------------------------------------- state
+    def finished(self) -> dict[str, str]:
+        """task_id -> status (``ok`` / ``failed``) of every finished task."""
+        out: dict[str, str] = {}
+        if not self.fragments.is_dir():
+            return out
+        for p in self.fragments.glob("*.scores.parquet"):
+            tid = p.name[: -len(".scores.parquet")]
+            try:
+                status = pq.read_table(p, columns=["status"]).column("status")[0].as_py()
+            except Exception:  # an unreadable fragment counts as not finished
+                continue
+            out[tid] = status
+        return out
+
+    def clean_stale_temporaries(self, older_than: float = 3600.0) -> int:
+        """Remove temporary files an interrupted run left (older than ``older_than`` s)."""
+        n = 0
+        now = time.time()
+        for d in (self.root, self.fragments):
+            if not d.is_dir():
+                continue
+            for p in d.glob(".*.tmp"):
+                try:
+                    if now - p.stat().st_mtime > older_than:
+                        p.unlink()
+                        n += 1
+                except FileNotFoundError:
+                    pass
+        return n
+
+    def forget(self, task_ids: Iterable[str]) -> None:
+        """Delete the fragments of ``task_ids`` (``--force``)."""
+        for tid in task_ids:
+            self.scores_fragment(tid).unlink(missing_ok=True)
+            self.predictions_fragment(tid).unlink(missing_ok=True)
+
+    # ----------------------------------------------------------- writing
+    def write_task(self, task_id: str, score: dict[str, Any], predictions: pd.DataFrame | None) -> None:
+        """Predictions first, scores last: the scores fragment marks the task finished."""
+        if predictions is not None and len(predictions):
+            atomic_write_parquet(self.predictions_fragment(task_id), predictions)
+        else:
+            self.predictions_fragment(task_id).unlink(missing_ok=True)
+        atomic_write_parquet(self.scores_fragment(task_id), pd.DataFrame([score]))
+
+    # ----------------------------------------------------------- reading (merge on read)
+    def read_scores(self, task_ids: Iterable[str] | None = None) -> pd.DataFrame:
+        ids = self._ids(task_ids, ".scores.parquet")
+        frames = [_read_parquet(self.scores_fragment(t)) for t in ids if self.scores_fragment(t).is_file()]
+        return _concat(frames, SCORE_COLUMNS)
+
+    def read_predictions(self, task_ids: Iterable[str] | None = None) -> pd.DataFrame:
+        ids = self._ids(task_ids, ".predictions.parquet")
+        frames = [_read_parquet(self.predictions_fragment(t)) for t in ids if self.predictions_fragment(t).is_file()]
+        return _concat(frames, PREDICTION_COLUMNS)
+
+    def _ids(self, task_ids: Iterable[str] | None, suffix: str) -> list[str]:
+        if task_ids is not None:
+            return list(task_ids)
+        if not self.fragments.is_dir():
+            return []
+        return sorted(p.name[: -len(suffix)] for p in self.fragments.glob(f"*{suffix}"))
+
+    def merge(self, task_ids: list[str], stamp: dict[str, Any]) -> dict[str, pd.DataFrame]:
+        """Write ``scores``, ``predictions`` and ``confusion`` for ``task_ids``.
+
+        ``stamp`` (``run_id``, ``protocol_hash``...) overwrites those columns,
+        so the merged report describes the current protocol. Rows keep the
+        order of ``task_ids`` (the plan's order), independent of the order
+        tasks finished in.
+        """
+        done = [t for t in task_ids if self.scores_fragment(t).is_file()]
+        scores = self.read_scores(done)
+        preds = self.read_predictions(done)
+        for df in (scores, preds):
+            for k, v in stamp.items():
+                if k in df.columns or df is scores:
+                    df[k] = v
+        order = {t: i for i, t in enumerate(task_ids)}
+        if len(scores):
+            scores = scores.sort_values("task_id", key=lambda s: s.map(order), kind="stable").reset_index(drop=True)
+        if len(preds):
+            preds = preds.sort_values("task_id", key=lambda s: s.map(order), kind="stable").reset_index(drop=True)
+        scores = _concat([scores], SCORE_COLUMNS)
+        preds = _concat([preds], PREDICTION_COLUMNS)
+        confusion = confusion_table(preds)
+        atomic_write_parquet(self.predictions_path, preds)
+        atomic_write_parquet(self.confusion_path, confusion)
+        atomic_write_parquet(self.scores_path, scores)
+        return {"scores": scores, "predictions": preds, "confusion": confusion}
+
+    def read_manifest(self) -> dict[str, Any] | None:
+        if not self.manifest_path.is_file():
+            return None
+        try:
+            return json.loads(self.manifest_path.read_text())
+        except (OSError, json.JSONDecodeError):
+            return None
+
+    def write_manifest(self, manifest: dict[str, Any]) -> None:
+        atomic_write_bytes(self.manifest_path, (json.dumps(manifest, indent=2, default=str) + "\n").encode())
+

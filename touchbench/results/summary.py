@@ -1,0 +1,111 @@
+"""Summaries of a scores table and the comparison with a protocol's ``expected`` numbers.
+
+``mean`` aggregation averages a metric over the folds of a configuration
+(what Gaus et al. report for 10-fold CV, "the average results of 10 fold
+cross validation", Sec. 4.1, and Al-mashhadani et al. for LOSO, Table 2 with
+its standard deviation over subjects). ``pooled`` computes the metric once
+over every test prediction of the configuration.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["CONFIG_KEYS", "check_expected", "summarize"]
+
+CONFIG_KEYS = ["features", "classifier", "early_frames"]
+METRICS = ["accuracy", "balanced_accuracy", "macro_f1"]
+
+
+def summarize(scores: pd.DataFrame, predictions: pd.DataFrame | None = None, by: list[str] | None = None) -> pd.DataFrame:
+    """One row per configuration: mean and standard deviation over folds, counts, pooled accuracy."""
+    by = list(by or CONFIG_KEYS)
+    if scores.empty:
+        return pd.DataFrame(columns=by + ["n_folds", "n_failed"])
+    s = scores.copy()
+    s["early_frames"] = s["early_frames"].fillna(-1) if "early_frames" in s else -1
+    rows = []
+    for key, g in s.groupby(by, sort=False, dropna=False):
+        key = key if isinstance(key, tuple) else (key,)
+        ok = g[g["status"] == "ok"]
+        row: dict[str, Any] = dict(zip(by, key))
+        row["n_folds"] = int(len(ok))
+        row["n_failed"] = int((g["status"] == "failed").sum())
+        for m in METRICS:
+            vals = ok[m].to_numpy(dtype=np.float64)
+            row[f"{m}_mean"] = float(np.mean(vals)) if len(vals) else np.nan
+            row[f"{m}_std"] = float(np.std(vals, ddof=1)) if len(vals) > 1 else np.nan
+        row["n_test"] = int(ok["n_test"].sum())
+        row["pooled_accuracy"] = (
+            float((ok["accuracy"] * ok["n_test"]).sum() / ok["n_test"].sum()) if ok["n_test"].sum() else np.nan
+        )
+        row["latency_ms_median"] = float(ok["latency_ms"].median()) if len(ok) else np.nan
+        rows.append(row)
+    out = pd.DataFrame(rows)
+    if "early_frames" in out:
+        out["early_frames"] = out["early_frames"].astype("float64").where(out["early_frames"] >= 0)
+    return out
+
+
+def _pooled_metric(preds: pd.DataFrame, metric: str) -> float:
+    from sklearn.metrics import balanced_accuracy_score, f1_score
+
+    if preds.empty:
+        return np.nan
+    t, p = preds["true"].astype(str), preds["predicted"].astype(str)
+    if metric == "accuracy":
+        return float((t == p).mean())
+    if metric == "balanced_accuracy":
+        import warnings
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return float(balanced_accuracy_score(t, p))
+    return float(f1_score(t, p, average="macro", labels=sorted(set(t) | set(p)), zero_division=0))
+
+
+def check_expected(expected, scores: pd.DataFrame, predictions: pd.DataFrame | None = None) -> list[dict[str, Any]]:
+    """Compare a protocol's ``expected`` block (values in percent) with the scores.
+
+    One dict per expected result: ``observed`` (percent, ``None`` when the
+    configuration has no successful fold), ``difference`` and ``within``
+    (``|observed - expected| <= tolerance``).
+    """
+    if expected is None:
+        return []
+    out = []
+    ok = scores[scores["status"] == "ok"] if not scores.empty else scores
+    for r in expected.results:
+        metric = r.metric or expected.metric
+        tol = r.tolerance if r.tolerance is not None else expected.tolerance
+        key = "+".join(r.features)
+        sel = ok[(ok["feature_sets"] == key) | (ok["features"] == key)] if not ok.empty else ok
+        if not sel.empty:
+            by_label = sel[sel["classifier"] == r.classifier]
+            sel = by_label if not by_label.empty else sel[sel["classifier_name"] == r.classifier]
+        if r.group is not None and not sel.empty:
+            sel = sel[sel["fold_group"] == r.group]
+        observed = None
+        if not sel.empty:
+            if expected.aggregate == "pooled" and predictions is not None:
+                observed = 100.0 * _pooled_metric(predictions[predictions["task_id"].isin(sel["task_id"])], metric)
+            else:
+                observed = 100.0 * float(sel[metric].mean())
+        out.append({
+            "features": key,
+            "classifier": r.classifier,
+            "group": r.group,
+            "metric": metric,
+            "aggregate": expected.aggregate,
+            "expected": r.value,
+            "observed": observed,
+            "difference": None if observed is None else observed - r.value,
+            "tolerance": tol,
+            "within": None if observed is None else bool(abs(observed - r.value) <= tol),
+            "n_folds": int(len(sel)),
+            "source": r.source or expected.source,
+        })
+    return out
