@@ -15,6 +15,9 @@ from ..errors import TouchbenchError
 _COMMANDS: list[tuple[str, str]] = [
     ("touchbench.cli.data", "data"),
     ("touchbench.cli.demo", "demo"),
+    ("touchbench.cli.deploy", "train"),
+    ("touchbench.cli.deploy", "predict"),
+    ("touchbench.cli.deploy", "stream"),
     ("touchbench.cli.protocols", "protocols"),
     ("touchbench.cli.run", "run"),
 ]

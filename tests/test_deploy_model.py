@@ -1,0 +1,155 @@
+"""``touchbench train`` / ``predict`` / ``stream`` on a small dataset built here.
+
+Checks: the manifest against values computed independently (content hash
+of the training captures, scikit-learn's version), a saved model predicting
+like the run engine's fold (same seed, same data), sensor refusal, method
+choice errors, frames from standard input and from a replayed file.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import sklearn
+from click.testing import CliRunner
+
+from touchbench.cli.main import cli
+from touchbench.datasets.model import SensorSpec, TouchDataset
+from touchbench.deploy.model import TrainedModel
+from touchbench.engine import run_protocol
+from touchbench.engine.testing import random_dataset
+
+PROTOCOL = """\
+name: deploy-small
+dataset: {data}
+scheme: loso
+features:
+  - [msd]
+  - [msd, bmh]
+classifiers:
+  - {{name: gaus-rf, params: {{n_estimators: 15}}, label: rf15}}
+seed: 3
+"""
+
+
+@pytest.fixture()
+def setup(tmp_path, monkeypatch):
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.chdir(tmp_path)
+    ds = random_dataset(subjects=("s1", "s2", "s3"), gestures=("pat", "rub", "stroke"), per_cell=3, frames=(20, 24))
+    data = tmp_path / "data.parquet"
+    ds.to_parquet(data)
+    proto = tmp_path / "small.yaml"
+    proto.write_text(PROTOCOL.format(data=data))
+    return ds, data, proto
+
+
+def invoke(*args, input=None):
+    res = CliRunner().invoke(cli, [str(a) for a in args], input=input, catch_exceptions=False)
+    return res
+
+
+def test_train_writes_model_and_manifest(setup, tmp_path):
+    ds, data, proto = setup
+    out = tmp_path / "m.joblib"
+    res = invoke("train", proto, "--method", "msd/rf15", "--exclude", "subject=s3", "--out", out)
+    assert res.exit_code == 0, res.output
+    manifest = json.loads((tmp_path / "m.joblib.json").read_text())
+    kept = np.flatnonzero(ds.meta["subject"].to_numpy() != "s3")
+    assert manifest["dataset"]["content_hash"] == ds.subset(kept).content_hash
+    assert manifest["dataset"]["n_captures"] == len(kept) == 18
+    assert manifest["versions"]["scikit-learn"] == sklearn.__version__
+    assert manifest["features"]["sets"] == [{"name": "msd", "params": {}}]
+    assert manifest["classifier"]["name"] == "gaus-rf" and manifest["classifier"]["params"] == {"n_estimators": 15}
+    assert manifest["classes"] == ["pat", "rub", "stroke"]
+    assert manifest["sensor"] == ds.sensor.to_dict()
+    m = TrainedModel.load(out)
+    assert m.manifest == manifest and m.method == "msd/rf15"
+    assert len(m.estimator.estimators_) == 15
+
+
+def test_fold_model_predicts_like_the_engine(setup, tmp_path):
+    ds, data, proto = setup
+    run = run_protocol(proto, tmp_path / "results")
+    assert run.n_failed == 0
+    preds = pd.read_parquet(tmp_path / "results" / "predictions.parquet")
+    res = invoke("train", proto, "--method", "msd+bmh/rf15", "--fold", "s2", "--out", tmp_path / "f.joblib")
+    assert res.exit_code == 0, res.output
+    test = ds.subset(np.flatnonzero(ds.meta["subject"].to_numpy() == "s2"))
+    test.to_parquet(tmp_path / "s2.parquet")
+    res = invoke("predict", tmp_path / "f.joblib", tmp_path / "s2.parquet", "--out", tmp_path / "p.csv")
+    assert res.exit_code == 0, res.output
+    ours = pd.read_csv(tmp_path / "p.csv").set_index("capture_id")
+    theirs = preds[(preds["fold"] == "subject=s2") & (preds["features"] == "msd+bmh")].set_index("capture_id")
+    assert len(ours) == len(theirs) == 9
+    assert (ours.loc[theirs.index, "predicted"] == theirs["predicted"]).all()
+    for c in ("pat", "rub", "stroke"):
+        np.testing.assert_allclose(ours.loc[theirs.index, f"proba_{c}"], theirs[f"proba_{c}"], rtol=0, atol=1e-12)
+
+
+def test_predict_refuses_another_sensor_and_reads_long_format(setup, tmp_path):
+    ds, data, proto = setup
+    assert invoke("train", proto, "-m", "msd/rf15", "-o", tmp_path / "m.joblib").exit_code == 0
+    other = TouchDataset("other", ds.captures, ds.meta, SensorSpec("test-4x4", (4, 4), 20.0, (0.0, 255.0)))
+    other.to_parquet(tmp_path / "other.parquet")
+    res = CliRunner().invoke(cli, ["predict", str(tmp_path / "m.joblib"), str(tmp_path / "other.parquet")])
+    assert res.exit_code == 2
+    assert "does not match the model's sensor" in res.output and "frame_rate: model 10.0, data 20.0" in res.output
+    # the same captures in the long format, read with the model's grid and frame rate
+    rows = []
+    for cid, subj, g, cap in zip(ds.meta["capture_id"], ds.meta["subject"], ds.meta["gesture"], ds.captures):
+        for t, frame in enumerate(cap):
+            rows.append({"capture_id": cid, "frame": t + 1, "subject": subj, "gesture": g,
+                         **{f"cell{i + 1}": int(v) for i, v in enumerate(frame.reshape(-1))}})
+    pd.DataFrame(rows).to_csv(tmp_path / "long.csv", index=False)
+    a = invoke("predict", tmp_path / "m.joblib", tmp_path / "long.csv", "--format", "long")
+    b = invoke("predict", tmp_path / "m.joblib", data)
+    assert a.exit_code == 0 and b.exit_code == 0
+    # long CSV values come back as float64, the Parquet as uint8: same features, same labels
+    assert a.stdout == b.stdout
+    assert "accuracy" in b.stderr
+
+
+def test_method_choice_and_bad_model_file(setup, tmp_path):
+    ds, data, proto = setup
+    res = CliRunner().invoke(cli, ["train", str(proto), "-o", str(tmp_path / "m.joblib")])
+    assert res.exit_code == 2 and "choose one with --method" in res.output and "msd+bmh/rf15" in res.output
+    res = CliRunner().invoke(cli, ["train", str(proto), "-m", "msd/rf51", "-o", str(tmp_path / "m.joblib")])
+    assert res.exit_code == 2 and "did you mean 'msd/rf15'" in res.output
+    res = CliRunner().invoke(cli, ["train", str(proto), "-m", "msd/rf15", "--fold", "s9", "-o", str(tmp_path / "m.joblib")])
+    assert res.exit_code == 2 and "no fold 's9'" in res.output
+    (tmp_path / "junk.joblib").write_bytes(b"not a model")
+    res = CliRunner().invoke(cli, ["predict", str(tmp_path / "junk.joblib"), str(data)])
+    assert res.exit_code == 2 and "not a readable touchbench model" in res.output
+    assert not (tmp_path / "m.joblib").exists()
+
+
+def test_stream_from_stdin_and_from_a_replayed_file(setup, tmp_path):
+    ds, data, proto = setup
+    res = invoke("train", proto, "-m", "msd/rf15", "-o", tmp_path / "m.joblib", "--window", "1", "--train-hop", "0.5")
+    assert res.exit_code == 0, res.output
+    cap = ds.captures[0]  # 4 x 4 frames at 10 Hz
+    lines = "\n".join(",".join(str(int(v)) for v in f.reshape(-1)) for f in cap[:20]) + "\n"
+    res = invoke("stream", tmp_path / "m.joblib", "-", "--hop", "0.5", "--threshold", "0", "--jsonl",
+                 "--summary-json", tmp_path / "s.json", input=lines)
+    assert res.exit_code == 0, res.output
+    decisions = [json.loads(x) for x in res.stdout.splitlines()]
+    # 1-s window = 10 frames, hop 5 frames, 20 frames: decisions at frames 10, 15, 20
+    assert [d["frame"] for d in decisions] == [10, 15, 20]
+    assert all(d["label"] in ("pat", "rub", "stroke") and 0 <= d["probability"] <= 1 for d in decisions)
+    summary = json.loads((tmp_path / "s.json").read_text())
+    assert summary["decisions"] == 3 and summary["latency_ms_p99"] >= summary["latency_ms_p50"] >= 0
+    assert "p50" in res.stderr and "p99" in res.stderr
+    # the same frames replayed from the dataset file give the same decisions
+    res2 = invoke("stream", tmp_path / "m.joblib", data, "--capture", ds.meta["capture_id"][0], "--hop", "0.5",
+                  "--threshold", "0", "--jsonl", "--speed", "50")
+    assert res2.exit_code == 0, res2.output
+    again = [json.loads(x) for x in res2.stdout.splitlines()][:3]
+    assert [(d["label"], d["probability"]) for d in again] == [(d["label"], d["probability"]) for d in decisions]
+    # a malformed line stops with its line number
+    bad = CliRunner().invoke(cli, ["stream", str(tmp_path / "m.joblib"), "-"], input="1,2,3\n")
+    assert bad.exit_code == 2 and "<stdin>:1:" in bad.output

@@ -1,0 +1,139 @@
+"""``touchbench train``, ``touchbench predict`` and ``touchbench stream``:
+from a leaderboard's method to a model file, offline labels and live labels."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import click
+
+
+def _floats(values, option: str) -> list[float] | None:
+    out = []
+    for v in values:
+        for part in str(v).split(","):
+            if part.strip():
+                try:
+                    out.append(float(part))
+                except ValueError:
+                    raise click.BadParameter(f"expected seconds, got {part!r}", param_hint=option) from None
+    return out or None
+
+
+@click.command("train")
+@click.argument("protocol")
+@click.option("--method", "-m", default=None,
+              help="FEATURES/CLASSIFIER as the results name it, e.g. msd+sd/gaus-rf (optional when the protocol has one).")
+@click.option("--out", "-o", required=True, type=click.Path(dir_okay=False), help="Model file to write (.joblib).")
+@click.option("--fold", default=None, help="Train on the training part of this fold of the protocol's scheme only.")
+@click.option("--where", multiple=True, metavar="COL=V1,V2", help="Keep only captures with these values (repeatable).")
+@click.option("--exclude", multiple=True, metavar="COL=V1,V2", help="Drop captures with these values (repeatable).")
+@click.option("--window", "windows", multiple=True, metavar="SECONDS",
+              help="Train on sliding windows of this length (repeatable, or comma-separated) for `stream`.")
+@click.option("--train-hop", type=float, default=None, help="Hop between training windows, seconds [default: half a window].")
+@click.option("--seed", type=int, default=None, help="Classifier seed [default: derived from the protocol seed].")
+def train(protocol, method, out, fold, where, exclude, windows, train_hop, seed) -> None:
+    """Fit one method of PROTOCOL on its data and save it with its manifest."""
+    from ..deploy.train import parse_selection, train_from_protocol
+
+    model = train_from_protocol(
+        protocol, method, fold=fold, where=parse_selection(where, "--where"),
+        exclude=parse_selection(exclude, "--exclude"), windows=_floats(windows, "--window"),
+        train_hop=train_hop, seed=seed,
+    )
+    path = model.save(out)
+    click.echo(model.describe())
+    t = model.manifest["timings"]
+    click.echo(f"saved {path} (manifest {path}.json); features {t['features_s']:.1f} s, fit {t['fit_s']:.1f} s", err=True)
+
+
+def _load_model(path: str):
+    from ..deploy.model import TrainedModel
+
+    model = TrainedModel.load(path)
+    for note in model.version_notes():
+        click.echo(f"warning: {note}", err=True)
+    return model
+
+
+@click.command("predict")
+@click.argument("model_path", metavar="MODEL")
+@click.argument("data")
+@click.option("--format", "fmt", type=click.Choice(["auto", "challenge-csv", "cost-csv", "long"]), default="auto",
+              show_default=True, help="Reader of DATA (auto: dataset name, scene:NAME or touchbench Parquet).")
+@click.option("--out", "-o", type=click.Path(dir_okay=False), default=None, help="Write the labels here (.csv or .parquet).")
+@click.option("--whole", is_flag=True, help="Label whole captures even when the model was trained on windows.")
+def predict(model_path, data, fmt, out, whole) -> None:
+    """Label the captures of DATA with MODEL; refuses data from another sensor."""
+    from ..deploy.predict import predict_dataset, read_data, write_table
+
+    model = _load_model(model_path)
+    ds = read_data(data, fmt, model)
+    table = predict_dataset(model, ds, whole=whole, source=data)
+    if out:
+        write_table(table, out)
+        click.echo(f"{out}: {len(table)} captures labelled", err=True)
+    else:
+        cols = [c for c in ("capture_id", "true", "predicted", "probability") if c in table.columns]
+        click.echo(table[cols].to_csv(index=False, float_format="%.4f"), nl=False)
+    if "true" in table.columns:
+        known = table["true"].isin([str(c) for c in model.classes])
+        if known.any():
+            acc = float((table["true"] == table["predicted"])[known].mean())
+            click.echo(f"accuracy {100 * acc:.1f}% on {int(known.sum())} captures of known classes", err=True)
+
+
+@click.command("stream")
+@click.argument("model_path", metavar="MODEL")
+@click.argument("source", default="-")
+@click.option("--window", "windows", multiple=True, metavar="SECONDS",
+              help="Window length (repeatable or comma-separated: several at once) [default: the model's].")
+@click.option("--hop", type=float, default=0.5, show_default=True, help="Seconds between decisions.")
+@click.option("--threshold", type=float, default=0.5, show_default=True,
+              help="Under this best probability the decision is 'none' (none of the above).")
+@click.option("--combine", type=click.Choice(["max", "mean"]), default="max", show_default=True,
+              help="Several windows: the most confident one decides (max) or their mean probabilities.")
+@click.option("--none-label", default="none", show_default=True)
+@click.option("--capture", default=None, help="Replay only this capture_id of SOURCE.")
+@click.option("--speed", type=float, default=1.0, show_default=True, help="Replay speed (2: twice the frame rate).")
+@click.option("--realtime/--no-realtime", default=True, show_default=True,
+              help="Replay files at their frame rate, or as fast as possible.")
+@click.option("--jsonl", is_flag=True, help="One JSON object per decision instead of text.")
+@click.option("--summary-json", type=click.Path(dir_okay=False), default=None, help="Write the summary (latencies) here.")
+def stream(model_path, source, windows, hop, threshold, combine, none_label, capture, speed, realtime, jsonl,
+           summary_json) -> None:
+    """Label a stream of frames with MODEL: SOURCE is a CSV/Parquet file replayed at
+    its frame rate, or - for standard input (one frame per line: H*W comma-separated
+    values, row-major). Prints one decision per hop, then latency p50/p99."""
+    from dataclasses import asdict
+
+    from ..deploy.stream import SlidingRecognizer, load_replay, replay, run_stream, text_frames
+
+    model = _load_model(model_path)
+    rec = SlidingRecognizer(model, _floats(windows, "--window"), hop_s=hop, threshold=threshold,
+                            combine=combine, none_label=none_label)
+    for note in rec.notes():
+        click.echo(f"note: {note}", err=True)
+    late = [0]
+    if source == "-":
+        frames = text_frames(sys.stdin, model)
+        what = "standard input"
+    else:
+        arr, rate, what = load_replay(source, model, capture)
+        frames = replay(arr, rate, speed=speed, realtime=realtime, late=late)
+    click.echo(f"{model.method} on {what}: windows {', '.join(f'{w:g}' for w in rec.windows_s)} s, "
+               f"hop {hop:g} s, threshold {threshold:g}", err=True)
+
+    def emit(d):
+        click.echo(d.to_json() if jsonl else d.to_text())
+        sys.stdout.flush()
+
+    summary = run_stream(rec, frames, emit, late=late)
+    click.echo(summary.to_text(), err=True)
+    if summary_json:
+        from pathlib import Path
+
+        from ..results.store import atomic_write_bytes
+
+        atomic_write_bytes(Path(summary_json), json.dumps(asdict(summary), indent=2).encode())

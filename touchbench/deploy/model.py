@@ -1,0 +1,354 @@
+"""A trained model: fitted feature sets + fitted classifier + manifest, in one file.
+
+:class:`TrainedModel` is what ``touchbench train`` writes and ``touchbench
+predict`` / ``touchbench stream`` read. It holds
+
+- the feature sets of the chosen combination, fitted on the training
+  captures (or on windows cut from them, see :mod:`.windows`), built the way
+  the run engine builds them (:func:`touchbench.engine.tasks.make_feature_set`,
+  with the dataset's sensor);
+- the classifier, built by :func:`touchbench.classifiers.make_classifier`
+  and fitted, as the engine does, on integer codes ``0..C-1`` of the sorted
+  class names (XGBoost needs contiguous codes), with everything limited to
+  one thread;
+- the manifest: what the model was trained on (dataset name, reference and
+  content hash of the training captures, the selection), the sensor spec,
+  the feature sets and classifier with their parameters and seed, the
+  window lengths, the class names and the package versions.
+
+The file is a joblib pickle (``MODEL_FORMAT``, ``MODEL_VERSION``) written
+atomically; the manifest is also written beside it as ``<file>.json`` for
+reading without Python. Like every pickle, a model file runs code when
+loaded: load only files you trust.
+
+Sensor check: data is refused when its sensor differs from the model's in
+grid, channels, frame rate, value range or polarity (the name alone may
+differ: a user's reader names its sensor ``custom``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import tempfile
+import time
+from dataclasses import dataclass, field
+from importlib import metadata
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from .. import __version__
+from ..datasets.model import SensorSpec, TouchDataset
+from ..errors import DataError, TouchbenchError
+from .fastforest import compile_forest
+from .windows import cut_windows, seconds_to_frames
+
+__all__ = [
+    "MODEL_FORMAT",
+    "MODEL_VERSION",
+    "SensorMismatchError",
+    "TrainedModel",
+    "fit_model",
+    "package_versions",
+    "sensor_differences",
+]
+
+MODEL_FORMAT = "touchbench-model"
+MODEL_VERSION = 1
+_VERSIONED = ("numpy", "scipy", "scikit-learn", "joblib", "pandas", "PyWavelets", "xgboost", "xgboost-cpu", "torch")
+# A pickle is only guaranteed to load with the versions that wrote it; these matter most.
+_CHECKED = ("scikit-learn", "numpy", "xgboost", "xgboost-cpu", "torch")
+
+
+class SensorMismatchError(TouchbenchError):
+    """Data from a sensor the model was not trained for."""
+
+
+def package_versions() -> dict[str, str]:
+    """touchbench, Python and the installed versions of the packages a model depends on."""
+    out = {"touchbench": __version__, "python": platform.python_version()}
+    for name in _VERSIONED:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            pass
+    return out
+
+
+def sensor_differences(model: SensorSpec, data: SensorSpec) -> list[str]:
+    """The fields in which ``data`` differs from ``model`` (the name is not compared)."""
+    out = []
+    for f in ("grid", "channels", "frame_rate", "value_range", "higher_is_more_pressure"):
+        a, b = getattr(model, f), getattr(data, f)
+        if a != b:
+            out.append(f"{f}: model {a!r}, data {b!r}")
+    return out
+
+
+@dataclass
+class TrainedModel:
+    """Fitted feature sets + classifier + manifest (see the module docstring)."""
+
+    feature_sets: list[Any]
+    estimator: Any | None  # None when the training data held one class
+    classes: np.ndarray
+    manifest: dict[str, Any]
+    _fast: Any = field(default=None, init=False, repr=False, compare=False)
+
+    # ------------------------------------------------------------ accessors
+    @property
+    def sensor(self) -> SensorSpec:
+        return SensorSpec.from_dict(self.manifest["sensor"])
+
+    @property
+    def windows(self) -> list[float] | None:
+        """Training window lengths in seconds, or None (trained on whole captures)."""
+        w = self.manifest.get("windows")
+        return None if not w else [float(v) for v in w["lengths_s"]]
+
+    @property
+    def method(self) -> str:
+        return f"{self.manifest['features']['label']}/{self.manifest['classifier']['label']}"
+
+    def check_sensor(self, sensor: SensorSpec, source: str = "data") -> None:
+        """Refuse data from another sensor (:class:`SensorMismatchError`)."""
+        diffs = sensor_differences(self.sensor, sensor)
+        if diffs:
+            raise SensorMismatchError(
+                f"{source}: sensor {sensor.name!r} does not match the model's sensor {self.sensor.name!r} ("
+                + "; ".join(diffs) + ")"
+            )
+
+    # ------------------------------------------------------------ inference
+    def transform(self, captures: Sequence[np.ndarray]) -> np.ndarray:
+        """The feature matrix of ``captures`` (the combination's sets, concatenated)."""
+        return np.hstack([np.asarray(fs.transform(captures), dtype=np.float64) for fs in self.feature_sets])
+
+    def proba_from_features(self, X: np.ndarray, fast: bool = True) -> np.ndarray:
+        """``(n, C)`` probabilities, columns in the order of :attr:`classes`.
+
+        A classifier without ``predict_proba`` gives 1 for its predicted
+        class. ``fast`` uses the flat-array forest walk for forests (same
+        numbers as scikit-learn, see :mod:`.fastforest`).
+        """
+        n, C = X.shape[0], len(self.classes)
+        if self.estimator is None:
+            return np.ones((n, 1))
+        est = self.estimator
+        P = np.zeros((n, C), dtype=np.float64)
+        if hasattr(est, "predict_proba"):
+            if fast and self._fast is None:
+                self._fast = compile_forest(est) or False
+            raw = self._fast.predict_proba(X) if (fast and self._fast) else np.asarray(est.predict_proba(X), dtype=np.float64)
+            codes = np.asarray(getattr(est, "classes_", np.arange(raw.shape[1]))).astype(np.int64)
+            P[:, codes] = raw
+        else:
+            P[np.arange(n), np.asarray(est.predict(X)).astype(np.int64)] = 1.0
+        return P
+
+    def predict_proba(self, captures: Sequence[np.ndarray], fast: bool = True) -> np.ndarray:
+        return self.proba_from_features(self.transform(captures), fast=fast)
+
+    def predict(self, captures: Sequence[np.ndarray]) -> np.ndarray:
+        """Labels: the classifier's own ``predict`` (not the argmax of probabilities)."""
+        if self.estimator is None:
+            return np.array([self.classes[0]] * len(captures), dtype=object)
+        codes = np.asarray(self.estimator.predict(self.transform(captures))).astype(np.int64)
+        return self.classes[codes]
+
+    # ------------------------------------------------------------ files
+    def save(self, path: str | Path) -> Path:
+        """Write the model (joblib) and ``<path>.json`` (the manifest), atomically."""
+        import joblib
+
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        payload = {
+            "format": MODEL_FORMAT,
+            "version": MODEL_VERSION,
+            "manifest": self.manifest,
+            "feature_sets": self.feature_sets,
+            "estimator": self.estimator,
+            "classes": [str(c) for c in self.classes],
+        }
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        os.close(fd)
+        try:
+            joblib.dump(payload, tmp, compress=3)
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+        from ..results.store import atomic_write_bytes
+
+        text = json.dumps(self.manifest, indent=2, sort_keys=True, default=str) + "\n"
+        atomic_write_bytes(manifest_path(path), text.encode())
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> "TrainedModel":
+        """Read a model written by :meth:`save` (a pickle: trusted files only)."""
+        import joblib
+
+        path = Path(path)
+        if not path.is_file():
+            raise DataError("no such model file", path)
+        try:
+            payload = joblib.load(path)
+        except Exception as e:  # corrupt file, missing module, wrong pickle...
+            raise DataError(f"not a readable touchbench model ({type(e).__name__}: {e})", path) from None
+        if not isinstance(payload, dict) or payload.get("format") != MODEL_FORMAT:
+            raise DataError("not a touchbench model file (train one with `touchbench train`)", path)
+        if payload.get("version") != MODEL_VERSION:
+            raise DataError(
+                f"written by another touchbench model format (version {payload.get('version')}, this version "
+                f"reads {MODEL_VERSION}); train it again", path)
+        return cls(
+            feature_sets=list(payload["feature_sets"]),
+            estimator=payload["estimator"],
+            classes=np.array(payload["classes"], dtype=object),
+            manifest=payload["manifest"],
+        )
+
+    def version_notes(self) -> list[str]:
+        """Packages whose installed version differs from the one the model was saved with."""
+        saved = self.manifest.get("versions", {})
+        now = package_versions()
+        return [
+            f"model saved with {k} {saved[k]}, running {now.get(k, 'none')}"
+            for k in _CHECKED if k in saved and saved[k] != now.get(k)
+        ]
+
+    def describe(self) -> str:
+        m = self.manifest
+        s = self.sensor
+        ds = m["dataset"]
+        w = self.windows
+        lines = [
+            f"method        {self.method}",
+            f"classes       {', '.join(str(c) for c in self.classes)} (target: {m['target']})",
+            f"trained on    {ds['name']} ({ds['selection']}): {ds['n_captures']} captures, "
+            f"{ds['n_samples']} training samples, hash {ds['content_hash'][:16]}",
+            f"sensor        {s.name}: {s.grid[0]} x {s.grid[1]} at {s.frame_rate:g} Hz, range {list(s.value_range)}",
+            "windows       " + (", ".join(f"{v:g} s" for v in w) + f" (hop {m['windows']['train_hop_s']:g} s)" if w
+                               else f"whole captures ({m['capture_frames']['median']:g} frames median)"),
+            f"seed          {m['classifier']['random_state']}",
+            "versions      " + ", ".join(f"{k} {v}" for k, v in m["versions"].items()),
+        ]
+        return "\n".join(lines)
+
+
+def manifest_path(model_path: str | Path) -> Path:
+    p = Path(model_path)
+    return p.with_name(p.name + ".json")
+
+
+def fit_model(
+    dataset: TouchDataset,
+    sets: Sequence[tuple[str, dict[str, Any]]],
+    classifier: str,
+    classifier_params: dict[str, Any] | None = None,
+    *,
+    seed: int = 0,
+    target: str = "gesture",
+    windows: Sequence[float] | None = None,
+    train_hop: float | None = None,
+    features_label: str | None = None,
+    classifier_label: str | None = None,
+    selection: str = "all captures",
+    source: dict[str, Any] | None = None,
+) -> TrainedModel:
+    """Fit ``sets`` + ``classifier`` on every capture of ``dataset``.
+
+    ``windows`` (seconds): train on windows of these lengths cut from the
+    captures every ``train_hop`` seconds (default: half of each window),
+    labelled with their capture's ``target``; None trains on whole captures.
+    ``source`` is recorded in the manifest (protocol name and hash, dataset
+    reference...).
+    """
+    from ..classifiers import make_classifier
+    from ..engine.tasks import make_feature_set, single_thread
+
+    if len(dataset) == 0:
+        raise TouchbenchError(f"dataset {dataset.name!r}: no captures to train on")
+    if target not in dataset.meta.columns:
+        raise TouchbenchError(f"dataset {dataset.name!r} has no {target!r} column to train on")
+    classifier_params = dict(classifier_params or {})
+    sensor = dataset.sensor
+    y_caps = np.array([str(v) for v in dataset.meta[target].tolist()], dtype=object)
+    if windows:
+        lengths = [seconds_to_frames(w, sensor.frame_rate) for w in windows]
+        hops = [seconds_to_frames(train_hop, sensor.frame_rate) if train_hop else max(1, L // 2) for L in lengths]
+        samples, src = cut_windows(dataset.captures, lengths, hops)
+    else:
+        lengths = hops = []
+        samples, src = list(dataset.captures), np.arange(len(dataset))
+    y = y_caps[src]
+    classes = np.array(sorted(set(y.tolist())), dtype=object)
+    code = {c: i for i, c in enumerate(classes)}
+    c_train = np.array([code[v] for v in y], dtype=np.int64)
+
+    t0 = time.perf_counter()
+    with single_thread():
+        fitted = []
+        for name, params in sets:
+            fs = make_feature_set(name, dict(params), sensor)
+            fs.fit(samples, y)
+            fitted.append(fs)
+        X = np.hstack([np.asarray(fs.transform(samples), dtype=np.float64) for fs in fitted])
+        feature_seconds = time.perf_counter() - t0
+        est = None
+        if len(classes) > 1:
+            est = make_classifier(classifier, random_state=seed, **classifier_params)
+            fit_kw = {}
+            from ..engine.tasks import _accepts  # the engine's own rule for group-aware classifiers
+
+            if _accepts(est.fit, "groups"):
+                subjects = np.array([str(v) for v in dataset.meta["subject"].tolist()], dtype=object)
+                fit_kw["groups"] = subjects[src]
+            est.fit(X, c_train, **fit_kw)
+    fit_seconds = time.perf_counter() - t0 - feature_seconds
+
+    n = dataset.n_frames
+    manifest = {
+        "format": MODEL_FORMAT,
+        "format_version": MODEL_VERSION,
+        "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "dataset": {
+            "name": dataset.name,
+            "content_hash": dataset.content_hash,
+            "selection": selection,
+            "n_captures": int(len(dataset)),
+            "n_samples": int(len(samples)),
+            "by_class": {str(k): int(v) for k, v in zip(*np.unique(y_caps, return_counts=True))},
+            **(source or {}),
+        },
+        "sensor": sensor.to_dict(),
+        "target": target,
+        "features": {
+            "label": features_label or "+".join(n for n, _ in sets),
+            "sets": [{"name": n, "params": dict(p)} for n, p in sets],
+            "n_columns": int(X.shape[1]),
+        },
+        "classifier": {
+            "label": classifier_label or classifier,
+            "name": classifier,
+            "params": classifier_params,
+            "random_state": int(seed),
+        },
+        "classes": [str(c) for c in classes],
+        "windows": None if not windows else {
+            "lengths_s": [float(w) for w in windows],
+            "lengths_frames": [int(v) for v in lengths],
+            "train_hop_s": float(train_hop) if train_hop else float(min(hops) / sensor.frame_rate),
+            "train_hop_frames": [int(v) for v in hops],
+        },
+        "capture_frames": {"min": int(n.min()), "median": float(np.median(n)), "max": int(n.max())},
+        "capture_dtype": np.dtype(dataset.captures[0].dtype).str,
+        "timings": {"features_s": round(feature_seconds, 3), "fit_s": round(fit_seconds, 3)},
+        "versions": package_versions(),
+    }
+    return TrainedModel(fitted, est, classes, manifest)

@@ -1,0 +1,107 @@
+"""``touchbench predict``: label the captures of a dataset with a trained model.
+
+The data is anything a touchbench reader reads: a registered dataset name,
+``scene:NAME``, a touchbench Parquet file, or a file in one of the
+``touchbench data convert`` formats (``challenge-csv``, ``cost-csv``,
+``long``; for ``long`` the grid, frame rate and value range default to the
+model's sensor). The data's sensor must match the model's
+(:func:`touchbench.deploy.model.sensor_differences`), or nothing is labelled.
+
+A model trained on windows labels a capture from the windows of the
+model's lengths cut from it (every training hop), by the mean of their
+probabilities; a capture shorter than every window is labelled whole
+(``whole=True`` labels every capture whole). Otherwise the label is the
+classifier's own prediction and the probabilities are its
+``predict_proba``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..datasets.model import TouchDataset
+from .model import TrainedModel
+from .windows import cut_windows
+
+__all__ = ["READ_FORMATS", "predict_dataset", "read_data"]
+
+READ_FORMATS = ("auto", "challenge-csv", "cost-csv", "long")
+
+
+def read_data(source: str, fmt: str = "auto", model: TrainedModel | None = None, *,
+              grid: tuple[int, int] | None = None, frame_rate: float | None = None) -> TouchDataset:
+    """Read ``source`` with the reader ``fmt`` (``auto``: :func:`load_dataset`)."""
+    if fmt == "auto":
+        from ..datasets import load_dataset
+
+        return load_dataset(source)
+    if fmt == "challenge-csv":
+        from ..datasets.challenge_csv import read_challenge_csv
+
+        return read_challenge_csv(source)
+    if fmt == "cost-csv":
+        from ..datasets.cost import read_cost_csv
+
+        return read_cost_csv(source)
+    if fmt == "long":
+        from ..datasets.generic import read_long_table
+
+        spec = model.sensor if model is not None else None
+        g = grid or (spec.grid if spec else None)
+        fr = frame_rate or (spec.frame_rate if spec else None)
+        if g is None or fr is None:
+            raise ValueError("the long format needs a grid and a frame rate")
+        kw = {}
+        if spec is not None:
+            kw = {"value_range": spec.value_range, "sensor_name": spec.name}
+        return read_long_table(source, tuple(g), float(fr), **kw)
+    raise ValueError(f"unknown format {fmt!r} (known: {', '.join(READ_FORMATS)})")
+
+
+def predict_dataset(model: TrainedModel, ds: TouchDataset, *, whole: bool = False, source: str | None = None) -> pd.DataFrame:
+    """One row per capture: id, subject, true label (if known), predicted, probability, ``proba_<class>``."""
+    model.check_sensor(ds.sensor, source or ds.name)
+    classes = [str(c) for c in model.classes]
+    w = model.manifest.get("windows")
+    if w and not whole:
+        windows, src = cut_windows(ds.captures, w["lengths_frames"], w["train_hop_frames"])
+        Pw = model.predict_proba(windows, fast=True)
+        P = np.zeros((len(ds), len(classes)))
+        np.add.at(P, src, Pw)
+        P /= np.bincount(src, minlength=len(ds))[:, None]
+        pred = np.array(classes, dtype=object)[np.argmax(P, axis=1)]
+        n_windows = np.bincount(src, minlength=len(ds))
+    else:
+        X = model.transform(ds.captures)
+        P = model.proba_from_features(X, fast=True)
+        pred = model.predict(ds.captures) if model.estimator is not None else np.array([classes[0]] * len(ds), dtype=object)
+        n_windows = np.ones(len(ds), dtype=np.int64)
+    meta = ds.meta
+    out = pd.DataFrame({"capture_id": meta["capture_id"].astype(str).to_numpy()})
+    if "subject" in meta:
+        out["subject"] = meta["subject"].astype(str).to_numpy()
+    target = model.manifest.get("target", "gesture")
+    if target in meta:
+        out["true"] = meta[target].astype(str).to_numpy()
+    out["predicted"] = np.asarray(pred, dtype=object).astype(str)
+    col = {c: i for i, c in enumerate(classes)}
+    out["probability"] = P[np.arange(len(ds)), [col[p] for p in out["predicted"]]]
+    out["n_windows"] = n_windows
+    for i, c in enumerate(classes):
+        out[f"proba_{c}"] = P[:, i]
+    return out
+
+
+def write_table(df: pd.DataFrame, path: str | Path) -> Path:
+    """CSV or Parquet by suffix, written atomically."""
+    from ..results.store import atomic_write_bytes, atomic_write_parquet
+
+    path = Path(path)
+    if path.suffix == ".parquet":
+        atomic_write_parquet(path, df)
+    else:
+        atomic_write_bytes(path, df.to_csv(index=False).encode())
+    return path

@@ -1,0 +1,368 @@
+"""``touchbench stream``: continuous recognition over sliding windows.
+
+Flagg (2012, seed 002, section 4.5) asks for "continuous gesture
+recognition that works with ongoing sequences of data, rather than
+fixed-length windows", "buffering in 2-second periods", "a few buffers of
+different length simultaneously", and "confidence estimates, so that the
+model is not forced to classify everything it sees in terms of its known
+gesture types". Here:
+
+- frames arrive one at a time (:func:`replay` of a recorded file at its
+  frame rate, or :func:`text_frames` from standard input, one frame per line
+  of ``H*W`` comma-separated values, row-major);
+- :class:`SlidingRecognizer` keeps the last frames; once the shortest
+  window is full, and then every ``hop`` frames, it classifies the last
+  ``L`` frames for every window length ``L`` already full, in one batch,
+  and combines them (:func:`.windows.combine_windows`);
+- the decision is the best class and its probability, or ``none`` ("none
+  of the above") when that probability is under ``threshold``;
+- a decision's latency is the time from the arrival of the frame that
+  completed the hop (after it was read and parsed) to the decision being
+  ready: features of every window + classifier + combination. It does not
+  include writing the decision out. With a real-time replay, frames that
+  reached the recogniser more than one frame period after their scheduled
+  time are counted as ``late`` (the recogniser did not keep up).
+
+Defaults (interpretations): the window lengths are the model's training
+windows, or, for a model trained on whole captures, its median training
+capture length; hop 0.5 s; threshold 0.5 (the best class is more likely than
+all others together); ``combine="max"``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import IO, Any, Callable, Iterable, Iterator
+
+import numpy as np
+
+from ..datasets.model import TouchDataset
+from ..errors import DataError, TouchbenchError
+from .model import TrainedModel
+from .windows import COMBINE, combine_windows, seconds_to_frames
+
+__all__ = [
+    "Decision",
+    "SlidingRecognizer",
+    "StreamSummary",
+    "load_replay",
+    "replay",
+    "run_stream",
+    "text_frames",
+]
+
+
+@dataclass
+class Decision:
+    frame: int  # frames seen when the decision was made (1-based count)
+    t: float  # stream time of that frame, seconds (frame / frame rate)
+    label: str  # the best class, or the none label
+    probability: float  # the best class's probability (also when under the threshold)
+    best: str  # the best class, even when the decision is "none"
+    window_s: float | None  # the deciding window (combine="max"), None for "mean"
+    latency_ms: float
+    windows: list[dict[str, Any]] = field(default_factory=list)  # per window: length, best class, probability
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), default=float)
+
+    def to_text(self) -> str:
+        w = f"window {self.window_s:g} s" if self.window_s is not None else "mean of windows"
+        return f"{self.t:8.3f} s  {self.label:12s} {self.probability:5.2f}  ({w}, {self.latency_ms:.2f} ms)"
+
+
+@dataclass
+class StreamSummary:
+    frames: int = 0
+    decisions: int = 0
+    none: int = 0
+    late_frames: int = 0
+    labels: dict[str, int] = field(default_factory=dict)
+    latency_ms_p50: float = math.nan
+    latency_ms_p99: float = math.nan
+    latency_ms_max: float = math.nan
+
+    none_label: str = "none"
+
+    def majority(self, include_none: bool = False) -> str | None:
+        """The most frequent decision (ties: alphabetical), ignoring "none" unless asked."""
+        counts = {k: v for k, v in self.labels.items() if include_none or k != self.none_label}
+        return max(sorted(counts), key=lambda k: counts[k]) if counts else None
+
+    def to_text(self) -> str:
+        lab = ", ".join(f"{k}: {v}" for k, v in sorted(self.labels.items(), key=lambda kv: -kv[1]))
+        return (f"{self.frames} frames, {self.decisions} decisions ({self.none} none); {lab}\n"
+                f"latency per decision: p50 {self.latency_ms_p50:.2f} ms, p99 {self.latency_ms_p99:.2f} ms, "
+                f"max {self.latency_ms_max:.2f} ms" + (f"; {self.late_frames} frames late" if self.late_frames else ""))
+
+
+class SlidingRecognizer:
+    """Sliding windows over incoming frames -> thresholded decisions (module docstring)."""
+
+    def __init__(self, model: TrainedModel, windows_s: Iterable[float] | None = None, hop_s: float = 0.5,
+                 threshold: float = 0.5, combine: str = "max", none_label: str = "none", fast: bool = True):
+        self.model = model
+        sensor = model.sensor
+        self.frame_rate = float(sensor.frame_rate)
+        if windows_s is None:
+            windows_s = model.windows or [model.manifest["capture_frames"]["median"] / self.frame_rate]
+        windows_s = sorted(float(w) for w in windows_s)
+        if not windows_s:
+            raise TouchbenchError("give at least one window length")
+        self.windows_s = windows_s
+        self.lengths = [seconds_to_frames(w, self.frame_rate) for w in windows_s]
+        self.hop = seconds_to_frames(hop_s, self.frame_rate)
+        if not 0.0 <= threshold <= 1.0:
+            raise TouchbenchError(f"threshold must be in [0, 1], got {threshold}")
+        if combine not in COMBINE:
+            raise TouchbenchError(f"unknown --combine {combine!r} (known: {', '.join(COMBINE)})")
+        classes = [str(c) for c in model.classes]
+        if none_label in classes:
+            raise TouchbenchError(f"the none label {none_label!r} is one of the model's classes; choose another")
+        self.classes = np.array(classes, dtype=object)
+        self.threshold = float(threshold)
+        self.combine = combine
+        self.none_label = none_label
+        self.fast = fast
+        self.dtype = np.dtype(model.manifest.get("capture_dtype", "<f8"))
+        self.grid = sensor.grid
+        self._cap = 2 * max(self.lengths)
+        self._buf = np.zeros((self._cap, *self.grid), dtype=self.dtype)
+        self._n = 0  # frames in the buffer
+        self.seen = 0  # frames seen in total
+
+    def warm_up(self) -> None:
+        """Classify one window of each length once (constant frames at the sensor's minimum), so
+        that one-off costs (imports, the forest's flat arrays) do not count as a decision's latency."""
+        lo = self.model.sensor.value_range[0]
+        caps = [np.full((L, *self.grid), lo, dtype=self.dtype) for L in self.lengths]
+        self.model.predict_proba(caps, fast=self.fast)
+
+    def notes(self) -> list[str]:
+        out = []
+        trained = self.model.windows
+        if trained is None:
+            med = self.model.manifest["capture_frames"]["median"]
+            if any(abs(L - med) > 0.5 for L in self.lengths):
+                out.append(f"the model was trained on whole captures ({med:g} frames median); "
+                           f"windows of {', '.join(map(str, self.lengths))} frames may behave differently")
+        elif sorted(trained) != self.windows_s:
+            out.append(f"the model was trained on windows of {', '.join(f'{w:g}' for w in trained)} s, "
+                       f"streaming with {', '.join(f'{w:g}' for w in self.windows_s)} s")
+        return out
+
+    def push(self, frame: np.ndarray, arrived: float | None = None) -> Decision | None:
+        """Add one ``(H, W)`` frame; a :class:`Decision` when one is due, else None."""
+        arrived = time.perf_counter() if arrived is None else arrived
+        if self._n == self._cap:
+            keep = max(self.lengths) - 1
+            self._buf[:keep] = self._buf[self._n - keep:self._n]
+            self._n = keep
+        self._buf[self._n] = frame
+        self._n += 1
+        self.seen += 1
+        first = self.lengths[0]
+        if self.seen < first or (self.seen - first) % self.hop:
+            return None
+        full = [(w, L) for w, L in zip(self.windows_s, self.lengths) if self.seen >= L]
+        caps = [self._buf[self._n - L:self._n] for _, L in full]
+        P = self.model.predict_proba(caps, fast=self.fast)
+        p, k = combine_windows(P, self.combine)
+        best = int(np.argmax(p))
+        prob = float(p[best])
+        latency = 1000.0 * (time.perf_counter() - arrived)
+        per = [{"window_s": w, "label": str(self.classes[int(np.argmax(P[i]))]), "probability": float(P[i].max())}
+               for i, (w, _) in enumerate(full)]
+        label = str(self.classes[best]) if prob >= self.threshold else self.none_label
+        return Decision(frame=self.seen, t=self.seen / self.frame_rate, label=label, probability=prob,
+                        best=str(self.classes[best]), window_s=None if k is None else full[k][0],
+                        latency_ms=latency, windows=per)
+
+
+# ----------------------------------------------------------------- sources
+def _check_values(values: np.ndarray, model: TrainedModel, where: str, line: int | None) -> None:
+    lo, hi = model.sensor.value_range
+    if not np.isfinite(values).all():
+        raise DataError("missing, NaN or infinite value in a frame", where, line)
+    if values.min() < lo or values.max() > hi:
+        bad = values[(values < lo) | (values > hi)][0]
+        raise DataError(f"value {bad:g} outside the model's sensor range [{lo:g}, {hi:g}]", where, line)
+    if np.dtype(model.manifest.get("capture_dtype", "<f8")).kind in "iu" and (values != np.round(values)).any():
+        bad = values[values != np.round(values)][0]
+        raise DataError(f"value {bad!r} is not a whole number (the model was trained on integer frames)", where, line)
+
+
+def text_frames(fh: IO[str], model: TrainedModel, where: str = "<stdin>") -> Iterator[tuple[np.ndarray, float]]:
+    """Frames from lines of ``H*W`` comma-separated values; blank lines are skipped.
+
+    Yields ``(frame, arrival time)`` as each line arrives (a live pipe is
+    read line by line). A malformed line stops with its line number.
+    """
+    h, w = model.sensor.grid
+    n = h * w
+    dtype = np.dtype(model.manifest.get("capture_dtype", "<f8"))
+    for lineno, line in enumerate(iter(fh.readline, ""), start=1):
+        arrived = time.perf_counter()
+        s = line.strip()
+        if not s:
+            continue
+        parts = s.split(",")
+        if len(parts) != n:
+            raise DataError(f"a frame has {len(parts)} values, the model's {h} x {w} sensor needs {n}", where, lineno)
+        try:
+            values = np.array([float(v) for v in parts], dtype=np.float64)
+        except ValueError:
+            bad = next(v for v in parts if not _is_number(v))
+            raise DataError(f"not a number: {bad.strip()!r}", where, lineno) from None
+        _check_values(values, model, where, lineno)
+        yield values.reshape(h, w).astype(dtype), arrived
+
+
+def _is_number(v: str) -> bool:
+    try:
+        float(v)
+        return True
+    except ValueError:
+        return False
+
+
+def load_replay(path: str | Path, model: TrainedModel, capture: str | None = None) -> tuple[np.ndarray, float, str]:
+    """Frames of a recorded file: ``(frames (T, H, W), frame rate, description)``.
+
+    - a touchbench dataset (Parquet): the capture ``capture`` (by
+      ``capture_id``), or every capture one after another; its sensor must
+      match the model's and its frame rate is the replay rate;
+    - any other CSV or Parquet table: one frame per row, the ``H*W`` cell
+      columns (all columns when there are exactly ``H*W`` of them, else the
+      numbered cell columns of the long format), rows of ``capture`` only
+      when a ``capture_id`` column exists; a CSV whose first line is numbers
+      has no header. Replayed at the model's frame rate.
+    """
+    from ..datasets.tables import numeric, read_table
+
+    path = Path(path)
+    if not path.is_file():
+        raise DataError("no such file", path)
+    if path.suffix == ".parquet":
+        import pyarrow.parquet as pq
+
+        try:
+            meta = pq.read_schema(path).metadata or {}
+        except Exception as e:
+            raise DataError(f"not a readable Parquet file ({e})", path) from None
+        if b"touchbench" in meta:
+            ds = TouchDataset.from_parquet(path)
+            model.check_sensor(ds.sensor, str(path))
+            if capture is not None:
+                ids = ds.meta["capture_id"].astype(str).tolist()
+                if capture not in ids:
+                    raise DataError(f"no capture {capture!r} (e.g. {', '.join(ids[:5])})", path)
+                frames = ds.captures[ids.index(capture)]
+                return frames, ds.sensor.frame_rate, f"{path.name}: capture {capture}"
+            return np.concatenate(ds.captures), ds.sensor.frame_rate, f"{path.name}: {len(ds)} captures"
+    h, w = model.sensor.grid
+    n = h * w
+    dtype = np.dtype(model.manifest.get("capture_dtype", "<f8"))
+    if path.suffix != ".parquet" and _first_line_is_numbers(path):
+        with _open_text(path) as fh:
+            got = [f for f, _ in text_frames(fh, model, str(path))]
+        if not got:
+            raise DataError("no frames", path)
+        return np.stack(got), model.sensor.frame_rate, f"{path.name}: {len(got)} frames"
+    df = read_table(path)
+    if capture is not None:
+        if "capture_id" not in df.columns:
+            raise DataError("--capture needs a capture_id column", path, 1)
+        df = df[df["capture_id"].astype(str) == capture]
+        if df.empty:
+            raise DataError(f"no rows of capture {capture!r}", path)
+    if df.shape[1] == n:
+        cols = list(df.columns)
+    else:
+        from ..datasets.generic import _cell_columns  # the long format's own rule for cell columns
+
+        cols = _cell_columns(df, n, path)
+    lo, hi = model.sensor.value_range
+    values = numeric(df, cols, path, lo=lo, hi=hi, integer=dtype.kind in "iu")
+    return values.reshape(len(df), h, w).astype(dtype), model.sensor.frame_rate, f"{path.name}: {len(df)} frames"
+
+
+def _open_text(path: Path) -> IO[str]:
+    import gzip
+
+    if path.suffix == ".gz":
+        return gzip.open(path, "rt", encoding="utf-8")
+    return open(path, encoding="utf-8")
+
+
+def _first_line_is_numbers(path: Path) -> bool:
+    try:
+        with _open_text(path) as fh:
+            for line in fh:
+                if line.strip():
+                    return all(_is_number(v) for v in line.strip().split(","))
+    except (OSError, UnicodeDecodeError):
+        return False
+    return False
+
+
+def replay(frames: np.ndarray, frame_rate: float, speed: float = 1.0, realtime: bool = True,
+           late: list[int] | None = None) -> Iterator[tuple[np.ndarray, float]]:
+    """Yield ``(frame, arrival time)`` at ``frame_rate * speed`` frames per second.
+
+    ``realtime=False`` yields as fast as the consumer takes them. Frames
+    handed over more than one period after their scheduled time are counted
+    in ``late[0]``.
+    """
+    if speed <= 0:
+        raise TouchbenchError(f"--speed must be positive, got {speed}")
+    period = 1.0 / (frame_rate * speed)
+    t0 = time.perf_counter()
+    for i, f in enumerate(frames):
+        if realtime:
+            due = t0 + i * period
+            now = time.perf_counter()
+            if now < due:
+                time.sleep(due - now)
+            elif late is not None and now - due > period:
+                late[0] += 1
+        yield f, time.perf_counter()
+
+
+def run_stream(recognizer: SlidingRecognizer, frames: Iterable[tuple[np.ndarray, float]],
+               emit: Callable[[Decision], None] | None = None, late: list[int] | None = None) -> StreamSummary:
+    """Feed ``frames`` to ``recognizer``, ``emit`` each decision, and summarise latencies."""
+    from ..engine.tasks import single_thread
+
+    lat: list[float] = []
+    summary = StreamSummary(none_label=recognizer.none_label)
+    with single_thread():
+        recognizer.warm_up()
+        for frame, arrived in frames:
+            summary.frames += 1
+            d = recognizer.push(frame, arrived)
+            if d is None:
+                continue
+            lat.append(d.latency_ms)
+            summary.decisions += 1
+            summary.labels[d.label] = summary.labels.get(d.label, 0) + 1
+            if d.label == recognizer.none_label:
+                summary.none += 1
+            if emit is not None:
+                emit(d)
+    if lat:
+        a = np.asarray(lat)
+        summary.latency_ms_p50 = float(np.percentile(a, 50))
+        summary.latency_ms_p99 = float(np.percentile(a, 99))
+        summary.latency_ms_max = float(a.max())
+    summary.late_frames = int(late[0]) if late else 0
+    return summary
+
+
+def stdin_source(model: TrainedModel) -> Iterator[tuple[np.ndarray, float]]:
+    return text_frames(sys.stdin, model)
