@@ -7,6 +7,7 @@ import sys
 
 import click
 
+from ..engine.backends import backend_for_run, backend_options
 from .protocols import find_protocol
 
 
@@ -50,7 +51,9 @@ def format_summary(summary, expected) -> str:
 @click.option("--force", is_flag=True, help="Recompute every task, even finished ones.")
 @click.option("--retry-failed", is_flag=True, help="Run the tasks that failed last time again.")
 @click.option("--progress/--no-progress", default=None, help="Progress bar [default: on a terminal only].")
-def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bool, progress: bool | None) -> None:
+@backend_options
+def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bool, progress: bool | None,
+        backend: str, scheduler: str | None, address: str | None) -> None:
     """Evaluate PROTOCOL (a file, or a name in protocols/): every feature
     combination x classifier under its scheme. Finished tasks are skipped, so
     an interrupted run resumes where it stopped."""
@@ -65,7 +68,8 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
     for n in plan.notes:
         click.echo(f"note: {n}", err=True)
     try:
-        res = run_plan(plan, out_dir, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress)
+        with backend_for_run(backend, scheduler, address, plan.cache_root, jobs) as jobs:
+            res = run_plan(plan, out_dir, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress)
     except KeyboardInterrupt:
         click.echo("\ninterrupted: finished tasks are saved; run the same command again to resume", err=True)
         sys.exit(130)

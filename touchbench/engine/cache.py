@@ -139,7 +139,9 @@ class FeatureCache:
             from joblib import Parallel, delayed
 
             results = []
-            par = Parallel(n_jobs=jobs, return_as="generator")
+            from .backends import supports_generator  # Ray's joblib backend returns lists only
+
+            par = Parallel(n_jobs=jobs, return_as="generator" if supports_generator() else "list")
             for ch, res in zip(chunks, par(delayed(_transform_chunk)(make, ch, setup) for ch in chunks)):
                 results.append(res)
                 if on_chunk:

@@ -370,7 +370,9 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
             else:
                 from joblib import Parallel, delayed
 
-                results = Parallel(n_jobs=jobs, return_as="generator_unordered")(
+                from .backends import supports_generator  # Ray's joblib backend returns lists only
+
+                results = Parallel(n_jobs=jobs, return_as="generator_unordered" if supports_generator() else "list")(
                     delayed(execute_task)(t, ctx) for t in pending)
             for row, preds in results:
                 if preds is not None:

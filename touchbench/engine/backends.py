@@ -1,0 +1,207 @@
+"""Run a protocol's tasks on an existing distributed engine (Dask or Ray) through joblib.
+
+The run engine (:mod:`touchbench.engine.runner`) runs its independent tasks
+-- one per (repetition, fold, feature combination, classifier) -- and the
+chunks of the feature cache with ``joblib.Parallel``. :func:`use_backend`
+makes joblib send them to a cluster instead of local processes:
+
+``dask``
+    ``distributed.Client(address)`` (a running scheduler, e.g.
+    ``tcp://10.0.0.5:8786``; without an address a ``LocalCluster`` of worker
+    processes on 127.0.0.1 is started) and ``joblib.parallel_config(
+    backend="dask")``. Parallelism: every worker thread of the cluster.
+``ray``
+    ``ray.init(address=...)`` (``auto``, ``ray://host:10001`` or
+    ``host:6379``; without an address a local Ray instance) and
+    ``ray.util.joblib.register_ray()`` + ``parallel_config(backend="ray")``.
+    Parallelism: the cluster's CPUs. Ray's joblib backend cannot stream
+    results back as they finish, so :func:`supports_generator` tells the
+    engine to collect them in one list.
+
+Same results as a local run: a task's classifier seed is derived from its
+identity and every task runs single-threaded (``tasks.single_thread``), so
+no prediction depends on where or in which order a task ran.
+
+Shared files: a worker reads the dataset's Parquet copy and the feature
+cache from the paths the client gives (``TOUCHBENCH_CACHE_DIR``), so on a
+cluster of several machines that folder must be on a shared file system
+mounted at the same path, and touchbench (same version) installed on every
+worker. :func:`check_dask_workers` verifies both before any work.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Iterator
+
+from ..errors import TouchbenchError
+
+__all__ = ["BACKENDS", "BackendInfo", "backend_for_run", "backend_options", "check_dask_workers", "supports_generator",
+           "use_backend"]
+
+BACKENDS = ("local", "dask", "ray")
+
+
+@dataclass
+class BackendInfo:
+    name: str
+    address: str | None
+    n_jobs: int | None  # parallel slots the backend offers (None: local, use --jobs)
+    notes: list[str] = field(default_factory=list)
+
+
+def supports_generator() -> bool:
+    """Whether the active joblib backend can return results as they finish
+    (``return_as="generator"`` / ``"generator_unordered"``)."""
+    from joblib.parallel import get_active_backend
+
+    backend, _ = get_active_backend()
+    return bool(getattr(backend, "supports_return_generator", True))
+
+
+def _probe(cache_root: str) -> dict:
+    """Run on a worker: its touchbench version and whether it sees the cache folder."""
+    import touchbench
+
+    p = Path(cache_root)
+    return {"version": touchbench.__version__, "cache_visible": p.is_dir() and os.access(p, os.W_OK)}
+
+
+def check_dask_workers(client, cache_root: str | Path) -> None:
+    """Refuse a cluster whose workers lack touchbench, run another version, or
+    do not see the shared cache folder (raises :class:`TouchbenchError`)."""
+    import touchbench
+
+    root = str(Path(cache_root).resolve())
+    Path(root).mkdir(parents=True, exist_ok=True)
+    try:
+        answers = client.run(_probe, root)
+    except Exception as e:  # an ImportError on the worker side comes back here
+        raise TouchbenchError(f"the Dask workers cannot run touchbench ({type(e).__name__}: {e}); "
+                              "install the same touchbench on every worker") from None
+    if not answers:
+        raise TouchbenchError("the Dask cluster has no workers")
+    for worker, a in sorted(answers.items()):
+        if a["version"] != touchbench.__version__:
+            raise TouchbenchError(f"Dask worker {worker} runs touchbench {a['version']}, this client "
+                                  f"{touchbench.__version__}; install the same version everywhere")
+        if not a["cache_visible"]:
+            raise TouchbenchError(f"Dask worker {worker} cannot write the cache folder {root}: put "
+                                  "TOUCHBENCH_CACHE_DIR on a file system shared by the client and every worker, "
+                                  "at the same path")
+
+
+@contextlib.contextmanager
+def use_backend(name: str = "local", address: str | None = None, *, cache_root: str | Path | None = None,
+                timeout: float = 60.0, local_workers: int = 2) -> Iterator[BackendInfo]:
+    """Route joblib's parallel calls inside the block to backend ``name``.
+
+    ``address``: the Dask scheduler or Ray cluster address (None: start a
+    local one: ``local_workers`` Dask worker processes on 127.0.0.1, or a
+    local Ray instance). ``cache_root``: checked to be visible from the Dask
+    workers. Clusters started here are shut down on exit; a cluster given by
+    address is only disconnected from.
+    """
+    if name not in BACKENDS:
+        raise TouchbenchError(f"unknown backend {name!r} (known: {', '.join(BACKENDS)})")
+    if name == "local":
+        if address:
+            raise TouchbenchError("--scheduler/--address need --backend dask or ray")
+        yield BackendInfo("local", None, None)
+        return
+    from joblib import parallel_config
+
+    if name == "dask":
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise TouchbenchError("--backend dask needs the dist extra: pip install 'touchbench[dist]'") from None
+        cluster = None
+        try:
+            if address:
+                client = Client(address, timeout=timeout)
+            else:
+                cluster = LocalCluster(n_workers=local_workers, threads_per_worker=1, processes=True,
+                                       host="127.0.0.1", dashboard_address=None)
+                client = Client(cluster, timeout=timeout)
+        except OSError as e:
+            if cluster is not None:
+                cluster.close()
+            raise TouchbenchError(f"cannot connect to the Dask scheduler {address!r}: {e}") from None
+        try:
+            client.wait_for_workers(1, timeout=timeout)
+            if cache_root is not None:
+                check_dask_workers(client, cache_root)
+            n = sum(client.nthreads().values())
+            with parallel_config(backend="dask"):
+                yield BackendInfo("dask", client.scheduler.address, n)
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+        return
+
+    # ray
+    try:
+        import ray
+        from ray.util.joblib import register_ray
+    except ImportError:
+        raise TouchbenchError("--backend ray needs the dist extra: pip install 'touchbench[dist]'") from None
+    started = not ray.is_initialized()
+    if started:
+        try:
+            if address:
+                ray.init(address=address, include_dashboard=False, log_to_driver=False)
+            else:
+                ray.init(num_cpus=local_workers, include_dashboard=False, log_to_driver=False)
+        except (ConnectionError, RuntimeError, ValueError) as e:
+            raise TouchbenchError(f"cannot connect to the Ray cluster {address!r}: {e}") from None
+    try:
+        register_ray()
+        n = int(ray.cluster_resources().get("CPU", 1))
+        with parallel_config(backend="ray"):
+            yield BackendInfo("ray", address, n, ["Ray's joblib backend returns results when all tasks finish"])
+    finally:
+        if started:
+            ray.shutdown()
+
+
+@contextlib.contextmanager
+def backend_for_run(backend: str, scheduler: str | None, address: str | None, cache_root: str | Path | None,
+                    jobs: int) -> Iterator[int]:
+    """The ``touchbench run`` options -> an active backend; yields the ``jobs`` to run with.
+
+    With a cluster, ``jobs`` is the cluster's parallelism (at least 2, so
+    that the engine goes through joblib even on a one-worker cluster).
+    """
+    if scheduler and backend != "dask":
+        raise TouchbenchError("--scheduler is the Dask scheduler's address: use it with --backend dask")
+    if address and backend != "ray":
+        raise TouchbenchError("--address is the Ray cluster's address: use it with --backend ray")
+    with use_backend(backend, scheduler or address, cache_root=cache_root) as info:
+        if info.n_jobs is None:
+            yield jobs
+            return
+        import click
+
+        click.echo(f"backend {info.name} at {info.address or 'a local cluster'}: {info.n_jobs} parallel slots", err=True)
+        for n in info.notes:
+            click.echo(f"note: {n}", err=True)
+        yield max(2, info.n_jobs)
+
+
+def backend_options(f):
+    """The ``--backend``, ``--scheduler`` and ``--address`` options of ``touchbench run``."""
+    import click
+
+    f = click.option("--address", default=None, metavar="ADDRESS",
+                     help="Ray cluster address for --backend ray (auto, ray://HOST:10001 or HOST:6379; "
+                          "default: a local Ray).")(f)
+    f = click.option("--scheduler", default=None, metavar="ADDRESS",
+                     help="Dask scheduler address for --backend dask (tcp://HOST:8786; default: a local cluster).")(f)
+    f = click.option("--backend", type=click.Choice(BACKENDS), default="local", show_default=True,
+                     help="Where tasks run: local processes (--jobs), a Dask or a Ray cluster (the cluster's size).")(f)
+    return f
