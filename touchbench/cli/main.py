@@ -20,6 +20,7 @@ _COMMANDS: list[tuple[str, str]] = [
     ("touchbench.cli.deploy", "stream"),
     ("touchbench.cli.protocols", "protocols"),
     ("touchbench.cli.run", "run"),
+    ("touchbench.cli.scenes", "scenes"),
 ]
 
 
