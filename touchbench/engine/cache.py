@@ -6,8 +6,9 @@ kept under ``touchbench.paths.cache_dir() / "features"``, keyed by
 
 - the content hash of the (filtered) dataset,
 - the feature set's name and parameters (canonical JSON),
-- the code version: touchbench's version and a hash of the source files of
-  the feature set's package (any edit of feature code invalidates entries),
+- the code version: touchbench's version and a hash of the source files the
+  feature set comes from (its module, its bases' modules and the touchbench
+  helpers they import; see :func:`code_version`),
 - the crop (``early`` scheme: the first N frames).
 
 An entry is ``<key>.npy`` (the float64 matrix, one row per capture in the
@@ -40,25 +41,50 @@ CHUNK = 32  # captures per chunk (fixed: results must not depend on --jobs)
 
 
 @lru_cache(maxsize=None)
-def _package_source_hash(package_dir: str) -> str:
+def _file_hash(path: str, mtime_ns: int) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
+
+
+def _touchbench_file(obj: Any) -> str | None:
+    try:
+        f = inspect.getsourcefile(obj)
+    except TypeError:
+        return None
+    return f if f and "touchbench" in Path(f).parts else None
+
+
+def source_files(cls: type) -> list[str]:
+    """Source files a feature set's output depends on, as far as we can tell.
+
+    The modules of the class and of its bases, and the touchbench modules
+    their module-level names come from (helpers imported with ``from .x
+    import f`` or ``from . import x``), one level deep.
+    """
+    files: set[str] = set()
+    for klass in getattr(cls, "__mro__", (cls,)):
+        f = _touchbench_file(klass)
+        if f is None:
+            continue
+        files.add(f)
+        module = inspect.getmodule(klass)
+        for value in vars(module).values() if module is not None else ():
+            if inspect.ismodule(value) or inspect.isclass(value) or inspect.isfunction(value):
+                g = _touchbench_file(value)
+                if g is not None:
+                    files.add(g)
+    return sorted(files)
+
+
+def code_version(cls: Any) -> str:
+    """touchbench's version + a hash of :func:`source_files` of ``cls``.
+
+    Editing a feature set's code (or a helper it imports) changes the code
+    version, so its cached features and the tasks that use them are recomputed.
+    """
     h = hashlib.sha256()
-    for p in sorted(Path(package_dir).glob("*.py")):
-        h.update(p.name.encode() + b"\0" + p.read_bytes())
-    return h.hexdigest()[:16]
-
-
-def code_version(obj: Any) -> str:
-    """touchbench version + hash of the sources of ``obj``'s package (and its bases')."""
-    files = set()
-    for klass in getattr(obj, "__mro__", (obj,)):
-        try:
-            f = inspect.getsourcefile(klass)
-        except TypeError:
-            f = None
-        if f and "touchbench" in Path(f).parts:
-            files.add(str(Path(f).parent))
-    parts = [__version__] + [_package_source_hash(d) for d in sorted(files)]
-    return "-".join(parts)
+    for f in source_files(cls):
+        h.update(Path(f).name.encode() + b"\0" + _file_hash(f, Path(f).stat().st_mtime_ns).encode())
+    return f"{__version__}-{h.hexdigest()[:16]}"
 
 
 def crop_captures(captures: Sequence[np.ndarray], n_frames: int | None) -> list[np.ndarray]:
