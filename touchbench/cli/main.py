@@ -20,6 +20,11 @@ _COMMANDS: list[tuple[str, str]] = [
     ("touchbench.cli.deploy", "stream"),
     ("touchbench.cli.protocols", "protocols"),
     ("touchbench.cli.run", "run"),
+    ("touchbench.cli.reports", "leaderboard"),
+    ("touchbench.cli.reports", "compare"),
+    ("touchbench.cli.reports", "plot"),
+    ("touchbench.cli.reports", "report"),
+    ("touchbench.cli.reports", "papers"),
     ("touchbench.cli.scenes", "scenes"),
 ]
 

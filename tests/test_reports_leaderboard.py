@@ -1,0 +1,232 @@
+"""Leaderboard and compare on hand-built results: values worked out by hand or by scipy."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+
+from touchbench.errors import TouchbenchError
+from touchbench.reports.leaderboard import build_leaderboards, compare_methods, to_csv, to_json, to_markdown
+from touchbench.reports.results import load_results
+from touchbench.reports.stats import wilson_interval
+from touchbench.reports.testing import FakeMethod, write_fake_run
+
+SUBJECTS = [f"s{i}" for i in range(1, 7)]
+GESTURES = ["pat", "rub", "stroke"]
+
+
+def _captures() -> pd.DataFrame:
+    rows = [(f"{s}-{g}-{r}", s, g) for s in SUBJECTS for g in GESTURES for r in range(2)]
+    return pd.DataFrame(rows, columns=["capture_id", "subject", "gesture"])
+
+
+CAPS = _captures()
+FOLDS = {f"subject={s}": CAPS[CAPS["subject"] == s]["capture_id"].tolist() for s in SUBJECTS}
+
+
+def _wrong(counts):
+    """The first ``counts[i]`` captures of fold i are predicted wrongly."""
+    return {f: ids[:c] for (f, ids), c in zip(FOLDS.items(), counts)}
+
+
+A_WRONG = [0, 1, 0, 1, 0, 0]  # fold accuracies 1, 5/6, 1, 5/6, 1, 1
+B_WRONG = [1, 2, 1, 2, 1, 1]  # 5/6, 4/6, ...: 1/6 below A on every fold
+C_WRONG = [2, 1, 3, 2, 0, 1]  # differences to A: 2, 0, 3, 1, 0, 1 (sixths)
+
+
+def _run1(tmp_path, **kw):
+    methods = [
+        FakeMethod("msd", "rf", classifier_name="gaus-rf", wrong=_wrong(A_WRONG), latency_ms=5.0),
+        FakeMethod("sd", "rf", classifier_name="gaus-rf", wrong=_wrong(B_WRONG), latency_ms=1.0),
+        FakeMethod("bmh", "rf", classifier_name="gaus-rf", wrong=_wrong(C_WRONG), latency_ms=2.0),
+    ]
+    return write_fake_run(tmp_path / "run1", CAPS, FOLDS, methods, scheme={"name": "loso"}, **kw)
+
+
+def _row(lb, features, classifier="rf"):
+    r = lb.rows[(lb.rows["features"] == features) & (lb.rows["classifier"] == classifier)]
+    assert len(r) == 1, lb.rows[["features", "classifier", "method_id"]]
+    return r.iloc[0]
+
+
+def test_accuracy_interval_and_tests_by_hand(tmp_path):
+    d = _run1(tmp_path)
+    [lb] = build_leaderboards(load_results([d]))
+    a, b, c = _row(lb, "msd"), _row(lb, "sd"), _row(lb, "bmh")
+    assert list(lb.rows["features"]) == ["msd", "sd", "bmh"]
+    assert list(lb.rows["rank"]) == [1, 2, 3]
+    acc_a = np.array([6, 5, 6, 5, 6, 6]) / 6
+    assert a["accuracy"] == pytest.approx(34 / 36)
+    assert a["accuracy_sd"] == pytest.approx(np.std(acc_a, ddof=1))
+    half = stats.t.ppf(0.975, 5) * np.std(acc_a, ddof=1) / np.sqrt(6)
+    assert a["ci_low"] == pytest.approx(34 / 36 - half) and a["ci_high"] == pytest.approx(34 / 36 + half)
+    assert b["accuracy"] == pytest.approx(28 / 36) and c["accuracy"] == pytest.approx(27 / 36)
+    # B vs A: six differences of -1/6: only the two all-equal-sign flips are as extreme -> 2/64
+    assert b["test"] == "exact-permutation" and b["n_pairs"] == 6
+    assert b["p_value"] == pytest.approx(2 / 64)
+    assert b["diff_vs_best"] == pytest.approx(-1 / 6)
+    # C vs A: differences 2, 0, 3, 1, 0, 1 sixths; only the 4 nonzero ones all of one sign reach |sum| = 7,
+    # and the two zeros' signs are free: 2 * 4 = 8 of 64 flips
+    assert c["p_value"] == pytest.approx(8 / 64)
+    ref = stats.permutation_test((np.array([-2, 0, -3, -1, 0, -1]) / 6,), np.mean, permutation_type="samples",
+                                 n_resamples=np.inf)
+    assert c["p_value"] == pytest.approx(ref.pvalue)
+    # Holm over the family {2/64, 8/64}: 2 * 2/64 = 4/64, max(4/64, 1 * 8/64) = 8/64
+    assert b["p_holm"] == pytest.approx(4 / 64) and c["p_holm"] == pytest.approx(8 / 64)
+    assert not b["differs"] and not c["differs"]
+    assert math.isnan(a["p_value"]) and a["test"] == "best"
+    # Pareto on accuracy vs latency: A (best), B (fastest) on it; C (slower and worse than B) not
+    assert bool(a["pareto"]) and bool(b["pareto"]) and not bool(c["pareto"])
+    assert a["latency_ms"] == pytest.approx(5.0)
+    # macro F1 is the mean of per-fold macro F1 (sklearn computes each fold's)
+    from sklearn.metrics import f1_score
+
+    f = FOLDS["subject=s2"]
+    true = CAPS.set_index("capture_id").loc[f, "gesture"].tolist()
+    pred = ["rub"] + true[1:]  # the first capture (a pat) predicted as the next class
+    f1_s2 = f1_score(true, pred, average="macro")
+    assert a["macro_f1"] == pytest.approx((4 * 1.0 + 2 * f1_s2) / 6)
+
+
+def test_same_run_twice_is_one_row(tmp_path):
+    d = _run1(tmp_path)
+    [lb] = build_leaderboards(load_results([d, d, tmp_path]))
+    assert len(lb.rows) == 3
+    assert (lb.rows["n_folds"] == 6).all() and (lb.rows["runs"] == 1).all()
+    # a copy of the directory (same tasks, same seeds) is also counted once
+    import shutil
+
+    shutil.copytree(d, tmp_path / "copy")
+    [lb2] = build_leaderboards(load_results([tmp_path / "run1", tmp_path / "copy"]))
+    assert len(lb2.rows) == 3
+    assert _row(lb2, "msd")["accuracy"] == pytest.approx(34 / 36)
+
+
+def test_runs_combine_by_parameter_hash_not_label(tmp_path):
+    _run1(tmp_path)
+    m2 = [
+        # the same method as "msd/rf" under another label, another run and machine, other seeds
+        FakeMethod("msd", "rf-1000", classifier_name="gaus-rf", wrong=_wrong([1, 1, 0, 1, 0, 0]), latency_ms=100.0),
+        # same label as run1's "msd/rf", different parameters: another method
+        FakeMethod("msd", "rf", classifier_name="gaus-rf", classifier_params={"n_estimators": 10},
+                   wrong=_wrong([3, 3, 3, 3, 3, 3]), latency_ms=50.0),
+    ]
+    other = {"platform": "Linux-other", "machine": "aarch64", "processor": "", "cpu_count": 64}
+    write_fake_run(tmp_path / "run2", CAPS, FOLDS, m2, scheme={"name": "loso"}, run_id="run2", platform=other)
+    rs = load_results([tmp_path])
+    [lb] = build_leaderboards(rs)
+    assert len(lb.rows) == 4  # msd/rf (combined), sd, bmh, msd/rf(n_estimators=10)
+    msd = lb.rows[(lb.rows["features"] == "msd") & (lb.rows["classifier_params"] == "{}")].iloc[0]
+    assert msd["runs"] == 2 and msd["n_folds"] == 6
+    # fold s1: mean of the two replicates (1 and 5/6); the other folds agree
+    assert msd["accuracy"] == pytest.approx(((1 + 5 / 6) / 2 + 5 / 6 + 1 + 5 / 6 + 1 + 1) / 6)
+    # timings: the reference machine (3 methods measured) is run1's; its latency 5 ms, not 100
+    assert msd["latency_ms"] == pytest.approx(5.0)
+    ten = lb.rows[lb.rows["classifier_params"] == '{"n_estimators":10}'].iloc[0]
+    assert ten["timing_machine"] != msd["timing_machine"]
+    # alone on its machine: on that machine's front even though it is slow and inaccurate
+    assert bool(ten["pareto"])
+    assert any("several machines" in n for n in lb.notes)
+    # pooled on request: one front; the 50 ms method is dominated
+    [pooled] = build_leaderboards(rs, pool_machines=True)
+    ten_p = pooled.rows[pooled.rows["classifier_params"] == '{"n_estimators":10}'].iloc[0]
+    assert not bool(ten_p["pareto"])
+    assert pooled.rows.loc[pooled.rows["method_id"] == msd["method_id"], "latency_ms"].iloc[0] == pytest.approx(
+        np.median([5.0] * 6 + [100.0] * 6))
+
+
+def test_tables_per_dataset_and_scheme(tmp_path):
+    _run1(tmp_path)
+    write_fake_run(tmp_path / "kfold", CAPS, FOLDS, [FakeMethod("msd", "rf", classifier_name="gaus-rf")],
+                   scheme={"name": "kfold", "k": 6}, run_id="k")
+    write_fake_run(tmp_path / "other-data", CAPS, FOLDS, [FakeMethod("msd", "rf", classifier_name="gaus-rf")],
+                   scheme={"name": "loso"}, dataset_hash="e" * 64, run_id="o")
+    lbs = build_leaderboards(load_results([tmp_path]))
+    assert sorted(lb.scheme for lb in lbs) == ["kfold(k=6)", "loso", "loso"]
+    assert len({lb.key for lb in lbs}) == 3
+
+
+def test_single_fold_wilson_and_subject_pairing(tmp_path):
+    caps = CAPS
+    fold = {"challenge": caps["capture_id"].tolist()}
+    by_subj = {s: caps[caps["subject"] == s]["capture_id"].tolist() for s in SUBJECTS}
+    x_wrong = by_subj["s1"][:2] + by_subj["s2"][:1]
+    y_wrong = by_subj["s1"][:2] + by_subj["s2"][:2] + by_subj["s3"][:2]
+    d = write_fake_run(tmp_path / "ch", caps, fold, [
+        FakeMethod("all", "x", wrong={"challenge": x_wrong}), FakeMethod("all", "y", wrong={"challenge": y_wrong})],
+        scheme={"name": "challenge"})
+    [lb] = build_leaderboards(load_results([d]))
+    x, y = _row(lb, "all", "x"), _row(lb, "all", "y")
+    assert x["accuracy"] == pytest.approx(33 / 36)
+    lo, hi = wilson_interval(33, 36)
+    assert (x["ci_low"], x["ci_high"]) == (pytest.approx(lo), pytest.approx(hi))
+    assert x["ci_method"] == "wilson" and math.isnan(x["accuracy_sd"])
+    # per-subject accuracy, y - x: s1 0, s2 -1/6, s3 -2/6, others 0: flips of (1, 2) with |sum| >= 3: 2 of 4
+    assert y["paired_by"] == "subject" and y["n_pairs"] == 6
+    assert y["p_value"] == pytest.approx(0.5)
+
+
+def test_failed_folds_are_counted_not_scored(tmp_path):
+    d = write_fake_run(tmp_path / "f", CAPS, FOLDS, [
+        FakeMethod("msd", "rf", wrong=_wrong(A_WRONG), failed_folds=["subject=s1"])], scheme={"name": "loso"})
+    [lb] = build_leaderboards(load_results([d]))
+    r = lb.rows.iloc[0]
+    assert r["n_folds"] == 5 and r["n_failed"] == 1
+    assert r["accuracy"] == pytest.approx((5 / 6 + 1 + 5 / 6 + 1 + 1) / 5)
+
+
+def test_compare_per_fold_and_per_class(tmp_path):
+    d = _run1(tmp_path)
+    rs = load_results([d])
+    [lb] = build_leaderboards(rs)
+    cmp = compare_methods(rs, lb, "msd/rf", "sd/rf")
+    assert cmp.test.n == 6 and cmp.test.pvalue == pytest.approx(2 / 64)
+    np.testing.assert_allclose(cmp.pairs["diff"].to_numpy(), np.full(6, 1 / 6))
+    pc = cmp.per_class.set_index("class")
+    # A misses 2 captures (first of folds s2 and s4: both 'pat'); B misses 8: in each fold 'pat' first,
+    # then a second 'pat' in folds s2 and s4 -> B's pat recall = (12 - 8) / 12
+    assert pc.loc["pat", "support"] == 12
+    assert pc.loc["pat", "recall_a"] == pytest.approx(10 / 12)
+    assert pc.loc["pat", "recall_b"] == pytest.approx(4 / 12)
+    assert pc.loc["pat", "recall_diff"] == pytest.approx(6 / 12)
+    assert pc.loc["stroke", "recall_diff"] == pytest.approx(0.0)
+    # a method id prefix works as well as a label
+    mid = lb.rows.iloc[0]["method_id"]
+    assert compare_methods(rs, lb, mid[:6], "bmh/rf").a["method_id"] == mid
+
+
+def test_ambiguous_label_needs_the_hash(tmp_path):
+    _run1(tmp_path)
+    write_fake_run(tmp_path / "run2", CAPS, FOLDS, [
+        FakeMethod("msd", "rf", classifier_name="gaus-rf", classifier_params={"n_estimators": 10})],
+        scheme={"name": "loso"}, run_id="run2")
+    rs = load_results([tmp_path])
+    [lb] = build_leaderboards(rs)
+    with pytest.raises(TouchbenchError, match="names 2 methods"):
+        compare_methods(rs, lb, "msd/rf", "sd/rf")
+    with pytest.raises(TouchbenchError, match="no method"):
+        compare_methods(rs, lb, "nope/rf", "sd/rf")
+
+
+def test_outputs_markdown_csv_json(tmp_path):
+    d = _run1(tmp_path)
+    lbs = build_leaderboards(load_results([d]))
+    md = to_markdown(lbs)
+    assert "| # | method |" in md and "94.4" in md and "★" in md
+    csv = pd.read_csv(__import__("io").StringIO(to_csv(lbs)))
+    assert len(csv) == 3 and {"accuracy", "p_holm", "pareto", "method_id", "scheme"} <= set(csv.columns)
+    js = json.loads(to_json(lbs))
+    assert js["tables"][0]["scheme"] == "loso" and len(js["tables"][0]["rows"]) == 3
+    assert js["tables"][0]["rows"][0]["p_value"] is None
+
+
+def test_missing_results_are_refused(tmp_path):
+    with pytest.raises(TouchbenchError, match="no scores.parquet"):
+        load_results([tmp_path])
+    with pytest.raises(TouchbenchError, match="no such results directory"):
+        load_results([tmp_path / "nope"])

@@ -1,0 +1,215 @@
+"""Paper protocols, profiles and REPORT.md: numbers checked against the papers' text and by hand."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from touchbench.paths import REPO_ROOT
+from touchbench.protocols.schema import load_protocol
+from touchbench.reports.papers import (
+    PAPER_CHECKS,
+    PROFILES,
+    Profile,
+    ProtocolRun,
+    apply_profile,
+    paper_protocols,
+    write_report,
+)
+from touchbench.reports.testing import FakeMethod, write_fake_run
+
+PAPERS = REPO_ROOT / "protocols" / "papers"
+SEEDS = REPO_ROOT.parent / "shared" / "seeds"
+SEED_OF = {"gaus-": "000_", "cnn-": "001_", "flagg-": "002_", "zhou-": "003_"}
+
+
+def _seed_text(name: str) -> str:
+    if not SEEDS.is_dir():
+        pytest.skip(f"seed papers not found at {SEEDS}")
+    prefix = next(v for k, v in SEED_OF.items() if name.startswith(k))
+    [path] = list(SEEDS.glob(f"{prefix}*.txt"))
+    return path.read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("path", paper_protocols(), ids=lambda p: p.stem)
+def test_paper_protocol_is_valid_and_its_numbers_are_in_the_paper(path):
+    proto = load_protocol(path, deep=False)
+    assert proto.name == path.stem
+    assert proto.expected is not None or proto.name in PAPER_CHECKS
+    text = _seed_text(proto.name)
+    if proto.expected is None:
+        return
+    for r in proto.expected.results:
+        # the value as printed in the paper: "36.17%", "83.2%", "95%", "80.50%"
+        forms = {f"{r.value:.2f}%", f"{r.value:.1f}%", f"{r.value:g}%", f"{r.value:.2f} %"}
+        assert any(f in text for f in forms), f"{path.name}: {r.value} ({r.source}) not found in the paper"
+        assert r.source, f"{path.name}: every expected number names its table cell"
+
+
+def test_every_table_of_the_brief_has_a_protocol():
+    names = {p.stem for p in paper_protocols()}
+    for needed in ("gaus-table5-haart", "gaus-tables6-7-haart", "cnn-table2-loso-haart", "cnn-fig5-frame-sweep-haart",
+                   "zhou-table3-basic-tpm", "zhou-table4-wavelet-tpm", "zhou-table5-combined-tpm",
+                   "zhou-table6-descriptors-tpm", "gaus-table8-cost", "flagg-fig4-6-combined-fur"):
+        assert needed in names
+    t5 = load_protocol(PAPERS / "gaus-table5-haart.yaml", deep=False)
+    assert t5.dataset.name == "haart-challenge" and t5.dataset.filters == {"split": ["train"]}
+    assert t5.scheme.name == "kfold" and t5.scheme.params["k"] == 10
+    assert {c.name for c in t5.classifiers} == {"gaus-rf", "gaus-boost"}
+    assert len(t5.expected.results) == 12
+
+
+@pytest.mark.parametrize("check", [c for cs in PAPER_CHECKS.values() for c in cs if c["kind"] == "confusion"],
+                         ids=lambda c: c["source"].split(",")[1].split("(")[0].strip())
+def test_paper_confusions_as_printed(check):
+    m = np.asarray(check["matrix"])
+    k = len(check["classes"])
+    assert m.shape == (k, k)
+    # rows are predicted, columns true: every column sums to one gesture's test captures
+    cols = m.sum(axis=0)
+    assert cols.max() - cols.min() <= 1 or "Table 9" in check["source"] or "Table 10" in check["source"]
+    acc = 100 * np.trace(m) / m.sum()
+    stated = re.search(r"(\d+\.\d+) %", check["source"])
+    if stated:
+        assert acc == pytest.approx(float(stated.group(1)), abs=0.06)
+
+
+def test_gaus_confusions_by_hand():
+    t6, t7 = PAPER_CHECKS["gaus-tables6-7-haart"]
+    # Table 6: 34+36+30+16+26+18+7 = 167 of 251 = 66.53 %; Table 7: 162 of 251 = 64.54 %
+    assert np.trace(np.array(t6["matrix"])) == 167 and np.array(t6["matrix"]).sum() == 251
+    assert np.trace(np.array(t7["matrix"])) == 162 and np.array(t7["matrix"]).sum() == 251
+    # the test split has 35 constant and 36 of every other gesture
+    assert np.array(t6["matrix"]).sum(axis=0).tolist() == [35, 36, 36, 36, 36, 36, 36]
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+def test_quick_profile_caps_defaults_grids_schemes_and_scenes(tmp_path):
+    quick = PROFILES["quick"]
+    proto, changes = apply_profile(PAPERS / "gaus-table5-haart.yaml", quick)
+    rf = next(c for c in proto.classifier_entries() if c.name == "gaus-rf")
+    assert rf.params["n_estimators"] == 100  # the protocol gives none: the default 1000 is capped
+    assert "gaus-rf: n_estimators 1000 -> 100" in changes
+    assert proto.dataset.options == {}  # real data is never reduced
+    p = _write(tmp_path / "g.yaml", """
+name: g
+dataset: scene:fur-like
+scheme: {name: kfold, k: 100}
+features: [[flagg-stats]]
+classifiers:
+  - {name: gaus-rf, params: {n_estimators: {grid: [50, 100, 500, 1000]}}}
+  - {name: gaus-rf, params: {n_estimators: 20}, label: small}
+""")
+    proto, changes = apply_profile(p, quick)
+    labels = [c.label for c in proto.classifier_entries()]
+    # grid capped at 100 and repeats dropped; 20 is under the cap and stays
+    assert labels == ["gaus-rf(n_estimators=50)", "gaus-rf(n_estimators=100)", "small"]
+    assert proto.scheme.params["k"] == 10
+    assert proto.dataset.options == {"repetitions": 10}
+    full, none = apply_profile(p, PROFILES["full"])
+    assert none == [] and full.scheme.params["k"] == 100
+
+
+def test_profile_never_touches_expected_or_features(tmp_path):
+    prof = Profile("x", "test", classifier_caps={"gaus-rf": {"n_estimators": 1}})
+    proto, _ = apply_profile(PAPERS / "gaus-table5-haart.yaml", prof)
+    orig = load_protocol(PAPERS / "gaus-table5-haart.yaml", deep=False)
+    assert [r.model_dump() for r in proto.expected.results] == [r.model_dump() for r in orig.expected.results]
+    assert [c.label for c in proto.combinations()] == [c.label for c in orig.combinations()]
+
+
+HAART = ["constant", "notouch", "pat", "rub", "scratch", "stroke", "tickle"]
+
+
+def _challenge_run(tmp_path: Path) -> Path:
+    """A fake results dir whose RF predictions reproduce Gaus's Table 6 exactly
+    and whose boosting predictions are all correct."""
+    t6 = np.array(PAPER_CHECKS["gaus-tables6-7-haart"][0]["matrix"]).T  # rows true, columns predicted
+    rows, pred = [], {}
+    n = 0
+    for i, true in enumerate(HAART):
+        for j, p in enumerate(HAART):
+            for _ in range(int(t6[i, j])):
+                cid = f"c{n:04d}"
+                rows.append((cid, f"s{n % 3 + 1}", true))
+                pred[cid] = p
+                n += 1
+    caps = pd.DataFrame(rows, columns=["capture_id", "subject", "gesture"])
+    combined = "sd+bmh+msd+smmhh+lbptop"
+    return write_fake_run(tmp_path / "gaus-tables6-7-haart", caps, {"challenge": caps["capture_id"].tolist()}, [
+        FakeMethod(combined, "gaus-rf", predicted=pred),
+        FakeMethod(combined, "gaus-boost"),
+    ], dataset="haart-challenge", scheme={"name": "challenge"}, protocol="gaus-tables6-7-haart")
+
+
+def test_report_compares_paper_and_ours(tmp_path):
+    out = _challenge_run(tmp_path)
+    run = ProtocolRun(path=PAPERS / "gaus-tables6-7-haart.yaml", name="gaus-tables6-7-haart", out=out, changes=[])
+    report = write_report([run], PROFILES["full"], tmp_path / "REPORT.md", wall_seconds=60.0)
+    text = report.read_text()
+    # RF reproduces Table 6 exactly: 167 / 251 = 66.53 %, difference +0.00
+    assert "| Table 5 Testing / Table 6, Random Forest | sd+bmh+msd+smmhh+lbptop | gaus-rf | 66.53 | 66.53 | +0.00 | 5 | yes |" in text
+    # boosting gets everything right: 100 % against 64.54 %: outside tolerance, said plainly
+    assert "| gaus-boost | 64.54 | 100.00 | +35.46 | 5 | **NO** |" in text
+    assert "## Where we differ from the papers (beyond tolerance)" in text
+    assert "ours 100.00 %, paper 64.54 %, +35.46 points" in text
+    # per-class recall of the RF confusion equals the paper's: every difference +0.0
+    sec = text[text.index("**Gaus et al. 2015, Table 6"):text.index("**Gaus et al. 2015, Table 7")]
+    assert sec.count("| +0.0 |") == 7
+    assert "| constant | 34 / 34 |" in sec
+    assert "real HAART" in text and "protocols/papers/gaus-tables6-7-haart.yaml" in text
+    assert "1 of 2 paper numbers reproduced within tolerance; on real HAART data 1 of 2" in text
+
+
+def test_report_states_a_failed_protocol(tmp_path):
+    run = ProtocolRun(path=PAPERS / "cnn-table2-loso-haart.yaml", name="cnn-table2-loso-haart",
+                      out=tmp_path / "none", changes=[], error="TouchbenchError: torch missing")
+    text = write_report([run], PROFILES["quick"], tmp_path / "R.md").read_text()
+    assert "**Did not run:** TouchbenchError: torch missing" in text
+    assert "cnn-table2-loso-haart: did not run" in text
+    assert "Profile `quick`" in text and "gaus-rf: n_estimators ≤ 100" in text
+
+
+def test_reproduce_end_to_end_on_a_tiny_protocol(tmp_path):
+    from touchbench.reports.papers import reproduce
+
+    d = tmp_path / "papers"
+    d.mkdir()
+    _write(d / "gaus-tiny.yaml", """# a tiny stand-in for a paper protocol
+name: gaus-tiny
+description: tiny scene, MSD, small forest
+dataset: scene:tiny
+scheme: loso
+features: [[msd]]
+classifiers:
+  - {name: gaus-rf, params: {n_estimators: 200}}
+seed: 0
+expected:
+  metric: accuracy
+  tolerance: 100.0
+  results:
+    - {features: [msd], classifier: gaus-rf, value: 50.0, source: "made up"}
+""")
+    prof = Profile("t", "test profile", classifier_caps={"gaus-rf": {"n_estimators": 5}})
+    import touchbench.reports.papers as P
+
+    P.PROFILES["t"] = prof
+    try:
+        path = reproduce("t", tmp_path / "res", protocols_dir=d, echo=lambda s: None)
+    finally:
+        P.PROFILES.pop("t")
+    text = path.read_text()
+    assert "gaus-rf: n_estimators 200 -> 5" in text
+    assert "| made up | msd | gaus-rf | 50.00 |" in text and "| yes |" in text
+    scores = pd.read_parquet(tmp_path / "res" / "t" / "gaus-tiny" / "scores.parquet")
+    assert (scores["status"] == "ok").all()
+    assert set(scores["classifier_params"]) == {'{"n_estimators":5}'}

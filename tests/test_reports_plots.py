@@ -1,0 +1,120 @@
+"""Plots, the HTML report and the report commands, on hand-built results."""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from touchbench.cli.main import cli
+from touchbench.reports.html import write_report
+from touchbench.reports.leaderboard import build_leaderboards
+from touchbench.reports.plots import confusion_matrix, plot_confusion, plot_frames
+from touchbench.reports.results import load_results
+from touchbench.reports.testing import FakeMethod, write_fake_run
+
+SUBJECTS = ["s1", "s2", "s3", "s4"]
+GESTURES = ["pat", "rub", "stroke"]
+CAPS = pd.DataFrame([(f"{s}-{g}-{r}", s, g) for s in SUBJECTS for g in GESTURES for r in range(2)],
+                    columns=["capture_id", "subject", "gesture"])
+FOLDS = {f"subject={s}": CAPS[CAPS["subject"] == s]["capture_id"].tolist() for s in SUBJECTS}
+
+
+def _wrong(counts):
+    return {f: ids[:c] for (f, ids), c in zip(FOLDS.items(), counts)}
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    d = tmp_path_factory.mktemp("runs")
+    write_fake_run(d / "loso", CAPS, FOLDS, [
+        FakeMethod("msd", "rf", wrong=_wrong([0, 1, 0, 1]), latency_ms=4.0, fit_seconds=2.0),
+        FakeMethod("sd", "rf", wrong=_wrong([2, 2, 1, 2]), latency_ms=0.5, fit_seconds=0.1),
+    ], scheme={"name": "loso"}, run_id="loso")
+    write_fake_run(d / "early", CAPS, FOLDS, [
+        FakeMethod("msd", "rf", wrong=_wrong([4, 4, 3, 4]), early_frames=27),
+        FakeMethod("msd", "rf", wrong=_wrong([2, 2, 1, 2]), early_frames=54),
+        FakeMethod("msd", "rf", wrong=_wrong([0, 1, 0, 1]), early_frames=108),
+    ], scheme={"name": "early", "base": {"name": "loso"}, "frames": [27, 54, 108]}, run_id="early")
+    return d
+
+
+def test_confusion_counts_by_hand(runs, tmp_path):
+    rs = load_results([runs / "loso"])
+    [lb] = build_leaderboards(rs)
+    best = lb.rows.iloc[0]
+    assert best["features"] == "msd"
+    m = confusion_matrix(rs, lb, best["method_id"])
+    # msd misses the first capture (a pat) of folds s2 and s4, predicted as rub
+    assert list(m.index) == GESTURES and list(m.columns) == GESTURES
+    assert m.loc["pat", "pat"] == 6 and m.loc["pat", "rub"] == 2 and m.loc["rub", "rub"] == 8
+    assert int(m.to_numpy().sum()) == 24
+    png, svg = plot_confusion(rs, lb, best["method_id"], tmp_path / "conf")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    root = ET.parse(svg).getroot()
+    texts = "".join(t.text or "" for t in root.iter() if t.tag.endswith("text"))
+    for g in GESTURES:  # class names on the axes
+        assert g in texts
+    assert "row-normalised" in texts and "0.75" in texts  # pat recall 6/8
+
+
+def test_frames_plot_has_seconds_axis(runs, tmp_path):
+    rs = load_results([runs / "early"])
+    [lb] = build_leaderboards(rs)
+    assert lb.is_early and sorted(lb.rows["early_frames"]) == [27.0, 54.0, 108.0]
+    # accuracy grows with frames seen: 15/24, 17/24, 22/24
+    acc = lb.rows.set_index("early_frames")["accuracy"]
+    assert acc[27.0] == pytest.approx(9 / 24) and acc[108.0] == pytest.approx(22 / 24)
+    png, svg = plot_frames(lb, tmp_path / "frames")
+    texts = "".join(t.text or "" for t in ET.parse(svg).getroot().iter() if t.tag.endswith("text"))
+    assert "frames seen" in texts and "seconds seen (at 54 frames/s)" in texts
+
+
+def test_html_report_is_self_contained(runs, tmp_path):
+    rs = load_results([runs])
+    lbs = build_leaderboards(rs)
+    page = write_report(rs, lbs, tmp_path / "rep", title="test report")
+    html = page.read_text()
+    # every image embedded, nothing fetched from elsewhere
+    assert html.count("data:image/png;base64,") >= 5
+    assert not re.search(r'src="(?!data:)', html) and "<link" not in html and "<script" not in html
+    first = re.search(r'data:image/png;base64,([A-Za-z0-9+/=]+)"', html).group(1)
+    assert base64.b64decode(first)[:4] == b"\x89PNG"
+    for name in ("leaderboard.md", "leaderboard.csv", "leaderboard.json"):
+        assert (tmp_path / "rep" / name).is_file()
+    kinds = {p.name.split("-")[-1].split(".")[0] for p in (tmp_path / "rep" / "plots").glob("*.png")}
+    assert {"pareto", "frames", "subjects"} <= kinds
+    assert len(list((tmp_path / "rep" / "plots").glob("*.svg"))) == len(list((tmp_path / "rep" / "plots").glob("*.png")))
+    assert "early(base=loso)" in html and "★" in html
+
+
+def test_cli_leaderboard_compare_plot(runs, tmp_path):
+    r = CliRunner()
+    res = r.invoke(cli, ["leaderboard", str(runs / "loso"), "--format", "md"])
+    assert res.exit_code == 0, res.output
+    assert "| 1 |" in res.output and "msd" in res.output
+    res = r.invoke(cli, ["leaderboard", str(runs), "--out", str(tmp_path / "lb"), "--format", "json"])
+    assert res.exit_code == 0, res.output
+    js = json.loads((tmp_path / "lb" / "leaderboard.json").read_text())
+    assert len(js["tables"]) == 2
+    res = r.invoke(cli, ["leaderboard", str(runs), "--scheme", "loso"])
+    assert res.exit_code == 0 and "Pareto" in res.output
+    res = r.invoke(cli, ["compare", str(runs / "loso"), "--a", "msd/rf", "--b", "sd/rf"])
+    assert res.exit_code == 0, res.output
+    # per-fold differences (sixths): 2, 1, 1, 1 -> all positive: exact p = 2/16
+    assert "exact sign-flip permutation test, two-sided p = 0.125" in res.output
+    assert "subject=s1" in res.output and "pat" in res.output
+    res = r.invoke(cli, ["compare", str(runs / "loso"), "--a", "msd/rf", "--b", "nope"])
+    assert res.exit_code == 2 and "no method 'nope'" in res.output
+    res = r.invoke(cli, ["plot", str(runs / "early"), "--out", str(tmp_path / "pl"), "--kind", "frames"])
+    assert res.exit_code == 0, res.output
+    assert len(list((tmp_path / "pl").glob("*frames.svg"))) == 1
+    res = r.invoke(cli, ["leaderboard", str(tmp_path / "missing")])
+    assert res.exit_code == 2

@@ -1,0 +1,230 @@
+"""Report commands: ``leaderboard``, ``compare``, ``plot``, ``report`` and ``papers reproduce``.
+
+RESULTS arguments are results directories written by ``touchbench run``, or
+folders holding several (searched recursively). Results of several runs and
+machines combine: a method is its parameters' hash (the ``method`` column),
+so the same method run twice is one row.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import click
+
+_FORMATS = ("terminal", "md", "csv", "json")
+
+
+def _load(results: tuple[str, ...], predictions: bool = True):
+    from ..reports.results import load_results
+
+    return load_results(results, predictions=predictions)
+
+
+def _filter(lbs, dataset: str | None, scheme: str | None):
+    from ..errors import TouchbenchError
+
+    out = [lb for lb in lbs if (dataset is None or dataset in (lb.dataset, lb.dataset_hash[: len(dataset)]))
+           and (scheme is None or lb.scheme == scheme or lb.scheme.split("(")[0] == scheme)]
+    if not out:
+        avail = "; ".join(f"{lb.dataset} / {lb.scheme}" for lb in lbs)
+        raise TouchbenchError(f"no table for dataset={dataset!r} scheme={scheme!r} (tables: {avail})")
+    return out
+
+
+_table_options = [
+    click.option("--dataset", default=None, help="Only tables of this dataset (name or hash prefix)."),
+    click.option("--scheme", default=None, help="Only tables of this scheme (name, or name(params) as shown)."),
+    click.option("--alpha", default=0.05, show_default=True, help="Significance level after Holm's correction."),
+    click.option("--pool-machines", is_flag=True,
+                 help="Pool timings of different machines into one ranking and Pareto front."),
+    click.option("--machine", default=None, help="Reference machine id for timings (default: the one that ran most methods)."),
+]
+
+
+def _with_table_options(f):
+    for opt in reversed(_table_options):
+        f = opt(f)
+    return f
+
+
+def _boards(results, dataset, scheme, alpha, pool_machines, machine, predictions=True):
+    from ..reports.leaderboard import build_leaderboards
+
+    rs = _load(results, predictions=predictions)
+    lbs = build_leaderboards(rs, alpha=alpha, pool_machines=pool_machines, machine=machine)
+    return rs, _filter(lbs, dataset, scheme)
+
+
+@click.command("leaderboard")
+@click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
+@click.option("--format", "-f", "formats", multiple=True, type=click.Choice(_FORMATS), default=("terminal",),
+              show_default=True, help="Output format (repeatable). md/csv/json go to stdout, or to files with --out.")
+@click.option("--out", "-o", type=click.Path(file_okay=False), default=None,
+              help="Write leaderboard.md/.csv/.json into this folder (the --format choices, all three by default).")
+@_with_table_options
+def leaderboard(results, formats, out, dataset, scheme, alpha, pool_machines, machine) -> None:
+    """One table per dataset and scheme: rank, features, classifier, accuracy
+    (mean over folds, sd, 95 % interval), macro F1, latency per capture, fit
+    time, feature time, the paired test against the best method (exact
+    permutation or Wilcoxon, Holm-corrected) and the accuracy/latency Pareto
+    front (★)."""
+    from ..reports.leaderboard import print_terminal, to_csv, to_json, to_markdown, write_outputs
+
+    _, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
+    if out:
+        fmts = [f for f in formats if f != "terminal"] or ["md", "csv", "json"]
+        for p in write_outputs(lbs, Path(out), fmts):
+            click.echo(f"wrote {p}", err=True)
+        if "terminal" not in formats:
+            return
+    for f in formats:
+        if f == "terminal":
+            print_terminal(lbs)
+        else:
+            click.echo({"md": to_markdown, "csv": to_csv, "json": to_json}[f](lbs))
+
+
+@click.command("compare")
+@click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
+@click.option("--a", "a", required=True, help="Method A: its id (or a prefix), or features/classifier if unambiguous.")
+@click.option("--b", "b", required=True, help="Method B, as --a.")
+@click.option("--json", "as_json", is_flag=True, help="Print the comparison as JSON.")
+@_with_table_options
+def compare(results, a, b, as_json, dataset, scheme, alpha, pool_machines, machine) -> None:
+    """The paired test of method A against B (by fold, or by subject when
+    they share one fold), the per-fold differences and the per-class
+    recall and F1 differences, in every table holding both methods."""
+    from ..errors import TouchbenchError
+    from ..reports.leaderboard import compare_methods, method_label
+
+    rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
+    done, errors = [], []
+    for lb in lbs:
+        try:
+            done.append(compare_methods(rs, lb, a, b))
+        except TouchbenchError as e:
+            errors.append(f"{lb.title}: {e}")
+    if not done:
+        raise TouchbenchError("no table holds both methods:\n" + "\n".join(errors))
+    if as_json:
+        def clean(v):
+            return None if isinstance(v, float) and not math.isfinite(v) else v
+
+        payload = [{
+            "table": {"dataset": c.leaderboard.dataset, "scheme": c.leaderboard.scheme},
+            "a": {k: clean(c.a[k]) for k in ("method_id", "features", "classifier", "accuracy", "macro_f1")},
+            "b": {k: clean(c.b[k]) for k in ("method_id", "features", "classifier", "accuracy", "macro_f1")},
+            "test": {k: clean(v) for k, v in c.test.as_dict().items()},
+            "pairs": c.pairs.to_dict(orient="records"),
+            "per_class": c.per_class.to_dict(orient="records"),
+        } for c in done]
+        click.echo(json.dumps(payload, indent=2, default=str))
+        return
+    for c in done:
+        t = c.test
+        click.echo(f"== {c.leaderboard.title}")
+        click.echo(f"A = {c.a['method_id']}  {method_label(c.a)}: accuracy {100 * c.a['accuracy']:.2f} %")
+        click.echo(f"B = {c.b['method_id']}  {method_label(c.b)}: accuracy {100 * c.b['accuracy']:.2f} %")
+        if t.test == "none":
+            click.echo(f"paired test: not possible ({t.n} shared {t.paired_by or 'fold'}s)")
+        else:
+            name = "exact sign-flip permutation test" if t.test == "exact-permutation" else "Wilcoxon signed-rank test"
+            click.echo(f"paired by {t.paired_by} (n={t.n}): mean difference A-B {100 * t.mean_difference:+.2f} points, "
+                       f"{name}, two-sided p = {t.pvalue:.4g}")
+        click.echo("")
+        click.echo(f"{t.paired_by or 'unit':28s} {'A %':>7s} {'B %':>7s} {'A-B':>7s}")
+        for r in c.pairs.itertuples():
+            click.echo(f"{str(r.unit)[:28]:28s} {100 * r.a:7.1f} {100 * r.b:7.1f} {100 * r.diff:+7.1f}")
+        if len(c.per_class):
+            click.echo("")
+            click.echo(f"{'class':16s} {'n':>5s} {'recall A':>9s} {'recall B':>9s} {'A-B':>7s} {'F1 A':>6s} {'F1 B':>6s} {'A-B':>7s}")
+            for r in c.per_class.itertuples():
+                click.echo(f"{str(r._1)[:16]:16s} {r.support:5d} {100 * r.recall_a:9.1f} {100 * r.recall_b:9.1f} "
+                           f"{100 * r.recall_diff:+7.1f} {100 * r.f1_a:6.1f} {100 * r.f1_b:6.1f} {100 * r.f1_diff:+7.1f}")
+        click.echo("")
+
+
+@click.command("plot")
+@click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
+@click.option("--out", "-o", required=True, type=click.Path(file_okay=False), help="Folder for the PNG and SVG files.")
+@click.option("--kind", "kinds", multiple=True, type=click.Choice(["pareto", "frames", "confusion", "subjects"]),
+              help="Plots to draw (repeatable) [default: all that apply].")
+@click.option("--method", "methods", multiple=True,
+              help="Method(s) for confusion matrices (id or unambiguous label) [default: each table's best].")
+@_with_table_options
+def plot(results, out, kinds, methods, dataset, scheme, alpha, pool_machines, machine) -> None:
+    """Plot accuracy against latency / fit time / feature time (Pareto front),
+    accuracy against frames and seconds seen (early scheme), confusion
+    matrices (counts and row-normalised) and per-subject accuracy."""
+    from ..reports.leaderboard import resolve_method
+    from ..reports.plots import KINDS, plot_table
+
+    rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
+    for lb in lbs:
+        ids = [resolve_method(lb.rows, m) for m in methods] if methods else None
+        made = plot_table(rs, lb, Path(out), tuple(kinds) or KINDS, ids)
+        for name, paths in made.items():
+            click.echo(f"{lb.title}: {name}: " + ", ".join(str(p) for p in paths))
+
+
+@click.command("report")
+@click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
+@click.option("--out", "-o", required=True, type=click.Path(file_okay=False), help="Folder for report.html and its files.")
+@click.option("--title", default="touchbench report", show_default=True)
+@_with_table_options
+def report(results, out, title, dataset, scheme, alpha, pool_machines, machine) -> None:
+    """Write one self-contained HTML page (images embedded) with every
+    leaderboard and plot, plus the plots as PNG/SVG and the leaderboard as
+    Markdown, CSV and JSON beside it."""
+    from ..reports.html import write_report
+
+    rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
+    page = write_report(rs, lbs, Path(out), title=title)
+    click.echo(f"wrote {page}")
+
+
+@click.group("papers")
+def papers() -> None:
+    """Reproduce the four seed papers (protocols/papers/)."""
+
+
+@papers.command("list")
+@click.option("--profile", default="quick", show_default=True, help="Show what this profile changes.")
+def papers_list(profile: str) -> None:
+    """The paper protocols and what the profile changes in each."""
+    from ..errors import TouchbenchError
+    from ..reports.papers import PROFILES, apply_profile, paper_protocols
+
+    if profile not in PROFILES:
+        raise TouchbenchError(f"unknown profile {profile!r} (known: {', '.join(PROFILES)})")
+    click.echo(f"profile {profile}: {PROFILES[profile].description}")
+    for f in paper_protocols():
+        proto, changes = apply_profile(f, PROFILES[profile])
+        click.echo(f"{f.stem:38s} {proto.description}")
+        for c in changes:
+            click.echo(f"{'':40s}{c}")
+
+
+@papers.command("reproduce")
+@click.option("--profile", default="quick", show_default=True, type=click.Choice(["quick", "full"]),
+              help="quick: fewer trees and epochs, smaller synthetic scenes (stated in the report); full: the papers' settings.")
+@click.option("--out", "-o", default="results/papers", show_default=True, type=click.Path(file_okay=False),
+              help="Results go to OUT/<profile>/<protocol>/; the report to OUT/REPORT.md.")
+@click.option("--only", multiple=True, help="Only protocols whose name contains this (repeatable).")
+@click.option("--jobs", "-j", default=-1, show_default=True, help="Tasks in parallel (-1: one per CPU).")
+@click.option("--report", "report_path", default=None, type=click.Path(dir_okay=False),
+              help="Where to write the report [default: OUT/REPORT.md].")
+@click.option("--progress/--no-progress", default=None, help="Progress bars [default: on a terminal only].")
+def papers_reproduce(profile, out, only, jobs, report_path, progress) -> None:
+    """Run every protocol of protocols/papers/ under PROFILE (resuming
+    finished tasks) and write REPORT.md: for each table and figure, the
+    paper's number, ours, the difference, real or synthetic data, and the
+    protocol file."""
+    from ..reports.papers import reproduce
+
+    p = reproduce(profile, out, only=list(only) or None, jobs=jobs, progress=progress, report=report_path,
+                  echo=lambda s: click.echo(s, err=True))
+    click.echo(f"wrote {p}")

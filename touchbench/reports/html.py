@@ -1,0 +1,91 @@
+"""One self-contained HTML page: the leaderboards and every plot.
+
+Images are embedded as base64 ``data:`` URIs (PNG), so the page can be
+mailed or checked in alone; the PNG and SVG files, and the leaderboard as
+Markdown, CSV and JSON, are written beside it.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+from datetime import datetime, timezone
+from pathlib import Path
+
+from .leaderboard import Leaderboard, display_rows, legend, write_outputs
+from .plots import KINDS, plot_table
+from .results import ResultSet
+
+__all__ = ["render_html", "write_report"]
+
+_CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:2em auto;max-width:1400px;
+color:#222;padding:0 1em}
+h1{font-size:1.6em}h2{font-size:1.25em;margin-top:2em;border-bottom:1px solid #ccc;padding-bottom:.2em}
+table{border-collapse:collapse;font-size:.85em;margin:.6em 0}
+th,td{border:1px solid #ddd;padding:.25em .5em;text-align:left;vertical-align:top}
+th{background:#f3f3f3}tr.best td{background:#eef7ee}td.num{text-align:right;font-variant-numeric:tabular-nums}
+.note{color:#8a5a00}.legend{color:#555;font-size:.85em;max-width:1100px}
+img{max-width:100%;height:auto;border:1px solid #eee;margin:.4em 0}
+code{font-size:.9em}
+"""
+
+
+def _img(path: Path) -> str:
+    data = base64.b64encode(path.read_bytes()).decode()
+    return f'<img alt="{html.escape(path.stem)}" src="data:image/png;base64,{data}">'
+
+
+def _table_html(lb: Leaderboard) -> str:
+    header, cells = display_rows(lb)
+    out = ["<table><thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in header) + "</tr></thead><tbody>"]
+    numeric = {0, 4, 5, 6, 7, 8, 9, 10}
+    for c in cells:
+        cls = ' class="best"' if c[0] == "1" else ""
+        tds = "".join(f'<td class="num">{html.escape(x)}</td>' if i in numeric else f"<td>{html.escape(x)}</td>"
+                      for i, x in enumerate(c))
+        out.append(f"<tr{cls}>{tds}</tr>")
+    out.append("</tbody></table>")
+    return "\n".join(out)
+
+
+def render_html(rs: ResultSet, lbs: list[Leaderboard], plots: dict[str, dict[str, list[Path]]],
+                title: str = "touchbench report") -> str:
+    now = datetime.now(timezone.utc).isoformat(timespec="seconds")
+    parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>",
+             f"<style>{_CSS}</style></head><body>", f"<h1>{html.escape(title)}</h1>",
+             f"<p>Generated {now} from {len(rs.sources)} results director{'y' if len(rs.sources) == 1 else 'ies'}.</p>"]
+    parts.append("<h2>Runs</h2><table><thead><tr><th>protocol</th><th>run</th><th>dataset</th><th>machine</th>"
+                 "<th>tasks (failed)</th><th>run time s</th><th>finished</th></tr></thead><tbody>")
+    for s in rs.sources:
+        parts.append(
+            f"<tr><td>{html.escape(str(s['protocol']))}</td><td><code>{html.escape(str(s['run_id']))}</code></td>"
+            f"<td>{html.escape(str(s['dataset']))}</td><td>{html.escape(s['machine'])}: {html.escape(s['machine_desc'])}</td>"
+            f"<td class='num'>{s['n_tasks']} ({s['n_failed']})</td><td class='num'>{s['seconds']:.1f}</td>"
+            f"<td>{html.escape(str(s.get('finished_at') or ''))}</td></tr>")
+    parts.append("</tbody></table>")
+    for lb in lbs:
+        parts.append(f"<h2>{html.escape(lb.title)}</h2>")
+        parts.append(_table_html(lb))
+        parts.append(f"<p class='legend'>{html.escape(legend(lb))}</p>")
+        for n in lb.notes:
+            parts.append(f"<p class='note'>Note: {html.escape(n)}</p>")
+        for name, paths in plots.get(lb.key, {}).items():
+            png = [p for p in paths if p.suffix == ".png"]
+            if png:
+                parts.append(f"<h3>{html.escape(name.split('-')[0])}</h3>{_img(png[0])}")
+    parts.append("</body></html>")
+    return "\n".join(parts) + "\n"
+
+
+def write_report(rs: ResultSet, lbs: list[Leaderboard], out: str | Path, title: str = "touchbench report",
+                 kinds: tuple[str, ...] = KINDS) -> Path:
+    """``out/report.html`` (self-contained), ``out/plots/*.{png,svg}``, ``out/leaderboard.{md,csv,json}``."""
+    from ..results.store import atomic_write_bytes
+
+    out = Path(out)
+    plots = {lb.key: plot_table(rs, lb, out / "plots", kinds) for lb in lbs}
+    write_outputs(lbs, out, ("md", "csv", "json"))
+    page = out / "report.html"
+    atomic_write_bytes(page, render_html(rs, lbs, plots, title).encode())
+    return page

@@ -1,0 +1,490 @@
+"""Leaderboards: one table per dataset, target and scheme; and pairwise comparison.
+
+Each row is a method (a parameter hash, see :mod:`touchbench.reports.results`):
+rank by mean accuracy over folds, the spread and 95 % interval, macro F1,
+balanced accuracy, the median latency per capture (features + predict of one
+capture, ms), the median fit time (s per fold) and feature extraction time
+(ms per capture), the paired test against the best method (Holm-adjusted
+within the table; statistics in :mod:`touchbench.reports.stats`) and whether
+the method is on the accuracy / latency Pareto front.
+
+Timings and machines: accuracy does not depend on the machine and is pooled
+over every run of a method. Timings do, so a table uses one *reference
+machine* (the one that measured the most of its methods; ``machine=`` picks
+another): a method measured there shows that machine's timings, a method
+measured only elsewhere shows its own machine's, flagged in the
+``timing_machine`` column, and the Pareto front is computed separately for
+each machine. ``pool_machines=True`` pools every machine's timings into one
+front (asked for explicitly, and said so in the table notes).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+import pandas as pd
+
+from ..errors import TouchbenchError
+from .pareto import pareto_front
+from .results import ResultSet
+from .stats import PairedTest, fold_interval, holm, paired_test, wilson_interval
+
+__all__ = [
+    "Leaderboard",
+    "build_leaderboards",
+    "compare_methods",
+    "fold_values",
+    "resolve_method",
+    "subject_values",
+    "to_csv",
+    "to_json",
+    "to_markdown",
+]
+
+METRICS = ["accuracy", "balanced_accuracy", "macro_f1"]
+
+
+@dataclass
+class Leaderboard:
+    """One table: the methods evaluated on one dataset (content hash), target and scheme."""
+
+    key: str
+    dataset: str
+    dataset_hash: str
+    target: str
+    scheme: str
+    rows: pd.DataFrame
+    folds: pd.DataFrame
+    machines: dict[str, str]
+    reference_machine: str | None
+    pooled_machines: bool
+    alpha: float
+    frame_rate: float
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def title(self) -> str:
+        t = f"{self.dataset} [{self.dataset_hash[:8]}] — {self.scheme}"
+        return t if self.target == "gesture" else f"{t} — target {self.target}"
+
+    @property
+    def is_early(self) -> bool:
+        return self.rows["early_frames"].notna().any()
+
+
+def _mode(s: pd.Series) -> str:
+    v = s.astype(str).value_counts()
+    return str(v.index[0]) if len(v) else ""
+
+
+def fold_values(ok: pd.DataFrame) -> pd.DataFrame:
+    """Per method and fold: metrics averaged over duplicate seeds (replicates of a fold)."""
+    agg = {m: "mean" for m in METRICS}
+    agg.update(n_test="first", fold="first", fold_group="first")
+    out = ok.groupby(["table_key", "method_id", "fold_key"], sort=False).agg(agg).reset_index()
+    return out
+
+
+def subject_values(predictions: pd.DataFrame | None, method: str, fold_keys: Iterable[str] | None = None) -> pd.Series:
+    """Per-subject accuracy of ``method`` from its predictions (over ``fold_keys``)."""
+    if predictions is None or predictions.empty:
+        return pd.Series(dtype=np.float64)
+    p = predictions[predictions["method_id"] == method]
+    if fold_keys is not None:
+        p = p[p["fold_key"].isin(set(fold_keys))]
+    if p.empty:
+        return pd.Series(dtype=np.float64)
+    p = p.sort_values("finished_at", kind="stable").drop_duplicates(["fold_key", "seed", "capture_id"], keep="last")
+    return p.groupby("subject")["correct"].mean().astype(np.float64)
+
+
+def _pair(folds: pd.DataFrame, preds: pd.DataFrame | None, a: str, b: str) -> tuple[str, pd.DataFrame]:
+    """Paired accuracies of methods ``a`` and ``b``: by fold, else by subject.
+
+    Returns ``(paired_by, frame)`` with columns ``unit``, ``a``, ``b``.
+    """
+    fa = folds[folds["method_id"] == a].set_index("fold_key")["accuracy"]
+    fb = folds[folds["method_id"] == b].set_index("fold_key")["accuracy"]
+    common = fa.index.intersection(fb.index)
+    if len(common) >= 2:
+        names = folds[folds["method_id"] == a].set_index("fold_key")["fold"]
+        return "fold", pd.DataFrame({"unit": [str(names[k]) for k in common], "a": fa[common].to_numpy(),
+                                     "b": fb[common].to_numpy()})
+    sa = subject_values(preds, a, common)
+    sb = subject_values(preds, b, common)
+    subj = sa.index.intersection(sb.index)
+    if len(common) and len(subj):
+        return "subject", pd.DataFrame({"unit": list(subj), "a": sa[subj].to_numpy(), "b": sb[subj].to_numpy()})
+    return "", pd.DataFrame({"unit": [], "a": [], "b": []})
+
+
+def _timings(s: pd.DataFrame) -> dict[str, float]:
+    return {
+        "latency_ms": float(s["latency_ms"].median()) if s["latency_ms"].notna().any() else math.nan,
+        "fit_seconds": float(s["fit_seconds"].median()) if s["fit_seconds"].notna().any() else math.nan,
+        "feature_ms": 1000.0 * float(s["feature_seconds_per_capture"].median())
+        if s["feature_seconds_per_capture"].notna().any() else math.nan,
+    }
+
+
+def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool_machines: bool,
+               machine: str | None) -> Leaderboard:
+    s_all = rs.scores[rs.scores["table_key"] == key]
+    ok = ok_all[ok_all["table_key"] == key]
+    first = s_all.iloc[0]
+    folds = fold_values(ok) if len(ok) else pd.DataFrame(columns=["table_key", "method_id", "fold_key", *METRICS, "n_test", "fold", "fold_group"])
+    preds = rs.predictions[rs.predictions["table_key"] == key] if rs.predictions is not None else None
+    machines = dict(zip(s_all["machine"], s_all["machine_desc"]))
+    notes: list[str] = []
+    # reference machine: measured the most methods (ties: smallest id)
+    timed = ok[ok["latency_ms"].notna()]
+    per_machine = timed.groupby("machine")["method_id"].nunique().sort_index()
+    ref = None
+    if machine is not None:
+        if machine not in machines:
+            raise TouchbenchError(f"machine {machine!r} has no runs in {first['dataset']} / {first['scheme_label']}; "
+                                  f"machines: {', '.join(sorted(machines))}")
+        ref = machine
+    elif len(per_machine):
+        ref = str(per_machine.sort_values(ascending=False, kind="stable").index[0])
+    if len(machines) > 1 and not pool_machines:
+        notes.append(
+            "results from several machines: " + "; ".join(f"{k} = {v}" for k, v in sorted(machines.items()))
+            + f". Timings are shown for {ref} where measured there, otherwise for the machine named in "
+              "'timing machine'; the Pareto front is computed per machine.")
+    elif len(machines) > 1:
+        notes.append("timings of several machines are pooled (asked with --pool-machines): "
+                     + "; ".join(f"{k} = {v}" for k, v in sorted(machines.items())))
+
+    rows = []
+    for mid, g_all in s_all.groupby("method_id", sort=False):
+        g = ok[ok["method_id"] == mid]
+        f = folds[folds["method_id"] == mid]
+        row: dict[str, Any] = {
+            "method_id": mid,
+            "features": _mode(g_all["features"]),
+            "classifier": _mode(g_all["classifier"]),
+            "classifier_name": _mode(g_all["classifier_name"]),
+            "feature_params": _mode(g_all["feature_params"]),
+            "classifier_params": _mode(g_all["classifier_params"]),
+            "early_frames": float(g_all["early_frames"].iloc[0]) if g_all["early_frames"].notna().any() else math.nan,
+            "n_folds": int(len(f)),
+            "n_failed": int((g_all["status"] != "ok").sum()),
+            "runs": int(g_all["run_id"].nunique()),
+            "protocols": ",".join(sorted(set(g_all["protocol"].astype(str)))),
+        }
+        mean, sd, lo, hi = fold_interval(f["accuracy"].to_numpy())
+        ci_method = "t"
+        if len(f) == 1:
+            n = int(f["n_test"].iloc[0])
+            lo, hi = wilson_interval(int(round(mean * n)), n)
+            ci_method = "wilson"
+        row.update(accuracy=mean, accuracy_sd=sd, ci_low=lo, ci_high=hi, ci_method=ci_method,
+                   balanced_accuracy=float(f["balanced_accuracy"].mean()) if len(f) else math.nan,
+                   macro_f1=float(f["macro_f1"].mean()) if len(f) else math.nan,
+                   n_test=int(f["n_test"].sum()) if len(f) else 0)
+        if pool_machines:
+            tm, gt = "pooled", g
+        else:
+            measured = g[g["latency_ms"].notna()]
+            if ref is not None and (measured["machine"] == ref).any():
+                tm = ref
+            elif len(measured):
+                tm = _mode(measured["machine"])
+            else:
+                tm = ref or ""
+            gt = g[g["machine"] == tm]
+        row["timing_machine"] = tm
+        row.update(_timings(gt) if len(gt) else {"latency_ms": math.nan, "fit_seconds": math.nan, "feature_ms": math.nan})
+        rows.append(row)
+    df = pd.DataFrame(rows)
+    df = df.sort_values(["accuracy", "macro_f1", "method_id"], ascending=[False, False, True], na_position="last",
+                        kind="stable").reset_index(drop=True)
+    df.insert(0, "rank", df["accuracy"].rank(method="min", ascending=False, na_option="bottom").astype(int))
+    # paired tests against the best
+    best = df["method_id"].iloc[0]
+    tests: list[PairedTest | None] = []
+    for mid in df["method_id"]:
+        if mid == best:
+            tests.append(None)
+            continue
+        by, pairs = _pair(folds, preds, mid, best)
+        tests.append(paired_test(pairs["a"].to_numpy(), pairs["b"].to_numpy(), paired_by=by))
+    pvals = [t.pvalue if t is not None else math.nan for t in tests]
+    adj = holm(pvals)
+    df["test"] = [t.test if t is not None else "best" for t in tests]
+    df["paired_by"] = [t.paired_by if t is not None else "" for t in tests]
+    df["n_pairs"] = [t.n if t is not None else 0 for t in tests]
+    df["diff_vs_best"] = [t.mean_difference if t is not None else 0.0 for t in tests]
+    df["p_value"] = pvals
+    df["p_holm"] = adj
+    df["differs"] = [bool(np.isfinite(p) and p < alpha) for p in adj]
+    # Pareto front (accuracy vs latency), per timing machine
+    df["pareto"] = False
+    for tm, g in df.groupby("timing_machine"):
+        mask = pareto_front(g["accuracy"].to_numpy(), g["latency_ms"].to_numpy())
+        df.loc[g.index[mask], "pareto"] = True
+    untested = [str(r.method_id) for r in df.itertuples() if r.test == "none"]
+    if untested and len(df) > 1:
+        notes.append(f"{len(untested)} method(s) share fewer than two folds or subjects with the best: not tested")
+    fr = s_all["frame_rate"].dropna()
+    return Leaderboard(
+        key=key, dataset=str(first["dataset"]), dataset_hash=str(first["dataset_hash"]), target=str(first["target"]),
+        scheme=str(first["scheme_label"]), rows=df, folds=folds, machines=machines, reference_machine=ref,
+        pooled_machines=pool_machines, alpha=alpha, frame_rate=float(fr.iloc[0]) if len(fr) else math.nan, notes=notes,
+    )
+
+
+def build_leaderboards(rs: ResultSet, *, alpha: float = 0.05, pool_machines: bool = False,
+                       machine: str | None = None) -> list[Leaderboard]:
+    """One :class:`Leaderboard` per dataset, target and scheme of ``rs``."""
+    ok = rs.ok
+    out = []
+    for key in dict.fromkeys(rs.scores["table_key"]):
+        out.append(_build_one(rs, key, ok, alpha, pool_machines, machine))
+    return out
+
+
+# ----------------------------------------------------------------- method lookup and compare
+def resolve_method(lb_rows: pd.DataFrame, spec: str) -> str:
+    """The method id ``spec`` names: an id (or its prefix of at least 4 characters),
+    ``features/classifier`` or a classifier label -- a label only when it names one method."""
+    ids = lb_rows["method_id"].astype(str)
+    hit = lb_rows[ids.str.startswith(spec)] if len(spec) >= 4 else lb_rows.iloc[0:0]
+    if len(hit) == 1:
+        return str(hit["method_id"].iloc[0])
+    labels = lb_rows["features"].astype(str) + "/" + lb_rows["classifier"].astype(str)
+    early = lb_rows["early_frames"].notna()
+    labels = labels.where(~early, labels + "@" + lb_rows["early_frames"].fillna(0).astype(int).astype(str) + "f")
+    by_label = lb_rows[(labels == spec) | (lb_rows["classifier"].astype(str) == spec)]
+    if len(by_label) == 1:
+        return str(by_label["method_id"].iloc[0])
+    cand = by_label if len(by_label) else hit
+    if len(cand) > 1:
+        lines = [f"  {r.method_id}  {r.features}/{r.classifier}  {r.classifier_params}" for r in cand.itertuples()]
+        raise TouchbenchError(f"{spec!r} names {len(cand)} methods; give the method id:\n" + "\n".join(lines))
+    known = [f"  {r.method_id}  {lab}" for r, lab in zip(lb_rows.itertuples(), labels)]
+    raise TouchbenchError(f"no method {spec!r} in this table; methods:\n" + "\n".join(known))
+
+
+@dataclass
+class Comparison:
+    leaderboard: Leaderboard
+    a: dict[str, Any]
+    b: dict[str, Any]
+    test: PairedTest
+    pairs: pd.DataFrame
+    per_class: pd.DataFrame
+
+
+def _per_class(preds: pd.DataFrame | None, a: str, b: str, fold_keys: list[str]) -> pd.DataFrame:
+    from sklearn.metrics import precision_recall_fscore_support
+
+    cols = ["class", "support", "recall_a", "recall_b", "recall_diff", "f1_a", "f1_b", "f1_diff"]
+    if preds is None or preds.empty:
+        return pd.DataFrame(columns=cols)
+    out = {}
+    for tag, mid in (("a", a), ("b", b)):
+        p = preds[(preds["method_id"] == mid) & preds["fold_key"].isin(set(fold_keys))]
+        p = p.sort_values("finished_at", kind="stable").drop_duplicates(["fold_key", "seed", "capture_id"], keep="last")
+        out[tag] = p
+    classes = sorted(set(out["a"]["true"].astype(str)) | set(out["b"]["true"].astype(str)))
+    if not classes:
+        return pd.DataFrame(columns=cols)
+    res = {}
+    for tag, p in out.items():
+        _, r, f1, sup = precision_recall_fscore_support(p["true"].astype(str), p["predicted"].astype(str),
+                                                        labels=classes, zero_division=0)
+        res[tag] = (r, f1, sup)
+    df = pd.DataFrame({"class": classes, "support": res["a"][2], "recall_a": res["a"][0], "recall_b": res["b"][0],
+                       "f1_a": res["a"][1], "f1_b": res["b"][1]})
+    df["recall_diff"] = df["recall_a"] - df["recall_b"]
+    df["f1_diff"] = df["f1_a"] - df["f1_b"]
+    return df[cols]
+
+
+def compare_methods(rs: ResultSet, lb: Leaderboard, a: str, b: str) -> Comparison:
+    """The paired test of ``a`` against ``b``, per-fold and per-class differences."""
+    ida, idb = resolve_method(lb.rows, a), resolve_method(lb.rows, b)
+    if ida == idb:
+        raise TouchbenchError(f"{a!r} and {b!r} are the same method ({ida})")
+    preds = rs.predictions[rs.predictions["table_key"] == lb.key] if rs.predictions is not None else None
+    by, pairs = _pair(lb.folds, preds, ida, idb)
+    test = paired_test(pairs["a"].to_numpy(), pairs["b"].to_numpy(), paired_by=by)
+    pairs = pairs.assign(diff=pairs["a"] - pairs["b"])
+    fa = set(lb.folds[lb.folds["method_id"] == ida]["fold_key"])
+    fb = set(lb.folds[lb.folds["method_id"] == idb]["fold_key"])
+    per_class = _per_class(preds, ida, idb, sorted(fa & fb))
+    ra = lb.rows[lb.rows["method_id"] == ida].iloc[0].to_dict()
+    rb = lb.rows[lb.rows["method_id"] == idb].iloc[0].to_dict()
+    return Comparison(lb, ra, rb, test, pairs, per_class)
+
+
+# ----------------------------------------------------------------- rendering
+def _pct(v: float, d: int = 1) -> str:
+    return "—" if v is None or not np.isfinite(v) else f"{100 * v:.{d}f}"
+
+
+def _num(v: float, d: int = 2) -> str:
+    if v is None or not np.isfinite(v):
+        return "—"
+    if abs(v) >= 100:
+        return f"{v:.0f}"
+    return f"{v:.{d}g}" if abs(v) < 0.01 else f"{v:.{d}f}"
+
+
+def _p(v: float) -> str:
+    if v is None or not np.isfinite(v):
+        return "—"
+    return "<0.001" if v < 0.001 else f"{v:.3f}"
+
+
+def method_label(r: Any) -> str:
+    lab = f"{r['features']} / {r['classifier']}"
+    if np.isfinite(r.get("early_frames", math.nan)):
+        lab += f" @ {int(r['early_frames'])} frames"
+    return lab
+
+
+def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
+    """Header and formatted cells of a leaderboard (terminal, Markdown, HTML)."""
+    header = ["#", "method", "features", "classifier", "folds", "accuracy % (±sd)", "95 % interval",
+              "macro F1 %", "latency ms", "fit s", "features ms", "vs best: Δ pp, p (Holm)", "Pareto"]
+    show_machine = len(set(lb.rows["timing_machine"])) > 1
+    if show_machine:
+        header.insert(11, "timing machine")
+    cells = []
+    for _, r in lb.rows.iterrows():
+        feats = str(r["features"])
+        if np.isfinite(r["early_frames"]):
+            fr = lb.frame_rate
+            secs = f", {r['early_frames'] / fr:.2g} s" if np.isfinite(fr) and fr > 0 else ""
+            feats += f" @ {int(r['early_frames'])} frames{secs}"
+        acc = _pct(r["accuracy"]) + (f" ± {_pct(r['accuracy_sd'])}" if np.isfinite(r["accuracy_sd"]) else "")
+        ci = f"{_pct(r['ci_low'])}–{_pct(r['ci_high'])}" if np.isfinite(r["ci_low"]) else "—"
+        if r["ci_method"] == "wilson" and np.isfinite(r["ci_low"]):
+            ci += " (Wilson)"
+        if r["test"] == "best":
+            vs = "best"
+        elif r["test"] == "none":
+            vs = f"{100 * r['diff_vs_best']:+.1f}, not tested (n={r['n_pairs']})" if np.isfinite(r["diff_vs_best"]) else "not tested"
+        else:
+            star = " *" if r["differs"] else ""
+            vs = (f"{100 * r['diff_vs_best']:+.1f}, p={_p(r['p_holm'])}{star} "
+                  f"({'perm' if r['test'] == 'exact-permutation' else 'Wilcoxon'}, n={r['n_pairs']} {r['paired_by']}s)")
+        row = [str(r["rank"]), str(r["method_id"]), feats, str(r["classifier"]),
+               f"{r['n_folds']}" + (f" (+{r['n_failed']} failed)" if r["n_failed"] else ""), acc, ci,
+               _pct(r["macro_f1"]), _num(r["latency_ms"]), _num(r["fit_seconds"]), _num(r["feature_ms"]), vs,
+               "★" if r["pareto"] else ""]
+        if show_machine:
+            row.insert(11, str(r["timing_machine"]))
+        cells.append(row)
+    return header, cells
+
+
+def legend(lb: Leaderboard) -> str:
+    return (f"Accuracy: mean over folds (± sample sd); interval: Student t over folds (Wilson over captures for a "
+            f"single fold). Latency: median over folds of the time to compute the features of one capture and "
+            f"predict it; fit: median seconds per fold; features: median ms per capture. Δ: mean paired difference "
+            f"to the best method in percentage points; p: exact sign-flip permutation test (≤15 pairs) or Wilcoxon "
+            f"signed-rank test, Holm-adjusted over the table; * = differs at α={lb.alpha:g}. ★ = on the accuracy / "
+            f"latency Pareto front.")
+
+
+def _md_escape(s: str) -> str:
+    return s.replace("|", "\\|")
+
+
+def to_markdown(lbs: list[Leaderboard], title: str | None = "Leaderboard") -> str:
+    out = [f"# {title}", ""] if title else []
+    for lb in lbs:
+        out.append(f"## {lb.title}")
+        out.append("")
+        header, cells = display_rows(lb)
+        out.append("| " + " | ".join(header) + " |")
+        out.append("|" + "|".join("---" for _ in header) + "|")
+        for c in cells:
+            out.append("| " + " | ".join(_md_escape(x) for x in c) + " |")
+        out.append("")
+        out.append(legend(lb))
+        for n in lb.notes:
+            out.append("")
+            out.append(f"Note: {n}")
+        out.append("")
+    return "\n".join(out)
+
+
+def _records(lb: Leaderboard) -> list[dict[str, Any]]:
+    recs = []
+    for r in lb.rows.to_dict(orient="records"):
+        clean = {}
+        for k, v in r.items():
+            if isinstance(v, (np.floating, float)):
+                v = None if not np.isfinite(v) else float(v)
+            elif isinstance(v, np.integer):
+                v = int(v)
+            elif isinstance(v, np.bool_):
+                v = bool(v)
+            clean[k] = v
+        recs.append(clean)
+    return recs
+
+
+def to_json(lbs: list[Leaderboard]) -> str:
+    tables = []
+    for lb in lbs:
+        tables.append({
+            "dataset": lb.dataset, "dataset_hash": lb.dataset_hash, "target": lb.target, "scheme": lb.scheme,
+            "alpha": lb.alpha, "machines": lb.machines, "reference_machine": lb.reference_machine,
+            "pooled_machines": lb.pooled_machines, "notes": lb.notes, "rows": _records(lb),
+        })
+    return json.dumps({"tables": tables}, indent=2) + "\n"
+
+
+def to_csv(lbs: list[Leaderboard]) -> str:
+    frames = []
+    for lb in lbs:
+        d = lb.rows.copy()
+        d.insert(0, "scheme", lb.scheme)
+        d.insert(0, "target", lb.target)
+        d.insert(0, "dataset_hash", lb.dataset_hash)
+        d.insert(0, "dataset", lb.dataset)
+        frames.append(d)
+    return pd.concat(frames, ignore_index=True).to_csv(index=False)
+
+
+def print_terminal(lbs: list[Leaderboard], console=None) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    console = console or Console()
+    for lb in lbs:
+        header, cells = display_rows(lb)
+        t = Table(title=lb.title, show_lines=False)
+        for h in header:
+            t.add_column(h, overflow="fold")
+        for c in cells:
+            t.add_row(*c)
+        console.print(t)
+        console.print(legend(lb), style="dim")
+        for n in lb.notes:
+            console.print(f"Note: {n}", style="yellow")
+        console.print()
+
+
+def write_outputs(lbs: list[Leaderboard], out: Path, formats: Iterable[str]) -> list[Path]:
+    """Write ``leaderboard.{md,csv,json}`` into ``out`` for the chosen formats."""
+    from ..results.store import atomic_write_bytes
+
+    written = []
+    for fmt in formats:
+        text = {"md": to_markdown, "csv": to_csv, "json": to_json}[fmt](lbs)
+        p = Path(out) / f"leaderboard.{fmt}"
+        atomic_write_bytes(p, text.encode())
+        written.append(p)
+    return written

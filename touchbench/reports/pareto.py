@@ -1,0 +1,32 @@
+"""The accuracy / cost Pareto front.
+
+A method is on the front when no other method measured on the same machine
+is at least as accurate and at most as costly, and strictly better in one of
+the two. Methods without a cost measurement (every fold failed to time) are
+never on the front. Ties (same accuracy and cost) are all on the front.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+__all__ = ["pareto_front"]
+
+
+def pareto_front(accuracy: Sequence[float], cost: Sequence[float]) -> np.ndarray:
+    """Boolean mask of the points not dominated (higher accuracy, lower cost is better)."""
+    a = np.asarray(accuracy, dtype=np.float64)
+    c = np.asarray(cost, dtype=np.float64)
+    if a.shape != c.shape:
+        raise ValueError("accuracy and cost differ in length")
+    ok = np.isfinite(a) & np.isfinite(c)
+    front = np.zeros(len(a), dtype=bool)
+    for i in np.flatnonzero(ok):
+        others = ok.copy()
+        others[i] = False
+        ge = (a >= a[i]) & (c <= c[i]) & others
+        strictly = ge & ((a > a[i]) | (c < c[i]))
+        front[i] = not strictly.any()
+    return front

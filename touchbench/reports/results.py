@@ -1,0 +1,243 @@
+"""Reading and combining results directories for the reports.
+
+A results directory is what the run engine writes (``scores.parquet``,
+``predictions.parquet``, ``manifest.json``; see
+:mod:`touchbench.results.store`). :func:`load_results` reads any number of
+them (a path may also be a folder holding many, searched recursively) and
+adds the columns the reports need:
+
+- ``method_id``: a hash of the method's parameters -- target, feature sets
+  with their parameters, classifier name with its parameters, and the
+  number of frames seen (``early`` scheme) -- never of its label. The same
+  method run by two protocols, twice, or on two machines has one id, so its
+  folds are combined into one leaderboard row; two methods that share a
+  label but differ in any parameter have two ids.
+- ``fold_key``: which test captures a fold scored (a hash of the fold's
+  sorted capture ids, read from the predictions; without predictions, the
+  protocol seed, repetition and fold name). Methods are paired on it.
+- ``machine``: a short hash of the manifest's platform description
+  (platform string, architecture, processor, CPU count), ``machine_desc``
+  its readable form. Timings are compared only within one machine.
+- ``scheme_label``: the scheme with its parameters, read from the protocol
+  text in the manifest (``kfold(k=10,grouped=false)``); the frame list of
+  the ``early`` scheme is left out so runs with different lists combine.
+- ``frame_rate``: the dataset's frame rate from the manifest (to express
+  frames seen in seconds).
+
+A task that appears twice (the same results directory given twice, or a run
+copied) is counted once: rows with the same method, fold and classifier seed
+are duplicates, and the last one (by ``finished_at``) is kept for accuracy.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+import pandas as pd
+
+from ..errors import TouchbenchError
+
+__all__ = ["ResultSet", "load_results", "machine_id", "method_id", "scheme_label"]
+
+PREDICTION_COLUMNS = ["task_id", "fold", "capture_id", "subject", "true", "predicted", "correct"]
+
+
+def _short_hash(obj: Any, n: int = 10) -> str:
+    return hashlib.sha256(json.dumps(obj, sort_keys=True, separators=(",", ":"), default=str).encode()).hexdigest()[:n]
+
+
+def method_id(target: str, feature_params: str, classifier_name: str, classifier_params: str,
+              early_frames: float | None) -> str:
+    """The hash that identifies a method (see the module docstring)."""
+    def _parse(s: str) -> Any:
+        try:
+            return json.loads(s)
+        except (TypeError, ValueError):
+            return s
+
+    frames = None if early_frames is None or (isinstance(early_frames, float) and math.isnan(early_frames)) else int(early_frames)
+    return _short_hash({
+        "target": target, "features": _parse(feature_params), "classifier": classifier_name,
+        "params": _parse(classifier_params), "early_frames": frames,
+    })
+
+
+def machine_id(platform: dict[str, Any] | None) -> tuple[str, str]:
+    """``(id, description)`` of the machine a manifest's ``platform`` block describes."""
+    if not platform:
+        return "unknown", "unknown machine (no manifest)"
+    key = {k: platform.get(k) for k in ("platform", "machine", "processor", "cpu_count")}
+    desc = f"{platform.get('platform') or '?'}, {platform.get('cpu_count') or '?'} CPUs"
+    return "m-" + _short_hash(key, 6), desc
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, dict):
+        return "{" + ",".join(f"{k}={_fmt(v[k])}" for k in sorted(v)) + "}"
+    if isinstance(v, list):
+        return "[" + ",".join(_fmt(x) for x in v) + "]"
+    return str(v)
+
+
+def scheme_label(scheme: Any, fallback: str = "?") -> str:
+    """``name(param=value,...)`` of a protocol's ``scheme`` entry (string or mapping)."""
+    if isinstance(scheme, str):
+        return scheme
+    if not isinstance(scheme, dict) or "name" not in scheme:
+        return fallback
+    params = {k: v for k, v in scheme.items() if k != "name"}
+    if scheme["name"] == "early":
+        params.pop("frames", None)
+        params.pop("seconds", None)
+        base = params.get("base")
+        if isinstance(base, dict):
+            params["base"] = scheme_label(base)
+    if not params:
+        return str(scheme["name"])
+    return f"{scheme['name']}(" + ",".join(f"{k}={_fmt(params[k])}" for k in sorted(params)) + ")"
+
+
+@dataclass
+class ResultSet:
+    """Scores (and predictions) of one or more results directories, combined."""
+
+    scores: pd.DataFrame
+    predictions: pd.DataFrame | None
+    sources: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def ok(self) -> pd.DataFrame:
+        """Successful rows, duplicates removed (one row per method, fold and seed)."""
+        s = self.scores[self.scores["status"] == "ok"]
+        s = s.sort_values("finished_at", kind="stable")
+        return s.drop_duplicates(["table_key", "method_id", "fold_key", "seed"], keep="last")
+
+
+def _find_dirs(path: Path) -> list[Path]:
+    if path.is_file():
+        if path.name == "scores.parquet":
+            return [path.parent]
+        raise TouchbenchError(f"{path}: not a results directory or scores.parquet")
+    if not path.is_dir():
+        raise TouchbenchError(f"{path}: no such results directory")
+    if (path / "scores.parquet").is_file():
+        return [path]
+    found = sorted({p.parent for p in path.rglob("scores.parquet") if "fragments" not in p.parts})
+    if not found:
+        raise TouchbenchError(f"{path}: no scores.parquet in it or below it (run `touchbench run` first)")
+    return found
+
+
+def _read_manifest(d: Path) -> dict[str, Any]:
+    p = d / "manifest.json"
+    if not p.is_file():
+        return {}
+    try:
+        return json.loads(p.read_text())
+    except (OSError, ValueError):
+        return {}
+
+
+def _protocol_scheme(manifest: dict[str, Any]) -> Any:
+    import yaml
+
+    text = (manifest.get("protocol") or {}).get("text")
+    if not text:
+        return None
+    try:
+        return (yaml.safe_load(text) or {}).get("scheme")
+    except yaml.YAMLError:
+        return None
+
+
+_CROP_PREFIX = re.compile(r"^first[^/]*/")
+
+
+def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> ResultSet:
+    """Read and combine results directories (see the module docstring)."""
+    dirs: list[Path] = []
+    for p in paths:
+        for d in _find_dirs(Path(p)):
+            if d.resolve() not in [x.resolve() for x in dirs]:
+                dirs.append(d)
+    if not dirs:
+        raise TouchbenchError("no results given")
+    score_frames, pred_frames, sources = [], [], []
+    for d in dirs:
+        try:
+            s = pd.read_parquet(d / "scores.parquet")
+        except Exception as e:
+            raise TouchbenchError(f"{d / 'scores.parquet'}: cannot read: {type(e).__name__}: {e}") from None
+        if s.empty:
+            continue
+        m = _read_manifest(d)
+        mid, mdesc = machine_id(m.get("platform"))
+        sensor = (m.get("dataset") or {}).get("sensor") or {}
+        scheme = _protocol_scheme(m)
+        proto_seed = (m.get("protocol") or {}).get("seed")
+        s = s.copy()
+        s["source"] = str(d)
+        s["machine"] = mid
+        s["machine_desc"] = mdesc
+        s["frame_rate"] = float(sensor.get("frame_rate")) if sensor.get("frame_rate") else np.nan
+        s["scheme_label"] = scheme_label(scheme, fallback=str(s["scheme"].iloc[0])) if scheme is not None else s["scheme"].astype(str)
+        s["method_id"] = [
+            method_id(t, fp, cn, cp, ef)
+            for t, fp, cn, cp, ef in zip(s["target"], s["feature_params"], s["classifier_name"],
+                                         s["classifier_params"], s["early_frames"])
+        ]
+        s["table_key"] = [
+            _short_hash([dh, t, sc], 8) for dh, t, sc in zip(s["dataset_hash"], s["target"], s["scheme_label"])
+        ]
+        base_fold = s["fold"].astype(str).str.replace(_CROP_PREFIX, "", regex=True)
+        s["fold_key"] = [f"{proto_seed}/{r}/{f}" for r, f in zip(s["repetition"], base_fold)]
+        s["finished_at"] = s["finished_at"].astype(str) if "finished_at" in s else ""
+        p = None
+        ppath = d / "predictions.parquet"
+        if ppath.is_file():
+            try:
+                p = pd.read_parquet(ppath)
+            except Exception:
+                p = None
+        if p is not None and len(p):
+            keys = (
+                p.groupby("task_id", sort=False)["capture_id"]
+                .apply(lambda c: "c:" + hashlib.sha256("\n".join(sorted(map(str, c))).encode()).hexdigest()[:12])
+            )
+            s["fold_key"] = [keys.get(t, fk) for t, fk in zip(s["task_id"], s["fold_key"])]
+            if predictions:
+                keep = [c for c in PREDICTION_COLUMNS if c in p.columns]
+                pp = p[keep].copy()
+                info = s.drop_duplicates("task_id").set_index("task_id")[
+                    ["method_id", "fold_key", "seed", "finished_at", "table_key"]]
+                pp = pp.join(info, on="task_id", how="inner")
+                pp["source"] = str(d)
+                pred_frames.append(pp)
+        score_frames.append(s)
+        sources.append({
+            "path": str(d), "run_id": (m.get("run") or {}).get("run_id") or str(s["run_id"].iloc[0]),
+            "protocol": (m.get("protocol") or {}).get("name") or str(s["protocol"].iloc[0]),
+            "protocol_path": (m.get("protocol") or {}).get("path"),
+            "machine": mid, "machine_desc": mdesc, "dataset": str(s["dataset"].iloc[0]),
+            "started_at": m.get("started_at"), "finished_at": m.get("finished_at"),
+            "versions": m.get("packages") or {}, "touchbench_version": m.get("touchbench_version"),
+            "git": m.get("git") or {}, "n_tasks": int(len(s)), "n_failed": int((s["status"] != "ok").sum()),
+            "seconds": sum(float(x.get("seconds") or 0) for x in (m.get("sessions") or [])),
+        })
+    if not score_frames:
+        raise TouchbenchError(f"no scores in {', '.join(map(str, dirs))} (every run is empty)")
+    scores = pd.concat(score_frames, ignore_index=True, sort=False)
+    scores["early_frames"] = scores["early_frames"].astype("float64")
+    preds = None
+    if predictions and pred_frames:
+        preds = pd.concat(pred_frames, ignore_index=True, sort=False)
+    return ResultSet(scores=scores, predictions=preds, sources=sources)

@@ -1,0 +1,134 @@
+"""Hand-built results directories for testing the reports (not used by a run).
+
+:func:`write_fake_run` writes ``scores.parquet``, ``predictions.parquet``,
+``confusion.parquet`` and ``manifest.json`` in the engine's layout (columns of
+:mod:`touchbench.results.store`) from a compact description: the captures,
+the folds (capture ids tested in each), and per method which test captures
+it gets right. Scores are computed from those predictions with the engine's
+own metric function, so a test can state accuracies by construction. The
+classifier seed of a task is derived from its labels and fold, as the
+engine's is, so the same method under another label is a replicate.
+"""
+
+from __future__ import annotations
+
+import json
+import zlib
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["FakeMethod", "write_fake_run"]
+
+DEFAULT_PLATFORM = {"platform": "Linux-test-x86_64", "machine": "x86_64", "processor": "x86_64", "python": "3.11",
+                    "cpu_count": 2}
+
+
+class FakeMethod(dict):
+    """A method of a fake run.
+
+    ``wrong``: fold name -> capture ids predicted wrongly (predicted as the
+    next class in sorted order); ``predicted``: capture id -> label, for any
+    confusion (overrides ``wrong``); timings per fold (constant or a list).
+    """
+
+    def __init__(self, features: str, classifier: str, *, classifier_name: str | None = None,
+                 classifier_params: dict[str, Any] | None = None, feature_params: list | None = None,
+                 wrong: dict[str, Sequence[str]] | None = None, latency_ms: float | Sequence[float] = 1.0,
+                 fit_seconds: float | Sequence[float] = 0.5, feature_seconds_per_capture: float | Sequence[float] = 1e-3,
+                 early_frames: int | None = None, failed_folds: Sequence[str] = (),
+                 predicted: dict[str, str] | None = None):
+        super().__init__(
+            features=features, classifier=classifier, classifier_name=classifier_name or classifier,
+            classifier_params=classifier_params or {},
+            feature_params=feature_params if feature_params is not None else [[f, {}] for f in features.split("+")],
+            wrong={k: list(v) for k, v in (wrong or {}).items()}, latency_ms=latency_ms, fit_seconds=fit_seconds,
+            feature_seconds_per_capture=feature_seconds_per_capture, early_frames=early_frames,
+            failed_folds=list(failed_folds), predicted=dict(predicted or {}),
+        )
+
+
+def _per_fold(v: Any, i: int) -> float:
+    return float(v[i]) if isinstance(v, (list, tuple, np.ndarray)) else float(v)
+
+
+def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Sequence[str]], methods: list[FakeMethod], *,
+                   dataset: str = "fake", dataset_hash: str = "d" * 64, scheme: Any = None, target: str = "gesture",
+                   seed: int = 0, run_id: str = "run1", protocol: str = "fake-protocol",
+                   platform: dict[str, Any] | None = None, frame_rate: float = 54.0,
+                   finished_at: str = "2026-01-01T00:00:00+00:00", seconds: float = 1.0) -> Path:
+    """Write a results directory (see the module docstring); returns its path."""
+    from ..engine.tasks import metrics
+    from ..protocols.schema import canonical_json
+    from ..results.store import confusion_table
+
+    import yaml
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    scheme = scheme if scheme is not None else {"name": "kfold", "k": len(folds)}
+    caps = captures.set_index("capture_id")
+    classes = sorted(set(caps[target].astype(str)))
+    nxt = {c: classes[(i + 1) % len(classes)] for i, c in enumerate(classes)}
+    score_rows, pred_frames = [], []
+    for m_i, m in enumerate(methods):
+        for f_i, (fold, ids) in enumerate(folds.items()):
+            ids = list(ids)
+            task_id = f"{run_id}-t{m_i}-{f_i}-{m['features']}-{m['classifier']}"
+            fold_name = fold if m["early_frames"] is None else f"first{m['early_frames']}f/{fold}"
+            base = {
+                "run_id": run_id, "task_id": task_id, "protocol": protocol, "protocol_hash": "p" * 64,
+                "dataset": dataset, "dataset_hash": dataset_hash, "target": target,
+                "scheme": scheme if isinstance(scheme, str) else scheme["name"], "repetition": 0,
+                "fold": fold_name, "fold_group": fold,
+                "early_frames": np.nan if m["early_frames"] is None else float(m["early_frames"]),
+                "features": m["features"], "feature_sets": "+".join(n for n, _ in m["feature_params"]),
+                "feature_params": canonical_json(m["feature_params"]), "classifier": m["classifier"],
+                "classifier_name": m["classifier_name"], "classifier_params": canonical_json(m["classifier_params"]),
+                "seed": zlib.crc32(f"{m['features']}|{m['classifier']}|{fold_name}".encode()), "n_train": len(caps) - len(ids), "n_test": len(ids), "n_classes_train": len(classes),
+                "finished_at": finished_at, "notes": "",
+            }
+            if fold in m["failed_folds"]:
+                base.update(status="failed", error="ValueError: fake", accuracy=np.nan, balanced_accuracy=np.nan,
+                            macro_f1=np.nan, feature_seconds_per_capture=np.nan, feature_fit_seconds=np.nan,
+                            fit_seconds=np.nan, predict_seconds=np.nan, latency_ms=np.nan)
+                score_rows.append(base)
+                continue
+            true = caps.loc[ids, target].astype(str).to_numpy()
+            wrong = set(m["wrong"].get(fold, []))
+            pred = np.array([m["predicted"].get(cid, nxt[t] if cid in wrong else t) for cid, t in zip(ids, true)],
+                            dtype=object)
+            base.update(status="ok", error="", **metrics(true, pred),
+                        feature_seconds_per_capture=_per_fold(m["feature_seconds_per_capture"], f_i),
+                        feature_fit_seconds=0.0, fit_seconds=_per_fold(m["fit_seconds"], f_i), predict_seconds=0.01,
+                        latency_ms=_per_fold(m["latency_ms"], f_i))
+            score_rows.append(base)
+            pred_frames.append(pd.DataFrame({
+                "run_id": run_id, "task_id": task_id, "repetition": 0, "fold": fold_name, "fold_group": fold,
+                "early_frames": base["early_frames"], "features": m["features"], "classifier": m["classifier"],
+                "capture_id": ids, "subject": caps.loc[ids, "subject"].astype(str).to_numpy(),
+                "gesture": caps.loc[ids, "gesture"].astype(str).to_numpy(), "true": true, "predicted": pred.astype(str),
+                "correct": true == pred.astype(str),
+            }))
+    scores = pd.DataFrame(score_rows)
+    preds = pd.concat(pred_frames, ignore_index=True) if pred_frames else pd.DataFrame()
+    scores.to_parquet(out / "scores.parquet")
+    preds.to_parquet(out / "predictions.parquet")
+    confusion_table(preds).to_parquet(out / "confusion.parquet")
+    text = yaml.safe_dump({"name": protocol, "dataset": dataset, "target": target, "scheme": scheme, "seed": seed,
+                           "features": [m["features"].split("+") for m in methods],
+                           "classifiers": [m["classifier_name"] for m in methods]}, sort_keys=False)
+    manifest = {
+        "touchbench_version": "test", "platform": platform or DEFAULT_PLATFORM, "packages": {"python": "3.11"},
+        "run": {"run_id": run_id, "results_dir": str(out)},
+        "protocol": {"name": protocol, "text": text, "seed": seed, "scheme": scheme if isinstance(scheme, str) else scheme["name"]},
+        "dataset": {"ref": dataset, "hash": dataset_hash, "captures": len(caps),
+                    "sensor": {"name": "fake", "grid": [8, 8], "frame_rate": frame_rate}},
+        "started_at": finished_at, "finished_at": finished_at,
+        "sessions": [{"started_at": finished_at, "finished_at": finished_at, "seconds": seconds}],
+        "tasks": {"total": len(scores)}, "notes": [], "expected": [],
+    }
+    (out / "manifest.json").write_text(json.dumps(manifest, indent=2))
+    return out
