@@ -7,20 +7,47 @@ captures, each a ``(T, H, W)`` array (see :mod:`touchbench.datasets.model`).
 (histogram edges, for example) and only from the training fold; a set whose
 ``fit`` learns nothing declares ``fold_dependent = False`` so the run engine
 may compute its features once per capture and cache them.
+
+``X`` may be a list of captures, one ``(N, T, H, W)`` array, or a
+:class:`~touchbench.datasets.model.TouchDataset` (then errors name the
+capture by its ``capture_id``). Captures of a batch may differ in length
+but must share the grid.
+
+Subclasses implement either ``_transform_one(capture)`` (one capture ->
+1-D row) or, to vectorise across captures, ``_transform_batch(stack)``
+(``(N, T, H, W)`` stack of captures of the same length -> ``(N, n_out)``).
+:meth:`FeatureSet.transform` groups captures by length, stacks each group
+in chunks of bounded size (``_BATCH_VALUES`` values) and puts the rows back
+in input order, so a capture's features never depend on its neighbours.
 """
 
 from __future__ import annotations
 
 import importlib
-from typing import ClassVar, Sequence
+from typing import Any, ClassVar, Sequence
 
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
+from ..errors import TouchbenchError
 from ..registry import Registry
 
 # Modules that register feature sets; imported on first use of the registry.
-_MODULES: list[str] = []
+_MODULES: list[str] = [
+    "touchbench.features.gaus_sd",
+    "touchbench.features.gaus_bmh",
+    "touchbench.features.gaus_msd",
+    "touchbench.features.gaus_smmhh",
+    "touchbench.features.gaus_lbptop",
+    "touchbench.features.zhou",
+    "touchbench.features.flagg",
+    "touchbench.features.raw",
+]
+
+# Upper bound on the values stacked at once by ``transform``: bounds peak
+# memory whatever the dataset size, and keeps a chunk's float64 temporaries
+# (1 MB each) in the CPU cache, which is faster than larger chunks.
+_BATCH_VALUES = 131_072
 
 
 def _load() -> None:
@@ -31,36 +58,64 @@ def _load() -> None:
 FEATURES: Registry = Registry("feature set", loader=_load)
 
 
-def check_captures(captures: Sequence[np.ndarray], *, name: str = "features") -> list[np.ndarray]:
+class FeatureInputError(TouchbenchError, ValueError):
+    """A capture a feature set cannot take (NaN, wrong shape, wrong grid...).
+
+    A ``ValueError`` for scikit-learn users and a ``TouchbenchError`` for
+    the command line, which prints it as one line.
+    """
+
+
+def _capture_names(captures: Any) -> tuple[Sequence[Any], list[str] | None]:
+    """Unwrap a TouchDataset into (captures, capture ids); else ids are None."""
+    caps = getattr(captures, "captures", None)
+    meta = getattr(captures, "meta", None)
+    if caps is not None and meta is not None and "capture_id" in getattr(meta, "columns", ()):
+        return caps, [str(v) for v in meta["capture_id"].tolist()]
+    return captures, None
+
+
+def check_captures(captures: Any, *, name: str = "features") -> list[np.ndarray]:
     """Validate a batch of captures: 3-D, same grid, at least one frame, finite.
 
-    NaN or infinite input is refused with the index of the offending capture.
-    Accepts a single ``(N, T, H, W)`` array as well as a list.
+    NaN or infinite input is refused with the index of the offending capture
+    (and its ``capture_id`` when ``captures`` is a TouchDataset). Accepts a
+    single ``(N, T, H, W)`` array, a list of arrays or a TouchDataset.
+    Raises :class:`FeatureInputError`.
     """
+    captures, ids = _capture_names(captures)
     if isinstance(captures, np.ndarray) and captures.ndim == 4:
         captures = list(captures)
+    elif isinstance(captures, np.ndarray):
+        raise FeatureInputError(f"{name}: expected a list of (frames, H, W) captures or an (N, frames, H, W) array, got an array of shape {captures.shape}")
     out = []
     grid = None
     for i, c in enumerate(captures):
+        label = f"capture {i}" + (f" ({ids[i]!r})" if ids is not None else "")
         a = np.asarray(c)
+        if a.dtype.kind not in "biuf":
+            raise FeatureInputError(f"{name}: {label} has non-numeric dtype {a.dtype}")
         if a.ndim != 3:
-            raise ValueError(f"{name}: capture {i} must be a (frames, H, W) array, got shape {a.shape}")
+            raise FeatureInputError(f"{name}: {label} must be a (frames, H, W) array, got shape {a.shape}")
         if a.shape[0] < 1:
-            raise ValueError(f"{name}: capture {i} has no frames")
+            raise FeatureInputError(f"{name}: {label} has no frames")
+        if a.shape[1] < 1 or a.shape[2] < 1:
+            raise FeatureInputError(f"{name}: {label} has an empty grid {a.shape[1:]}")
         if grid is None:
             grid = a.shape[1:]
         elif a.shape[1:] != grid:
-            raise ValueError(f"{name}: capture {i} has grid {a.shape[1:]}, capture 0 has {grid}")
+            raise FeatureInputError(f"{name}: {label} has grid {a.shape[1:]}, capture 0 has {grid}")
         if a.dtype.kind == "f" and not np.isfinite(a).all():
-            raise ValueError(f"{name}: capture {i} contains NaN or infinite values")
-        if a.dtype.kind not in "biuf":
-            raise ValueError(f"{name}: capture {i} has non-numeric dtype {a.dtype}")
+            bad = np.argwhere(~np.isfinite(a))[0]
+            raise FeatureInputError(
+                f"{name}: {label} contains NaN or infinite values (first at frame {bad[0]}, row {bad[1]}, column {bad[2]})"
+            )
         out.append(a)
     return out
 
 
 class FeatureSet(TransformerMixin, BaseEstimator):
-    """Base class: subclasses implement ``_transform_one`` or ``transform``.
+    """Base class: subclasses implement ``_transform_one`` or ``_transform_batch``.
 
     Class attributes (read by the registry listing and the run engine):
     ``paper`` (citation with section), ``cost`` (``cheap`` / ``moderate`` /
@@ -74,20 +129,47 @@ class FeatureSet(TransformerMixin, BaseEstimator):
     def fit(self, captures, y=None):
         caps = check_captures(captures, name=type(self).__name__)
         self.grid_ = caps[0].shape[1:] if caps else None
+        self._check_params()
         self._fit(caps, y)
-        self.n_features_out_ = len(self.feature_names(self.grid_)) if self.grid_ is not None else 0
+        self.n_features_out_ = self.n_features(self.grid_) if self.grid_ is not None else 0
         return self
+
+    def _check_params(self) -> None:
+        """Check constructor parameters; raise ``FeatureInputError``. Nothing by default."""
 
     def _fit(self, captures: list[np.ndarray], y=None) -> None:
         """Learn data-dependent parameters; nothing by default."""
 
     def transform(self, captures) -> np.ndarray:
         caps = check_captures(captures, name=type(self).__name__)
+        fitted_grid = getattr(self, "grid_", None)
         if not caps:
-            grid = getattr(self, "grid_", None)
-            return np.zeros((0, len(self.feature_names(grid)) if grid else 0))
-        rows = [self._transform_one(c) for c in caps]
-        return np.vstack(rows).astype(np.float64, copy=False)
+            return np.zeros((0, self.n_features(fitted_grid) if fitted_grid else 0))
+        grid = caps[0].shape[1:]
+        if fitted_grid is not None and tuple(grid) != tuple(fitted_grid):
+            raise FeatureInputError(f"{type(self).__name__}: fitted on grid {tuple(fitted_grid)}, got captures of grid {tuple(grid)}")
+        if self.fold_dependent and fitted_grid is None:
+            raise FeatureInputError(f"{type(self).__name__}: call fit before transform (this set learns from the training fold)")
+        self._check_params()
+        n_out = self.n_features(grid)
+        out = np.empty((len(caps), n_out), dtype=np.float64)
+        lengths = np.array([c.shape[0] for c in caps])
+        cells = grid[0] * grid[1]
+        for t in np.unique(lengths):
+            idx = np.flatnonzero(lengths == t)
+            step = max(1, _BATCH_VALUES // (int(t) * cells))
+            for k in range(0, len(idx), step):
+                part = idx[k:k + step]
+                stack = np.stack([caps[i] for i in part])
+                rows = np.asarray(self._transform_batch(stack), dtype=np.float64)
+                if rows.shape != (len(part), n_out):
+                    raise AssertionError(f"{type(self).__name__}: produced {rows.shape}, expected {(len(part), n_out)}")
+                out[part] = rows
+        return out
+
+    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
+        """Features of ``stack`` (N, T, H, W), captures of equal length."""
+        return np.vstack([np.asarray(self._transform_one(c), dtype=np.float64).reshape(1, -1) for c in stack])
 
     def _transform_one(self, capture: np.ndarray) -> np.ndarray:
         raise NotImplementedError
@@ -100,4 +182,11 @@ class FeatureSet(TransformerMixin, BaseEstimator):
         return np.asarray(self.feature_names(self.grid_), dtype=object)
 
     def n_features(self, grid: tuple[int, int]) -> int:
+        """Output size for ``grid`` (subclasses with long name lists compute it directly)."""
         return len(self.feature_names(grid))
+
+
+def cell_names(grid: tuple[int, int]) -> list[str]:
+    """``r{i}_c{j}`` for every cell of ``grid``, row-major (the order of ``reshape``)."""
+    h, w = grid
+    return [f"r{i}_c{j}" for i in range(h) for j in range(w)]

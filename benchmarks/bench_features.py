@@ -1,0 +1,173 @@
+"""Speed and memory of every feature set on the real HAART captures, with
+tsfresh's MinimalFCParameters on the same 64 cell series as a reference.
+
+    /work/venv/bin/python benchmarks/bench_features.py [--runs 5] [--tsfresh-runs 3]
+
+Runs on one core: BLAS/OpenMP threads are set to 1 before numpy loads and
+the process is pinned to one CPU (``--cpu``). Each set extracts features
+from all captures ``--runs`` times (after a short warm-up); the table gives
+the median (and min) wall-clock and CPU microseconds per capture. tsfresh
+(benchmark-only dependency, the ``bench`` extra: ``pip install tsfresh``)
+runs ``extract_features`` with ``MinimalFCParameters`` on a long table with
+one column per cell (64 series per capture), ``n_jobs=0``; building that
+table is not timed. Targets (issue 4): ``msd`` at least 20 x faster per
+capture than tsfresh's minimal set; the five Gaus sets together under 10 s
+for all of ``haart``; peak memory under 1 GB (peak RSS of the process).
+
+The targets are judged on CPU time (``time.process_time``) of this pinned,
+single-threaded process: that is the time on one core, and it stays
+meaningful when other processes share the CPU (wall-clock then includes
+the time the core spent on them). On an idle machine the two agree; both
+are printed.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_v, "1")
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import resource  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+GAUS = ("sd", "bmh", "msd", "smmhh", "lbptop")
+
+
+def peak_rss_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # Linux: kilobytes
+
+
+def time_runs(fn, runs: int) -> tuple[list[float], list[float]]:
+    wall, cpu = [], []
+    for _ in range(runs):
+        w0, c0 = time.perf_counter(), time.process_time()
+        fn()
+        wall.append(time.perf_counter() - w0)
+        cpu.append(time.process_time() - c0)
+    return wall, cpu
+
+
+def tsfresh_frame(captures):
+    import pandas as pd
+
+    n = len(captures)
+    t, h, w = captures[0].shape
+    if any(c.shape != (t, h, w) for c in captures):
+        raise SystemExit("tsfresh reference expects captures of one length")
+    values = np.stack(captures).reshape(n * t, h * w).astype(np.float64)
+    df = pd.DataFrame(values, columns=[f"r{i}_c{j}" for i in range(h) for j in range(w)])
+    df.insert(0, "time", np.tile(np.arange(t), n))
+    df.insert(0, "id", np.repeat(np.arange(n), t))
+    return df
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--dataset", default="haart")
+    ap.add_argument("--runs", type=int, default=5, help="timed runs per feature set")
+    ap.add_argument("--tsfresh-runs", type=int, default=3)
+    ap.add_argument("--no-tsfresh", action="store_true")
+    ap.add_argument("--sets", nargs="*", help="feature sets (default: all registered)")
+    ap.add_argument("--cpu", type=int, default=None, help="CPU to pin to (default: the last allowed one)")
+    ap.add_argument("--json", help="also write the figures to this JSON file")
+    args = ap.parse_args(argv)
+
+    if hasattr(os, "sched_setaffinity"):
+        cpu = args.cpu if args.cpu is not None else max(os.sched_getaffinity(0))
+        os.sched_setaffinity(0, {cpu})
+        pinned = f"pinned to CPU {cpu}"
+    else:
+        pinned = "not pinned"
+
+    from touchbench.datasets import load_dataset
+    from touchbench.features import FEATURES
+
+    ds = load_dataset(args.dataset)
+    caps = ds.captures
+    n = len(caps)
+    print(f"{args.dataset}: {n} captures of {caps[0].shape} {caps[0].dtype}; {pinned}; "
+          f"threads OMP/BLAS=1; {args.runs} runs per set; peak RSS after loading {peak_rss_mb():.0f} MB")
+
+    names = args.sets or FEATURES.names()
+    rows = {}
+    print(f"\n{'set':14s} {'size':>6s} {'median us/cap':>14s} {'min us/cap':>11s} {'cpu us/cap':>11s} {'s for all':>10s}")
+    for name in names:
+        fs = FEATURES.create(name, sensor=ds.sensor)
+        fs.fit_transform(caps[:20])  # warm-up (imports, caches)
+        wall, cpu = time_runs(lambda: fs.fit_transform(caps), args.runs)
+        med = statistics.median(wall)
+        rows[name] = {
+            "size": fs.n_features(ds.sensor.grid),
+            "median_us_per_capture": med / n * 1e6,
+            "min_us_per_capture": min(wall) / n * 1e6,
+            "median_cpu_us_per_capture": statistics.median(cpu) / n * 1e6,
+            "median_seconds_all": med,
+            "runs_seconds": wall,
+        }
+        r = rows[name]
+        print(f"{name:14s} {r['size']:6d} {r['median_us_per_capture']:14.1f} {r['min_us_per_capture']:11.1f} "
+              f"{r['median_cpu_us_per_capture']:11.1f} {med:10.2f}", flush=True)
+    rss_features = peak_rss_mb()
+
+    result = {"dataset": args.dataset, "captures": n, "runs": args.runs, "sets": rows, "peak_rss_mb_features": rss_features}
+
+    ts = None
+    if not args.no_tsfresh:
+        try:
+            from tsfresh import extract_features
+            from tsfresh.feature_extraction import MinimalFCParameters
+        except ImportError:
+            print("\ntsfresh not installed (pip install tsfresh, the 'bench' extra): reference skipped")
+        else:
+            df = tsfresh_frame(caps)
+
+            def run():
+                extract_features(df, column_id="id", column_sort="time", default_fc_parameters=MinimalFCParameters(),
+                                 n_jobs=0, disable_progressbar=True)
+
+            wall, cpu = time_runs(run, args.tsfresh_runs)
+            med = statistics.median(wall)
+            ts = {"median_us_per_capture": med / n * 1e6, "min_us_per_capture": min(wall) / n * 1e6,
+                  "median_cpu_us_per_capture": statistics.median(cpu) / n * 1e6, "median_seconds_all": med, "runs_seconds": wall}
+            print(f"{'tsfresh-min':14s} {640:6d} {ts['median_us_per_capture']:14.1f} {ts['min_us_per_capture']:11.1f} "
+                  f"{ts['median_cpu_us_per_capture']:11.1f} {med:10.2f}   (MinimalFCParameters on the 64 cell series)")
+            result["tsfresh_minimal"] = ts
+    rss_all = peak_rss_mb()
+    result["peak_rss_mb_all"] = rss_all
+
+    print("\ntargets (CPU time on one core; wall-clock in brackets)")
+    ok = True
+    if all(g in rows for g in GAUS):
+        total = sum(rows[g]["median_cpu_us_per_capture"] for g in GAUS) * n / 1e6
+        total_wall = sum(rows[g]["median_seconds_all"] for g in GAUS)
+        result["gaus_total_seconds_cpu"] = total
+        result["gaus_total_seconds_wall"] = total_wall
+        print(f"  five Gaus sets together: {total:.2f} s ({total_wall:.2f} s) for {n} captures (target < 10 s): "
+              f"{'ok' if total < 10 else 'MISSED'}")
+        ok &= total < 10
+    if ts is not None and "msd" in rows:
+        ratio = ts["median_us_per_capture"] / rows["msd"]["median_us_per_capture"]
+        ratio_cpu = ts["median_cpu_us_per_capture"] / rows["msd"]["median_cpu_us_per_capture"]
+        result["msd_speedup_vs_tsfresh_cpu"] = ratio_cpu
+        result["msd_speedup_vs_tsfresh_wall"] = ratio
+        print(f"  msd vs tsfresh minimal: {ratio_cpu:.1f} x ({ratio:.1f} x) faster per capture (target >= 20 x): "
+              f"{'ok' if ratio_cpu >= 20 else 'MISSED'}")
+        ok &= ratio_cpu >= 20
+    print(f"  peak RSS: {rss_features:.0f} MB after the feature sets, {rss_all:.0f} MB with tsfresh (target < 1024 MB): "
+          f"{'ok' if rss_all < 1024 else 'MISSED'}")
+    ok &= rss_all < 1024
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(result, f, indent=2)
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

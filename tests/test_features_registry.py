@@ -1,0 +1,86 @@
+"""The feature registry, the ``touchbench features`` command, scikit-learn
+compatibility, and every set on the real HAART recordings."""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from sklearn.base import clone
+from sklearn.pipeline import make_pipeline
+
+from touchbench.cli.main import cli
+from touchbench.features import FEATURES
+
+EXPECTED_8X8 = {
+    "sd": 62,
+    "bmh": 64,
+    "msd": 768,
+    "smmhh": 2125,
+    "lbptop": 177,
+    "zhou-basic": 30,
+    "zhou-wavelet": 234,
+    "flagg-stats": 28,
+    "raw-window": 432 * 64,
+}
+
+
+def test_every_set_is_registered_with_paper_and_cost():
+    assert FEATURES.names() == sorted(EXPECTED_8X8)
+    for e in FEATURES.entries():
+        cls = e.obj
+        assert e.tags["paper"] and e.tags["cost"] in ("cheap", "moderate", "expensive")
+        assert "section" in cls.paper and cls.fold_dependent is False
+        doc = inspect.getdoc(cls)
+        assert "Interpretations" in doc or "interpretations" in doc.lower()
+        assert "sensor" in inspect.signature(cls.__init__).parameters
+        fs = cls()
+        assert fs.n_features((8, 8)) == EXPECTED_8X8[e.name] == len(fs.feature_names((8, 8)))
+        assert len(set(fs.feature_names((8, 8)))) == EXPECTED_8X8[e.name]  # names are unique
+
+
+def test_sklearn_api():
+    caps = [np.random.default_rng(i).integers(0, 1024, (20, 8, 8)) for i in range(3)]
+    for name in FEATURES.names():
+        fs = FEATURES.create(name)
+        c = clone(fs)
+        assert c.get_params() == fs.get_params()
+        assert np.array_equal(make_pipeline(c).fit_transform(caps), fs.fit_transform(caps))
+        assert len(fs.get_feature_names_out()) == fs.n_features_out_
+
+
+def test_cli_features_list_and_show():
+    r = CliRunner().invoke(cli, ["features", "list"], terminal_width=200)
+    assert r.exit_code == 0, r.output
+    for name, size in EXPECTED_8X8.items():
+        line = next(ln for ln in r.output.splitlines() if f" {name} " in ln)
+        assert str(size) in line
+    assert "Gaus et al. 2015" in r.output and "moderate" in r.output
+    r = CliRunner().invoke(cli, ["features", "show", "msd"])
+    assert r.exit_code == 0 and "section 3.2.3" in r.output and "Interpretations" in r.output
+    r = CliRunner().invoke(cli, ["features", "show", "smmh"])
+    assert r.exit_code == 2 and "did you mean 'smmhh'" in r.output
+
+
+@pytest.mark.realdata
+def test_every_set_on_real_haart(real_haart):
+    ds = real_haart
+    caps = ds.captures[::10]
+    for name in FEATURES.names():
+        fs = FEATURES.create(name, sensor=ds.sensor)
+        out = fs.fit_transform(caps)
+        assert out.shape == (len(caps), fs.n_features(ds.sensor.grid)) and np.isfinite(out).all(), name
+    bmh = FEATURES.create("bmh").fit_transform(caps)
+    assert set(np.unique(bmh)) <= {0.0, 1.0} and (bmh.sum(axis=1) >= 1).all()
+
+
+@pytest.mark.realdata
+def test_table4_edges_fit_real_haart(real_haart):
+    # Gaus et al.: the edges were set "to fit all instances". Read as per-frame cell
+    # counts, the no-touch counts of every real capture fall inside -0.5..55.5, so
+    # dropping out-of-range counts (histcounts) loses nothing: each histogram sums to T.
+    out = FEATURES.create("sd", clip=False).fit_transform(real_haart.captures)
+    t = np.array([c.shape[0] for c in real_haart.captures])
+    assert (out[:, :12].sum(axis=1) == t).all() and (out[:, 12:24].sum(axis=1) == t).all()

@@ -1,0 +1,114 @@
+"""``flagg-stats``: seven sequence statistics per channel (Flagg 2012, seed
+002, sections 3.4.2 and 4.3.2)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..datasets.model import SensorSpec
+from .base import FEATURES, FeatureInputError, FeatureSet, cell_names
+from .numerics import as_f64, hazen_quantiles, moments, total_variation, weighted_centroid
+
+FLAGG_STATS = ("max", "min", "mean", "median", "area", "var", "tv")
+GRID_CHANNELS = ("total_pressure", "contact_area", "centroid_x", "centroid_y")
+# Default contact threshold, as a fraction of the sensor's value range above
+# its low end: 1.5 % of 0..1023 is 15.3, above the 99th percentile (14) of
+# the cell values of the real HAART no-touch captures.
+CONTACT_FRACTION = 0.015
+
+
+def grid_channels(stack: np.ndarray, floor: float, contact: float) -> np.ndarray:
+    """Frame summaries of ``(N, T, H, W)`` captures -> ``(N, 4, T)``: total
+    pressure, contact area, centroid x (column), centroid y (row)."""
+    x = as_f64(stack)
+    r, c, total = weighted_centroid(x, floor)
+    n, t = x.shape[:2]
+    area = np.count_nonzero(x.reshape(n, t, -1) > floor + contact, axis=-1).astype(np.float64)
+    return np.stack([total, area, c, r], axis=1)
+
+
+@FEATURES.register("flagg-stats", description="7 sequence statistics of total pressure, contact area and centroid", paper="flagg2012", cost="cheap")
+class FlaggStats(FeatureSet):
+    """Flagg's sequence statistics (Flagg 2012, sections 3.4.2 and 4.3.2).
+
+    Per channel time series: maximum, minimum, mean, median, area under the
+    curve, variance and total variation ("summing the absolute values of
+    the differences between each consecutive point"), "calculated for each
+    of the 4 time-series curves, resulting in a set of 28 features".
+    ``flagg_{stat}_{channel}``.
+
+    Channels (``channels``):
+
+    - ``"auto"`` (default): the sensor's own channels if the sensor is a
+      channel sensor (``sensor.channels``, e.g. Flagg's x, y, pressure,
+      fur: the ``(T, 1, C)`` capture's C columns), else ``"grid"``;
+    - ``"grid"``: four frame-level summaries of a pressure grid, the
+      grid counterparts of Flagg's x, y, pressure and touch channels:
+      total pressure (sum over cells of the value above the sensor's low
+      end), contact area (cells above low end + ``contact_threshold``),
+      pressure centroid x (column) and y (row), in cell units. 28 values;
+    - ``"cells"``: every cell is a channel (7 x H x W values).
+
+    Interpretations:
+
+    - Area under the curve = sum of the samples (unit spacing, as Gaus's
+      "area"), not divided by the frame rate.
+    - Variance with ddof = 1 (0 for one frame); median is the usual middle
+      value (mean of the two middle ones).
+    - ``contact_threshold`` default: 1.5 % of the sensor's value range
+      (15.3 on HAART's 0..1023), above the no-touch noise of the real
+      HAART recordings; without a sensor the range is 0..1023.
+    - An empty frame (nothing above the low end) has no centroid: we use
+      the grid centre ((W-1)/2, (H-1)/2), so a no-touch capture has a
+      centred, motionless centroid (variance and total variation 0).
+    - No normalisation by length (area and total variation grow with T).
+
+    Parameters: ``channels``, ``contact_threshold``, ``sensor``.
+    """
+
+    paper = "Flagg 2012 (MSc thesis, UBC), sections 3.4.2 and 4.3.2"
+    cost = "cheap"
+    fold_dependent = False
+
+    def __init__(self, channels: str = "auto", contact_threshold: float | None = None, sensor: SensorSpec | None = None):
+        self.channels = channels
+        self.contact_threshold = contact_threshold
+        self.sensor = sensor
+
+    def _mode(self) -> str:
+        if self.channels not in ("auto", "grid", "cells"):
+            raise FeatureInputError(f"flagg-stats: channels must be 'auto', 'grid' or 'cells', got {self.channels!r}")
+        if self.channels == "auto":
+            return "cells" if self.sensor is not None and self.sensor.channels is not None else "grid"
+        return self.channels
+
+    def _check_params(self) -> None:
+        self._mode()
+
+    def _range(self) -> tuple[float, float]:
+        return tuple(self.sensor.value_range) if self.sensor is not None else (0.0, 1023.0)
+
+    def _channel_names(self, grid: tuple[int, int]) -> list[str]:
+        if self._mode() == "grid":
+            return list(GRID_CHANNELS)
+        if self.sensor is not None and self.sensor.channels is not None and tuple(self.sensor.grid) == tuple(grid):
+            return [str(c) for c in self.sensor.channels]
+        return cell_names(grid)
+
+    def feature_names(self, grid: tuple[int, int]) -> list[str]:
+        return [f"flagg_{s}_{c}" for s in FLAGG_STATS for c in self._channel_names(grid)]
+
+    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
+        n, t = stack.shape[:2]
+        if self._mode() == "grid":
+            lo, hi = self._range()
+            contact = self.contact_threshold if self.contact_threshold is not None else CONTACT_FRACTION * (hi - lo)
+            series = grid_channels(stack, lo, float(contact))
+        else:
+            series = as_f64(stack).reshape(n, t, -1).transpose(0, 2, 1)
+        series = np.ascontiguousarray(series)  # (N, C, T)
+        srt = np.sort(series, axis=-1)
+        m = moments(srt, presorted=True)
+        (median,) = hazen_quantiles(srt, (0.5,))
+        cols = [m["max"], m["min"], m["mean"], median, m["sum"], m["var"], total_variation(series)]
+        return np.concatenate(cols, axis=1)

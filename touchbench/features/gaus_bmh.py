@@ -1,0 +1,68 @@
+"""``bmh``: binary motion history (Gaus et al. 2015, seed 000, section 3.2.2)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..datasets.model import SensorSpec
+from .base import FEATURES, FeatureInputError, FeatureSet, cell_names
+from .gaus_common import GAUS_PAPER, resolve
+
+# Section 3.2.2: high pressure is value >= maximum - offset.
+_TABLE: dict[str, dict[str, Any]] = {"haart": {"offset": 5.0}, "cost": {"offset": 100.0}}
+
+
+@FEATURES.register("bmh", description="binary map of the cells ever touched with high pressure", paper="gaus2015", cost="cheap")
+class BinaryMotionHistory(FeatureSet):
+    """Binary motion history (BMH): the high-pressure shape of a gesture.
+
+    Gaus et al. 2015, section 3.2.2: one value per cell, 1 if "throughout
+    the gesture instance, the corresponding sensor cell was touched at least
+    once with high pressure (CoST: pressure >= (maximum - 100); HAART:
+    pressure >= (maximum - 5))", 0 otherwise. 64 values for an 8 x 8 grid
+    (H x W in general), row-major ``bmh_r{i}_c{j}``.
+
+    Interpretations:
+
+    - "maximum" is the capture's maximum over all cells and frames
+      (``level="instance"``, default): the paper's shape is one matrix per
+      instance. ``level="frame"`` uses each frame's own maximum instead
+      (a cell is set if it was ever within ``offset`` of its frame's peak).
+    - The offsets 5 and 100 are raw sensor units, as in Table 3.
+    - With the instance maximum at least one cell is always 1; a constant
+      capture (no touch, all zero, all saturated) sets every cell to 1.
+      Finite and binary for every input.
+
+    Parameters: ``preset`` ("haart" / "cost"), ``offset`` (overrides the
+    preset), ``level`` ("instance" / "frame"), ``sensor`` (unused).
+    """
+
+    paper = f"{GAUS_PAPER}.2"
+    cost = "cheap"
+    fold_dependent = False
+
+    def __init__(self, preset: str = "haart", offset: float | None = None, level: str = "instance", sensor: SensorSpec | None = None):
+        self.preset = preset
+        self.offset = offset
+        self.level = level
+        self.sensor = sensor
+
+    def _check_params(self) -> None:
+        resolve("bmh", self.preset, _TABLE, "offset", self.offset)
+        if self.level not in ("instance", "frame"):
+            raise FeatureInputError(f"bmh: level must be 'instance' or 'frame', got {self.level!r}")
+
+    def feature_names(self, grid: tuple[int, int]) -> list[str]:
+        return [f"bmh_{c}" for c in cell_names(grid)]
+
+    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
+        off = float(resolve("bmh", self.preset, _TABLE, "offset", self.offset))
+        n, t = stack.shape[:2]
+        x = stack.reshape(n, t, -1).astype(np.float64)
+        if self.level == "instance":
+            top = x.max(axis=(1, 2))[:, None, None]
+        else:
+            top = x.max(axis=2, keepdims=True)
+        return (x >= top - off).any(axis=1).astype(np.float64)

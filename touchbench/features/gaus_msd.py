@@ -1,0 +1,80 @@
+"""``msd``: motion statistical distribution, twelve statistics per cell
+(Gaus et al. 2015, seed 000, section 3.2.3)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..datasets.model import SensorSpec
+from .base import FEATURES, FeatureSet, cell_names
+from .gaus_common import GAUS_PAPER
+from .numerics import as_f64, hazen_quantiles, moments, total_variation
+
+MSD_STATS = ("min", "max", "mean", "q1", "median", "q3", "area", "tv", "iqr", "var", "skew", "kurt")
+
+
+def cell_series(stack: np.ndarray) -> np.ndarray:
+    """``(N, T, H, W)`` -> ``(N, H*W, T)``: one contiguous time series per cell, native dtype."""
+    n, t = stack.shape[:2]
+    return np.ascontiguousarray(stack.reshape(n, t, -1).transpose(0, 2, 1))
+
+
+def sorted_f64(series: np.ndarray) -> np.ndarray:
+    """Sort along the last axis in the native dtype (faster for integers), then float64."""
+    return as_f64(np.sort(series, axis=-1))
+
+
+@FEATURES.register("msd", description="12 statistics of every cell's time series", paper="gaus2015", cost="cheap")
+class MotionStatisticalDistribution(FeatureSet):
+    """Motion statistical distribution (MSD): 12 statistics per cell.
+
+    Gaus et al. 2015, section 3.2.3: from each sensor (cell) sequence
+    ``F = (f_1..f_L)``: minimum, maximum, mean, first quartile, median,
+    third quartile, area ("the sum of all values of each sensor in all
+    frames"), total variation ("the sum of changes in values for each
+    sensor in all frames"), interquartile range, variance, skewness and
+    kurtosis. 12 x 64 = 768 values for an 8 x 8 grid, statistic-major:
+    ``msd_{stat}_r{i}_c{j}``.
+
+    Interpretations:
+
+    - "on the changing information for each sensor": the statistics are of
+      the raw cell series (the paper defines area on the values), not of
+      their differences.
+    - Total variation = sum of |f_{t+1} - f_t| (Flagg 2012, section 3.4.2,
+      from which these 12 statistics come).
+    - Quartiles, median and IQR follow MATLAB's ``quantile`` / ``iqr`` (the
+      authors' tool): numpy ``method="hazen"``.
+    - Variance: MATLAB ``var`` (ddof = 1; 0 for one frame). Skewness and
+      kurtosis: MATLAB ``skewness`` / ``kurtosis`` defaults (biased,
+      Pearson kurtosis, 3 for a normal).
+    - Limits (see :mod:`touchbench.features.numerics`): a constant cell
+      (no touch, all zero, saturated at 1023) has variance, IQR and total
+      variation 0, skewness 0 and kurtosis 3; a one-frame capture is
+      constant in every cell.
+    - No normalisation by the number of frames (area and total variation
+      grow with length), as in the paper.
+
+    Parameters: ``sensor`` (unused; nothing depends on the sensor).
+    """
+
+    paper = f"{GAUS_PAPER}.3"
+    cost = "cheap"
+    fold_dependent = False
+
+    def __init__(self, sensor: SensorSpec | None = None):
+        self.sensor = sensor
+
+    def feature_names(self, grid: tuple[int, int]) -> list[str]:
+        cells = cell_names(grid)
+        return [f"msd_{s}_{c}" for s in MSD_STATS for c in cells]
+
+    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
+        series = cell_series(stack)  # (N, P, T)
+        srt = sorted_f64(series)
+        q1, med, q3 = hazen_quantiles(srt, (0.25, 0.5, 0.75))
+        m = moments(srt, presorted=True, overwrite=True)  # srt is scratch from here on
+        area = m["sum"]
+        tv = total_variation(series)
+        cols = [m["min"], m["max"], m["mean"], q1, med, q3, area, tv, q3 - q1, m["var"], m["skew"], m["kurt"]]
+        return np.concatenate(cols, axis=1)
