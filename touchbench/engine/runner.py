@@ -46,7 +46,7 @@ from .. import __version__
 from ..datasets.model import TouchDataset
 from ..errors import TouchbenchError
 from ..paths import cache_dir
-from ..protocols.schema import Protocol, _suggest, canonical_json, load_protocol, resolve_dataset_ref
+from ..protocols.schema import Protocol, did_you_mean, canonical_json, expand_grid, load_protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
 from ..protocols.splits import SplitError
 from ..results.manifest import now_iso, update_manifest
@@ -130,7 +130,7 @@ def apply_filters(protocol: Protocol, ds: TouchDataset) -> TouchDataset:
             if col not in meta.columns:
                 raise protocol.error_at(
                     ("dataset", field_name, col),
-                    f"the dataset has no metadata column {col!r}{_suggest(col, list(map(str, meta.columns)))} "
+                    f"the dataset has no metadata column {col!r}{did_you_mean(col, list(map(str, meta.columns)))} "
                     f"(columns: {', '.join(map(str, meta.columns))})",
                 )
             col_vals = np.array([None if pd.isna(v) else str(v) for v in meta[col].tolist()], dtype=object)
@@ -139,7 +139,7 @@ def apply_filters(protocol: Protocol, ds: TouchDataset) -> TouchDataset:
                 if v not in present:
                     raise protocol.error_at(
                         ("dataset", field_name, col, i),
-                        f"{col} {v!r} is not in the dataset{_suggest(v, present)} (values: {', '.join(present)})",
+                        f"{col} {v!r} is not in the dataset{did_you_mean(v, present)} (values: {', '.join(present)})",
                     )
             hit = np.isin(col_vals, values)
             keep &= hit if include else ~hit
@@ -170,8 +170,6 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
     # feature sets must build with their parameters and this dataset's sensor
     for i, combo in enumerate(protocol.features):
         for j, ref in enumerate(combo):
-            from ..protocols.schema import expand_grid
-
             for p in expand_grid(ref.params):
                 try:
                     make_feature_set(ref.name, p, ds.sensor)
@@ -240,8 +238,11 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
     ids = [t.task_id for t in tasks]
     if len(set(ids)) != len(ids):
         raise protocol.error_at(("features",), "two entries of the protocol describe the same task (duplicate combination or classifier)")
+    # The run is the set of its tasks: a change of protocol, data, code version or
+    # package version that changes any task gives another run id.
     run_id = hashlib.sha256(canonical_json(
-        {"protocol": protocol.content_hash, "dataset": ds.content_hash, "versions": versions}).encode()).hexdigest()[:12]
+        {"protocol": protocol.content_hash, "dataset": ds.content_hash, "versions": versions,
+         "tasks": hashlib.sha256("\n".join(ids).encode()).hexdigest()}).encode()).hexdigest()[:12]
     return Plan(protocol=protocol, dataset=ds, dataset_ref=resolve_dataset_ref(protocol), source_hash=full.content_hash,
                 tasks=tasks, notes=list(dict.fromkeys(notes)), run_id=run_id, cache_root=cache_root, n_folds=n_folds)
 

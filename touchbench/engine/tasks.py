@@ -137,7 +137,7 @@ class RunContext:
         self.cache_root = Path(cache_root)
         self.setup = setup
         self._dataset: TouchDataset | None = dataset
-        RunContext._loaded[self.dataset_hash] = dataset
+        RunContext._loaded = {self.dataset_hash: dataset}  # keep one dataset per process
 
     def ensure_setup(self) -> None:
         """Run ``setup`` (e.g. registering plug-in components) once per process."""

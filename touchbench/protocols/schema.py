@@ -64,6 +64,7 @@ from .splits import SPLITTERS, Splitter, SplitError
 
 __all__ = [
     "ClassifierEntry",
+    "did_you_mean",
     "FeatureCombination",
     "Protocol",
     "ProtocolError",
@@ -123,7 +124,7 @@ def _label(name: str, params: dict[str, Any], keys: list[str] | None = None) -> 
     return f"{name}(" + ",".join(f"{k}={_fmt_value(params[k])}" for k in keys) + ")"
 
 
-def _suggest(word: str, choices: list[str]) -> str:
+def did_you_mean(word: str, choices: list[str]) -> str:
     close = difflib.get_close_matches(str(word), choices, n=3, cutoff=0.5)
     return f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
 
@@ -482,7 +483,7 @@ def _pydantic_issues(err: ValidationError, model: type[BaseModel], prefix: tuple
             msg = "missing required field"
         elif kind == "extra_forbidden":
             fields = _model_fields_at(model, loc[:-1]) or []
-            msg = f"unknown field{_suggest(str(loc[-1]), fields)}"
+            msg = f"unknown field{did_you_mean(str(loc[-1]), fields)}"
             if fields:
                 msg += f" (allowed: {', '.join(fields)})"
         elif kind not in ("value_error", "assertion_error"):
@@ -559,7 +560,7 @@ def _feature_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
                     issues.append((loc, "the engine passes the dataset's sensor; do not set 'sensor'"))
                 elif not var_kw and k not in names:
                     issues.append((loc, f"unknown parameter {k!r} for feature set {ref.name!r}"
-                                        f"{_suggest(k, names)} (accepted: {', '.join(n for n in names if n != 'sensor') or 'none'})"))
+                                        f"{did_you_mean(k, names)} (accepted: {', '.join(n for n in names if n != 'sensor') or 'none'})"))
                 elif _is_grid(v) and not (isinstance(v["grid"], list) and v["grid"]):
                     issues.append((loc + ("grid",), "a grid must be a non-empty list of values"))
     return issues
@@ -592,7 +593,7 @@ def _classifier_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
         for k in spec.params:
             if k != "random_state" and known and k not in names:
                 issues.append((("classifiers", i, "params", k),
-                               f"unknown parameter {k!r} for classifier {spec.name!r}{_suggest(k, known)}"))
+                               f"unknown parameter {k!r} for classifier {spec.name!r}{did_you_mean(k, known)}"))
                 bad = True
         if bad:
             continue
@@ -617,10 +618,10 @@ def _expected_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
         key = "+".join(r.features)
         if key not in by_names:
             issues.append((("expected", "results", i, "features"),
-                           f"no feature combination {r.features} in this protocol{_suggest(key, sorted(by_names))}"))
+                           f"no feature combination {r.features} in this protocol{did_you_mean(key, sorted(by_names))}"))
         if r.classifier not in clf_names:
             issues.append((("expected", "results", i, "classifier"),
-                           f"no classifier {r.classifier!r} in this protocol{_suggest(r.classifier, sorted(clf_names))}"))
+                           f"no classifier {r.classifier!r} in this protocol{did_you_mean(r.classifier, sorted(clf_names))}"))
     return issues
 
 
