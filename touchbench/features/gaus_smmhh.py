@@ -30,14 +30,12 @@ def pool2(frames: np.ndarray) -> np.ndarray:
     if ph or pw:
         pad = [(0, 0)] * (frames.ndim - 2) + [(0, ph), (0, pw)]
         frames = np.pad(frames, pad)
-        ones = np.pad(np.ones((h, w)), [(0, ph), (0, pw)])
+        cnt = np.pad(np.ones((h, w)), [(0, ph), (0, pw)])
+        cnt = cnt[0::2, 0::2] + cnt[1::2, 0::2] + cnt[0::2, 1::2] + cnt[1::2, 1::2]
     else:
-        ones = None
-    hh, ww = frames.shape[-2] // 2, frames.shape[-1] // 2
-    s = frames.reshape(frames.shape[:-2] + (hh, 2, ww, 2)).sum(axis=(-3, -1))
-    if ones is None:
-        return s / 4.0
-    cnt = ones.reshape(hh, 2, ww, 2).sum(axis=(1, 3))
+        cnt = 4.0
+    # four strided slices: faster than a reduction over two length-2 axes
+    s = frames[..., 0::2, 0::2] + frames[..., 1::2, 0::2] + frames[..., 0::2, 1::2] + frames[..., 1::2, 1::2]
     return s / cnt
 
 
@@ -51,22 +49,25 @@ def pyramid_shapes(grid: tuple[int, int], n_scales: int) -> list[tuple[int, int]
 
 
 def run_length_histogram(binary: np.ndarray, max_len: int) -> np.ndarray:
-    """Histogram of the lengths of the runs of 1s in each row of ``binary`` (R, L).
+    """Histogram of the lengths of the runs of 1s along the last axis of ``binary`` (..., L).
 
     Bin m-1 counts runs of exactly m ones, m < ``max_len``; the last bin
-    counts runs of ``max_len`` or more. A run touching either end of the
-    row counts (the row is read as if bordered by 0s). Returns (R, max_len).
+    counts runs of ``max_len`` or more. A run touching either end counts
+    (the sequence is read as if bordered by 0s). Returns (..., max_len).
+    ``binary`` may be a strided view (it is copied once, into the padding).
     """
-    r, L = binary.shape
-    padded = np.zeros((r, L + 2), dtype=np.int8)
-    padded[:, 1:-1] = binary
-    d = np.diff(padded, axis=1).ravel()
+    lead, L = binary.shape[:-1], binary.shape[-1]
+    r = int(np.prod(lead))
+    padded = np.zeros(lead + (L + 2,), dtype=np.int8)
+    padded[..., 1:-1] = binary
+    d = np.diff(padded.reshape(r, L + 2), axis=1).ravel()
     starts = np.flatnonzero(d == 1)
     ends = np.flatnonzero(d == -1)
     lengths = ends - starts  # each run's end follows its start in the same row
     rows = starts // (L + 1)
     bins = np.minimum(lengths, max_len) - 1
-    return np.bincount(rows * max_len + bins, minlength=r * max_len).reshape(r, max_len).astype(np.float64)
+    hist = np.bincount(rows * max_len + bins, minlength=r * max_len).astype(np.float64)
+    return hist.reshape(lead + (max_len,))
 
 
 @FEATURES.register("smmhh", description="multi-scale motion history histograms on 8x8..1x1 pooled videos", paper="gaus2015", cost="moderate")
@@ -163,7 +164,7 @@ class SpatialMultiScaleMHH(FeatureSet):
         sizes = [h * w for h, w in shapes]
         ptot = sum(sizes)
         L = max(t - min(skips), 0)
-        motion = np.zeros((n, len(skips), ptot, max(L, 1)), dtype=bool)
+        motion = np.zeros((n, len(skips), max(L, 1), ptot), dtype=bool)  # time-major: contiguous writes
         v = as_f64(stack)
         off = 0
         for k, size in enumerate(sizes):
@@ -172,10 +173,9 @@ class SpatialMultiScaleMHH(FeatureSet):
             flat = v.reshape(n, t, size)
             for si, s in enumerate(skips):
                 if t > s:
-                    moved = np.abs(flat[:, s:] - flat[:, :-s]) > thr[k]
-                    motion[:, si, off:off + size, : t - s] = moved.transpose(0, 2, 1)
+                    np.greater(np.abs(flat[:, s:] - flat[:, :-s]), thr[k], out=motion[:, si, : t - s, off:off + size])
             off += size
-        hist = run_length_histogram(motion.reshape(-1, motion.shape[-1]), M).reshape(n, len(skips), ptot, M)
+        hist = run_length_histogram(motion.transpose(0, 1, 3, 2), M)  # (n, S, P, M)
         parts = []
         off = 0
         for size in sizes:
