@@ -132,9 +132,15 @@ def test_channel_sensor_reads_position_pressure_and_fur():
     assert x[-1] == pytest.approx(1023 * 150.0 / 200.0, rel=0.01)
     assert y[5] == pytest.approx(1023 * 75.0 / 150.0, rel=0.01)
     assert p[5] == pytest.approx(60.0 + 10.0 * 4.0, rel=1e-3)
-    # moving at 100 mm / 0.58 s = 172 mm/s, force weight 4 / 4.5
+    # one contact of 4 N: activity 4 / 4.5; moving 100 mm in 29 frames at 50 Hz
     speed = 100.0 / ((T - 1) / 50.0)
     assert fur[5] == pytest.approx(200.0 + (4 / 4.5) * (0.5 * speed + 30.0), rel=1e-3)
+    # two contacts of 1 N: activity 1 - (1/3)^2 = 8/9, standing still
+    two = Tracks(cx=np.full((2, 3), 100.0), cy=np.full((2, 3), 75.0), force=np.ones((2, 3)),
+                 sdx=np.full(2, 8.0), sdy=np.full(2, 8.0), conform=np.zeros(2, dtype=bool))
+    out2 = S.to_channels(render(two, (15, 20), pitch), two, frame_rate=50.0, pressure_gain=10.0, fur_motion_gain=0.5,
+                         fur_touch_gain=30.0, contact_n=0.3, rest=rest, value_range=(0.0, 1023.0))
+    assert out2[1, 3] == pytest.approx(200.0 + (8 / 9) * 30.0)
     still = S.to_channels(np.zeros((3, 15, 20)), Tracks(*(np.zeros((0, 3)),) * 3, np.zeros(0), np.zeros(0), np.zeros(0, bool)),
                           frame_rate=50.0, pressure_gain=10.0, fur_motion_gain=0.5, fur_touch_gain=30.0,
                           contact_n=0.3, rest=rest, value_range=(0.0, 1023.0))

@@ -24,6 +24,7 @@ SPECS_DIR = Path(__file__).resolve().parent / "specs"
 
 # load_dataset passes a dataset loader's keywords on; a scene has no use for them
 _IGNORED = {"cache_dir", "data_dir", "refresh"}
+_SUBSET = "\0gestures"  # marks gestures=[...]: a subset, not a merge
 # shortcuts for the overrides people use most
 _SHORTCUTS = {
     "subjects": ("population", "subjects"),
@@ -81,7 +82,7 @@ def overrides_to_dict(raw: dict[str, Any], overrides: dict[str, Any]) -> dict[st
         if key == "gestures":
             have = raw.get("gestures") or {}
             names = [value] if isinstance(value, str) else list(value)
-            out["gestures"] = {g: have.get(g) for g in names}
+            out[_SUBSET] = {g: have.get(g) for g in names}
             continue
         path = _SHORTCUTS.get(key) or tuple(key.replace(".", "__").split("__"))
         out = deep_merge(out, _nest(path, value))
@@ -103,8 +104,8 @@ def load_scene(name_or_yaml: str | Path, **overrides: Any) -> SceneSpec:
     if not isinstance(raw, dict):
         raise DataError("a scene file holds a mapping", path)
     over = overrides_to_dict(raw, overrides)
-    if "gestures" in over:
-        raw = {**raw, "gestures": over.pop("gestures")}
+    if _SUBSET in over:
+        raw = {**raw, "gestures": over.pop(_SUBSET)}
     from .spec import deep_merge, parse_spec
 
     return parse_spec(deep_merge(raw, over), path, text)

@@ -87,7 +87,7 @@ def lost_indices(spec: SceneSpec, n: int, seed: int) -> set[int]:
     k = spec.protocol.lost
     if k == 0:
         return set()
-    rng = np.random.default_rng([seed, LOST_STREAM])
+    rng = np.random.default_rng([seed, LOST_STREAM, 0])
     return {int(i) for i in rng.choice(n, size=k, replace=False)}
 
 

@@ -175,10 +175,11 @@ def to_channels(
       resting reading (the fur's weight biases it, Sec. 4.2.3);
     - x, y: the force-weighted centroid mapped onto the value range while
       the total force exceeds ``contact_n``, else the resting reading;
-    - fur: the conductive fur responds to hand motion through it and to
-      light touches without pressure (Sec. 3.2): ``fur_motion_gain`` x the
-      touch-weighted speed of the contacts (mm/s) plus ``fur_touch_gain`` x
-      the number of touching contacts, each weighted F / (F + 0.5 N).
+    - fur: the conductive fur responds to light touch without pressure and
+      to hand motion through it (Sec. 3.2): touch activity A = 1 - prod(1 -
+      a_b) with a_b = F_b / (F_b + 0.5 N) for each contact b, times
+      (``fur_touch_gain`` + ``fur_motion_gain`` x the force-weighted mean
+      speed of the contacts, mm/s).
     """
     T, H, W = field.shape
     lo, hi = value_range
@@ -192,12 +193,14 @@ def to_channels(
     pressure = rest["pressure"] + pressure_gain * total
     fur = np.full(T, rest["fur"], dtype=np.float64)
     if len(tr):
-        a = tr.force / (tr.force + 0.5)
+        # touch activity: each contact touches the fur with probability
+        # F / (F + 0.5 N); the hand touches it if any contact does
+        activity = 1.0 - np.prod(0.5 / (tr.force + 0.5), axis=0)
         if T > 1:
-            vx = np.gradient(tr.cx, axis=1) * frame_rate
-            vy = np.gradient(tr.cy, axis=1) * frame_rate
-            speed = np.hypot(vx, vy)
+            speed = np.hypot(np.gradient(tr.cx, axis=1), np.gradient(tr.cy, axis=1)) * frame_rate
         else:
             speed = np.zeros_like(tr.cx)
-        fur = fur + fur_motion_gain * (a * speed).sum(axis=0) + fur_touch_gain * a.sum(axis=0)
+        ftot = tr.force.sum(axis=0)
+        mean_speed = np.divide((tr.force * speed).sum(axis=0), ftot, out=np.zeros(T), where=ftot > 0)
+        fur = fur + activity * (fur_motion_gain * mean_speed + fur_touch_gain)
     return np.stack([x, y, pressure, fur], axis=1)

@@ -446,6 +446,8 @@ def _format_error(e: ValidationError) -> str:
     for err in e.errors():
         loc = ".".join(str(x) for x in err["loc"] if not str(x).startswith("function-after"))
         msg = err["msg"].removeprefix("Value error, ")
+        if err.get("type") in ("literal_error", "enum") and isinstance(err.get("input"), (str, int, float)):
+            msg += f", got {err['input']!r}"
         parts.append(f"{loc}: {msg}" if loc else msg)
     return "; ".join(parts)
 
