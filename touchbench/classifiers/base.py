@@ -14,7 +14,14 @@ from typing import Any
 
 from ..registry import Registry
 
-_MODULES: list[str] = []
+_MODULES: list[str] = [
+    "touchbench.classifiers.gaus",
+    "touchbench.classifiers.flagg",
+    "touchbench.classifiers.zhou",
+    "touchbench.classifiers.jung",
+    "touchbench.classifiers.xgb",
+    "touchbench.classifiers.cnn",  # imports torch only when the CNN is fitted
+]
 
 
 def _load() -> None:

@@ -1,0 +1,53 @@
+"""The frame-length sweep of Al-mashhadani et al. 2021 (seed 001, section 3,
+Fig. 5), quick version: leave-one-subject-out CNN accuracy for several L
+(F = floor(432 / L) frames per window) on the paper's subjects 1, 3, 5 and 7.
+
+Usage::
+
+    python benchmarks/bench_cnn_lsweep.py                   # L = 5, 10, 20, 30, 40, 50
+    python benchmarks/bench_cnn_lsweep.py --L 5,10,15,20,25,30,35,40,45,50   # the full Fig. 5 grid
+
+Each (L, subject) cell is one fit, about 10 to 30 s on one core with the
+default first-window setting.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_cnn_loso import haart_raw, loso  # noqa: E402
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--L", default="5,10,20,30,40,50")
+    ap.add_argument("--subjects", default="s01,s03,s05,s07")
+    ap.add_argument("--windows", default="first")
+    ap.add_argument("--max-epochs", type=int, default=100)
+    ap.add_argument("--patience", type=int, default=10)
+    ap.add_argument("--seed", type=int, default=0)
+    a = ap.parse_args(argv)
+    X, y, s, grid, how = haart_raw()
+    subjects = a.subjects.split(",")
+    print(f"real HAART, {how}; subjects {subjects}; windows {a.windows}; {os.cpu_count()} cores, no GPU")
+    print(f"{'L':>3} {'F':>4} " + " ".join(f"{x:>6}" for x in subjects) + "   mean  s/fold")
+    for L in [int(v) for v in a.L.split(",")]:
+        params = dict(L=L, train_windows=a.windows, test_windows=a.windows, max_epochs=a.max_epochs,
+                      patience=a.patience)
+        t0 = time.perf_counter()
+        rows = loso(X, y, s, grid, subjects, params, a.seed, True, log=lambda *_: None)
+        accs = [r[1] for r in rows]
+        per = (time.perf_counter() - t0) / len(rows)
+        print(f"{L:>3} {432 // L:>4} " + " ".join(f"{x:6.1%}" for x in accs) + f" {np.mean(accs):6.1%} {per:6.1f}",
+              flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

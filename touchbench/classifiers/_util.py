@@ -1,0 +1,225 @@
+"""Helpers shared by the classifier modules: building an estimator from a
+registry entry's defaults, the standardisation MATLAB and Weka apply, a
+random forest whose ``max_features`` can follow Weka's rule, and the
+``LabelEncoded`` base for estimators whose backend wants integer labels.
+
+Nothing here is tied to one paper; the paper modules (``gaus.py``,
+``flagg.py``, ``zhou.py``, ``jung.py``, ``xgb.py``, ``cnn.py``) import it.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+from typing import Any
+
+import numpy as np
+from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
+from sklearn.ensemble import RandomForestClassifier
+from sklearn.utils.metaestimators import available_if
+from sklearn.utils.validation import check_is_fitted, validate_data
+
+from ..errors import TouchbenchError
+
+#: Largest seed handed to a sub-estimator (numpy's legacy RandomState bound).
+MAX_SEED = 2**31 - 1
+
+
+def build(cls: type, defaults: dict[str, Any], random_state: Any, params: dict[str, Any], *, name: str):
+    """``cls(**{**defaults, **params, random_state})``, refusing unknown names.
+
+    ``random_state`` is passed only when ``cls`` takes one (LDA, KNN and
+    Gaussian naive Bayes are deterministic and ignore it).
+    """
+    valid = set(cls().get_params(deep=False))
+    unknown = sorted(set(params) - valid)
+    if "random_state" in params:
+        raise TouchbenchError(f"classifier {name!r}: pass random_state as its own argument, not in params")
+    if unknown:
+        raise TouchbenchError(
+            f"classifier {name!r}: unknown parameter(s) {', '.join(unknown)}; "
+            f"known: {', '.join(sorted(valid - {'random_state'}))}"
+        )
+    kwargs = {**defaults, **params}
+    if "random_state" in valid:
+        kwargs["random_state"] = random_state
+    return cls(**kwargs)
+
+
+def torch_available() -> bool:
+    """Whether PyTorch can be imported, without importing it."""
+    try:
+        return importlib.util.find_spec("torch") is not None
+    except (ImportError, ValueError):  # a broken or blocked install
+        return False
+
+
+def check_sample_weight(sample_weight, n: int) -> np.ndarray:
+    """Sample weights as a float64 vector of length ``n`` (ones when None):
+    finite, non-negative, not all zero."""
+    if sample_weight is None:
+        return np.ones(n)
+    w = np.asarray(sample_weight, dtype=np.float64)
+    if w.ndim == 0:
+        w = np.full(n, float(w))
+    if w.shape != (n,):
+        raise ValueError(f"sample_weight has shape {w.shape}, expected ({n},)")
+    if not np.isfinite(w).all() or (w < 0).any():
+        raise ValueError("Sample weights must be finite and non-negative.")
+    if not (w > 0).any():
+        raise ValueError("Sample weights must contain at least one non-zero number.")
+    return w
+
+
+# ---------------------------------------------------------------------------
+# standardisation
+
+
+class SampleStandardScaler(TransformerMixin, BaseEstimator):
+    """Centre each column on its mean and divide by its *sample* standard
+    deviation (``ddof=1``).
+
+    This is what MATLAB's ``'Standardize', true`` (``fitcsvm``, ``fitcknn``,
+    the Classification Learner presets) and Weka's ``Logistic`` do, whereas
+    scikit-learn's ``StandardScaler`` divides by the population deviation
+    (``ddof=0``). A column with zero (or undefined, n = 1) deviation is only
+    centred, as MATLAB does.
+    """
+
+    def fit(self, X, y=None, sample_weight=None):
+        """``sample_weight`` are frequency weights (a weight of 2 is a repeated
+        row; the denominator is ``sum(w) - 1``, as in Weka)."""
+        X = validate_data(self, X, dtype=np.float64)
+        w = check_sample_weight(sample_weight, X.shape[0])
+        sw = w.sum()
+        self.mean_ = (w @ X) / sw
+        if sw > 1:
+            scale = np.sqrt((w @ (X - self.mean_) ** 2) / (sw - 1.0))
+        else:
+            scale = np.zeros(X.shape[1])
+        scale[~np.isfinite(scale) | (scale == 0)] = 1.0
+        self.scale_ = scale
+        return self
+
+    def transform(self, X):
+        check_is_fitted(self)
+        X = validate_data(self, X, dtype=np.float64, reset=False)
+        return (X - self.mean_) / self.scale_
+
+
+# ---------------------------------------------------------------------------
+# Weka's random forest
+
+
+def weka_max_features(max_features: Any, n_features: int) -> Any:
+    """Resolve Weka's ``-K`` rule: ``"weka"`` (Weka's ``-K 0``) is
+    ``int(log2(M)) + 1`` attributes per split (``RandomForest.java``:
+    ``(int) Utils.log2(numAttributes - 1) + 1``); an integer is capped at
+    ``M`` as Weka does; anything else is scikit-learn's own value."""
+    if isinstance(max_features, str) and max_features == "weka":
+        return int(math.log2(n_features)) + 1 if n_features > 0 else 1
+    if isinstance(max_features, (int, np.integer)) and not isinstance(max_features, bool):
+        return int(min(max_features, max(n_features, 1)))
+    return max_features
+
+
+class WekaRandomForestClassifier(RandomForestClassifier):
+    """scikit-learn's random forest, with ``max_features="weka"`` for Weka's
+    default ``int(log2(M)) + 1`` and an integer ``max_features`` capped at the
+    number of features (Weka caps it; scikit-learn would raise).
+
+    Remaining differences from Weka's ``RandomForest`` (which the papers
+    used): Weka draws each bag with probability proportional to the instance
+    weights where scikit-learn multiplies bootstrap counts by
+    ``sample_weight``, and the two break ties between equally good splits
+    differently, so individual trees differ for the same seed.
+    """
+
+    def fit(self, X, y, sample_weight=None):
+        requested = self.max_features
+        try:
+            n_features = np.shape(X)[1] if len(np.shape(X)) == 2 else 0
+        except Exception:  # let the parent's validation report it
+            n_features = 0
+        self.max_features = weka_max_features(requested, n_features)
+        try:
+            return super().fit(X, y, sample_weight=sample_weight)
+        finally:
+            self.max_features = requested
+
+
+# ---------------------------------------------------------------------------
+# estimators that wrap another (a pipeline) but keep flat parameters
+
+
+class DelegatingClassifier(ClassifierMixin, BaseEstimator):
+    """Base for wrappers with flat, paper-named parameters.
+
+    Subclasses implement :meth:`_make_estimator` (called in ``fit``) and get
+    ``predict``, ``predict_proba`` (only when the inner estimator has it) and
+    ``decision_function`` delegated to the fitted ``estimator_``. Labels pass
+    through unchanged (the inner estimators accept string labels).
+    """
+
+    def _make_estimator(self, n_features: int, n_classes: int):  # pragma: no cover
+        raise NotImplementedError
+
+    def fit(self, X, y, sample_weight=None):
+        X, y = validate_data(self, X, y, dtype=np.float64)
+        from sklearn.utils.multiclass import check_classification_targets
+
+        check_classification_targets(y)
+        self.classes_ = np.unique(y)
+        est = self._make_estimator(X.shape[1], len(self.classes_))
+        if sample_weight is not None:
+            w = check_sample_weight(sample_weight, X.shape[0])
+            est.fit(X, y, **_weight_params(est, w))
+        else:
+            est.fit(X, y)
+        self.estimator_ = est
+        return self
+
+    def _X(self, X):
+        check_is_fitted(self)
+        return validate_data(self, X, dtype=np.float64, reset=False)
+
+    def predict(self, X):
+        X = self._X(X)
+        return self.estimator_.predict(X)
+
+    def _proba_available(self) -> bool:
+        """Whether an unfitted instance will have ``predict_proba`` (override)."""
+        return True
+
+    @available_if(lambda self: _inner_has(self, "predict_proba"))
+    def predict_proba(self, X):
+        X = self._X(X)
+        return self.estimator_.predict_proba(X)
+
+    @available_if(lambda self: _inner_has(self, "decision_function"))
+    def decision_function(self, X):
+        X = self._X(X)
+        return self.estimator_.decision_function(X)
+
+
+def _inner_has(self: DelegatingClassifier, method: str) -> bool:
+    if hasattr(self, "estimator_"):
+        return hasattr(self.estimator_, method)
+    if method == "predict_proba":
+        return self._proba_available()
+    return getattr(self, "_has_decision_function", False)
+
+
+def _weight_params(est, w: np.ndarray) -> dict[str, np.ndarray]:
+    """``sample_weight`` for an estimator, or for every step of a pipeline
+    whose ``fit`` takes it (so a scaler sees the same weights as the model)."""
+    import inspect
+
+    steps = getattr(est, "steps", None)
+    if not steps:
+        return {"sample_weight": w}
+    out = {}
+    for name, step in steps:
+        if step != "passthrough" and step is not None and "sample_weight" in inspect.signature(step.fit).parameters:
+            out[f"{name}__sample_weight"] = w
+    return out

@@ -1,0 +1,425 @@
+"""The raw-frame CNN of Al-mashhadani et al. 2021 (seed 001, section 2.3,
+Table 1, Fig. 5), in PyTorch: the ``deep`` extra.
+
+PyTorch is imported lazily, inside this module's functions only, so the
+rest of touchbench works without it; building the ``cnn`` entry without
+PyTorch raises a :class:`~touchbench.errors.TouchbenchError` naming the
+install command (``pip install 'touchbench[deep]'``).
+
+Input
+-----
+``X`` is the ``raw-window`` feature set: one row per capture, the capture's
+``F_total`` frames of ``H x W`` cells flattened in C order (``F_total`` is
+432 for HAART: 8 s at 54 Hz). ``grid=(H, W)`` gives the frame shape;
+``F_total = n_features / (H * W)``.
+
+Sub-windows (the paper's "subsamples", section 2.3, Eq. 3)
+-------------------------------------------------------
+"F = floor(N / L)" with N = 432 frames; "the sample ... can be broken down
+into 86 multiple subsamples of 8x8x5" (L = 86, F = 5). So a capture gives
+**L consecutive, non-overlapping windows of F frames** (window ``k`` holds
+frames ``k*F .. (k+1)*F - 1``; the last ``N - L*F`` frames are unused), and
+the network sees one window as an ``F``-channel 8 x 8 image. L = 30 (F =
+14, Table 1's "8 x 8 x 14" input) is the paper's choice from its Fig. 5
+sweep. The paper then says "the first subsample is picked, and the others
+are kept away ... we will have only 8x8x43 (if L = 10), which is the first
+part of the big sample", so the defaults are ``train_windows="first"`` and
+``test_windows="first"``: one window per capture. ``"all"`` (or a list of
+window indices) trains on every window as its own sample with the capture's
+label (the paper's "benefit I": more training samples) and/or classifies
+every window of a test capture and combines them by a capture-level
+``vote``: ``"soft"`` averages the windows' softmax outputs, ``"hard"``
+takes the majority label (ties broken by the soft average).
+
+Network (Table 1)
+-----------------
+Three blocks of convolution -> ReLU -> 2 x 2 max-pooling, then one fully
+connected layer and the softmax output:
+
+==========  ======================================================
+block 1     conv 2x2, stride 1, pad 1, F -> 32 channels
+block 2     conv 2x2, stride 1, pad 1, 32 -> 64
+block 3     conv 3x3, stride 1, pad 1, 64 -> 128
+pooling     2 x 2, stride 2, partial windows kept (ceil mode)
+FC          128 x 2 x 2 = 512 -> 256, ReLU
+output      256 -> n_classes, softmax
+==========  ======================================================
+
+Interpretations. Table 1 lists each layer's *input* channels (8x8x14, 32,
+64) and the FC input "128 x 2 x 2", which fixes the output channels at 32,
+64, 128. Its pooling rows read "Size 2x2, Pad 2": with stride 2 and
+MATLAB-style "same" padding (PyTorch ``ceil_mode=True``) an 8 x 8 input
+becomes 9 -> 5 -> 6 -> 3 -> 3 -> 2, which reproduces the table's 128 x 2 x 2;
+no other reading we tried does, so "Pad 2" is taken to be the stride. The
+"Softmax, Output Units 7" row needs a 256 -> 7 projection, which we add as
+the output layer (as in MATLAB's ``fullyConnectedLayer(7)`` +
+``softmaxLayer``); the 256-unit layer gets a ReLU (section 2.2.1.1). The
+paper gives no optimiser, learning rate, batch size, epoch count or input
+scaling ("raw data ... without preprocessing"): we use Adam (lr 1e-3),
+batches of 32, at most 100 epochs with early stopping (patience 10, best
+weights restored), and ``scaling="standard"``: one mean and one standard
+deviation over all training cells (a single affine rescaling of the raw
+pressures, which the first convolution could absorb, but which keeps
+Adam's step sizes sensible for values in 0..1023; ``"none"`` feeds raw
+values).
+
+Early stopping and leakage
+--------------------------
+The validation split is drawn only from the ``X, y`` given to ``fit`` (the
+training fold), stratified by label and seeded, at the capture level (all
+windows of a capture fall on one side). ``fit`` cannot see subjects
+unless it is given ``groups``: then whole training subjects are held out
+for validation (``fit(X, y, groups=subjects)``), which imitates
+leave-one-subject-out evaluation more closely. Test subjects are never
+seen. ``validation_fraction=0`` trains for exactly ``max_epochs``.
+
+Determinism
+-----------
+``fit`` seeds PyTorch from ``random_state`` inside ``torch.random.fork_rng``
+(the caller's global generator is untouched), turns on
+``torch.use_deterministic_algorithms`` and sets ``torch.set_num_threads(
+n_jobs)`` for its duration (both restored afterwards); the data order and
+validation split come from a numpy generator with the same seed. On the CPU
+a given seed and ``n_jobs`` give bit-identical weights and predictions.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from typing import Any
+
+import numpy as np
+from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.utils import check_random_state
+from sklearn.utils.multiclass import check_classification_targets
+from sklearn.utils.validation import check_is_fitted, validate_data
+
+from ..errors import TouchbenchError
+from ._util import MAX_SEED, build, torch_available
+from .base import CLASSIFIERS
+
+INSTALL_HINT = "pip install 'touchbench[deep]'  (or: pip install torch==2.13.0)"
+SOURCE = "Al-mashhadani et al. 2021 (seed 001), section 2.3, Table 1, Eq. 3"
+
+
+def import_torch():
+    """Import PyTorch or raise a TouchbenchError with the install command."""
+    try:
+        import torch
+    except ImportError as e:
+        raise TouchbenchError(f"the 'cnn' classifier needs PyTorch, which is not installed: {INSTALL_HINT}") from e
+    return torch
+
+
+def build_network(torch, in_channels: int, grid: tuple[int, int], n_classes: int,
+                  channels: tuple[int, int, int] = (32, 64, 128), hidden_units: int = 256):
+    """Table 1's network for ``in_channels`` (= F) frames of ``grid`` cells."""
+    nn = torch.nn
+    c1, c2, c3 = channels
+    features = nn.Sequential(
+        nn.Conv2d(in_channels, c1, kernel_size=2, stride=1, padding=1), nn.ReLU(),
+        nn.MaxPool2d(2, stride=2, ceil_mode=True),
+        nn.Conv2d(c1, c2, kernel_size=2, stride=1, padding=1), nn.ReLU(),
+        nn.MaxPool2d(2, stride=2, ceil_mode=True),
+        nn.Conv2d(c2, c3, kernel_size=3, stride=1, padding=1), nn.ReLU(),
+        nn.MaxPool2d(2, stride=2, ceil_mode=True),
+        nn.Flatten(),
+    )
+    with torch.no_grad():
+        n_flat = features(torch.zeros(1, in_channels, *grid)).shape[1]
+    return nn.Sequential(features, nn.Linear(n_flat, hidden_units), nn.ReLU(), nn.Linear(hidden_units, n_classes))
+
+
+def _window_indices(spec: Any, n_windows: int, what: str) -> np.ndarray:
+    if isinstance(spec, str):
+        if spec == "first":
+            return np.array([0])
+        if spec == "all":
+            return np.arange(n_windows)
+        raise ValueError(f"{what} must be 'first', 'all', a window index or a list of them, got {spec!r}")
+    idx = np.atleast_1d(np.asarray(spec))
+    if idx.size == 0 or idx.dtype.kind not in "iu":
+        raise ValueError(f"{what} must be 'first', 'all', a window index or a list of them, got {spec!r}")
+    if idx.min() < 0 or idx.max() >= n_windows:
+        raise ValueError(f"{what}: window index out of range 0..{n_windows - 1}: {spec!r}")
+    return idx.astype(np.int64)
+
+
+class _Threads:
+    """Set torch's thread count and deterministic mode for a block, then restore."""
+
+    def __init__(self, torch, n_jobs):
+        self.torch = torch
+        self.n = (os.cpu_count() or 1) if n_jobs in (None, -1) else max(int(n_jobs), 1)
+
+    def __enter__(self):
+        t = self.torch
+        self.prev_threads = t.get_num_threads()
+        self.prev_det = t.are_deterministic_algorithms_enabled()
+        t.set_num_threads(self.n)
+        t.use_deterministic_algorithms(True)
+        return self
+
+    def __exit__(self, *exc):
+        self.torch.set_num_threads(self.prev_threads)
+        self.torch.use_deterministic_algorithms(self.prev_det)
+        return False
+
+
+class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
+    """Al-mashhadani et al.'s CNN as a scikit-learn classifier (module
+    docstring: input, sub-windows, network, interpretations).
+
+    Parameters
+    ----------
+    grid : (H, W) of a frame; the row length must be a multiple of H * W.
+    L : number of sub-windows per capture; F = floor(F_total / L) frames each.
+    train_windows, test_windows : ``"first"`` (the paper), ``"all"``, a
+        window index or a list of indices.
+    vote : ``"soft"`` or ``"hard"``, combines a capture's test windows.
+    max_epochs, batch_size, learning_rate, weight_decay : Adam training.
+    patience : epochs without a lower validation loss before stopping.
+    validation_fraction : share of the training captures (or of the
+        training ``groups``) held out for early stopping; 0 disables it.
+    scaling : ``"standard"`` (one mean / std over training cells) or ``"none"``.
+    channels, hidden_units : Table 1's (32, 64, 128) and 256.
+    random_state : seed of everything random in ``fit``.
+    device : ``"cpu"`` (deterministic) or a torch device string.
+    n_jobs : torch threads during fit and predict (default 1; -1 = all cores).
+    verbose : print one line per epoch when > 0.
+    """
+
+    def __init__(self, grid=(8, 8), L=30, train_windows="first", test_windows="first", vote="soft",
+                 max_epochs=100, batch_size=32, learning_rate=1e-3, weight_decay=0.0, patience=10,
+                 validation_fraction=0.1, scaling="standard", channels=(32, 64, 128), hidden_units=256,
+                 random_state=None, device="cpu", n_jobs=1, verbose=0):
+        self.grid = grid
+        self.L = L
+        self.train_windows = train_windows
+        self.test_windows = test_windows
+        self.vote = vote
+        self.max_epochs = max_epochs
+        self.batch_size = batch_size
+        self.learning_rate = learning_rate
+        self.weight_decay = weight_decay
+        self.patience = patience
+        self.validation_fraction = validation_fraction
+        self.scaling = scaling
+        self.channels = channels
+        self.hidden_units = hidden_units
+        self.random_state = random_state
+        self.device = device
+        self.n_jobs = n_jobs
+        self.verbose = verbose
+
+    # -- shapes ---------------------------------------------------------------
+    def _check_params(self):
+        if self.vote not in ("soft", "hard"):
+            raise ValueError(f"vote must be 'soft' or 'hard', got {self.vote!r}")
+        if self.scaling not in ("standard", "none"):
+            raise ValueError(f"scaling must be 'standard' or 'none', got {self.scaling!r}")
+        if not (isinstance(self.L, (int, np.integer)) and self.L >= 1):
+            raise ValueError(f"L must be a positive integer, got {self.L!r}")
+        vf = self.validation_fraction
+        if vf is not None and not (0.0 <= vf < 1.0):
+            raise ValueError(f"validation_fraction must be in [0, 1), got {vf!r}")
+        grid = tuple(int(g) for g in self.grid)
+        if len(grid) != 2 or min(grid) < 1:
+            raise ValueError(f"grid must be (H, W) with positive sizes, got {self.grid!r}")
+        return grid
+
+    def _windows(self, X, idx):
+        """(n, F_total*H*W) rows -> (n, len(idx), F, H, W) float32 windows."""
+        n = X.shape[0]
+        H, W = self.grid_
+        F, L = self.frames_per_window_, int(self.L)
+        frames = X.reshape(n, self.n_frames_total_, H, W)[:, : L * F]
+        return frames.reshape(n, L, F, H, W)[:, idx].astype(np.float32)
+
+    # -- fit ------------------------------------------------------------------
+    def fit(self, X, y, groups=None):
+        """Fit on captures ``X`` with labels ``y``; ``groups`` (e.g. subjects),
+        if given, makes the early-stopping split hold out whole groups."""
+        torch = import_torch()
+        grid = self._check_params()
+        X, y = validate_data(self, X, y, dtype=np.float64)
+        check_classification_targets(y)
+        cells = grid[0] * grid[1]
+        if X.shape[1] % cells:
+            raise ValueError(
+                f"HaartCNNClassifier: {X.shape[1]} features is not a whole number of {grid[0]}x{grid[1]} frames"
+            )
+        self.grid_ = grid
+        self.n_frames_total_ = X.shape[1] // cells
+        self.frames_per_window_ = self.n_frames_total_ // int(self.L)
+        if self.frames_per_window_ < 1:
+            raise ValueError(f"L={self.L} leaves no frame per window ({self.n_frames_total_} frames in a capture)")
+        self.classes_, yi = np.unique(y, return_inverse=True)
+        train_idx = _window_indices(self.train_windows, int(self.L), "train_windows")
+        _window_indices(self.test_windows, int(self.L), "test_windows")
+
+        rs = check_random_state(self.random_state)
+        seed = int(rs.randint(MAX_SEED))
+        rng = np.random.default_rng(seed)
+        self.validation_groups_ = None
+        fit_rows, val_rows = self._validation_split(yi, groups, rng)
+        self.validation_size_ = len(val_rows)
+
+        Wtr = self._windows(X[fit_rows], train_idx)  # (n, w, F, H, W)
+        ytr = np.repeat(yi[fit_rows], len(train_idx))
+        Wtr = Wtr.reshape(-1, *Wtr.shape[2:])
+        if self.scaling == "standard":
+            self.scale_mean_ = float(Wtr.mean(dtype=np.float64))
+            sd = float(Wtr.std(dtype=np.float64))
+            self.scale_std_ = sd if sd > 0 else 1.0
+        else:
+            self.scale_mean_, self.scale_std_ = 0.0, 1.0
+        Wtr = (Wtr - np.float32(self.scale_mean_)) / np.float32(self.scale_std_)
+        if len(val_rows):
+            Wva = self._windows(X[val_rows], train_idx)
+            yva = np.repeat(yi[val_rows], len(train_idx))
+            Wva = (Wva.reshape(-1, *Wva.shape[2:]) - np.float32(self.scale_mean_)) / np.float32(self.scale_std_)
+
+        with _Threads(torch, self.n_jobs), torch.random.fork_rng(devices=[]):
+            torch.manual_seed(seed)
+            dev = torch.device(self.device)
+            net = build_network(torch, self.frames_per_window_, grid, len(self.classes_),
+                                tuple(self.channels), int(self.hidden_units)).to(dev)
+            opt = torch.optim.Adam(net.parameters(), lr=self.learning_rate, weight_decay=self.weight_decay)
+            loss_fn = torch.nn.CrossEntropyLoss()
+            xt = torch.from_numpy(np.ascontiguousarray(Wtr)).to(dev)
+            yt = torch.from_numpy(ytr.astype(np.int64)).to(dev)
+            if len(val_rows):
+                xv = torch.from_numpy(np.ascontiguousarray(Wva)).to(dev)
+                yv = torch.from_numpy(yva.astype(np.int64)).to(dev)
+            best_loss, best_state, best_epoch, stale = np.inf, None, 0, 0
+            self.history_ = []
+            bs = max(int(self.batch_size), 1)
+            for epoch in range(1, int(self.max_epochs) + 1):
+                net.train()
+                perm = torch.from_numpy(rng.permutation(len(yt))).to(dev)
+                total = 0.0
+                for start in range(0, len(perm), bs):
+                    b = perm[start:start + bs]
+                    opt.zero_grad()
+                    loss = loss_fn(net(xt[b]), yt[b])
+                    loss.backward()
+                    opt.step()
+                    total += float(loss.detach()) * len(b)
+                rec = {"epoch": epoch, "train_loss": total / max(len(yt), 1)}
+                if len(val_rows):
+                    net.eval()
+                    with torch.no_grad():
+                        vl = float(loss_fn(net(xv), yv))
+                    rec["val_loss"] = vl
+                    if vl < best_loss:
+                        best_loss, best_epoch, stale = vl, epoch, 0
+                        best_state = copy.deepcopy(net.state_dict())
+                    else:
+                        stale += 1
+                self.history_.append(rec)
+                if self.verbose:
+                    print(rec, flush=True)
+                if len(val_rows) and stale >= int(self.patience):
+                    break
+            if best_state is not None:
+                net.load_state_dict(best_state)
+            else:
+                best_epoch = len(self.history_)
+        net.eval()
+        self.net_ = net.to("cpu") if self.device != "cpu" else net
+        self.best_epoch_ = best_epoch
+        self.n_epochs_ = len(self.history_)
+        return self
+
+    def _validation_split(self, yi, groups, rng):
+        n = len(yi)
+        rows = np.arange(n)
+        frac = self.validation_fraction or 0.0
+        if frac <= 0 or n < 4:
+            return rows, rows[:0]
+        if groups is not None:
+            g = np.asarray(groups)
+            if len(g) != n:
+                raise ValueError(f"groups has {len(g)} entries for {n} captures")
+            uniq = np.unique(g)
+            if len(uniq) >= 2:
+                n_val = min(max(1, int(round(frac * len(uniq)))), len(uniq) - 1)
+                val_groups = rng.permutation(uniq)[:n_val]
+                self.validation_groups_ = sorted(val_groups.tolist())
+                val = np.isin(g, val_groups)
+                return rows[~val], rows[val]
+        # stratified: the same share of every class, at least one training capture per class
+        val = []
+        for c in np.unique(yi):
+            members = rng.permutation(rows[yi == c])
+            k = int(round(frac * len(members)))
+            if len(members) - k >= 1 and k >= 1:
+                val.extend(members[:k].tolist())
+        if not val:
+            return rows, rows[:0]
+        val = np.sort(np.asarray(val))
+        return np.setdiff1d(rows, val), val
+
+    # -- predict --------------------------------------------------------------
+    def _window_proba(self, X):
+        torch = import_torch()
+        check_is_fitted(self)
+        X = validate_data(self, X, dtype=np.float64, reset=False)
+        idx = _window_indices(self.test_windows, int(self.L), "test_windows")
+        Wx = self._windows(X, idx)
+        n, w = Wx.shape[:2]
+        Wx = (Wx.reshape(n * w, *Wx.shape[2:]) - np.float32(self.scale_mean_)) / np.float32(self.scale_std_)
+        out = []
+        with _Threads(torch, self.n_jobs), torch.no_grad():
+            xt = torch.from_numpy(np.ascontiguousarray(Wx))
+            for start in range(0, len(xt), 1024):
+                out.append(torch.softmax(self.net_(xt[start:start + 1024]), dim=1).double().numpy())
+        p = np.concatenate(out) if out else np.zeros((0, len(self.classes_)))
+        return p.reshape(n, w, len(self.classes_))
+
+    def predict_proba(self, X):
+        """Capture probabilities: the soft vote (mean of the windows' softmax),
+        or with ``vote="hard"`` the share of windows voting for each class."""
+        p = self._window_proba(X)
+        if self.vote == "soft" or p.shape[1] == 1:
+            return p.mean(axis=1)
+        votes = np.zeros((p.shape[0], p.shape[2]))
+        win = p.argmax(axis=2)
+        for j in range(p.shape[1]):
+            votes[np.arange(p.shape[0]), win[:, j]] += 1.0
+        return votes / p.shape[1]
+
+    def predict(self, X):
+        p = self._window_proba(X)
+        soft = p.mean(axis=1)
+        if self.vote == "soft" or p.shape[1] == 1:
+            return self.classes_[np.argmax(soft, axis=1)]
+        votes = np.zeros_like(soft)
+        win = p.argmax(axis=2)
+        for j in range(p.shape[1]):
+            votes[np.arange(p.shape[0]), win[:, j]] += 1.0
+        # majority vote; soft / 2 < 1 only orders classes with equal vote counts
+        key = votes + soft / 2.0
+        return self.classes_[np.argmax(key, axis=1)]
+
+
+DEFAULTS = {
+    "grid": (8, 8), "L": 30, "train_windows": "first", "test_windows": "first", "vote": "soft",
+    "max_epochs": 100, "batch_size": 32, "learning_rate": 1e-3, "weight_decay": 0.0, "patience": 10,
+    "validation_fraction": 0.1, "scaling": "standard", "channels": (32, 64, 128), "hidden_units": 256,
+    "device": "cpu", "n_jobs": 1,
+}
+
+
+@CLASSIFIERS.register(
+    "cnn",
+    description="raw-frame CNN (3 conv blocks + FC 256, softmax) on 8x8xF windows, F = floor(432/L), L = 30",
+    source=SOURCE, defaults=DEFAULTS, extra="deep",
+)
+def cnn(random_state=None, **params):
+    """The CNN; raises a TouchbenchError with the install command without PyTorch."""
+    if not torch_available():
+        raise TouchbenchError(f"the 'cnn' classifier needs PyTorch, which is not installed: {INSTALL_HINT}")
+    return build(HaartCNNClassifier, DEFAULTS, random_state, params, name="cnn")

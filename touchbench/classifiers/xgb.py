@@ -1,0 +1,90 @@
+"""Gradient-boosted trees with XGBoost (``xgboost-cpu``): not one of the four
+papers' classifiers, a modern baseline for the same feature sets.
+
+Defaults for these data sizes (hundreds to a few thousand captures, tens to
+a few thousand features, 7 to 14 classes): 300 rounds of depth-4 trees at
+learning rate 0.1 with row and column subsampling 0.8 (regularises when
+features outnumber captures), the ``hist`` tree method, one thread.
+XGBoost needs integer labels: the wrapper encodes the gesture names with a
+``LabelEncoder`` and decodes its predictions. With a fixed ``random_state``
+and ``n_jobs`` the model is bit-identical across runs on one machine.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.preprocessing import LabelEncoder
+from sklearn.utils import check_random_state
+from sklearn.utils.multiclass import check_classification_targets
+from sklearn.utils.validation import check_is_fitted, validate_data
+
+from ._util import MAX_SEED, build, check_sample_weight
+from .base import CLASSIFIERS
+
+
+class XGBoostClassifier(ClassifierMixin, BaseEstimator):
+    """``xgboost.XGBClassifier`` that accepts and returns string labels."""
+
+    def __init__(self, n_estimators=300, max_depth=4, learning_rate=0.1, subsample=0.8, colsample_bytree=0.8,
+                 min_child_weight=1.0, reg_lambda=1.0, tree_method="hist", n_jobs=1, random_state=None):
+        self.n_estimators = n_estimators
+        self.max_depth = max_depth
+        self.learning_rate = learning_rate
+        self.subsample = subsample
+        self.colsample_bytree = colsample_bytree
+        self.min_child_weight = min_child_weight
+        self.reg_lambda = reg_lambda
+        self.tree_method = tree_method
+        self.n_jobs = n_jobs
+        self.random_state = random_state
+
+    def fit(self, X, y, sample_weight=None):
+        import xgboost  # a core dependency, imported late to keep listing fast
+
+        X, y = validate_data(self, X, y, dtype=np.float64)
+        check_classification_targets(y)
+        self.encoder_ = LabelEncoder().fit(y)
+        self.classes_ = self.encoder_.classes_
+        yi = self.encoder_.transform(y)
+        seed = self.random_state
+        if not isinstance(seed, (int, np.integer)):
+            seed = int(check_random_state(seed).randint(MAX_SEED))
+        k = len(self.classes_)
+        self.booster_model_ = xgboost.XGBClassifier(
+            n_estimators=self.n_estimators, max_depth=self.max_depth, learning_rate=self.learning_rate,
+            subsample=self.subsample, colsample_bytree=self.colsample_bytree,
+            min_child_weight=self.min_child_weight, reg_lambda=self.reg_lambda, tree_method=self.tree_method,
+            n_jobs=self.n_jobs, random_state=int(seed),
+            objective="binary:logistic" if k <= 2 else "multi:softprob",
+        )
+        if k == 1:  # XGBoost cannot fit one class; every prediction is that class
+            self.booster_model_ = None
+            return self
+        if sample_weight is not None:
+            sample_weight = check_sample_weight(sample_weight, X.shape[0])
+        self.booster_model_.fit(X, yi, sample_weight=sample_weight)
+        return self
+
+    def predict_proba(self, X):
+        check_is_fitted(self)
+        X = validate_data(self, X, dtype=np.float64, reset=False)
+        if self.booster_model_ is None:
+            return np.ones((X.shape[0], 1))
+        return np.asarray(self.booster_model_.predict_proba(X), dtype=np.float64)
+
+    def predict(self, X):
+        p = self.predict_proba(X)
+        return self.classes_[np.argmax(p, axis=1)]
+
+
+DEFAULTS = {"n_estimators": 300, "max_depth": 4, "learning_rate": 0.1, "subsample": 0.8,
+            "colsample_bytree": 0.8, "min_child_weight": 1.0, "reg_lambda": 1.0, "tree_method": "hist",
+            "n_jobs": 1}
+
+
+@CLASSIFIERS.register("xgboost", description="XGBoost gradient-boosted trees (300 x depth 4, lr 0.1, hist)",
+                      source="XGBoost (Chen & Guestrin 2016); not from the papers, a modern baseline",
+                      defaults=DEFAULTS, extra=None)
+def xgboost_classifier(random_state=None, **params):
+    return build(XGBoostClassifier, DEFAULTS, random_state, params, name="xgboost")

@@ -1,0 +1,51 @@
+"""``touchbench classifiers``: the classifier registry on the command line."""
+
+from __future__ import annotations
+
+import json
+
+import click
+
+
+def _fmt(v) -> str:
+    return repr(v) if isinstance(v, str) else str(v)
+
+
+@click.group("classifiers")
+def classifiers() -> None:
+    """Registered classifiers (defaults are the papers' settings)."""
+
+
+@classifiers.command("list")
+@click.option("--json", "as_json", is_flag=True, help="One JSON object per classifier, in a list.")
+def list_classifiers(as_json: bool) -> None:
+    """List every classifier with its source and defaults."""
+    from ..classifiers import CLASSIFIERS
+    from ..classifiers._util import torch_available
+    from ..classifiers.cnn import INSTALL_HINT
+
+    extras_ok = {"deep": torch_available()}
+    rows = []
+    for e in CLASSIFIERS.entries():
+        extra = e.tags.get("extra")
+        available = extra is None or extras_ok.get(extra, False)
+        rows.append({
+            "name": e.name,
+            "description": e.description,
+            "source": e.tags.get("source", ""),
+            "defaults": e.tags.get("defaults", {}),
+            "extra": extra,
+            "available": available,
+            "install": None if available else INSTALL_HINT,
+        })
+    if as_json:
+        click.echo(json.dumps(rows, indent=2, default=list))
+        return
+    for r in rows:
+        status = ""
+        if r["extra"]:
+            status = f"  [extra '{r['extra']}'" + ("]" if r["available"] else f": not installed; {r['install']}]")
+        click.echo(f"{r['name']}  {r['description']}{status}")
+        click.echo(f"    source:   {r['source']}")
+        defaults = ", ".join(f"{k}={_fmt(v)}" for k, v in r["defaults"].items())
+        click.echo(f"    defaults: {defaults}")
