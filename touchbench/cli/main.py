@@ -14,6 +14,7 @@ from ..errors import TouchbenchError
 # (module, attribute) of each subcommand; one line per area.
 _COMMANDS: list[tuple[str, str]] = [
     ("touchbench.cli.data", "data"),
+    ("touchbench.cli.classifiers", "classifiers"),
     ("touchbench.cli.features", "features"),
     ("touchbench.cli.demo", "demo"),
     ("touchbench.cli.deploy", "train"),
