@@ -154,10 +154,12 @@ class TrainedModel:
 
     def predict(self, captures: Sequence[np.ndarray]) -> np.ndarray:
         """Labels: the classifier's own ``predict`` (not the argmax of probabilities)."""
+        return self.predict_from_features(self.transform(captures))
+
+    def predict_from_features(self, X: np.ndarray) -> np.ndarray:
         if self.estimator is None:
-            return np.array([self.classes[0]] * len(captures), dtype=object)
-        codes = np.asarray(self.estimator.predict(self.transform(captures))).astype(np.int64)
-        return self.classes[codes]
+            return np.array([self.classes[0]] * X.shape[0], dtype=object)
+        return self.classes[np.asarray(self.estimator.predict(X)).astype(np.int64)]
 
     # ------------------------------------------------------------ files
     def save(self, path: str | Path) -> Path:

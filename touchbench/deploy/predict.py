@@ -77,7 +77,7 @@ def predict_dataset(model: TrainedModel, ds: TouchDataset, *, whole: bool = Fals
     else:
         X = model.transform(ds.captures)
         P = model.proba_from_features(X, fast=True)
-        pred = model.predict(ds.captures) if model.estimator is not None else np.array([classes[0]] * len(ds), dtype=object)
+        pred = model.predict_from_features(X)
         n_windows = np.ones(len(ds), dtype=np.int64)
     meta = ds.meta
     out = pd.DataFrame({"capture_id": meta["capture_id"].astype(str).to_numpy()})
