@@ -98,6 +98,12 @@ def test_errors_name_the_field():
     raw = tiny_raw()
     raw["gestures"]["strok"] = None
     refused(raw, r"strok: unknown gesture; did you mean stroke")
+    raw = haart_raw()
+    raw["protocol"]["substrates"]["foam"]["tension"] = 2.0
+    refused(raw, r"protocol\.substrates\.foam: .*only a curved substrate")
+    raw = tiny_raw()
+    del raw["sensor"]["gain"]
+    refused(raw, r"sensor: .*a grid sensor needs its gain")
     raw = tiny_raw()
     raw["sensor"]["grid"] = [0, 8]
     refused(raw, r"sensor\.grid")
@@ -132,6 +138,13 @@ def test_channel_sensor_rules():
     bad = copy.deepcopy(raw)
     bad["sensor"]["channels"] = ["x", "y", "pressure"]
     refused(bad, r"channels: a channel sensor has channels")
+    bad = copy.deepcopy(raw)
+    bad["sensor"]["gain"] = 5.0
+    refused(bad, r"gain: a channel sensor's gains are in its response")
+    bad = copy.deepcopy(raw)
+    bad["effects"].append("crosstalk")
+    bad["sensor"]["crosstalk"] = 0.05
+    refused(bad, r"crosstalk and curvature apply to grid sensors only")
     bad = copy.deepcopy(raw)
     bad["sensor"]["response"]["rest"].pop("fur")
     refused(bad, r"sensor\.response\.rest: .*missing \['fur'\]")

@@ -205,9 +205,12 @@ class _Scene:
                 x[:, 2] = rest_p + S.saturate(x[:, 2] - rest_p, sen.saturation)  # type: ignore[arg-type]
             x = x[:, None, :]
         else:
+            # the electronics in float32: counts up to a few thousand keep
+            # ~1e-4 resolution, and the passes over the field cost half
+            field = field.astype(np.float32)
             if "crosstalk" in fx:
                 field = S.crosstalk(field, sen.crosstalk)  # type: ignore[arg-type]
-            x = field * sen.gain
+            x = field * np.float32(sen.gain)
             if "saturation" in fx:
                 x = S.saturate(x, sen.saturation)  # type: ignore[arg-type]
         rest = None
@@ -220,11 +223,11 @@ class _Scene:
             # the stretched sheet's resting pressure is read through the same
             # line sensitivities as the baseline (if the scene has one)
             if rest is not None and sen.baseline.level > 0:  # type: ignore[union-attr]
-                x = x + (rest * (curve[2] / sen.baseline.level))[None]  # type: ignore[union-attr]
+                rest = rest * (1.0 + curve[2] / sen.baseline.level)  # type: ignore[union-attr]
             else:
-                x = x + S.tension(self.grid, curve[2], curve[1])[None]  # type: ignore[arg-type]
+                x = x + S.tension(self.grid, curve[2], curve[1]).astype(x.dtype)[None]  # type: ignore[arg-type]
         if rest is not None:
-            x = x + rest[None]
+            x = x + rest.astype(x.dtype)[None]
         if "noise" in fx:
             x = S.add_noise(x, sen.noise_sd, rng)  # type: ignore[arg-type]
         return S.adc(x, tuple(sen.value_range), sen.dtype)  # type: ignore[arg-type]

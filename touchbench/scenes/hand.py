@@ -1,7 +1,7 @@
 """The hand: contact primitives, force time profiles, and rendering them
 onto a sensor grid.
 
-A primitive is a set of pressure *blobs* (elliptical Gaussian footprints)
+A primitive is a set of pressure *blobs* (elliptical bell-shaped footprints)
 placed relative to the contact point along the hand axis ("along") and
 across it ("across"); sizes scale with the person's hand (hand length / 185
 mm, the mean of Zhou et al. 2017 Sec. 3.2's participants, 16.5-21.5 cm):
@@ -18,13 +18,17 @@ mm, the mean of Zhou et al. 2017 Sec. 3.2's participants, 16.5-21.5 cm):
 
 A blob's force follows the event's time profile: a raised-cosine rise, a
 hold and a raised-cosine fall (:func:`force_profile`), optionally modulated
-(kneading). :func:`render` integrates each Gaussian over each cell's area
+(kneading). :func:`render` integrates each blob over each cell's area
 (so a fingertip between two cells is not lost between samples) and sums the
 blobs: the value of a cell is the force (N) it carries.
 
-Interpretation: rotated ellipses are rendered axis-aligned with the
+Interpretations: a blob's profile along each axis is the bell whose CDF is
+the tanh form of the normal CDF (within 2e-4 of a Gaussian's, and much
+cheaper to integrate); rotated ellipses are rendered axis-aligned with the
 variances projected on x and y (the cross term is dropped), which keeps the
 rendering separable and fast; the footprint does not change with force.
+A blob's force may wobble (:func:`wobble`): the pressure under a moving
+hand shifts between its parts.
 """
 
 from __future__ import annotations

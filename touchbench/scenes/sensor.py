@@ -18,11 +18,17 @@ Order (top to bottom of the physical stack, then the electronics):
    4-neighbour;
 6. gain to ADC counts; soft saturation ``S (1 - exp(-x / S))``
    (:func:`saturate`): linear for light touch, flattening toward S;
-7. tension (:func:`tension`): a sensor stretched over a curve reads a
-   resting pressure; baseline (:func:`baseline_pattern`): resting offset
-   per cell; noise (:func:`add_noise`): Gaussian read noise of sd
-   ``noise_sd`` counts;
+7. tension: a sensor stretched over a curve reads a resting pressure of
+   ``tension`` counts on average, through the same line sensitivities as
+   the baseline when the scene has one (the real HAART's curved no-touch
+   recordings repeat its flat row pattern, about 4x higher), else along
+   the crest profile of :func:`tension`; baseline
+   (:func:`baseline_pattern`): resting offset per cell; noise
+   (:func:`add_noise`): Gaussian read noise of sd ``noise_sd`` counts;
 8. ADC (:func:`adc`): round, clip to the value range, cast.
+
+Steps 5-8 run in float32 (counts up to a few thousand keep a resolution
+far below one count).
 
 The channel sensor of Flagg (2012, Sec. 4.2) reduces the field to x, y,
 pressure and fur readings (:func:`to_channels`).
@@ -95,17 +101,19 @@ def crosstalk(field: np.ndarray, c: float) -> np.ndarray:
     """Each cell picks up ``c`` times each of its 4 neighbours (T, H, W)."""
     if c <= 0:
         return field
+    leak = field * np.asarray(c, dtype=field.dtype)
     out = field.copy()
-    out[:, 1:, :] += c * field[:, :-1, :]
-    out[:, :-1, :] += c * field[:, 1:, :]
-    out[:, :, 1:] += c * field[:, :, :-1]
-    out[:, :, :-1] += c * field[:, :, 1:]
+    out[:, 1:, :] += leak[:, :-1, :]
+    out[:, :-1, :] += leak[:, 1:, :]
+    out[:, :, 1:] += leak[:, :, :-1]
+    out[:, :, :-1] += leak[:, :, 1:]
     return out
 
 
 def saturate(x: np.ndarray, level: float) -> np.ndarray:
     """Soft saturation ``level * (1 - exp(-x / level))``; slope 1 at 0."""
-    return level * -np.expm1(-x / level)
+    lv = np.asarray(level, dtype=x.dtype) if isinstance(x, np.ndarray) else level
+    return lv * -np.expm1(-x / lv)
 
 
 def tension(grid: tuple[int, int], level: float, axis: str) -> np.ndarray:
@@ -143,7 +151,8 @@ def add_noise(x: np.ndarray, sd: float, rng: np.random.Generator) -> np.ndarray:
         return x
     noise = rng.standard_normal(x.shape, dtype=np.float32)
     noise *= np.float32(sd)
-    return x + noise
+    noise += x
+    return noise
 
 
 def adc(x: np.ndarray, value_range: tuple[float, float], dtype: str) -> np.ndarray:

@@ -146,7 +146,7 @@ class SensorModel(_Strict):
     frame_rate: float = Field(gt=0)
     value_range: tuple[float, float] = (0.0, 1023.0)
     dtype: Literal["uint8", "uint16", "int16", "int32", "float32", "float64"] = "uint16"
-    gain: float = Field(gt=0, description="counts per newton on one cell")
+    gain: float | None = Field(None, gt=0, description="counts per newton on one cell (grid sensors)")
     channels: list[str] | None = None
     response: ChannelResponse | None = None
     noise_sd: float | None = Field(None, ge=0)
@@ -172,7 +172,11 @@ class SensorModel(_Strict):
                 raise ValueError(f"channels: a channel sensor has channels {list(CHANNELS)}")
             if self.response is None:
                 raise ValueError("response: a channel sensor needs its channel response")
+            if self.gain is not None:
+                raise ValueError("gain: a channel sensor's gains are in its response")
         else:
+            if self.gain is None:
+                raise ValueError("gain: a grid sensor needs its gain (counts per newton on one cell)")
             if self.channels is not None:
                 raise ValueError("channels: only a sensor of kind 'channels' names channels")
             if self.response is not None:
@@ -219,6 +223,12 @@ class Substrate(_Strict):
     gain: float = Field(1.0, gt=0)
     radius_mm: float | None = Field(None, gt=0)
     tension: float = Field(0.0, ge=0)
+
+    @model_validator(mode="after")
+    def _tension_needs_curve(self) -> "Substrate":
+        if self.tension > 0 and self.radius_mm is None:
+            raise ValueError("tension: only a curved substrate (radius_mm) stretches the sensor")
+        return self
 
 
 class Cover(_Strict):
