@@ -230,3 +230,17 @@ def test_missing_results_are_refused(tmp_path):
         load_results([tmp_path])
     with pytest.raises(TouchbenchError, match="no such results directory"):
         load_results([tmp_path / "nope"])
+
+
+def test_interrupted_run_is_read_from_its_fragments(tmp_path):
+    from touchbench.results.store import ResultStore
+
+    d = _run1(tmp_path)
+    scores = pd.read_parquet(d / "scores.parquet")
+    preds = pd.read_parquet(d / "predictions.parquet")
+    store = ResultStore(tmp_path / "interrupted")
+    for t in scores["task_id"][:12]:  # two of the three methods finished
+        store.write_task(t, scores[scores["task_id"] == t].iloc[0].to_dict(), preds[preds["task_id"] == t])
+    [lb] = build_leaderboards(load_results([tmp_path / "interrupted"]))
+    assert list(lb.rows["features"]) == ["msd", "sd"]
+    assert lb.rows.iloc[0]["accuracy"] == pytest.approx(34 / 36)

@@ -12,7 +12,7 @@ import html
 from datetime import datetime, timezone
 from pathlib import Path
 
-from .leaderboard import Leaderboard, display_rows, legend, write_outputs
+from .leaderboard import Leaderboard, display_rows, legend, write_outputs, write_text
 from .plots import KINDS, plot_table
 from .results import ResultSet
 
@@ -81,11 +81,8 @@ def render_html(rs: ResultSet, lbs: list[Leaderboard], plots: dict[str, dict[str
 def write_report(rs: ResultSet, lbs: list[Leaderboard], out: str | Path, title: str = "touchbench report",
                  kinds: tuple[str, ...] = KINDS) -> Path:
     """``out/report.html`` (self-contained), ``out/plots/*.{png,svg}``, ``out/leaderboard.{md,csv,json}``."""
-    from ..results.store import atomic_write_bytes
-
     out = Path(out)
     plots = {lb.key: plot_table(rs, lb, out / "plots", kinds) for lb in lbs}
     write_outputs(lbs, out, ("md", "csv", "json"))
     page = out / "report.html"
-    atomic_write_bytes(page, render_html(rs, lbs, plots, title).encode())
-    return page
+    return write_text(page, render_html(rs, lbs, plots, title))

@@ -477,14 +477,21 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
         console.print()
 
 
-def write_outputs(lbs: list[Leaderboard], out: Path, formats: Iterable[str]) -> list[Path]:
-    """Write ``leaderboard.{md,csv,json}`` into ``out`` for the chosen formats."""
+def write_text(path: Path, text: str) -> Path:
+    """Write ``text`` atomically (temporary file + rename), readable by all (0644)."""
+    import os
+
     from ..results.store import atomic_write_bytes
 
+    atomic_write_bytes(Path(path), text.encode())
+    os.chmod(path, 0o644)
+    return Path(path)
+
+
+def write_outputs(lbs: list[Leaderboard], out: Path, formats: Iterable[str]) -> list[Path]:
+    """Write ``leaderboard.{md,csv,json}`` into ``out`` for the chosen formats."""
     written = []
     for fmt in formats:
         text = {"md": to_markdown, "csv": to_csv, "json": to_json}[fmt](lbs)
-        p = Path(out) / f"leaderboard.{fmt}"
-        atomic_write_bytes(p, text.encode())
-        written.append(p)
+        written.append(write_text(Path(out) / f"leaderboard.{fmt}", text))
     return written

@@ -29,9 +29,9 @@ parameter hashes, so they are never combined.
 
 from __future__ import annotations
 
-import copy
 import json
 import math
+import os
 import platform
 import time
 from dataclasses import dataclass, field
@@ -73,7 +73,7 @@ PROFILES: dict[str, Profile] = {
         "under 20 minutes; real HAART data is used whole",
         classifier_caps={
             "gaus-rf": {"n_estimators": 100},
-            "gaus-boost": {"n_trees": 100, "n_estimators": 50},
+            "gaus-boost": {"n_trees": 100, "n_estimators": 10},
             "cnn": {"max_epochs": 15, "patience": 4},
             "flagg-mlp": {"max_epochs": 100},
             "flagg-rf": {"n_estimators": 10},
@@ -389,8 +389,8 @@ def _confusion_section(check: dict[str, Any], scores: pd.DataFrame, preds: pd.Da
     lines += ["", f"Cells are paper / ours. Accuracy of the matrix: paper {acc_p:.2f} % ({int(paper.sum())} captures), "
                   f"ours {_fmt(acc_o, 2)} % ({int(ours.sum())} captures)."]
     if outside:
-        msg = (f"{proto_name}: {check['source']}: per-class recall differs by more than {check['tolerance']:g} points "
-               f"for {', '.join(outside)}")
+        msg = (f"{check['source']} (`{proto_name}`): per-class recall differs by more than {check['tolerance']:g} "
+               f"points for {', '.join(outside)}")
         flags.append(msg)
         lines += ["", f"**Outside tolerance:** {', '.join(outside)}."]
     return lines
@@ -407,87 +407,133 @@ def _expected_rows(proto, scores: pd.DataFrame, preds: pd.DataFrame | None) -> l
     return rows
 
 
+@dataclass
+class _Section:
+    lines: list[str]
+    flags: list[str]  # numbers beyond tolerance
+    problems: list[str] = field(default_factory=list)  # protocols or tasks that did not run
+    real: bool = False
+    compared: int = 0
+    within: int = 0
+    seconds: float = 0.0
+    status: str = "ran"
+
+
+def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
+    """The report section of one protocol: the comparison with the paper."""
+    sec = _Section([], [])
+    try:
+        proto, _ = apply_profile(r.path, profile)
+    except TouchbenchError as e:
+        sec.status = "invalid"
+        sec.lines = [f"### {r.name}", "", f"**Invalid protocol:** {e}", ""]
+        sec.problems.append(f"{r.name}: invalid protocol")
+        return sec
+    ref = proto.dataset.name
+    sec.real = _is_real(ref)
+    body, flags = sec.lines, sec.flags
+    body += [f"### {proto.description or proto.name}", ""]
+    body.append(f"Protocol: `{_rel(r.path)}`. Data: {_data_kind(ref)}"
+                + (f", options {proto.dataset.options}" if proto.dataset.options else "")
+                + f". Scheme: {proto.scheme.name} {proto.scheme.params or ''}. Results: `{_rel(r.out)}`.")
+    if r.changes:
+        body.append(f"Profile '{profile.name}' changed: " + "; ".join(r.changes) + ".")
+    if r.error:
+        body += ["", f"**Did not run:** {r.error}", ""]
+        sec.problems.append(f"{r.name}: did not run ({r.error.splitlines()[0]})")
+        sec.status = "did not run"
+        return sec
+    scores, preds, man = _read(r.out)
+    if scores is None:
+        body += ["", "**No results.**", ""]
+        sec.problems.append(f"{r.name}: no results")
+        sec.status = "no results"
+        return sec
+    sec.seconds = sum(float(x.get("seconds") or 0) for x in man.get("sessions", []))
+    n_fail = int((scores["status"] != "ok").sum())
+    body.append(f"Run: {len(scores)} tasks ({n_fail} failed), {sec.seconds / 60:.1f} min of run time on "
+                f"{(man.get('platform') or {}).get('cpu_count', '?')} CPUs.")
+    if n_fail:
+        err = str(scores[scores["status"] != "ok"]["error"].iloc[0]).splitlines()[0]
+        sec.problems.append(f"{r.name}: {n_fail} of {len(scores)} tasks failed ({err})")
+    body.append("")
+    rows = _expected_rows(proto, scores, preds)
+    if rows:
+        agg = proto.expected.aggregate
+        body += [f"Accuracy in % ({'mean over folds' if agg == 'mean' else 'pooled over the folds'}):", "",
+                 "| table cell | features | classifier | paper | ours | difference | tolerance | within |",
+                 "|---|---|---|---|---|---|---|---|"]
+        for e in rows:
+            within = {True: "yes", False: "**NO**", None: "not run"}[e["within"]]
+            diff = "—" if e["difference"] is None else f"{e['difference']:+.2f}"
+            body.append(f"| {e['cell']} | {e['features']} | {e['classifier']} | {e['expected']:.2f} | "
+                        f"{_fmt(e['observed'], 2)} | {diff} | {e['tolerance']:g} | {within} |")
+            if e["within"] is not None:
+                sec.compared += 1
+                sec.within += bool(e["within"])
+            if e["within"] is False:
+                flags.append(f"{e['cell']} (`{r.name}`): ours {e['observed']:.2f} %, paper "
+                             f"{e['expected']:.2f} %, {e['difference']:+.2f} points (tolerance {e['tolerance']:g})")
+        body.append("")
+    for check in PAPER_CHECKS.get(r.name, []):
+        body += _check_section(check, proto, scores, preds, flags, r.name, ref)
+        body.append("")
+    if not rows and not PAPER_CHECKS.get(r.name):
+        body += ["_No paper numbers to compare._", ""]
+    return sec
+
+
 def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, wall_seconds: float | None = None,
                  jobs: int | None = None) -> Path:
     """``REPORT.md``: for every table and figure, the paper's number, ours, the difference."""
     from .. import __version__
     from ..results.manifest import git_revision
-    from ..results.store import atomic_write_bytes
+    from .leaderboard import write_text
 
     now = datetime.now(timezone.utc).isoformat(timespec="seconds")
     git = git_revision()
-    flags: list[str] = []
+    flags_real: list[str] = []
+    flags_synth: list[str] = []
+    problems: list[str] = []
     body: list[str] = []
-    n_compared = n_within = 0
-    real_compared = real_within = 0
+    overview = ["| paper | table / figure | data | accuracies within tolerance | other differences | run time min | protocol |",
+                "|---|---|---|---|---|---|---|"]
+    n_compared = n_within = real_compared = real_within = 0
     compute = 0.0
-    by_name = {r.name: r for r in runs}
     for seed, citation, prefix in PAPERS:
-        mine = [r for r in runs if r.name.startswith(prefix)]
+        mine = sorted((r for r in runs if r.name.startswith(prefix)), key=lambda r: r.name)
         if not mine:
             continue
         body += [f"## {citation} (seed {seed})", ""]
-        for r in sorted(mine, key=lambda r: r.name):
-            proto, _ = apply_profile(r.path, profile)
-            ref = proto.dataset.name
-            body += [f"### {proto.description or proto.name}", ""]
-            body.append(f"Protocol: `{_rel(r.path)}`. Data: {_data_kind(ref)}"
-                        + (f", options {proto.dataset.options}" if proto.dataset.options else "")
-                        + f". Scheme: {proto.scheme.name} {proto.scheme.params or ''}. Results: `{_rel(r.out)}`.")
-            if r.changes:
-                body.append(f"Profile '{profile.name}' changed: " + "; ".join(r.changes) + ".")
-            if r.error:
-                body += ["", f"**Did not run:** {r.error}", ""]
-                flags.append(f"{r.name}: did not run ({r.error.splitlines()[0]})")
-                continue
-            scores, preds, man = _read(r.out)
-            if scores is None:
-                body += ["", "**No results.**", ""]
-                flags.append(f"{r.name}: no results")
-                continue
-            secs = sum(float(s.get("seconds") or 0) for s in man.get("sessions", []))
-            compute += secs
-            n_ok = int((scores["status"] == "ok").sum())
-            n_fail = int((scores["status"] != "ok").sum())
-            body.append(f"Run: {len(scores)} tasks ({n_fail} failed), {secs / 60:.1f} min of run time on "
-                        f"{(man.get('platform') or {}).get('cpu_count', '?')} CPUs.")
-            if n_fail:
-                err = str(scores[scores["status"] != "ok"]["error"].iloc[0]).splitlines()[0]
-                flags.append(f"{r.name}: {n_fail} of {len(scores)} tasks failed ({err})")
-            body.append("")
-            rows = _expected_rows(proto, scores, preds)
-            if rows:
-                agg = proto.expected.aggregate
-                body += [f"Accuracy in % ({'mean over folds' if agg == 'mean' else 'pooled over the folds'}):", "",
-                         "| table cell | features | classifier | paper | ours | difference | tolerance | within |",
-                         "|---|---|---|---|---|---|---|---|"]
-                for e in rows:
-                    within = {True: "yes", False: "**NO**", None: "not run"}[e["within"]]
-                    diff = "—" if e["difference"] is None else f"{e['difference']:+.2f}"
-                    body.append(f"| {e['cell']} | {e['features']} | {e['classifier']} | {e['expected']:.2f} | "
-                                f"{_fmt(e['observed'], 2)} | {diff} | {e['tolerance']:g} | {within} |")
-                    if e["within"] is not None:
-                        n_compared += 1
-                        n_within += bool(e["within"])
-                        if _is_real(ref):
-                            real_compared += 1
-                            real_within += bool(e["within"])
-                    if e["within"] is False:
-                        where = "real data" if _is_real(ref) else "synthetic scene"
-                        flags.append(f"{e['cell']} ({r.name}, {where}): ours {e['observed']:.2f} %, paper "
-                                     f"{e['expected']:.2f} %, {e['difference']:+.2f} points (tolerance {e['tolerance']:g})")
-                body.append("")
-            for check in PAPER_CHECKS.get(r.name, []):
-                body += _check_section(check, proto, scores, preds, flags, r.name, ref)
-                body.append("")
-            if not rows and not PAPER_CHECKS.get(r.name):
-                body += ["_No paper numbers to compare._", ""]
+        for r in mine:
+            sec = _protocol_section(r, profile)
+            body += sec.lines
+            (flags_real if sec.real else flags_synth).extend(sec.flags)
+            problems += sec.problems
+            compute += sec.seconds
+            n_compared += sec.compared
+            n_within += sec.within
+            try:
+                ref = apply_profile(r.path, profile)[0].dataset.name
+            except TouchbenchError:
+                ref = "?"
+            if _is_real(ref):
+                real_compared += sec.compared
+                real_within += sec.within
+            desc = sec.lines[0][4:] if sec.lines and sec.lines[0].startswith("### ") else r.name
+            what = desc.split(":")[0].split("(")[0].strip()
+            others = len(sec.flags) - (sec.compared - sec.within) + len(sec.problems)
+            overview.append(
+                f"| {seed} | {what} | {'real HAART' if _is_real(ref) else ref} | "
+                + (f"{sec.within} / {sec.compared}" if sec.compared else "—") + " | "
+                + (sec.status if sec.status != "ran" else (str(others) if others else "—")) + " | "
+                + f"{sec.seconds / 60:.1f} | `{_rel(r.path)}` |")
     head = [
         "# Reproducing the four seed papers",
         "",
         f"Generated {now} by `touchbench papers reproduce --profile {profile.name}` (touchbench {__version__}, "
         f"git {str(git.get('revision') or '?')[:12]}{' with uncommitted changes' if git.get('dirty') else ''}) on "
-        f"{platform.platform()}, {__import__('os').cpu_count()} CPUs" + (f", {jobs} parallel jobs" if jobs else "") + ".",
+        f"{platform.platform()}, {os.cpu_count()} CPUs" + (f", {jobs} parallel jobs" if jobs else "") + ".",
         "",
         f"**Profile `{profile.name}`:** {profile.description}.",
     ]
@@ -510,14 +556,18 @@ def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, wall_
         "Every number is computed by the protocol named in its section, from the method's parameters as the "
         "protocol file gives them (with the profile's caps); no method is tuned to a paper's number.",
         "",
-    ]
-    if flags:
+    ] + overview + [""]
+    if flags_real or flags_synth or problems:
         head += ["## Where we differ from the papers (beyond tolerance)", ""]
-        head += [f"- {f}" for f in flags]
-        head.append("")
+    if flags_real:
+        head += ["On real HAART data:", ""] + [f"- {f}" for f in flags_real] + [""]
+    if flags_synth:
+        head += ["On synthetic scenes (not the papers' data; agreement is not expected):", ""]
+        head += [f"- {f}" for f in flags_synth] + [""]
+    if problems:
+        head += ["Not run or failed:", ""] + [f"- {f}" for f in problems] + [""]
     text = "\n".join(head + body) + "\n"
-    atomic_write_bytes(Path(path), text.encode())
-    return Path(path)
+    return write_text(Path(path), text)
 
 
 def _check_section(check: dict[str, Any], proto, scores: pd.DataFrame, preds: pd.DataFrame | None,
@@ -531,7 +581,7 @@ def _check_section(check: dict[str, Any], proto, scores: pd.DataFrame, preds: pd
         d = sd - check["value"]
         within = math.isfinite(sd) and abs(d) <= check["tolerance"]
         if not within:
-            flags.append(f"{check['source']} ({name}): ours {_fmt(sd)} points, paper {check['value']:g} "
+            flags.append(f"{check['source']} (`{name}`): ours {_fmt(sd)} points, paper {check['value']:g} "
                          f"(tolerance {check['tolerance']:g})")
         return [f"**{check['source']}:** paper {check['value']:g} points, ours {_fmt(sd)} points "
                 f"(sample sd over {len(sel)} folds), difference {d:+.1f}, tolerance {check['tolerance']:g}: "
@@ -553,6 +603,6 @@ def _check_section(check: dict[str, Any], proto, scores: pd.DataFrame, preds: pd
             ours += f", {check['value']} {100 * m.loc[check['value'], 'mean']:.1f} %"
         lines += ["", ours + ("." if same else ": **differs**.")]
         if not same:
-            flags.append(f"{check['source']} ({name}): our best configuration is {best}, not {check['value']}")
+            flags.append(f"{check['source']} (`{name}`): our best configuration is {best}, not {check['value']}")
         return lines
     raise ValueError(f"unknown check kind {check['kind']!r}")

@@ -229,7 +229,7 @@ def plot_subjects(rs: ResultSet, lb: Leaderboard, base: Path, top: int = 5) -> l
     ax.set_ylabel("accuracy (%)")
     ax.set_ylim(0, 105)
     ax.grid(True, axis="y", alpha=0.3)
-    ax.legend(fontsize=7, loc="lower right")
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
     ax.set_title(f"{lb.title}: per-subject accuracy")
     return _save(fig, base)
 

@@ -24,6 +24,9 @@ adds the columns the reports need:
 - ``frame_rate``: the dataset's frame rate from the manifest (to express
   frames seen in seconds).
 
+A run interrupted before its reports were merged is read from its task
+fragments (``fragments/*.scores.parquet``).
+
 A task that appears twice (the same results directory given twice, or a run
 copied) is counted once: rows with the same method, fold and classifier seed
 are duplicates, and the last one (by ``finished_at``) is kept for accuracy.
@@ -129,12 +132,19 @@ def _find_dirs(path: Path) -> list[Path]:
         raise TouchbenchError(f"{path}: not a results directory or scores.parquet")
     if not path.is_dir():
         raise TouchbenchError(f"{path}: no such results directory")
-    if (path / "scores.parquet").is_file():
+    if (path / "scores.parquet").is_file() or _fragments_only(path):
         return [path]
-    found = sorted({p.parent for p in path.rglob("scores.parquet") if "fragments" not in p.parts})
+    found = {p.parent for p in path.rglob("scores.parquet") if "fragments" not in p.parts}
+    found |= {p.parent.parent for p in path.rglob("fragments/*.scores.parquet") if _fragments_only(p.parent.parent)}
+    found = sorted(found)
     if not found:
         raise TouchbenchError(f"{path}: no scores.parquet in it or below it (run `touchbench run` first)")
     return found
+
+
+def _fragments_only(d: Path) -> bool:
+    """An interrupted run: task fragments but no merged ``scores.parquet`` yet."""
+    return not (d / "scores.parquet").is_file() and any((d / "fragments").glob("*.scores.parquet"))
 
 
 def _read_manifest(d: Path) -> dict[str, Any]:
@@ -173,8 +183,15 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
         raise TouchbenchError("no results given")
     score_frames, pred_frames, sources = [], [], []
     for d in dirs:
+        store = None
         try:
-            s = pd.read_parquet(d / "scores.parquet")
+            if _fragments_only(d):  # merge on read (touchbench.results.store)
+                from ..results.store import ResultStore
+
+                store = ResultStore(d)
+                s = store.read_scores()
+            else:
+                s = pd.read_parquet(d / "scores.parquet")
         except Exception as e:
             raise TouchbenchError(f"{d / 'scores.parquet'}: cannot read: {type(e).__name__}: {e}") from None
         if s.empty:
@@ -203,11 +220,13 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
         s["finished_at"] = s["finished_at"].astype(str) if "finished_at" in s else ""
         p = None
         ppath = d / "predictions.parquet"
-        if ppath.is_file():
-            try:
+        try:
+            if store is not None:
+                p = store.read_predictions()
+            elif ppath.is_file():
                 p = pd.read_parquet(ppath)
-            except Exception:
-                p = None
+        except Exception:
+            p = None
         if p is not None and len(p):
             keys = (
                 p.groupby("task_id", sort=False)["capture_id"]
