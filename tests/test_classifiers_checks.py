@@ -25,8 +25,9 @@ SMALL = {
     "xgboost": dict(n_estimators=10),
 }
 
-_BOOTSTRAP = ("bootstrap resampling draws rows, so a weight of 2 is not a repeated row "
-              "(scikit-learn's own RandomForestClassifier fails this check for the same reason)")
+_BOOTSTRAP = ("bags are drawn at random (with probability proportional to the weights), so a weight of 2 "
+              "equals a repeated row in distribution only, not for one seed (scikit-learn's own "
+              "RandomForestClassifier fails this check for the same reason)")
 _EQUIV = ("check_sample_weight_equivalence_on_dense_data", "check_sample_weight_equivalence_on_sparse_data")
 
 NOT_APPLICABLE = {

@@ -174,7 +174,6 @@ def test_perfectly_fitting_forest_stops_boosting_at_one_forest():
     assert len(ada.estimators_) == 1
 
 
-@pytest.mark.filterwarnings("ignore:Some inputs do not have OOB scores")
 def test_out_of_bag_error_keeps_boosting():
     X, y = load_iris(return_X_y=True)
     b = make_classifier("gaus-boost", random_state=0, n_trees=30, n_estimators=5, weak_error="oob").fit(X, y)

@@ -128,11 +128,12 @@ class WekaRandomForestClassifier(RandomForestClassifier):
     default ``int(log2(M)) + 1`` and an integer ``max_features`` capped at the
     number of features (Weka caps it; scikit-learn would raise).
 
-    Remaining differences from Weka's ``RandomForest`` (which the papers
-    used): Weka draws each bag with probability proportional to the instance
-    weights where scikit-learn multiplies bootstrap counts by
-    ``sample_weight``, and the two break ties between equally good splits
-    differently, so individual trees differ for the same seed.
+    Weighted fits (boosting) draw each bag with probability proportional to
+    the instance weights, as Weka's ``Bagging`` does (scikit-learn 1.9, the
+    development version; releases before the weighted bootstrap multiplied
+    bootstrap counts by ``sample_weight`` instead). Remaining differences
+    from Weka's ``RandomForest``: the random streams and the tie-breaking
+    between equally good splits, so individual trees differ for one seed.
     """
 
     def fit(self, X, y, sample_weight=None):

@@ -26,20 +26,27 @@ probabilities with a softmax (Weka's ``Utils.logs2probs``).
 
 What happens with random-forest weak learners (the finding the registry
 entry ``gaus-boost`` documents): a forest of fully grown trees classifies
-its own training set perfectly (on HAART with 192 simple per-cell statistics
-a 100- or 1000-tree forest reaches training accuracy 1.0), so ``err == 0``
-at the first iteration and the loop stops there. "Boosting" with 500
+its own training set perfectly, so ``err == 0`` at the first iteration and
+the loop stops there. Measured on real HAART (challenge training split, 578
+captures): with Gaus et al.'s five feature sets combined (SD, BMH, MSD,
+SMMHH, LBPTOP; 3196 columns) and with 192 simple per-cell statistics, a
+1000-tree forest has training accuracy 1.0 and ``gaus-boost`` keeps one
+forest (test accuracy 62.8% against 64.4% for ``gaus-rf``: the same model
+up to the seed). "Boosting" with 500
 iterations is then exactly one random forest: Weka's AdaBoostM1 and
 scikit-learn's ``AdaBoostClassifier`` both behave this way. That is
 consistent with Gaus et al.'s near-identical RF and boosting accuracies
 (Tables 5 and 8). ``weak_error="oob"`` is an opt-in alternative that
 measures each forest's error out of bag, so the weights are finite and the
-ensemble really boosts; it is not what the paper ran.
+ensemble really boosts (on the same HAART data, 20 iterations of 200-tree
+forests: weighted out-of-bag errors 0.27, then about 0.5 to 0.7, below
+SAMME's limit 1 - 1/7; test accuracy 67.2%); it is not what the paper ran.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
@@ -124,7 +131,9 @@ class SAMMEClassifier(ClassifierMixin, BaseEstimator):
                     raise ValueError("weak_error='oob' needs a bagged weak learner with oob_score")
                 upd["oob_score"] = True
             est.set_params(**upd)
-            est.fit(X, yi, sample_weight=w * n)
+            with warnings.catch_warnings():  # "Some inputs do not have OOB scores": handled below
+                warnings.filterwarnings("ignore", message="Some inputs do not have OOB scores")
+                est.fit(X, yi, sample_weight=w * n)
             pred = self._weak_predictions(est, X)
             miss = pred != yi
             err = float(np.sum(w[miss]))
@@ -147,6 +156,9 @@ class SAMMEClassifier(ClassifierMixin, BaseEstimator):
         return self
 
     def _weak_predictions(self, est, X):
+        """Each row's prediction by the learner: on the training set, or out of
+        bag (rows in every bag, likely once their weight is large, fall back
+        to the in-bag prediction)."""
         if self.weak_error == "train":
             return est.predict(X)
         oob = est.oob_decision_function_

@@ -10,9 +10,8 @@ leaf), information-gain splits (``criterion="entropy"``, Weka's
 ``RandomTree`` splits on gain), ``int(log2(M)) + 1`` attributes tried per
 split (Weka ``-K 0``; scikit-learn's own default would be ``sqrt(M)``),
 bootstrap bags of the training-set size, class distributions averaged over
-trees. Not matched: Weka's random number streams, its tie-breaking between
-equal splits and its weight-proportional bag sampling, so forests differ
-tree by tree for the same seed.
+trees. Not matched: Weka's random number streams and its tie-breaking
+between equal splits, so forests differ tree by tree for the same seed.
 
 Boosting: "Stage-wise Additive Modelling" with random forests as weak
 learners, read as SAMME (Zhu et al. 2009) inside Weka's AdaBoostM1 loop
