@@ -462,12 +462,16 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    console = console or Console()
+    import sys
+
+    # a pipe or a file gets the whole width the table needs, a terminal its own width
+    console = console or Console(width=None if sys.stdout.isatty() else 250)
     for lb in lbs:
         header, cells = display_rows(lb)
         t = Table(title=lb.title, show_lines=False)
         for h in header:
-            t.add_column(h, overflow="fold")
+            wrap = h in ("features", "classifier", "vs best: Δ pp, p (Holm)")
+            t.add_column(h, overflow="fold", no_wrap=not wrap)
         for c in cells:
             t.add_row(*c)
         console.print(t)

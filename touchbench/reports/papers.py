@@ -282,6 +282,10 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
         raise TouchbenchError(f"unknown profile {profile!r} (known: {', '.join(PROFILES)})")
     prof = PROFILES[profile]
     out = Path(out)
+    if jobs in (-1, 0):
+        jobs = os.cpu_count() or 1
+    cpu0 = _cpu_seconds()
+    load0 = _load()
     files = paper_protocols(protocols_dir)
     if only:
         files = [f for f in files if any(o == f.stem or o in f.stem for o in only)]
@@ -318,9 +322,36 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
         r.seconds = time.perf_counter() - t0
         runs.append(r)
     wall = time.perf_counter() - t_all
+    _stop_workers()
+    cpu = _cpu_seconds() - cpu0
     report_path = Path(report) if report is not None else out / "REPORT.md"
-    write_report(runs, prof, report_path, wall_seconds=wall, jobs=jobs)
+    write_report(runs, prof, report_path, wall_seconds=wall, jobs=jobs, cpu_seconds=cpu, load=(load0, _load()))
     return report_path
+
+
+def _cpu_seconds() -> float:
+    """User + system CPU seconds of this process and its finished child processes."""
+    import resource
+
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def _load() -> float | None:
+    try:
+        return os.getloadavg()[0]
+    except OSError:
+        return None
+
+
+def _stop_workers() -> None:
+    """Shut joblib's worker processes down, so their CPU time is counted."""
+    try:
+        from joblib.externals.loky import get_reusable_executor
+
+        get_reusable_executor().shutdown(wait=True)
+    except Exception:  # no executor was started, or another backend
+        pass
 
 
 # ----------------------------------------------------------------- the report
@@ -484,7 +515,8 @@ def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
 
 
 def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, wall_seconds: float | None = None,
-                 jobs: int | None = None) -> Path:
+                 jobs: int | None = None, cpu_seconds: float | None = None,
+                 load: tuple[float | None, float | None] | None = None) -> Path:
     """``REPORT.md``: for every table and figure, the paper's number, ours, the difference."""
     from .. import __version__
     from ..results.manifest import git_revision
@@ -547,7 +579,11 @@ def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, wall_
         "",
         f"**Time:** {compute / 60:.1f} min of run time summed over the protocols' results (every session that "
         f"computed them)" + (f"; this invocation took {wall_seconds / 60:.1f} min of wall time, dataset loading "
-                             f"included" if wall_seconds is not None else "") + ".",
+                             f"included" if wall_seconds is not None else "")
+        + (f", and {cpu_seconds / 60:.1f} min of CPU time (user + system, its worker processes included)"
+           if cpu_seconds is not None else "")
+        + (f"; the machine's 1-minute load average was {load[0]:.1f} at the start and {load[1]:.1f} at the end"
+           if load and None not in load else "") + ".",
         "",
         f"**Summary:** {n_within} of {n_compared} paper numbers reproduced within tolerance; on real HAART data "
         f"{real_within} of {real_compared}. Synthetic scenes (CoST, fur sensor, textile sensor) only imitate "
