@@ -45,3 +45,15 @@ def real_haart_challenge(real_haart_dir, tb_cache):
     from touchbench.datasets import load_dataset
 
     return load_dataset("haart-challenge", cache_dir=tb_cache)
+
+
+@pytest.fixture
+def engine_env(tmp_path, monkeypatch):
+    """For engine tests: a private cache, the test's folder as working
+    directory, and the test-only feature sets and classifiers registered."""
+    from touchbench.engine.testing import components_for_tests
+
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.chdir(tmp_path)
+    with components_for_tests():
+        yield

@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 
 from touchbench.engine import run_protocol
-from touchbench.engine.testing import components_for_tests, random_dataset
+from touchbench.engine.testing import random_dataset
 from touchbench.protocols.schema import ProtocolError, parse_protocol
 
 TEMPLATE = """\
@@ -32,11 +32,9 @@ seed: 1
 
 
 @pytest.fixture(autouse=True)
-def env(tmp_path, monkeypatch):
-    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
-    monkeypatch.chdir(tmp_path)
-    with components_for_tests():
-        yield
+def env(engine_env):
+    """A private cache and working folder, with the test-only components."""
+    yield
 
 
 def run(tmp_path, rows=None, ds=None, scheme="loso", filters="", clf="test-logreg"):

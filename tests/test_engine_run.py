@@ -46,11 +46,9 @@ PREDICTION_COLUMNS = ["run_id", "task_id", "capture_id", "subject", "true", "pre
 
 
 @pytest.fixture(autouse=True)
-def env(tmp_path, monkeypatch):
-    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
-    monkeypatch.chdir(tmp_path)
-    with components_for_tests():
-        yield
+def env(engine_env):
+    """A private cache and working folder, with the test-only components."""
+    yield
 
 
 def protocol(tmp_path: Path, scheme="loso", classifiers=("test-logreg",), ds=None, **fmt):
