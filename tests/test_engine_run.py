@@ -21,7 +21,7 @@ from sklearn.metrics import balanced_accuracy_score, f1_score
 from touchbench.engine import run_protocol
 from touchbench.engine import testing as tk
 from touchbench.engine.tasks import LATENCY_REPEATS
-from touchbench.engine.testing import components_for_tests, random_dataset, register_test_components
+from touchbench.engine.testing import random_dataset, register_test_components
 from touchbench.protocols.schema import parse_protocol
 
 PROTOCOL = """\
