@@ -154,8 +154,12 @@ def _challenge_run(tmp_path: Path) -> Path:
 def test_report_compares_paper_and_ours(tmp_path):
     out = _challenge_run(tmp_path)
     run = ProtocolRun(path=PAPERS / "gaus-tables6-7-haart.yaml", name="gaus-tables6-7-haart", out=out, changes=[])
-    report = write_report([run], PROFILES["full"], tmp_path / "REPORT.md", wall_seconds=60.0)
+    timing = {"wall_seconds": 60.0, "cpu_seconds": 90.0, "cpus": 2, "jobs": 2, "load": [3.0, 1.0]}
+    report = write_report([run], PROFILES["full"], tmp_path / "REPORT.md", timing=timing)
     text = report.read_text()
+    # 90 CPU seconds on 2 CPUs: 0.75 min per CPU
+    assert "took 1.0 min of wall time" in text and "1.5 min of CPU time" in text and "0.8 min per CPU" in text
+    assert "load average was 3.0 at the start and 1.0 at the end (above 2: other jobs shared the CPUs)" in text
     # RF reproduces Table 6 exactly: 167 / 251 = 66.53 %, difference +0.00
     assert "| Table 5 Testing / Table 6, Random Forest | sd+bmh+msd+smmhh+lbptop | gaus-rf | 66.53 | 66.53 | +0.00 | 5 | yes |" in text
     # boosting gets everything right: 100 % against 64.54 %: outside tolerance, said plainly
@@ -205,9 +209,14 @@ expected:
     P.PROFILES["t"] = prof
     try:
         path = reproduce("t", tmp_path / "res", protocols_dir=d, echo=lambda s: None)
+        assert "This invocation took" in path.read_text()
+        assert (tmp_path / "res" / "t" / "invocation.json").is_file()
+        # a second run computes nothing and reports the timing of the run that did
+        path = reproduce("t", tmp_path / "res", protocols_dir=d, echo=lambda s: None)
     finally:
         P.PROFILES.pop("t")
     text = path.read_text()
+    assert "The invocation that computed them (finished" in text and " tasks) took " in text
     assert "gaus-rf: n_estimators 200 -> 5" in text
     assert "| made up | msd | gaus-rf | 50.00 |" in text and "| yes |" in text
     scores = pd.read_parquet(tmp_path / "res" / "t" / "gaus-tiny" / "scores.parquet")

@@ -257,6 +257,7 @@ class ProtocolRun:
     changes: list[str]
     seconds: float = 0.0
     error: str | None = None
+    n_ran: int = 0
 
 
 def _dataset_key(protocol) -> str:
@@ -311,6 +312,7 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
                 cache_key = key
             echo(f"{proto.name}: running -> {r.out}")
             res = run_protocol(proto, r.out, jobs=jobs, progress=progress, dataset=cache_ds)
+            r.n_ran = res.n_ran
             echo(f"{proto.name}: {res.n_ran} ran, {res.n_skipped} finished before, {res.n_failed} failed, "
                  f"{res.seconds:.0f} s")
         except TouchbenchError as e:
@@ -323,9 +325,21 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
         runs.append(r)
     wall = time.perf_counter() - t_all
     _stop_workers()
-    cpu = _cpu_seconds() - cpu0
+    timing = {"wall_seconds": wall, "cpu_seconds": _cpu_seconds() - cpu0, "load": [load0, _load()], "jobs": jobs,
+              "cpus": os.cpu_count(), "tasks_ran": sum(r.n_ran for r in runs),
+              "protocols": len(runs), "finished_at": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+    timing_path = out / profile / "invocation.json"
+    if timing["tasks_ran"] and not only:
+        from .leaderboard import write_text
+
+        write_text(timing_path, json.dumps(timing, indent=2) + "\n")
+    elif timing_path.is_file():  # nothing (or only a subset) computed now: report the run that computed them
+        try:
+            timing = {**json.loads(timing_path.read_text()), "reused": True}
+        except (OSError, ValueError):
+            pass
     report_path = Path(report) if report is not None else out / "REPORT.md"
-    write_report(runs, prof, report_path, wall_seconds=wall, jobs=jobs, cpu_seconds=cpu, load=(load0, _load()))
+    write_report(runs, prof, report_path, timing=timing)
     return report_path
 
 
@@ -514,10 +528,12 @@ def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
     return sec
 
 
-def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, wall_seconds: float | None = None,
-                 jobs: int | None = None, cpu_seconds: float | None = None,
-                 load: tuple[float | None, float | None] | None = None) -> Path:
-    """``REPORT.md``: for every table and figure, the paper's number, ours, the difference."""
+def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, timing: dict[str, Any] | None = None) -> Path:
+    """``REPORT.md``: for every table and figure, the paper's number, ours, the difference.
+
+    ``timing``: wall and CPU seconds, load averages, jobs of the invocation
+    that computed the results (see :func:`reproduce`).
+    """
     from .. import __version__
     from ..results.manifest import git_revision
     from .leaderboard import write_text
@@ -565,7 +581,8 @@ def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, wall_
         "",
         f"Generated {now} by `touchbench papers reproduce --profile {profile.name}` (touchbench {__version__}, "
         f"git {str(git.get('revision') or '?')[:12]}{' with uncommitted changes' if git.get('dirty') else ''}) on "
-        f"{platform.platform()}, {os.cpu_count()} CPUs" + (f", {jobs} parallel jobs" if jobs else "") + ".",
+        f"{platform.platform()}, {os.cpu_count()} CPUs"
+        + (f", {timing['jobs']} parallel jobs" if timing and timing.get("jobs") else "") + ".",
         "",
         f"**Profile `{profile.name}`:** {profile.description}.",
     ]
@@ -578,12 +595,7 @@ def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, wall_
     head += [
         "",
         f"**Time:** {compute / 60:.1f} min of run time summed over the protocols' results (every session that "
-        f"computed them)" + (f"; this invocation took {wall_seconds / 60:.1f} min of wall time, dataset loading "
-                             f"included" if wall_seconds is not None else "")
-        + (f", and {cpu_seconds / 60:.1f} min of CPU time (user + system, its worker processes included)"
-           if cpu_seconds is not None else "")
-        + (f"; the machine's 1-minute load average was {load[0]:.1f} at the start and {load[1]:.1f} at the end"
-           if load and None not in load else "") + ".",
+        f"computed them)." + (" " + _timing_text(timing) if timing else ""),
         "",
         f"**Summary:** {n_within} of {n_compared} paper numbers reproduced within tolerance; on real HAART data "
         f"{real_within} of {real_compared}. Synthetic scenes (CoST, fur sensor, textile sensor) only imitate "
@@ -604,6 +616,23 @@ def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, wall_
         head += ["Not run or failed:", ""] + [f"- {f}" for f in problems] + [""]
     text = "\n".join(head + body) + "\n"
     return write_text(Path(path), text)
+
+
+def _timing_text(t: dict[str, Any]) -> str:
+    who = (f"The invocation that computed them (finished {t.get('finished_at')}, {t.get('tasks_ran')} tasks)"
+           if t.get("reused") else "This invocation")
+    text = f"{who} took {t['wall_seconds'] / 60:.1f} min of wall time, dataset loading and scene generation included"
+    cpus = t.get("cpus") or 1
+    if t.get("cpu_seconds") is not None:
+        text += (f", and {t['cpu_seconds'] / 60:.1f} min of CPU time (user + system, worker processes included): "
+                 f"{t['cpu_seconds'] / 60 / cpus:.1f} min per CPU, the wall time to expect on an otherwise idle "
+                 f"{cpus}-CPU machine")
+    load = t.get("load") or []
+    if len(load) == 2 and None not in load:
+        text += (f". The machine's 1-minute load average was {load[0]:.1f} at the start and {load[1]:.1f} at the "
+                 f"end (above {cpus}: other jobs shared the CPUs)" if max(load) > cpus else
+                 f". The machine's 1-minute load average was {load[0]:.1f} at the start and {load[1]:.1f} at the end")
+    return text + "."
 
 
 def _check_section(check: dict[str, Any], proto, scores: pd.DataFrame, preds: pd.DataFrame | None,
