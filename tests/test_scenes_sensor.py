@@ -67,14 +67,23 @@ def test_curvature_narrows_flat_contact_but_not_a_wrapping_hand():
     assert wrap.sdx[0] == 30.0
 
 
-def test_crosstalk_reaches_the_four_neighbours():
+def test_crosstalk_reaches_the_neighbours():
     f = np.zeros((1, 5, 5))
     f[0, 2, 2] = 10.0
     out = S.crosstalk(f, 0.05)
     assert out[0, 2, 2] == 10.0
     for r, c in [(1, 2), (3, 2), (2, 1), (2, 3)]:
-        assert out[0, r, c] == pytest.approx(0.5)
-    assert out[0, 1, 1] == 0.0 and out[0, 0, 2] == 0.0
+        assert out[0, r, c] == pytest.approx(0.5)  # c x 10
+    for r, c in [(1, 1), (1, 3), (3, 1), (3, 3)]:
+        assert out[0, r, c] == pytest.approx(0.025)  # c^2 x 10
+    assert out[0, 0, 2] == 0.0 and out[0, 0, 0] == 0.0
+
+
+def test_crosstalk_while_rendering_equals_crosstalk_of_the_field():
+    tr = blob(force=3.0, sd=12.0, x=60.0, y=130.0, T=3)
+    plain = render(tr, (8, 8), 25.0)
+    leaky = render(tr, (8, 8), 25.0, line_filter=lambda w: S.crosstalk_lines(w, 0.04))
+    np.testing.assert_allclose(leaky, S.crosstalk(plain, 0.04), rtol=1e-12, atol=1e-15)
 
 
 def test_saturation():

@@ -10,7 +10,7 @@ at random, with their own stream; the survivors keep their draws.
 
 Each capture: the person's factors (person.py) -> contact events
 (gestures.py) -> blobs (hand.py) -> cover, substrate, curvature -> force per
-cell -> cross-talk, gain, saturation, tension, baseline, noise, ADC
+cell (with the cross-talk) -> gain, saturation, tension, baseline, noise, ADC
 (sensor.py); every step vectorised over frames and cells, and each effect
 applied only if the scene lists it.
 
@@ -184,7 +184,11 @@ class _Scene:
         curve = self.curvature(row)
         if curve is not None:
             tr = S.apply_curvature(tr, curve[0], curve[1])
-        field = render(tr, self.grid, self.pitch)  # type: ignore[arg-type]
+        leak = None
+        if "crosstalk" in fx and sen.kind == "grid":
+            c = float(sen.crosstalk)  # type: ignore[arg-type]
+            leak = lambda w: S.crosstalk_lines(w, c)  # noqa: E731
+        field = render(tr, self.grid, self.pitch, line_filter=leak)  # type: ignore[arg-type]
 
         if sen.kind == "channels":
             r = sen.response
@@ -207,10 +211,8 @@ class _Scene:
         else:
             # the electronics in float32: counts up to a few thousand keep
             # ~1e-4 resolution, and the passes over the field cost half
-            field = field.astype(np.float32)
-            if "crosstalk" in fx:
-                field = S.crosstalk(field, sen.crosstalk)  # type: ignore[arg-type]
-            x = field * np.float32(sen.gain)
+            x = field.astype(np.float32)
+            x *= np.float32(sen.gain)
             if "saturation" in fx:
                 x = S.saturate(x, sen.saturation)  # type: ignore[arg-type]
         rest = None

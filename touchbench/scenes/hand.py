@@ -34,6 +34,7 @@ hand shifts between its parts.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -222,13 +223,21 @@ def _cell_weights(c: np.ndarray, sd: np.ndarray, n: int) -> np.ndarray:
 RENDER_FLOOR_N = 1e-4
 
 
-def render(tr: Tracks, grid: tuple[int, int], pitch_mm: float) -> np.ndarray:
+def render(
+    tr: Tracks,
+    grid: tuple[int, int],
+    pitch_mm: float,
+    line_filter: Callable[[np.ndarray], np.ndarray] | None = None,
+) -> np.ndarray:
     """Force per cell (N), (T, H, W) float64: each blob integrated over each
     cell's area. Force falling outside the grid is lost (off the sensor).
 
     Only the (frame, blob) pairs that carry force (above
     :data:`RENDER_FLOOR_N`) are computed: a pat's hand touches a few frames
-    of each period, and the rest costs nothing.
+    of each period, and the rest costs nothing. ``line_filter`` (a linear
+    map along the last axis, such as the sensor's line cross-talk) is
+    applied to every blob's row and column profiles: the same as applying
+    it to the rendered field along both axes, at a fraction of the cost.
     """
     H, W = grid
     T = tr.force.shape[1]
@@ -245,6 +254,8 @@ def render(tr: Tracks, grid: tuple[int, int], pitch_mm: float) -> np.ndarray:
     wy = np.zeros((n + 1, H))
     wx[:n] = _cell_weights(cx, tr.sdx[on_b] / pitch_mm, W)
     wy[:n] = _cell_weights(cy, tr.sdy[on_b] / pitch_mm, H) * tr.force[on_b, on_t][:, None]
+    if line_filter is not None:
+        wx, wy = line_filter(wx), line_filter(wy)
     # (frame, slot) -> pair index, padded: then one batched matmul over frames
     counts = np.bincount(on_t, minlength=T)
     m = int(counts.max())

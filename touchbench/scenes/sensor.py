@@ -14,8 +14,10 @@ Order (top to bottom of the physical stack, then the electronics):
    radius R touches only a strip: its sd round the circumference is
    limited to about 0.35 R; a wrapping hand conforms and keeps its size;
 4. render (hand.py) to force per cell;
-5. cross-talk (:func:`crosstalk`): each cell picks up a fraction of each
-   4-neighbour;
+5. cross-talk (:func:`crosstalk`): neighbouring rows and columns of the
+   matrix leak into each other (``c`` from each 4-neighbour, ``c**2`` from
+   each diagonal one); applied during rendering, to each blob's row and
+   column profiles, which is the same and cheaper;
 6. gain to ADC counts; soft saturation ``S (1 - exp(-x / S))``
    (:func:`saturate`): linear for light touch, flattening toward S;
 7. tension: a sensor stretched over a curve reads a resting pressure of
@@ -33,8 +35,8 @@ far below one count).
 The channel sensor of Flagg (2012, Sec. 4.2) reduces the field to x, y,
 pressure and fur readings (:func:`to_channels`).
 
-Interpretations: cross-talk as 4-neighbour leakage (the papers give no
-figures); curvature narrowing at 0.35 R (the chord of a cylinder within
+Interpretations: cross-talk as leakage between neighbouring lines (the
+papers give no figures); curvature narrowing at 0.35 R (the chord of a cylinder within
 which a flat palm pressed with moderate force stays in contact).
 """
 
@@ -97,17 +99,27 @@ def apply_curvature(tr: Tracks, radius_mm: float, axis: str) -> Tracks:
     return Tracks(tr.cx, tr.cy, tr.force, sdx, sdy, tr.conform)
 
 
+def crosstalk_lines(w: np.ndarray, c: float) -> np.ndarray:
+    """Leakage between neighbouring lines along the last axis: each line
+    picks up ``c`` times each neighbour's value."""
+    if c <= 0:
+        return w
+    leak = w * np.asarray(c, dtype=w.dtype)
+    out = w.copy()
+    out[..., 1:] += leak[..., :-1]
+    out[..., :-1] += leak[..., 1:]
+    return out
+
+
 def crosstalk(field: np.ndarray, c: float) -> np.ndarray:
-    """Each cell picks up ``c`` times each of its 4 neighbours (T, H, W)."""
+    """Cross-talk of a scanned matrix (T, H, W): leakage ``c`` between
+    neighbouring rows and between neighbouring columns, so a cell picks up
+    ``c`` of each 4-neighbour and ``c**2`` of each diagonal one. The
+    generator applies the same operator to each blob's row and column
+    profiles (``render(..., line_filter=...)``), which is equivalent."""
     if c <= 0:
         return field
-    leak = field * np.asarray(c, dtype=field.dtype)
-    out = field.copy()
-    out[:, 1:, :] += leak[:, :-1, :]
-    out[:, :-1, :] += leak[:, 1:, :]
-    out[:, :, 1:] += leak[:, :, :-1]
-    out[:, :, :-1] += leak[:, :, 1:]
-    return out
+    return np.swapaxes(crosstalk_lines(np.swapaxes(crosstalk_lines(field, c), -1, -2), c), -1, -2)
 
 
 def saturate(x: np.ndarray, level: float) -> np.ndarray:
