@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 
 from touchbench.datasets.model import SensorSpec, TouchDataset
 
@@ -41,3 +43,18 @@ def random_recording(seed: int, n_lines: int = 5400) -> list[str]:
     rng = np.random.default_rng(seed)
     a = rng.integers(0, 1024, size=(n_lines, 10))
     return [",".join(str(v) for v in row) for row in a]
+
+
+def captures_strategy(min_n=1, max_n=4, max_frames=40):
+    """Hypothesis: a batch of 1..4 uint16 captures of one random grid (1..5 x 1..5), each 1..max_frames frames."""
+    @st.composite
+    def make(draw):
+        h = draw(st.integers(1, 5))
+        w = draw(st.integers(1, 5))
+        n = draw(st.integers(min_n, max_n))
+        caps = []
+        for _ in range(n):
+            t = draw(st.integers(1, max_frames))
+            caps.append(draw(arrays(np.uint16, (t, h, w), elements=st.integers(0, 1023))))
+        return caps
+    return make()

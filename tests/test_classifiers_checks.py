@@ -1,5 +1,6 @@
 """scikit-learn's estimator checks for every registered classifier but the
-CNN (tests/test_classifiers_cnn.py runs them for it).
+CNN and the aeon peers (tests/test_classifiers_cnn.py and
+tests/test_classifiers_peers.py run them for those).
 
 The papers' defaults (1000 trees, 500 boosting iterations, 500 MLP epochs,
 L-BFGS to 1e-10) are slow, so each classifier is checked with the smaller
@@ -23,6 +24,15 @@ SMALL = {
     "flagg-logistic": dict(max_iter=100, tol=1e-4),
     "zhou-bagged-trees": dict(n_estimators=5),
     "xgboost": dict(n_estimators=10),
+    "sota-et": dict(n_estimators=5),
+    "sota-et-fast": dict(n_estimators=5),
+    "sota-et-tuned": dict(n_estimators=5, inner_folds=2),
+    # raw-frame methods: a 1 x 1 "grid", so every column of the checks' data is one frame
+    "touch-et": dict(grid=(1, 1), model_params={"n_estimators": 5}),
+    "touch-et-fast": dict(grid=(1, 1), model_params={"n_estimators": 5}),
+    "touch-et-tuned": dict(grid=(1, 1), model_params={"n_estimators": 5, "inner_folds": 2}),
+    "touch-xgb": dict(grid=(1, 1), model_params={"n_estimators": 5}),
+    "touch-et-win": dict(grid=(1, 1), model_params={"n_estimators": 5}),
 }
 
 _BOOTSTRAP = ("bags are drawn at random (with probability proportional to the weights), so a weight of 2 "
@@ -41,7 +51,7 @@ NOT_APPLICABLE = {
     "zhou-tree": dict.fromkeys(_EQUIV, "min_samples_split=10 (MATLAB's MinParentSize) counts rows, not weights"),
 }
 
-NAMES = [n for n in CLASSIFIERS.names() if n != "cnn"]
+NAMES = [n for n in CLASSIFIERS.names() if n != "cnn" and CLASSIFIERS.entry(n).tags.get("extra") != "peers"]
 
 
 def _expected(est):

@@ -20,7 +20,11 @@ EXPECTED = [
     "gaus-rf", "gaus-boost", "flagg-logistic", "flagg-bayesnet", "flagg-mlp", "flagg-rf", "zhou-tree",
     "zhou-lda", "zhou-linear-svm", "zhou-quadratic-svm", "zhou-knn", "zhou-weighted-knn",
     "zhou-bagged-trees", "jung-naive-bayes", "jung-svm", "xgboost", "cnn",
+    # issue 9: the aeon peers and touchbench's own
+    "minirocket", "multirocket", "sota-et", "sota-et-fast", "sota-et-tuned",
+    "touch-et", "touch-et-fast", "touch-et-tuned", "touch-et-win", "touch-xgb",
 ]
+EXTRAS = {"cnn": "deep", "minirocket": "peers", "multirocket": "peers"}
 
 
 def test_registry_holds_exactly_the_documented_names():
@@ -31,7 +35,7 @@ def test_registry_holds_exactly_the_documented_names():
 def test_entry_tags_and_defaults(name):
     e = CLASSIFIERS.entry(name)
     assert e.description and e.tags["source"]
-    assert e.tags["extra"] == ("deep" if name == "cnn" else None)
+    assert e.tags["extra"] == EXTRAS.get(name)
     est = make_classifier(name, random_state=7)
     params = est.get_params()
     for k, v in e.tags["defaults"].items():  # the defaults listed are the ones built
@@ -104,7 +108,7 @@ def test_cli_list_shows_every_classifier_with_source_and_defaults():
     assert "n_estimators=1000" in res.output
     rows = json.loads(CliRunner().invoke(classifiers, ["list", "--json"]).output)
     assert [r["name"] for r in rows] == sorted(EXPECTED)
-    assert all(r["available"] for r in rows)  # torch is in the development venv
+    assert all(r["available"] for r in rows)  # torch and aeon are in the development venv
 
 
 def test_cli_is_registered_in_the_main_group():

@@ -21,6 +21,8 @@ _MODULES: list[str] = [
     "touchbench.classifiers.jung",
     "touchbench.classifiers.xgb",
     "touchbench.classifiers.cnn",  # imports torch only when the CNN is fitted
+    "touchbench.classifiers.sota",
+    "touchbench.classifiers.peers",  # imports aeon only when a peer is fitted
 ]
 
 

@@ -21,10 +21,11 @@ def classifiers() -> None:
 def list_classifiers(as_json: bool) -> None:
     """List every classifier with its source and defaults."""
     from ..classifiers import CLASSIFIERS
+    from ..classifiers import cnn, peers
     from ..classifiers._util import torch_available
-    from ..classifiers.cnn import INSTALL_HINT
 
-    extras_ok = {"deep": torch_available()}
+    extras_ok = {"deep": torch_available(), "peers": peers.aeon_available()}
+    hints = {"deep": cnn.INSTALL_HINT, "peers": peers.INSTALL_HINT}
     rows = []
     for e in CLASSIFIERS.entries():
         extra = e.tags.get("extra")
@@ -36,7 +37,7 @@ def list_classifiers(as_json: bool) -> None:
             "defaults": e.tags.get("defaults", {}),
             "extra": extra,
             "available": available,
-            "install": None if available else INSTALL_HINT,
+            "install": None if available else hints.get(extra, f"pip install 'touchbench[{extra}]'"),
         })
     if as_json:
         click.echo(json.dumps(rows, indent=2, default=list))

@@ -42,6 +42,8 @@ _MODULES: list[str] = [
     "touchbench.features.zhou",
     "touchbench.features.flagg",
     "touchbench.features.raw",
+    "touchbench.features.sota",
+    "touchbench.features.sota_windows",
 ]
 
 # Upper bound on the values stacked at once by ``transform``: bounds peak

@@ -1,0 +1,140 @@
+"""The aeon peers (issue 9): MiniRocket and MultiRocket on the cell series of raw frames.
+
+The cell-series layout is checked on a capture whose every value names its
+frame and cell; the peers are checked against aeon's own classifiers called
+directly on series built independently (a loop over cells); scikit-learn's
+estimator checks run on a 1 x 1 "grid". aeon is the ``peers`` extra, which
+CI installs: without it these tests fail under CI=true and skip elsewhere.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+if os.environ.get("CI", "").lower() == "true":
+    import aeon  # noqa: F401  (CI installs the peers extra: a missing aeon must fail, not skip)
+else:
+    pytest.importorskip("aeon")
+
+from sklearn.utils.estimator_checks import parametrize_with_checks  # noqa: E402
+
+from touchbench.classifiers import make_classifier  # noqa: E402
+from touchbench.classifiers.peers import MIN_TIMEPOINTS, frames_to_series  # noqa: E402
+
+SMALL = dict(grid=(1, 1), n_kernels=84)
+
+
+def _labelled_capture(frames: int, h: int, w: int) -> np.ndarray:
+    """value = 1000 * frame + cell (row-major), flattened frame-major as raw-window does."""
+    f = np.arange(frames)[:, None, None] * 1000 + np.arange(h * w).reshape(1, h, w)
+    return f.reshape(1, -1).astype(np.float64)
+
+
+def test_series_layout_cell_by_frame():
+    X = _labelled_capture(12, 2, 3)
+    S = frames_to_series(X, (2, 3))
+    assert S.shape == (1, 6, 12)
+    for cell in range(6):
+        for frame in range(12):
+            assert S[0, cell, frame] == 1000 * frame + cell
+
+
+def test_short_series_repeat_the_last_frame():
+    X = _labelled_capture(3, 1, 2)
+    S = frames_to_series(X, (1, 2))
+    assert S.shape == (1, 2, MIN_TIMEPOINTS)
+    assert S[0, 1].tolist() == [1, 1001, 2001] + [2001] * (MIN_TIMEPOINTS - 3)
+
+
+def test_frames_must_fill_the_grid():
+    with pytest.raises(ValueError, match="2x2 frames"):
+        frames_to_series(np.zeros((1, 10)), (2, 2))
+
+
+def _toy(n_per_class=12, frames=40, seed=0):
+    """Two classes of 2 x 2 captures: a slow and a fast oscillation, random phase and gain."""
+    rng = np.random.default_rng(seed)
+    X, y = [], []
+    t = np.arange(frames)
+    for label, period in (("slow", 16.0), ("fast", 4.0)):
+        for _ in range(n_per_class):
+            cap = np.empty((frames, 2, 2))
+            for c in range(4):
+                cap[:, c // 2, c % 2] = rng.uniform(5, 20) * np.sin(2 * np.pi * t / period + rng.uniform(0, 6.3))
+            X.append((cap + rng.normal(0, 0.5, cap.shape)).reshape(-1))
+            y.append(label)
+    return np.array(X), np.array(y)
+
+
+@pytest.mark.parametrize("name,aeon_class", [("minirocket", "MiniRocketClassifier"), ("multirocket", "MultiRocketClassifier")])
+def test_same_predictions_as_aeon_called_directly(name, aeon_class):
+    from aeon.classification import convolution_based
+
+    X, y = _toy()
+    Xt, yt = _toy(seed=1)
+    est = make_classifier(name, random_state=7, grid=(2, 2), n_kernels=84).fit(X, y)
+    # the same series built by hand: channel c = cell (c // 2, c % 2) over the frames
+    def series(A):
+        caps = A.reshape(len(A), -1, 2, 2)
+        return np.stack([np.stack([caps[i, :, c // 2, c % 2] for c in range(4)]) for i in range(len(A))])
+    ref = getattr(convolution_based, aeon_class)(n_kernels=84, n_jobs=1, random_state=7).fit(series(X), y)
+    assert est.predict(Xt).tolist() == ref.predict(series(Xt)).tolist()
+    assert np.mean(est.predict(Xt) == yt) >= 0.9  # slow vs fast is easy
+    P = est.predict_proba(Xt)
+    assert P.shape == (len(Xt), 2) and np.allclose(P.sum(axis=1), 1.0)
+    assert list(est.classes_) == ["fast", "slow"]
+
+
+def test_one_class_training_predicts_that_class():
+    X, y = _toy(n_per_class=3)
+    est = make_classifier("minirocket", random_state=0, grid=(2, 2), n_kernels=84).fit(X, np.full(len(y), "pat"))
+    assert est.predict(X[:2]).tolist() == ["pat", "pat"]
+    assert est.predict_proba(X[:2]).tolist() == [[1.0], [1.0]]
+
+
+@parametrize_with_checks([make_classifier(n, random_state=0, **SMALL) for n in ("minirocket", "multirocket")])
+def test_sklearn_estimator_checks(estimator, check):
+    check(estimator)
+
+
+_NO_AEON = r"""
+import sys, importlib.abc
+class _NoAeon(importlib.abc.MetaPathFinder):  # as if aeon were not installed
+    def find_spec(self, name, path=None, target=None):
+        if name == "aeon" or name.startswith("aeon."):
+            raise ModuleNotFoundError(name)
+        return None
+sys.meta_path.insert(0, _NoAeon())
+import numpy as np
+from touchbench.classifiers import make_classifier
+est = make_classifier("minirocket", random_state=0, grid=(1, 1))
+try:
+    est.fit(np.arange(40.0).reshape(4, 10), np.array(["a", "b", "a", "b"]))
+except Exception as e:
+    print(type(e).__name__, e)
+"""
+
+
+def test_without_aeon_the_peer_says_how_to_install():
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    proc = subprocess.run([sys.executable, "-c", _NO_AEON], capture_output=True, text=True, env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert "TouchbenchError" in proc.stdout and "pip install 'touchbench[peers]'" in proc.stdout
+
+
+def test_listing_does_not_import_aeon_and_marks_the_extra():
+    code = ("import sys, json; from click.testing import CliRunner; from touchbench.cli.classifiers import classifiers; "
+            "rows = json.loads(CliRunner().invoke(classifiers, ['list', '--json']).output); "
+            "print(json.dumps({'aeon': 'aeon' in sys.modules, 'extra': {r['name']: r['extra'] for r in rows}}))")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert out["aeon"] is False
+    assert out["extra"]["minirocket"] == out["extra"]["multirocket"] == "peers"

@@ -1,0 +1,93 @@
+"""``touch-windows``: how touchbench's own features change within a capture (issue 9).
+
+Not from a paper. The sets of :mod:`touchbench.features.sota` summarise a
+whole capture; a gesture whose rhythm or contact changes during the
+capture (a tickle that wanders, a pat that slows, a rub that turns into a
+stroke) looks the same to them as a steady one. This set computes the
+``sets`` (default: ``touch-rhythm``, ``cell-rhythm``, ``contact-motion``)
+on ``n_windows`` windows of ``window_s`` seconds each, and returns the mean
+and the standard deviation (population, ``ddof=0``) of every feature over
+the windows.
+
+Choices (made by cross-validation inside the challenge's training subjects,
+benchmarks/sota/NOTES.md, exp 15; the test subjects were never used):
+4 windows of 2 s (108 frames at HAART's 54 Hz), i.e. the 8-s capture cut
+into four quarters: +1.0 to +1.6 points over the whole-capture sets alone
+with two forest seeds; 7 overlapping windows of 2 s gave the same.
+
+Interpretations and limits:
+
+- Window starts are ``round(linspace(0, T - L, n_windows))`` frames (evenly
+  spaced, the first at the capture's start, the last ending at its end);
+  ``L = round(window_s * frame rate)``, at least 1 frame, at most ``T``: a
+  capture shorter than one window gives ``n_windows`` copies of the whole
+  capture, so every standard deviation is 0 (up to rounding of the mean).
+- Each window is a capture of its own for the inner sets: its baseline is
+  its own 5 % order statistic per cell, and windows shorter than
+  ``MIN_FRAMES`` frames are padded as those sets pad.
+- Fold-independent: a capture's row depends on that capture alone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..datasets.model import SensorSpec
+from .base import FEATURES, FeatureInputError, FeatureSet
+from .sota import _SotaBase
+
+OWN_SETS: tuple[str, ...] = ("touch-rhythm", "cell-rhythm", "contact-motion")
+
+
+@FEATURES.register("touch-windows", description="ours: mean and sd of touch-rhythm + cell-rhythm + contact-motion over 4 windows of 2 s (issue 9)",
+                   paper="touchbench", cost="moderate")
+class TouchWindows(_SotaBase):
+    """Mean and standard deviation of the own feature sets over ``n_windows`` windows.
+
+    Interpretations: the module docstring's (window placement, a capture
+    shorter than a window, each window its own capture).
+    """
+
+    paper = "touchbench issue 9 (benchmarks/sota/NOTES.md, exp 15), after Gaus et al. 2015 section 5"
+    cost = "moderate"
+    fold_dependent = False
+
+    def __init__(self, n_windows: int = 4, window_s: float = 2.0, sets: tuple[str, ...] = OWN_SETS,
+                 frame_rate: float | None = None, sensor: SensorSpec | None = None):
+        self.n_windows = n_windows
+        self.window_s = window_s
+        self.sets = sets
+        self.frame_rate = frame_rate
+        self.sensor = sensor
+
+    def _check_params(self) -> None:
+        super()._check_params()
+        k, w = self.n_windows, self.window_s
+        if not (isinstance(k, (int, np.integer)) and k >= 1):
+            raise FeatureInputError(f"TouchWindows: n_windows must be a whole number >= 1, got {k!r}")
+        if not (isinstance(w, (int, float)) and np.isfinite(w) and w > 0):
+            raise FeatureInputError(f"TouchWindows: window_s must be a positive number of seconds, got {w!r}")
+        if not self.sets or any(s not in OWN_SETS for s in self.sets):
+            raise FeatureInputError(f"TouchWindows: sets must name some of {list(OWN_SETS)}, got {self.sets!r}")
+
+    def _inner(self) -> list[FeatureSet]:
+        return [FEATURES.create(name, frame_rate=self._fs()) for name in self.sets]
+
+    def feature_names(self, grid: tuple[int, int]) -> list[str]:
+        inner = [n for fs in self._inner() for n in fs.feature_names(grid)]
+        return [f"win_mean_{n}" for n in inner] + [f"win_sd_{n}" for n in inner]
+
+    def window_starts(self, t: int) -> tuple[np.ndarray, int]:
+        """Start frames and length of the windows of a ``t``-frame capture."""
+        length = int(min(t, max(1, round(float(self.window_s) * self._fs()))))
+        return np.round(np.linspace(0, t - length, int(self.n_windows))).astype(int), length
+
+    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
+        starts, length = self.window_starts(stack.shape[1])
+        inner = self._inner()
+        per_window = []
+        for s in starts:
+            part = stack[:, s:s + length]
+            per_window.append(np.hstack([fs._transform_batch(part) for fs in inner]))
+        W = np.stack(per_window)  # (windows, N, D)
+        return np.hstack([W.mean(axis=0), W.std(axis=0)])
