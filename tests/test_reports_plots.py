@@ -16,7 +16,8 @@ from click.testing import CliRunner
 from touchbench.cli.main import cli
 from touchbench.reports.html import write_report
 from touchbench.reports.leaderboard import build_leaderboards
-from touchbench.reports.plots import confusion_matrix, plot_confusion, plot_frames
+from touchbench.cli.reports import parse_reference
+from touchbench.reports.plots import confusion_matrix, label_offsets, plot_confusion, plot_frames
 from touchbench.reports.results import load_results
 from touchbench.reports.testing import FakeMethod, write_fake_run
 
@@ -118,3 +119,35 @@ def test_cli_leaderboard_compare_plot(runs, tmp_path):
     assert len(list((tmp_path / "pl").glob("*frames.svg"))) == 1
     res = r.invoke(cli, ["leaderboard", str(tmp_path / "missing")])
     assert res.exit_code == 2
+
+
+def test_pareto_references_and_labels(runs, tmp_path):
+    r = CliRunner()
+    res = r.invoke(cli, ["plot", str(runs / "loso"), "--out", str(tmp_path / "pl"), "--kind", "pareto",
+                         "--reference", "paper A=66.5", "--reference", "target=88"])
+    assert res.exit_code == 0, res.output
+    svg = next((tmp_path / "pl").glob("*pareto.svg")).read_text()
+    # the reference labels, and the methods labelled by features/classifier (two feature sets here)
+    assert "paper A 66.5 %" in svg and "target 88 %" in svg
+    assert "msd/rf" in svg and "sd/rf" in svg
+    for bad in ("nolabel", "x=abc", "x=101", "=50"):
+        res = r.invoke(cli, ["plot", str(runs / "loso"), "--out", str(tmp_path / "pl"), "--reference", bad])
+        assert res.exit_code == 2 and "--reference" in res.output and "LABEL=PERCENT" in res.output
+
+
+def test_parse_reference_keeps_equals_signs_in_the_label():
+    assert parse_reference("F1=acc=70.9") == ("F1=acc", 70.9)
+    assert parse_reference(" best 2015 entry =70.9") == ("best 2015 entry", 70.9)
+
+
+def test_label_offsets_move_colliding_labels_apart():
+    # three labels at the same point: each takes the next free offset; a far one keeps the first
+    offs = label_offsets(np.array([[100.0, 100.0], [100.0, 100.0], [100.0, 100.0], [400.0, 300.0]]),
+                         np.array([40.0, 40.0, 40.0, 40.0]))
+    assert offs[0] == (4, 3) and offs[3] == (4, 3)
+    assert len(set(offs[:3])) == 3
+    boxes = [(100 + dx, 100 + dy, 140 + dx, 100 + dy + 8.5) for dx, dy in offs[:3]]
+    for i in range(3):
+        for j in range(i + 1, 3):
+            a, b = boxes[i], boxes[j]
+            assert min(a[3], b[3]) <= max(a[1], b[1])  # no vertical overlap

@@ -147,6 +147,19 @@ def compare(results, a, b, as_json, dataset, scheme, alpha, pool_machines, machi
         click.echo("")
 
 
+def parse_reference(text: str) -> tuple[str, float]:
+    """``"LABEL=PERCENT"`` -> (label, percent); a bad value is a ``click.BadParameter`` naming it."""
+    label, sep, value = str(text).rpartition("=")
+    try:
+        pct = float(value)
+    except ValueError:
+        pct = float("nan")
+    if not sep or not label.strip() or not (0.0 <= pct <= 100.0):
+        raise click.BadParameter(f"{text!r}: expected LABEL=PERCENT with a percentage from 0 to 100, e.g. 'Gaus 2015=66.5'",
+                                 param_hint="'--reference'")
+    return label.strip(), pct
+
+
 @click.command("plot")
 @click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
 @click.option("--out", "-o", required=True, type=click.Path(file_okay=False), help="Folder for the PNG and SVG files.")
@@ -154,8 +167,11 @@ def compare(results, a, b, as_json, dataset, scheme, alpha, pool_machines, machi
               help="Plots to draw (repeatable) [default: all that apply].")
 @click.option("--method", "methods", multiple=True,
               help="Method(s) for confusion matrices (id or unambiguous label) [default: each table's best].")
+@click.option("--reference", "references", multiple=True, callback=lambda ctx, param, v: [parse_reference(r) for r in v],
+              metavar="LABEL=PERCENT",
+              help="A reference accuracy drawn as a dashed line on the Pareto plots, e.g. 'Gaus 2015=66.5' (repeatable).")
 @_with_table_options
-def plot(results, out, kinds, methods, dataset, scheme, alpha, pool_machines, machine) -> None:
+def plot(results, out, kinds, methods, references, dataset, scheme, alpha, pool_machines, machine) -> None:
     """Plot accuracy against latency / fit time / feature time (Pareto front),
     accuracy against frames and seconds seen (early scheme), confusion
     matrices (counts and row-normalised) and per-subject accuracy."""
@@ -165,7 +181,7 @@ def plot(results, out, kinds, methods, dataset, scheme, alpha, pool_machines, ma
     rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
     for lb in lbs:
         ids = [resolve_method(lb.rows, m) for m in methods] if methods else None
-        made = plot_table(rs, lb, Path(out), tuple(kinds) or KINDS, ids)
+        made = plot_table(rs, lb, Path(out), tuple(kinds) or KINDS, ids, references)
         for name, paths in made.items():
             click.echo(f"{lb.title}: {name}: " + ", ".join(str(p) for p in paths))
 

@@ -72,13 +72,51 @@ def _plain_log_ticks(ax) -> None:
     ax.xaxis.set_minor_locator(NullLocator())
 
 
-def _short(r: Any, width: int = 28) -> str:
-    lab = f"{r['features']}/{r['classifier']}"
+def _short(r: Any, width: int = 28, with_features: bool = True) -> str:
+    lab = f"{r['features']}/{r['classifier']}" if with_features else str(r["classifier"])
     return lab if len(lab) <= width else lab[: width - 1] + "…"
 
 
-def plot_pareto(lb: Leaderboard, base: Path) -> list[Path]:
-    """Accuracy against latency, fit time and feature time (see the module docstring)."""
+#: a label's height and its width per character at fontsize 7, in points (a generous estimate)
+_LABEL_H, _LABEL_CHAR_W = 8.5, 4.3
+#: offsets (points) tried in turn for a label, right of its point
+_LABEL_OFFSETS = ((4, 3), (4, -9), (4, 11), (4, -17), (4, 19), (4, -25), (4, 27))
+
+
+def label_offsets(points_pt: np.ndarray, widths_pt: np.ndarray) -> list[tuple[int, int]]:
+    """Offsets (points) for labels at ``points_pt`` (N, 2 display points) so that their boxes do not overlap.
+
+    Greedy, in the given order: each label takes the first offset of
+    ``_LABEL_OFFSETS`` whose box (``widths_pt`` wide, ``_LABEL_H`` high,
+    lower-left corner at point + offset) overlaps no box placed before it;
+    when every offset collides, the least overlapping one.
+    """
+    placed: list[tuple[float, float, float, float]] = []
+    out = []
+    for (x, y), w in zip(np.asarray(points_pt, dtype=float), np.asarray(widths_pt, dtype=float)):
+        best, best_overlap = _LABEL_OFFSETS[0], np.inf
+        for dx, dy in _LABEL_OFFSETS:
+            box = (x + dx, y + dy, x + dx + w, y + dy + _LABEL_H)
+            overlap = sum(max(0.0, min(box[2], b[2]) - max(box[0], b[0])) * max(0.0, min(box[3], b[3]) - max(box[1], b[1]))
+                          for b in placed)
+            if overlap < best_overlap:
+                best, best_overlap = (dx, dy), overlap
+            if overlap == 0:
+                break
+        dx, dy = best
+        placed.append((x + dx, y + dy, x + dx + w, y + dy + _LABEL_H))
+        out.append(best)
+    return out
+
+
+def plot_pareto(lb: Leaderboard, base: Path, references: list[tuple[str, float]] | None = None) -> list[Path]:
+    """Accuracy against latency, fit time and feature time (see the module docstring).
+
+    ``references``: (label, accuracy in %) pairs drawn as dashed horizontal
+    lines on every panel (published results, targets). Points are labelled
+    by classifier alone when every method of the table has the same
+    features; labels are moved apart so that they do not overlap.
+    """
     plt = _plt()
     rows = lb.rows
     costs = [("latency_ms", "latency per capture (ms)"), ("fit_seconds", "fit time per fold (s)"),
@@ -87,7 +125,13 @@ def plot_pareto(lb: Leaderboard, base: Path) -> list[Path]:
     machines = sorted(set(rows["timing_machine"]))
     markers = ["o", "s", "^", "D", "v"]
     label_all = len(rows) <= 12
+    with_features = rows["features"].nunique() > 1
+    if references:
+        lows = [100 * rows["ci_low"].min(), min(v for _, v in references) - 2]
+        highs = [100 * rows["ci_high"].max(), max(v for _, v in references) + 3]
+        axes[0].set_ylim(np.nanmin(lows), np.nanmax(highs))
     for ax, (col, title) in zip(axes, costs):
+        labelled = []
         for mi, m in enumerate(machines):
             g = rows[(rows["timing_machine"] == m) & np.isfinite(rows[col]) & np.isfinite(rows["accuracy"])]
             if g.empty:
@@ -106,10 +150,26 @@ def plot_pareto(lb: Leaderboard, base: Path) -> list[Path]:
                 if len(front) > 1:
                     ax.step(np.maximum(front["latency_ms"].to_numpy(float), 1e-6), 100 * front["accuracy"].to_numpy(float),
                             where="post", color="tab:red", lw=1, alpha=0.6)
+            labelled.append((g, x, y))
+        ax.set_xscale("log")
+        for label, value in references or []:
+            ax.axhline(value, color="0.45", lw=0.8, ls="--", zorder=0)
+            if ax is axes[0]:
+                ax.annotate(f"{label} {value:g} %", (0.01, value), xycoords=("axes fraction", "data"),
+                            textcoords="offset points", xytext=(0, 2), fontsize=6.5, color="0.35")
+        ax.autoscale_view()
+        texts, pts = [], []
+        for g, x, y in labelled:
             for (_, r), xi, yi in zip(g.iterrows(), x, y):
                 if label_all or r["pareto"]:
-                    ax.annotate(_short(r), (xi, yi), textcoords="offset points", xytext=(4, 3), fontsize=7)
-        ax.set_xscale("log")
+                    texts.append((_short(r, with_features=with_features), xi, yi))
+                    pts.append(ax.transData.transform((xi, yi)) * 72.0 / fig.dpi)
+        if texts:
+            order = np.argsort([-p[1] for p in pts], kind="stable")  # top to bottom
+            offs = label_offsets(np.array(pts)[order], np.array([len(texts[i][0]) * _LABEL_CHAR_W for i in order]))
+            for i, off in zip(order, offs):
+                lab, xi, yi = texts[i]
+                ax.annotate(lab, (xi, yi), textcoords="offset points", xytext=off, fontsize=7)
         _plain_log_ticks(ax)
         ax.set_xlabel(title)
         ax.grid(True, which="major", alpha=0.3)
@@ -235,8 +295,10 @@ def plot_subjects(rs: ResultSet, lb: Leaderboard, base: Path, top: int = 5) -> l
 
 
 def plot_table(rs: ResultSet, lb: Leaderboard, out_dir: Path, kinds: tuple[str, ...] = KINDS,
-               methods: list[str] | None = None) -> dict[str, list[Path]]:
+               methods: list[str] | None = None, references: list[tuple[str, float]] | None = None) -> dict[str, list[Path]]:
     """Every applicable plot of one table into ``out_dir``; ``{name: [png, svg]}``.
+
+    ``references`` go to :func:`plot_pareto` (reference accuracies in %).
 
     Confusion matrices are drawn for ``methods`` (ids), by default the best
     method of the table. A plot that does not apply (``frames`` outside an
@@ -246,7 +308,7 @@ def plot_table(rs: ResultSet, lb: Leaderboard, out_dir: Path, kinds: tuple[str, 
     s = slug(lb)
     made: dict[str, list[Path]] = {}
     if "pareto" in kinds and lb.rows["accuracy"].notna().any():
-        made["pareto"] = plot_pareto(lb, out_dir / f"{s}-pareto")
+        made["pareto"] = plot_pareto(lb, out_dir / f"{s}-pareto", references)
     if "frames" in kinds and lb.is_early:
         made["frames"] = plot_frames(lb, out_dir / f"{s}-frames")
     has_preds = rs.predictions is not None and (rs.predictions["table_key"] == lb.key).any()
