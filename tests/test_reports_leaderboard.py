@@ -244,3 +244,27 @@ def test_interrupted_run_is_read_from_its_fragments(tmp_path):
     [lb] = build_leaderboards(load_results([tmp_path / "interrupted"]))
     assert list(lb.rows["features"]) == ["msd", "sd"]
     assert lb.rows.iloc[0]["accuracy"] == pytest.approx(34 / 36)
+
+
+def test_single_fold_with_several_seeds_reports_their_spread(tmp_path):
+    fold = {"challenge": CAPS["capture_id"].tolist()}
+    wrong = CAPS["capture_id"].tolist()[:3]
+    d = write_fake_run(tmp_path / "ch", CAPS, fold, [FakeMethod("all", "x", wrong={"challenge": wrong})],
+                       scheme={"name": "challenge"})
+    # a second repetition of the same split with another seed: 30 of 36 right instead of 33
+    s = pd.read_parquet(d / "scores.parquet")
+    rep = s.copy()
+    rep["repetition"] = 1
+    rep["seed"] = s["seed"] + 1
+    rep["task_id"] = s["task_id"] + "-rep1"
+    rep["accuracy"] = 30 / 36
+    pd.concat([s, rep], ignore_index=True).to_parquet(d / "scores.parquet")
+    p = pd.read_parquet(d / "predictions.parquet")  # the same test captures: the same fold
+    p1 = p.assign(repetition=1, task_id=p["task_id"] + "-rep1")
+    pd.concat([p, p1], ignore_index=True).to_parquet(d / "predictions.parquet")
+    [lb] = build_leaderboards(load_results([d]))
+    x = _row(lb, "all", "x")
+    assert x["accuracy"] == pytest.approx((33 / 36 + 30 / 36) / 2)
+    assert x["accuracy_sd"] == pytest.approx((3 / 36) / math.sqrt(2))  # sample sd of two values: |a - b| / sqrt(2)
+    assert x["n_seeds"] == 2 and x["n_folds"] == 1
+    assert "± 5.9 (2 seeds)" in to_markdown([lb])

@@ -180,11 +180,17 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
         }
         mean, sd, lo, hi = fold_interval(f["accuracy"].to_numpy())
         ci_method = "t"
+        n_seeds = 1
         if len(f) == 1:
             n = int(f["n_test"].iloc[0])
             lo, hi = wilson_interval(int(round(mean * n)), n)
             ci_method = "wilson"
-        row.update(accuracy=mean, accuracy_sd=sd, ci_low=lo, ci_high=hi, ci_method=ci_method,
+            # one fold evaluated with several seeds (repetitions): the spread over the seeds
+            per_seed = g.groupby(["repetition", "seed"])["accuracy"].mean()
+            n_seeds = int(len(per_seed))
+            if n_seeds > 1:
+                sd = float(per_seed.std(ddof=1))
+        row.update(accuracy=mean, accuracy_sd=sd, n_seeds=n_seeds, ci_low=lo, ci_high=hi, ci_method=ci_method,
                    balanced_accuracy=float(f["balanced_accuracy"].mean()) if len(f) else math.nan,
                    macro_f1=float(f["macro_f1"].mean()) if len(f) else math.nan,
                    n_test=int(f["n_test"].sum()) if len(f) else 0)
@@ -366,6 +372,8 @@ def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
             secs = f", {r['early_frames'] / fr:.2g} s" if np.isfinite(fr) and fr > 0 else ""
             feats += f" @ {int(r['early_frames'])} frames{secs}"
         acc = _pct(r["accuracy"]) + (f" ± {_pct(r['accuracy_sd'])}" if np.isfinite(r["accuracy_sd"]) else "")
+        if r["ci_method"] == "wilson" and r.get("n_seeds", 1) > 1:
+            acc += f" ({int(r['n_seeds'])} seeds)"
         ci = f"{_pct(r['ci_low'])}–{_pct(r['ci_high'])}" if np.isfinite(r["ci_low"]) else "—"
         if r["ci_method"] == "wilson" and np.isfinite(r["ci_low"]):
             ci += " (Wilson)"
@@ -388,7 +396,8 @@ def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
 
 
 def legend(lb: Leaderboard) -> str:
-    return (f"Accuracy: mean over folds (± sample sd); interval: Student t over folds (Wilson over captures for a "
+    return (f"Accuracy: mean over folds (± sample sd; for a single fold evaluated with several seeds, the sd over "
+            f"the seeds); interval: Student t over folds (Wilson over captures for a "
             f"single fold). Latency: median over folds of the time to compute the features of one capture and "
             f"predict it; fit: median seconds per fold; features: median ms per capture. Δ: mean paired difference "
             f"to the best method in percentage points; p: exact sign-flip permutation test (≤15 pairs) or Wilcoxon "
