@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
 from sklearn.ensemble import RandomForestClassifier
+from sklearn.utils import check_random_state
 from sklearn.utils.metaestimators import available_if
 from sklearn.utils.validation import check_is_fitted, validate_data
 
@@ -44,6 +45,23 @@ def build(cls: type, defaults: dict[str, Any], random_state: Any, params: dict[s
     if "random_state" in valid:
         kwargs["random_state"] = random_state
     return cls(**kwargs)
+
+
+def seed_int(random_state: Any) -> int:
+    """An integer seed for a sub-estimator: ``random_state`` itself when it is an
+    integer, else one draw from it (None, a RandomState) below ``MAX_SEED``."""
+    if isinstance(random_state, (int, np.integer)):
+        return int(random_state)
+    return int(check_random_state(random_state).randint(MAX_SEED))
+
+
+def frames_in_row(n_columns: int, grid: tuple[int, int], who: str = "") -> int:
+    """Frames in a flattened capture of ``n_columns`` values on ``grid`` (H, W);
+    a ``ValueError`` (prefixed with ``who``) when they do not fill whole frames."""
+    h, w = (int(g) for g in grid)
+    if n_columns % (h * w):
+        raise ValueError(f"{who + ': ' if who else ''}{n_columns} features is not a whole number of {h}x{w} frames")
+    return n_columns // (h * w)
 
 
 def torch_available() -> bool:

@@ -96,7 +96,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ..errors import TouchbenchError
-from ._util import MAX_SEED, build, torch_available
+from ._util import MAX_SEED, build, frames_in_row, torch_available
 from .base import CLASSIFIERS
 
 INSTALL_HINT = "pip install 'touchbench[deep]'  (or: pip install torch==2.13.0)"
@@ -245,13 +245,8 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
         grid = self._check_params()
         X, y = validate_data(self, X, y, dtype=np.float64)
         check_classification_targets(y)
-        cells = grid[0] * grid[1]
-        if X.shape[1] % cells:
-            raise ValueError(
-                f"HaartCNNClassifier: {X.shape[1]} features is not a whole number of {grid[0]}x{grid[1]} frames"
-            )
         self.grid_ = grid
-        self.n_frames_total_ = X.shape[1] // cells
+        self.n_frames_total_ = frames_in_row(X.shape[1], grid, "HaartCNNClassifier")
         self.frames_per_window_ = self.n_frames_total_ // int(self.L)
         if self.frames_per_window_ < 1:
             raise ValueError(f"L={self.L} leaves no frame per window ({self.n_frames_total_} frames in a capture)")

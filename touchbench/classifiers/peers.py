@@ -38,12 +38,11 @@ import importlib.util
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
-from sklearn.utils import check_random_state
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ..errors import TouchbenchError
-from ._util import MAX_SEED, build
+from ._util import build, frames_in_row, seed_int
 from .base import CLASSIFIERS
 
 INSTALL_HINT = "pip install 'touchbench[peers]'  (or: pip install aeon)"
@@ -67,11 +66,8 @@ def frames_to_series(X: np.ndarray, grid: tuple[int, int]) -> np.ndarray:
 
     Fewer than ``MIN_TIMEPOINTS`` frames are padded by repeating the last one.
     """
-    h, w = (int(g) for g in grid)
-    cells = h * w
-    if X.shape[1] % cells:
-        raise ValueError(f"{X.shape[1]} features is not a whole number of {h}x{w} frames")
-    f = X.shape[1] // cells
+    f = frames_in_row(X.shape[1], grid)
+    cells = int(grid[0]) * int(grid[1])
     S = X.reshape(X.shape[0], f, cells).transpose(0, 2, 1)
     if f < MIN_TIMEPOINTS:
         S = np.concatenate([S, np.repeat(S[:, :, -1:], MIN_TIMEPOINTS - f, axis=2)], axis=2)
@@ -103,13 +99,10 @@ class _RocketPeer(ClassifierMixin, BaseEstimator):
         X, y = validate_data(self, X, y, dtype=np.float64)
         check_classification_targets(y)
         self.classes_ = np.unique(y)
-        seed = self.random_state
-        if not isinstance(seed, (int, np.integer)):
-            seed = int(check_random_state(seed).randint(MAX_SEED))
         if len(self.classes_) == 1:
             self.model_ = None  # one class: nothing to learn
             return self
-        self.model_ = self._make(int(seed))
+        self.model_ = self._make(seed_int(self.random_state))
         self.model_.fit(frames_to_series(X, self.grid), y)
         return self
 

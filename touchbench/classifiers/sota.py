@@ -33,11 +33,10 @@ import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
 from sklearn.ensemble import ExtraTreesClassifier
 from sklearn.model_selection import GroupKFold, LeaveOneGroupOut, StratifiedKFold
-from sklearn.utils import check_random_state
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ._util import MAX_SEED, build
+from ._util import MAX_SEED, build, frames_in_row, seed_int
 from .base import CLASSIFIERS
 
 #: at most this many rows are predicted with the compiled forest (live use, latency)
@@ -47,12 +46,6 @@ SOURCE = "touchbench issue 9 (benchmarks/sota/NOTES.md); Geurts et al. 2006 extr
 
 def _extra_trees(n_estimators: int, max_features: Any, n_jobs: int, seed: int) -> ExtraTreesClassifier:
     return ExtraTreesClassifier(n_estimators=int(n_estimators), max_features=max_features, n_jobs=int(n_jobs), random_state=seed)
-
-
-def _seed(random_state) -> int:
-    if isinstance(random_state, (int, np.integer)):
-        return int(random_state)
-    return int(check_random_state(random_state).randint(MAX_SEED))
 
 
 class SelectedExtraTrees(ClassifierMixin, BaseEstimator):
@@ -73,7 +66,7 @@ class SelectedExtraTrees(ClassifierMixin, BaseEstimator):
     def fit(self, X, y):
         X, y = validate_data(self, X, y, dtype=np.float64)
         check_classification_targets(y)
-        seed = _seed(self.random_state)
+        seed = seed_int(self.random_state)
         if self.keep is not None and int(self.keep) < X.shape[1]:
             ranker = _extra_trees(200, self.max_features, self.n_jobs, seed + 1).fit(X, y)
             self.columns_ = np.sort(np.argsort(-ranker.feature_importances_, kind="stable")[: int(self.keep)])
@@ -106,9 +99,10 @@ class SelectedExtraTrees(ClassifierMixin, BaseEstimator):
 class NestedTunedExtraTrees(ClassifierMixin, BaseEstimator):
     """``SelectedExtraTrees`` whose ``max_features`` and ``keep`` are chosen by inner CV on the training rows.
 
-    ``inner_splits``: ``"subject"`` leaves one training subject out when
-    ``groups`` has at most ``max_groups_loo`` subjects, else ``GroupKFold``
-    with ``inner_folds``; without groups, ``StratifiedKFold(inner_folds)``.
+    Inner splits: with ``groups`` (the training subjects), one training
+    subject is left out when there are at most ``max_groups_loo`` of them,
+    else ``GroupKFold(inner_folds)``; without groups,
+    ``StratifiedKFold(inner_folds)``.
     Ties go to the earlier grid entry (the cheaper, default-like one).
     """
 
@@ -130,7 +124,7 @@ class NestedTunedExtraTrees(ClassifierMixin, BaseEstimator):
             return GroupKFold(n_splits=min(int(self.inner_folds), n_groups))
         _, counts = np.unique(y, return_counts=True)
         k = max(2, min(int(self.inner_folds), int(counts.min())))
-        return StratifiedKFold(n_splits=k, shuffle=True, random_state=_seed(self.random_state) % MAX_SEED)
+        return StratifiedKFold(n_splits=k, shuffle=True, random_state=seed_int(self.random_state) % MAX_SEED)
 
     def candidates(self) -> list[dict[str, Any]]:
         return [{"max_features": mf, "keep": k} for k in self.grid_keep for mf in self.grid_max_features]
@@ -142,7 +136,7 @@ class NestedTunedExtraTrees(ClassifierMixin, BaseEstimator):
             groups = np.asarray(groups)
             if len(groups) != len(y):
                 raise ValueError(f"groups has {len(groups)} entries for {len(y)} training rows")
-        seed = _seed(self.random_state)
+        seed = seed_int(self.random_state)
         base = SelectedExtraTrees(n_estimators=self.n_estimators, n_jobs=self.n_jobs, random_state=seed)
         splitter = self._inner_splitter(y, groups)
         self.inner_splitter_ = splitter
@@ -207,26 +201,28 @@ class TouchFeatureClassifier(ClassifierMixin, BaseEstimator):
 
     def _captures(self, X: np.ndarray) -> np.ndarray:
         h, w = (int(g) for g in self.grid)
-        if X.shape[1] % (h * w):
-            raise ValueError(f"{X.shape[1]} features is not a whole number of {h}x{w} frames")
-        return X.reshape(X.shape[0], X.shape[1] // (h * w), h, w)
+        return X.reshape(X.shape[0], frames_in_row(X.shape[1], (h, w)), h, w)
 
     def _features(self, caps: np.ndarray) -> np.ndarray:
+        """The feature sets of ``caps``; a set that takes a ``frame_rate`` gets this estimator's."""
+        import inspect
+
         from ..features.base import FEATURES
 
         blocks = []
         for name in self.feature_sets:
-            fs = FEATURES.create(name, frame_rate=self.frame_rate) if name in _OWN_SETS else FEATURES.create(name)
+            takes_rate = "frame_rate" in inspect.signature(FEATURES.get(name)).parameters
+            fs = FEATURES.create(name, frame_rate=self.frame_rate) if takes_rate else FEATURES.create(name)
             blocks.append(fs.fit(caps[:1]).transform(caps))
         return np.hstack(blocks)
 
     def _make_model(self):
         params = dict(self.model_params or {})
-        seed = _seed(self.random_state)
+        seed = seed_int(self.random_state)
         if self.model == "et":
-            return SelectedExtraTrees(**{**DEFAULTS_ET, **params, "random_state": seed})
+            return build(SelectedExtraTrees, DEFAULTS_ET, seed, params, name="touch (et)")
         if self.model == "et-tuned":
-            return NestedTunedExtraTrees(**{**DEFAULTS_TUNED, **params, "random_state": seed})
+            return build(NestedTunedExtraTrees, DEFAULTS_TUNED, seed, params, name="touch (et-tuned)")
         if self.model == "xgboost":
             from .base import make_classifier
 
@@ -240,23 +236,17 @@ class TouchFeatureClassifier(ClassifierMixin, BaseEstimator):
             raise ValueError("feature_sets must name at least one feature set")
         caps = self._captures(X)
         F = [self._features(caps)]
-        ys = [y]
-        gs = [groups] if groups is not None else None
         if self.gain_augment:
             from ..features.sota import pressure
 
-            _, base = pressure(caps[:, :0] if caps.shape[1] == 0 else caps)
+            _, base = pressure(caps)
             b = base.reshape(caps.shape[0], 1, *caps.shape[2:])
-            for g in self.gain_augment:
-                F.append(self._features(b + float(g) * (caps - b)))
-                ys.append(y)
-                if gs is not None:
-                    gs.append(groups)
-        model = self._make_model()
+            F += [self._features(b + float(g) * (caps - b)) for g in self.gain_augment]
+        copies = len(F)  # the captures, then one copy per gain factor, in that order
         fit_kw = {}
-        if self.model == "et-tuned" and gs is not None:
-            fit_kw["groups"] = np.concatenate([np.asarray(g) for g in gs])
-        self.model_ = model.fit(np.vstack(F), np.concatenate(ys), **fit_kw)
+        if self.model == "et-tuned" and groups is not None:
+            fit_kw["groups"] = np.tile(np.asarray(groups), copies)
+        self.model_ = self._make_model().fit(np.vstack(F), np.tile(y, copies), **fit_kw)
         self.classes_ = np.asarray(self.model_.classes_)
         return self
 
@@ -269,8 +259,6 @@ class TouchFeatureClassifier(ClassifierMixin, BaseEstimator):
         proba = self.predict_proba(X)
         return self.classes_[np.argmax(proba, axis=1)]
 
-
-_OWN_SETS = ("touch-rhythm", "cell-rhythm", "contact-motion", "touch-windows")
 
 DEFAULTS_ET = {"n_estimators": 500, "max_features": 0.3, "keep": None, "n_jobs": 1}
 DEFAULTS_FAST = {"n_estimators": 100, "max_features": 0.3, "keep": None, "n_jobs": 1}

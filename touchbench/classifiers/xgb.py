@@ -15,11 +15,10 @@ from __future__ import annotations
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.preprocessing import LabelEncoder
-from sklearn.utils import check_random_state
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ._util import MAX_SEED, build, check_sample_weight
+from ._util import build, check_sample_weight, seed_int
 from .base import CLASSIFIERS
 
 
@@ -47,9 +46,7 @@ class XGBoostClassifier(ClassifierMixin, BaseEstimator):
         self.encoder_ = LabelEncoder().fit(y)
         self.classes_ = self.encoder_.classes_
         yi = self.encoder_.transform(y)
-        seed = self.random_state
-        if not isinstance(seed, (int, np.integer)):
-            seed = int(check_random_state(seed).randint(MAX_SEED))
+        seed = seed_int(self.random_state)
         k = len(self.classes_)
         self.booster_model_ = xgboost.XGBClassifier(
             n_estimators=self.n_estimators, max_depth=self.max_depth, learning_rate=self.learning_rate,
