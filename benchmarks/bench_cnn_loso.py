@@ -48,7 +48,7 @@ import numpy as np
 
 def haart_raw():
     """(X, gestures, subjects) of real HAART, X from the ``raw-window`` set."""
-    from touchbench.datasets import load_dataset
+    from touchbench.catalog import load_dataset
 
     ds = load_dataset("haart")
     try:

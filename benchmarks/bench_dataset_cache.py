@@ -11,7 +11,7 @@ import statistics
 import tempfile
 import time
 
-from touchbench.datasets import load_dataset
+from touchbench.catalog import load_dataset
 
 
 def main() -> None:

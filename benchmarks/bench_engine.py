@@ -86,8 +86,8 @@ def bench_overhead(work: Path, repeats: int) -> dict:
 
 
 def bench_cache(work: Path, repeats: int, protocol: str) -> dict:
-    from touchbench.cli.protocols import find_protocol
-    from touchbench.paths import cache_dir
+    from touchbench.protocols.library import find_protocol
+    from touchbench.core.paths import cache_dir
     from touchbench.protocols.schema import load_protocol
 
     proto = load_protocol(find_protocol(protocol))
@@ -134,7 +134,7 @@ def main(argv=None) -> None:
     os.environ["TOUCHBENCH_CACHE_DIR"] = str(work / "cache")
     os.chdir(work)
     try:
-        from touchbench.datasets import load_dataset
+        from touchbench.catalog import load_dataset
 
         for name in ("haart", "haart-challenge"):
             load_dataset(name)  # convert once, outside the timings

@@ -86,7 +86,7 @@ def main(argv=None) -> int:
     else:
         pinned = "not pinned"
 
-    from touchbench.datasets import load_dataset
+    from touchbench.catalog import load_dataset
     from touchbench.features import FEATURES
 
     ds = load_dataset(args.dataset)

@@ -40,7 +40,7 @@ seed: 0
 
 def child(features: str, trees: int, work: Path) -> None:
     os.environ["TOUCHBENCH_CACHE_DIR"] = str(work / "cache")
-    from touchbench.datasets import load_dataset
+    from touchbench.catalog import load_dataset
     from touchbench.engine import run_protocol
     from touchbench.protocols.schema import parse_protocol
 

@@ -43,7 +43,7 @@ def main() -> None:
     args = ap.parse_args()
 
     from touchbench.classifiers import make_classifier
-    from touchbench.datasets import load_dataset
+    from touchbench.catalog import load_dataset
 
     cpus = sorted(os.sched_getaffinity(0))
     os.sched_setaffinity(0, {cpus[-1]})

@@ -98,7 +98,7 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     cpu = pin_one_core()
 
-    from touchbench.datasets import load_dataset
+    from touchbench.catalog import load_dataset
     from touchbench.deploy.model import TrainedModel
     from touchbench.engine.tasks import single_thread
 

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from touchbench.datasets import load_dataset
+from touchbench.catalog import load_dataset
 from touchbench.datasets.sample import SAMPLE_PATH
 
 ds = load_dataset("haart")

@@ -7,7 +7,7 @@ import os
 
 import pytest
 
-from touchbench.paths import data_dir
+from touchbench.core.paths import data_dir
 
 
 def _haart_dir():
@@ -35,14 +35,14 @@ def tb_cache(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def real_haart(real_haart_dir, tb_cache):
-    from touchbench.datasets import load_dataset
+    from touchbench.catalog import load_dataset
 
     return load_dataset("haart", cache_dir=tb_cache)
 
 
 @pytest.fixture(scope="session")
 def real_haart_challenge(real_haart_dir, tb_cache):
-    from touchbench.datasets import load_dataset
+    from touchbench.catalog import load_dataset
 
     return load_dataset("haart-challenge", cache_dir=tb_cache)
 

@@ -19,7 +19,7 @@ from touchbench.cli.main import cli  # noqa: E402
 from touchbench.engine import run_protocol  # noqa: E402
 from touchbench.engine.backends import supports_generator, use_backend  # noqa: E402
 from touchbench.engine.testing import components_for_tests, register_test_components  # noqa: E402
-from touchbench.errors import TouchbenchError  # noqa: E402
+from touchbench.core.errors import TouchbenchError  # noqa: E402
 from test_backends_shared import assert_same_results, env, write_protocol  # noqa: E402,F401  (env: a fixture)
 
 

@@ -14,7 +14,7 @@ import pytest
 from click.testing import CliRunner
 
 from touchbench.classifiers import CLASSIFIERS, make_classifier
-from touchbench.errors import TouchbenchError, UnknownNameError
+from touchbench.core.errors import TouchbenchError, UnknownNameError
 
 EXPECTED = [
     "gaus-rf", "gaus-boost", "flagg-logistic", "flagg-bayesnet", "flagg-mlp", "flagg-rf", "zhou-tree",
@@ -131,7 +131,7 @@ _NO_TORCH = textwrap.dedent("""
     from click.testing import CliRunner
     from touchbench.classifiers import CLASSIFIERS, make_classifier
     from touchbench.cli.classifiers import classifiers
-    from touchbench.errors import TouchbenchError
+    from touchbench.core.errors import TouchbenchError
     out = {"names": CLASSIFIERS.names()}
     res = CliRunner().invoke(classifiers, ["list"])
     out["list_exit"] = res.exit_code

@@ -12,7 +12,7 @@ from touchbench.datasets.cost import read_cost_csv
 from touchbench.datasets.generic import read_long_table
 from touchbench.datasets.haart import HAART_SENSOR
 from touchbench.datasets.model import TouchDataset
-from touchbench.errors import DataError
+from touchbench.core.errors import DataError
 
 
 def _challenge_like(n_train=2, n_test=2, seed=0) -> TouchDataset:

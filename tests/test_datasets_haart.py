@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from touchbench.datasets import load_dataset
+from touchbench.catalog import load_dataset
 from touchbench.datasets.haart import build_haart, find_recordings
-from touchbench.errors import DataError
+from touchbench.core.errors import DataError
 
 from helpers import random_recording, write_recording
 

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from touchbench.datasets.model import SensorSpec, TouchDataset, concat
-from touchbench.errors import DataError
+from touchbench.core.errors import DataError
 
 from helpers import make_dataset
 

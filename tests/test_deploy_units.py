@@ -17,11 +17,11 @@ from sklearn.ensemble import ExtraTreesClassifier, RandomForestClassifier
 from sklearn.linear_model import LogisticRegression
 
 from touchbench.datasets.model import SensorSpec
-from touchbench.deploy.fastforest import compile_forest
+from touchbench.classifiers.fastforest import compile_forest
 from touchbench.deploy.model import SensorMismatchError, TrainedModel, sensor_differences
 from touchbench.deploy.stream import SlidingRecognizer, replay, run_stream, text_frames
 from touchbench.deploy.windows import combine_windows, cut_windows, seconds_to_frames
-from touchbench.errors import DataError, TouchbenchError
+from touchbench.core.errors import DataError, TouchbenchError
 
 SENSOR = SensorSpec("stub", grid=(2, 2), frame_rate=10.0, value_range=(0.0, 100.0))
 

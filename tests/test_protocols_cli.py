@@ -8,7 +8,7 @@ import pytest
 from click.testing import CliRunner
 
 from touchbench.cli.main import cli
-from touchbench.paths import REPO_ROOT
+from touchbench.core.paths import REPO_ROOT
 from touchbench.protocols.schema import load_protocol
 
 SHIPPED = sorted((REPO_ROOT / "protocols").glob("*.yaml")) + sorted((REPO_ROOT / "protocols" / "papers").glob("*.yaml"))

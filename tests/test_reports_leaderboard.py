@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from touchbench.errors import TouchbenchError
+from touchbench.core.errors import TouchbenchError
 from touchbench.reports.leaderboard import build_leaderboards, compare_methods, to_csv, to_json, to_markdown
 from touchbench.reports.results import load_results
 from touchbench.reports.stats import wilson_interval

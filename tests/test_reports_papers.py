@@ -11,9 +11,9 @@ import pandas as pd
 import pytest
 import yaml
 
-from touchbench.paths import REPO_ROOT
+from touchbench.core.paths import REPO_ROOT
 from touchbench.protocols.schema import load_protocol
-from touchbench.reports.papers import (
+from touchbench.papers.reproduce import (
     PAPER_CHECKS,
     PROFILES,
     Profile,
@@ -188,7 +188,7 @@ def test_report_states_a_failed_protocol(tmp_path):
 
 
 def test_reproduce_end_to_end_on_a_tiny_protocol(tmp_path):
-    from touchbench.reports.papers import reproduce
+    from touchbench.papers.reproduce import reproduce
 
     d = tmp_path / "papers"
     d.mkdir()
@@ -208,7 +208,7 @@ expected:
     - {features: [msd], classifier: gaus-rf, value: 50.0, source: "made up"}
 """)
     prof = Profile("t", "test profile", classifier_caps={"gaus-rf": {"n_estimators": 5}})
-    import touchbench.reports.papers as P
+    import touchbench.papers.reproduce as P
 
     P.PROFILES["t"] = prof
     try:

@@ -7,7 +7,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from touchbench.datasets import TouchDataset, load_dataset
+from touchbench.datasets import TouchDataset
+
+from touchbench.catalog import load_dataset
 from touchbench.scenes import generate_scene
 
 

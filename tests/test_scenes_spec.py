@@ -7,7 +7,7 @@ import copy
 import pytest
 import yaml
 
-from touchbench.errors import DataError, UnknownNameError
+from touchbench.core.errors import DataError, UnknownNameError
 from touchbench.scenes import SCENES, SPECS_DIR, generate_scene, load_scene
 from touchbench.scenes.spec import n_captures, parse_spec, subject_ids
 

@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from touchbench.errors import UnknownNameError
+from touchbench.core.errors import UnknownNameError
 from touchbench.protocols.splits import SPLITTERS, Crop, Fold, SplitError, fold_notes, make_splitter
 
 

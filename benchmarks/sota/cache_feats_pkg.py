@@ -1,6 +1,6 @@
 """Compute the own and the paper feature sets of haart and haart-challenge once into /tmp/exp (for exp 15, 16)."""
 import numpy as np, time, sys
-from touchbench.datasets import load_dataset
+from touchbench.catalog import load_dataset
 from touchbench.features.base import FEATURES
 for dsname in ["haart", "haart-challenge"]:
     ds = load_dataset(dsname)

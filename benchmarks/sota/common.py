@@ -1,7 +1,7 @@
 """Shared helpers for the Phase-1 SOTA exploration scripts (benchmarks only)."""
 from __future__ import annotations
 import numpy as np
-from touchbench.datasets import load_dataset
+from touchbench.catalog import load_dataset
 
 _CACHE = {}
 

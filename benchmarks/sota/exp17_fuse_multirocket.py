@@ -12,7 +12,7 @@ from sklearn.linear_model import RidgeClassifierCV
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 from common import OWN_SETS, cached_inner
-from touchbench.datasets import load_dataset
+from touchbench.catalog import load_dataset
 
 DS = "haart-challenge"
 ds = load_dataset(DS)

@@ -20,7 +20,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils.metaestimators import available_if
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ..errors import TouchbenchError
+from ..core.errors import TouchbenchError
 
 #: Largest seed handed to a sub-estimator (numpy's legacy RandomState bound).
 MAX_SEED = 2**31 - 1

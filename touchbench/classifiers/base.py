@@ -12,7 +12,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from ..registry import Registry
+from ..core.registry import Registry
 
 _MODULES: list[str] = [
     "touchbench.classifiers.gaus",

@@ -3,7 +3,7 @@ Table 1, Fig. 5), in PyTorch: the ``deep`` extra.
 
 PyTorch is imported lazily, inside this module's functions only, so the
 rest of touchbench works without it; building the ``cnn`` entry without
-PyTorch raises a :class:`~touchbench.errors.TouchbenchError` naming the
+PyTorch raises a :class:`~touchbench.core.errors.TouchbenchError` naming the
 install command (``pip install 'touchbench[deep]'``).
 
 Input
@@ -95,7 +95,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ..errors import TouchbenchError
+from ..core.errors import TouchbenchError
 from ._util import MAX_SEED, build, frames_in_row, torch_available
 from .base import CLASSIFIERS
 

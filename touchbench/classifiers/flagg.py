@@ -36,7 +36,12 @@ from __future__ import annotations
 from sklearn.linear_model import LogisticRegression
 from sklearn.pipeline import Pipeline
 
-from ._util import DelegatingClassifier, SampleStandardScaler, WekaRandomForestClassifier, build
+from ._util import (
+    DelegatingClassifier,
+    SampleStandardScaler,
+    WekaRandomForestClassifier,
+    build,
+)
 from .base import CLASSIFIERS
 from .bayesnet import K2BayesNetClassifier
 from .mlp import WekaMLPClassifier

@@ -41,7 +41,7 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ..errors import TouchbenchError
+from ..core.errors import TouchbenchError
 from ._util import build, frames_in_row, seed_int
 from .base import CLASSIFIERS
 

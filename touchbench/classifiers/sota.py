@@ -84,7 +84,7 @@ class SelectedExtraTrees(ClassifierMixin, BaseEstimator):
         X = validate_data(self, X, dtype=np.float64, reset=False)[:, self.columns_]
         if X.shape[0] <= FEW_ROWS:
             if getattr(self, "_compiled", None) is None:
-                from ..deploy.fastforest import compile_forest
+                from .fastforest import compile_forest
 
                 self._compiled = compile_forest(self.model_) or False
             if self._compiled:

@@ -20,8 +20,7 @@ def classifiers() -> None:
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per classifier, in a list.")
 def list_classifiers(as_json: bool) -> None:
     """List every classifier with its source and defaults."""
-    from ..classifiers import CLASSIFIERS
-    from ..classifiers import cnn, peers
+    from ..classifiers import CLASSIFIERS, cnn, peers
     from ..classifiers._util import torch_available
 
     extras_ok = {"deep": torch_available(), "peers": peers.aeon_available()}

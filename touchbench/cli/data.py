@@ -7,7 +7,9 @@ from pathlib import Path
 
 import click
 
-from ..datasets import DATASETS, load_dataset
+from ..datasets import DATASETS
+
+from ..catalog import load_dataset, parse_dataset_ref
 from ..datasets.model import TouchDataset
 
 FORMATS = ("challenge-csv", "cost-csv", "long")
@@ -27,7 +29,7 @@ def list_() -> None:
 
 def _load(name: str, cache_dir: str | None, data_dir: str | None, refresh: bool = False) -> TouchDataset:
     kw = {}
-    if not (name.startswith("scene:") or Path(name).is_file()):
+    if parse_dataset_ref(name).kind == "registered":
         kw = {"cache_dir": cache_dir, "data_dir": data_dir, "refresh": refresh}
     return load_dataset(name, **kw)
 

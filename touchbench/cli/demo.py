@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import click
 
-from ..errors import DataError
+from ..core.errors import DataError
 
 
 @click.command()
@@ -21,7 +21,7 @@ def demo(ctx: click.Context, jobs: int) -> None:
     from ..datasets.haart import _raw_dir
     from ..engine.runner import default_results_dir
     from ..protocols.schema import load_protocol
-    from .protocols import find_protocol
+    from ..protocols.library import find_protocol
     from .reports import leaderboard
     from .run import run
 

@@ -108,7 +108,13 @@ def stream(model_path, source, windows, hop, threshold, combine, none_label, cap
     values, row-major). Prints one decision per hop, then latency p50/p99."""
     from dataclasses import asdict
 
-    from ..deploy.stream import SlidingRecognizer, load_replay, replay, run_stream, text_frames
+    from ..deploy.stream import (
+        SlidingRecognizer,
+        load_replay,
+        replay,
+        run_stream,
+        text_frames,
+    )
 
     model = _load_model(model_path)
     rec = SlidingRecognizer(model, _floats(windows, "--window"), hop_s=hop, threshold=threshold,
@@ -134,6 +140,6 @@ def stream(model_path, source, windows, hop, threshold, combine, none_label, cap
     if summary_json:
         from pathlib import Path
 
-        from ..results.store import atomic_write_bytes
+        from ..core.atomic import atomic_write_bytes
 
         atomic_write_bytes(Path(summary_json), json.dumps(asdict(summary), indent=2).encode())

@@ -9,7 +9,7 @@ import sys
 import click
 
 from .. import __version__
-from ..errors import TouchbenchError
+from ..core.errors import TouchbenchError
 
 # (module, attribute) of each subcommand; one line per area.
 _COMMANDS: list[tuple[str, str]] = [

@@ -7,31 +7,8 @@ from pathlib import Path
 import click
 import yaml
 
-from ..paths import REPO_ROOT
-from ..protocols.schema import ProtocolError, load_protocol
-
-
-def protocol_dirs() -> list[Path]:
-    """``protocols/`` of the current directory and of the checkout (deduplicated)."""
-    out: list[Path] = []
-    for base in (Path.cwd(), REPO_ROOT):
-        d = (base / "protocols").resolve()
-        if d.is_dir() and d not in out:
-            out.append(d)
-    return out
-
-
-def find_protocol(ref: str) -> Path:
-    """A protocol file path, or a name looked up in protocols/ and protocols/papers/."""
-    p = Path(ref)
-    if p.is_file():
-        return p
-    for d in protocol_dirs():
-        for sub in (d, d / "papers"):
-            for cand in (sub / ref, sub / f"{ref}.yaml", sub / f"{ref}.yml"):
-                if cand.is_file():
-                    return cand
-    raise ProtocolError(f"{ref}: no such protocol file (nor a protocol of that name in protocols/ or protocols/papers/)")
+from ..protocols.library import find_protocol, protocol_dirs
+from ..protocols.schema import load_protocol
 
 
 def _description(path: Path) -> str:

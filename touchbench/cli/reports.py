@@ -24,7 +24,7 @@ def _load(results: tuple[str, ...], predictions: bool = True):
 
 
 def _filter(lbs, dataset: str | None, scheme: str | None):
-    from ..errors import TouchbenchError
+    from ..core.errors import TouchbenchError
 
     out = [lb for lb in lbs if (dataset is None or dataset in (lb.dataset, lb.dataset_hash[: len(dataset)]))
            and (scheme is None or lb.scheme == scheme or lb.scheme.split("(")[0] == scheme)]
@@ -71,7 +71,13 @@ def leaderboard(results, formats, out, dataset, scheme, alpha, pool_machines, ma
     time, feature time, the paired test against the best method (exact
     permutation or Wilcoxon, Holm-corrected) and the accuracy/latency Pareto
     front (★)."""
-    from ..reports.leaderboard import print_terminal, to_csv, to_json, to_markdown, write_outputs
+    from ..reports.leaderboard import (
+        print_terminal,
+        to_csv,
+        to_json,
+        to_markdown,
+        write_outputs,
+    )
 
     _, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
     if out:
@@ -97,7 +103,7 @@ def compare(results, a, b, as_json, dataset, scheme, alpha, pool_machines, machi
     """The paired test of method A against B (by fold, or by subject when
     they share one fold), the per-fold differences and the per-class
     recall and F1 differences, in every table holding both methods."""
-    from ..errors import TouchbenchError
+    from ..core.errors import TouchbenchError
     from ..reports.leaderboard import compare_methods, method_label
 
     rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
@@ -211,8 +217,8 @@ def papers() -> None:
 @click.option("--profile", default="quick", show_default=True, help="Show what this profile changes.")
 def papers_list(profile: str) -> None:
     """The paper protocols and what the profile changes in each."""
-    from ..errors import TouchbenchError
-    from ..reports.papers import PROFILES, apply_profile, paper_protocols
+    from ..core.errors import TouchbenchError
+    from ..papers.reproduce import PROFILES, apply_profile, paper_protocols
 
     if profile not in PROFILES:
         raise TouchbenchError(f"unknown profile {profile!r} (known: {', '.join(PROFILES)})")
@@ -239,7 +245,7 @@ def papers_reproduce(profile, out, only, jobs, report_path, progress) -> None:
     finished tasks) and write REPORT.md: for each table and figure, the
     paper's number, ours, the difference, real or synthetic data, and the
     protocol file."""
-    from ..reports.papers import reproduce
+    from ..papers.reproduce import reproduce
 
     p = reproduce(profile, out, only=list(only) or None, jobs=jobs, progress=progress, report=report_path,
                   echo=lambda s: click.echo(s, err=True))

@@ -8,7 +8,7 @@ import sys
 import click
 
 from ..engine.backends import backend_for_run, backend_options
-from .protocols import find_protocol
+from ..protocols.library import find_protocol
 
 
 def _pct(x: float) -> str:

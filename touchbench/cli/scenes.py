@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 import yaml
 
-from ..errors import TouchbenchError
+from ..core.errors import TouchbenchError
 
 
 def _parse_sets(values: tuple[str, ...]) -> dict:
@@ -78,8 +78,8 @@ def calibrate(name: str, seed: int | None, real: str | None, feature_sets: str |
     Gaus features + random forest (LOSO and challenge split) on both. A
     scene without a real counterpart gets its separability instead: the
     accuracy of a few methods, person-independent and random 5-fold."""
+    from ..evaluation import calibration as cal
     from ..scenes import generate_scene, load_scene
-    from ..scenes import calibrate as cal
 
     spec = load_scene(name)
     sets = [s.strip() for s in feature_sets.split(",")] if feature_sets else None

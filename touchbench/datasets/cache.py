@@ -12,7 +12,7 @@ import hashlib
 from pathlib import Path
 from typing import Callable, Sequence
 
-from ..paths import cache_dir as default_cache_dir
+from ..core.paths import cache_dir as default_cache_dir
 from .model import FORMAT_VERSION, TouchDataset
 
 

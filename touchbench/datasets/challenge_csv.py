@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
-from ..errors import DataError
+from ..core.errors import DataError
 from .haart import HAART_SENSOR, N_FRAMES
 from .model import TouchDataset
 from .tables import find_column, numeric, read_table, runs, write_csv_atomic

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..errors import DataError
+from ..core.errors import DataError
 from .model import SensorSpec, TouchDataset
 from .tables import find_column, numeric, read_table, runs
 

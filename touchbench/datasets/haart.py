@@ -39,8 +39,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..errors import DataError
-from ..paths import data_dir as default_data_dir
+from ..core.errors import DataError
+from ..core.paths import data_dir as default_data_dir
 from .cache import cached_dataset
 from .model import SensorSpec, TouchDataset
 from .registry import DATASETS

@@ -16,8 +16,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import tempfile
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Sequence
@@ -27,7 +25,8 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from ..errors import DataError
+from ..core.atomic import atomic_path
+from ..core.errors import DataError
 
 FORMAT_VERSION = 2
 REQUIRED_META = ("capture_id", "subject", "gesture")
@@ -210,15 +209,8 @@ class TouchDataset:
             "provenance": self.provenance,
         }
         table = table.replace_schema_metadata({**(table.schema.metadata or {}), b"touchbench": json.dumps(info).encode()})
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-        os.close(fd)
-        try:
+        with atomic_path(path) as tmp:
             pq.write_table(table, tmp, compression="zstd", use_dictionary=[c for c in table.column_names if c != "frames"])
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
         return path
 
     @classmethod

@@ -1,19 +1,15 @@
-"""Registered datasets, and :func:`load_dataset` which resolves a name.
+"""Registered datasets.
 
 An entry is a loader ``f(cache_dir=None, data_dir=None, refresh=False) ->
-TouchDataset``. :func:`load_dataset` accepts a registered dataset name, a
-registered scene name written ``scene:NAME``, or the path of a dataset
-Parquet file.
+TouchDataset``. :func:`touchbench.catalog.load_dataset` resolves a
+reference (a registered name, ``scene:NAME`` or a Parquet path).
 """
 
 from __future__ import annotations
 
 import importlib
-from pathlib import Path
-from typing import Any
 
-from ..registry import Registry
-from .model import TouchDataset
+from ..core.registry import Registry
 
 _MODULES = ["touchbench.datasets.haart", "touchbench.datasets.sample"]
 
@@ -24,15 +20,3 @@ def _load() -> None:
 
 
 DATASETS: Registry = Registry("dataset", loader=_load)
-
-
-def load_dataset(ref: str | Path, **kwargs: Any) -> TouchDataset:
-    """Load a registered dataset, a ``scene:NAME`` or a Parquet file."""
-    ref_s = str(ref)
-    if ref_s.startswith("scene:"):
-        from ..scenes import generate_scene  # scenes are optional at import time
-
-        return generate_scene(ref_s[len("scene:"):], **kwargs)
-    if ref_s.endswith(".parquet") or Path(ref_s).is_file():
-        return TouchDataset.from_parquet(ref_s)
-    return DATASETS.create(ref_s, **kwargs)

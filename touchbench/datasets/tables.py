@@ -18,7 +18,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.csv as pacsv
 
-from ..errors import DataError
+from ..core.errors import DataError
 
 
 def clean_name(name: object) -> str:

@@ -29,21 +29,22 @@ differ: a user's reader names its sensor ``custom``).
 from __future__ import annotations
 
 import json
-import os
-import platform
-import tempfile
 import time
 from dataclasses import dataclass, field
-from importlib import metadata
 from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
 
-from .. import __version__
+from ..classifiers import make_classifier
+from ..core.atomic import atomic_path, atomic_write_bytes
+from ..core.errors import DataError, TouchbenchError
+from ..core.introspect import accepts
+from ..core.threads import single_thread
+from ..core.versions import package_versions
 from ..datasets.model import SensorSpec, TouchDataset
-from ..errors import DataError, TouchbenchError
-from .fastforest import compile_forest
+from ..features.base import make_feature_set
+from ..classifiers.fastforest import compile_forest
 from .windows import cut_windows, seconds_to_frames
 
 __all__ = [
@@ -65,17 +66,6 @@ _CHECKED = ("scikit-learn", "numpy", "xgboost", "xgboost-cpu", "torch")
 
 class SensorMismatchError(TouchbenchError):
     """Data from a sensor the model was not trained for."""
-
-
-def package_versions() -> dict[str, str]:
-    """touchbench, Python and the installed versions of the packages a model depends on."""
-    out = {"touchbench": __version__, "python": platform.python_version()}
-    for name in _VERSIONED:
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            pass
-    return out
 
 
 def sensor_differences(model: SensorSpec, data: SensorSpec) -> list[str]:
@@ -176,16 +166,8 @@ class TrainedModel:
             "estimator": self.estimator,
             "classes": [str(c) for c in self.classes],
         }
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-        os.close(fd)
-        try:
+        with atomic_path(path) as tmp:
             joblib.dump(payload, tmp, compress=3)
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
-        from ..results.store import atomic_write_bytes
-
         text = json.dumps(self.manifest, indent=2, sort_keys=True, default=str) + "\n"
         atomic_write_bytes(manifest_path(path), text.encode())
         return path
@@ -218,7 +200,7 @@ class TrainedModel:
     def version_notes(self) -> list[str]:
         """Packages whose installed version differs from the one the model was saved with."""
         saved = self.manifest.get("versions", {})
-        now = package_versions()
+        now = package_versions(installed_only=True)
         return [
             f"model saved with {k} {saved[k]}, running {now.get(k, 'none')}"
             for k in _CHECKED if k in saved and saved[k] != now.get(k)
@@ -271,9 +253,6 @@ def fit_model(
     ``source`` is recorded in the manifest (protocol name and hash, dataset
     reference...).
     """
-    from ..classifiers import make_classifier
-    from ..engine.tasks import make_feature_set, single_thread
-
     if len(dataset) == 0:
         raise TouchbenchError(f"dataset {dataset.name!r}: no captures to train on")
     if target not in dataset.meta.columns:
@@ -306,9 +285,7 @@ def fit_model(
         if len(classes) > 1:
             est = make_classifier(classifier, random_state=seed, **classifier_params)
             fit_kw = {}
-            from ..engine.tasks import _accepts  # the engine's own rule for group-aware classifiers
-
-            if _accepts(est.fit, "groups"):
+            if accepts(est.fit, "groups"):  # the engine's own rule for group-aware classifiers
                 subjects = np.array([str(v) for v in dataset.meta["subject"].tolist()], dtype=object)
                 fit_kw["groups"] = subjects[src]
             est.fit(X, c_train, **fit_kw)
@@ -351,6 +328,6 @@ def fit_model(
         "capture_frames": {"min": int(n.min()), "median": float(np.median(n)), "max": int(n.max())},
         "capture_dtype": np.dtype(dataset.captures[0].dtype).str,
         "timings": {"features_s": round(feature_seconds, 3), "fit_s": round(fit_seconds, 3)},
-        "versions": package_versions(),
+        "versions": package_versions(installed_only=True),
     }
     return TrainedModel(fitted, est, classes, manifest)

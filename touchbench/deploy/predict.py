@@ -35,7 +35,7 @@ def read_data(source: str, fmt: str = "auto", model: TrainedModel | None = None,
               grid: tuple[int, int] | None = None, frame_rate: float | None = None) -> TouchDataset:
     """Read ``source`` with the reader ``fmt`` (``auto``: :func:`load_dataset`)."""
     if fmt == "auto":
-        from ..datasets import load_dataset
+        from ..catalog import load_dataset
 
         return load_dataset(source)
     if fmt == "challenge-csv":
@@ -97,7 +97,7 @@ def predict_dataset(model: TrainedModel, ds: TouchDataset, *, whole: bool = Fals
 
 def write_table(df: pd.DataFrame, path: str | Path) -> Path:
     """CSV or Parquet by suffix, written atomically."""
-    from ..results.store import atomic_write_bytes, atomic_write_parquet
+    from ..core.atomic import atomic_write_bytes, atomic_write_parquet
 
     path = Path(path)
     if path.suffix == ".parquet":

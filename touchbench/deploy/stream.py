@@ -41,8 +41,9 @@ from typing import IO, Any, Callable, Iterable, Iterator
 
 import numpy as np
 
+from ..core.errors import DataError, TouchbenchError
+from ..core.threads import single_thread
 from ..datasets.model import TouchDataset
-from ..errors import DataError, TouchbenchError
 from .model import TrainedModel
 from .windows import COMBINE, combine_windows, seconds_to_frames
 
@@ -284,7 +285,9 @@ def load_replay(path: str | Path, model: TrainedModel, capture: str | None = Non
     if df.shape[1] == n:
         cols = list(df.columns)
     else:
-        from ..datasets.generic import _cell_columns  # the long format's own rule for cell columns
+        from ..datasets.generic import (
+            _cell_columns,  # the long format's own rule for cell columns
+        )
 
         cols = _cell_columns(df, n, path)
     lo, hi = model.sensor.value_range
@@ -337,8 +340,6 @@ def replay(frames: np.ndarray, frame_rate: float, speed: float = 1.0, realtime: 
 def run_stream(recognizer: SlidingRecognizer, frames: Iterable[tuple[np.ndarray, float]],
                emit: Callable[[Decision], None] | None = None, late: list[int] | None = None) -> StreamSummary:
     """Feed ``frames`` to ``recognizer``, ``emit`` each decision, and summarise latencies."""
-    from ..engine.tasks import single_thread
-
     lat: list[float] = []
     summary = StreamSummary(none_label=recognizer.none_label)
     with single_thread():

@@ -28,7 +28,8 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
-from ..errors import TouchbenchError
+from ..core.errors import TouchbenchError
+from ..core.suggest import did_you_mean
 from ..protocols.seeding import derive_seed
 from .model import TrainedModel, fit_model
 
@@ -75,10 +76,7 @@ def _choose(proto, method: str | None):
                               f"({', '.join(names)})")
     if method in names:
         return choices[names.index(method)]
-    import difflib
-
-    close = difflib.get_close_matches(method, names, n=3, cutoff=0.4)
-    hint = f"; did you mean {', '.join(map(repr, close))}?" if close else ""
+    hint = did_you_mean(method, names, cutoff=0.4)
     raise TouchbenchError(f"protocol {proto.name!r} has no method {method!r}{hint} (methods: {', '.join(names)})")
 
 
@@ -94,7 +92,7 @@ def train_from_protocol(
     seed: int | None = None,
 ) -> TrainedModel:
     """Fit the protocol's ``method`` (see the module docstring) and return the model."""
-    from ..cli.protocols import find_protocol
+    from ..protocols.library import find_protocol
     from ..engine.runner import plan_run
     from ..protocols.schema import load_protocol
 

@@ -35,9 +35,9 @@ import contextlib
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterator
+from typing import Callable, Iterator
 
-from ..errors import TouchbenchError
+from ..core.errors import TouchbenchError
 
 __all__ = ["BACKENDS", "BackendInfo", "backend_for_run", "backend_options", "check_dask_workers", "supports_generator",
            "use_backend"]
@@ -51,6 +51,19 @@ class BackendInfo:
     address: str | None
     n_jobs: int | None  # parallel slots the backend offers (None: local, use --jobs)
     notes: list[str] = field(default_factory=list)
+
+
+_SETUP_DONE: set = set()
+
+
+def run_setup(setup: Callable[[], None] | None) -> None:
+    """Call a worker set-up function once per process (a picklable module-level function)."""
+    if setup is None:
+        return
+    key = (getattr(setup, "__module__", ""), getattr(setup, "__qualname__", repr(setup)))
+    if key not in _SETUP_DONE:
+        setup()
+        _SETUP_DONE.add(key)
 
 
 def supports_generator() -> bool:

@@ -2,7 +2,7 @@
 
 Features of a feature set whose ``fit`` learns nothing (``fold_dependent =
 False``) do not depend on the fold: they are computed once per capture and
-kept under ``touchbench.paths.cache_dir() / "features"``, keyed by
+kept under ``touchbench.core.paths.cache_dir() / "features"``, keyed by
 
 - the content hash of the (filtered) dataset,
 - the feature set's name and parameters (canonical JSON),
@@ -30,10 +30,12 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from .. import __version__
-from ..paths import cache_dir
-from ..results.store import atomic_write_bytes
+from ..core.atomic import atomic_write_bytes
+from ..core.paths import cache_dir
+from .backends import run_setup
 
 __all__ = ["CHUNK", "FeatureCache", "code_version", "crop_captures"]
 
@@ -165,7 +167,9 @@ class FeatureCache:
             from joblib import Parallel, delayed
 
             results = []
-            from .backends import supports_generator  # Ray's joblib backend returns lists only
+            from .backends import (
+                supports_generator,  # Ray's joblib backend returns lists only
+            )
 
             par = Parallel(n_jobs=jobs, return_as="generator" if supports_generator() else "list")
             for ch, res in zip(chunks, par(delayed(_transform_chunk)(make, ch, setup) for ch in chunks)):
@@ -190,10 +194,6 @@ class FeatureCache:
 
 def _transform_chunk(make: Callable[[], Any], captures: list[np.ndarray],
                      setup: Callable[[], None] | None = None) -> tuple[np.ndarray, float, list[str]]:
-    from threadpoolctl import threadpool_limits
-
-    from .tasks import run_setup
-
     run_setup(setup)
 
     with threadpool_limits(limits=1):

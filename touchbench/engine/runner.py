@@ -42,11 +42,13 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .. import __version__
+from ..core.errors import TouchbenchError
+from ..core.hashing import canonical_json
+from ..core.paths import cache_dir
+from ..core.suggest import did_you_mean
+from ..core.versions import package_versions
 from ..datasets.model import TouchDataset
-from ..errors import TouchbenchError
-from ..paths import cache_dir
-from ..protocols.schema import Protocol, did_you_mean, canonical_json, expand_grid, load_protocol, resolve_dataset_ref
+from ..protocols.schema import Protocol, expand_grid, load_protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
 from ..protocols.splits import SplitError
 from ..results.manifest import now_iso, update_manifest
@@ -56,12 +58,6 @@ from .cache import FeatureCache, code_version, crop_captures
 from .tasks import RunContext, SetSpec, Task, execute_task, make_feature_set
 
 __all__ = ["Plan", "RunResult", "default_results_dir", "plan_run", "run_plan", "run_protocol"]
-
-
-def _versions() -> dict[str, str]:
-    import sklearn
-
-    return {"touchbench": __version__, "numpy": np.__version__, "scikit-learn": sklearn.__version__}
 
 
 def default_results_dir(protocol: Protocol) -> Path:
@@ -108,7 +104,7 @@ class RunResult:
 
 # ----------------------------------------------------------------- dataset
 def _load(protocol: Protocol) -> TouchDataset:
-    from ..datasets import load_dataset
+    from ..catalog import load_dataset
 
     ref = resolve_dataset_ref(protocol)
     try:
@@ -176,7 +172,7 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                 except Exception as e:
                     raise protocol.error_at(("features", i, j), f"feature set {ref.name!r} rejects {p}: {type(e).__name__}: {e}") from None
 
-    versions = _versions()
+    versions = package_versions()
     combos = protocol.combinations()
     clfs = protocol.classifier_entries()
     set_info: dict[tuple, tuple[bool, str]] = {}
@@ -258,7 +254,14 @@ class _Progress:
     def __enter__(self) -> "_Progress":
         if self.enabled:
             from rich.console import Console
-            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+            from rich.progress import (
+                BarColumn,
+                MofNCompleteColumn,
+                Progress,
+                TextColumn,
+                TimeElapsedColumn,
+                TimeRemainingColumn,
+            )
 
             self._p = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                                TimeElapsedColumn(), TimeRemainingColumn(), console=Console(stderr=True), transient=False)
@@ -371,7 +374,9 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
             else:
                 from joblib import Parallel, delayed
 
-                from .backends import supports_generator  # Ray's joblib backend returns lists only
+                from .backends import (
+                    supports_generator,  # Ray's joblib backend returns lists only
+                )
 
                 results = Parallel(n_jobs=jobs, return_as="generator_unordered" if supports_generator() else "list")(
                     delayed(execute_task)(t, ctx) for t in pending)

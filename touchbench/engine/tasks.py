@@ -19,8 +19,6 @@ present in the training fold (sorted), which every estimator accepts
 
 from __future__ import annotations
 
-import contextlib
-import inspect
 import time
 import traceback
 import warnings
@@ -31,66 +29,18 @@ from typing import Any, Callable
 import numpy as np
 import pandas as pd
 
-from ..datasets.model import SensorSpec, TouchDataset
+from ..core.introspect import accepts
+from ..core.threads import single_thread
+from ..datasets.model import TouchDataset
+from ..evaluation.metrics import metrics
+from ..features.base import make_feature_set
 from ..protocols.splits import Fold, fold_notes
+from .backends import run_setup
 from .cache import FeatureCache, crop_captures
 
-__all__ = ["RunContext", "SetSpec", "Task", "execute_task", "make_feature_set", "single_thread"]
+__all__ = ["RunContext", "SetSpec", "Task", "execute_task"]
 
 LATENCY_REPEATS = 5
-
-
-def make_feature_set(name: str, params: dict[str, Any], sensor: SensorSpec | None):
-    """Build the registered feature set, passing ``sensor`` when its constructor takes it."""
-    from ..features import FEATURES
-
-    cls = FEATURES.get(name)
-    kwargs = dict(params)
-    try:
-        if sensor is not None and "sensor" in inspect.signature(cls).parameters:
-            kwargs["sensor"] = sensor
-    except (TypeError, ValueError):
-        pass
-    return cls(**kwargs)
-
-
-def _accepts(fn: Any, name: str) -> bool:
-    try:
-        return name in inspect.signature(fn).parameters
-    except (TypeError, ValueError):
-        return False
-
-
-@contextlib.contextmanager
-def single_thread():
-    """BLAS/OpenMP and torch limited to one thread (deterministic, no oversubscription)."""
-    import sys
-
-    from threadpoolctl import threadpool_limits
-
-    torch = sys.modules.get("torch")
-    prev = torch.get_num_threads() if torch is not None else None
-    with threadpool_limits(limits=1):
-        if torch is not None:
-            torch.set_num_threads(1)
-        try:
-            yield
-        finally:
-            if torch is not None and prev is not None:
-                torch.set_num_threads(prev)
-
-
-_SETUP_DONE: set = set()
-
-
-def run_setup(setup: Callable[[], None] | None) -> None:
-    """Call a worker set-up function once per process (a picklable module-level function)."""
-    if setup is None:
-        return
-    key = (getattr(setup, "__module__", ""), getattr(setup, "__qualname__", repr(setup)))
-    if key not in _SETUP_DONE:
-        setup()
-        _SETUP_DONE.add(key)
 
 
 @dataclass(frozen=True)
@@ -168,27 +118,6 @@ class RunContext:
 
 
 # ----------------------------------------------------------------- metrics
-def metrics(y_true: np.ndarray, y_pred: np.ndarray) -> dict[str, float]:
-    """Accuracy, balanced accuracy (mean recall over the true classes) and macro F1.
-
-    Macro F1 averages over the classes present in truth or prediction
-    (a class neither present nor predicted has no F1). Computed with
-    scikit-learn; its warnings for absent classes are silenced (the fold's
-    notes describe them).
-    """
-    from sklearn.metrics import balanced_accuracy_score, f1_score
-
-    yt = np.asarray(y_true).astype(str)
-    yp = np.asarray(y_pred).astype(str)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return {
-            "accuracy": float(np.mean(yt == yp)),
-            "balanced_accuracy": float(balanced_accuracy_score(yt, yp)),
-            "macro_f1": float(f1_score(yt, yp, average="macro", labels=sorted(set(yt) | set(yp)), zero_division=0)),
-        }
-
-
 # ----------------------------------------------------------------- features
 def _fold_features(task: Task, ctx: RunContext, y_train: np.ndarray):
     """Training and test matrices of the task's combination, the fitted sets and timings."""
@@ -295,7 +224,7 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
             else:
                 est = make_classifier(task.classifier_name, random_state=task.seed, **task.classifier_params)
                 fit_kw = {}
-                if _accepts(est.fit, "groups"):
+                if accepts(est.fit, "groups"):
                     fit_kw["groups"] = np.array([str(v) for v in ds.meta["subject"].to_numpy()[fold.train]], dtype=object)
                 t0 = time.perf_counter()
                 est.fit(X_tr, c_train, **fit_kw)

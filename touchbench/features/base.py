@@ -29,8 +29,9 @@ from typing import Any, ClassVar, Sequence
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
-from ..errors import TouchbenchError
-from ..registry import Registry
+from ..core.errors import TouchbenchError
+from ..core.introspect import accepts
+from ..core.registry import Registry
 
 # Modules that register feature sets; imported on first use of the registry.
 _MODULES: list[str] = [
@@ -192,3 +193,12 @@ def cell_names(grid: tuple[int, int]) -> list[str]:
     """``r{i}_c{j}`` for every cell of ``grid``, row-major (the order of ``reshape``)."""
     h, w = grid
     return [f"r{i}_c{j}" for i in range(h) for j in range(w)]
+
+
+def make_feature_set(name: str, params: dict[str, Any], sensor: Any = None) -> FeatureSet:
+    """Build the registered feature set ``name``, passing ``sensor`` when its constructor takes it."""
+    cls = FEATURES.get(name)
+    kwargs = dict(params)
+    if sensor is not None and accepts(cls, "sensor"):
+        kwargs["sensor"] = sensor
+    return cls(**kwargs)

@@ -7,7 +7,13 @@ import numpy as np
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, cell_names
-from .numerics import as_f64, hazen_quantiles, moments, total_variation, weighted_centroid
+from .numerics import (
+    as_f64,
+    hazen_quantiles,
+    moments,
+    total_variation,
+    weighted_centroid,
+)
 
 FLAGG_STATS = ("max", "min", "mean", "median", "area", "var", "tv")
 GRID_CHANNELS = ("total_pressure", "contact_area", "centroid_x", "centroid_y")

@@ -46,7 +46,6 @@ before any work and report through :meth:`Protocol.error_at`.
 from __future__ import annotations
 
 import copy
-import difflib
 import hashlib
 import inspect
 import itertools
@@ -57,10 +56,21 @@ from pathlib import Path
 from typing import Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    PrivateAttr,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
-from ..errors import TouchbenchError
-from .splits import SPLITTERS, Splitter, SplitError
+from ..catalog import DatasetRef, dataset_ref_problem, parse_dataset_ref
+from ..core.errors import TouchbenchError
+from ..core.hashing import canonical_json
+from ..core.suggest import did_you_mean
+from .splits import SPLITTERS, SplitError, Splitter
 
 __all__ = [
     "ClassifierEntry",
@@ -87,11 +97,6 @@ class ProtocolError(TouchbenchError):
 
 
 # ----------------------------------------------------------------- helpers
-def canonical_json(obj: Any) -> str:
-    """JSON with sorted keys, for hashing and for the ``params`` columns."""
-    return json.dumps(obj, sort_keys=True, separators=(",", ":"), default=str)
-
-
 def _is_grid(v: Any) -> bool:
     return isinstance(v, dict) and set(v) == {"grid"}
 
@@ -122,11 +127,6 @@ def _label(name: str, params: dict[str, Any], keys: list[str] | None = None) -> 
     if not keys:
         return name
     return f"{name}(" + ",".join(f"{k}={_fmt_value(params[k])}" for k in keys) + ")"
-
-
-def did_you_mean(word: str, choices: list[str]) -> str:
-    close = difflib.get_close_matches(str(word), choices, n=3, cutoff=0.5)
-    return f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
 
 
 # ----------------------------------------------------------------- YAML with lines
@@ -636,46 +636,18 @@ def _target_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
 
 
 def _dataset_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
-    ref = protocol.dataset.name
-    if ref.startswith("scene:"):
-        try:
-            from ..scenes import SCENES  # the scene registry (optional at import time)
-        except Exception:
-            return []
-        scene = ref[len("scene:"):]
-        if scene and not scene.endswith((".yaml", ".yml")) and scene not in SCENES:
-            return [(("dataset", "name"), SCENES.suggest(scene))]
-        return []
-    looks_like_path = ref.endswith(".parquet") or "/" in ref or "\\" in ref
-    if looks_like_path:
-        p = _resolve_path(protocol, ref)
-        if not p.is_file():
-            return [(("dataset", "name"), f"no dataset file {ref!r} (looked for {p})")]
-        return []
-    from ..datasets import DATASETS
-
-    if ref not in DATASETS:
-        return [(("dataset", "name"), DATASETS.suggest(ref) + "; or write scene:NAME or a .parquet path")]
-    return []
+    problem = dataset_ref_problem(protocol_dataset_ref(protocol))
+    return [] if problem is None else [(("dataset", "name"), problem)]
 
 
-def _resolve_path(protocol: Protocol, ref: str) -> Path:
-    p = Path(ref)
-    if not p.is_absolute() and protocol.path is not None and not p.exists():
-        cand = protocol.path.parent / p
-        if cand.exists():
-            return cand
-    return p
+def protocol_dataset_ref(protocol: Protocol) -> DatasetRef:
+    """The protocol's dataset reference, relative paths taken from the protocol's folder."""
+    return parse_dataset_ref(protocol.dataset.name, None if protocol.path is None else protocol.path.parent)
 
 
 def resolve_dataset_ref(protocol: Protocol) -> str:
-    """The dataset reference with relative paths resolved against the protocol's folder."""
-    ref = protocol.dataset.name
-    if ref.startswith("scene:"):
-        return ref
-    if ref.endswith(".parquet") or "/" in ref:
-        return str(_resolve_path(protocol, ref))
-    return ref
+    """The dataset reference as a string, relative paths resolved against the protocol's folder."""
+    return str(protocol_dataset_ref(protocol))
 
 
 # ----------------------------------------------------------------- entry points

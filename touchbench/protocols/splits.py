@@ -53,8 +53,8 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from ..errors import TouchbenchError
-from ..registry import Registry
+from ..core.errors import TouchbenchError
+from ..core.registry import Registry
 from .seeding import derive_seed
 
 __all__ = [

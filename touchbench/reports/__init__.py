@@ -1,5 +1,5 @@
-"""Reports over results directories: leaderboards, comparisons, plots, the
-HTML report and the paper reproduction report.
+"""Reports over results directories: leaderboards, comparisons, plots and the
+HTML report (the paper reproduction report is :mod:`touchbench.papers`).
 
 - :mod:`.results`: read and combine results directories (methods identified
   by their parameters' hash, machines by their platform);
@@ -7,6 +7,5 @@ HTML report and the paper reproduction report.
 - :mod:`.pareto`: the accuracy / cost Pareto front;
 - :mod:`.leaderboard`: one table per dataset, target and scheme; compare;
 - :mod:`.plots`: Pareto, accuracy vs frames, confusion, per-subject (PNG + SVG);
-- :mod:`.html`: one self-contained HTML page;
-- :mod:`.papers`: ``touchbench papers reproduce`` and ``REPORT.md``.
+- :mod:`.html`: one self-contained HTML page.
 """

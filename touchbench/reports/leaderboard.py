@@ -29,7 +29,7 @@ from typing import Any, Iterable
 import numpy as np
 import pandas as pd
 
-from ..errors import TouchbenchError
+from ..core.errors import TouchbenchError
 from .pareto import pareto_front
 from .results import ResultSet
 from .stats import PairedTest, fold_interval, holm, paired_test, wilson_interval
@@ -468,10 +468,10 @@ def to_csv(lbs: list[Leaderboard]) -> str:
 
 
 def print_terminal(lbs: list[Leaderboard], console=None) -> None:
+    import sys
+
     from rich.console import Console
     from rich.table import Table
-
-    import sys
 
     # a pipe or a file gets the whole width the table needs, a terminal its own width
     console = console or Console(width=None if sys.stdout.isatty() else 250)
@@ -494,7 +494,7 @@ def write_text(path: Path, text: str) -> Path:
     """Write ``text`` atomically (temporary file + rename), readable by all (0644)."""
     import os
 
-    from ..results.store import atomic_write_bytes
+    from ..core.atomic import atomic_write_bytes
 
     atomic_write_bytes(Path(path), text.encode())
     os.chmod(path, 0o644)

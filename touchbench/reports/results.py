@@ -45,7 +45,7 @@ from typing import Any, Iterable
 import numpy as np
 import pandas as pd
 
-from ..errors import TouchbenchError
+from ..core.errors import TouchbenchError
 
 __all__ = ["ResultSet", "load_results", "machine_id", "method_id", "scheme_label"]
 

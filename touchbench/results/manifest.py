@@ -15,33 +15,16 @@ import platform
 import subprocess
 import sys
 from datetime import datetime, timezone
-from importlib import metadata
 from typing import Any
 
 from .. import __version__
-from ..paths import REPO_ROOT
+from ..core.paths import REPO_ROOT
+from ..core.versions import package_versions
 
 __all__ = ["PACKAGES", "git_revision", "now_iso", "package_versions", "platform_info", "update_manifest"]
 
-PACKAGES = (
-    "numpy", "scipy", "scikit-learn", "pandas", "pyarrow", "joblib", "pydantic", "PyYAML",
-    "PyWavelets", "xgboost", "xgboost-cpu", "torch", "threadpoolctl",
-)
-
-
 def now_iso() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
-
-
-def package_versions() -> dict[str, str | None]:
-    """Installed versions (``None`` when not installed), read without importing."""
-    out: dict[str, str | None] = {"python": platform.python_version()}
-    for name in PACKAGES:
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            out[name] = None
-    return out
 
 
 def git_revision() -> dict[str, Any]:

@@ -23,15 +23,14 @@ and the report describes the protocol as it is now.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 import time
 from pathlib import Path
 from typing import Any, Iterable
 
 import pandas as pd
-import pyarrow as pa
 import pyarrow.parquet as pq
+
+from ..core.atomic import atomic_write_bytes, atomic_write_parquet
 
 __all__ = ["ResultStore", "atomic_write_bytes", "atomic_write_parquet", "confusion_table"]
 
@@ -48,35 +47,6 @@ PREDICTION_COLUMNS = [
     "run_id", "task_id", "repetition", "fold", "fold_group", "early_frames", "features", "classifier",
     "capture_id", "subject", "gesture", "true", "predicted", "correct",
 ]
-
-
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file and a rename."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def atomic_write_parquet(path: Path, df: pd.DataFrame) -> None:
-    """Write ``df`` as Parquet through a temporary file and a rename."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    table = pa.Table.from_pandas(df, preserve_index=False)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        pq.write_table(table, tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def _read_parquet(path: Path) -> pd.DataFrame:

@@ -16,8 +16,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ..errors import DataError
-from ..registry import Registry
+from ..core.errors import DataError
+from ..core.registry import Registry
 from .spec import SceneSpec, load_spec, read_yaml
 
 SPECS_DIR = Path(__file__).resolve().parent / "specs"

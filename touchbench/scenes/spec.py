@@ -50,7 +50,8 @@ from pydantic import (
     model_validator,
 )
 
-from ..errors import DataError
+from ..core.errors import DataError
+from ..core.suggest import did_you_mean
 from .gestures import LIBRARY, GestureParams
 
 EFFECTS = (
@@ -341,10 +342,7 @@ class SceneSpec(_Strict):
             raise ValueError("a scene needs at least one gesture")
         for g, over in v.items():
             if g not in LIBRARY:
-                import difflib
-
-                close = difflib.get_close_matches(g, list(LIBRARY), n=3)
-                hint = f"; did you mean {', '.join(close)}?" if close else ""
+                hint = did_you_mean(g, LIBRARY, cutoff=0.6, quote=False)
                 raise ValueError(f"{g}: unknown gesture{hint} (known: {', '.join(sorted(LIBRARY))})")
             _check_gesture_override("gestures", g, over or {})
         return v

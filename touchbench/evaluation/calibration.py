@@ -231,9 +231,9 @@ def calibrate(
     accuracy_too: bool = True,
 ) -> Calibration:
     """Compare scene ``scene`` with the real dataset it names (or ``real``)."""
-    from ..datasets import load_dataset
-    from ..errors import TouchbenchError
-    from . import generate_scene, load_scene
+    from ..core.errors import TouchbenchError
+    from ..catalog import load_dataset
+    from ..scenes import generate_scene, load_scene
 
     spec = load_scene(scene)
     real_name = real or spec.calibrate_against

@@ -43,8 +43,8 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from ..errors import TouchbenchError
-from ..paths import REPO_ROOT
+from ..core.errors import TouchbenchError
+from ..core.paths import REPO_ROOT
 
 __all__ = ["PAPERS", "PAPER_CHECKS", "PROFILES", "Profile", "apply_profile", "paper_protocols", "reproduce",
            "write_report"]
@@ -275,7 +275,7 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
     skips finished tasks). Each dataset is loaded once for the protocols that
     share it. A protocol that fails to run is reported, and the others go on.
     """
-    from ..datasets import load_dataset
+    from ..catalog import load_dataset
     from ..engine.runner import run_protocol
     from ..protocols.schema import resolve_dataset_ref
 
@@ -330,7 +330,7 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
               "protocols": len(runs), "finished_at": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     timing_path = out / profile / "invocation.json"
     if timing["tasks_ran"] and not only:
-        from .leaderboard import write_text
+        from ..reports.leaderboard import write_text
 
         write_text(timing_path, json.dumps(timing, indent=2) + "\n")
     elif timing_path.is_file():  # nothing (or only a subset) computed now: report the run that computed them
@@ -536,7 +536,7 @@ def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, timin
     """
     from .. import __version__
     from ..results.manifest import git_revision
-    from .leaderboard import write_text
+    from ..reports.leaderboard import write_text
 
     now = datetime.now(timezone.utc).isoformat(timespec="seconds")
     git = git_revision()

@@ -4,16 +4,16 @@ sets, classifiers and splitters.
 A registry is a closed set of names. Entries are added by a decorator at
 import time; YAML and the command line can only name what is registered,
 never import an arbitrary Python path. Looking up an unknown name raises
-:class:`~touchbench.errors.UnknownNameError` with the nearest names.
+:class:`~touchbench.core.errors.UnknownNameError` with the nearest names.
 """
 
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass, field
 from typing import Any, Callable, Generic, Iterator, TypeVar
 
 from .errors import UnknownNameError
+from .suggest import did_you_mean
 
 T = TypeVar("T")
 
@@ -70,8 +70,7 @@ class Registry(Generic[T]):
             raise UnknownNameError(self._unknown_message(name)) from None
 
     def _unknown_message(self, name: str) -> str:
-        close = difflib.get_close_matches(str(name), list(self._entries), n=3, cutoff=0.5)
-        hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
+        hint = did_you_mean(name, self._entries)
         known = ", ".join(sorted(self._entries))
         return f"unknown {self.kind} {name!r}{hint} (known: {known})"
 

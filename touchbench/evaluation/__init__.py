@@ -1,0 +1,1 @@
+"""Evaluation helpers that sit beside the protocols: metrics and scene calibration."""

@@ -1,0 +1,1 @@
+"""Reproduction of the published papers: run their protocols, compare with their numbers."""
