@@ -1,7 +1,7 @@
 # touchbench: the two commands of the README, and the paper reproduction.
 #   make demo              set up .venv and run the main job
 #   make test              set up .venv (with the dev, deep, dist and peers extras) and run the tests
-#   make reproduce-papers  run protocols/papers/ and write results/papers/REPORT.md
+#   make reproduce-papers  run touchbench/protocols/papers/ and write results/papers/REPORT.md
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin

@@ -2,16 +2,16 @@
 
 from __future__ import annotations
 
-
 import pandas as pd
 import pytest
 from click.testing import CliRunner
 
 from touchbench.cli.main import cli
 from touchbench.core.paths import REPO_ROOT
+from touchbench.protocols.library import PAPERS_DIR, SHIPPED_DIR
 from touchbench.protocols.schema import load_protocol
 
-SHIPPED = sorted((REPO_ROOT / "protocols").glob("*.yaml")) + sorted((REPO_ROOT / "protocols" / "papers").glob("*.yaml"))
+SHIPPED = sorted(SHIPPED_DIR.glob("*.yaml")) + sorted(PAPERS_DIR.glob("*.yaml"))
 MINE = ["haart-loso-msd-rf", "gaus-table5-haart", "cnn-loso-haart", "cnn-frame-sweep-haart", "tiny"]
 
 
@@ -27,13 +27,13 @@ def test_every_shipped_protocol_is_valid(path):
 
 
 def test_expected_numbers_of_the_paper_protocols():
-    t5 = load_protocol(REPO_ROOT / "protocols" / "gaus-table5-haart.yaml")
+    t5 = load_protocol(SHIPPED_DIR / "gaus-table5-haart.yaml")
     values = {"+".join(r.features): r.value for r in t5.expected.results}
     assert values == {"sd": 36.17, "bmh": 22.67, "msd": 54.82, "smmhh": 65.66, "lbptop": 53.01,
                       "sd+bmh+msd+smmhh+lbptop": 76.65}  # Gaus et al. 2015, Table 5, RF
-    cnn = load_protocol(REPO_ROOT / "protocols" / "cnn-loso-haart.yaml")
+    cnn = load_protocol(SHIPPED_DIR / "cnn-loso-haart.yaml")
     assert [r.value for r in cnn.expected.results] == [83.2]  # Al-mashhadani et al. 2021, Table 2
-    sweep = load_protocol(REPO_ROOT / "protocols" / "cnn-frame-sweep-haart.yaml")
+    sweep = load_protocol(SHIPPED_DIR / "cnn-frame-sweep-haart.yaml")
     assert [c.params["L"] for c in sweep.classifier_entries()] == list(range(5, 55, 5))
     assert sweep.scheme.params == {"subjects": ["s01", "s03", "s05", "s07"]}
 
@@ -48,10 +48,10 @@ def test_list_shows_the_shipped_protocols_with_descriptions(monkeypatch):
 
 
 def test_validate_valid_and_invalid(tmp_path):
-    r = invoke("protocols", "validate", "--schema-only", str(REPO_ROOT / "protocols" / "haart-loso-msd-rf.yaml"))
+    r = invoke("protocols", "validate", "--schema-only", str(SHIPPED_DIR / "haart-loso-msd-rf.yaml"))
     assert r.exit_code == 0 and "valid protocol 'haart-loso-msd-rf'" in r.output
     bad = tmp_path / "bad.yaml"
-    bad.write_text((REPO_ROOT / "protocols" / "haart-loso-msd-rf.yaml").read_text().replace("name: gaus-rf", "name: gaus-fr"))
+    bad.write_text((SHIPPED_DIR / "haart-loso-msd-rf.yaml").read_text().replace("name: gaus-rf", "name: gaus-fr"))
     r = invoke("protocols", "validate", str(bad))
     assert r.exit_code == 2
     lines = [l for l in r.output.splitlines() if l.strip()]

@@ -9,10 +9,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-import yaml
 
 from touchbench.core.paths import REPO_ROOT
-from touchbench.protocols.schema import load_protocol
 from touchbench.papers.reproduce import (
     PAPER_CHECKS,
     PROFILES,
@@ -22,9 +20,11 @@ from touchbench.papers.reproduce import (
     paper_protocols,
     write_report,
 )
+from touchbench.protocols.library import PAPERS_DIR
+from touchbench.protocols.schema import load_protocol
 from touchbench.reports.testing import FakeMethod, write_fake_run
 
-PAPERS = REPO_ROOT / "protocols" / "papers"
+PAPERS = PAPERS_DIR
 SEEDS = REPO_ROOT.parent / "shared" / "seeds"
 SEED_OF = {"gaus-": "000_", "cnn-": "001_", "flagg-": "002_", "zhou-": "003_"}
 

@@ -1,7 +1,7 @@
 """``touchbench demo``: the README's first command.
 
-Runs ``protocols/demo-haart.yaml`` (the challenge split on the real HAART
-recordings) when ../shared/data is present, otherwise ``protocols/tiny.yaml``
+Runs the shipped protocol ``demo-haart`` (the challenge split on the real HAART
+recordings) when ../shared/data is present, otherwise ``tiny``
 (the built-in synthetic ``tiny`` scene, no data needed), then prints the
 leaderboard of the run.
 """

@@ -10,6 +10,7 @@ import click
 
 from .. import __version__
 from ..core.errors import TouchbenchError
+from ..protocols.library import add_protocol_dir
 
 # (module, attribute) of each subcommand; one line per area.
 _COMMANDS: list[tuple[str, str]] = [
@@ -44,8 +45,13 @@ class _Group(click.Group):
 
 @click.group(cls=_Group)
 @click.version_option(__version__, prog_name="touchbench")
-def cli() -> None:
+@click.option("--protocols", "protocol_folders", multiple=True, type=click.Path(file_okay=False, exists=True),
+              help="A folder of your own protocols, searched by name before the shipped ones (repeatable; "
+                   "also $TOUCHBENCH_PROTOCOLS).")
+def cli(protocol_folders: tuple[str, ...]) -> None:
     """touchbench: benchmark social touch gesture recognition."""
+    for folder in protocol_folders:
+        add_protocol_dir(folder)
 
 
 for _mod, _attr in _COMMANDS:

@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 import yaml
 
-from ..protocols.library import find_protocol, protocol_dirs
+from ..protocols.library import find_protocol, listed_protocols, protocol_dirs
 from ..protocols.schema import load_protocol
 
 
@@ -54,17 +54,14 @@ def validate(file: str, schema_only: bool) -> None:
 
 @protocols.command("list")
 def list_() -> None:
-    """Protocols in protocols/ and protocols/papers/, with their descriptions."""
-    found = False
-    for d in protocol_dirs():
-        for sub in (d, d / "papers"):
-            files = sorted(sub.glob("*.yaml")) + sorted(sub.glob("*.yml"))
-            for f in files:
-                found = True
-                try:
-                    rel = f.relative_to(Path.cwd())
-                except ValueError:
-                    rel = f
-                click.echo(f"{str(rel):48s} {_description(f)}")
-    if not found:
-        click.echo("no protocols found (looked in protocols/ and protocols/papers/)")
+    """Protocols found by name: your folders (--protocols, $TOUCHBENCH_PROTOCOLS,
+    ./protocols) and the shipped ones (papers included), with their descriptions."""
+    files = listed_protocols()
+    for f in files:
+        try:
+            rel = f.relative_to(Path.cwd())
+        except ValueError:
+            rel = f
+        click.echo(f"{str(rel):48s} {_description(f)}")
+    if not files:
+        click.echo("no protocols found (looked in " + ", ".join(str(d) for d in protocol_dirs()) + ")")

@@ -210,7 +210,7 @@ def report(results, out, title, dataset, scheme, alpha, pool_machines, machine) 
 
 @click.group("papers")
 def papers() -> None:
-    """Reproduce the four seed papers (protocols/papers/)."""
+    """Reproduce the four papers (the shipped papers/ protocols)."""
 
 
 @papers.command("list")
@@ -241,7 +241,7 @@ def papers_list(profile: str) -> None:
               help="Where to write the report [default: OUT/REPORT.md].")
 @click.option("--progress/--no-progress", default=None, help="Progress bars [default: on a terminal only].")
 def papers_reproduce(profile, out, only, jobs, report_path, progress) -> None:
-    """Run every protocol of protocols/papers/ under PROFILE (resuming
+    """Run every shipped paper protocol (touchbench/protocols/papers/) under PROFILE (resuming
     finished tasks) and write REPORT.md: for each table and figure, the
     paper's number, ours, the difference, real or synthetic data, and the
     protocol file."""

@@ -54,7 +54,7 @@ def format_summary(summary, expected) -> str:
 @backend_options
 def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bool, progress: bool | None,
         backend: str, scheduler: str | None, address: str | None) -> None:
-    """Evaluate PROTOCOL (a file, or a name in protocols/): every feature
+    """Evaluate PROTOCOL (a file, or the name of a shipped protocol or of one in your folders): every feature
     combination x classifier under its scheme. Finished tasks are skipped, so
     an interrupted run resumes where it stopped."""
     from ..engine.runner import default_results_dir, plan_run, run_plan

@@ -1,6 +1,6 @@
-"""``touchbench papers reproduce``: run ``protocols/papers/`` and write ``REPORT.md``.
+"""``touchbench papers reproduce``: run the shipped paper protocols (``touchbench/protocols/papers/``) and write ``REPORT.md``.
 
-Every protocol in ``protocols/papers/`` reproduces one table or figure of the
+Every one of them reproduces one table or figure of the
 four seed papers and carries the paper's numbers in its ``expected:`` block.
 :func:`reproduce` runs them all through the run engine
 (:func:`touchbench.engine.runner.run_protocol`) under a *profile*, then
@@ -45,11 +45,11 @@ import yaml
 
 from ..core.errors import TouchbenchError
 from ..core.paths import REPO_ROOT
+from ..protocols.library import PAPERS_DIR
 
 __all__ = ["PAPERS", "PAPER_CHECKS", "PROFILES", "Profile", "apply_profile", "paper_protocols", "reproduce",
            "write_report"]
 
-PAPERS_DIR = REPO_ROOT / "protocols" / "papers"
 
 
 @dataclass(frozen=True)
