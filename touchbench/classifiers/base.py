@@ -9,29 +9,12 @@ own pipelines.
 
 from __future__ import annotations
 
-import importlib
 from typing import Any
 
 from ..core.registry import Registry
 
-_MODULES: list[str] = [
-    "touchbench.classifiers.gaus",
-    "touchbench.classifiers.flagg",
-    "touchbench.classifiers.zhou",
-    "touchbench.classifiers.jung",
-    "touchbench.classifiers.xgb",
-    "touchbench.classifiers.cnn",  # imports torch only when the CNN is fitted
-    "touchbench.classifiers.sota",
-    "touchbench.classifiers.peers",  # imports aeon only when a peer is fitted
-]
-
-
-def _load() -> None:
-    for m in _MODULES:
-        importlib.import_module(m)
-
-
-CLASSIFIERS: Registry = Registry("classifier", loader=_load)
+# Filled by every module of touchbench.classifiers (imported on first use of the registry).
+CLASSIFIERS: Registry = Registry("classifier", package="touchbench.classifiers")
 
 
 def make_classifier(name: str, random_state: int | None = None, **params: Any):

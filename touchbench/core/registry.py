@@ -9,13 +9,25 @@ never import an arbitrary Python path. Looking up an unknown name raises
 
 from __future__ import annotations
 
+import importlib
+import pkgutil
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any, Callable, Generic, Iterator, TypeVar
 
 from .errors import UnknownNameError
 from .suggest import did_you_mean
 
 T = TypeVar("T")
+
+
+def import_submodules(package: str) -> list[str]:
+    """Import every module of ``package`` whose name does not start with ``_``; their names."""
+    pkg = importlib.import_module(package)
+    names = sorted(f"{package}.{m.name}" for m in pkgutil.iter_modules(pkg.__path__) if not m.name.startswith("_"))
+    for name in names:
+        importlib.import_module(name)
+    return names
 
 
 @dataclass(frozen=True)
@@ -38,9 +50,11 @@ class Registry(Generic[T]):
     '#f00'
     """
 
-    def __init__(self, kind: str, loader: Callable[[], None] | None = None):
+    def __init__(self, kind: str, loader: Callable[[], Any] | None = None, *, package: str | None = None):
         self.kind = kind
         self._entries: dict[str, Entry[T]] = {}
+        if package is not None:
+            loader = partial(import_submodules, package)
         self._loader = loader
         self._loaded = loader is None
 

@@ -7,16 +7,7 @@ reference (a registered name, ``scene:NAME`` or a Parquet path).
 
 from __future__ import annotations
 
-import importlib
-
 from ..core.registry import Registry
 
-_MODULES = ["touchbench.datasets.haart", "touchbench.datasets.sample"]
-
-
-def _load() -> None:
-    for m in _MODULES:
-        importlib.import_module(m)
-
-
-DATASETS: Registry = Registry("dataset", loader=_load)
+# Filled by every module of touchbench.datasets (imported on first use of the registry).
+DATASETS: Registry = Registry("dataset", package="touchbench.datasets")

@@ -23,7 +23,6 @@ in input order, so a capture's features never depend on its neighbours.
 
 from __future__ import annotations
 
-import importlib
 from typing import Any, ClassVar, Sequence
 
 import numpy as np
@@ -33,32 +32,8 @@ from ..core.errors import TouchbenchError
 from ..core.introspect import accepts
 from ..core.registry import Registry
 
-# Modules that register feature sets; imported on first use of the registry.
-_MODULES: list[str] = [
-    "touchbench.features.gaus_sd",
-    "touchbench.features.gaus_bmh",
-    "touchbench.features.gaus_msd",
-    "touchbench.features.gaus_smmhh",
-    "touchbench.features.gaus_lbptop",
-    "touchbench.features.zhou",
-    "touchbench.features.flagg",
-    "touchbench.features.raw",
-    "touchbench.features.sota",
-    "touchbench.features.sota_windows",
-]
-
-# Upper bound on the values stacked at once by ``transform``: bounds peak
-# memory whatever the dataset size, and keeps a chunk's float64 temporaries
-# (1 MB each) in the CPU cache, which is faster than larger chunks.
-_BATCH_VALUES = 131_072
-
-
-def _load() -> None:
-    for m in _MODULES:
-        importlib.import_module(m)
-
-
-FEATURES: Registry = Registry("feature set", loader=_load)
+# Filled by every module of touchbench.features (imported on first use of the registry).
+FEATURES: Registry = Registry("feature set", package="touchbench.features")
 
 
 class FeatureInputError(TouchbenchError, ValueError):
