@@ -151,3 +151,15 @@ def test_label_offsets_move_colliding_labels_apart():
         for j in range(i + 1, 3):
             a, b = boxes[i], boxes[j]
             assert min(a[3], b[3]) <= max(a[1], b[1])  # no vertical overlap
+
+
+def test_plot_name_gives_stable_file_names(runs, tmp_path):
+    r = CliRunner()
+    res = r.invoke(cli, ["plot", str(runs / "loso"), "--out", str(tmp_path / "pl"), "--kind", "pareto",
+                         "--name", "figure-a"])
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in (tmp_path / "pl").iterdir()) == ["figure-a-pareto.png", "figure-a-pareto.svg"]
+    # one name cannot serve several tables
+    res = r.invoke(cli, ["plot", str(runs / "loso"), str(runs / "early"), "--out", str(tmp_path / "p2"),
+                         "--name", "figure-b"])
+    assert res.exit_code == 2 and "--name figure-b" in res.output and "tables" in res.output

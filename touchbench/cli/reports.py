@@ -14,6 +14,8 @@ from pathlib import Path
 
 import click
 
+from ..core.errors import TouchbenchError
+
 _FORMATS = ("terminal", "md", "csv", "json")
 
 
@@ -24,7 +26,6 @@ def _load(results: tuple[str, ...], predictions: bool = True):
 
 
 def _filter(lbs, dataset: str | None, scheme: str | None):
-    from ..core.errors import TouchbenchError
 
     out = [lb for lb in lbs if (dataset is None or dataset in (lb.dataset, lb.dataset_hash[: len(dataset)]))
            and (scheme is None or lb.scheme == scheme or lb.scheme.split("(")[0] == scheme)]
@@ -103,7 +104,6 @@ def compare(results, a, b, as_json, dataset, scheme, alpha, pool_machines, machi
     """The paired test of method A against B (by fold, or by subject when
     they share one fold), the per-fold differences and the per-class
     recall and F1 differences, in every table holding both methods."""
-    from ..core.errors import TouchbenchError
     from ..reports.leaderboard import compare_methods, method_label
 
     rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
@@ -176,8 +176,10 @@ def parse_reference(text: str) -> tuple[str, float]:
 @click.option("--reference", "references", multiple=True, callback=lambda ctx, param, v: [parse_reference(r) for r in v],
               metavar="LABEL=PERCENT",
               help="A reference accuracy drawn as a dashed line on the Pareto plots, e.g. 'Gaus 2015=66.5' (repeatable).")
+@click.option("--name", default=None, metavar="STEM",
+              help="File names STEM-<kind>.png/.svg instead of <dataset>-<scheme>-<key>-<kind> (one table only).")
 @_with_table_options
-def plot(results, out, kinds, methods, references, dataset, scheme, alpha, pool_machines, machine) -> None:
+def plot(results, out, kinds, methods, references, name, dataset, scheme, alpha, pool_machines, machine) -> None:
     """Plot accuracy against latency / fit time / feature time (Pareto front),
     accuracy against frames and seconds seen (early scheme), confusion
     matrices (counts and row-normalised) and per-subject accuracy."""
@@ -185,9 +187,11 @@ def plot(results, out, kinds, methods, references, dataset, scheme, alpha, pool_
     from ..reports.plots import KINDS, plot_table
 
     rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
+    if name is not None and len(lbs) > 1:
+        raise TouchbenchError(f"--name {name}: the results hold {len(lbs)} tables; choose one with --dataset/--scheme")
     for lb in lbs:
         ids = [resolve_method(lb.rows, m) for m in methods] if methods else None
-        made = plot_table(rs, lb, Path(out), tuple(kinds) or KINDS, ids, references)
+        made = plot_table(rs, lb, Path(out), tuple(kinds) or KINDS, ids, references, name=name)
         for name, paths in made.items():
             click.echo(f"{lb.title}: {name}: " + ", ".join(str(p) for p in paths))
 
@@ -217,7 +221,6 @@ def papers() -> None:
 @click.option("--profile", default="quick", show_default=True, help="Show what this profile changes.")
 def papers_list(profile: str) -> None:
     """The paper protocols and what the profile changes in each."""
-    from ..core.errors import TouchbenchError
     from ..papers.reproduce import PROFILES, apply_profile, paper_protocols
 
     if profile not in PROFILES:

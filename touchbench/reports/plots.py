@@ -295,17 +295,21 @@ def plot_subjects(rs: ResultSet, lb: Leaderboard, base: Path, top: int = 5) -> l
 
 
 def plot_table(rs: ResultSet, lb: Leaderboard, out_dir: Path, kinds: tuple[str, ...] = KINDS,
-               methods: list[str] | None = None, references: list[tuple[str, float]] | None = None) -> dict[str, list[Path]]:
+               methods: list[str] | None = None, references: list[tuple[str, float]] | None = None,
+               name: str | None = None) -> dict[str, list[Path]]:
     """Every applicable plot of one table into ``out_dir``; ``{name: [png, svg]}``.
 
     ``references`` go to :func:`plot_pareto` (reference accuracies in %).
+    Files are named ``<name>-<kind>`` (``name`` defaults to :func:`slug`, the
+    table's dataset and scheme with a short key); a stable ``name`` gives
+    stable file names, e.g. for figures a document links to.
 
     Confusion matrices are drawn for ``methods`` (ids), by default the best
     method of the table. A plot that does not apply (``frames`` outside an
     ``early`` scheme, ``confusion`` without predictions) is skipped.
     """
     out_dir = Path(out_dir)
-    s = slug(lb)
+    s = name or slug(lb)
     made: dict[str, list[Path]] = {}
     if "pareto" in kinds and lb.rows["accuracy"].notna().any():
         made["pareto"] = plot_pareto(lb, out_dir / f"{s}-pareto", references)
