@@ -10,6 +10,7 @@ Nothing here is tied to one paper; the paper modules (``gaus.py``,
 from __future__ import annotations
 
 import importlib.util
+import inspect
 import math
 from typing import Any
 
@@ -18,6 +19,7 @@ from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
 from sklearn.ensemble import RandomForestClassifier
 from sklearn.utils import check_random_state
 from sklearn.utils.metaestimators import available_if
+from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ..core.errors import TouchbenchError
@@ -185,7 +187,6 @@ class DelegatingClassifier(ClassifierMixin, BaseEstimator):
 
     def fit(self, X, y, sample_weight=None):
         X, y = validate_data(self, X, y, dtype=np.float64)
-        from sklearn.utils.multiclass import check_classification_targets
 
         check_classification_targets(y)
         self.classes_ = np.unique(y)
@@ -232,7 +233,6 @@ def _inner_has(self: DelegatingClassifier, method: str) -> bool:
 def _weight_params(est, w: np.ndarray) -> dict[str, np.ndarray]:
     """``sample_weight`` for an estimator, or for every step of a pipeline
     whose ``fit`` takes it (so a scaler sees the same weights as the model)."""
-    import inspect
 
     steps = getattr(est, "steps", None)
     if not steps:

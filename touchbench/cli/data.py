@@ -7,9 +7,8 @@ from pathlib import Path
 
 import click
 
-from ..datasets import DATASETS
-
 from ..catalog import load_dataset, parse_dataset_ref
+from ..datasets import DATASETS
 from ..datasets.model import TouchDataset
 
 FORMATS = ("challenge-csv", "cost-csv", "long")

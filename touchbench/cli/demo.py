@@ -20,8 +20,8 @@ def demo(ctx: click.Context, jobs: int) -> None:
     """Run the main job on the embedded default and show its leaderboard."""
     from ..datasets.haart import _raw_dir
     from ..engine.runner import default_results_dir
-    from ..protocols.schema import load_protocol
     from ..protocols.library import find_protocol
+    from ..protocols.schema import load_protocol
     from .reports import leaderboard
     from .run import run
 

@@ -34,9 +34,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
 
+import joblib
 import numpy as np
 
 from ..classifiers import make_classifier
+from ..classifiers.fastforest import compile_forest
 from ..core.atomic import atomic_path, atomic_write_bytes
 from ..core.errors import DataError, TouchbenchError
 from ..core.introspect import accepts
@@ -44,7 +46,6 @@ from ..core.threads import single_thread
 from ..core.versions import package_versions
 from ..datasets.model import SensorSpec, TouchDataset
 from ..features.base import make_feature_set
-from ..classifiers.fastforest import compile_forest
 from .windows import cut_windows, seconds_to_frames
 
 __all__ = [
@@ -154,7 +155,6 @@ class TrainedModel:
     # ------------------------------------------------------------ files
     def save(self, path: str | Path) -> Path:
         """Write the model (joblib) and ``<path>.json`` (the manifest), atomically."""
-        import joblib
 
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -175,7 +175,6 @@ class TrainedModel:
     @classmethod
     def load(cls, path: str | Path) -> "TrainedModel":
         """Read a model written by :meth:`save` (a pickle: trusted files only)."""
-        import joblib
 
         path = Path(path)
         if not path.is_file():

@@ -30,6 +30,9 @@ import pandas as pd
 
 from ..core.errors import TouchbenchError
 from ..core.suggest import did_you_mean
+from ..engine.runner import plan_run
+from ..protocols.library import find_protocol
+from ..protocols.schema import load_protocol
 from ..protocols.seeding import derive_seed
 from .model import TrainedModel, fit_model
 
@@ -92,9 +95,6 @@ def train_from_protocol(
     seed: int | None = None,
 ) -> TrainedModel:
     """Fit the protocol's ``method`` (see the module docstring) and return the model."""
-    from ..protocols.library import find_protocol
-    from ..engine.runner import plan_run
-    from ..protocols.schema import load_protocol
 
     path = find_protocol(str(protocol))
     proto = load_protocol(path)

@@ -30,12 +30,13 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
+from joblib import Parallel, delayed
 from threadpoolctl import threadpool_limits
 
 from .. import __version__
 from ..core.atomic import atomic_write_bytes
 from ..core.paths import cache_dir
-from .backends import run_setup
+from .backends import run_setup, supports_generator
 
 __all__ = ["CHUNK", "FeatureCache", "code_version", "crop_captures"]
 
@@ -164,12 +165,8 @@ class FeatureCache:
                 if on_chunk:
                     on_chunk(len(ch))
         else:
-            from joblib import Parallel, delayed
 
             results = []
-            from .backends import (
-                supports_generator,  # Ray's joblib backend returns lists only
-            )
 
             par = Parallel(n_jobs=jobs, return_as="generator" if supports_generator() else "list")
             for ch, res in zip(chunks, par(delayed(_transform_chunk)(make, ch, setup) for ch in chunks)):

@@ -32,6 +32,7 @@ and scikit-learn versions). The classifier's ``random_state`` is
 from __future__ import annotations
 
 import hashlib
+import os
 import sys
 import time
 from dataclasses import dataclass, field
@@ -41,19 +42,32 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from joblib import Parallel, delayed
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 
+from ..catalog import load_dataset
 from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
 from ..core.paths import cache_dir
 from ..core.suggest import did_you_mean
 from ..core.versions import package_versions
 from ..datasets.model import TouchDataset
+from ..features import FEATURES
 from ..protocols.schema import Protocol, expand_grid, load_protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
 from ..protocols.splits import SplitError
 from ..results.manifest import now_iso, update_manifest
 from ..results.store import ResultStore
 from ..results.summary import check_expected, summarize
+from .backends import supports_generator
 from .cache import FeatureCache, code_version, crop_captures
 from .tasks import RunContext, SetSpec, Task, execute_task, make_feature_set
 
@@ -104,7 +118,6 @@ class RunResult:
 
 # ----------------------------------------------------------------- dataset
 def _load(protocol: Protocol) -> TouchDataset:
-    from ..catalog import load_dataset
 
     ref = resolve_dataset_ref(protocol)
     try:
@@ -149,7 +162,6 @@ def apply_filters(protocol: Protocol, ds: TouchDataset) -> TouchDataset:
 # ----------------------------------------------------------------- planning
 def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: TouchDataset | None = None) -> Plan:
     """Every check that needs the data, then the list of tasks (no work done)."""
-    from ..features import FEATURES
 
     cache_root = Path(cache_root) if cache_root is not None else cache_dir() / "features"
     full = dataset if dataset is not None else _load(protocol)
@@ -253,15 +265,6 @@ class _Progress:
 
     def __enter__(self) -> "_Progress":
         if self.enabled:
-            from rich.console import Console
-            from rich.progress import (
-                BarColumn,
-                MofNCompleteColumn,
-                Progress,
-                TextColumn,
-                TimeElapsedColumn,
-                TimeRemainingColumn,
-            )
 
             self._p = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                                TimeElapsedColumn(), TimeRemainingColumn(), console=Console(stderr=True), transient=False)
@@ -340,7 +343,6 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
     store = ResultStore(out)
     store.clean_stale_temporaries()
     if jobs == -1 or jobs == 0:
-        import os
 
         jobs = os.cpu_count() or 1
     if jobs < 1:
@@ -372,11 +374,6 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
             if jobs == 1 or len(pending) == 1:
                 results = (execute_task(t, ctx) for t in pending)
             else:
-                from joblib import Parallel, delayed
-
-                from .backends import (
-                    supports_generator,  # Ray's joblib backend returns lists only
-                )
 
                 results = Parallel(n_jobs=jobs, return_as="generator_unordered" if supports_generator() else "list")(
                     delayed(execute_task)(t, ctx) for t in pending)

@@ -29,6 +29,7 @@ from typing import Any, Callable
 import numpy as np
 import pandas as pd
 
+from ..classifiers import make_classifier
 from ..core.introspect import accepts
 from ..core.threads import single_thread
 from ..datasets.model import TouchDataset
@@ -191,7 +192,6 @@ def _measure_latency(sets: list, capture: np.ndarray, predict) -> float:
 # ----------------------------------------------------------------- the task
 def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFrame | None]:
     """Run one task; a feature or classifier error becomes a ``failed`` row."""
-    from ..classifiers import make_classifier
 
     ctx.ensure_setup()
     row = dict(task.base_row)

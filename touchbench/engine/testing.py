@@ -18,7 +18,12 @@ from typing import Any, Iterator, Sequence
 import numpy as np
 import pandas as pd
 from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.ensemble import RandomForestClassifier
+from sklearn.linear_model import LogisticRegression
+from sklearn.pipeline import make_pipeline
+from sklearn.preprocessing import StandardScaler
 
+from ..classifiers import CLASSIFIERS
 from ..datasets.model import SensorSpec, TouchDataset
 from ..features.base import FEATURES, FeatureSet
 
@@ -110,15 +115,11 @@ class CenteredMax(FeatureSet):
 
 # ----------------------------------------------------------------- classifiers
 def _logreg(random_state=None, C: float = 1.0, max_iter: int = 500):
-    from sklearn.linear_model import LogisticRegression
-    from sklearn.pipeline import make_pipeline
-    from sklearn.preprocessing import StandardScaler
 
     return make_pipeline(StandardScaler(), LogisticRegression(C=C, max_iter=max_iter, random_state=random_state))
 
 
 def _forest(random_state=None, n_estimators: int = 10, max_features: str | float = "sqrt"):
-    from sklearn.ensemble import RandomForestClassifier
 
     return RandomForestClassifier(n_estimators=n_estimators, max_features=max_features, random_state=random_state, n_jobs=1)
 
@@ -168,7 +169,6 @@ class InterruptAfter(ClassifierMixin, BaseEstimator):
 
 
 def _registries():
-    from ..classifiers import CLASSIFIERS
 
     return [
         (FEATURES, "test-mean", MeanFrame, "test only: mean of every cell", {}),

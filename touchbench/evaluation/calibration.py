@@ -36,8 +36,14 @@ from typing import Any, Sequence
 
 import numpy as np
 import pandas as pd
+from sklearn.ensemble import RandomForestClassifier
+from sklearn.model_selection import GroupKFold, StratifiedKFold
 
+from ..catalog import load_dataset
+from ..core.errors import TouchbenchError
 from ..datasets.model import TouchDataset
+from ..features import FEATURES
+from ..scenes import generate_scene, load_scene
 
 METRICS = ("total", "area", "speed")
 GAUS_SETS = ("sd", "bmh", "msd", "smmhh", "lbptop")
@@ -103,7 +109,6 @@ def compare_distributions(real: pd.DataFrame, synth: pd.DataFrame) -> pd.DataFra
 
 # ----------------------------------------------------------------- accuracy
 def available_sets(names: Sequence[str]) -> list[str]:
-    from ..features import FEATURES
 
     return [n for n in names if n in FEATURES]
 
@@ -111,7 +116,6 @@ def available_sets(names: Sequence[str]) -> list[str]:
 def feature_matrix(ds: TouchDataset, sets: Sequence[str], train: np.ndarray | None = None) -> np.ndarray:
     """Features of every capture; fold-dependent sets are fitted on
     ``train`` (positions) only."""
-    from ..features import FEATURES
 
     blocks = []
     for name in sets:
@@ -133,13 +137,11 @@ def _folds(meta: pd.DataFrame, scheme: str, seed: int) -> list[tuple[np.ndarray,
         sp = meta["split"].to_numpy()
         return [(idx[sp == "train"], idx[sp == "test"])]
     if scheme.startswith("subject-kfold"):
-        from sklearn.model_selection import GroupKFold
 
         k = int(scheme.split(":")[1]) if ":" in scheme else 5
         k = min(k, len(set(subj)))
         return [(tr, te) for tr, te in GroupKFold(n_splits=k).split(idx, groups=subj)]
     if scheme.startswith("kfold"):
-        from sklearn.model_selection import StratifiedKFold
 
         k = int(scheme.split(":")[1]) if ":" in scheme else 5
         skf = StratifiedKFold(n_splits=k, shuffle=True, random_state=seed)
@@ -156,9 +158,6 @@ def accuracy(
 ) -> dict[str, float]:
     """Pooled accuracy (correct / tested) of ``sets`` + random forest under
     each scheme. Fold-independent features are computed once."""
-    from sklearn.ensemble import RandomForestClassifier
-
-    from ..features import FEATURES
 
     y = ds.labels
     fixed = [s for s in sets if not FEATURES.get(s).fold_dependent]
@@ -231,9 +230,6 @@ def calibrate(
     accuracy_too: bool = True,
 ) -> Calibration:
     """Compare scene ``scene`` with the real dataset it names (or ``real``)."""
-    from ..core.errors import TouchbenchError
-    from ..catalog import load_dataset
-    from ..scenes import generate_scene, load_scene
 
     spec = load_scene(scene)
     real_name = real or spec.calibrate_against

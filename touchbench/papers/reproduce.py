@@ -535,8 +535,8 @@ def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, timin
     that computed the results (see :func:`reproduce`).
     """
     from .. import __version__
-    from ..results.manifest import git_revision
     from ..reports.leaderboard import write_text
+    from ..results.manifest import git_revision
 
     now = datetime.now(timezone.utc).isoformat(timespec="seconds")
     git = git_revision()

@@ -22,13 +22,19 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable
 
 import numpy as np
 import pandas as pd
+from rich.console import Console
+from rich.table import Table
+from sklearn.metrics import precision_recall_fscore_support
 
+from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError
 from .pareto import pareto_front
 from .results import ResultSet
@@ -289,7 +295,6 @@ class Comparison:
 
 
 def _per_class(preds: pd.DataFrame | None, a: str, b: str, fold_keys: list[str]) -> pd.DataFrame:
-    from sklearn.metrics import precision_recall_fscore_support
 
     cols = ["class", "support", "recall_a", "recall_b", "recall_diff", "f1_a", "f1_b", "f1_diff"]
     if preds is None or preds.empty:
@@ -468,10 +473,6 @@ def to_csv(lbs: list[Leaderboard]) -> str:
 
 
 def print_terminal(lbs: list[Leaderboard], console=None) -> None:
-    import sys
-
-    from rich.console import Console
-    from rich.table import Table
 
     # a pipe or a file gets the whole width the table needs, a terminal its own width
     console = console or Console(width=None if sys.stdout.isatty() else 250)
@@ -492,9 +493,6 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
 
 def write_text(path: Path, text: str) -> Path:
     """Write ``text`` atomically (temporary file + rename), readable by all (0644)."""
-    import os
-
-    from ..core.atomic import atomic_write_bytes
 
     atomic_write_bytes(Path(path), text.encode())
     os.chmod(path, 0o644)

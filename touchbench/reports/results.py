@@ -44,8 +44,10 @@ from typing import Any, Iterable
 
 import numpy as np
 import pandas as pd
+import yaml
 
 from ..core.errors import TouchbenchError
+from ..results.store import ResultStore
 
 __all__ = ["ResultSet", "load_results", "machine_id", "method_id", "scheme_label"]
 
@@ -158,7 +160,6 @@ def _read_manifest(d: Path) -> dict[str, Any]:
 
 
 def _protocol_scheme(manifest: dict[str, Any]) -> Any:
-    import yaml
 
     text = (manifest.get("protocol") or {}).get("text")
     if not text:
@@ -186,7 +187,6 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
         store = None
         try:
             if _fragments_only(d):  # merge on read (touchbench.results.store)
-                from ..results.store import ResultStore
 
                 store = ResultStore(d)
                 s = store.read_scores()

@@ -38,6 +38,7 @@ from dataclasses import asdict, dataclass
 from typing import Sequence
 
 import numpy as np
+from scipy import stats
 
 __all__ = [
     "EXACT_MAX_PAIRS",
@@ -58,7 +59,6 @@ def fold_interval(values: Sequence[float], level: float = 0.95) -> tuple[float, 
 
     ``sd`` and the interval are NaN for fewer than two values.
     """
-    from scipy import stats
 
     x = np.asarray(values, dtype=np.float64)
     x = x[np.isfinite(x)]
@@ -75,7 +75,6 @@ def fold_interval(values: Sequence[float], level: float = 0.95) -> tuple[float, 
 
 def wilson_interval(successes: int, n: int, level: float = 0.95) -> tuple[float, float]:
     """Wilson score interval of a binomial proportion ``successes / n``."""
-    from scipy import stats
 
     if n <= 0:
         return (math.nan, math.nan)
@@ -130,7 +129,6 @@ def paired_test(a: Sequence[float], b: Sequence[float], paired_by: str = "fold",
     Fewer than two pairs: no test (``pvalue`` NaN). All differences zero:
     p = 1 (the methods agree on every pair).
     """
-    from scipy import stats
 
     x = np.asarray(a, dtype=np.float64)
     y = np.asarray(b, dtype=np.float64)

@@ -19,6 +19,11 @@ from typing import Any, Sequence
 
 import numpy as np
 import pandas as pd
+import yaml
+
+from ..core.hashing import canonical_json
+from ..evaluation.metrics import metrics
+from ..results.store import confusion_table
 
 __all__ = ["FakeMethod", "write_fake_run"]
 
@@ -60,11 +65,6 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
                    platform: dict[str, Any] | None = None, frame_rate: float = 54.0,
                    finished_at: str = "2026-01-01T00:00:00+00:00", seconds: float = 1.0) -> Path:
     """Write a results directory (see the module docstring); returns its path."""
-    import yaml
-
-    from ..core.hashing import canonical_json
-    from ..evaluation.metrics import metrics
-    from ..results.store import confusion_table
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

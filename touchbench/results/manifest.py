@@ -21,7 +21,7 @@ from .. import __version__
 from ..core.paths import REPO_ROOT
 from ..core.versions import package_versions
 
-__all__ = ["PACKAGES", "git_revision", "now_iso", "package_versions", "platform_info", "update_manifest"]
+__all__ = ["git_revision", "now_iso", "package_versions", "platform_info", "update_manifest"]
 
 def now_iso() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="seconds")

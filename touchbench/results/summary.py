@@ -9,10 +9,12 @@ over every test prediction of the configuration.
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
 import pandas as pd
+from sklearn.metrics import balanced_accuracy_score, f1_score
 
 __all__ = ["CONFIG_KEYS", "check_expected", "summarize"]
 
@@ -51,7 +53,6 @@ def summarize(scores: pd.DataFrame, predictions: pd.DataFrame | None = None, by:
 
 
 def _pooled_metric(preds: pd.DataFrame, metric: str) -> float:
-    from sklearn.metrics import balanced_accuracy_score, f1_score
 
     if preds.empty:
         return np.nan
@@ -59,7 +60,6 @@ def _pooled_metric(preds: pd.DataFrame, metric: str) -> float:
     if metric == "accuracy":
         return float((t == p).mean())
     if metric == "balanced_accuracy":
-        import warnings
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

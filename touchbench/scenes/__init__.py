@@ -18,7 +18,8 @@ from typing import Any
 
 from ..core.errors import DataError
 from ..core.registry import Registry
-from .spec import SceneSpec, load_spec, read_yaml
+from .generate import generate
+from .spec import SceneSpec, deep_merge, load_spec, parse_spec, read_yaml
 
 SPECS_DIR = Path(__file__).resolve().parent / "specs"
 
@@ -73,7 +74,6 @@ def overrides_to_dict(raw: dict[str, Any], overrides: dict[str, Any]) -> dict[st
     other key is a path with ``__`` or ``.`` between levels
     (``protocol__segmentation__pad_s=0.1``).
     """
-    from .spec import deep_merge
 
     out: dict[str, Any] = {}
     for key, value in overrides.items():
@@ -106,7 +106,6 @@ def load_scene(name_or_yaml: str | Path, **overrides: Any) -> SceneSpec:
     over = overrides_to_dict(raw, overrides)
     if _SUBSET in over:
         raw = {**raw, "gestures": over.pop(_SUBSET)}
-    from .spec import deep_merge, parse_spec
 
     return parse_spec(deep_merge(raw, over), path, text)
 
@@ -117,7 +116,6 @@ def generate_scene(name_or_yaml: str | Path, seed: int | None = None, **override
     ``seed`` defaults to the scene's own; the same seed gives the same
     content hash. See :func:`overrides_to_dict` for ``overrides``.
     """
-    from .generate import generate
 
     spec = load_scene(name_or_yaml, **overrides)
     return generate(spec, seed=seed)
