@@ -12,7 +12,6 @@ import pytest
 
 from touchbench.core.paths import REPO_ROOT
 from touchbench.papers.reproduce import (
-    PAPER_CHECKS,
     PROFILES,
     Profile,
     ProtocolRun,
@@ -25,19 +24,39 @@ from touchbench.protocols.schema import load_protocol
 from touchbench.reports.testing import FakeMethod, write_fake_run
 
 PAPERS = PAPERS_DIR
-SEEDS = REPO_ROOT.parent / "shared" / "seeds"
-SEED_OF = {"gaus-": "000_", "cnn-": "001_", "flagg-": "002_", "zhou-": "003_"}
+PAPER_TEXTS = REPO_ROOT.parent / "shared" / "seeds"
+# the papers' text files: Gaus et al. 2015, Al-mashhadani et al. 2021, Flagg 2012, Zhou et al. 2017
+PAPER_FILE = {"gaus-": "000_", "cnn-": "001_", "flagg-": "002_", "zhou-": "003_"}
 
 
-def _seed_text(name: str) -> str:
-    if not SEEDS.is_dir():
-        msg = f"seed papers not found at {SEEDS}"
+def _paper_text(name: str) -> str:
+    if not PAPER_TEXTS.is_dir():
+        msg = f"the papers' text not found at {PAPER_TEXTS}"
         if os.environ.get("CI", "").lower() == "true":
-            pytest.fail(msg)  # CI has ../shared beside the checkout: a missing seed is an error there
+            pytest.fail(msg)  # CI has ../shared beside the checkout: a missing paper is an error there
         pytest.skip(msg)
-    prefix = next(v for k, v in SEED_OF.items() if name.startswith(k))
-    [path] = list(SEEDS.glob(f"{prefix}*.txt"))
+    prefix = next(v for k, v in PAPER_FILE.items() if name.startswith(k))
+    [path] = list(PAPER_TEXTS.glob(f"{prefix}*.txt"))
     return path.read_text(encoding="utf-8")
+
+
+def _paper_checks() -> dict[str, list[dict]]:
+    """The papers' numbers that are not one accuracy, as read from each paper
+    protocol's ``expected:`` block: {protocol: [{"kind": ..., field: value}]}."""
+    out = {}
+    for path in paper_protocols():
+        e = load_protocol(path, deep=False).expected
+        if e is None:
+            continue
+        checks = ([{"kind": "sd", **c.model_dump()} for c in e.standard_deviations]
+                  + [{"kind": "confusion", **c.model_dump()} for c in e.confusions]
+                  + [{"kind": "argmax", **c.model_dump()} for c in e.best_parameters])
+        if checks:
+            out[path.stem] = checks
+    return out
+
+
+PAPER_CHECKS = _paper_checks()
 
 
 @pytest.mark.parametrize("path", paper_protocols(), ids=lambda p: p.stem)
@@ -45,7 +64,7 @@ def test_paper_protocol_is_valid_and_its_numbers_are_in_the_paper(path):
     proto = load_protocol(path, deep=False)
     assert proto.name == path.stem
     assert proto.expected is not None or proto.name in PAPER_CHECKS
-    text = _seed_text(proto.name)
+    text = _paper_text(proto.name)
     if proto.expected is None:
         return
     for r in proto.expected.results:
@@ -90,6 +109,46 @@ def test_gaus_confusions_by_hand():
     assert np.trace(np.array(t7["matrix"])) == 162 and np.array(t7["matrix"]).sum() == 251
     # the test split has 35 constant and 36 of every other gesture
     assert np.array(t6["matrix"]).sum(axis=0).tolist() == [35, 36, 36, 36, 36, 36, 36]
+
+
+def test_paper_numbers_read_from_the_protocols_equal_the_papers_text():
+    def confusion(protocol: str, classifier: str):
+        e = load_protocol(PAPERS / f"{protocol}.yaml", deep=False).expected
+        [c] = [c for c in e.confusions if c.classifier == classifier]
+        return c
+
+    # Gaus et al. 2015, Table 6, row "rub": 0 0 1 16 2 13 0 (rows are the predicted class)
+    t6 = confusion("gaus-tables6-7-haart", "gaus-rf")
+    assert t6.rows == "predicted" and t6.tolerance == 10.0
+    assert t6.classes == ["constant", "notouch", "pat", "rub", "scratch", "stroke", "tickle"]
+    assert t6.matrix[3] == [0, 0, 1, 16, 2, 13, 0]
+    # Gaus et al. 2015, Table 10, row "grab": 93 0 1 0 4 0 14 2 0 0 73 0 0 0; its last class is tickle
+    t10 = confusion("gaus-tables9-10-cost", "gaus-boost")
+    assert t10.matrix[0] == [93, 0, 1, 0, 4, 0, 14, 2, 0, 0, 73, 0, 0, 0]
+    assert len(t10.classes) == 14 and t10.classes[-1] == "tickle" and t10.matrix[13][13] == 78
+    # Al-mashhadani et al. 2021, Table 3, row "Scratch (e)": 0 0 0 2 26 0 20; Table 2: standard deviation 13 %
+    cnn = load_protocol(PAPERS / "cnn-table2-loso-haart.yaml", deep=False)
+    assert confusion("cnn-table2-loso-haart", "cnn").matrix[4] == [0, 0, 0, 2, 26, 0, 20]
+    [sd] = cnn.expected.standard_deviations
+    assert (sd.classifier, sd.value, sd.tolerance) == ("cnn", 13.0, 5.0)
+    # Al-mashhadani et al. 2021, Fig. 5 / Sec. 3: "L = 30 provides the maximum classification rate"
+    sweep = load_protocol(PAPERS / "cnn-fig5-frame-sweep-haart.yaml", deep=False)
+    [best] = sweep.expected.best_parameters
+    assert (best.classifier, best.parameter, best.value) == ("cnn", "L", 30)
+    assert sweep.best_label(best) == "cnn(L=30)"
+
+
+@pytest.mark.parametrize("path", paper_protocols(), ids=lambda p: p.stem)
+def test_every_confusion_row_is_printed_in_the_paper(path):
+    proto = load_protocol(path, deep=False)
+    if proto.expected is None or not proto.expected.confusions:
+        return
+    # the paper's table rows, bold diagonal cells unmarked: "rub\t0\t0\t1\t<b>16</b>\t..." -> "0\t0\t1\t16\t..."
+    lines = [re.sub(r"</?b>", "", line).rstrip() for line in _paper_text(proto.name).splitlines()]
+    for c in proto.expected.confusions:
+        for row in c.matrix:
+            cells = "\t" + "\t".join(map(str, row))
+            assert any(line.endswith(cells) for line in lines), f"{c.source}: row {row} not in the paper"
 
 
 def _write(path: Path, text: str) -> Path:

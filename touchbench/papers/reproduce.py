@@ -1,7 +1,10 @@
 """``touchbench papers reproduce``: run the shipped paper protocols (``touchbench/protocols/papers/``) and write ``REPORT.md``.
 
-Every one of them reproduces one table or figure of the
-four seed papers and carries the paper's numbers in its ``expected:`` block.
+Every one of them reproduces one table or figure of one of four papers
+(Gaus et al. 2015, Al-mashhadani et al. 2021, Flagg 2012, Zhou et al. 2017)
+and carries the paper's numbers in its ``expected:`` block: accuracies,
+standard deviations, confusion matrices, the best value of a sweep
+(:class:`touchbench.protocols.schema.Expected`).
 :func:`reproduce` runs them all through the run engine
 (:func:`touchbench.engine.runner.run_protocol`) under a *profile*, then
 :func:`write_report` compares each expected number with ours.
@@ -33,6 +36,7 @@ import json
 import math
 import os
 import platform
+import resource
 import time
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
@@ -42,14 +46,28 @@ from typing import Any, Callable
 import numpy as np
 import pandas as pd
 import yaml
+from joblib.externals.loky import get_reusable_executor
 
+from .. import __version__
+from ..catalog import load_dataset, parse_dataset_ref
+from ..classifiers import CLASSIFIERS
 from ..core.errors import TouchbenchError
 from ..core.paths import REPO_ROOT
+from ..engine.runner import run_protocol
 from ..protocols.library import PAPERS_DIR
+from ..protocols.schema import (
+    ExpectedBest,
+    ExpectedConfusion,
+    ExpectedDeviation,
+    load_protocol,
+    parse_protocol,
+    resolve_dataset_ref,
+)
+from ..reports.leaderboard import write_text
+from ..results.manifest import git_revision
+from ..results.summary import check_expected
 
-__all__ = ["PAPERS", "PAPER_CHECKS", "PROFILES", "Profile", "apply_profile", "paper_protocols", "reproduce",
-           "write_report"]
-
+__all__ = ["PAPERS", "PROFILES", "Profile", "apply_profile", "paper_protocols", "reproduce", "write_report"]
 
 
 @dataclass(frozen=True)
@@ -89,70 +107,17 @@ PROFILES: dict[str, Profile] = {
     ),
 }
 
-# The papers, in report order: (seed file, citation, protocol name prefix).
+# The papers, in report order: (short name, citation, protocol name prefix).
 PAPERS = [
-    ("000", "Gaus et al. 2015, Social touch gesture recognition using Random Forest and Boosting on distinct feature sets (ICMI)", "gaus-"),
-    ("001", "Al-mashhadani et al. 2021, Human-animal affective robot touch classification using deep neural network", "cnn-"),
-    ("002", "Flagg 2012, Sensing and recognizing affective touch in a furry zoomorphic object (MSc thesis, UBC)", "flagg-"),
-    ("003", "Zhou et al. 2017, Textile pressure mapping sensor for emotional touch detection in HRI (Sensors)", "zhou-"),
+    ("Gaus et al. 2015", "Gaus et al. 2015, Social touch gesture recognition using Random Forest and Boosting on "
+                         "distinct feature sets (ICMI)", "gaus-"),
+    ("Al-mashhadani et al. 2021", "Al-mashhadani et al. 2021, Human-animal affective robot touch classification "
+                                  "using deep neural network", "cnn-"),
+    ("Flagg 2012", "Flagg 2012, Sensing and recognizing affective touch in a furry zoomorphic object (MSc thesis, "
+                   "UBC)", "flagg-"),
+    ("Zhou et al. 2017", "Zhou et al. 2017, Textile pressure mapping sensor for emotional touch detection in HRI "
+                         "(Sensors)", "zhou-"),
 ]
-
-_HAART = ["constant", "notouch", "pat", "rub", "scratch", "stroke", "tickle"]
-_COST = ["grab", "hit", "massage", "pat", "pinch", "poke", "press", "rub", "scratch", "slap", "squeeze", "stroke", "tap",
-         "tickle"]
-
-# Numbers of the papers that are not a single accuracy (so not in a protocol's
-# `expected:` block): confusion matrices, a standard deviation, the argmax of
-# a sweep. Each names its protocol, the table and the classifier (label).
-# Confusion matrices are copied as printed: in both papers the ROWS are the
-# PREDICTED class and the COLUMNS the TRUE class (each column of Gaus's
-# Table 6 sums to the test captures of one gesture: 35 constant, 36 of each
-# other; each column of Al-mashhadani's Table 3 sums to 36).
-PAPER_CHECKS: dict[str, list[dict[str, Any]]] = {
-    "gaus-tables6-7-haart": [
-        {"kind": "confusion", "classifier": "gaus-rf", "source": "Gaus et al. 2015, Table 6 (Random Forest, 66.53 %)",
-         "tolerance": 10.0, "classes": _HAART, "rows": "predicted", "matrix": [
-             [34, 0, 0, 0, 0, 0, 0], [1, 36, 0, 0, 1, 0, 0], [0, 0, 30, 0, 1, 0, 2], [0, 0, 1, 16, 2, 13, 0],
-             [0, 0, 3, 17, 26, 3, 24], [0, 0, 1, 2, 0, 18, 3], [0, 0, 1, 1, 6, 2, 7]]},
-        {"kind": "confusion", "classifier": "gaus-boost", "source": "Gaus et al. 2015, Table 7 (Boosting, 64.54 %)",
-         "tolerance": 10.0, "classes": _HAART, "rows": "predicted", "matrix": [
-             [34, 1, 0, 0, 0, 0, 0], [1, 35, 0, 0, 0, 0, 0], [0, 0, 19, 2, 2, 0, 3], [0, 0, 0, 14, 2, 4, 0],
-             [0, 0, 6, 12, 26, 1, 20], [0, 0, 8, 7, 2, 30, 9], [0, 0, 3, 1, 4, 1, 4]]},
-    ],
-    "gaus-tables9-10-cost": [
-        {"kind": "confusion", "classifier": "gaus-rf", "source": "Gaus et al. 2015, Table 9 (Random Forest, 58.7 %)",
-         "tolerance": 10.0, "classes": _COST, "rows": "predicted", "matrix": [
-             [84, 0, 3, 0, 3, 0, 13, 2, 0, 0, 57, 0, 0, 0], [0, 57, 0, 19, 0, 3, 0, 0, 0, 27, 0, 0, 22, 0],
-             [1, 0, 88, 0, 1, 0, 1, 13, 8, 0, 1, 0, 0, 1], [0, 0, 0, 41, 1, 1, 0, 0, 0, 0, 0, 1, 18, 5],
-             [1, 2, 4, 2, 91, 4, 9, 0, 1, 0, 8, 3, 1, 5], [0, 10, 0, 4, 9, 104, 5, 0, 0, 2, 1, 0, 18, 4],
-             [0, 0, 0, 3, 6, 0, 84, 5, 0, 0, 0, 0, 3, 0], [3, 0, 5, 0, 0, 0, 0, 37, 1, 0, 0, 13, 0, 0],
-             [4, 0, 12, 2, 0, 0, 0, 23, 72, 0, 0, 2, 0, 29], [0, 46, 0, 25, 2, 0, 0, 0, 0, 87, 0, 9, 24, 0],
-             [26, 0, 3, 1, 7, 0, 7, 4, 2, 0, 52, 0, 0, 0], [1, 0, 3, 2, 0, 0, 1, 27, 10, 0, 0, 80, 0, 2],
-             [0, 5, 0, 20, 0, 8, 0, 0, 1, 4, 0, 0, 34, 0], [0, 0, 2, 1, 0, 0, 0, 9, 25, 0, 0, 12, 0, 74]]},
-        {"kind": "confusion", "classifier": "gaus-boost", "source": "Gaus et al. 2015, Table 10 (Boosting, 58.2 %)",
-         "tolerance": 10.0, "classes": _COST, "rows": "predicted", "matrix": [
-             [93, 0, 1, 0, 4, 0, 14, 2, 0, 0, 73, 0, 0, 0], [0, 71, 0, 24, 1, 1, 0, 0, 0, 42, 0, 0, 29, 0],
-             [4, 0, 94, 0, 1, 0, 1, 20, 13, 0, 1, 0, 0, 9], [0, 1, 0, 52, 2, 2, 0, 0, 1, 0, 0, 1, 23, 6],
-             [0, 1, 3, 3, 83, 4, 4, 0, 1, 1, 6, 1, 2, 3], [0, 9, 0, 3, 9, 101, 2, 0, 0, 3, 1, 0, 14, 1],
-             [2, 3, 0, 8, 14, 2, 92, 6, 1, 2, 2, 2, 7, 0], [3, 0, 5, 0, 0, 0, 0, 28, 3, 0, 0, 9, 0, 2],
-             [2, 0, 5, 1, 0, 0, 0, 17, 53, 0, 0, 1, 0, 15], [0, 24, 0, 13, 0, 0, 0, 0, 0, 68, 0, 5, 10, 0],
-             [16, 0, 4, 0, 6, 0, 6, 3, 1, 0, 36, 0, 0, 0], [0, 0, 5, 2, 0, 0, 1, 32, 15, 0, 0, 94, 0, 5],
-             [0, 11, 0, 14, 0, 10, 0, 0, 0, 3, 0, 0, 34, 1], [0, 0, 3, 0, 0, 0, 0, 12, 32, 1, 0, 7, 1, 78]]},
-    ],
-    "cnn-table2-loso-haart": [
-        {"kind": "sd", "classifier": "cnn", "value": 13.0, "tolerance": 5.0,
-         "source": "Al-mashhadani et al. 2021, Table 2 (standard deviation over subjects)"},
-        {"kind": "confusion", "classifier": "cnn", "tolerance": 10.0, "rows": "predicted",
-         "source": "Al-mashhadani et al. 2021, Table 3 (252 captures, 36 per gesture; diagonal = 80.2 %)",
-         "classes": _HAART, "matrix": [
-             [35, 0, 0, 0, 0, 0, 0], [1, 36, 0, 0, 0, 0, 0], [0, 0, 29, 1, 0, 0, 0], [0, 0, 3, 30, 7, 3, 2],
-             [0, 0, 0, 2, 26, 0, 20], [0, 0, 4, 2, 0, 33, 1], [0, 0, 0, 1, 3, 0, 13]]},
-    ],
-    "cnn-fig5-frame-sweep-haart": [
-        {"kind": "argmax", "value": "cnn(L=30)",
-         "source": "Al-mashhadani et al. 2021, Fig. 5 / Sec. 3: L = 30 gives the best average accuracy"},
-    ],
-}
 
 
 # ----------------------------------------------------------------- profiles
@@ -188,9 +153,6 @@ def apply_profile(path: Path, profile: Profile) -> tuple[Any, list[str]]:
     The original file is validated first (errors name its lines); the
     changed protocol is re-validated from its YAML text.
     """
-    from ..classifiers import CLASSIFIERS
-    from ..protocols.schema import load_protocol, parse_protocol
-
     original = load_protocol(path)
     data = yaml.safe_load(original.text)
     changes: list[str] = []
@@ -261,8 +223,6 @@ class ProtocolRun:
 
 
 def _dataset_key(protocol) -> str:
-    from ..protocols.schema import resolve_dataset_ref
-
     return json.dumps([resolve_dataset_ref(protocol), protocol.dataset.options], sort_keys=True, default=str)
 
 
@@ -275,10 +235,6 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
     skips finished tasks). Each dataset is loaded once for the protocols that
     share it. A protocol that fails to run is reported, and the others go on.
     """
-    from ..catalog import load_dataset
-    from ..engine.runner import run_protocol
-    from ..protocols.schema import resolve_dataset_ref
-
     if profile not in PROFILES:
         raise TouchbenchError(f"unknown profile {profile!r} (known: {', '.join(PROFILES)})")
     prof = PROFILES[profile]
@@ -330,8 +286,6 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
               "protocols": len(runs), "finished_at": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     timing_path = out / profile / "invocation.json"
     if timing["tasks_ran"] and not only:
-        from ..reports.leaderboard import write_text
-
         write_text(timing_path, json.dumps(timing, indent=2) + "\n")
     elif timing_path.is_file():  # nothing (or only a subset) computed now: report the run that computed them
         try:
@@ -345,8 +299,6 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
 
 def _cpu_seconds() -> float:
     """User + system CPU seconds of this process and its finished child processes."""
-    import resource
-
     me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
     return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
@@ -361,8 +313,6 @@ def _load() -> float | None:
 def _stop_workers() -> None:
     """Shut joblib's worker processes down, so their CPU time is counted."""
     try:
-        from joblib.externals.loky import get_reusable_executor
-
         get_reusable_executor().shutdown(wait=True)
     except Exception:  # no executor was started, or another backend
         pass
@@ -370,13 +320,15 @@ def _stop_workers() -> None:
 
 # ----------------------------------------------------------------- the report
 def _is_real(ref: str) -> bool:
-    return not ref.startswith("scene:") and not ref.endswith(".parquet")
+    """A registered dataset (recorded data), not a synthetic scene or a file."""
+    return parse_dataset_ref(ref).kind == "registered"
 
 
 def _data_kind(ref: str) -> str:
-    if ref.startswith("scene:"):
+    parsed = parse_dataset_ref(ref)
+    if parsed.kind == "scene":
         return f"synthetic scene `{ref}`"
-    if ref.startswith("haart"):
+    if parsed.kind == "registered" and parsed.value.startswith("haart"):
         return f"real HAART (`{ref}`)"
     return f"`{ref}`"
 
@@ -401,19 +353,39 @@ def _read(out: Path) -> tuple[pd.DataFrame | None, pd.DataFrame | None, dict[str
     return scores, preds, man
 
 
-def _confusion_section(check: dict[str, Any], scores: pd.DataFrame, preds: pd.DataFrame | None,
-                       flags: list[str], proto_name: str) -> list[str]:
-    classes = check["classes"]
-    paper = np.asarray(check["matrix"], dtype=float)
-    if check["rows"] == "predicted":
+def _ok_tasks(scores: pd.DataFrame, classifier: str | None = None) -> pd.DataFrame:
+    ok = scores[scores["status"] == "ok"]
+    return ok if classifier is None else ok[ok["classifier"] == classifier]
+
+
+def _deviation_section(check: ExpectedDeviation, scores: pd.DataFrame, flags: list[str], name: str) -> list[str]:
+    """A paper's standard deviation over the folds against ours (sample sd of our folds' accuracy)."""
+    sel = _ok_tasks(scores, check.classifier)
+    sd = 100 * float(np.std(sel["accuracy"], ddof=1)) if len(sel) > 1 else math.nan
+    d = sd - check.value
+    within = math.isfinite(sd) and abs(d) <= check.tolerance
+    if not within:
+        flags.append(f"{check.source} (`{name}`): ours {_fmt(sd)} points, paper {check.value:g} "
+                     f"(tolerance {check.tolerance:g})")
+    return [f"**{check.source}:** paper {check.value:g} points, ours {_fmt(sd)} points "
+            f"(sample sd over {len(sel)} folds), difference {d:+.1f}, tolerance {check.tolerance:g}: "
+            f"{'within' if within else '**outside**'}."]
+
+
+def _confusion_section(check: ExpectedConfusion, scores: pd.DataFrame, preds: pd.DataFrame | None,
+                       flags: list[str], name: str) -> list[str]:
+    """A paper's confusion matrix against ours (pooled over the folds), compared by per-class recall."""
+    classes = check.classes
+    paper = np.asarray(check.matrix, dtype=float)
+    printed = "rows: true class, columns: predicted"
+    if check.rows == "predicted":
         paper = paper.T  # rows = true class, as ours
-    lines = [f"**{check['source']}** vs ours ({check['classifier']}), pooled over the folds; rows: true class, "
-             f"columns: predicted (the paper prints the transpose). Per-class recall tolerance "
-             f"{check['tolerance']:g} points."]
+        printed += " (the paper prints the transpose)"
+    lines = [f"**{check.source}** vs ours ({check.classifier}), pooled over the folds; {printed}. Per-class recall "
+             f"tolerance {check.tolerance:g} points."]
     if preds is None or preds.empty:
         return lines + ["", "_no predictions: not compared_"]
-    ok = scores[(scores["status"] == "ok") & (scores["classifier"] == check["classifier"])]
-    p = preds[preds["task_id"].isin(ok["task_id"])]
+    p = preds[preds["task_id"].isin(_ok_tasks(scores, check.classifier)["task_id"])]
     ours = pd.crosstab(p["true"].astype(str), p["predicted"].astype(str)).reindex(
         index=classes, columns=classes, fill_value=0).to_numpy(dtype=float)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -425,7 +397,7 @@ def _confusion_section(check: dict[str, Any], scores: pd.DataFrame, preds: pd.Da
     for i, c in enumerate(classes):
         cells = " | ".join(f"{int(paper[i, j])} / {int(ours[i, j])}" for j in range(len(classes)))
         d = r_ours[i] - r_paper[i]
-        mark = "" if abs(d) <= check["tolerance"] else " **outside**"
+        mark = "" if abs(d) <= check.tolerance else " **outside**"
         if mark:
             outside.append(f"{c} ({d:+.1f})")
         lines.append(f"| {c} | {cells} | {_fmt(r_paper[i])} | {_fmt(r_ours[i])} | {d:+.1f}{mark} |")
@@ -434,16 +406,48 @@ def _confusion_section(check: dict[str, Any], scores: pd.DataFrame, preds: pd.Da
     lines += ["", f"Cells are paper / ours. Accuracy of the matrix: paper {acc_p:.2f} % ({int(paper.sum())} captures), "
                   f"ours {_fmt(acc_o, 2)} % ({int(ours.sum())} captures)."]
     if outside:
-        msg = (f"{check['source']} (`{proto_name}`): per-class recall differs by more than {check['tolerance']:g} "
-               f"points for {', '.join(outside)}")
-        flags.append(msg)
+        flags.append(f"{check.source} (`{name}`): per-class recall differs by more than {check.tolerance:g} "
+                     f"points for {', '.join(outside)}")
         lines += ["", f"**Outside tolerance:** {', '.join(outside)}."]
     return lines
 
 
-def _expected_rows(proto, scores: pd.DataFrame, preds: pd.DataFrame | None) -> list[dict[str, Any]]:
-    from ..results.summary import check_expected
+def _best_section(check: ExpectedBest, paper_best: str, scores: pd.DataFrame, flags: list[str],
+                  name: str) -> list[str]:
+    """The best configuration of a sweep (``paper_best``: its entry's label) against ours (best mean accuracy)."""
+    ok = _ok_tasks(scores)
+    if ok.empty:
+        return [f"**{check.source}:** no results."]
+    m = ok.groupby("classifier")["accuracy"].agg(["mean", "std", "count"])
+    order = sorted(m.index, key=lambda s: float(s.split("=")[-1].rstrip(")")) if "=" in s else s)
+    best = m["mean"].idxmax()
+    lines = [f"**{check.source}.** Ours, mean accuracy over the held-out subjects (%):", "",
+             "| configuration | mean | sd | folds |", "|---|---|---|---|"]
+    for k in order:
+        star = " (best)" if k == best else ""
+        lines.append(f"| {k}{star} | {100 * m.loc[k, 'mean']:.1f} | {_fmt(100 * m.loc[k, 'std'])} | {int(m.loc[k, 'count'])} |")
+    same = best == paper_best
+    ours = f"Paper: best {paper_best}; ours: best {best} ({100 * m.loc[best, 'mean']:.1f} %)"
+    if paper_best in m.index and not same:
+        ours += f", {paper_best} {100 * m.loc[paper_best, 'mean']:.1f} %"
+    lines += ["", ours + ("." if same else ": **differs**.")]
+    if not same:
+        flags.append(f"{check.source} (`{name}`): our best configuration is {best}, not {paper_best}")
+    return lines
 
+
+def _other_sections(proto, scores: pd.DataFrame, preds: pd.DataFrame | None, flags: list[str]) -> list[list[str]]:
+    """The sections of the expected numbers that are not one accuracy, in the order
+    standard deviations, confusions, best parameter values."""
+    if proto.expected is None:
+        return []
+    e, name = proto.expected, proto.name
+    return ([_deviation_section(c, scores, flags, name) for c in e.standard_deviations]
+            + [_confusion_section(c, scores, preds, flags, name) for c in e.confusions]
+            + [_best_section(c, proto.best_label(c), scores, flags, name) for c in e.best_parameters])
+
+
+def _expected_rows(proto, scores: pd.DataFrame, preds: pd.DataFrame | None) -> list[dict[str, Any]]:
     if proto.expected is None:
         return []
     rows = check_expected(proto.expected, scores, preds)
@@ -458,6 +462,7 @@ class _Section:
     flags: list[str]  # numbers beyond tolerance
     problems: list[str] = field(default_factory=list)  # protocols or tasks that did not run
     real: bool = False
+    data: str = "?"  # the overview's data column
     compared: int = 0
     within: int = 0
     seconds: float = 0.0
@@ -476,6 +481,7 @@ def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
         return sec
     ref = proto.dataset.name
     sec.real = _is_real(ref)
+    sec.data = "real HAART" if sec.real else ref
     body, flags = sec.lines, sec.flags
     body += [f"### {proto.description or proto.name}", ""]
     body.append(f"Protocol: `{_rel(r.path)}`. Data: {_data_kind(ref)}"
@@ -520,10 +526,10 @@ def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
                 flags.append(f"{e['cell']} (`{r.name}`): ours {e['observed']:.2f} %, paper "
                              f"{e['expected']:.2f} %, {e['difference']:+.2f} points (tolerance {e['tolerance']:g})")
         body.append("")
-    for check in PAPER_CHECKS.get(r.name, []):
-        body += _check_section(check, proto, scores, preds, flags, r.name, ref)
-        body.append("")
-    if not rows and not PAPER_CHECKS.get(r.name):
+    others = _other_sections(proto, scores, preds, flags)
+    for lines in others:
+        body += lines + [""]
+    if not rows and not others:
         body += ["_No paper numbers to compare._", ""]
     return sec
 
@@ -534,10 +540,6 @@ def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, timin
     ``timing``: wall and CPU seconds, load averages, jobs of the invocation
     that computed the results (see :func:`reproduce`).
     """
-    from .. import __version__
-    from ..reports.leaderboard import write_text
-    from ..results.manifest import git_revision
-
     now = datetime.now(timezone.utc).isoformat(timespec="seconds")
     git = git_revision()
     flags_real: list[str] = []
@@ -548,11 +550,11 @@ def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, timin
                 "|---|---|---|---|---|---|---|"]
     n_compared = n_within = real_compared = real_within = 0
     compute = 0.0
-    for seed, citation, prefix in PAPERS:
+    for short, citation, prefix in PAPERS:
         mine = sorted((r for r in runs if r.name.startswith(prefix)), key=lambda r: r.name)
         if not mine:
             continue
-        body += [f"## {citation} (seed {seed})", ""]
+        body += [f"## {citation}", ""]
         for r in mine:
             sec = _protocol_section(r, profile)
             body += sec.lines
@@ -561,23 +563,19 @@ def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, timin
             compute += sec.seconds
             n_compared += sec.compared
             n_within += sec.within
-            try:
-                ref = apply_profile(r.path, profile)[0].dataset.name
-            except TouchbenchError:
-                ref = "?"
-            if _is_real(ref):
+            if sec.real:
                 real_compared += sec.compared
                 real_within += sec.within
             desc = sec.lines[0][4:] if sec.lines and sec.lines[0].startswith("### ") else r.name
             what = desc.split(":")[0].split("(")[0].strip()
             others = len(sec.flags) - (sec.compared - sec.within) + len(sec.problems)
             overview.append(
-                f"| {seed} | {what} | {'real HAART' if _is_real(ref) else ref} | "
+                f"| {short} | {what} | {sec.data} | "
                 + (f"{sec.within} / {sec.compared}" if sec.compared else "—") + " | "
                 + (sec.status if sec.status != "ran" else (str(others) if others else "—")) + " | "
                 + f"{sec.seconds / 60:.1f} | `{_rel(r.path)}` |")
     head = [
-        "# Reproducing the four seed papers",
+        "# Reproducing the four papers",
         "",
         f"Generated {now} by `touchbench papers reproduce --profile {profile.name}` (touchbench {__version__}, "
         f"git {str(git.get('revision') or '?')[:12]}{' with uncommitted changes' if git.get('dirty') else ''}) on "
@@ -633,41 +631,3 @@ def _timing_text(t: dict[str, Any]) -> str:
                  f"end (above {cpus}: other jobs shared the CPUs)" if max(load) > cpus else
                  f". The machine's 1-minute load average was {load[0]:.1f} at the start and {load[1]:.1f} at the end")
     return text + "."
-
-
-def _check_section(check: dict[str, Any], proto, scores: pd.DataFrame, preds: pd.DataFrame | None,
-                   flags: list[str], name: str, ref: str) -> list[str]:
-    ok = scores[scores["status"] == "ok"]
-    if check["kind"] == "confusion":
-        return _confusion_section(check, scores, preds, flags, name)
-    if check["kind"] == "sd":
-        sel = ok[ok["classifier"] == check["classifier"]]
-        sd = 100 * float(np.std(sel["accuracy"], ddof=1)) if len(sel) > 1 else math.nan
-        d = sd - check["value"]
-        within = math.isfinite(sd) and abs(d) <= check["tolerance"]
-        if not within:
-            flags.append(f"{check['source']} (`{name}`): ours {_fmt(sd)} points, paper {check['value']:g} "
-                         f"(tolerance {check['tolerance']:g})")
-        return [f"**{check['source']}:** paper {check['value']:g} points, ours {_fmt(sd)} points "
-                f"(sample sd over {len(sel)} folds), difference {d:+.1f}, tolerance {check['tolerance']:g}: "
-                f"{'within' if within else '**outside**'}."]
-    if check["kind"] == "argmax":
-        if ok.empty:
-            return [f"**{check['source']}:** no results."]
-        m = ok.groupby("classifier")["accuracy"].agg(["mean", "std", "count"])
-        order = sorted(m.index, key=lambda s: float(s.split("=")[-1].rstrip(")")) if "=" in s else s)
-        best = m["mean"].idxmax()
-        lines = [f"**{check['source']}.** Ours, mean accuracy over the held-out subjects (%):", "",
-                 "| configuration | mean | sd | folds |", "|---|---|---|---|"]
-        for k in order:
-            star = " (best)" if k == best else ""
-            lines.append(f"| {k}{star} | {100 * m.loc[k, 'mean']:.1f} | {_fmt(100 * m.loc[k, 'std'])} | {int(m.loc[k, 'count'])} |")
-        same = best == check["value"]
-        ours = f"Paper: best {check['value']}; ours: best {best} ({100 * m.loc[best, 'mean']:.1f} %)"
-        if check["value"] in m.index and not same:
-            ours += f", {check['value']} {100 * m.loc[check['value'], 'mean']:.1f} %"
-        lines += ["", ours + ("." if same else ": **differs**.")]
-        if not same:
-            flags.append(f"{check['source']} (`{name}`): our best configuration is {best}, not {check['value']}")
-        return lines
-    raise ValueError(f"unknown check kind {check['kind']!r}")

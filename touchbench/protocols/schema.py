@@ -26,6 +26,17 @@ A protocol names everything a benchmark run needs::
       tolerance: 3.0                   # percentage points
       results:
         - {features: [msd], classifier: gaus-rf, value: 54.82}
+      standard_deviations:             # of the accuracy over the folds
+        - {classifier: gaus-rf, value: 13, tolerance: 5, source: Table 2}
+      confusions:                      # a confusion matrix as printed
+        - classifier: gaus-rf
+          source: Table 6
+          tolerance: 10                # points of per-class recall
+          rows: predicted              # the paper's rows: predicted (or true) class
+          classes: [pat, rub]          # the order of its rows and columns
+          matrix: [[30, 2], [6, 34]]
+      best_parameters:                 # the best value of a parameter grid
+        - {classifier: cnn, parameter: L, value: 30, source: Fig. 5}
 
 **Parameter grids.** A feature or classifier parameter written
 ``{grid: [v1, v2, ...]}`` expands to one entry per value (the cartesian
@@ -53,7 +64,7 @@ import json
 import re
 import typing
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import yaml
 from pydantic import (
@@ -94,6 +105,15 @@ class ProtocolError(TouchbenchError):
     def __init__(self, message: str, issues: list[tuple[str, int | None, str, str]] | None = None):
         super().__init__(message)
         self.issues = issues or []
+
+
+class _ErrorAt(ValueError):
+    """Raised by a model validator about one of the model's fields (``loc``
+    below the model), so that the error names that field's line."""
+
+    def __init__(self, loc: tuple, message: str):
+        super().__init__(message)
+        self.loc = loc
 
 
 # ----------------------------------------------------------------- helpers
@@ -266,14 +286,88 @@ class ExpectedResult(_Model):
         return v
 
 
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}{'' if n == 1 else 's'}"
+
+
+class ExpectedDeviation(_Model):
+    """A standard deviation a paper gives for one classifier's accuracy over
+    the folds, in percentage points; ours is the sample standard deviation
+    (ddof 1) of the accuracy of that classifier's folds."""
+
+    classifier: str  # a classifier entry's label
+    value: float = Field(ge=0)
+    tolerance: float = Field(ge=0)  # percentage points
+    source: str  # the table or figure
+
+
+class ExpectedConfusion(_Model):
+    """A confusion matrix as a paper prints it (counts of captures), compared
+    per class: the paper's recall of each class against ours, from one
+    classifier's predictions pooled over the folds.
+
+    ``rows`` says what the printed rows are: ``predicted`` (the columns are
+    then the true class) or ``true``. ``classes`` is the order of the rows
+    and of the columns; ``matrix`` has one row per class, each with one count
+    per class.
+    """
+
+    classifier: str  # a classifier entry's label
+    source: str  # the table or figure
+    tolerance: float = Field(ge=0)  # percentage points of per-class recall
+    rows: Literal["predicted", "true"]
+    classes: list[str] = Field(min_length=2)
+    matrix: list[list[Annotated[int, Field(ge=0)]]]
+
+    @model_validator(mode="after")
+    def _square(self) -> "ExpectedConfusion":
+        k = len(self.classes)
+        twice = sorted({c for c in self.classes if self.classes.count(c) > 1})
+        if twice:
+            raise _ErrorAt(("classes",), f"each class once: {', '.join(twice)} repeated")
+        if len(self.matrix) != k:
+            raise _ErrorAt(("matrix",), f"{_count(len(self.matrix), 'row')} for {k} classes: one row per class, "
+                                        f"in the order of 'classes'")
+        for i, row in enumerate(self.matrix):
+            if len(row) != k:
+                raise _ErrorAt(("matrix", i), f"row {i + 1} ({self.classes[i]}) has {_count(len(row), 'count')} "
+                                              f"for {k} classes: the matrix is square, one column per class")
+        return self
+
+
+class ExpectedBest(_Model):
+    """The value of a swept parameter (a ``{grid: [...]}`` of a classifier)
+    that gave a paper its best accuracy; ours is the grid entry with the best
+    mean accuracy over the folds."""
+
+    classifier: str  # the classifier's registered name
+    parameter: str
+    value: Any
+    source: str  # the table or figure
+
+
 class Expected(_Model):
-    """Paper numbers the report compares against (``value`` in percent)."""
+    """Paper numbers the report compares against (``value`` in percent).
+
+    ``results`` are single numbers (accuracies); ``standard_deviations``,
+    ``confusions`` and ``best_parameters`` the papers' other numbers. Every
+    one names its table or figure in ``source``.
+    """
 
     metric: Literal["accuracy", "balanced_accuracy", "macro_f1"] = "accuracy"
     tolerance: float = Field(default=3.0, ge=0)
     aggregate: Literal["mean", "pooled"] = "mean"
     source: str | None = None
-    results: list[ExpectedResult] = Field(min_length=1)
+    results: list[ExpectedResult] = Field(default_factory=list)
+    standard_deviations: list[ExpectedDeviation] = Field(default_factory=list)
+    confusions: list[ExpectedConfusion] = Field(default_factory=list)
+    best_parameters: list[ExpectedBest] = Field(default_factory=list)
+
+    @model_validator(mode="after")
+    def _not_empty(self) -> "Expected":
+        if not (self.results or self.standard_deviations or self.confusions or self.best_parameters):
+            raise ValueError("no paper numbers: give results, standard_deviations, confusions or best_parameters")
+        return self
 
 
 class FeatureCombination(BaseModel):
@@ -409,6 +503,15 @@ class Protocol(_Model):
                 c.label = _label(c.label, c.params)
         return out
 
+    def best_label(self, best: ExpectedBest) -> str:
+        """The label of the classifier entry that ``best`` (an entry of
+        ``expected.best_parameters``) says is the best, e.g. ``cnn(L=30)``."""
+        for c in self.classifier_entries():
+            if c.name == best.classifier and c.params.get(best.parameter) == best.value:
+                return c.label
+        raise self.error_at(("expected", "best_parameters"), f"no {best.classifier} entry with "
+                                                             f"{best.parameter} = {best.value!r}")
+
     def splitter(self, repetition: int = 0) -> Splitter:
         """The scheme, seeded for ``repetition``."""
         from .seeding import derive_seed
@@ -479,6 +582,9 @@ def _pydantic_issues(err: ValidationError, model: type[BaseModel], prefix: tuple
         msg = e["msg"]
         if msg.startswith("Value error, "):
             msg = msg[len("Value error, "):]
+        at = (e.get("ctx") or {}).get("error")
+        if isinstance(at, _ErrorAt):
+            loc += at.loc
         if kind == "missing":
             msg = "missing required field"
         elif kind == "extra_forbidden":
@@ -613,6 +719,7 @@ def _expected_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
     by_names = {"+".join(c.names) for c in combos} | {c.label for c in combos}
     clfs = protocol.classifier_entries()
     clf_names = {c.label for c in clfs} | {c.name for c in clfs} | {s.label for s in protocol.classifiers if s.label}
+    labels = sorted(c.label for c in clfs)
     issues = []
     for i, r in enumerate(protocol.expected.results):
         key = "+".join(r.features)
@@ -622,7 +729,31 @@ def _expected_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
         if r.classifier not in clf_names:
             issues.append((("expected", "results", i, "classifier"),
                            f"no classifier {r.classifier!r} in this protocol{did_you_mean(r.classifier, sorted(clf_names))}"))
+    for field in ("standard_deviations", "confusions"):
+        for i, c in enumerate(getattr(protocol.expected, field)):
+            if c.classifier not in labels:
+                issues.append((("expected", field, i, "classifier"),
+                               f"no classifier entry labelled {c.classifier!r} in this protocol"
+                               f"{did_you_mean(c.classifier, labels)} (labels: {', '.join(labels)})"))
+    for i, b in enumerate(protocol.expected.best_parameters):
+        issues += [(("expected", "best_parameters", i) + loc, msg) for loc, msg in _best_issues(protocol, b)]
     return issues
+
+
+def _best_issues(protocol: Protocol, best: ExpectedBest) -> list[tuple[tuple, str]]:
+    """Whether ``best`` names a grid of one of the protocol's classifiers and one of its values."""
+    specs = [s for s in protocol.classifiers if s.name == best.classifier]
+    if not specs:
+        names = sorted({s.name for s in protocol.classifiers})
+        return [(("classifier",), f"no classifier {best.classifier!r} in this protocol{did_you_mean(best.classifier, names)}")]
+    grids = {k: v["grid"] for s in specs for k, v in s.params.items() if _is_grid(v)}
+    if best.parameter not in grids:
+        return [(("parameter",), f"{best.classifier} has no grid of {best.parameter!r} to take the best of"
+                                 f"{did_you_mean(best.parameter, sorted(grids))}")]
+    if best.value not in grids[best.parameter]:
+        return [(("value",), f"{best.value!r} is not in the grid of {best.parameter}: "
+                             f"{', '.join(map(_fmt_value, grids[best.parameter]))}")]
+    return []
 
 
 def _target_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
