@@ -1,17 +1,16 @@
-"""``touchbench data``: list, inspect, export and convert datasets."""
+"""``touchbench data``: list, inspect, export and convert datasets; the file formats."""
 
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import click
 
 from ..catalog import load_dataset, parse_dataset_ref
 from ..datasets import DATASETS
+from ..datasets.formats import FORMATS
 from ..datasets.model import TouchDataset
-
-FORMATS = ("challenge-csv", "cost-csv", "long")
+from .formats import FORMATS_HELP, FormatChoice, format_options
 
 
 @click.group()
@@ -76,48 +75,47 @@ def info(name: str, cache_dir, data_dir, refresh: bool, as_json: bool) -> None:
 @data.command()
 @click.argument("name")
 @click.argument("out_dir", type=click.Path(file_okay=False))
-@click.option("--format", "fmt", type=click.Choice(["challenge-csv", "parquet"]), default="challenge-csv", show_default=True)
+@click.option("--format", "fmt", type=FormatChoice("write", lambda f: f.writer is not None), default="challenge-csv",
+              show_default=True, help=f"Format to write ({FORMATS_HELP}).")
 @click.option("--cache-dir", type=click.Path(file_okay=False), default=None)
 @click.option("--data-dir", type=click.Path(file_okay=False), default=None)
 def export(name: str, out_dir: str, fmt: str, cache_dir, data_dir) -> None:
     """Write dataset NAME to OUT_DIR (the challenge's training.csv and testWITHLABELS.csv, or Parquet)."""
     ds = _load(name, cache_dir, data_dir)
-    if fmt == "challenge-csv":
-        from ..datasets.challenge_csv import export_challenge_csv
-
-        paths = export_challenge_csv(ds, out_dir)
-    else:
-        paths = [ds.to_parquet(Path(out_dir) / f"{ds.name}.parquet")]
-    for p in paths:
+    for p in FORMATS.get(fmt).write(ds, out_dir):
         click.echo(str(p))
 
 
 @data.command()
 @click.argument("source", type=click.Path(exists=True))
 @click.argument("out", type=click.Path(dir_okay=False))
-@click.option("--format", "fmt", type=click.Choice(FORMATS), required=True, help="Format of SOURCE.")
-@click.option("--grid", default=None, help="H,W of the grid (format long).")
-@click.option("--frame-rate", type=float, default=None, help="Frames per second (format long).")
+@click.option("--format", "fmt", type=FormatChoice("read"), required=True,
+              help=f"Format of SOURCE ({FORMATS_HELP}).")
+@format_options
 @click.option("--name", default=None, help="Dataset name (default: from the file).")
-def convert(source: str, out: str, fmt: str, grid, frame_rate, name) -> None:
+def convert(source: str, out: str, fmt: str, name, **options) -> None:
     """Read SOURCE in a supported format and save it as a touchbench Parquet dataset OUT."""
-    if fmt == "challenge-csv":
-        from ..datasets.challenge_csv import read_challenge_csv
-
-        ds = read_challenge_csv(source, name=name or "haart-challenge")
-    elif fmt == "cost-csv":
-        from ..datasets.cost import read_cost_csv
-
-        ds = read_cost_csv(source, name=name or "cost")
-    else:
-        if grid is None or frame_rate is None:
-            raise click.UsageError("--format long needs --grid H,W and --frame-rate")
-        from ..datasets.generic import read_long_table
-
-        try:
-            h, w = (int(x) for x in grid.split(","))
-        except ValueError:
-            raise click.BadParameter("expected H,W such as 8,8", param_hint="--grid") from None
-        ds = read_long_table(source, (h, w), frame_rate, name=name)
+    form = FORMATS.get(fmt)
+    missing = form.missing(options)
+    if missing:
+        raise click.UsageError(f"--format {fmt} needs {' and '.join(o.usage for o in missing)}")
+    ds = form.read(source, name=name, **options)
     ds.to_parquet(out)
     click.echo(f"{out}: {len(ds)} captures, hash {ds.content_hash}")
+
+
+@data.command("formats")
+def formats() -> None:
+    """File formats: what reads and writes them, and the options they take."""
+    for e in FORMATS.entries():
+        f = e.obj
+        can = [f"reads a {f.reads}"]
+        if f.writer is not None:
+            can.append("writes into a folder")
+        if f.replay:
+            can.append("replays in stream")
+        click.echo(f"{e.name:14s} {e.description}")
+        click.echo(f"{'':14s} {', '.join(can)}")
+        for o in f.options:
+            need = " (convert needs it)" if o.required else ""
+            click.echo(f"{'':14s} {o.usage:18s} {o.help}{need}")

@@ -5,8 +5,23 @@ from __future__ import annotations
 
 import json
 import sys
+from dataclasses import asdict
+from pathlib import Path
 
 import click
+
+from ..core.atomic import atomic_write_bytes
+from ..deploy.model import TrainedModel
+from ..deploy.predict import predict_dataset, read_data, write_table
+from ..deploy.stream import (
+    SlidingRecognizer,
+    load_replay,
+    replay,
+    run_stream,
+    text_frames,
+)
+from ..deploy.train import parse_selection, train_from_protocol
+from .formats import FORMATS_HELP, FormatChoice
 
 
 def _floats(values, option: str) -> list[float] | None:
@@ -35,8 +50,6 @@ def _floats(values, option: str) -> list[float] | None:
 @click.option("--seed", type=int, default=None, help="Classifier seed [default: derived from the protocol seed].")
 def train(protocol, method, out, fold, where, exclude, windows, train_hop, seed) -> None:
     """Fit one method of PROTOCOL on its data and save it with its manifest."""
-    from ..deploy.train import parse_selection, train_from_protocol
-
     model = train_from_protocol(
         protocol, method, fold=fold, where=parse_selection(where, "--where"),
         exclude=parse_selection(exclude, "--exclude"), windows=_floats(windows, "--window"),
@@ -48,9 +61,7 @@ def train(protocol, method, out, fold, where, exclude, windows, train_hop, seed)
     click.echo(f"saved {path} (manifest {path}.json); features {t['features_s']:.1f} s, fit {t['fit_s']:.1f} s", err=True)
 
 
-def _load_model(path: str):
-    from ..deploy.model import TrainedModel
-
+def _load_model(path: str) -> TrainedModel:
     model = TrainedModel.load(path)
     for note in model.version_notes():
         click.echo(f"warning: {note}", err=True)
@@ -60,14 +71,12 @@ def _load_model(path: str):
 @click.command("predict")
 @click.argument("model_path", metavar="MODEL")
 @click.argument("data")
-@click.option("--format", "fmt", type=click.Choice(["auto", "challenge-csv", "cost-csv", "long"]), default="auto",
-              show_default=True, help="Reader of DATA (auto: dataset name, scene:NAME or touchbench Parquet).")
+@click.option("--format", "fmt", type=FormatChoice("read", extra=("auto",)), default="auto", show_default=True,
+              help=f"Reader of DATA (auto: dataset name, scene:NAME or touchbench Parquet; {FORMATS_HELP}).")
 @click.option("--out", "-o", type=click.Path(dir_okay=False), default=None, help="Write the labels here (.csv or .parquet).")
 @click.option("--whole", is_flag=True, help="Label whole captures even when the model was trained on windows.")
 def predict(model_path, data, fmt, out, whole) -> None:
     """Label the captures of DATA with MODEL; refuses data from another sensor."""
-    from ..deploy.predict import predict_dataset, read_data, write_table
-
     model = _load_model(model_path)
     ds = read_data(data, fmt, model)
     table = predict_dataset(model, ds, whole=whole, source=data)
@@ -95,27 +104,22 @@ def predict(model_path, data, fmt, out, whole) -> None:
 @click.option("--combine", type=click.Choice(["max", "mean"]), default="max", show_default=True,
               help="Several windows: the most confident one decides (max) or their mean probabilities.")
 @click.option("--none-label", default="none", show_default=True)
+@click.option("--format", "fmt", type=FormatChoice("replay", lambda f: f.replay, extra=("auto",)), default="auto",
+              show_default=True, help="Reader of the file SOURCE (auto: a touchbench dataset, or a table of one "
+                                      f"frame per row; {FORMATS_HELP}).")
 @click.option("--capture", default=None, help="Replay only this capture_id of SOURCE.")
 @click.option("--speed", type=float, default=1.0, show_default=True, help="Replay speed (2: twice the frame rate).")
 @click.option("--realtime/--no-realtime", default=True, show_default=True,
               help="Replay files at their frame rate, or as fast as possible.")
 @click.option("--jsonl", is_flag=True, help="One JSON object per decision instead of text.")
 @click.option("--summary-json", type=click.Path(dir_okay=False), default=None, help="Write the summary (latencies) here.")
-def stream(model_path, source, windows, hop, threshold, combine, none_label, capture, speed, realtime, jsonl,
+def stream(model_path, source, windows, hop, threshold, combine, none_label, fmt, capture, speed, realtime, jsonl,
            summary_json) -> None:
     """Label a stream of frames with MODEL: SOURCE is a CSV/Parquet file replayed at
     its frame rate, or - for standard input (one frame per line: H*W comma-separated
     values, row-major). Prints one decision per hop, then latency p50/p99."""
-    from dataclasses import asdict
-
-    from ..deploy.stream import (
-        SlidingRecognizer,
-        load_replay,
-        replay,
-        run_stream,
-        text_frames,
-    )
-
+    if source == "-" and fmt != "auto":
+        raise click.UsageError("standard input is read as one frame per line; --format is for files")
     model = _load_model(model_path)
     rec = SlidingRecognizer(model, _floats(windows, "--window"), hop_s=hop, threshold=threshold,
                             combine=combine, none_label=none_label)
@@ -126,7 +130,7 @@ def stream(model_path, source, windows, hop, threshold, combine, none_label, cap
         frames = text_frames(sys.stdin, model)
         what = "standard input"
     else:
-        arr, rate, what = load_replay(source, model, capture)
+        arr, rate, what = load_replay(source, model, capture, fmt)
         frames = replay(arr, rate, speed=speed, realtime=realtime, late=late)
     click.echo(f"{model.method} on {what}: windows {', '.join(f'{w:g}' for w in rec.windows_s)} s, "
                f"hop {hop:g} s, threshold {threshold:g}", err=True)
@@ -138,8 +142,4 @@ def stream(model_path, source, windows, hop, threshold, combine, none_label, cap
     summary = run_stream(rec, frames, emit, late=late)
     click.echo(summary.to_text(), err=True)
     if summary_json:
-        from pathlib import Path
-
-        from ..core.atomic import atomic_write_bytes
-
         atomic_write_bytes(Path(summary_json), json.dumps(asdict(summary), indent=2).encode())

@@ -24,6 +24,7 @@ import pandas as pd
 import pyarrow as pa
 
 from ..core.errors import DataError
+from .formats import register_format
 from .haart import HAART_SENSOR, N_FRAMES
 from .model import TouchDataset
 from .tables import find_column, numeric, read_table, runs, write_csv_atomic
@@ -117,3 +118,9 @@ def read_challenge_csv(path: str | Path, name: str = "haart-challenge") -> Touch
         captures += c
         metas.append(m)
     return TouchDataset(name, captures, pd.concat(metas, ignore_index=True), HAART_SENSOR)
+
+
+register_format(
+    "challenge-csv", "the Social Touch Challenge 2015 release: training.csv and testWITHLABELS.csv (8 x 8 HAART)",
+    read_challenge_csv, writer=export_challenge_csv, reads="file or folder",
+)

@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 
 from ..core.errors import DataError
+from .formats import register_format
 from .model import SensorSpec, TouchDataset
 from .tables import find_column, numeric, read_table, runs
 
@@ -64,3 +65,6 @@ def read_cost_csv(path: str | Path, name: str = "cost") -> TouchDataset:
             "variant": variant, "repetition": rep[key], "split": "none",
         })
     return TouchDataset(name, captures, pd.DataFrame(rows), COST_SENSOR)
+
+
+register_format("cost-csv", "the Corpus of Social Touch release file CoST.csv (8 x 8 at 135 Hz)", read_cost_csv)

@@ -18,12 +18,14 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
-from ..core.errors import DataError
+from ..core.errors import DataError, TouchbenchError
+from .formats import FormatOption, parse_frame_rate, parse_grid, register_format
 from .model import SensorSpec, TouchDataset
 from .tables import find_column, numeric, read_table, runs
 
 
-def _cell_columns(df: pd.DataFrame, n_cells: int, path: Path) -> list[str]:
+def cell_columns(df: pd.DataFrame, n_cells: int, path: Path) -> list[str]:
+    """The ``n_cells`` cell columns: the one group of columns named by a common prefix and a number, by number."""
     groups: dict[str, list[tuple[int, str]]] = {}
     for c in df.columns:
         m = re.fullmatch(r"(.*?)(\d+)", c)
@@ -56,7 +58,7 @@ def read_long_table(
     fr = find_column(df, (frame_col,), path, "frame index")
     for req in ("subject", "gesture"):
         find_column(df, (req,), path, req)
-    cell_cols = list(cells) if cells is not None else _cell_columns(df, sensor.n_cells, path)
+    cell_cols = list(cells) if cells is not None else cell_columns(df, sensor.n_cells, path)
     missing = [c for c in cell_cols if c not in df.columns]
     if missing:
         raise DataError(f"cell columns not found: {missing[:5]}", path, 1)
@@ -83,3 +85,34 @@ def read_long_table(
         dup = meta["capture_id"][meta["capture_id"].duplicated()].iloc[0]
         raise DataError(f"capture {dup!r} appears in two separate runs of rows", path)
     return TouchDataset(name or path.stem, captures, meta, sensor)
+
+
+def read_long_format(
+    path: str | Path,
+    *,
+    grid: tuple[int, int] | None = None,
+    frame_rate: float | None = None,
+    name: str | None = None,
+    like: SensorSpec | None = None,
+) -> TouchDataset:
+    """The ``long`` file format: :func:`read_long_table` with the grid and
+    frame rate given, or else those of ``like`` (the sensor of the model that
+    is to label the data), whose value range and name the dataset then takes."""
+    kw = {}
+    if like is not None:
+        grid = grid or like.grid
+        frame_rate = frame_rate or like.frame_rate
+        kw = {"value_range": like.value_range, "sensor_name": like.name}
+    if grid is None or frame_rate is None:
+        raise TouchbenchError("the long format needs a grid and a frame rate")
+    return read_long_table(path, tuple(grid), float(frame_rate), name=name, **kw)
+
+
+register_format(
+    "long", "your own sensor: one row per frame (capture_id, frame, subject, gesture, H x W numbered cell columns)",
+    read_long_format,
+    options=(
+        FormatOption("grid", "H,W of the grid", parse_grid, metavar="H,W", required=True),
+        FormatOption("frame_rate", "Frames per second", parse_frame_rate, required=True),
+    ),
+)

@@ -27,6 +27,7 @@ import pyarrow.parquet as pq
 
 from ..core.atomic import atomic_path
 from ..core.errors import DataError
+from .formats import register_format
 
 FORMAT_VERSION = 2
 REQUIRED_META = ("capture_id", "subject", "gesture")
@@ -298,3 +299,16 @@ def concat(datasets: Sequence[TouchDataset], name: str) -> TouchDataset:
         meta=pd.concat([d.meta for d in datasets], ignore_index=True),
         sensor=sensor,
     )
+
+
+def _read_parquet(path: str | Path, name: str | None = None) -> TouchDataset:
+    ds = TouchDataset.from_parquet(path)
+    return ds if name is None else ds.with_name(name)
+
+
+def _write_parquet(ds: TouchDataset, out_dir: Path) -> list[Path]:
+    return [ds.to_parquet(Path(out_dir) / f"{ds.name}.parquet")]
+
+
+register_format("parquet", "touchbench's own dataset file: one row per capture, the sensor in the metadata",
+                _read_parquet, writer=_write_parquet)

@@ -2,9 +2,9 @@
 
 The data is anything a touchbench reader reads: a registered dataset name,
 ``scene:NAME``, a touchbench Parquet file, or a file in one of the
-``touchbench data convert`` formats (``challenge-csv``, ``cost-csv``,
-``long``; for ``long`` the grid, frame rate and value range default to the
-model's sensor). The data's sensor must match the model's
+registered file formats (:mod:`touchbench.datasets.formats`; what a file
+does not say, such as the ``long`` format's grid, frame rate and value
+range, is the model's sensor's). The data's sensor must match the model's
 (:func:`touchbench.deploy.model.sensor_differences`), or nothing is labelled.
 
 A model trained on windows labels a capture from the windows of the
@@ -22,43 +22,22 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..catalog import load_dataset
+from ..core.atomic import atomic_write_bytes, atomic_write_parquet
+from ..datasets.formats import FORMATS
 from ..datasets.model import TouchDataset
 from .model import TrainedModel
 from .windows import cut_windows
 
-__all__ = ["READ_FORMATS", "predict_dataset", "read_data"]
-
-READ_FORMATS = ("auto", "challenge-csv", "cost-csv", "long")
+__all__ = ["predict_dataset", "read_data", "write_table"]
 
 
-def read_data(source: str, fmt: str = "auto", model: TrainedModel | None = None, *,
-              grid: tuple[int, int] | None = None, frame_rate: float | None = None) -> TouchDataset:
-    """Read ``source`` with the reader ``fmt`` (``auto``: :func:`load_dataset`)."""
+def read_data(source: str, fmt: str = "auto", model: TrainedModel | None = None, **options) -> TouchDataset:
+    """Read ``source`` in the registered file format ``fmt`` with its ``options``
+    (``auto``: :func:`~touchbench.catalog.load_dataset`); the model's sensor fills what the file does not say."""
     if fmt == "auto":
-        from ..catalog import load_dataset
-
         return load_dataset(source)
-    if fmt == "challenge-csv":
-        from ..datasets.challenge_csv import read_challenge_csv
-
-        return read_challenge_csv(source)
-    if fmt == "cost-csv":
-        from ..datasets.cost import read_cost_csv
-
-        return read_cost_csv(source)
-    if fmt == "long":
-        from ..datasets.generic import read_long_table
-
-        spec = model.sensor if model is not None else None
-        g = grid or (spec.grid if spec else None)
-        fr = frame_rate or (spec.frame_rate if spec else None)
-        if g is None or fr is None:
-            raise ValueError("the long format needs a grid and a frame rate")
-        kw = {}
-        if spec is not None:
-            kw = {"value_range": spec.value_range, "sensor_name": spec.name}
-        return read_long_table(source, tuple(g), float(fr), **kw)
-    raise ValueError(f"unknown format {fmt!r} (known: {', '.join(READ_FORMATS)})")
+    return FORMATS.get(fmt).read(source, like=None if model is None else model.sensor, **options)
 
 
 def predict_dataset(model: TrainedModel, ds: TouchDataset, *, whole: bool = False, source: str | None = None) -> pd.DataFrame:
@@ -97,8 +76,6 @@ def predict_dataset(model: TrainedModel, ds: TouchDataset, *, whole: bool = Fals
 
 def write_table(df: pd.DataFrame, path: str | Path) -> Path:
     """CSV or Parquet by suffix, written atomically."""
-    from ..core.atomic import atomic_write_bytes, atomic_write_parquet
-
     path = Path(path)
     if path.suffix == ".parquet":
         atomic_write_parquet(path, df)

@@ -31,19 +31,23 @@ all others together); ``combine="max"``.
 
 from __future__ import annotations
 
+import gzip
 import json
 import math
-import sys
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import IO, Any, Callable, Iterable, Iterator
 
 import numpy as np
+import pyarrow.parquet as pq
 
 from ..core.errors import DataError, TouchbenchError
 from ..core.threads import single_thread
+from ..datasets.formats import FORMATS
+from ..datasets.generic import cell_columns
 from ..datasets.model import TouchDataset
+from ..datasets.tables import numeric, read_table
 from .model import TrainedModel
 from .windows import COMBINE, combine_windows, seconds_to_frames
 
@@ -53,6 +57,7 @@ __all__ = [
     "StreamSummary",
     "load_replay",
     "replay",
+    "replay_dataset",
     "run_stream",
     "text_frames",
 ]
@@ -89,11 +94,6 @@ class StreamSummary:
     latency_ms_max: float = math.nan
 
     none_label: str = "none"
-
-    def majority(self, include_none: bool = False) -> str | None:
-        """The most frequent decision (ties: alphabetical), ignoring "none" unless asked."""
-        counts = {k: v for k, v in self.labels.items() if include_none or k != self.none_label}
-        return max(sorted(counts), key=lambda k: counts[k]) if counts else None
 
     def to_text(self) -> str:
         lab = ", ".join(f"{k}: {v}" for k, v in sorted(self.labels.items(), key=lambda kv: -kv[1]))
@@ -232,8 +232,14 @@ def _is_number(v: str) -> bool:
         return False
 
 
-def load_replay(path: str | Path, model: TrainedModel, capture: str | None = None) -> tuple[np.ndarray, float, str]:
+def load_replay(path: str | Path, model: TrainedModel, capture: str | None = None,
+                fmt: str = "auto") -> tuple[np.ndarray, float, str]:
     """Frames of a recorded file: ``(frames (T, H, W), frame rate, description)``.
+
+    ``fmt`` is a registered file format (:mod:`touchbench.datasets.formats`),
+    whose dataset is replayed like a touchbench dataset below (what the file
+    does not say, such as the ``long`` format's grid, is the model's sensor's),
+    or ``auto``:
 
     - a touchbench dataset (Parquet): the capture ``capture`` (by
       ``capture_id``), or every capture one after another; its sensor must
@@ -244,28 +250,21 @@ def load_replay(path: str | Path, model: TrainedModel, capture: str | None = Non
       when a ``capture_id`` column exists; a CSV whose first line is numbers
       has no header. Replayed at the model's frame rate.
     """
-    from ..datasets.tables import numeric, read_table
-
     path = Path(path)
+    if fmt != "auto":
+        form = FORMATS.get(fmt)
+        if not form.replay:
+            raise TouchbenchError(f"the {fmt} format cannot be replayed frame by frame")
+        return replay_dataset(form.read(path, like=model.sensor), model, capture, path)
     if not path.is_file():
         raise DataError("no such file", path)
     if path.suffix == ".parquet":
-        import pyarrow.parquet as pq
-
         try:
             meta = pq.read_schema(path).metadata or {}
         except Exception as e:
             raise DataError(f"not a readable Parquet file ({e})", path) from None
         if b"touchbench" in meta:
-            ds = TouchDataset.from_parquet(path)
-            model.check_sensor(ds.sensor, str(path))
-            if capture is not None:
-                ids = ds.meta["capture_id"].astype(str).tolist()
-                if capture not in ids:
-                    raise DataError(f"no capture {capture!r} (e.g. {', '.join(ids[:5])})", path)
-                frames = ds.captures[ids.index(capture)]
-                return frames, ds.sensor.frame_rate, f"{path.name}: capture {capture}"
-            return np.concatenate(ds.captures), ds.sensor.frame_rate, f"{path.name}: {len(ds)} captures"
+            return replay_dataset(TouchDataset.from_parquet(path), model, capture, path)
     h, w = model.sensor.grid
     n = h * w
     dtype = np.dtype(model.manifest.get("capture_dtype", "<f8"))
@@ -285,19 +284,27 @@ def load_replay(path: str | Path, model: TrainedModel, capture: str | None = Non
     if df.shape[1] == n:
         cols = list(df.columns)
     else:
-        from ..datasets.generic import (
-            _cell_columns,  # the long format's own rule for cell columns
-        )
-
-        cols = _cell_columns(df, n, path)
+        cols = cell_columns(df, n, path)  # the long format's own rule for cell columns
     lo, hi = model.sensor.value_range
     values = numeric(df, cols, path, lo=lo, hi=hi, integer=dtype.kind in "iu")
     return values.reshape(len(df), h, w).astype(dtype), model.sensor.frame_rate, f"{path.name}: {len(df)} frames"
 
 
-def _open_text(path: Path) -> IO[str]:
-    import gzip
+def replay_dataset(ds: TouchDataset, model: TrainedModel, capture: str | None, path: Path) -> tuple[np.ndarray, float, str]:
+    """Frames of dataset ``ds`` read from ``path``: the capture ``capture``
+    (by ``capture_id``), or every capture one after another, at the dataset's
+    frame rate; its sensor must match the model's."""
+    model.check_sensor(ds.sensor, str(path))
+    if capture is not None:
+        ids = ds.meta["capture_id"].astype(str).tolist()
+        if capture not in ids:
+            raise DataError(f"no capture {capture!r} (e.g. {', '.join(ids[:5])})", path)
+        frames = ds.captures[ids.index(capture)]
+        return frames, ds.sensor.frame_rate, f"{path.name}: capture {capture}"
+    return np.concatenate(ds.captures), ds.sensor.frame_rate, f"{path.name}: {len(ds)} captures"
 
+
+def _open_text(path: Path) -> IO[str]:
     if path.suffix == ".gz":
         return gzip.open(path, "rt", encoding="utf-8")
     return open(path, encoding="utf-8")
@@ -364,6 +371,3 @@ def run_stream(recognizer: SlidingRecognizer, frames: Iterable[tuple[np.ndarray,
     summary.late_frames = int(late[0]) if late else 0
     return summary
 
-
-def stdin_source(model: TrainedModel) -> Iterator[tuple[np.ndarray, float]]:
-    return text_frames(sys.stdin, model)

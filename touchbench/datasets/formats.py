@@ -1,0 +1,125 @@
+"""Registered file formats: the files touchbench reads and writes datasets as.
+
+An entry is a :class:`FileFormat`, declared once in the module that holds
+its reader (``challenge_csv.py``, ``cost.py``, ``generic.py``,
+``model.py``) with :func:`register_format`. ``touchbench data convert``,
+``data export``, ``predict --format`` and ``stream --format`` take their
+choices and their reader or writer from here; ``touchbench data formats``
+lists them. Adding a format is adding a module that registers it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+from ..core.errors import TouchbenchError
+from ..core.introspect import accepts
+from ..core.registry import Registry
+
+__all__ = ["FORMATS", "FileFormat", "FormatOption", "parse_frame_rate", "parse_grid", "register_format"]
+
+# Filled by every module of touchbench.datasets (imported on first use of the registry).
+FORMATS: Registry = Registry("file format", package="touchbench.datasets")
+
+
+@dataclass(frozen=True)
+class FormatOption:
+    """A setting the file cannot tell the reader, given on the command line as ``--NAME``.
+
+    ``name`` is the reader's keyword (``frame_rate`` is ``--frame-rate``);
+    ``parse`` turns the command-line text into its value and raises
+    ``ValueError`` with the expected form when it cannot. A ``required``
+    option must be given to ``data convert``; ``predict`` and ``stream`` take
+    it from the model's sensor instead.
+    """
+
+    name: str
+    help: str
+    parse: Callable[[str], Any] = str
+    metavar: str | None = None
+    required: bool = False
+
+    @property
+    def flag(self) -> str:
+        return "--" + self.name.replace("_", "-")
+
+    @property
+    def usage(self) -> str:
+        return f"{self.flag} {self.metavar}" if self.metavar else self.flag
+
+
+@dataclass(frozen=True)
+class FileFormat:
+    """A file format: its reader, its writer if any, and the options the reader takes.
+
+    ``reader(path, name=..., **options)`` returns a
+    :class:`~touchbench.datasets.model.TouchDataset`; a reader that also takes
+    ``like`` (a :class:`~touchbench.datasets.model.SensorSpec`) fills what the
+    file does not say from that sensor (``predict``: the model's).
+    ``writer(dataset, out_dir)`` writes into a folder and returns the files.
+    ``reads`` is ``"file"``, ``"folder"`` or ``"file or folder"``; ``replay``
+    says whether ``stream`` can replay its captures frame by frame.
+    """
+
+    name: str
+    description: str
+    reader: Callable[..., Any]
+    writer: Callable[[Any, Path], list[Path]] | None = None
+    options: tuple[FormatOption, ...] = ()
+    reads: str = "file"
+    replay: bool = True
+
+    def missing(self, values: dict[str, Any]) -> list[FormatOption]:
+        """The required options that ``values`` lacks (``None`` counts as missing)."""
+        return [o for o in self.options if o.required and values.get(o.name) is None]
+
+    def read(self, path: str | Path, *, name: str | None = None, like: Any = None, **options: Any) -> Any:
+        """Read ``path``; ``None`` options are left to the reader's defaults (or ``like``)."""
+        known = {o.name for o in self.options}
+        unknown = sorted(k for k, v in options.items() if v is not None and k not in known)
+        if unknown:
+            takes = ", ".join(sorted(known)) or "none"
+            raise TouchbenchError(f"the {self.name} format takes no option {unknown[0]!r} (it takes: {takes})")
+        kw = {k: v for k, v in options.items() if v is not None}
+        if like is not None and accepts(self.reader, "like"):
+            kw["like"] = like
+        elif self.missing(kw):
+            need = " and ".join(o.name for o in self.missing(kw))
+            raise TouchbenchError(f"the {self.name} format needs {need}")
+        if name is not None:
+            kw["name"] = name
+        return self.reader(path, **kw)
+
+    def write(self, ds: Any, out_dir: str | Path) -> list[Path]:
+        """Write ``ds`` into the folder ``out_dir``; the files written."""
+        if self.writer is None:
+            writable = ", ".join(e.name for e in FORMATS.entries() if e.obj.writer is not None)
+            raise TouchbenchError(f"touchbench reads the {self.name} format but does not write it "
+                                  f"(formats it writes: {writable})")
+        return self.writer(ds, Path(out_dir))
+
+
+def register_format(name: str, description: str, reader: Callable[..., Any], **fields: Any) -> FileFormat:
+    """Declare a file format (the fields of :class:`FileFormat`) and register it."""
+    fmt = FileFormat(name, description, reader, **fields)
+    FORMATS.register(name, description=description)(fmt)
+    return fmt
+
+
+def parse_grid(text: str) -> tuple[int, int]:
+    """``"H,W"`` -> ``(H, W)``."""
+    try:
+        h, w = (int(x) for x in str(text).split(","))
+    except ValueError:
+        raise ValueError("expected H,W such as 8,8") from None
+    return h, w
+
+
+def parse_frame_rate(text: str) -> float:
+    """Frames per second, a number."""
+    try:
+        return float(text)
+    except ValueError:
+        raise ValueError(f"expected frames per second, got {text!r}") from None
