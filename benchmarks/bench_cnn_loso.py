@@ -1,7 +1,7 @@
-"""Leave-one-subject-out CNN on real HAART (Al-mashhadani et al. 2021,
-seed 001, Table 2: 83.2% +- 13%).
+"""Leave-one-subject-out CNN on real HAART (Al-mashhadani et al.
+2021, Table 2: 83.2% +- 13%).
 
-Loads real HAART with ``touchbench.datasets.load_dataset("haart")``, turns
+Loads real HAART with ``touchbench.catalog.load_dataset("haart")``, turns
 every capture into the ``raw-window`` feature set (all 432 frames; the CNN
 cuts its own sub-windows), and for each of the 10 subjects trains the
 ``cnn`` classifier on the other nine and tests on that one. Prints per-fold

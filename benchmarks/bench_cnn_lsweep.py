@@ -1,4 +1,4 @@
-"""The frame-length sweep of Al-mashhadani et al. 2021 (seed 001, section 3,
+"""The frame-length sweep of Al-mashhadani et al. 2021 (section 3,
 Fig. 5), quick version: leave-one-subject-out CNN accuracy for several L
 (F = floor(432 / L) frames per window) on the paper's subjects 1, 3, 5 and 7.
 

@@ -1,6 +1,7 @@
 """Cold conversion and warm (cached) load of the real HAART datasets.
 
-Prints the median of several warm loads in a fresh cache directory.
+Prints the median of several warm loads in a fresh cache directory under
+``cache_dir() / "benchmarks" / "dataset_cache"``, removed afterwards.
 Usage: python benchmarks/bench_dataset_cache.py [--repeats 7]
 """
 
@@ -8,8 +9,9 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import tempfile
 import time
+
+from workdir import fresh_dir
 
 from touchbench.catalog import load_dataset
 
@@ -18,7 +20,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=7)
     args = ap.parse_args()
-    with tempfile.TemporaryDirectory() as cache:
+    with fresh_dir(__file__) as cache:
         for name in ("haart", "haart-challenge"):
             t = time.perf_counter()
             ds = load_dataset(name, cache_dir=cache)

@@ -3,8 +3,9 @@
     python benchmarks/bench_engine.py                 # all three, 3 repeats each
     python benchmarks/bench_engine.py --what cache --repeats 1
 
-Everything runs on the real HAART data in a temporary cache and results
-folder (the user's are not touched; the HAART conversion is done once,
+Everything runs on the real HAART data in a fresh cache and results folder
+under ``cache_dir() / "benchmarks" / "engine"``, removed afterwards (the
+user's feature cache and results are not touched; the HAART conversion is done once,
 before timing). Figures are medians over ``--repeats`` runs, wall time.
 
 overhead
@@ -37,9 +38,10 @@ import os
 import shutil
 import statistics
 import sys
-import tempfile
 import time
 from pathlib import Path
+
+from workdir import fresh_dir
 
 OVERHEAD_PROTOCOL = """\
 name: bench-overhead
@@ -86,8 +88,8 @@ def bench_overhead(work: Path, repeats: int) -> dict:
 
 
 def bench_cache(work: Path, repeats: int, protocol: str) -> dict:
-    from touchbench.protocols.library import find_protocol
     from touchbench.core.paths import cache_dir
+    from touchbench.protocols.library import find_protocol
     from touchbench.protocols.schema import load_protocol
 
     proto = load_protocol(find_protocol(protocol))
@@ -130,38 +132,42 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
 
     json_path = Path(args.json).resolve() if args.json else None
-    work = Path(tempfile.mkdtemp(prefix="tb-bench-engine-"))
-    os.environ["TOUCHBENCH_CACHE_DIR"] = str(work / "cache")
-    os.chdir(work)
-    try:
-        from touchbench.catalog import load_dataset
+    home = os.getcwd()
+    with fresh_dir(__file__) as work:
+        os.environ["TOUCHBENCH_CACHE_DIR"] = str(work / "cache")
+        os.chdir(work)
+        try:
+            figures = run_all(args, work)
+        finally:
+            os.chdir(home)
+    if json_path:
+        json_path.write_text(json.dumps(figures, indent=2))
 
-        for name in ("haart", "haart-challenge"):
-            load_dataset(name)  # convert once, outside the timings
-        print(f"cpus {os.cpu_count()}, load average {os.getloadavg()[0]:.1f}", file=sys.stderr)
-        figures = {}
-        if args.what in ("all", "overhead"):
-            figures["overhead"] = r = bench_overhead(work, args.repeats)
-            print(f"overhead: {r['tasks']} tasks, {1000 * r['wall_per_task_s']:.0f} ms per task, bare fit+predict "
-                  f"{1000 * r['bare_fit_predict_s']:.0f} ms, overhead {1000 * r['overhead_per_task_s']:.0f} ms per task, "
-                  f"of which ~{1000 * r['latency_measurement_s']:.0f} ms measure the one-capture latency "
-                  f"(median of {r['runs']})")
-        if args.what in ("all", "cache"):
-            figures["cache"] = r = bench_cache(work, args.repeats, args.protocol)
-            print(f"cache: {r['protocol']}: cold {r['cold_s']:.1f} s, warm {r['warm_s']:.1f} s "
-                  f"({r['cold_over_warm']:.1f}x), rerun {r['rerun_s']:.2f} s ({r['cold_over_rerun']:.0f}x) "
-                  f"(median of {r['runs']})")
-        if args.what in ("all", "jobs"):
-            figures["jobs"] = r = bench_jobs(work, args.repeats)
-            print(f"jobs: 1 job {r['jobs1_s']:.1f} s, 2 jobs {r['jobs2_s']:.1f} s ({r['speedup']:.2f}x) "
-                  f"(median of {r['runs']})")
-        figures["load_average_end"] = os.getloadavg()[0]
-        if json_path:
-            json_path.write_text(json.dumps(figures, indent=2))
-    finally:
-        os.chdir("/")
-        shutil.rmtree(work, ignore_errors=True)
 
+def run_all(args, work: Path) -> dict:
+    from touchbench.catalog import load_dataset
+
+    for name in ("haart", "haart-challenge"):
+        load_dataset(name)  # convert once, outside the timings
+    print(f"cpus {os.cpu_count()}, load average {os.getloadavg()[0]:.1f}", file=sys.stderr)
+    figures = {}
+    if args.what in ("all", "overhead"):
+        figures["overhead"] = r = bench_overhead(work, args.repeats)
+        print(f"overhead: {r['tasks']} tasks, {1000 * r['wall_per_task_s']:.0f} ms per task, bare fit+predict "
+              f"{1000 * r['bare_fit_predict_s']:.0f} ms, overhead {1000 * r['overhead_per_task_s']:.0f} ms per task, "
+              f"of which ~{1000 * r['latency_measurement_s']:.0f} ms measure the one-capture latency "
+              f"(median of {r['runs']})")
+    if args.what in ("all", "cache"):
+        figures["cache"] = r = bench_cache(work, args.repeats, args.protocol)
+        print(f"cache: {r['protocol']}: cold {r['cold_s']:.1f} s, warm {r['warm_s']:.1f} s "
+              f"({r['cold_over_warm']:.1f}x), rerun {r['rerun_s']:.2f} s ({r['cold_over_rerun']:.0f}x) "
+              f"(median of {r['runs']})")
+    if args.what in ("all", "jobs"):
+        figures["jobs"] = r = bench_jobs(work, args.repeats)
+        print(f"jobs: 1 job {r['jobs1_s']:.1f} s, 2 jobs {r['jobs2_s']:.1f} s ({r['speedup']:.2f}x) "
+              f"(median of {r['runs']})")
+    figures["load_average_end"] = os.getloadavg()[0]
+    return figures
 
 if __name__ == "__main__":
     main()

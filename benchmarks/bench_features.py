@@ -1,7 +1,7 @@
 """Speed and memory of every feature set on the real HAART captures, with
 tsfresh's MinimalFCParameters on the same 64 cell series as a reference.
 
-    /work/venv/bin/python benchmarks/bench_features.py [--runs 5] [--tsfresh-runs 3]
+    python benchmarks/bench_features.py [--runs 5] [--tsfresh-runs 3]
 
 Runs on one core: BLAS/OpenMP threads are set to 1 before numpy loads and
 the process is pinned to one CPU (``--cpu``). Each set extracts features
@@ -10,7 +10,7 @@ the median (and min) wall-clock and CPU microseconds per capture. tsfresh
 (benchmark-only dependency, the ``bench`` extra: ``pip install tsfresh``)
 runs ``extract_features`` with ``MinimalFCParameters`` on a long table with
 one column per cell (64 series per capture), ``n_jobs=0``; building that
-table is not timed. Targets (issue 4): ``msd`` at least 20 x faster per
+table is not timed. Targets: ``msd`` at least 20 x faster per
 capture than tsfresh's minimal set; the five Gaus sets together under 10 s
 for all of ``haart``; peak memory under 1 GB (peak RSS of the process).
 

@@ -12,6 +12,8 @@ scene, and the size of the captures themselves. The default configuration
 machine; peak memory is driven by the dataset, the cached feature matrix
 and one fold's training matrix, which the number of trees barely changes
 (a forest's nodes grow with the training set, not with the feature count).
+The child's cache and results go to a fresh folder under
+``cache_dir() / "benchmarks" / "memory_cost"``, removed afterwards.
 """
 
 from __future__ import annotations
@@ -22,9 +24,10 @@ import os
 import resource
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
+
+from workdir import fresh_dir
 
 PROTOCOL = """\
 name: bench-memory-cost
@@ -70,8 +73,8 @@ def main(argv=None) -> None:
     if args.child:
         child(features, args.trees, Path(args.child))
         return
-    with tempfile.TemporaryDirectory(prefix="tb-bench-mem-") as work:
-        cmd = [sys.executable, __file__, "--features", args.features, "--trees", str(args.trees), "--child", work]
+    with fresh_dir(__file__) as work:
+        cmd = [sys.executable, __file__, "--features", args.features, "--trees", str(args.trees), "--child", str(work)]
         out = subprocess.run(cmd, capture_output=True, text=True, check=False)
     if out.returncode != 0:
         sys.exit(f"the child run failed:\n{out.stderr[-3000:]}")

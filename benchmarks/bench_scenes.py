@@ -1,4 +1,4 @@
-"""Generation time of the full ``cost-like`` scene (issue 6: the 7805
+"""Generation time of the full ``cost-like`` scene (target: the 7805
 captures in under 30 s on one core).
 
 Generates the scene ``--runs`` times in this process (one core: numpy's

@@ -99,8 +99,8 @@ def main(argv=None) -> None:
     cpu = pin_one_core()
 
     from touchbench.catalog import load_dataset
+    from touchbench.core.threads import single_thread
     from touchbench.deploy.model import TrainedModel
-    from touchbench.engine.tasks import single_thread
 
     ds = load_dataset("haart")
     path = Path(args.model) if args.model else None

@@ -24,9 +24,9 @@ SMALL = {
     "flagg-logistic": dict(max_iter=100, tol=1e-4),
     "zhou-bagged-trees": dict(n_estimators=5),
     "xgboost": dict(n_estimators=10),
-    "sota-et": dict(n_estimators=5),
-    "sota-et-fast": dict(n_estimators=5),
-    "sota-et-tuned": dict(n_estimators=5, inner_folds=2),
+    "touch-extra-trees": dict(n_estimators=5),
+    "touch-extra-trees-fast": dict(n_estimators=5),
+    "touch-extra-trees-tuned": dict(n_estimators=5, inner_folds=2),
     # raw-frame methods: a 1 x 1 "grid", so every column of the checks' data is one frame
     "touch-et": dict(grid=(1, 1), model_params={"n_estimators": 5}),
     "touch-et-fast": dict(grid=(1, 1), model_params={"n_estimators": 5}),

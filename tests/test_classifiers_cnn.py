@@ -1,4 +1,4 @@
-"""The CNN of Al-mashhadani et al. 2021 (seed 001): Table 1's shapes,
+"""The CNN of Al-mashhadani et al. 2021: Table 1's shapes,
 the sub-windows of Eq. 3, voting, the early-stopping split, determinism,
 and scikit-learn's estimator checks (on a 1 x 1 "grid" so that the checks'
 small 2-D data are valid frames)."""

@@ -1,4 +1,4 @@
-"""The aeon peers (issue 9): MiniRocket and MultiRocket on the cell series of raw frames.
+"""The aeon peers: MiniRocket and MultiRocket on the cell series of raw frames.
 
 The cell-series layout is checked on a capture whose every value names its
 frame and cell; the peers are checked against aeon's own classifiers called

@@ -20,8 +20,8 @@ EXPECTED = [
     "gaus-rf", "gaus-boost", "flagg-logistic", "flagg-bayesnet", "flagg-mlp", "flagg-rf", "zhou-tree",
     "zhou-lda", "zhou-linear-svm", "zhou-quadratic-svm", "zhou-knn", "zhou-weighted-knn",
     "zhou-bagged-trees", "jung-naive-bayes", "jung-svm", "xgboost", "cnn",
-    # issue 9: the aeon peers and touchbench's own
-    "minirocket", "multirocket", "sota-et", "sota-et-fast", "sota-et-tuned",
+    # the aeon peers and touchbench's own
+    "minirocket", "multirocket", "touch-extra-trees", "touch-extra-trees-fast", "touch-extra-trees-tuned",
     "touch-et", "touch-et-fast", "touch-et-tuned", "touch-et-win", "touch-xgb",
 ]
 EXTRAS = {"cnn": "deep", "minirocket": "peers", "multirocket": "peers"}

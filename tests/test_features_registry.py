@@ -24,7 +24,7 @@ EXPECTED_8X8 = {
     "zhou-wavelet": 234,
     "flagg-stats": 28,
     "raw-window": 432 * 64,
-    # touchbench's own (issue 9): 11 series x 35 statistics + 7 capture scalars + 3 x (7 ranks + sum) + 2
+    # touchbench's own: 11 series x 35 statistics + 7 capture scalars + 3 x (7 ranks + sum) + 2
     "touch-rhythm": 11 * 35 + 7 + 3 * 8 + 2,
     "cell-rhythm": 9 + 11,  # nine band fractions + eleven named features
     "contact-motion": 3 * (12 + 4 + 2) + 1,  # per threshold: 12 motion, 4 position bands, 2 activity; + peak

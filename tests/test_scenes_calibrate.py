@@ -61,7 +61,7 @@ def test_folds():
 
 @pytest.mark.realdata
 def test_haart_like_medians_within_the_real_iqr(real_haart):
-    """Issue 6's target: every per-gesture median of haart-like within the
+    """The calibration target: every per-gesture median of haart-like within the
     real interquartile range (total pressure, contact area, centroid speed)."""
     from touchbench.scenes import generate_scene
     from touchbench.evaluation.calibration import metric_table

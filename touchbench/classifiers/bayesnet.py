@@ -1,5 +1,5 @@
 """A discrete Bayesian network classifier learned with K2, as Weka's
-``BayesNet`` builds it (Flagg 2012, seed 002, Appendix A: "conditional
+``BayesNet`` builds it (Flagg 2012, Appendix A: "conditional
 probabilities estimator algorithm: simple estimator; network search
 algorithm: K2").
 

@@ -1,6 +1,6 @@
 """SAMME boosting with Weka's AdaBoostM1 control flow.
 
-Gaus et al. 2015 (seed 000, sections 3.3.2 and 4) boost random forests with
+Gaus et al. 2015 (sections 3.3.2 and 4) boost random forests with
 "Stage-wise Additive Modelling" (SAMME: Zhu, Zou, Rosset and Hastie, 2009,
 "Multi-class AdaBoost"), 500 iterations, in Weka. SAMME differs from
 AdaBoost.M1 in the weight of a weak learner,

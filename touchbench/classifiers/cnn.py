@@ -1,4 +1,4 @@
-"""The raw-frame CNN of Al-mashhadani et al. 2021 (seed 001, section 2.3,
+"""The raw-frame CNN of Al-mashhadani et al. 2021 (section 2.3,
 Table 1, Fig. 5), in PyTorch: the ``deep`` extra.
 
 PyTorch is imported lazily, inside this module's functions only, so the
@@ -100,7 +100,7 @@ from ._util import MAX_SEED, build, frames_in_row, torch_available
 from .base import CLASSIFIERS
 
 INSTALL_HINT = "pip install 'touchbench[deep]'  (or: pip install torch==2.13.0)"
-SOURCE = "Al-mashhadani et al. 2021 (seed 001), section 2.3, Table 1, Eq. 3"
+SOURCE = "Al-mashhadani et al. 2021, section 2.3, Table 1, Eq. 3"
 
 
 def import_torch():

@@ -2,7 +2,7 @@
 
 Why: ``RandomForestClassifier.predict_proba`` walks its trees one at a time
 in Python (one call and one input validation per tree), which for the
-1000 trees of Gaus et al. (2015, seed 000, section 4) costs tens to
+1000 trees of Gaus et al. (2015, section 4) costs tens to
 hundreds of milliseconds per window, however small the input. A live
 recogniser classifies one to a few windows per decision, so here every
 tree is walked at once: the trees' nodes are concatenated into flat arrays

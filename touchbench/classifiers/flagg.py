@@ -1,4 +1,4 @@
-"""Flagg 2012 (MSc thesis, seed 002), Appendix A "Model Parameters": the four
+"""Flagg 2012 (MSc thesis), Appendix A "Model Parameters": the four
 Weka models of chapters 3 and 4.
 
 - ``flagg-logistic``: Weka ``Logistic``, "ridge regularization parameter:
@@ -46,7 +46,7 @@ from .base import CLASSIFIERS
 from .bayesnet import K2BayesNetClassifier
 from .mlp import WekaMLPClassifier
 
-SOURCE = "Flagg 2012 (seed 002), Appendix A (Weka)"
+SOURCE = "Flagg 2012, Appendix A (Weka)"
 
 
 class WekaLogisticRegression(DelegatingClassifier):

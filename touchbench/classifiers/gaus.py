@@ -1,4 +1,4 @@
-"""Gaus et al. 2015 (seed 000), section 4: "For RF, 1000 trees were used. In
+"""Gaus et al. 2015, section 4: "For RF, 1000 trees were used. In
 the Boosting implementation, the Random Forest was used as the weak
 learners. 500 iterations were used in all experiments. Both are implemented
 using Weka software."
@@ -26,7 +26,7 @@ from ._util import WekaRandomForestClassifier, build
 from .base import CLASSIFIERS
 from .boosting import GausBoostingClassifier
 
-SOURCE = "Gaus et al. 2015 (seed 000), section 4; Weka defaults otherwise"
+SOURCE = "Gaus et al. 2015, section 4; Weka defaults otherwise"
 
 RF_DEFAULTS = {"n_estimators": 1000, "criterion": "entropy", "max_features": "weka", "n_jobs": 1}
 

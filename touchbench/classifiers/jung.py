@@ -1,8 +1,8 @@
 """Jung et al. (CoST: ICMI 2014 "Touching the void"; JMUI 2016), cited in
-Gaus et al. 2015 (seed 000, section 4): "Jung et al [22] (Bayes: 54%;
+Gaus et al. 2015 (section 4): "Jung et al [22] (Bayes: 54%;
 SVM: 53%)" on CoST, under leave-one-subject-out.
 
-The seeds give only the two classifier families and their accuracies, not
+Gaus et al. give only the two classifier families and their accuracies, not
 their settings. Interpretation:
 
 - ``jung-naive-bayes``: a Bayesian classifier with normally distributed,
@@ -27,7 +27,7 @@ from sklearn.svm import SVC
 from ._util import DelegatingClassifier, SampleStandardScaler, build
 from .base import CLASSIFIERS
 
-SOURCE = "Jung et al. 2014/2016, as cited in Gaus et al. 2015 (seed 000), section 4"
+SOURCE = "Jung et al. 2014/2016, as cited in Gaus et al. 2015, section 4"
 
 
 class StandardizedSVC(DelegatingClassifier):

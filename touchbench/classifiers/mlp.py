@@ -1,5 +1,5 @@
 """A multilayer perceptron trained as Weka's ``MultilayerPerceptron`` trains
-it (Flagg 2012, seed 002, Appendix A: "hidden layers: 19 (option 'a' in
+it (Flagg 2012, Appendix A: "hidden layers: 19 (option 'a' in
 Weka); learning rate: 0.3; momentum: 0.2; normalize attributes: true;
 seed: 0; number of training epochs: 500; validation set size: 0; decay
 learning rate: false").

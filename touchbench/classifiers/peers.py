@@ -5,7 +5,7 @@ Dempster, Bergmeir and Webb, DMKD 2022) as aeon ships them
 (``aeon.classification.convolution_based``), defaults unchanged: 10,000
 kernels, a ridge classifier with cross-validated regularisation (aeon's
 default estimator), one thread. They are the methods touchbench's own must
-beat (issue 9): an off-the-shelf MiniRocket on HAART's 64 cell series is
+beat: an off-the-shelf MiniRocket on HAART's 64 cell series is
 about 71 % on the challenge test subjects.
 
 Input: the ``raw-window`` feature set's flattened frames (frame-major,
@@ -19,7 +19,7 @@ Unequal lengths: aeon's Rocket family needs equal-length series here.
 length): a shorter capture is padded by repeating its last frame, a longer
 one truncated to its first F frames. HAART's captures are all 432 frames,
 so on ``haart`` and ``haart-challenge`` nothing is padded. This is stated
-in the protocol (``protocols/sota-haart*.yaml``) and so in every run's
+in the protocols (``touch-haart-loso``, ``touch-haart-challenge``) and so in every run's
 manifest. Series shorter than aeon's minimum (``MIN_TIMEPOINTS`` = 9, the
 length of MiniRocket's kernels) are padded here the same way, by repeating
 the last frame (a held pose; aeon itself asks for zero padding, which on a

@@ -1,4 +1,4 @@
-"""Zhou et al. 2017 (seed 003), section 4.2: the seven classifiers of MATLAB's
+"""Zhou et al. 2017, section 4.2: the seven classifiers of MATLAB's
 Classification Learner app (R2017a) they compared.
 
 The paper names only the presets ("Medium Tree (maximum 20 splits)",
@@ -62,7 +62,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from ._util import MAX_SEED, DelegatingClassifier, SampleStandardScaler, build
 from .base import CLASSIFIERS
 
-SOURCE = "Zhou et al. 2017 (seed 003), section 4.2; MATLAB Classification Learner R2017a presets"
+SOURCE = "Zhou et al. 2017, section 4.2; MATLAB Classification Learner R2017a presets"
 
 
 def squared_inverse_weights(dist: np.ndarray) -> np.ndarray:

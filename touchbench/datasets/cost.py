@@ -1,7 +1,7 @@
 """The Corpus of Social Touch (CoST) release file ``CoST.csv``.
 
 Format as ../shared/docs/cost-format.md records it (Jung et al.; used by
-Gaus et al. 2015, seed 000, section 2): header ``subject, variant, gesture,
+Gaus et al. 2015, section 2): header ``subject, variant, gesture,
 frame, ch1..ch64`` (names may carry leading spaces); one row per frame; a
 capture is a run of rows with the same subject, variant and gesture whose
 frame counter climbs from 1; the same key occurs six times in a row (the

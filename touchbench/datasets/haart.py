@@ -1,8 +1,8 @@
 """Real HAART, read from the organisers' raw recordings.
 
 Source and format: ../shared/data/haart/README.md (Social Touch Gesture
-Challenge 2015; Gaus et al. 2015, seed 000, section 2; Al-mashhadani et al.
-2021, seed 001, section 2.1). Each recording is a 10 x 10 grid at 54 frames
+Challenge 2015; Gaus et al. 2015, section 2; Al-mashhadani et al.
+2021, section 2.1). Each recording is a 10 x 10 grid at 54 frames
 per second for 10 s, ten text lines per frame, raw ADC values 0..1023 where a
 higher value means less pressure.
 
@@ -48,8 +48,6 @@ from .registry import DATASETS
 READER_VERSION = "haart-raw-1"
 
 HAART_SENSOR = SensorSpec(name="haart", grid=(8, 8), frame_rate=54.0, value_range=(0.0, 1023.0))
-SUBSTRATES = ("curve", "foam", "none")
-COVERS = ("fur", "long", "none", "short")
 GESTURES = ("constant", "notouch", "pat", "rub", "scratch", "stroke", "tickle")
 RAW_SIDE = 10  # the recorded grid is 10 x 10
 LINES_USED = 5400  # 540 frames of 10 lines; longer files: the first 5400 lines

@@ -1,6 +1,6 @@
 """Sliding windows over frames, shared by training and live recognition.
 
-Flagg (2012, seed 002, section 4.5, "Future Work"): continuous recognition
+Flagg (2012, section 4.5, "Future Work"): continuous recognition
 "could involve buffering in 2-second periods. Since some gestures tend to
 take more time than others, perhaps running a few buffers of different
 length simultaneously could help prevent shorter gestures from getting lost

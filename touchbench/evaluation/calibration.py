@@ -14,7 +14,7 @@ same protocol on both:
   above ``threshold``, over consecutive frames that both have contact; 0
   for a capture with fewer than two such frames.
 
-Target (issue 6): each per-gesture median of the scene within the real
+Target: each per-gesture median of the scene within the real
 interquartile range, and accuracy within 10 points of the real data's under
 the same protocol: Gaus et al. (2015) feature sets and a random forest,
 leave-one-subject-out and the challenge split.

@@ -1,4 +1,4 @@
-"""``bmh``: binary motion history (Gaus et al. 2015, seed 000, section 3.2.2)."""
+"""``bmh``: binary motion history (Gaus et al. 2015, section 3.2.2)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""What the five Gaus et al. (2015, seed 000, section 3.2) feature sets share:
+"""What the five Gaus et al. (2015, section 3.2) feature sets share:
 the per-dataset presets.
 
 Section 3.2: "Parameters tuning is used to optimize their discriminative
@@ -15,7 +15,6 @@ from typing import Any
 
 from .base import FeatureInputError
 
-PRESETS = ("haart", "cost")
 GAUS_PAPER = "Gaus et al. 2015 (ICMI), section 3.2"
 
 

@@ -1,5 +1,5 @@
 """``lbptop``: local binary patterns on three orthogonal planes (Gaus et al.
-2015, seed 000, section 3.2.5, after Zhao and Pietikainen 2007)."""
+2015, section 3.2.5, after Zhao and Pietikainen 2007)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """``msd``: motion statistical distribution, twelve statistics per cell
-(Gaus et al. 2015, seed 000, section 3.2.3)."""
+(Gaus et al. 2015, section 3.2.3)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""``sd``: statistical distribution of the pressure surface (Gaus et al. 2015,
-seed 000, section 3.2.1, Tables 3 and 4)."""
+"""``sd``: statistical distribution of the pressure surface (Gaus et al.
+2015, section 3.2.1, Tables 3 and 4)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""``smmhh``: spatial multi-scale motion history histogram (Gaus et al. 2015,
-seed 000, section 3.2.4, equation 1)."""
+"""``smmhh``: spatial multi-scale motion history histogram (Gaus et al.
+2015, section 3.2.4, equation 1)."""
 
 from __future__ import annotations
 

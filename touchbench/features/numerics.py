@@ -81,17 +81,6 @@ def moments(x: np.ndarray, *, ddof_scale: int = 0, presorted: bool = False, over
     return {"sum": total, "mean": mean, "var": var, "skew": skew, "kurt": kurt, "min": lo, "max": hi, "range": np.where(const, 0.0, rng)}
 
 
-def sample_var(x: np.ndarray) -> np.ndarray:
-    """Variance with ddof=1 along the last axis; exactly 0 for a constant or single-value series."""
-    n = x.shape[-1]
-    if n < 2:
-        return np.zeros(x.shape[:-1])
-    mean = x.sum(axis=-1) / n
-    d = x - mean[..., None]
-    var = np.einsum("...i,...i->...", d, d) / (n - 1)
-    return np.where(x.max(axis=-1) == x.min(axis=-1), 0.0, var)
-
-
 def hazen_quantiles(sorted_x: np.ndarray, probs: tuple[float, ...]) -> list[np.ndarray]:
     """Quantiles of already-sorted data along the last axis, MATLAB's method.
 

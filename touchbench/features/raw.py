@@ -1,5 +1,5 @@
 """``raw-window``: a fixed-size window of raw frames, the CNN's input
-(Al-mashhadani et al. 2021, seed 001, section 3)."""
+(Al-mashhadani et al. 2021, section 3)."""
 
 from __future__ import annotations
 

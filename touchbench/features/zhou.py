@@ -1,5 +1,5 @@
 """``zhou-basic`` and ``zhou-wavelet``: statistics and wavelet features of the
-frame descriptors D1..D6 (Zhou et al. 2017, seed 003, section 4.1).
+frame descriptors D1..D6 (Zhou et al. 2017, section 4.1).
 
 Shared pipeline (section 4.1):
 
@@ -235,11 +235,6 @@ class ZhouBasic(_ZhouBase):
     def _per_descriptor(self, series: np.ndarray) -> np.ndarray:
         m = moments(series, ddof_scale=1)
         return np.stack([m["mean"], np.sqrt(m["var"]), m["range"], m["kurt"], m["skew"]], axis=1).ravel()
-
-
-def wavelet_feature_count(levels: int) -> int:
-    """Per descriptor: 4 means + 5 statistics for each of d1..d(J-3): 5 J - 11 (14 for J = 5, 39 for J = 10)."""
-    return 4 + 5 * (levels - 3)
 
 
 @FEATURES.register("zhou-wavelet", description="db8 wavelet subband statistics of each frame-descriptor series", paper="zhou2017", cost="moderate")

@@ -462,9 +462,6 @@ class Protocol(_Model):
     def content_hash(self) -> str:
         return hashlib.sha256(canonical_json(self.content()).encode()).hexdigest()
 
-    def line_of(self, loc: tuple) -> int | None:
-        return _best_line(self._lines, loc)
-
     def error_at(self, loc: tuple, message: str) -> ProtocolError:
         """A :class:`ProtocolError` at field ``loc`` (for checks that need the data)."""
         return _make_error(self._path, self._lines, [(loc, message)])

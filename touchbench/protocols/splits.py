@@ -67,9 +67,6 @@ __all__ = [
     "make_splitter",
 ]
 
-TARGETS = ("gesture", "subject")
-
-
 class SplitError(TouchbenchError):
     """A scheme that cannot be evaluated on this metadata (refused before any work)."""
 

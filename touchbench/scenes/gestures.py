@@ -352,7 +352,3 @@ def _clip_span(span: float, min_s: float | None, max_s: float | None) -> float:
     if max_s is not None:
         span = min(span, max_s)
     return span
-
-
-def parameter_names() -> list[str]:
-    return [f.name for f in fields(GestureParams)]

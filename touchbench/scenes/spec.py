@@ -54,20 +54,6 @@ from ..core.errors import DataError
 from ..core.suggest import did_you_mean
 from .gestures import LIBRARY, GestureParams
 
-EFFECTS = (
-    "style",
-    "handedness",
-    "variant",
-    "session",
-    "group",
-    "substrate",
-    "cover",
-    "curvature",
-    "crosstalk",
-    "saturation",
-    "baseline",
-    "noise",
-)
 Effect = Literal[
     "style",
     "handedness",

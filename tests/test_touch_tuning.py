@@ -1,6 +1,6 @@
-"""Tuning happens inside the training subjects only (issue 9).
+"""Tuning happens inside the training subjects only.
 
-A spy replaces the inner splitter of ``sota-et-tuned``; a leave-one-subject-out
+A spy replaces the inner splitter of ``touch-extra-trees-tuned``; a leave-one-subject-out
 run of the real engine then records what every inner split received. The
 left-out subject's rows and labels must never reach it, and predicting the
 test fold must not tune anything.
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from sklearn.model_selection import GroupKFold
 
-import touchbench.classifiers.sota as sota
+import touchbench.classifiers.touch as touch
 from touchbench.classifiers import make_classifier
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
@@ -29,7 +29,7 @@ scheme: loso
 features:
   - [test-mean]
 classifiers:
-  - name: sota-et-tuned
+  - name: touch-extra-trees-tuned
     params: {{n_estimators: 10, grid_keep: [null, 4], inner_folds: 2}}
 seed: 3
 """
@@ -46,7 +46,7 @@ class SpyGroupKFold(GroupKFold):
 @pytest.fixture(autouse=True)
 def env(engine_env, monkeypatch):
     SpyGroupKFold.calls = []
-    monkeypatch.setattr(sota, "GroupKFold", SpyGroupKFold)
+    monkeypatch.setattr(touch, "GroupKFold", SpyGroupKFold)
     yield
 
 
@@ -80,7 +80,7 @@ def test_predict_does_not_tune():
     X = rng.normal(size=(60, 6))
     y = np.repeat(["a", "b", "c"], 20)
     groups = np.tile(["g1", "g2", "g3"], 20)
-    m = make_classifier("sota-et-tuned", random_state=0, n_estimators=10, grid_keep=(None, 3), inner_folds=3)
+    m = make_classifier("touch-extra-trees-tuned", random_state=0, n_estimators=10, grid_keep=(None, 3), inner_folds=3)
     m.fit(X, y, groups=groups)
     n = len(SpyGroupKFold.calls)
     assert n == 1 and SpyGroupKFold.calls[0]["n"] == 60
@@ -92,6 +92,6 @@ def test_predict_does_not_tune():
 
 
 def test_groups_must_match_rows():
-    m = make_classifier("sota-et-tuned", random_state=0, n_estimators=5)
+    m = make_classifier("touch-extra-trees-tuned", random_state=0, n_estimators=5)
     with pytest.raises(ValueError, match="groups"):
         m.fit(np.zeros((10, 2)), np.repeat(["a", "b"], 5), groups=np.array(["g"] * 9))

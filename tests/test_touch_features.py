@@ -1,4 +1,4 @@
-"""touchbench's own feature sets (issue 9): touch-rhythm, cell-rhythm, contact-motion.
+"""touchbench's own feature sets: touch-rhythm, cell-rhythm, contact-motion.
 
 Values worked out by hand on two captures whose every statistic follows
 from their construction:
@@ -25,7 +25,7 @@ from helpers import captures_strategy
 
 from touchbench.datasets.model import SensorSpec
 from touchbench.features.base import FEATURES
-from touchbench.features.sota import CellRhythm, ContactMotion, TouchRhythm
+from touchbench.features.touch import CellRhythm, ContactMotion, TouchRhythm
 
 NAMES = ["touch-rhythm", "cell-rhythm", "contact-motion"]
 HAART = SensorSpec(name="haart", grid=(8, 8), frame_rate=54.0)

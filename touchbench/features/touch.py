@@ -1,10 +1,10 @@
-"""Feature sets of touchbench's own methods (issue 9): rhythm, cell rhythm, contact motion.
+"""Feature sets of touchbench's own methods: rhythm, cell rhythm, contact motion.
 
-Not from a paper: designed for HAART (benchmarks/sota/NOTES.md has the
+Not from a paper: designed for HAART (docs/research/touch-methods.md has the
 inner cross-validation evidence behind each choice). They follow Gaus et al.
-2015 (seed 000), Sec. 5, who note that pat, tickle, scratch and stroke
+2015, Sec. 5, who note that pat, tickle, scratch and stroke
 differ in rhythm and movement more than in pressure, and the frame-level
-descriptors of Zhou et al. 2017 (seed 003), Sec. 4.1 (total pressure,
+descriptors of Zhou et al. 2017, Sec. 4.1 (total pressure,
 contact area, centroid). Three sets, each cheap and vectorised over
 captures, frames and cells:
 
@@ -78,10 +78,10 @@ def _band_name(lo: float, hi: float) -> str:
     return f"{lo:g}-{hi:g}Hz" if np.isfinite(hi) else f"{lo:g}Hz+"
 
 
-class _SotaBase(FeatureSet):
+class _TouchBase(FeatureSet):
     """Frame rate handling and the common preprocessing."""
 
-    paper = "touchbench issue 9 (benchmarks/sota/NOTES.md), after Gaus et al. 2015 section 5 and Zhou et al. 2017 section 4.1"
+    paper = "touchbench (docs/research/touch-methods.md), after Gaus et al. 2015 section 5 and Zhou et al. 2017 section 4.1"
     cost = "cheap"
     fold_dependent = False
 
@@ -217,9 +217,9 @@ def _grid_coords(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
     return yy.ravel(), xx.ravel()
 
 
-@FEATURES.register("touch-rhythm", description="rhythm, level and movement statistics of 11 frame-level series (ours, issue 9)",
+@FEATURES.register("touch-rhythm", description="rhythm, level and movement statistics of 11 frame-level series (touchbench)",
                    paper="touchbench", cost="cheap")
-class TouchRhythm(_SotaBase):
+class TouchRhythm(_TouchBase):
     """``touch-rhythm``: statistics and spectra of frame-level series, capture scalars, cell ranks.
 
     Series per frame (pressure ``S`` above baseline, module docstring):
@@ -316,9 +316,9 @@ class TouchRhythm(_SotaBase):
         return np.hstack([block, np.column_stack(extra)])
 
 
-@FEATURES.register("cell-rhythm", description="per-cell spectra pooled by cell power, cell coherence, neighbour correlation, blobs (ours, issue 9)",
+@FEATURES.register("cell-rhythm", description="per-cell spectra pooled by cell power, cell coherence, neighbour correlation, blobs (touchbench)",
                    paper="touchbench", cost="cheap")
-class CellRhythm(_SotaBase):
+class CellRhythm(_TouchBase):
     """``cell-rhythm``: rhythm seen by every cell, pooled without positions.
 
     Each cell's pressure series (mean removed, Hann window) has a power
@@ -394,9 +394,9 @@ class CellRhythm(_SotaBase):
         return np.column_stack(feats)
 
 
-@FEATURES.register("contact-motion", description="contact above 10/30/50 % of the peak: activity, area, speed, reversals, position spectrum (ours, issue 9)",
+@FEATURES.register("contact-motion", description="contact above 10/30/50 % of the peak: activity, area, speed, reversals, position spectrum (touchbench)",
                    paper="touchbench", cost="cheap")
-class ContactMotion(_SotaBase):
+class ContactMotion(_TouchBase):
     """``contact-motion``: how the contact moves, robust to the noise floor.
 
     The capture's robust peak is the 95 % order statistic (rank

@@ -1,8 +1,8 @@
-"""touchbench's fastest own method on the real challenge split (issue 9).
+"""touchbench's fastest own method on the real challenge split.
 
 ``touch-et-fast`` (touch-rhythm + 100 extra-trees) trained on the 578
 training captures of ``haart-challenge`` must beat Gaus et al.'s published
-random forest on the same split (66.5 %, seed 000, Table 6), with every
+random forest on the same split (2015, Table 6: 66.5 %), with every
 test capture labelled with one of the seven gestures. Fails, not skips,
 under CI=true without ../shared/data.
 """

@@ -1,8 +1,8 @@
-"""Per-capture cost of the issue-9 methods side by side: features + prediction of one capture, one core.
+"""Per-capture cost of touchbench's own methods and the peers side by side: features + prediction of one capture, one core.
 
-    python benchmarks/bench_sota_latency.py [--runs 5] [--captures 40] [--methods touch-et-fast,minirocket]
+    python benchmarks/bench_touch_latency.py [--runs 5] [--captures 40] [--methods touch-et-fast,minirocket]
 
-Every method of ``protocols/sota-haart-challenge.yaml`` but the CNN (and
+Every method of the shipped protocol ``touch-haart-challenge`` but the CNN (and
 the CNN too with ``--methods``) is fitted once on the challenge's training
 captures of ``haart-challenge`` (578 captures, seed 0, the protocol's
 parameters), then times the path a live recogniser takes: one capture's
@@ -42,8 +42,8 @@ def main() -> None:
     ap.add_argument("--methods", default=DEFAULT_METHODS)
     args = ap.parse_args()
 
-    from touchbench.classifiers import make_classifier
     from touchbench.catalog import load_dataset
+    from touchbench.classifiers import make_classifier
 
     cpus = sorted(os.sched_getaffinity(0))
     os.sched_setaffinity(0, {cpus[-1]})

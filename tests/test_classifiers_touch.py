@@ -1,4 +1,4 @@
-"""touchbench's own classifiers (issue 9): raw frames -> own feature sets -> extra-trees / XGBoost.
+"""touchbench's own classifiers: raw frames -> own feature sets -> extra-trees / XGBoost.
 
 Each raw-frame method is compared with the same model fitted by hand on
 features computed through the feature registry (a separate route), so
@@ -13,7 +13,7 @@ import pytest
 from sklearn.ensemble import ExtraTreesClassifier
 
 from touchbench.classifiers import make_classifier
-from touchbench.classifiers.sota import FEW_ROWS, SelectedExtraTrees
+from touchbench.classifiers.touch import FEW_ROWS, SelectedExtraTrees
 from touchbench.features.base import FEATURES
 
 OWN = ("touch-rhythm", "cell-rhythm", "contact-motion")
@@ -61,20 +61,6 @@ def test_touch_et_fast_uses_touch_rhythm_only_and_100_trees():
     assert est.feature_sets == ("touch-rhythm",)
     assert est.model_.model_.n_estimators == 100
     assert est.model_.model_.n_features_in_ == len(FEATURES.create("touch-rhythm").feature_names((4, 4)))
-
-
-def test_gain_augment_adds_each_capture_scaled_above_its_baseline():
-    caps, y = _captures(n_per_class=5)
-    X = caps.reshape(len(caps), -1)
-    est = make_classifier("touch-et", random_state=4, grid=(4, 4), model_params={"n_estimators": 10},
-                          gain_augment=(2.0,)).fit(X, y)
-    # baseline by hand: each cell's 5 % order statistic over frames (rank floor(0.05 * 59) = 2)
-    base = np.sort(caps, axis=1)[:, 2:3]
-    doubled = base + 2.0 * (caps - base)
-    F = np.vstack([_registry_features(caps), _registry_features(doubled)])
-    ref = ExtraTreesClassifier(n_estimators=10, max_features=0.3, n_jobs=1, random_state=4).fit(F, np.concatenate([y, y]))
-    assert est.model_.model_.n_features_in_ == F.shape[1]
-    assert np.array_equal(est.predict_proba(X), ref.predict_proba(_registry_features(caps)))
 
 
 def test_touch_xgb_gives_probabilities_of_the_training_classes():

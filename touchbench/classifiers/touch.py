@@ -1,19 +1,19 @@
-"""touchbench's own classifiers (issue 9): extremely randomised trees, plain and tuned by nested CV.
+"""touchbench's own classifiers: extremely randomised trees, plain and tuned by nested CV.
 
 Not from a paper. Designed for the ``touch-rhythm``, ``cell-rhythm`` and
-``contact-motion`` feature sets (:mod:`touchbench.features.sota`), usable
+``contact-motion`` feature sets (:mod:`touchbench.features.touch`), usable
 on any feature matrix. Every choice below was made by cross-validation
 inside the challenge's training subjects (leave one training subject out);
-benchmarks/sota/NOTES.md has the numbers, including what did not help.
+docs/research/touch-methods.md has the numbers, including what did not help.
 
-- ``sota-et``: scikit-learn's ``ExtraTreesClassifier``, 500 trees, 30 % of
+- ``touch-extra-trees``: scikit-learn's ``ExtraTreesClassifier``, 500 trees, 30 % of
   the features tried per split (``max_features=0.3``; better than
   ``sqrt`` in the inner CV), unlimited depth, one thread. Extra-trees
-  rather than Gaus et al.'s random forest (seed 000, Sec. 4): equal in the
+  rather than Gaus et al.'s random forest (2015, Sec. 4): equal in the
   inner CV, several times faster to fit.
-- ``sota-et-fast``: the same with 100 trees, for the latency-bound entry
+- ``touch-extra-trees-fast``: the same with 100 trees, for the latency-bound entry
   (one capture's prediction costs about a fifth).
-- ``sota-et-tuned``: nested cross-validation. Inside ``fit``, the training
+- ``touch-extra-trees-tuned``: nested cross-validation. Inside ``fit``, the training
   rows only are split by subject (``groups``, which the run engine passes:
   the training fold's subjects; without groups, stratified folds) and a
   small grid (``max_features`` x number of features kept by an importance
@@ -41,7 +41,7 @@ from .base import CLASSIFIERS
 
 #: at most this many rows are predicted with the compiled forest (live use, latency)
 FEW_ROWS = 16
-SOURCE = "touchbench issue 9 (benchmarks/sota/NOTES.md); Geurts et al. 2006 extra-trees via scikit-learn"
+SOURCE = "touchbench (docs/research/touch-methods.md); Geurts et al. 2006 extra-trees via scikit-learn"
 
 
 def _extra_trees(n_estimators: int, max_features: Any, n_jobs: int, seed: int) -> ExtraTreesClassifier:
@@ -175,28 +175,22 @@ class TouchFeatureClassifier(ClassifierMixin, BaseEstimator):
     protocol entry as the peers (which take the same input) and its
     ``latency_ms`` covers features + prediction of one capture, measured
     the same way as theirs. ``feature_sets`` names registered feature sets
-    (default the three of :mod:`touchbench.features.sota`), computed with
+    (default the three of :mod:`touchbench.features.touch`), computed with
     ``frame_rate`` (HAART's 54 Hz by default: the classifier does not see
     the sensor). ``model``: ``"et"`` (:class:`SelectedExtraTrees`),
     ``"et-tuned"`` (:class:`NestedTunedExtraTrees`, which receives the
     training subjects as ``groups``) or ``"xgboost"`` (the registered
     ``xgboost`` classifier: gradient boosting on the same features).
     ``model_params`` go to that model.
-
-    ``gain_augment``: factors g; each training capture is added again with
-    its pressure above the per-cell baseline multiplied by g (a stronger or
-    lighter hand, the sensor's gain). Off by default: it did not help in the
-    inner cross-validation (NOTES.md).
     """
 
     def __init__(self, grid=(8, 8), frame_rate=54.0, feature_sets=("touch-rhythm", "cell-rhythm", "contact-motion"),
-                 model="et", model_params=None, gain_augment=(), random_state=None):
+                 model="et", model_params=None, random_state=None):
         self.grid = grid
         self.frame_rate = frame_rate
         self.feature_sets = feature_sets
         self.model = model
         self.model_params = model_params
-        self.gain_augment = gain_augment
         self.random_state = random_state
 
     def _captures(self, X: np.ndarray) -> np.ndarray:
@@ -234,19 +228,11 @@ class TouchFeatureClassifier(ClassifierMixin, BaseEstimator):
         check_classification_targets(y)
         if not self.feature_sets:
             raise ValueError("feature_sets must name at least one feature set")
-        caps = self._captures(X)
-        F = [self._features(caps)]
-        if self.gain_augment:
-            from ..features.sota import pressure
-
-            _, base = pressure(caps)
-            b = base.reshape(caps.shape[0], 1, *caps.shape[2:])
-            F += [self._features(b + float(g) * (caps - b)) for g in self.gain_augment]
-        copies = len(F)  # the captures, then one copy per gain factor, in that order
+        F = self._features(self._captures(X))
         fit_kw = {}
         if self.model == "et-tuned" and groups is not None:
-            fit_kw["groups"] = np.tile(np.asarray(groups), copies)
-        self.model_ = self._make_model().fit(np.vstack(F), np.tile(y, copies), **fit_kw)
+            fit_kw["groups"] = np.asarray(groups)
+        self.model_ = self._make_model().fit(F, y, **fit_kw)
         self.classes_ = np.asarray(self.model_.classes_)
         return self
 
@@ -266,26 +252,26 @@ DEFAULTS_TUNED = {"n_estimators": 500, "grid_max_features": (0.3, "sqrt"), "grid
                   "inner_folds": 3, "max_groups_loo": 0, "n_jobs": 1}
 
 
-@CLASSIFIERS.register("sota-et", description="ours: extra-trees, 500 trees, 30 % of features per split (issue 9)",
+@CLASSIFIERS.register("touch-extra-trees", description="touchbench: extra-trees, 500 trees, 30 % of features per split, on any feature matrix",
                       source=SOURCE, defaults=DEFAULTS_ET, extra=None)
-def sota_et(random_state=None, **params):
-    return build(SelectedExtraTrees, DEFAULTS_ET, random_state, params, name="sota-et")
+def touch_extra_trees(random_state=None, **params):
+    return build(SelectedExtraTrees, DEFAULTS_ET, random_state, params, name="touch-extra-trees")
 
 
-@CLASSIFIERS.register("sota-et-fast", description="ours: extra-trees, 100 trees (latency-bound entry, issue 9)",
+@CLASSIFIERS.register("touch-extra-trees-fast", description="touchbench: extra-trees, 100 trees (latency-bound entry), on any feature matrix",
                       source=SOURCE, defaults=DEFAULTS_FAST, extra=None)
-def sota_et_fast(random_state=None, **params):
-    return build(SelectedExtraTrees, DEFAULTS_FAST, random_state, params, name="sota-et-fast")
+def touch_extra_trees_fast(random_state=None, **params):
+    return build(SelectedExtraTrees, DEFAULTS_FAST, random_state, params, name="touch-extra-trees-fast")
 
 
-@CLASSIFIERS.register("sota-et-tuned", description="ours: extra-trees with max_features and feature selection chosen by nested CV over training subjects",
+@CLASSIFIERS.register("touch-extra-trees-tuned", description="touchbench: extra-trees with max_features and feature selection chosen by nested CV over training subjects",
                       source=SOURCE, defaults=DEFAULTS_TUNED, extra=None)
-def sota_et_tuned(random_state=None, **params):
-    return build(NestedTunedExtraTrees, DEFAULTS_TUNED, random_state, params, name="sota-et-tuned")
+def touch_extra_trees_tuned(random_state=None, **params):
+    return build(NestedTunedExtraTrees, DEFAULTS_TUNED, random_state, params, name="touch-extra-trees-tuned")
 
 
 DEFAULTS_TOUCH = {"grid": (8, 8), "frame_rate": 54.0, "feature_sets": ("touch-rhythm", "cell-rhythm", "contact-motion"),
-                  "model": "et", "model_params": None, "gain_augment": ()}
+                  "model": "et", "model_params": None}
 
 
 def _touch(name: str, **over):
@@ -298,17 +284,17 @@ def _touch(name: str, **over):
 
 
 _d, _f = _touch("touch-et")
-CLASSIFIERS.register("touch-et", description="ours: raw frames -> touch-rhythm + cell-rhythm + contact-motion -> extra-trees 500",
+CLASSIFIERS.register("touch-et", description="touchbench: raw frames -> touch-rhythm + cell-rhythm + contact-motion -> extra-trees 500",
                      source=SOURCE, defaults=_d, extra=None)(_f)
 _d, _f = _touch("touch-et-tuned", model="et-tuned")
-CLASSIFIERS.register("touch-et-tuned", description="ours: touch-et with max_features / feature selection by nested CV over training subjects",
+CLASSIFIERS.register("touch-et-tuned", description="touchbench: touch-et with max_features / feature selection by nested CV over training subjects",
                      source=SOURCE, defaults=_d, extra=None)(_f)
 _d, _f = _touch("touch-xgb", model="xgboost")
-CLASSIFIERS.register("touch-xgb", description="ours: raw frames -> our three feature sets -> XGBoost (gradient boosting on the combined features)",
+CLASSIFIERS.register("touch-xgb", description="touchbench: raw frames -> touch-rhythm + cell-rhythm + contact-motion -> XGBoost (gradient boosting on the combined features)",
                      source=SOURCE, defaults=_d, extra=None)(_f)
 _d, _f = _touch("touch-et-win", feature_sets=("touch-rhythm", "cell-rhythm", "contact-motion", "touch-windows"))
-CLASSIFIERS.register("touch-et-win", description="ours: touch-et plus touch-windows (the three sets' mean and sd over four 2-s windows)",
+CLASSIFIERS.register("touch-et-win", description="touchbench: touch-et plus touch-windows (the three sets' mean and sd over four 2-s windows)",
                      source=SOURCE, defaults=_d, extra=None)(_f)
 _d, _f = _touch("touch-et-fast", feature_sets=("touch-rhythm",), model_params={"n_estimators": 100})
-CLASSIFIERS.register("touch-et-fast", description="ours, latency-bound: raw frames -> touch-rhythm -> extra-trees 100",
+CLASSIFIERS.register("touch-et-fast", description="touchbench, latency-bound: raw frames -> touch-rhythm -> extra-trees 100",
                      source=SOURCE, defaults=_d, extra=None)(_f)

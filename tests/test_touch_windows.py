@@ -1,4 +1,4 @@
-"""``touch-windows`` (issue 9): the own feature sets' mean and sd over windows of a capture.
+"""``touch-windows``: the own feature sets' mean and sd over windows of a capture.
 
 Hand-worked capture: cell (2, 5) taps as a 3 Hz square wave (on 9 frames,
 off 9, at 54 frames/s) during the first quarter of a 432-frame capture and
@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from helpers import captures_strategy
 from touchbench.datasets.model import SensorSpec
 from touchbench.features.base import FEATURES
-from touchbench.features.sota_windows import TouchWindows
+from touchbench.features.touch_windows import TouchWindows
 
 HAART = SensorSpec(name="haart", grid=(8, 8), frame_rate=54.0)
 

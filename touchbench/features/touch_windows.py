@@ -1,6 +1,6 @@
-"""``touch-windows``: how touchbench's own features change within a capture (issue 9).
+"""``touch-windows``: how touchbench's own features change within a capture.
 
-Not from a paper. The sets of :mod:`touchbench.features.sota` summarise a
+Not from a paper. The sets of :mod:`touchbench.features.touch` summarise a
 whole capture; a gesture whose rhythm or contact changes during the
 capture (a tickle that wanders, a pat that slows, a rub that turns into a
 stroke) looks the same to them as a steady one. This set computes the
@@ -10,7 +10,7 @@ and the standard deviation (population, ``ddof=0``) of every feature over
 the windows.
 
 Choices (made by cross-validation inside the challenge's training subjects,
-benchmarks/sota/NOTES.md, exp 15; the test subjects were never used):
+docs/research/touch-methods.md, experiment 15; the test subjects were never used):
 4 windows of 2 s (108 frames at HAART's 54 Hz), i.e. the 8-s capture cut
 into four quarters: +1.0 to +1.6 points over the whole-capture sets alone
 with two forest seeds; 7 overlapping windows of 2 s gave the same.
@@ -34,21 +34,21 @@ import numpy as np
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
-from .sota import _SotaBase
+from .touch import _TouchBase
 
 OWN_SETS: tuple[str, ...] = ("touch-rhythm", "cell-rhythm", "contact-motion")
 
 
-@FEATURES.register("touch-windows", description="ours: mean and sd of touch-rhythm + cell-rhythm + contact-motion over 4 windows of 2 s (issue 9)",
+@FEATURES.register("touch-windows", description="mean and sd of touch-rhythm + cell-rhythm + contact-motion over 4 windows of 2 s (touchbench)",
                    paper="touchbench", cost="moderate")
-class TouchWindows(_SotaBase):
+class TouchWindows(_TouchBase):
     """Mean and standard deviation of the own feature sets over ``n_windows`` windows.
 
     Interpretations: the module docstring's (window placement, a capture
     shorter than a window, each window its own capture).
     """
 
-    paper = "touchbench issue 9 (benchmarks/sota/NOTES.md, exp 15), after Gaus et al. 2015 section 5"
+    paper = "touchbench (docs/research/touch-methods.md, experiment 15), after Gaus et al. 2015 section 5"
     cost = "moderate"
     fold_dependent = False
 
