@@ -1,6 +1,6 @@
 """``touchbench stream``: continuous recognition over sliding windows.
 
-Flagg (2012, seed 002, section 4.5) asks for "continuous gesture
+Flagg (2012, section 4.5) asks for "continuous gesture
 recognition that works with ongoing sequences of data, rather than
 fixed-length windows", "buffering in 2-second periods", "a few buffers of
 different length simultaneously", and "confidence estimates, so that the
