@@ -1,6 +1,7 @@
 # touchbench: the two commands of the README, and the paper reproduction.
 #   make demo              set up .venv and run the main job
 #   make test              set up .venv (with the dev, deep, dist and peers extras) and run the tests
+#   make snapshots         record the names every registry holds (tests/snapshots/), after adding an entry
 #   make reproduce-papers  run touchbench/protocols/papers/ and write results/papers/REPORT.md
 #   make examples          run the example protocols on real HAART and regenerate the example
 #                          leaderboards and report (results/examples/, results/touch-haart/) and
@@ -14,7 +15,7 @@ JOBS ?= 2
 RUNS ?= results/runs
 TB := $(BIN)/touchbench
 
-.PHONY: setup demo test reproduce-papers examples clean
+.PHONY: setup demo test snapshots reproduce-papers examples clean
 
 $(VENV)/.installed-$(subst ,,$(EXTRAS)): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -29,6 +30,9 @@ demo: setup
 
 test: setup
 	$(BIN)/python -m pytest -q -p no:cacheprovider
+
+snapshots: setup
+	$(BIN)/python tests/snapshots/registries.py
 
 reproduce-papers: setup
 	$(BIN)/touchbench papers reproduce --profile $(PROFILE)

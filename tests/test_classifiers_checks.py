@@ -4,7 +4,8 @@ tests/test_classifiers_peers.py run them for those).
 
 The papers' defaults (1000 trees, 500 boosting iterations, 500 MLP epochs,
 L-BFGS to 1e-10) are slow, so each classifier is checked with the smaller
-settings in ``SMALL``; the code paths are the same. Checks that do not apply
+settings each entry declares as ``cheap_params`` in the registry; the code
+paths are the same. Checks that do not apply
 are listed in ``NOT_APPLICABLE`` with the reason, and run as expected
 failures (strict: if one starts passing, the test says so).
 """
@@ -15,25 +16,6 @@ import pytest
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from touchbench.classifiers import CLASSIFIERS, make_classifier
-
-SMALL = {
-    "gaus-rf": dict(n_estimators=5),
-    "gaus-boost": dict(n_estimators=3, n_trees=3),
-    "flagg-rf": dict(n_estimators=5),
-    "flagg-mlp": dict(max_epochs=10),
-    "flagg-logistic": dict(max_iter=100, tol=1e-4),
-    "zhou-bagged-trees": dict(n_estimators=5),
-    "xgboost": dict(n_estimators=10),
-    "touch-extra-trees": dict(n_estimators=5),
-    "touch-extra-trees-fast": dict(n_estimators=5),
-    "touch-extra-trees-tuned": dict(n_estimators=5, inner_folds=2),
-    # raw-frame methods: a 1 x 1 "grid", so every column of the checks' data is one frame
-    "touch-et": dict(grid=(1, 1), model_params={"n_estimators": 5}),
-    "touch-et-fast": dict(grid=(1, 1), model_params={"n_estimators": 5}),
-    "touch-et-tuned": dict(grid=(1, 1), model_params={"n_estimators": 5, "inner_folds": 2}),
-    "touch-xgb": dict(grid=(1, 1), model_params={"n_estimators": 5}),
-    "touch-et-win": dict(grid=(1, 1), model_params={"n_estimators": 5}),
-}
 
 _BOOTSTRAP = ("bags are drawn at random (with probability proportional to the weights), so a weight of 2 "
               "equals a repeated row in distribution only, not for one seed (scikit-learn's own "
@@ -59,7 +41,7 @@ def _expected(est):
 
 
 def _build(name):
-    est = make_classifier(name, random_state=0, **SMALL.get(name, {}))
+    est = make_classifier(name, random_state=0, **CLASSIFIERS.entry(name).tags.get("cheap_params", {}))
     est._touchbench_name = name  # read by _expected; not a constructor parameter, clone drops it
     return est
 

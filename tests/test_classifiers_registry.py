@@ -13,17 +13,12 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from snapshots.registries import snapshot
+
 from touchbench.classifiers import CLASSIFIERS, make_classifier
 from touchbench.core.errors import TouchbenchError, UnknownNameError
 
-EXPECTED = [
-    "gaus-rf", "gaus-boost", "flagg-logistic", "flagg-bayesnet", "flagg-mlp", "flagg-rf", "zhou-tree",
-    "zhou-lda", "zhou-linear-svm", "zhou-quadratic-svm", "zhou-knn", "zhou-weighted-knn",
-    "zhou-bagged-trees", "jung-naive-bayes", "jung-svm", "xgboost", "cnn",
-    # the aeon peers and touchbench's own
-    "minirocket", "multirocket", "touch-extra-trees", "touch-extra-trees-fast", "touch-extra-trees-tuned",
-    "touch-et", "touch-et-fast", "touch-et-tuned", "touch-et-win", "touch-xgb",
-]
+EXPECTED = snapshot()["classifiers"]  # tests/snapshots/registry-names.json (make snapshots)
 EXTRAS = {"cnn": "deep", "minirocket": "peers", "multirocket": "peers"}
 
 

@@ -7,6 +7,8 @@ import copy
 import pytest
 import yaml
 
+from snapshots.registries import snapshot
+
 from touchbench.core.errors import DataError, UnknownNameError
 from touchbench.scenes import SCENES, SPECS_DIR, generate_scene, load_scene
 from touchbench.scenes.spec import n_captures, parse_spec, subject_ids
@@ -26,7 +28,7 @@ def refused(raw, match):
 
 
 def test_shipped_scenes_are_registered_and_valid():
-    assert SCENES.names() == ["cost-like", "fur-like", "haart-like", "tiny", "tpm-like"]
+    assert SCENES.names() == snapshot()["scenes"] == ["cost-like", "fur-like", "haart-like", "tiny", "tpm-like"]
     for name in SCENES.names():
         spec = load_scene(name)
         assert spec.name == name

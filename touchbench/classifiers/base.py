@@ -1,8 +1,11 @@
 """The classifier registry.
 
 Each entry is a factory ``f(random_state=None, **params) -> estimator``
-registered with ``description`` (one line), ``source`` (paper and section)
-and ``defaults`` (the paper's settings, as a dict). The estimators are plain
+registered with ``description`` (one line), ``source`` (paper and section),
+``defaults`` (the paper's settings, as a dict), ``extra`` (the optional
+install it needs: None, ``"deep"`` or ``"peers"``) and, where the defaults
+are slow, ``cheap_params`` (smaller settings that run the same code paths in
+seconds: the tests' estimator checks use them). The estimators are plain
 scikit-learn estimators (or follow that API), so users can use them in their
 own pipelines.
 """

@@ -94,8 +94,7 @@ RF_DEFAULTS = {"n_estimators": 10, "max_features": 5, "max_depth": None, "criter
 @CLASSIFIERS.register(
     "flagg-logistic",
     description="Weka Logistic: multinomial logistic regression, ridge 1e-8, fitted to convergence",
-    source=SOURCE, defaults=LOGISTIC_DEFAULTS, extra=None,
-)
+    source=SOURCE, defaults=LOGISTIC_DEFAULTS, extra=None, cheap_params=dict(max_iter=100, tol=1e-4))
 def flagg_logistic(random_state=None, **params):
     return build(WekaLogisticRegression, LOGISTIC_DEFAULTS, random_state, params, name="flagg-logistic")
 
@@ -112,8 +111,7 @@ def flagg_bayesnet(random_state=None, **params):
 @CLASSIFIERS.register(
     "flagg-mlp",
     description="Weka MultilayerPerceptron: 1 hidden layer (attribs+classes)/2, lr 0.3, momentum 0.2, 500 epochs",
-    source=SOURCE, defaults=MLP_DEFAULTS, extra=None,
-)
+    source=SOURCE, defaults=MLP_DEFAULTS, extra=None, cheap_params=dict(max_epochs=10))
 def flagg_mlp(random_state=None, **params):
     return build(WekaMLPClassifier, MLP_DEFAULTS, random_state, params, name="flagg-mlp")
 
@@ -121,8 +119,7 @@ def flagg_mlp(random_state=None, **params):
 @CLASSIFIERS.register(
     "flagg-rf",
     description="Weka RandomForest: 10 trees, 5 features per split, unlimited depth",
-    source=SOURCE, defaults=RF_DEFAULTS, extra=None,
-)
+    source=SOURCE, defaults=RF_DEFAULTS, extra=None, cheap_params=dict(n_estimators=5))
 def flagg_rf(random_state=None, **params):
     return build(WekaRandomForestClassifier, RF_DEFAULTS, random_state, params, name="flagg-rf")
 

@@ -46,8 +46,7 @@ BOOST_DEFAULTS = {
     description="random forest, 1000 trees, Weka's int(log2 M)+1 features per split, entropy",
     source=SOURCE,
     defaults=RF_DEFAULTS,
-    extra=None,
-)
+    extra=None, cheap_params=dict(n_estimators=5))
 def gaus_rf(random_state=None, **params):
     """Gaus et al.'s random forest (module docstring: what is and is not Weka's)."""
     return build(WekaRandomForestClassifier, RF_DEFAULTS, random_state, params, name="gaus-rf")
@@ -58,8 +57,7 @@ def gaus_rf(random_state=None, **params):
     description="SAMME boosting of 1000-tree forests, 500 iterations (stops after 1: forests fit perfectly)",
     source=SOURCE + "; SAMME (Zhu et al. 2009) in Weka AdaBoostM1's loop",
     defaults=BOOST_DEFAULTS,
-    extra=None,
-)
+    extra=None, cheap_params=dict(n_estimators=3, n_trees=3))
 def gaus_boost(random_state=None, **params):
     """Gaus et al.'s boosting; ``weak_error="oob"`` is the non-paper variant
     that keeps boosting when forests fit the training set perfectly."""

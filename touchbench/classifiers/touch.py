@@ -253,19 +253,19 @@ DEFAULTS_TUNED = {"n_estimators": 500, "grid_max_features": (0.3, "sqrt"), "grid
 
 
 @CLASSIFIERS.register("touch-extra-trees", description="touchbench: extra-trees, 500 trees, 30 % of features per split, on any feature matrix",
-                      source=SOURCE, defaults=DEFAULTS_ET, extra=None)
+                      source=SOURCE, defaults=DEFAULTS_ET, extra=None, cheap_params=dict(n_estimators=5))
 def touch_extra_trees(random_state=None, **params):
     return build(SelectedExtraTrees, DEFAULTS_ET, random_state, params, name="touch-extra-trees")
 
 
 @CLASSIFIERS.register("touch-extra-trees-fast", description="touchbench: extra-trees, 100 trees (latency-bound entry), on any feature matrix",
-                      source=SOURCE, defaults=DEFAULTS_FAST, extra=None)
+                      source=SOURCE, defaults=DEFAULTS_FAST, extra=None, cheap_params=dict(n_estimators=5))
 def touch_extra_trees_fast(random_state=None, **params):
     return build(SelectedExtraTrees, DEFAULTS_FAST, random_state, params, name="touch-extra-trees-fast")
 
 
 @CLASSIFIERS.register("touch-extra-trees-tuned", description="touchbench: extra-trees with max_features and feature selection chosen by nested CV over training subjects",
-                      source=SOURCE, defaults=DEFAULTS_TUNED, extra=None)
+                      source=SOURCE, defaults=DEFAULTS_TUNED, extra=None, cheap_params=dict(n_estimators=5, inner_folds=2))
 def touch_extra_trees_tuned(random_state=None, **params):
     return build(NestedTunedExtraTrees, DEFAULTS_TUNED, random_state, params, name="touch-extra-trees-tuned")
 
@@ -285,16 +285,16 @@ def _touch(name: str, **over):
 
 _d, _f = _touch("touch-et")
 CLASSIFIERS.register("touch-et", description="touchbench: raw frames -> touch-rhythm + cell-rhythm + contact-motion -> extra-trees 500",
-                     source=SOURCE, defaults=_d, extra=None)(_f)
+                     source=SOURCE, defaults=_d, extra=None, cheap_params=dict(grid=(1, 1), model_params={"n_estimators": 5}))(_f)
 _d, _f = _touch("touch-et-tuned", model="et-tuned")
 CLASSIFIERS.register("touch-et-tuned", description="touchbench: touch-et with max_features / feature selection by nested CV over training subjects",
-                     source=SOURCE, defaults=_d, extra=None)(_f)
+                     source=SOURCE, defaults=_d, extra=None, cheap_params=dict(grid=(1, 1), model_params={"n_estimators": 5, "inner_folds": 2}))(_f)
 _d, _f = _touch("touch-xgb", model="xgboost")
 CLASSIFIERS.register("touch-xgb", description="touchbench: raw frames -> touch-rhythm + cell-rhythm + contact-motion -> XGBoost (gradient boosting on the combined features)",
-                     source=SOURCE, defaults=_d, extra=None)(_f)
+                     source=SOURCE, defaults=_d, extra=None, cheap_params=dict(grid=(1, 1), model_params={"n_estimators": 5}))(_f)
 _d, _f = _touch("touch-et-win", feature_sets=("touch-rhythm", "cell-rhythm", "contact-motion", "touch-windows"))
 CLASSIFIERS.register("touch-et-win", description="touchbench: touch-et plus touch-windows (the three sets' mean and sd over four 2-s windows)",
-                     source=SOURCE, defaults=_d, extra=None)(_f)
+                     source=SOURCE, defaults=_d, extra=None, cheap_params=dict(grid=(1, 1), model_params={"n_estimators": 5}))(_f)
 _d, _f = _touch("touch-et-fast", feature_sets=("touch-rhythm",), model_params={"n_estimators": 100})
 CLASSIFIERS.register("touch-et-fast", description="touchbench, latency-bound: raw frames -> touch-rhythm -> extra-trees 100",
-                     source=SOURCE, defaults=_d, extra=None)(_f)
+                     source=SOURCE, defaults=_d, extra=None, cheap_params=dict(grid=(1, 1), model_params={"n_estimators": 5}))(_f)

@@ -82,6 +82,6 @@ DEFAULTS = {"n_estimators": 300, "max_depth": 4, "learning_rate": 0.1, "subsampl
 
 @CLASSIFIERS.register("xgboost", description="XGBoost gradient-boosted trees (300 x depth 4, lr 0.1, hist)",
                       source="XGBoost (Chen & Guestrin 2016); not from the papers, a modern baseline",
-                      defaults=DEFAULTS, extra=None)
+                      defaults=DEFAULTS, extra=None, cheap_params=dict(n_estimators=10))
 def xgboost_classifier(random_state=None, **params):
     return build(XGBoostClassifier, DEFAULTS, random_state, params, name="xgboost")

@@ -284,6 +284,6 @@ def zhou_weighted_knn(random_state=None, **params):
 
 
 @CLASSIFIERS.register("zhou-bagged-trees", description="MATLAB Bagged Trees: 30 deep trees, sqrt(M) per split",
-                      source=SOURCE, defaults=BAGGED_DEFAULTS, extra=None)
+                      source=SOURCE, defaults=BAGGED_DEFAULTS, extra=None, cheap_params=dict(n_estimators=5))
 def zhou_bagged_trees(random_state=None, **params):
     return build(RandomForestClassifier, BAGGED_DEFAULTS, random_state, params, name="zhou-bagged-trees")

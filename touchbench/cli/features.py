@@ -29,7 +29,7 @@ def feature_table(grid: tuple[int, int] = (8, 8)) -> list[dict]:
                 "name": e.name,
                 "paper": cls.paper,
                 "size": cls().n_features(grid),
-                "cost": e.tags.get("cost", cls.cost),
+                "cost": cls.cost,
                 "fold_dependent": cls.fold_dependent,
                 "description": e.description,
             }

@@ -50,8 +50,12 @@ class Registry(Generic[T]):
     '#f00'
     """
 
-    def __init__(self, kind: str, loader: Callable[[], Any] | None = None, *, package: str | None = None):
+    def __init__(self, kind: str, loader: Callable[[], Any] | None = None, *, package: str | None = None,
+                 tags_of: Callable[[Any], dict[str, Any]] | None = None):
+        """``tags_of(obj)`` gives the tags an entry declares on the object itself
+        (class attributes, say), so that they are written once, not twice."""
         self.kind = kind
+        self._tags_of = tags_of
         self._entries: dict[str, Entry[T]] = {}
         if package is not None:
             loader = partial(import_submodules, package)
@@ -71,7 +75,11 @@ class Registry(Generic[T]):
         def deco(obj: T) -> T:
             if name in self._entries:
                 raise ValueError(f"{self.kind} {name!r} is registered twice")
-            self._entries[name] = Entry(name, obj, description, dict(tags))
+            declared = self._tags_of(obj) if self._tags_of is not None else {}
+            clash = sorted(set(declared) & set(tags))
+            if clash:
+                raise ValueError(f"{self.kind} {name!r}: {', '.join(clash)} declared twice (on the object and as tags)")
+            self._entries[name] = Entry(name, obj, description, {**declared, **tags})
             return obj
 
         return deco

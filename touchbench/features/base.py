@@ -33,7 +33,8 @@ from ..core.introspect import accepts
 from ..core.registry import Registry
 
 # Filled by every module of touchbench.features (imported on first use of the registry).
-FEATURES: Registry = Registry("feature set", package="touchbench.features")
+FEATURES: Registry = Registry("feature set", package="touchbench.features",
+                              tags_of=lambda cls: {"paper": cls.paper, "cost": cls.cost})
 
 # Upper bound on the values stacked at once by ``transform``: bounds peak
 # memory whatever the dataset size, and keeps a chunk's float64 temporaries

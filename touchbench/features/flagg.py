@@ -33,7 +33,7 @@ def grid_channels(stack: np.ndarray, floor: float, contact: float) -> np.ndarray
     return np.stack([total, area, c, r], axis=1)
 
 
-@FEATURES.register("flagg-stats", description="7 sequence statistics of total pressure, contact area and centroid", paper="flagg2012", cost="cheap")
+@FEATURES.register("flagg-stats", description="7 sequence statistics of total pressure, contact area and centroid")
 class FlaggStats(FeatureSet):
     """Flagg's sequence statistics (Flagg 2012, sections 3.4.2 and 4.3.2).
 

@@ -14,7 +14,7 @@ from .gaus_common import GAUS_PAPER, resolve
 _TABLE: dict[str, dict[str, Any]] = {"haart": {"offset": 5.0}, "cost": {"offset": 100.0}}
 
 
-@FEATURES.register("bmh", description="binary map of the cells ever touched with high pressure", paper="gaus2015", cost="cheap")
+@FEATURES.register("bmh", description="binary map of the cells ever touched with high pressure")
 class BinaryMotionHistory(FeatureSet):
     """Binary motion history (BMH): the high-pressure shape of a gesture.
 

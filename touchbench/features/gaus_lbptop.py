@@ -40,7 +40,7 @@ def uniform_mapping(n_points: int) -> tuple[np.ndarray, int]:
     return table, n_bins
 
 
-@FEATURES.register("lbptop", description="LBP-TOP histograms (XY, XT, YT planes) of the pressure video", paper="gaus2015", cost="moderate")
+@FEATURES.register("lbptop", description="LBP-TOP histograms (XY, XT, YT planes) of the pressure video")
 class LBPTOP(FeatureSet):
     """Local binary patterns on three orthogonal planes (LBP-TOP).
 

@@ -24,7 +24,7 @@ def sorted_f64(series: np.ndarray) -> np.ndarray:
     return as_f64(np.sort(series, axis=-1))
 
 
-@FEATURES.register("msd", description="12 statistics of every cell's time series", paper="gaus2015", cost="cheap")
+@FEATURES.register("msd", description="12 statistics of every cell's time series")
 class MotionStatisticalDistribution(FeatureSet):
     """Motion statistical distribution (MSD): 12 statistics per cell.
 

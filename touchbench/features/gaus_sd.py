@@ -65,7 +65,7 @@ def histogram_rows(values: np.ndarray, edges: np.ndarray, clip: bool) -> np.ndar
     return np.bincount(flat.ravel(), weights=weights.ravel(), minlength=n * nb).reshape(n, nb)
 
 
-@FEATURES.register("sd", description="no-touch / touched / high-pressure cell counts per frame, histogrammed", paper="gaus2015", cost="cheap")
+@FEATURES.register("sd", description="no-touch / touched / high-pressure cell counts per frame, histogrammed")
 class StatisticalDistribution(FeatureSet):
     """Statistical distribution (SD) of the pressure surface.
 

@@ -70,7 +70,7 @@ def run_length_histogram(binary: np.ndarray, max_len: int) -> np.ndarray:
     return hist.reshape(lead + (max_len,))
 
 
-@FEATURES.register("smmhh", description="multi-scale motion history histograms on 8x8..1x1 pooled videos", paper="gaus2015", cost="moderate")
+@FEATURES.register("smmhh", description="multi-scale motion history histograms on 8x8..1x1 pooled videos")
 class SpatialMultiScaleMHH(FeatureSet):
     """Spatial multi-scale motion history histogram (SMMHH).
 

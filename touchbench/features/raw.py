@@ -11,7 +11,7 @@ from .base import FEATURES, FeatureInputError, FeatureSet
 HAART_FRAMES = 432
 
 
-@FEATURES.register("raw-window", description="F raw frames from an offset, flattened (CNN input)", paper="almashhadani2021", cost="cheap")
+@FEATURES.register("raw-window", description="F raw frames from an offset, flattened (CNN input)")
 class RawWindow(FeatureSet):
     """The first ``frames`` frames of a capture (from ``offset``), flattened.
 

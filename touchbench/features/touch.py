@@ -217,8 +217,7 @@ def _grid_coords(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
     return yy.ravel(), xx.ravel()
 
 
-@FEATURES.register("touch-rhythm", description="rhythm, level and movement statistics of 11 frame-level series (touchbench)",
-                   paper="touchbench", cost="cheap")
+@FEATURES.register("touch-rhythm", description="rhythm, level and movement statistics of 11 frame-level series (touchbench)")
 class TouchRhythm(_TouchBase):
     """``touch-rhythm``: statistics and spectra of frame-level series, capture scalars, cell ranks.
 
@@ -316,8 +315,7 @@ class TouchRhythm(_TouchBase):
         return np.hstack([block, np.column_stack(extra)])
 
 
-@FEATURES.register("cell-rhythm", description="per-cell spectra pooled by cell power, cell coherence, neighbour correlation, blobs (touchbench)",
-                   paper="touchbench", cost="cheap")
+@FEATURES.register("cell-rhythm", description="per-cell spectra pooled by cell power, cell coherence, neighbour correlation, blobs (touchbench)")
 class CellRhythm(_TouchBase):
     """``cell-rhythm``: rhythm seen by every cell, pooled without positions.
 
@@ -394,8 +392,7 @@ class CellRhythm(_TouchBase):
         return np.column_stack(feats)
 
 
-@FEATURES.register("contact-motion", description="contact above 10/30/50 % of the peak: activity, area, speed, reversals, position spectrum (touchbench)",
-                   paper="touchbench", cost="cheap")
+@FEATURES.register("contact-motion", description="contact above 10/30/50 % of the peak: activity, area, speed, reversals, position spectrum (touchbench)")
 class ContactMotion(_TouchBase):
     """``contact-motion``: how the contact moves, robust to the noise floor.
 

@@ -39,8 +39,7 @@ from .touch import _TouchBase
 OWN_SETS: tuple[str, ...] = ("touch-rhythm", "cell-rhythm", "contact-motion")
 
 
-@FEATURES.register("touch-windows", description="mean and sd of touch-rhythm + cell-rhythm + contact-motion over 4 windows of 2 s (touchbench)",
-                   paper="touchbench", cost="moderate")
+@FEATURES.register("touch-windows", description="mean and sd of touch-rhythm + cell-rhythm + contact-motion over 4 windows of 2 s (touchbench)")
 class TouchWindows(_TouchBase):
     """Mean and standard deviation of the own feature sets over ``n_windows`` windows.
 

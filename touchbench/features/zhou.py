@@ -190,7 +190,7 @@ class _ZhouBase(FeatureSet):
         return np.vstack(rows)
 
 
-@FEATURES.register("zhou-basic", description="5 statistics of each frame-descriptor series D1..D6", paper="zhou2017", cost="moderate")
+@FEATURES.register("zhou-basic", description="5 statistics of each frame-descriptor series D1..D6")
 class ZhouBasic(_ZhouBase):
     """Basic features of the frame descriptors (Zhou et al. 2017, section 4.1.1).
 
@@ -237,7 +237,7 @@ class ZhouBasic(_ZhouBase):
         return np.stack([m["mean"], np.sqrt(m["var"]), m["range"], m["kurt"], m["skew"]], axis=1).ravel()
 
 
-@FEATURES.register("zhou-wavelet", description="db8 wavelet subband statistics of each frame-descriptor series", paper="zhou2017", cost="moderate")
+@FEATURES.register("zhou-wavelet", description="db8 wavelet subband statistics of each frame-descriptor series")
 class ZhouWavelet(_ZhouBase):
     """Wavelet features of the frame descriptors (Zhou et al. 2017, section 4.1.2).
 

@@ -1,0 +1,38 @@
+"""The names every registry holds, kept in ``registry-names.json`` beside this file.
+
+The tests compare each registry with the snapshot, so adding, renaming or
+removing an entry shows up as a reviewed change of that file. Regenerate it
+after an intended change with ``make snapshots`` (which runs this file).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+SNAPSHOT = Path(__file__).resolve().parent / "registry-names.json"
+
+
+def registries() -> dict:
+    from touchbench.classifiers import CLASSIFIERS
+    from touchbench.datasets import DATASETS
+    from touchbench.datasets.formats import FORMATS
+    from touchbench.features import FEATURES
+    from touchbench.protocols.splits import SPLITTERS
+    from touchbench.scenes import SCENES
+
+    return {"classifiers": CLASSIFIERS, "datasets": DATASETS, "evaluation schemes": SPLITTERS,
+            "features": FEATURES, "file formats": FORMATS, "scenes": SCENES}
+
+
+def current() -> dict[str, list[str]]:
+    return {kind: reg.names() for kind, reg in registries().items()}
+
+
+def snapshot() -> dict[str, list[str]]:
+    return json.loads(SNAPSHOT.read_text(encoding="utf-8"))
+
+
+if __name__ == "__main__":
+    SNAPSHOT.write_text(json.dumps(current(), indent=2) + "\n", encoding="utf-8")
+    print(f"wrote {SNAPSHOT}")
