@@ -27,6 +27,7 @@ docs/research/touch-methods.md has the numbers, including what did not help.
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
 import numpy as np
@@ -36,8 +37,10 @@ from sklearn.model_selection import GroupKFold, LeaveOneGroupOut, StratifiedKFol
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from ..features.base import FEATURES
 from ._util import MAX_SEED, build, frames_in_row, seed_int
-from .base import CLASSIFIERS
+from .base import CLASSIFIERS, make_classifier
+from .fastforest import compile_forest
 
 #: at most this many rows are predicted with the compiled forest (live use, latency)
 FEW_ROWS = 16
@@ -84,7 +87,6 @@ class SelectedExtraTrees(ClassifierMixin, BaseEstimator):
         X = validate_data(self, X, dtype=np.float64, reset=False)[:, self.columns_]
         if X.shape[0] <= FEW_ROWS:
             if getattr(self, "_compiled", None) is None:
-                from .fastforest import compile_forest
 
                 self._compiled = compile_forest(self.model_) or False
             if self._compiled:
@@ -199,9 +201,6 @@ class TouchFeatureClassifier(ClassifierMixin, BaseEstimator):
 
     def _features(self, caps: np.ndarray) -> np.ndarray:
         """The feature sets of ``caps``; a set that takes a ``frame_rate`` gets this estimator's."""
-        import inspect
-
-        from ..features.base import FEATURES
 
         blocks = []
         for name in self.feature_sets:
@@ -218,7 +217,6 @@ class TouchFeatureClassifier(ClassifierMixin, BaseEstimator):
         if self.model == "et-tuned":
             return build(NestedTunedExtraTrees, DEFAULTS_TUNED, seed, params, name="touch (et-tuned)")
         if self.model == "xgboost":
-            from .base import make_classifier
 
             return make_classifier("xgboost", random_state=seed, **params)
         raise ValueError(f"model must be 'et', 'et-tuned' or 'xgboost', got {self.model!r}")

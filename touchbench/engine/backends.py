@@ -37,6 +37,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterator
 
+from joblib import parallel_config
+from joblib.parallel import get_active_backend
+
+import touchbench
+
 from ..core.errors import TouchbenchError
 
 __all__ = ["BACKENDS", "BackendInfo", "backend_for_run", "backend_options", "check_dask_workers", "supports_generator",
@@ -69,7 +74,6 @@ def run_setup(setup: Callable[[], None] | None) -> None:
 def supports_generator() -> bool:
     """Whether the active joblib backend can return results as they finish
     (``return_as="generator"`` / ``"generator_unordered"``)."""
-    from joblib.parallel import get_active_backend
 
     backend, _ = get_active_backend()
     return bool(getattr(backend, "supports_return_generator", True))
@@ -77,7 +81,6 @@ def supports_generator() -> bool:
 
 def _probe(cache_root: str) -> dict:
     """Run on a worker: its touchbench version and whether it sees the cache folder."""
-    import touchbench
 
     p = Path(cache_root)
     return {"version": touchbench.__version__, "cache_visible": p.is_dir() and os.access(p, os.W_OK)}
@@ -86,7 +89,6 @@ def _probe(cache_root: str) -> dict:
 def check_dask_workers(client, cache_root: str | Path) -> None:
     """Refuse a cluster whose workers lack touchbench, run another version, or
     do not see the shared cache folder (raises :class:`TouchbenchError`)."""
-    import touchbench
 
     root = str(Path(cache_root).resolve())
     Path(root).mkdir(parents=True, exist_ok=True)
@@ -125,7 +127,6 @@ def use_backend(name: str = "local", address: str | None = None, *, cache_root: 
             raise TouchbenchError("--scheduler/--address need --backend dask or ray")
         yield BackendInfo("local", None, None)
         return
-    from joblib import parallel_config
 
     if name == "dask":
         try:

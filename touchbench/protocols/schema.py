@@ -78,10 +78,13 @@ from pydantic import (
 )
 
 from ..catalog import DatasetRef, dataset_ref_problem, parse_dataset_ref
+from ..classifiers import CLASSIFIERS
 from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
 from ..core.suggest import did_you_mean
-from .splits import SPLITTERS, SplitError, Splitter
+from ..features import FEATURES
+from .seeding import derive_seed
+from .splits import SPLITTERS, SplitError, Splitter, make_splitter
 
 __all__ = [
     "ClassifierEntry",
@@ -206,7 +209,6 @@ class FeatureRef(_Model):
     @field_validator("name")
     @classmethod
     def _known(cls, v: str) -> str:
-        from ..features import FEATURES
 
         return _registry_check(FEATURES, v)
 
@@ -221,7 +223,6 @@ class ClassifierSpec(_Model):
     @field_validator("name")
     @classmethod
     def _known(cls, v: str) -> str:
-        from ..classifiers import CLASSIFIERS
 
         return _registry_check(CLASSIFIERS, v)
 
@@ -248,7 +249,6 @@ class DatasetSpec(_Model):
         if isinstance(v, dict):
             return {k: _coerce_str_list(x) for k, x in v.items()}
         return v
-
 
 
 class SchemeSpec(BaseModel):
@@ -439,7 +439,6 @@ class Protocol(_Model):
             d["classifiers"] = [{"name": c} if isinstance(c, str) else c for c in clfs]
         return d
 
-
     # ----------------------------------------------------------- accessors
     @property
     def path(self) -> Path | None:
@@ -511,8 +510,6 @@ class Protocol(_Model):
 
     def splitter(self, repetition: int = 0) -> Splitter:
         """The scheme, seeded for ``repetition``."""
-        from .seeding import derive_seed
-        from .splits import make_splitter
 
         params = self.scheme.params
         return make_splitter(self.scheme.name, target=self.target,
@@ -649,7 +646,6 @@ def _shape_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
 
 
 def _feature_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
-    from ..features import FEATURES
 
     issues = []
     for i, combo in enumerate(protocol.features):
@@ -670,7 +666,6 @@ def _feature_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
 
 
 def _classifier_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
-    from ..classifiers import CLASSIFIERS
 
     issues = []
     for i, spec in enumerate(protocol.classifiers):

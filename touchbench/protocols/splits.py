@@ -52,6 +52,7 @@ from typing import Any, ClassVar
 import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+from sklearn.model_selection import GroupKFold, StratifiedGroupKFold
 
 from ..core.errors import TouchbenchError
 from ..core.registry import Registry
@@ -464,7 +465,6 @@ class KFold(Splitter):
         for r in range(p.repeats):
             seed = derive_seed(self.random_state, "kfold", r)
             if p.grouped:
-                from sklearn.model_selection import GroupKFold, StratifiedGroupKFold
 
                 if p.stratified:
                     cv = StratifiedGroupKFold(n_splits=p.k, shuffle=p.shuffle, random_state=seed if p.shuffle else None)

@@ -24,7 +24,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .leaderboard import Leaderboard
+from ..protocols.splits import _natural_key
+from .leaderboard import Leaderboard, subject_values
 from .results import ResultSet
 
 __all__ = ["KINDS", "plot_confusion", "plot_frames", "plot_pareto", "plot_subjects", "plot_table", "slug",
@@ -262,7 +263,6 @@ def plot_confusion(rs: ResultSet, lb: Leaderboard, method: str, base: Path) -> l
 
 def plot_subjects(rs: ResultSet, lb: Leaderboard, base: Path, top: int = 5) -> list[Path]:
     """Per-subject accuracy of the ``top`` methods of the table."""
-    from .leaderboard import subject_values
 
     plt = _plt()
     preds = rs.predictions[rs.predictions["table_key"] == lb.key] if rs.predictions is not None else None
@@ -274,7 +274,6 @@ def plot_subjects(rs: ResultSet, lb: Leaderboard, base: Path, top: int = 5) -> l
             series[r["method_id"]] = (r, s)
     if not series:
         raise ValueError(f"{lb.title}: no predictions to compute per-subject accuracy")
-    from ..protocols.splits import _natural_key
 
     subjects = sorted(set().union(*[set(s.index) for _, s in series.values()]), key=_natural_key)
     fig, ax = plt.subplots(figsize=(max(6, 0.45 * len(subjects) + 3), 4), layout="constrained")
