@@ -21,6 +21,9 @@ classifiers:
   - test-logreg
 """
 
+# an expected block with one 2 x 2 confusion matrix (lines 8-17 after BASE)
+CONFUSION = ("expected:\n  confusions:\n    - classifier: test-logreg\n      source: T1\n      tolerance: 10\n      rows: predicted\n      classes: [a, b]\n      matrix:\n        - [1, 2]\n        - [3, 4]\n")
+
 
 @pytest.fixture(autouse=True)
 def components(tmp_path, monkeypatch):
@@ -120,19 +123,19 @@ def test_content_hash_ignores_comments_and_description():
     (BASE.replace("name: t", "name: a/b"), "protocols/x.yaml:1: name: name 'a/b' must be letters, digits"),
     # the expected numbers that are not one accuracy (lines 8-17: expected, confusions, classifier, source,
     # tolerance, rows, classes, matrix, its two rows)
-    (BASE + "expected:\n  confusions:\n    - classifier: test-logreg\n      source: T1\n      tolerance: 10\n      rows: predicted\n      classes: [a, b]\n      matrix:\n        - [1, 2]\n        - [3, 4]\n".replace("[3, 4]", "[3]"),
+    (BASE + CONFUSION.replace("[3, 4]", "[3]"),
      "protocols/x.yaml:17: expected.confusions[0].matrix[1]: row 2 (b) has 1 count for 2 classes: the matrix is square"),
-    (BASE + "expected:\n  confusions:\n    - classifier: test-logreg\n      source: T1\n      tolerance: 10\n      rows: predicted\n      classes: [a, b]\n      matrix:\n        - [1, 2]\n        - [3, 4]\n".replace("        - [3, 4]\n", ""),
+    (BASE + CONFUSION.replace("        - [3, 4]\n", ""),
      "protocols/x.yaml:15: expected.confusions[0].matrix: 1 row for 2 classes: one row per class"),
-    (BASE + "expected:\n  confusions:\n    - classifier: test-logreg\n      source: T1\n      tolerance: 10\n      rows: predicted\n      classes: [a, b]\n      matrix:\n        - [1, 2]\n        - [3, 4]\n".replace("[1, 2]", "[1, -2]"),
+    (BASE + CONFUSION.replace("[1, 2]", "[1, -2]"),
      "protocols/x.yaml:16: expected.confusions[0].matrix[0][1]: Input should be greater than or equal to 0, got -2"),
-    (BASE + "expected:\n  confusions:\n    - classifier: test-logreg\n      source: T1\n      tolerance: 10\n      rows: predicted\n      classes: [a, b]\n      matrix:\n        - [1, 2]\n        - [3, 4]\n".replace("[a, b]", "[a, a]"),
+    (BASE + CONFUSION.replace("[a, b]", "[a, a]"),
      "protocols/x.yaml:14: expected.confusions[0].classes: each class once: a repeated"),
-    (BASE + "expected:\n  confusions:\n    - classifier: test-logreg\n      source: T1\n      tolerance: 10\n      rows: predicted\n      classes: [a, b]\n      matrix:\n        - [1, 2]\n        - [3, 4]\n".replace("rows: predicted", "rows: columns"),
+    (BASE + CONFUSION.replace("rows: predicted", "rows: columns"),
      "protocols/x.yaml:13: expected.confusions[0].rows: Input should be 'predicted' or 'true', got 'columns'"),
-    (BASE + "expected:\n  confusions:\n    - classifier: test-logreg\n      source: T1\n      tolerance: 10\n      rows: predicted\n      classes: [a, b]\n      matrix:\n        - [1, 2]\n        - [3, 4]\n".replace("      source: T1\n", ""),
+    (BASE + CONFUSION.replace("      source: T1\n", ""),
      "protocols/x.yaml:10: expected.confusions[0].source: missing required field"),
-    (BASE + "expected:\n  confusions:\n    - classifier: test-logreg\n      source: T1\n      tolerance: 10\n      rows: predicted\n      classes: [a, b]\n      matrix:\n        - [1, 2]\n        - [3, 4]\n".replace("classifier: test-logreg", "classifier: test-logerg"),
+    (BASE + CONFUSION.replace("classifier: test-logreg", "classifier: test-logerg"),
      "protocols/x.yaml:10: expected.confusions[0].classifier: no classifier entry labelled 'test-logerg' in this "
      "protocol; did you mean 'test-logreg'"),
     (BASE + "expected:\n  standard_deviations:\n    - {classifier: test-logreg, value: -1, tolerance: 5, source: T2}\n",
