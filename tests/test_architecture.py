@@ -23,6 +23,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("touchbench.catalog",),                         # dataset references: registered name, scene:NAME, file
     ("touchbench.features",),
     ("touchbench.classifiers",),
+    ("touchbench.methods",),                         # feature sets -> estimator; the one fit path
     ("touchbench.protocols", "touchbench.evaluation"),  # schema, splitters, metrics, calibration
     ("touchbench.results",),                         # the results store and run manifests
     ("touchbench.engine",),                          # planning and running tasks

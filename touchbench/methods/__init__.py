@@ -1,0 +1,20 @@
+"""Methods: what a protocol evaluates and a model file holds.
+
+A method is feature sets -> an estimator on the feature matrix
+(:class:`~touchbench.methods.pipeline.FeaturePipeline`). The protocol
+shorthand ``features`` x ``classifiers`` expands to methods; a named method
+(:data:`METHODS`, e.g. touchbench's ``touch-*`` family) declares its own
+feature sets and estimator, so the run engine computes its fold-independent
+features once per dataset in the feature cache instead of inside every task.
+
+:mod:`touchbench.methods.fitting` is the one place that turns labels into
+codes, routes training subjects to estimators that take ``groups``, handles a
+training set of one class, and limits threads: the engine's tasks and
+``touchbench train`` both fit through it.
+"""
+
+from .base import METHODS, MethodSpec, method_spec
+from .fitting import FittedEstimator, fit_estimator
+from .pipeline import FeaturePipeline
+
+__all__ = ["METHODS", "FeaturePipeline", "FittedEstimator", "MethodSpec", "fit_estimator", "method_spec"]

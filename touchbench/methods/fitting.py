@@ -1,0 +1,78 @@
+"""The one fit path from a feature matrix and labels to a fitted estimator.
+
+Used by the run engine's tasks and by ``touchbench train`` alike, so both
+treat labels, subjects and degenerate folds the same way:
+
+- labels: the estimator is fitted on integer codes ``0..C-1`` of the
+  classes present in the training rows (sorted as strings), which every
+  estimator accepts (XGBoost needs contiguous codes); predictions are
+  decoded back to the labels;
+- subjects: an estimator whose ``fit`` takes ``groups`` receives the
+  training rows' subjects (for subject-grouped inner cross-validation);
+- one class: a training set with a single class gets no estimator; every
+  prediction is that class (the caller notes it).
+
+Threads are the caller's business (:func:`touchbench.core.threads.single_thread`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..classifiers import make_classifier
+from ..core.introspect import accepts
+
+__all__ = ["FittedEstimator", "encode_labels", "fit_estimator"]
+
+
+def encode_labels(y: Any) -> tuple[np.ndarray, np.ndarray]:
+    """``(classes, codes)``: the sorted distinct labels (as str) and each row's index into them."""
+    labels = np.array([str(v) for v in np.asarray(y, dtype=object).tolist()], dtype=object)
+    classes = np.array(sorted(set(labels.tolist())), dtype=object)
+    code = {c: i for i, c in enumerate(classes)}
+    return classes, np.array([code[v] for v in labels], dtype=np.int64)
+
+
+@dataclass
+class FittedEstimator:
+    """A fitted estimator with the labels its codes stand for (``estimator`` None: one class)."""
+
+    classes: np.ndarray
+    estimator: Any | None
+
+    def predict(self, X: np.ndarray) -> np.ndarray:
+        if self.estimator is None:
+            return np.array([self.classes[0]] * len(X), dtype=object)
+        codes = np.asarray(self.estimator.predict(X)).astype(np.int64)
+        return self.classes[codes]
+
+    def predict_proba(self, X: np.ndarray) -> dict[str, np.ndarray] | None:
+        """Probability of each training class (by label), or None when the estimator gives none."""
+        if self.estimator is None:
+            return {str(self.classes[0]): np.ones(len(X), dtype=np.float64)}
+        if not hasattr(self.estimator, "predict_proba"):
+            return None
+        try:
+            P = np.asarray(self.estimator.predict_proba(X), dtype=np.float64)
+        except Exception:  # probabilities are optional (e.g. an SVM without them)
+            return None
+        est_classes = getattr(self.estimator, "classes_", np.arange(P.shape[1]))
+        return {str(self.classes[int(c)]): P[:, j] for j, c in enumerate(est_classes)}
+
+
+def fit_estimator(name: str, params: dict[str, Any], seed: int | None, X: np.ndarray, y: Any,
+                  groups: Any = None, **build: Any) -> FittedEstimator:
+    """Build the registered estimator ``name`` (``random_state=seed``, ``params``,
+    and ``build`` keywords such as the sensor) and fit it on ``X``, ``y``."""
+    classes, codes = encode_labels(y)
+    if len(classes) < 2:
+        return FittedEstimator(classes, None)
+    est = make_classifier(name, random_state=seed, **build, **params)
+    fit_kw = {}
+    if groups is not None and accepts(est.fit, "groups"):
+        fit_kw["groups"] = np.array([str(g) for g in np.asarray(groups, dtype=object).tolist()], dtype=object)
+    est.fit(X, codes, **fit_kw)
+    return FittedEstimator(classes, est)

@@ -1,0 +1,42 @@
+"""touchbench's own methods, the ``touch-*`` family: touchbench's feature sets -> extra-trees or XGBoost.
+
+Not from a paper: every choice was made by cross-validation inside the
+HAART challenge's training subjects (docs/research/touch-methods.md). Each
+method is feature sets of :mod:`touchbench.features.touch` (and
+:mod:`touchbench.features.touch_windows`) followed by an estimator of
+:mod:`touchbench.classifiers.touch` or the ``xgboost`` classifier, so the
+run engine computes the features once per dataset (feature cache) and the
+estimator sees the same matrix a user's own pipeline would.
+
+- ``touch-et``: touch-rhythm + cell-rhythm + contact-motion -> extra-trees (500 trees, 30 % of features per split);
+- ``touch-et-tuned``: the same with max_features and feature selection chosen by nested CV over the training subjects;
+- ``touch-xgb``: the same sets -> XGBoost;
+- ``touch-et-win``: the three sets plus touch-windows (their mean and sd over four 2-s windows) -> extra-trees;
+- ``touch-et-fast``: touch-rhythm alone -> extra-trees of 100 trees (the latency-bound entry).
+
+Parameters given to a method go to its estimator.
+"""
+
+from __future__ import annotations
+
+from .base import METHODS, pipeline_method
+
+SOURCE = "touchbench (docs/research/touch-methods.md)"
+THREE = ("touch-rhythm", "cell-rhythm", "contact-motion")
+
+_TOUCH = {
+    "touch-et": ("touchbench: touch-rhythm + cell-rhythm + contact-motion -> extra-trees 500",
+                 THREE, "touch-extra-trees", {}),
+    "touch-et-tuned": ("touchbench: touch-et with max_features / feature selection by nested CV over training subjects",
+                       THREE, "touch-extra-trees-tuned", {}),
+    "touch-xgb": ("touchbench: touch-rhythm + cell-rhythm + contact-motion -> XGBoost",
+                  THREE, "xgboost", {}),
+    "touch-et-win": ("touchbench: touch-et plus touch-windows (the three sets' mean and sd over four 2-s windows)",
+                     (*THREE, "touch-windows"), "touch-extra-trees", {}),
+    "touch-et-fast": ("touchbench, latency-bound: touch-rhythm -> extra-trees 100",
+                      ("touch-rhythm",), "touch-extra-trees", {"n_estimators": 100}),
+}
+
+for _name, (_desc, _sets, _est, _params) in _TOUCH.items():
+    METHODS.register(_name, description=_desc, source=SOURCE, feature_sets=_sets, estimator=_est,
+                     defaults=dict(_params))(pipeline_method(_name, _sets, _est, _params))
