@@ -80,6 +80,33 @@ def test_verify_detects_edited_content(tmp_path):
         TouchDataset.from_parquet(p, verify=True)
 
 
+def test_a_file_edited_in_place_is_loaded_as_new_data(tmp_path):
+    import warnings
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from touchbench.datasets.model import DatasetChangedWarning
+
+    ds = make_dataset()
+    p = ds.to_parquet(tmp_path / "d.parquet")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # an intact file loads without a word
+        assert TouchDataset.from_parquet(p).content_hash == ds.content_hash
+    # change one capture's label in the file; the stored hash stays the old one
+    t = pq.read_table(p)
+    gestures = t.column("gesture").to_pylist()
+    new_label = next(g for g in sorted(set(gestures)) if g != gestures[0])
+    t = t.set_column(t.column_names.index("gesture"), "gesture", pa.array([new_label] + gestures[1:]))
+    pq.write_table(t, p)
+    meta = ds.meta.copy()
+    meta.loc[0, "gesture"] = new_label
+    edited = TouchDataset(ds.name, ds.captures, meta, ds.sensor)
+    with pytest.warns(DatasetChangedWarning, match="d.parquet: the content changed since"):
+        back = TouchDataset.from_parquet(p)
+    assert back.content_hash == edited.content_hash != ds.content_hash
+
+
 def test_validation_of_shapes_and_ids():
     sensor = SensorSpec("s", (2, 3), 10.0)
     meta = pd.DataFrame({"capture_id": ["a", "b"], "subject": ["x", "x"], "gesture": ["g", "g"]})

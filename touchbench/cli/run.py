@@ -73,6 +73,9 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
     except KeyboardInterrupt:
         click.echo("\ninterrupted: finished tasks are saved; run the same command again to resume", err=True)
         sys.exit(130)
+    for n in res.notes:
+        if n not in plan.notes:
+            click.echo(f"note: {n}", err=True)
     if res.noop:
         click.echo(f"nothing to do: all {res.n_tasks} tasks finished (use --force to recompute)", err=True)
     else:

@@ -2,13 +2,25 @@
 
 Versions are read from the installed distributions' metadata, without
 importing the packages (cheap, and safe for optional extras).
+
+Two questions, one function:
+
+- ``package_versions()``: the packages whose version can change a number
+  touchbench reports (:data:`PACKAGES`), for manifests and model files;
+- ``package_versions(modules=[...])``: the distributions that provide the
+  given top-level import names (``sklearn`` -> ``scikit-learn``, mapped with
+  :func:`importlib.metadata.packages_distributions`) and, transitively, the
+  installed distributions they require (scikit-learn's results depend on
+  SciPy's version too), for task identities.
 """
 
 from __future__ import annotations
 
 import platform
+import re
 from functools import lru_cache
 from importlib import metadata
+from typing import Iterable
 
 from .. import __version__
 
@@ -20,25 +32,70 @@ PACKAGES = (
     "PyWavelets", "xgboost", "xgboost-cpu", "torch", "threadpoolctl", "aeon", "numba",
 )
 
+_REQUIREMENT_NAME = re.compile(r"^\s*([A-Za-z0-9][A-Za-z0-9._-]*)")
+
 
 @lru_cache(maxsize=None)
-def _installed() -> tuple[tuple[str, str | None], ...]:
+def _version(dist: str) -> str | None:
+    try:
+        return metadata.version(dist)
+    except metadata.PackageNotFoundError:
+        return None
+
+
+@lru_cache(maxsize=None)
+def _distributions_of_modules() -> dict[str, tuple[str, ...]]:
+    return {k: tuple(v) for k, v in metadata.packages_distributions().items()}
+
+
+@lru_cache(maxsize=None)
+def _requirements(dist: str) -> tuple[str, ...]:
+    """The distributions ``dist`` requires unconditionally (no extras), as installed names."""
+    try:
+        reqs = metadata.requires(dist) or []
+    except metadata.PackageNotFoundError:
+        return ()
     out = []
-    for name in PACKAGES:
-        try:
-            out.append((name, metadata.version(name)))
-        except metadata.PackageNotFoundError:
-            out.append((name, None))
+    for r in reqs:
+        name, _, marker = r.partition(";")
+        if "extra" in marker:
+            continue  # an optional extra: not installed because of this distribution
+        m = _REQUIREMENT_NAME.match(name)
+        if m and _version(m.group(1)) is not None:
+            out.append(metadata.metadata(m.group(1))["Name"])
     return tuple(out)
 
 
-def package_versions(installed_only: bool = False) -> dict[str, str | None]:
+def _with_requirements(dists: Iterable[str]) -> dict[str, str | None]:
+    out: dict[str, str | None] = {}
+    todo = list(dists)
+    while todo:
+        d = todo.pop()
+        if d in out:
+            continue
+        out[d] = _version(d)
+        todo.extend(_requirements(d))
+    return out
+
+
+def package_versions(installed_only: bool = False, *, modules: Iterable[str] | None = None) -> dict[str, str | None]:
     """``{"touchbench": ..., "python": ..., package: version or None}``.
 
-    ``installed_only=True`` leaves out packages that are not installed.
+    Without ``modules``: the packages of :data:`PACKAGES`
+    (``installed_only=True`` leaves out those that are not installed).
+    With ``modules`` (top-level import names such as ``"sklearn"``): the
+    distributions providing them and those they require, each installed;
+    a name no installed distribution provides is left out.
     """
     out: dict[str, str | None] = {"touchbench": __version__, "python": platform.python_version()}
-    for name, version in _installed():
+    if modules is not None:
+        mapping = _distributions_of_modules()
+        dists = sorted({d for m in modules for d in mapping.get(m, ())})
+        found = _with_requirements(dists)
+        out.update({d: v for d, v in sorted(found.items()) if v is not None})
+        return out
+    for name in PACKAGES:
+        version = _version(name)
         if version is not None or not installed_only:
             out[name] = version
     return out

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import warnings
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Sequence
@@ -30,6 +31,11 @@ from ..core.errors import DataError
 from .formats import register_format
 
 FORMAT_VERSION = 2
+
+
+class DatasetChangedWarning(UserWarning):
+    """A dataset file's content no longer matches the hash it was written with (edited in place)."""
+
 REQUIRED_META = ("capture_id", "subject", "gesture")
 
 
@@ -218,8 +224,12 @@ class TouchDataset:
     def from_parquet(cls, path: str | Path, verify: bool = False) -> "TouchDataset":
         """Load a dataset written by :meth:`to_parquet`.
 
-        ``verify=True`` recomputes the content hash and refuses a file whose
-        content no longer matches the hash it was written with.
+        The content hash is recomputed from what the file holds, never taken
+        from the file: a file edited in place is new data, with a new hash
+        (so runs on it recompute their tasks and features), and a
+        :class:`DatasetChangedWarning` says that the file changed since it
+        was written. ``verify=True`` refuses such a file instead
+        (:class:`~touchbench.core.errors.DataError`).
         """
         path = Path(path)
         if not path.exists():
@@ -251,12 +261,14 @@ class TouchDataset:
         else:
             captures = []
         meta = table.drop_columns(["frames", "n_frames"]).to_pandas()
-        ds = cls(
-            name=info["name"], captures=captures, meta=meta, sensor=sensor,
-            _hash=None if verify else info["content_hash"], provenance=info.get("provenance", {}),
-        )
-        if verify and ds.content_hash != info["content_hash"]:
-            raise DataError("content does not match the hash it was saved with (file corrupted or edited)", path)
+        ds = cls(name=info["name"], captures=captures, meta=meta, sensor=sensor, provenance=info.get("provenance", {}))
+        if ds.content_hash != info.get("content_hash"):
+            if verify:
+                raise DataError("content does not match the hash it was saved with (file corrupted or edited)", path)
+            warnings.warn(DatasetChangedWarning(
+                f"{path}: the content changed since touchbench wrote this file (it no longer matches the hash "
+                "saved with it); it is treated as new data: results and cached features of the old content are not reused"),
+                stacklevel=2)
         return ds
 
     # ----------------------------------------------------------------- summary

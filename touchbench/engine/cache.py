@@ -6,26 +6,29 @@ kept under ``touchbench.core.paths.cache_dir() / "features"``, keyed by
 
 - the content hash of the (filtered) dataset,
 - the feature set's name and parameters (canonical JSON),
-- the code version: touchbench's version and a hash of the source files the
-  feature set comes from (its module, its bases' modules and the touchbench
-  helpers they import; see :func:`code_version`),
+- the feature set's identity: its source, the source of the helper modules
+  it imports and the versions of the packages they import
+  (:func:`touchbench.engine.identity.feature_set_identity`),
 - the crop (``early`` scheme: the first N frames).
 
 An entry is ``<key>.npy`` (the float64 matrix, one row per capture in the
 dataset's order) and ``<key>.json`` (column names, seconds per capture it
-took to compute, shape), both written atomically, the JSON last: an entry
-without its JSON is not an entry. Rows are computed in chunks of a fixed
+took to compute, shape, size of the ``.npy`` file and a SHA-256 checksum of
+the matrix), both written atomically, the JSON last: an entry without its
+JSON is not an entry. An entry whose file is truncated or whose matrix does
+not match its checksum is never loaded (:meth:`FeatureCache.problem` says
+why; the run computes it again and says so in its notes). The checksum is
+verified once per process and file. Rows are computed in chunks of a fixed
 size, so the matrix is the same whatever the number of parallel jobs.
 """
 
 from __future__ import annotations
 
 import hashlib
-import inspect
 import io
 import json
+import os
 import time
-from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
@@ -33,61 +36,26 @@ import numpy as np
 from joblib import Parallel, delayed
 from threadpoolctl import threadpool_limits
 
-from .. import __version__
 from ..core.atomic import atomic_write_bytes
 from ..core.paths import cache_dir
 from .backends import run_setup, supports_generator
 
-__all__ = ["CHUNK", "FeatureCache", "code_version", "crop_captures"]
+__all__ = ["CHUNK", "FeatureCache", "crop_captures", "matrix_checksum"]
 
 CHUNK = 32  # captures per chunk (fixed: results must not depend on --jobs)
 
 
-@lru_cache(maxsize=None)
-def _file_hash(path: str, mtime_ns: int) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
+def matrix_checksum(X: np.ndarray) -> str:
+    """SHA-256 of a matrix's float64 values in C order, with its shape."""
+    a = np.ascontiguousarray(X, dtype=np.float64)
+    h = hashlib.sha256(f"{a.shape}".encode())
+    h.update(memoryview(a).cast("B") if a.size else b"")
+    return h.hexdigest()
 
 
-def _touchbench_file(obj: Any) -> str | None:
-    try:
-        f = inspect.getsourcefile(obj)
-    except TypeError:
-        return None
-    return f if f and "touchbench" in Path(f).parts else None
-
-
-def source_files(cls: type) -> list[str]:
-    """Source files a feature set's output depends on, as far as we can tell.
-
-    The modules of the class and of its bases, and the touchbench modules
-    their module-level names come from (helpers imported with ``from .x
-    import f`` or ``from . import x``), one level deep.
-    """
-    files: set[str] = set()
-    for klass in getattr(cls, "__mro__", (cls,)):
-        f = _touchbench_file(klass)
-        if f is None:
-            continue
-        files.add(f)
-        module = inspect.getmodule(klass)
-        for value in vars(module).values() if module is not None else ():
-            if inspect.ismodule(value) or inspect.isclass(value) or inspect.isfunction(value):
-                g = _touchbench_file(value)
-                if g is not None:
-                    files.add(g)
-    return sorted(files)
-
-
-def code_version(cls: Any) -> str:
-    """touchbench's version + a hash of :func:`source_files` of ``cls``.
-
-    Editing a feature set's code (or a helper it imports) changes the code
-    version, so its cached features and the tasks that use them are recomputed.
-    """
-    h = hashlib.sha256()
-    for f in source_files(cls):
-        h.update(Path(f).name.encode() + b"\0" + _file_hash(f, Path(f).stat().st_mtime_ns).encode())
-    return f"{__version__}-{h.hexdigest()[:16]}"
+def _signature(path: Path) -> tuple[int, int, int, int]:
+    st = os.stat(path)
+    return (st.st_mtime_ns, st.st_ctime_ns, st.st_size, st.st_ino)
 
 
 def crop_captures(captures: Sequence[np.ndarray], n_frames: int | None) -> list[np.ndarray]:
@@ -99,6 +67,9 @@ def crop_captures(captures: Sequence[np.ndarray], n_frames: int | None) -> list[
 
 class FeatureCache:
     """Matrices of fold-independent features, one entry per (dataset, set, params, code, crop)."""
+
+    #: entries whose checksum this process verified, with the files' signatures then
+    _verified: dict[Path, tuple] = {}
 
     def __init__(self, root: str | Path | None = None):
         self.root = Path(root) if root is not None else cache_dir() / "features"
@@ -115,29 +86,56 @@ class FeatureCache:
         return self.root / f"{key}.npy", self.root / f"{key}.json"
 
     def has(self, key: str) -> bool:
+        """Whether a complete entry exists (its files; :meth:`problem` checks their content)."""
         npy, js = self._paths(key)
         return npy.is_file() and js.is_file()
 
+    def problem(self, key: str) -> str | None:
+        """None for a sound entry, ``"missing"``, or what is wrong with it (truncated file, checksum...)."""
+        npy, js = self._paths(key)
+        if not (npy.is_file() and js.is_file()):
+            return "missing"
+        return self._check(npy, js)[0]
+
+    def _check(self, npy: Path, js: Path) -> tuple[str | None, np.ndarray | None, dict[str, Any]]:
+        try:
+            sig = (_signature(npy), _signature(js))
+            info = json.loads(js.read_text())
+        except (OSError, ValueError):
+            return "its description is unreadable", None, {}
+        if not isinstance(info, dict) or "sha256" not in info or "npy_bytes" not in info:
+            return "it has no checksum (written by an older touchbench)", None, info
+        if sig[0][2] != info["npy_bytes"]:
+            return f"its matrix file has {sig[0][2]} bytes instead of {info['npy_bytes']} (truncated or overwritten)", None, info
+        try:
+            X = np.load(npy, mmap_mode="r")
+        except (OSError, ValueError) as e:
+            return f"its matrix file is unreadable ({e})", None, info
+        if X.ndim != 2 or X.shape[0] != info.get("n_rows") or X.dtype != np.float64:
+            return f"its matrix has shape {X.shape} and type {X.dtype}, not {info.get('n_rows')} float64 rows", None, info
+        if FeatureCache._verified.get(npy) != sig:
+            if matrix_checksum(X) != info["sha256"]:
+                return "its matrix does not match its checksum", None, info
+            FeatureCache._verified[npy] = sig
+        return None, X, info
+
     def load(self, key: str) -> tuple[np.ndarray, dict[str, Any]] | None:
-        """``(matrix, info)`` (the matrix memory-mapped, read-only) or None."""
+        """``(matrix, info)`` (the matrix memory-mapped, read-only), or None when missing or damaged."""
         npy, js = self._paths(key)
         if not (npy.is_file() and js.is_file()):
             return None
-        try:
-            info = json.loads(js.read_text())
-            X = np.load(npy, mmap_mode="r")
-        except (OSError, ValueError, json.JSONDecodeError):
-            return None
-        if X.shape[0] != info.get("n_rows"):
-            return None
-        return X, info
+        problem, X, info = self._check(npy, js)
+        return None if problem is not None else (X, info)
 
     def store(self, key: str, X: np.ndarray, info: dict[str, Any]) -> None:
         npy, js = self._paths(key)
+        X = np.ascontiguousarray(X, dtype=np.float64)
         buf = io.BytesIO()
-        np.save(buf, np.ascontiguousarray(X, dtype=np.float64))
-        atomic_write_bytes(npy, buf.getvalue())
-        atomic_write_bytes(js, json.dumps({**info, "n_rows": int(X.shape[0])}, default=str).encode())
+        np.save(buf, X)
+        data = buf.getvalue()
+        atomic_write_bytes(npy, data)
+        atomic_write_bytes(js, json.dumps({**info, "n_rows": int(X.shape[0]), "npy_bytes": len(data),
+                                           "sha256": matrix_checksum(X)}, default=str).encode())
 
     def compute(
         self,

@@ -22,10 +22,15 @@ A rerun of a finished run loads the dataset, rebuilds the plan, sees that
 every task is finished and the reports are current, and does nothing else.
 
 Identity and seeds: a task id is a hash of everything that determines its
-result (dataset content hash, target, scheme and its parameters, repetition,
-fold name and indices, the feature sets with parameters and code version,
-the classifier with parameters, the protocol seed, and the touchbench, numpy
-and scikit-learn versions). The classifier's ``random_state`` is
+result: the dataset's content hash (recomputed from the data when it is
+loaded), target, scheme and its parameters, repetition, fold name and
+indices, the feature sets and the classifier with their parameters and
+their identities (:mod:`touchbench.engine.identity`: the source of their
+modules and of the helper modules these import, touchbench's or the user's,
+and the versions of the third-party packages they import), and the protocol
+seed. Editing a component's code, or a helper it imports, recomputes exactly
+the tasks that use it. The run id is a hash of the protocol, the dataset and
+the task ids. The classifier's ``random_state`` is
 ``derive_seed(seed, "task", repetition, fold, features, classifier)``.
 """
 
@@ -35,6 +40,7 @@ import hashlib
 import os
 import sys
 import time
+import warnings
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -58,8 +64,7 @@ from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
 from ..core.paths import cache_dir
 from ..core.suggest import did_you_mean
-from ..core.versions import package_versions
-from ..datasets.model import TouchDataset
+from ..datasets.model import DatasetChangedWarning, TouchDataset
 from ..features import FEATURES
 from ..protocols.schema import Protocol, expand_grid, load_protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
@@ -68,7 +73,8 @@ from ..results.manifest import now_iso, update_manifest
 from ..results.store import ResultStore
 from ..results.summary import check_expected, summarize
 from .backends import supports_generator
-from .cache import FeatureCache, code_version, crop_captures
+from .cache import FeatureCache, crop_captures
+from .identity import MAX_MODULES, Identity, classifier_identity, feature_set_identity
 from .tasks import RunContext, SetSpec, Task, execute_task, make_feature_set
 
 __all__ = ["Plan", "RunResult", "default_results_dir", "plan_run", "run_plan", "run_protocol"]
@@ -90,6 +96,16 @@ class Plan:
     run_id: str
     cache_root: Path
     n_folds: int = 0
+    #: the identity of every component the tasks use, by label ("feature set msd {...}")
+    identities: dict[str, Identity] = field(default_factory=dict)
+
+    @property
+    def package_versions(self) -> dict[str, str | None]:
+        """Every package version that entered a task id (the union over the components)."""
+        out: dict[str, str | None] = {}
+        for ident in self.identities.values():
+            out.update(ident.packages)
+        return dict(sorted(out.items()))
 
     @property
     def task_ids(self) -> list[str]:
@@ -117,11 +133,19 @@ class RunResult:
 
 
 # ----------------------------------------------------------------- dataset
-def _load(protocol: Protocol) -> TouchDataset:
-
+def _load(protocol: Protocol, notes: list[str]) -> TouchDataset:
+    """The protocol's dataset; a dataset file changed since it was written adds a note."""
     ref = resolve_dataset_ref(protocol)
     try:
-        return load_dataset(ref, **protocol.dataset.options)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", DatasetChangedWarning)
+            ds = load_dataset(ref, **protocol.dataset.options)
+        for w in caught:
+            if issubclass(w.category, DatasetChangedWarning):
+                notes.append(str(w.message))
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
+        return ds
     except TouchbenchError:
         raise
     except TypeError as e:
@@ -160,11 +184,16 @@ def apply_filters(protocol: Protocol, ds: TouchDataset) -> TouchDataset:
 
 
 # ----------------------------------------------------------------- planning
+def _label(kind: str, name: str, params: dict[str, Any]) -> str:
+    return f"{kind} {name}" + (f" {canonical_json(params)}" if params else "")
+
+
 def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: TouchDataset | None = None) -> Plan:
     """Every check that needs the data, then the list of tasks (no work done)."""
 
     cache_root = Path(cache_root) if cache_root is not None else cache_dir() / "features"
-    full = dataset if dataset is not None else _load(protocol)
+    notes: list[str] = []
+    full = dataset if dataset is not None else _load(protocol, notes)
     ds = apply_filters(protocol, full)
     target = protocol.target
     if target not in ds.meta.columns:
@@ -184,16 +213,27 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                 except Exception as e:
                     raise protocol.error_at(("features", i, j), f"feature set {ref.name!r} rejects {p}: {type(e).__name__}: {e}") from None
 
-    versions = package_versions()
     combos = protocol.combinations()
     clfs = protocol.classifier_entries()
+    identities: dict[str, Identity] = {}
     set_info: dict[tuple, tuple[bool, str]] = {}
     for c in combos:
         for name, params in c.sets:
-            cls = FEATURES.get(name)
-            set_info[(name, canonical_json(params))] = (bool(getattr(cls, "fold_dependent", True)), code_version(cls))
+            k = (name, canonical_json(params))
+            if k not in set_info:
+                ident = identities[_label("feature set", name, params)] = feature_set_identity(name, params)
+                set_info[k] = (bool(getattr(FEATURES.get(name), "fold_dependent", True)), ident.digest)
+    clf_info: dict[tuple, str] = {}
+    for clf in clfs:
+        k = (clf.name, canonical_json(clf.params))
+        if k not in clf_info:
+            ident = identities[_label("classifier", clf.name, clf.params)] = classifier_identity(clf.name, clf.params)
+            clf_info[k] = ident.digest
+    for label, ident in identities.items():
+        if ident.incomplete:
+            notes.append(f"the {label} imports more than {MAX_MODULES} modules of its own: "
+                         "edits beyond the first ones found are not noticed (use --force after editing them)")
 
-    notes: list[str] = []
     tasks: list[Task] = []
     n_folds = 0
     scheme_json = canonical_json({"name": protocol.scheme.name, **protocol.scheme.params})
@@ -223,7 +263,8 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                         "dataset": ds.content_hash, "target": target, "scheme": scheme_json, "repetition": r,
                         "fold": fold.name, "indices": idx_hash, "crop": [crop_frames, bool(fold.crop and fold.crop.train)],
                         "features": [[n, p, set_info[(n, canonical_json(p))][1]] for n, p in combo.sets],
-                        "classifier": [clf.name, clf.params], "seed": protocol.seed, "versions": versions,
+                        "classifier": [clf.name, clf.params, clf_info[(clf.name, canonical_json(clf.params))]],
+                        "seed": protocol.seed,
                     }
                     task_id = hashlib.sha256(canonical_json(identity).encode()).hexdigest()[:20]
                     seed = derive_seed(protocol.seed, "task", r, fold.name, combo.label, clf.label)
@@ -246,13 +287,14 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
     ids = [t.task_id for t in tasks]
     if len(set(ids)) != len(ids):
         raise protocol.error_at(("features",), "two entries of the protocol describe the same task (duplicate combination or classifier)")
-    # The run is the set of its tasks: a change of protocol, data, code version or
+    # The run is the set of its tasks: a change of protocol, data, component source or
     # package version that changes any task gives another run id.
     run_id = hashlib.sha256(canonical_json(
-        {"protocol": protocol.content_hash, "dataset": ds.content_hash, "versions": versions,
+        {"protocol": protocol.content_hash, "dataset": ds.content_hash,
          "tasks": hashlib.sha256("\n".join(ids).encode()).hexdigest()}).encode()).hexdigest()[:12]
     return Plan(protocol=protocol, dataset=ds, dataset_ref=resolve_dataset_ref(protocol), source_hash=full.content_hash,
-                tasks=tasks, notes=list(dict.fromkeys(notes)), run_id=run_id, cache_root=cache_root, n_folds=n_folds)
+                tasks=tasks, notes=list(dict.fromkeys(notes)), run_id=run_id, cache_root=cache_root, n_folds=n_folds,
+                identities=identities)
 
 
 # ----------------------------------------------------------------- progress
@@ -284,8 +326,10 @@ class _Progress:
 
 
 # ----------------------------------------------------------------- running
-def _fill_cache(plan: Plan, pending: list[Task], jobs: int, progress: _Progress, setup=None) -> None:
+def _fill_cache(plan: Plan, pending: list[Task], jobs: int, progress: _Progress, setup=None) -> list[str]:
+    """Compute the missing (or damaged) feature cache entries of ``pending``; notes on damaged ones."""
     ds = plan.dataset
+    notes: list[str] = []
     cache = FeatureCache(plan.cache_root)
     needed: dict[str, tuple[str, dict, int | None]] = {}
     for t in pending:
@@ -298,23 +342,32 @@ def _fill_cache(plan: Plan, pending: list[Task], jobs: int, progress: _Progress,
             if s.key_crop is not None:
                 needed.setdefault(s.key_crop, (s.name, s.params, t.crop_frames))
     for key, (name, params, crop) in needed.items():
-        if cache.has(key) and cache.load(key) is not None:
+        problem = cache.problem(key)
+        if problem is None:
             continue
         caps = crop_captures(ds.captures, crop)
         label = name + (f" (first {crop} frames)" if crop is not None else "")
+        if problem != "missing":
+            notes.append(f"the cached features of {label} were not used ({problem}): computed again")
         tid = progress.add(f"features {label}", len(caps))
         cache.compute(
             key, partial(make_feature_set, name, params, ds.sensor), caps, jobs=jobs,
             info={"dataset_hash": ds.content_hash, "name": name, "params": params, "crop": crop},
             on_chunk=lambda n, tid=tid: progress.advance(tid, n), setup=setup,
         )
+    return notes
 
 
 def _dataset_copy(plan: Plan) -> Path:
     """A Parquet copy of the (filtered) dataset for parallel workers."""
     path = plan.cache_root.parent / "engine-datasets" / f"{plan.dataset.content_hash[:32]}.parquet"
-    if not path.is_file():
-        plan.dataset.to_parquet(path)
+    if path.is_file():
+        try:
+            TouchDataset.from_parquet(path, verify=True)
+            return path
+        except TouchbenchError:  # damaged: written again below
+            pass
+    plan.dataset.to_parquet(path)
     return path
 
 
@@ -365,9 +418,10 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
                          expected=check_expected(protocol.expected, scores, preds), notes=plan.notes)
 
     n_ran = 0
+    notes = list(plan.notes)
     with _Progress(show) as prog:
         if pending:
-            _fill_cache(plan, pending, jobs, prog, worker_setup)
+            notes += _fill_cache(plan, pending, jobs, prog, worker_setup)
             ds_path = _dataset_copy(plan) if jobs > 1 and len(pending) > 1 else None
             ctx = RunContext(plan.dataset, protocol.target, plan.cache_root, ds_path, setup=worker_setup)
             tid = prog.add(f"{protocol.name}: tasks", len(pending))
@@ -404,17 +458,20 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
                  "source_hash": plan.source_hash, "captures": len(plan.dataset),
                  "filters": protocol.dataset.filters, "exclude": protocol.dataset.exclude,
                  "sensor": plan.dataset.sensor.to_dict()},
+        identity={"packages": plan.package_versions,
+                  "components": {label: {"digest": i.digest, "modules": list(i.modules)}
+                                 for label, i in plan.identities.items()}},
         session=session,
         tasks={"total": len(plan.tasks), "merged": len(scores), "failed": n_failed, "folds": plan.n_folds,
                "ids_hash": plan.ids_hash, "task_ids": plan.task_ids},
-        notes=plan.notes,
+        notes=notes,
         expected=expected,
     )
     store.write_manifest(manifest)
     return RunResult(out=out, run_id=plan.run_id, n_tasks=len(plan.tasks), n_ran=n_ran,
                      n_skipped=len(plan.tasks) - len(pending), n_failed=n_failed, noop=False,
                      seconds=time.perf_counter() - t_start, scores=scores, summary=summarize(scores),
-                     expected=expected, notes=plan.notes)
+                     expected=expected, notes=notes)
 
 
 def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None, *, jobs: int = 1,

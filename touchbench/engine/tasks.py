@@ -105,7 +105,9 @@ class RunContext:
             ds = RunContext._loaded.get(self.dataset_hash)
             if ds is None:
                 assert self.dataset_path is not None, "a worker needs the dataset's Parquet copy"
-                ds = TouchDataset.from_parquet(self.dataset_path)
+                ds = TouchDataset.from_parquet(self.dataset_path, verify=True)
+                if ds.content_hash != self.dataset_hash:
+                    raise RuntimeError(f"{self.dataset_path} holds another dataset than the run's")
                 RunContext._loaded = {self.dataset_hash: ds}  # one dataset per worker
             self._dataset = ds
         return self._dataset

@@ -3,6 +3,8 @@
 touchbench version, git revision (and whether the working tree had
 uncommitted changes), versions of the packages results depend on, platform,
 CPU count, the protocol's text and hashes, the dataset's reference and hash,
+the identity of the run's components (``identity``: every package version
+that entered a task id, and the modules whose source did, per component),
 and the start and end of every session that worked on the run (a resumed
 run has several sessions; ``started_at`` is the first one's start and
 ``finished_at`` the last one's end).
@@ -52,7 +54,8 @@ def platform_info() -> dict[str, Any]:
 
 def update_manifest(previous: dict[str, Any] | None, *, run: dict[str, Any], protocol: dict[str, Any],
                     dataset: dict[str, Any], session: dict[str, Any], tasks: dict[str, Any],
-                    notes: list[str], expected: list[dict[str, Any]] | None = None) -> dict[str, Any]:
+                    notes: list[str], expected: list[dict[str, Any]] | None = None,
+                    identity: dict[str, Any] | None = None) -> dict[str, Any]:
     """A manifest for this run, keeping the sessions of ``previous`` when it is the same run."""
     sessions = []
     if previous and previous.get("run", {}).get("run_id") == run.get("run_id"):
@@ -66,6 +69,7 @@ def update_manifest(previous: dict[str, Any] | None, *, run: dict[str, Any], pro
         "run": run,
         "protocol": protocol,
         "dataset": dataset,
+        "identity": identity or {},
         "started_at": sessions[0].get("started_at"),
         "finished_at": session.get("finished_at"),
         "sessions": sessions,
