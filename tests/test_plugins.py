@@ -11,6 +11,7 @@ are loaded once per process.
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -88,10 +89,8 @@ def test_listings_show_the_plugin_package(example_plugin):
     assert package in line and "touchbench " in next(ln for ln in r.output.splitlines() if " msd " in ln)
     r = CliRunner().invoke(cli, ["classifiers", "list"])
     assert f"{CLASSIFIER}  " in r.output and f"[plugin {label}]" in r.output
-    assert f"zhou-knn  " in r.output and r.output.count("[plugin ") == 1
+    assert "zhou-knn  " in r.output and r.output.count("[plugin ") == 1
     r = CliRunner().invoke(cli, ["classifiers", "list", "--json"])
-    import json
-
     rows = {row["name"]: row for row in json.loads(r.output)}
     assert rows[CLASSIFIER]["plugin"] == {"package": package, "version": version, "entry_point": "example"}
     assert rows["zhou-knn"]["plugin"] is None
