@@ -1,6 +1,7 @@
 # touchbench: the two commands of the README, and the paper reproduction.
 #   make demo              set up .venv and run the main job
-#   make test              set up .venv (with the dev, deep, dist and peers extras) and run the tests
+#   make test              set up .venv (with the dev, deep, dist and peers extras and the example plugin)
+#                          and run the tests
 #   make snapshots         record the names every registry holds (tests/snapshots/), after adding an entry
 #   make reproduce-papers  run touchbench/protocols/papers/ and write results/papers/REPORT.md
 #   make examples          run the example protocols on real HAART and regenerate the example
@@ -17,10 +18,14 @@ TB := $(BIN)/touchbench
 
 .PHONY: setup demo test snapshots reproduce-papers examples clean
 
-$(VENV)/.installed-$(subst ,,$(EXTRAS)): pyproject.toml
+PLUGIN := examples/touchbench-plugin-example
+
+# The example plugin is installed as users install one (not editable): the tests run it by name.
+$(VENV)/.installed-$(subst ,,$(EXTRAS)): pyproject.toml $(PLUGIN)/pyproject.toml $(wildcard $(PLUGIN)/src/*/*.py)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e ".[$(EXTRAS)]"
+	$(BIN)/python -m pip install -q ./$(PLUGIN)
 	touch $@
 
 setup: $(VENV)/.installed-$(subst ,,$(EXTRAS))

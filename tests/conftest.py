@@ -1,5 +1,8 @@
 """Shared fixtures. Real-data tests use ``real_haart_dir``: it fails (not
-skips) when CI=true and ../shared/data/haart is missing."""
+skips) when CI=true and ../shared/data/haart is missing. Plugin tests use
+``example_plugin``: it fails (not skips) when CI=true and the example plugin
+(examples/touchbench-plugin-example, installed by ``make setup``) is not
+installed."""
 
 from __future__ import annotations
 
@@ -10,14 +13,32 @@ import pytest
 from touchbench.core.paths import data_dir
 
 
+def _missing(msg: str):
+    """Fail under CI=true (CI must have everything), skip elsewhere."""
+    if os.environ.get("CI", "").lower() == "true":
+        pytest.fail(msg)
+    pytest.skip(msg)
+
+
 def _haart_dir():
     d = data_dir() / "haart"
     if not (d / "raw").is_dir():
-        msg = f"real HAART data not found at {d} (set TOUCHBENCH_DATA_DIR)"
-        if os.environ.get("CI", "").lower() == "true":
-            pytest.fail(msg)
-        pytest.skip(msg)
+        _missing(f"real HAART data not found at {d} (set TOUCHBENCH_DATA_DIR)")
     return d
+
+
+EXAMPLE_PLUGIN = "touchbench-plugin-example"
+
+
+@pytest.fixture(scope="session")
+def example_plugin():
+    """The example plugin's distribution name and version, when it is installed."""
+    from importlib import metadata
+
+    try:
+        return EXAMPLE_PLUGIN, metadata.version(EXAMPLE_PLUGIN)
+    except metadata.PackageNotFoundError:
+        _missing(f"the example plugin is not installed (pip install ./examples/{EXAMPLE_PLUGIN}; make setup does)")
 
 
 @pytest.fixture(scope="session")

@@ -20,7 +20,8 @@ from touchbench.engine import run_protocol  # noqa: E402
 from touchbench.engine.backends import supports_generator, use_backend  # noqa: E402
 from touchbench.engine.testing import components_for_tests, register_test_components  # noqa: E402
 from touchbench.core.errors import TouchbenchError  # noqa: E402
-from test_backends_shared import assert_same_results, env, write_protocol  # noqa: E402,F401  (env: a fixture)
+from test_backends_shared import PROTOCOL, assert_same_results, env, write_protocol  # noqa: E402,F401  (env: a fixture)
+from touchbench.protocols.schema import parse_protocol  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -66,3 +67,17 @@ def test_backend_option_errors(env):
     with pytest.raises(TouchbenchError, match="unknown backend"):
         with use_backend("spark"):
             pass
+
+
+def test_dask_workers_see_installed_plugins(cluster, env, example_plugin):
+    # no worker_setup: the workers load the plugin by themselves, like the command line does
+    text = PROTOCOL.replace("features:\n  - [msd]\n  - [sd, bmh]\n", "features:\n  - [example-pressure-stats]\n")
+    text = text.replace("  - zhou-knn\n", "  - example-nearest-centroid\n")
+    (env / "p.yaml").write_text(text.format(data=env / "data.parquet", extra=""))
+    proto = parse_protocol((env / "p.yaml").read_text(), env / "p.yaml")
+    assert [c.name for c in proto.classifier_entries()] == ["gaus-rf", "example-nearest-centroid"]
+    local = run_protocol(proto, env / "local", jobs=1)
+    with use_backend("dask", cluster, cache_root=env / "cache") as info:
+        dist = run_protocol(proto, env / "dask", jobs=info.n_jobs, force=True)
+    assert local.n_tasks == dist.n_tasks == dist.n_ran == 3 * 2
+    assert_same_results(env / "local", env / "dask")

@@ -6,6 +6,8 @@ import json
 
 import click
 
+from .plugins import plugin_note
+
 
 def _fmt(v) -> str:
     return repr(v) if isinstance(v, str) else str(v)
@@ -37,15 +39,18 @@ def list_classifiers(as_json: bool) -> None:
             "extra": extra,
             "available": available,
             "install": None if available else hints.get(extra, f"pip install 'touchbench[{extra}]'"),
+            "plugin": None if e.plugin is None else {"package": e.plugin.package, "version": e.plugin.version,
+                                                     "entry_point": e.plugin.entry_point},
+            "note": plugin_note(e),
         })
     if as_json:
-        click.echo(json.dumps(rows, indent=2, default=list))
+        click.echo(json.dumps([{k: v for k, v in r.items() if k != "note"} for r in rows], indent=2, default=list))
         return
     for r in rows:
         status = ""
         if r["extra"]:
             status = f"  [extra '{r['extra']}'" + ("]" if r["available"] else f": not installed; {r['install']}]")
-        click.echo(f"{r['name']}  {r['description']}{status}")
+        click.echo(f"{r['name']}  {r['description']}{status}{r['note']}")
         click.echo(f"    source:   {r['source']}")
         defaults = ", ".join(f"{k}={_fmt(v)}" for k, v in r["defaults"].items())
         click.echo(f"    defaults: {defaults}")

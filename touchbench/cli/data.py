@@ -11,6 +11,7 @@ from ..datasets import DATASETS
 from ..datasets.formats import FORMATS
 from ..datasets.model import TouchDataset
 from .formats import FORMATS_HELP, FormatChoice, format_options
+from .plugins import plugin_note
 
 
 @click.group()
@@ -22,7 +23,7 @@ def data() -> None:
 def list_() -> None:
     """Registered datasets (scenes: `touchbench scenes list`)."""
     for e in DATASETS.entries():
-        click.echo(f"{e.name:18s} {e.description}")
+        click.echo(f"{e.name:18s} {e.description}{plugin_note(e)}")
 
 
 def _load(name: str, cache_dir: str | None, data_dir: str | None, refresh: bool = False) -> TouchDataset:
@@ -114,7 +115,7 @@ def formats() -> None:
             can.append("writes into a folder")
         if f.replay:
             can.append("replays in stream")
-        click.echo(f"{e.name:14s} {e.description}")
+        click.echo(f"{e.name:14s} {e.description}{plugin_note(e)}")
         click.echo(f"{'':14s} {', '.join(can)}")
         for o in f.options:
             need = " (convert needs it)" if o.required else ""

@@ -7,6 +7,7 @@ import inspect
 import click
 
 from ..features import FEATURES
+from .plugins import package_of
 
 
 def _grid(value: str) -> tuple[int, int]:
@@ -20,7 +21,8 @@ def _grid(value: str) -> tuple[int, int]:
 
 
 def feature_table(grid: tuple[int, int] = (8, 8)) -> list[dict]:
-    """One row per registered set: name, paper, output size for ``grid`` (default parameters), cost, description."""
+    """One row per registered set: name, paper, output size for ``grid`` (default parameters), cost,
+    description, package (touchbench or the plugin's distribution and version)."""
     rows = []
     for e in FEATURES.entries():
         cls = e.obj
@@ -32,6 +34,7 @@ def feature_table(grid: tuple[int, int] = (8, 8)) -> list[dict]:
                 "cost": cls.cost,
                 "fold_dependent": cls.fold_dependent,
                 "description": e.description,
+                "package": package_of(e),
             }
         )
     return rows
@@ -50,11 +53,14 @@ def list_(grid: str) -> None:
     from rich.table import Table
 
     g = _grid(grid)
+    rows = feature_table(g)
+    plugins = any(r["package"] != "touchbench" for r in rows)  # the package column only when a plugin added sets
     table = Table(title=f"feature sets (output size for a {g[0]} x {g[1]} grid, default parameters)")
-    for col in ("name", "paper", "size", "cost", "fold-dependent", "description"):
+    for col in ("name", "paper", "size", "cost", "fold-dependent", "description") + (("package",) if plugins else ()):
         table.add_column(col, justify="right" if col == "size" else "left", overflow="fold")
-    for r in feature_table(g):
-        table.add_row(r["name"], r["paper"], str(r["size"]), r["cost"], "yes" if r["fold_dependent"] else "no", r["description"])
+    for r in rows:
+        table.add_row(r["name"], r["paper"], str(r["size"]), r["cost"], "yes" if r["fold_dependent"] else "no",
+                      r["description"], *((r["package"],) if plugins else ()))
     Console(width=max(Console().width, 140)).print(table)
 
 

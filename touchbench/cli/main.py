@@ -10,6 +10,7 @@ import click
 
 from .. import __version__
 from ..core.errors import TouchbenchError
+from ..core.plugins import PluginError
 from ..protocols.library import add_protocol_dir
 
 # (module, attribute) of each subcommand; one line per area.
@@ -29,6 +30,7 @@ _COMMANDS: list[tuple[str, str]] = [
     ("touchbench.cli.reports", "report"),
     ("touchbench.cli.reports", "papers"),
     ("touchbench.cli.scenes", "scenes"),
+    ("touchbench.cli.plugins", "plugins"),
 ]
 
 
@@ -54,5 +56,22 @@ def cli(protocol_folders: tuple[str, ...]) -> None:
         add_protocol_dir(folder)
 
 
+def _unavailable(name: str, error: PluginError) -> click.Command:
+    """Stands in for a command whose options come from the registries (``--format``) when a plugin
+    failed to load: ``--help`` and the other commands still work; this one reports the plugin."""
+
+    @click.command(name, context_settings={"ignore_unknown_options": True, "allow_extra_args": True,
+                                           "help_option_names": []},
+                   help="Unavailable: a plugin failed to load (`touchbench plugins list`).")
+    def command() -> None:
+        raise PluginError(str(error))
+
+    return command
+
+
 for _mod, _attr in _COMMANDS:
-    cli.add_command(getattr(importlib.import_module(_mod), _attr))
+    try:
+        _command = getattr(importlib.import_module(_mod), _attr)
+    except PluginError as _error:
+        _command = _unavailable(_attr, _error)
+    cli.add_command(_command)

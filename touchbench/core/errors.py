@@ -26,3 +26,7 @@ class UnknownNameError(TouchbenchError, KeyError):
 
     def __str__(self) -> str:  # KeyError would repr() the message
         return str(self.args[0])
+
+
+class RegistrationError(TouchbenchError, ValueError):
+    """An entry a registry refuses: a name registered twice, a tag declared twice."""

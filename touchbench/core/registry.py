@@ -5,6 +5,12 @@ A registry is a closed set of names. Entries are added by a decorator at
 import time; YAML and the command line can only name what is registered,
 never import an arbitrary Python path. Looking up an unknown name raises
 :class:`~touchbench.core.errors.UnknownNameError` with the nearest names.
+
+A registry that takes plugins (:mod:`touchbench.core.plugins`) also holds
+the entries of installed plugins: on first use it imports its own package's
+modules, then every plugin's module. An entry a plugin adds carries the
+plugin (a :class:`~touchbench.core.plugins.PluginInfo`) in its ``plugin``
+tag; :attr:`Entry.plugin` reads it.
 """
 
 from __future__ import annotations
@@ -15,7 +21,8 @@ from dataclasses import dataclass, field
 from functools import partial
 from typing import Any, Callable, Generic, Iterator, TypeVar
 
-from .errors import UnknownNameError
+from .errors import RegistrationError, UnknownNameError
+from .plugins import PluginInfo, current_plugin, importing, load_plugins
 from .suggest import did_you_mean
 
 T = TypeVar("T")
@@ -39,6 +46,18 @@ class Entry(Generic[T]):
     description: str
     tags: dict[str, Any] = field(default_factory=dict)
 
+    @property
+    def plugin(self) -> PluginInfo | None:
+        """The plugin that registered this entry; None for touchbench's own."""
+        return self.tags.get("plugin")
+
+    @property
+    def origin(self) -> str:
+        """Where the entry comes from, for messages: the plugin, or the module that registered it."""
+        if self.plugin is not None:
+            return self.plugin.where
+        return f"module {getattr(self.obj, '__module__', None) or '?'}"
+
 
 class Registry(Generic[T]):
     """A named, closed set of factories (classes or functions).
@@ -51,9 +70,11 @@ class Registry(Generic[T]):
     """
 
     def __init__(self, kind: str, loader: Callable[[], Any] | None = None, *, package: str | None = None,
-                 tags_of: Callable[[Any], dict[str, Any]] | None = None):
+                 tags_of: Callable[[Any], dict[str, Any]] | None = None, plugins: bool | None = None):
         """``tags_of(obj)`` gives the tags an entry declares on the object itself
-        (class attributes, say), so that they are written once, not twice."""
+        (class attributes, say), so that they are written once, not twice.
+        ``plugins``: whether installed plugins fill this registry too; by
+        default the registries that find their modules by ``package`` do."""
         self.kind = kind
         self._tags_of = tags_of
         self._entries: dict[str, Entry[T]] = {}
@@ -61,25 +82,51 @@ class Registry(Generic[T]):
             loader = partial(import_submodules, package)
         self._loader = loader
         self._loaded = loader is None
+        self._load_error: BaseException | None = None
+        self.plugins = package is not None if plugins is None else plugins
 
     def _ensure_loaded(self) -> None:
         # Modules that register entries are imported lazily, on first use,
         # so that `import touchbench` stays cheap and optional extras
-        # (torch, aeon) are only imported when their entry is used.
+        # (torch, aeon) are only imported when their entry is used. Then
+        # the plugins (once per process, for every registry that takes them).
+        self._load_own()
+        if self.plugins:
+            load_plugins()
+
+    def _load_own(self) -> None:
+        if self._load_error is not None:  # a module that failed stays failed: no half-filled registry
+            raise self._load_error
         if not self._loaded:
             self._loaded = True
             assert self._loader is not None
-            self._loader()
+            try:
+                with importing(None):  # a plugin's import may be what started this: these entries are not its
+                    self._loader()
+            except Exception as e:
+                self._load_error = e
+                raise
 
     def register(self, name: str, *, description: str, **tags: Any) -> Callable[[T], T]:
         def deco(obj: T) -> T:
-            if name in self._entries:
-                raise ValueError(f"{self.kind} {name!r} is registered twice")
+            plugin = current_plugin()
+            if plugin is not None:
+                if not self.plugins:
+                    raise RegistrationError(f"{self.kind} {name!r}: the {self.kind} registry does not take plugins")
+                self._load_own()  # touchbench's own entries first, whichever registry loaded the plugin
             declared = self._tags_of(obj) if self._tags_of is not None else {}
+            if name in self._entries:
+                new = Entry(name, obj, description, {"plugin": plugin} if plugin else {})
+                raise RegistrationError(f"{self.kind} {name!r} is registered twice: by {self._entries[name].origin} "
+                                        f"and by {new.origin}")
             clash = sorted(set(declared) & set(tags))
             if clash:
-                raise ValueError(f"{self.kind} {name!r}: {', '.join(clash)} declared twice (on the object and as tags)")
-            self._entries[name] = Entry(name, obj, description, {**declared, **tags})
+                raise RegistrationError(f"{self.kind} {name!r}: {', '.join(clash)} declared twice "
+                                        "(on the object and as tags)")
+            if "plugin" in declared or "plugin" in tags:
+                raise RegistrationError(f"{self.kind} {name!r}: the tag 'plugin' is touchbench's (it names the plugin)")
+            extra = {"plugin": plugin} if plugin is not None else {}
+            self._entries[name] = Entry(name, obj, description, {**declared, **tags, **extra})
             return obj
 
         return deco
@@ -115,6 +162,10 @@ class Registry(Generic[T]):
         self._ensure_loaded()
         for name in sorted(self._entries):
             yield self._entries[name]
+
+    def registered(self) -> list[Entry[T]]:
+        """The entries registered so far, by name, without loading anything (and so never failing)."""
+        return [self._entries[n] for n in sorted(self._entries)]
 
     def suggest(self, name: str) -> str:
         """The message an unknown ``name`` gets (for schema validators)."""

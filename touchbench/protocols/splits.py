@@ -242,7 +242,7 @@ class Splitter:
         return np.random.default_rng(derive_seed(self.random_state, self.name, *identity))
 
 
-SPLITTERS: Registry = Registry("evaluation scheme")
+SPLITTERS: Registry = Registry("evaluation scheme", plugins=True)
 
 
 def make_splitter(name: str, target: str = "gesture", random_state: int | None = None, **params: Any) -> Splitter:

@@ -1,0 +1,210 @@
+"""Plugins: installed packages that register entries through the entry-point
+group ``touchbench.plugins``.
+
+The example plugin (examples/touchbench-plugin-example, installed by ``make
+setup``) must be installed: its tests fail under CI=true when it is not (the
+``example_plugin`` fixture). The broken plugins are fake distributions
+written into a temporary folder (a ``*.dist-info`` with ``entry_points.txt``
+is all importlib.metadata needs) and run in a fresh process, since plugins
+are loaded once per process.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from touchbench.classifiers import CLASSIFIERS
+from touchbench.cli.main import cli
+from touchbench.core.errors import RegistrationError
+from touchbench.core.plugins import PluginInfo, importing
+from touchbench.core.registry import Registry
+from touchbench.datasets.model import SensorSpec
+from touchbench.engine import run_protocol
+from touchbench.engine.testing import SENSOR, random_dataset
+from touchbench.features import FEATURES
+from touchbench.protocols.schema import parse_protocol
+
+REPO = Path(__file__).resolve().parent.parent
+FEATURE, CLASSIFIER = "example-pressure-stats", "example-nearest-centroid"
+
+PROTOCOL = """\
+name: plugin-small
+dataset: {data}
+scheme: loso
+features:
+  - [{feature}]
+classifiers:
+  - {classifier}
+seed: 5
+"""
+
+
+# ------------------------------------------------------------- the example plugin
+def test_the_example_plugin_registers_its_entries_with_its_package(example_plugin):
+    package, version = example_plugin
+    want = PluginInfo(package, version, "example", "touchbench_plugin_example")
+    assert FEATURES.entry(FEATURE).plugin == want
+    assert CLASSIFIERS.entry(CLASSIFIER).plugin == want
+    assert FEATURES.entry("sd").plugin is None and CLASSIFIERS.entry("zhou-knn").plugin is None
+
+
+def test_pressure_stats_worked_out_by_hand(example_plugin):
+    # per-frame means: [[0, 2], [4, 6]] -> 3, all 5 -> 5, all 1 -> 1
+    cap = np.array([[[0, 2], [4, 6]], [[5, 5], [5, 5]], [[1, 1], [1, 1]]], dtype=np.uint16)
+    sd = np.sqrt(((3 - 3) ** 2 + (5 - 3) ** 2 + (1 - 3) ** 2) / 3)
+    out = FEATURES.create(FEATURE).fit_transform([cap])
+    np.testing.assert_allclose(out, [[3.0, sd, 1.0, 5.0]])
+    # a sensor rescales by its value range 0..10; one whose higher values mean less pressure is flipped
+    sensor = SensorSpec(name="s", grid=(2, 2), frame_rate=10.0, value_range=(0.0, 10.0))
+    np.testing.assert_allclose(FEATURES.create(FEATURE, sensor=sensor).fit_transform([cap]),
+                               [[0.3, sd / 10, 0.1, 0.5]])
+    inverse = SensorSpec(name="s", grid=(2, 2), frame_rate=10.0, value_range=(0.0, 10.0),
+                         higher_is_more_pressure=False)
+    np.testing.assert_allclose(FEATURES.create(FEATURE, sensor=inverse).fit_transform([cap]),
+                               [[0.7, sd / 10, 0.5, 0.9]])
+    assert FEATURES.create(FEATURE).feature_names((2, 2)) == [
+        "frame_mean_pressure_mean", "frame_mean_pressure_sd", "frame_mean_pressure_min", "frame_mean_pressure_max"]
+
+
+def test_listings_show_the_plugin_package(example_plugin):
+    package, version = example_plugin
+    label = f"{package} {version}"
+    r = CliRunner().invoke(cli, ["plugins", "list"])
+    assert r.exit_code == 0, r.output
+    assert f"{label}  (entry point example = touchbench_plugin_example)" in r.output
+    assert any(ln.split()[:3] == ["feature", "set", FEATURE] for ln in r.output.splitlines())
+    assert any(ln.split()[:2] == ["classifier", CLASSIFIER] for ln in r.output.splitlines())
+    r = CliRunner().invoke(cli, ["features", "list"], env={"COLUMNS": "250"})
+    assert r.exit_code == 0, r.output
+    line = next(ln for ln in r.output.splitlines() if f" {FEATURE} " in ln)
+    assert package in line and "touchbench " in next(ln for ln in r.output.splitlines() if " msd " in ln)
+    r = CliRunner().invoke(cli, ["classifiers", "list"])
+    assert f"{CLASSIFIER}  " in r.output and f"[plugin {label}]" in r.output
+    assert "zhou-knn  " in r.output and r.output.count("[plugin ") == 1
+    r = CliRunner().invoke(cli, ["classifiers", "list", "--json"])
+    rows = {row["name"]: row for row in json.loads(r.output)}
+    assert rows[CLASSIFIER]["plugin"] == {"package": package, "version": version, "entry_point": "example"}
+    assert rows["zhou-knn"]["plugin"] is None
+
+
+def _nearest_centroid_by_hand(X_tr, y_tr, X_te):
+    """The label of the nearest class mean (Euclidean)."""
+    classes = sorted(set(y_tr))
+    centroids = np.array([X_tr[np.asarray(y_tr) == c].mean(axis=0) for c in classes])
+    d = ((X_te[:, None, :] - centroids[None]) ** 2).sum(axis=2)
+    return [classes[i] for i in d.argmin(axis=1)]
+
+
+def test_a_protocol_runs_the_plugin_by_name_in_parallel_workers(example_plugin, tmp_path, monkeypatch):
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.chdir(tmp_path)
+    ds = random_dataset(subjects=("s1", "s2", "s3"), per_cell=4, frames=(10, 14), seed=3)
+    ds.to_parquet(tmp_path / "data.parquet")
+    (tmp_path / "p.yaml").write_text(PROTOCOL.format(data=tmp_path / "data.parquet", feature=FEATURE,
+                                                     classifier=CLASSIFIER))
+    r = CliRunner().invoke(cli, ["protocols", "validate", str(tmp_path / "p.yaml")])
+    assert r.exit_code == 0 and "valid protocol 'plugin-small'" in r.output, r.output
+
+    res = run_protocol(tmp_path / "p.yaml", tmp_path / "out", jobs=2, progress=False)  # loky worker processes
+    assert res.n_tasks == res.n_ran == 3 and (res.scores["status"] == "ok").all()
+    preds = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
+
+    # the same by hand: per-frame means rescaled by the sensor's range 0..255, four statistics, LOSO
+    lo, hi = SENSOR.value_range
+    m = [(c.astype(np.float64).mean(axis=(1, 2)) - lo) / (hi - lo) for c in ds.captures]
+    X = np.array([[v.mean(), v.std(), v.min(), v.max()] for v in m])
+    y = ds.meta["gesture"].to_numpy()
+    ids = ds.meta["capture_id"].to_numpy()
+    for s in ("s1", "s2", "s3"):
+        test = (ds.meta["subject"] == s).to_numpy()
+        want = dict(zip(ids[test], _nearest_centroid_by_hand(X[~test], y[~test], X[test])))
+        got = preds[preds["fold"] == f"subject={s}"].set_index("capture_id")["predicted"].to_dict()
+        assert got == want, s
+
+
+def test_protocol_validation_accepts_the_names(example_plugin, tmp_path):
+    p = parse_protocol(PROTOCOL.format(data="haart-sample", feature=FEATURE, classifier=CLASSIFIER), tmp_path / "p.yaml")
+    assert [c.name for c in p.classifier_entries()] == [CLASSIFIER]
+    with pytest.raises(Exception, match="did you mean 'example-nearest-centroid'"):
+        parse_protocol(PROTOCOL.format(data="haart-sample", feature=FEATURE, classifier="example-nearest-centroi"),
+                       tmp_path / "p.yaml")
+
+
+# ------------------------------------------------------------- the registry's side
+def test_entries_registered_while_a_plugin_is_imported_carry_it():
+    info = PluginInfo("touchbench-plugin-test", "2.0", "t", "tp")
+    reg: Registry = Registry("thing", plugins=True)
+    reg.register("own", description="touchbench's")(int)
+    with importing(info):
+        reg.register("theirs", description="a plugin's")(float)
+        with pytest.raises(RegistrationError, match=r"thing 'own' is registered twice: by module builtins and by "
+                                                    r"plugin touchbench-plugin-test 2.0 \(entry point 't' = 'tp'"):
+            reg.register("own", description="again")(str)
+        with pytest.raises(RegistrationError, match="the scene registry does not take plugins"):
+            Registry("scene").register("x", description="x")(str)
+        with pytest.raises(RegistrationError, match="the tag 'plugin' is touchbench's"):
+            reg.register("tagged", description="x", plugin="mine")(str)
+    assert reg.entry("theirs").plugin == info and reg.entry("own").plugin is None
+    assert "plugin touchbench-plugin-test 2.0" in reg.entry("theirs").origin
+
+
+# ------------------------------------------------------------- broken plugins
+def _fake_plugin(root: Path, package: str, module: str, source: str) -> None:
+    """An installed distribution ``package`` 1.0 whose entry point ``main`` names ``module``."""
+    (root / f"{module}.py").write_text(source)
+    info = root / f"{package.replace('-', '_')}-1.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {package}\nVersion: 1.0\n")
+    (info / "entry_points.txt").write_text(f"[touchbench.plugins]\nmain = {module}\n")
+
+
+def _touchbench(site: Path, tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(site), str(REPO), os.environ.get("PYTHONPATH", "")]),
+               TOUCHBENCH_CACHE_DIR=str(tmp_path / "cache"))
+    return subprocess.run([sys.executable, "-c", "from touchbench.cli.main import cli; cli()", *args],
+                          env=env, cwd=tmp_path, capture_output=True, text=True, timeout=300)
+
+
+@pytest.mark.slow
+def test_a_plugin_that_fails_to_import_stops_the_registries_naming_it(tmp_path):
+    site = tmp_path / "site"
+    site.mkdir()
+    _fake_plugin(site, "broken-plugin", "broken_plugin_mod", "import a_module_nobody_has\n")
+    where = "plugin broken-plugin 1.0 (entry point 'main' = 'broken_plugin_mod' in group 'touchbench.plugins')"
+    for args in (["features", "list"], ["classifiers", "list"], ["data", "list"], ["data", "formats"]):
+        r = _touchbench(site, tmp_path, *args)
+        assert r.returncode == 2, (args, r.stdout, r.stderr)
+        assert f"{where} failed to load: ModuleNotFoundError: No module named 'a_module_nobody_has'" in r.stderr, args
+        assert "Traceback" not in r.stderr
+    # help, and the command that says what is installed, still work
+    r = _touchbench(site, tmp_path, "--help")
+    assert r.returncode == 0 and "plugins" in r.stdout, r.stderr
+    r = _touchbench(site, tmp_path, "plugins", "list")
+    assert r.returncode == 2
+    assert "broken-plugin 1.0  (entry point main = broken_plugin_mod)" in r.stdout
+    assert "failed to load: ModuleNotFoundError" in r.stdout and where in r.stderr
+
+
+@pytest.mark.slow
+def test_a_plugin_that_registers_an_existing_name_is_refused(tmp_path):
+    site = tmp_path / "site"
+    site.mkdir()
+    _fake_plugin(site, "clashing-plugin", "clashing_plugin_mod",
+                 "from touchbench.features.base import FEATURES, FeatureSet\n"
+                 "@FEATURES.register('sd', description='not the paper one')\n"
+                 "class Mine(FeatureSet):\n    pass\n")
+    # the data registry loads the plugins here: touchbench's own feature sets still come first
+    r = _touchbench(site, tmp_path, "data", "list")
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert ("plugin clashing-plugin 1.0 (entry point 'main' = 'clashing_plugin_mod' in group 'touchbench.plugins') "
+            "failed to load: feature set 'sd' is registered twice: by module touchbench.features.gaus_sd and by "
+            "plugin clashing-plugin 1.0") in r.stderr

@@ -1,0 +1,70 @@
+"""``touchbench plugins``: the installed plugins, their versions and what they registered."""
+
+from __future__ import annotations
+
+import click
+
+from ..classifiers import CLASSIFIERS
+from ..core.plugins import GROUP, PluginError, plugin_status
+from ..core.registry import Entry, Registry
+from ..datasets import DATASETS
+from ..datasets.formats import FORMATS
+from ..features import FEATURES
+from ..protocols.splits import SPLITTERS
+
+# Every registry a plugin may fill, as the listings name them.
+PLUGIN_REGISTRIES: tuple[Registry, ...] = (FEATURES, CLASSIFIERS, DATASETS, FORMATS, SPLITTERS)
+
+
+def plugin_note(e: Entry) -> str:
+    """``  [plugin PACKAGE VERSION]`` for a plugin's entry, else nothing (line listings end with it)."""
+    return f"  [plugin {e.plugin.label}]" if e.plugin is not None else ""
+
+
+def package_of(e: Entry) -> str:
+    """The package an entry comes from: the plugin's distribution and version, or touchbench."""
+    return e.plugin.label if e.plugin is not None else "touchbench"
+
+
+def plugin_entries() -> list[tuple[str, Entry]]:
+    """(registry kind, entry) for every entry a plugin added, over every registry that takes plugins.
+
+    Loads the plugins and never raises: with a plugin that failed, the
+    entries registered before the failure are listed.
+    """
+    out = []
+    for reg in PLUGIN_REGISTRIES:
+        try:
+            entries = list(reg.entries())
+        except PluginError:
+            entries = reg.registered()
+        out += [(reg.kind, e) for e in entries if e.plugin is not None]
+    return out
+
+
+@click.group("plugins")
+def plugins() -> None:
+    """Installed plugins: packages that add feature sets, classifiers, datasets, file formats or schemes."""
+
+
+@plugins.command("list")
+def list_() -> None:
+    """Every installed plugin with its version, its entry point and what it registered."""
+    status = plugin_status()
+    if not status:
+        click.echo(f"no plugins installed (a plugin declares an entry point in the group {GROUP!r}; "
+                   "see the README, section Plugins)")
+        return
+    added = plugin_entries()
+    for info, error in status:
+        click.echo(f"{info.package} {info.version}  (entry point {info.entry_point} = {info.module})")
+        if error is not None:
+            click.echo(f"    failed to load: {error}")
+        mine = [(kind, e) for kind, e in added if e.plugin == info]
+        for kind, e in mine:
+            click.echo(f"    {kind:19s} {e.name:26s} {e.description}")
+        if error is None and not mine:
+            click.echo("    (registered nothing)")
+    failed = [info for info, error in status if error is not None]
+    if failed:
+        raise PluginError(f"{len(failed)} plugin(s) failed to load: " + ", ".join(i.where for i in failed))
