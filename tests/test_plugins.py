@@ -208,3 +208,28 @@ def test_a_plugin_that_registers_an_existing_name_is_refused(tmp_path):
     assert ("plugin clashing-plugin 1.0 (entry point 'main' = 'clashing_plugin_mod' in group 'touchbench.plugins') "
             "failed to load: feature set 'sd' is registered twice: by module touchbench.features.gaus_sd and by "
             "plugin clashing-plugin 1.0") in r.stderr
+
+
+def test_a_plugins_source_enters_the_identity_of_its_components(example_plugin, tmp_path, monkeypatch):
+    """A plugin is installed like any package (under site-packages), but its source
+    is followed like touchbench's own: editing it without a new version changes the
+    identity of the components it registers, so their tasks are recomputed."""
+    import importlib
+
+    from touchbench.engine import identity as ident
+
+    module = importlib.import_module(FEATURES.get("example-pressure-stats").__module__)
+    assert ident._top_kind(module.__name__.split(".")[0]) == "own"
+    before = ident.feature_set_identity("example-pressure-stats")
+    assert module.__name__ in before.modules
+    # the same file with one more line: the identity follows the content
+    copy = tmp_path / Path(module.__file__).name
+    copy.write_text(Path(module.__file__).read_text() + "\n# edited\n")
+    real = ident._file_info
+
+    def edited(path, *a, **k):
+        return real(str(copy) if os.path.samefile(path, module.__file__) else path, *a, **k)
+
+    monkeypatch.setattr(ident, "_file_info", edited)
+    after = ident.feature_set_identity("example-pressure-stats")
+    assert after.digest != before.digest

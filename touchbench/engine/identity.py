@@ -49,6 +49,7 @@ from typing import Any, Iterable
 
 from ..classifiers import CLASSIFIERS
 from ..core.hashing import canonical_json
+from ..core.plugins import installed_plugins
 from ..core.versions import package_versions
 from ..features import FEATURES
 
@@ -91,12 +92,19 @@ def _under(path: str, roots: Iterable[str]) -> bool:
 _KINDS: dict[str, str] = {}
 
 
+@functools.lru_cache(maxsize=1)
+def _plugin_tops() -> frozenset[str]:
+    """Top-level modules of the installed touchbench plugins: their source counts like
+    touchbench's own, so editing a plugin recomputes its tasks even without a new version."""
+    return frozenset(ep.value.split(":")[0].split(".")[0] for _, ep in installed_plugins())
+
+
 def _top_kind(top: str) -> str:
     """``"stdlib"``, ``"package"`` (installed third party), ``"own"`` (source to follow) or ``"missing"``."""
     if top in _KINDS:
         return _KINDS[top]
-    if top == "touchbench":
-        kind = "own"
+    if top == "touchbench" or top in _plugin_tops():
+        kind = "own"  # touchbench's and its plugins' source is followed, wherever they are installed
     elif top in sys.stdlib_module_names or top in sys.builtin_module_names or top == "__future__":
         kind = "stdlib"
     else:
