@@ -435,6 +435,7 @@ DEFAULTS = {
     "cnn",
     description="raw-frame CNN (3 conv blocks + FC 256, softmax) on H x W x F windows, F = floor(frames/L), L = 30",
     source=SOURCE, defaults=DEFAULTS, extra="deep",
+    cheap_params=dict(max_epochs=3, channels=(4, 8, 8), hidden_units=16),
 )
 def cnn(random_state=None, sensor=None, **params):
     """The CNN; raises a TouchbenchError with the install command without PyTorch."""

@@ -156,12 +156,12 @@ DEFAULTS = {"n_kernels": 10000, "max_dilations_per_kernel": 32, "n_jobs": 1}
 
 
 @CLASSIFIERS.register("minirocket", description="peer: aeon MiniRocket (10k kernels + ridge) on the H x W cell series of raw-window frames",
-                      source=SOURCE_MINI, defaults=DEFAULTS, extra="peers")
+                      source=SOURCE_MINI, defaults=DEFAULTS, extra="peers", cheap_params=dict(n_kernels=84))
 def minirocket(random_state=None, sensor=None, **params):
     return build(MiniRocketPeer, DEFAULTS, random_state, {**params, "sensor": sensor}, name="minirocket")
 
 
 @CLASSIFIERS.register("multirocket", description="peer: aeon MultiRocket (10k kernels, 4 poolings + ridge) on the H x W cell series of raw-window frames",
-                      source=SOURCE_MULTI, defaults=DEFAULTS, extra="peers")
+                      source=SOURCE_MULTI, defaults=DEFAULTS, extra="peers", cheap_params=dict(n_kernels=84))
 def multirocket(random_state=None, sensor=None, **params):
     return build(MultiRocketPeer, DEFAULTS, random_state, {**params, "sensor": sensor}, name="multirocket")
