@@ -54,7 +54,7 @@ def haart_raw():
     try:
         from touchbench.features.base import FEATURES
 
-        X = FEATURES.create("raw-window").fit_transform(ds.captures)
+        X = FEATURES.create("raw-window", frames=432, shorter="pad").fit_transform(ds.captures)  # HAART: 432 frames
         how = "raw-window feature set"
     except Exception as e:  # the feature set is another module's; fall back to stacking the frames
         X = np.stack([np.asarray(c, dtype=np.float64).reshape(-1) for c in ds.captures])

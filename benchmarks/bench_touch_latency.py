@@ -56,7 +56,7 @@ def main() -> None:
     fitted, acc, fit_s = {}, {}, {}
     for m in methods:
         t0 = time.perf_counter()
-        est = make_classifier(m, random_state=0)
+        est = make_classifier(m, random_state=0, sensor=ds.sensor)
         kw = {"groups": ds.meta["subject"].astype(str).to_numpy()[tr]} if m == "touch-et-tuned" else {}
         est.fit(X[tr], y[tr], **kw)
         fit_s[m] = time.perf_counter() - t0

@@ -10,7 +10,18 @@ import pandas as pd
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from touchbench.datasets.haart import HAART_SENSOR
 from touchbench.datasets.model import SensorSpec, TouchDataset
+from touchbench.features.base import make_feature_set
+
+#: parameters a feature set needs stated (it has no default): raw-window's window, HAART's
+STATED = {"raw-window": {"frames": 432, "shorter": "pad"}}
+
+
+def make_set(name, sensor=HAART_SENSOR, **params):
+    """The registered set ``name`` as the engine builds it on ``sensor`` (HAART's by default:
+    the values these tests were worked out for), with the parameters it needs stated."""
+    return make_feature_set(name, {**STATED.get(name, {}), **params}, sensor)
 
 
 def make_dataset(n_subjects=3, gestures=("pat", "stroke"), reps=2, frames=20, grid=(4, 4), dtype=np.uint16, seed=0,

@@ -16,6 +16,7 @@ import pytest
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from touchbench.classifiers import CLASSIFIERS, make_classifier
+from touchbench.datasets.model import SensorSpec
 
 _BOOTSTRAP = ("bags are drawn at random (with probability proportional to the weights), so a weight of 2 "
               "equals a repeated row in distribution only, not for one seed (scikit-learn's own "
@@ -40,8 +41,13 @@ def _expected(est):
     return NOT_APPLICABLE.get(est._touchbench_name, {})
 
 
+#: the checks' rows are any number of columns: a one-cell sensor makes every row whole frames
+#: (the raw-frame classifiers take their grid and frame rate from the sensor)
+ONE_CELL = SensorSpec("one-cell", (1, 1), 50.0)
+
+
 def _build(name):
-    est = make_classifier(name, random_state=0, **CLASSIFIERS.entry(name).tags.get("cheap_params", {}))
+    est = make_classifier(name, random_state=0, sensor=ONE_CELL, **CLASSIFIERS.entry(name).tags.get("cheap_params", {}))
     est._touchbench_name = name  # read by _expected; not a constructor parameter, clone drops it
     return est
 

@@ -125,7 +125,7 @@ def test_early_stopping_holds_out_training_groups_only():
 def test_bad_shapes_and_parameters_are_refused():
     X, y, _ = _toy()
     with pytest.raises(ValueError, match="not a whole number of 8x8 frames"):
-        HaartCNNClassifier().fit(X, y)
+        HaartCNNClassifier(grid=(8, 8)).fit(X, y)
     with pytest.raises(ValueError, match="no frame per window"):
         HaartCNNClassifier(grid=(2, 2), L=13).fit(X, y)
     with pytest.raises(ValueError, match="window index out of range"):

@@ -17,6 +17,7 @@ from snapshots.registries import builtin_names, snapshot
 
 from touchbench.classifiers import CLASSIFIERS, make_classifier
 from touchbench.core.errors import TouchbenchError, UnknownNameError
+from touchbench.datasets.haart import HAART_SENSOR
 
 EXPECTED = snapshot()["classifiers"]  # tests/snapshots/registry-names.json (make snapshots)
 EXTRAS = {"cnn": "deep", "minirocket": "peers", "multirocket": "peers"}
@@ -57,8 +58,8 @@ def test_paper_settings_are_the_defaults():
     assert make_classifier("zhou-weighted-knn").distance_weight == "squaredinverse"
     assert make_classifier("zhou-quadratic-svm").polynomial_order == 2
     assert make_classifier("zhou-bagged-trees").n_estimators == 30
-    cnn = make_classifier("cnn")
-    assert (cnn.L, tuple(cnn.grid), cnn.train_windows, cnn.test_windows) == (30, (8, 8), "first", "first")
+    cnn = make_classifier("cnn", sensor=HAART_SENSOR)  # the grid is the sensor's (the engine passes it)
+    assert (cnn.L, tuple(cnn.sensor.grid), cnn.train_windows, cnn.test_windows) == (30, (8, 8), "first", "first")
 
 
 def test_params_override_defaults_and_unknown_params_are_refused():

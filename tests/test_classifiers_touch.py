@@ -14,9 +14,12 @@ from sklearn.ensemble import ExtraTreesClassifier
 
 from touchbench.classifiers import make_classifier
 from touchbench.classifiers.touch import FEW_ROWS, SelectedExtraTrees
+from touchbench.datasets.model import SensorSpec
 from touchbench.features.base import FEATURES
 
 OWN = ("touch-rhythm", "cell-rhythm", "contact-motion")
+
+SENSOR_4X4 = SensorSpec("test-4x4", (4, 4), 54.0)  # the rate the reference features use
 
 
 def _captures(n_per_class=8, frames=60, seed=0):
@@ -45,7 +48,7 @@ def _registry_features(caps, names=OWN):
 def test_touch_et_is_extra_trees_on_the_registry_features():
     caps, y = _captures()
     test, _ = _captures(n_per_class=3, seed=1)
-    est = make_classifier("touch-et", random_state=11, grid=(4, 4), model_params={"n_estimators": 20})
+    est = make_classifier("touch-et", random_state=11, sensor=SENSOR_4X4, model_params={"n_estimators": 20})
     est.fit(caps.reshape(len(caps), -1), y)
     ref = ExtraTreesClassifier(n_estimators=20, max_features=0.3, n_jobs=1, random_state=11)
     ref.fit(_registry_features(caps), y)
@@ -57,15 +60,15 @@ def test_touch_et_is_extra_trees_on_the_registry_features():
 
 def test_touch_et_fast_uses_touch_rhythm_only_and_100_trees():
     caps, y = _captures()
-    est = make_classifier("touch-et-fast", random_state=2, grid=(4, 4)).fit(caps.reshape(len(caps), -1), y)
+    est = make_classifier("touch-et-fast", random_state=2, sensor=SENSOR_4X4).fit(caps.reshape(len(caps), -1), y)
     assert est.feature_sets == ("touch-rhythm",)
     assert est.model_.model_.n_estimators == 100
-    assert est.model_.model_.n_features_in_ == len(FEATURES.create("touch-rhythm").feature_names((4, 4)))
+    assert est.model_.model_.n_features_in_ == len(FEATURES.create("touch-rhythm", frame_rate=54.0).feature_names((4, 4)))
 
 
 def test_touch_xgb_gives_probabilities_of_the_training_classes():
     caps, y = _captures()
-    est = make_classifier("touch-xgb", random_state=0, grid=(4, 4), model_params={"n_estimators": 20})
+    est = make_classifier("touch-xgb", random_state=0, sensor=SENSOR_4X4, model_params={"n_estimators": 20})
     est.fit(caps.reshape(len(caps), -1), y)
     P = est.predict_proba(caps.reshape(len(caps), -1))
     assert P.shape == (len(y), 3) and np.allclose(P.sum(axis=1), 1.0)
@@ -98,9 +101,9 @@ def test_few_rows_go_through_the_compiled_forest_with_the_same_probabilities():
 
 def test_bad_input_is_refused():
     with pytest.raises(ValueError, match="4x4 frames"):
-        make_classifier("touch-et", grid=(4, 4)).fit(np.zeros((6, 17)), np.array(["a", "b"] * 3))
+        make_classifier("touch-et", sensor=SENSOR_4X4).fit(np.zeros((6, 17)), np.array(["a", "b"] * 3))
     caps, y = _captures(n_per_class=2)
     with pytest.raises(ValueError, match="model must be"):
-        make_classifier("touch-et", grid=(4, 4), model="svm").fit(caps.reshape(len(caps), -1), y)
+        make_classifier("touch-et", sensor=SENSOR_4X4, model="svm").fit(caps.reshape(len(caps), -1), y)
     with pytest.raises(ValueError, match="feature_sets"):
-        make_classifier("touch-et", grid=(4, 4), feature_sets=()).fit(caps.reshape(len(caps), -1), y)
+        make_classifier("touch-et", sensor=SENSOR_4X4, feature_sets=()).fit(caps.reshape(len(caps), -1), y)

@@ -29,7 +29,7 @@ dataset: {data}
 scheme: loso
 features:
   - [msd]
-  - [msd, bmh]
+  - [msd, {{name: bmh, params: {{preset: haart}}}}]   # the test sensor is neither HAART nor CoST: the preset is named
 classifiers:
   - {{name: gaus-rf, params: {{n_estimators: 15}}, label: rf15}}
 seed: 3

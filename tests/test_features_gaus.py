@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import make_set
 from numpy.testing import assert_allclose, assert_array_equal
 
 from touchbench.features import FEATURES
@@ -32,7 +33,7 @@ SD_BINS = {"notouch": (1, -0.5, 4.5), "touched": (2, -0.5, 4.5), "high": (1, -0.
 
 
 def test_sd_hand_made_haart_rules():
-    fs = FEATURES.create("sd", preset="haart", bins=SD_BINS)
+    fs = make_set("sd", preset="haart", bins=SD_BINS)
     out = fs.fit_transform([SD_CAPTURE])[0]
     expected = (
         [0, 2, 0, 0, 1]  # notouch frame: counts 4, 1, 1
@@ -50,7 +51,7 @@ def test_sd_cost_rules():
     # 1 x 2 grid: frames [0, 150], [120, 300]; instance max 300, median (120 + 150) / 2 = 135
     c = cap([[[0, 150]], [[120, 300]]])
     bins = {k: (1, -0.5, 2.5) for k in ("notouch", "touched", "high")}  # a bin per count 0, 1, 2
-    fs = FEATURES.create("sd", preset="cost", bins=bins)
+    fs = make_set("sd", preset="cost", bins=bins)
     out = fs.fit_transform([c])[0]
     expected = (
         [0, 2, 0]  # notouch frame (== 0, == 120): 1, 1
@@ -71,10 +72,10 @@ def test_sd_table4_edges_and_sizes():
     assert len(histcounts_edges(5, -0.5, 65.5)) - 1 == 14
     assert len(histcounts_edges(10, -0.5, 80.5)) - 1 == 9
     assert len(histcounts_edges(10, -0.5, 100.5)) - 1 == 11
-    assert FEATURES.create("sd").n_features((8, 8)) == 12 + 12 + 14 + 12 + 12
-    assert FEATURES.create("sd", preset="cost").n_features((8, 8)) == 12 + 12 + 9 + 9 + 11 + 11
+    assert make_set("sd").n_features((8, 8)) == 12 + 12 + 14 + 12 + 12
+    assert make_set("sd", preset="cost").n_features((8, 8)) == 12 + 12 + 9 + 9 + 11 + 11
     # with the paper's edges every count 0..4 of a 2 x 2 grid is in bin 0: 3 frames
-    out = FEATURES.create("sd").fit_transform([SD_CAPTURE])[0]
+    out = make_set("sd").fit_transform([SD_CAPTURE])[0]
     assert out[0] == 3 and out[:12].sum() == 3
 
 
@@ -82,34 +83,34 @@ def test_sd_value_on_edge_and_clip():
     # a count exactly on an inner edge goes right; on the last edge, into the last bin
     bins = {k: (2, 0, 4) for k in ("notouch", "touched", "high")}  # edges 0, 2, 4
     c = cap([[[1, 1]], [[1, 2]]])  # notouch frame counts 2, 1
-    out = FEATURES.create("sd", bins=bins).fit_transform([c])[0]
+    out = make_set("sd", bins=bins).fit_transform([c])[0]
     assert_array_equal(out[:2], [1, 1])  # 1 -> [0, 2); 2 -> [2, 4]
     # 72 cells all equal: every count is 72, beyond HAART's 55.5
     c = np.zeros((2, 8, 9))
-    clipped = FEATURES.create("sd").fit_transform([c])[0]
+    clipped = make_set("sd").fit_transform([c])[0]
     assert clipped[11] == 2 and clipped[:11].sum() == 0  # both frames in the last no-touch bin
-    dropped = FEATURES.create("sd", clip=False).fit_transform([c])[0]
+    dropped = make_set("sd", clip=False).fit_transform([c])[0]
     assert dropped[:12].sum() == 0
-    norm = FEATURES.create("sd", normalize=True).fit_transform([c])[0]
+    norm = make_set("sd", normalize=True).fit_transform([c])[0]
     assert norm[11] == 1.0
 
 
 def test_sd_unknown_preset_is_clear():
     with pytest.raises(ValueError, match="unknown preset 'coast'"):
-        FEATURES.create("sd", preset="coast").fit_transform([SD_CAPTURE])
+        make_set("sd", preset="coast").fit_transform([SD_CAPTURE])
 
 
 # --------------------------------------------------------------------- bmh
 def test_bmh_hand_made():
     # 1 x 3 grid. Instance max 100, HAART: >= 95 -> cells 1 (100) and 2 (96)
     c = cap([[[0, 10, 96]], [[0, 100, 50]], [[18, 20, 0]]])
-    assert_array_equal(FEATURES.create("bmh").fit_transform([c])[0], [0, 1, 1])
+    assert_array_equal(make_set("bmh").fit_transform([c])[0], [0, 1, 1])
     # frame maxima 96, 100, 20 -> thresholds 91, 95, 15: frame 2 sets cells 0 and 1
-    assert_array_equal(FEATURES.create("bmh", level="frame").fit_transform([c])[0], [1, 1, 1])
+    assert_array_equal(make_set("bmh", level="frame").fit_transform([c])[0], [1, 1, 1])
     # CoST: >= 100 - 100 = 0: every cell
-    assert_array_equal(FEATURES.create("bmh", preset="cost").fit_transform([c])[0], [1, 1, 1])
-    assert_array_equal(FEATURES.create("bmh", offset=3).fit_transform([c])[0], [0, 1, 0])  # >= 97
-    assert FEATURES.create("bmh").n_features((8, 8)) == 64
+    assert_array_equal(make_set("bmh", preset="cost").fit_transform([c])[0], [1, 1, 1])
+    assert_array_equal(make_set("bmh", offset=3).fit_transform([c])[0], [0, 1, 0])  # >= 97
+    assert make_set("bmh").n_features((8, 8)) == 64
 
 
 # --------------------------------------------------------------------- msd
@@ -160,10 +161,10 @@ def test_smmhh_run_lengths_by_hand():
     # |v(t+2) - v(t)|, t = 0..7: 0, 1, 3, 3, 0, 0, 0, 3 -> motion 0 1 1 1 0 0 0 1
     # runs: 3 (t = 1..3) and 1 (t = 7, touching the end)
     c = cap(np.array(v, dtype=float).reshape(10, 1, 1))
-    fs = FEATURES.create("smmhh", skips=(2,), max_len=3, n_scales=1, threshold=0.5)
+    fs = make_set("smmhh", skips=(2,), max_len=3, n_scales=1, threshold=0.5)
     assert_array_equal(fs.fit_transform([c])[0], [1, 0, 1])
     # M = 2: the run of 3 counts as "2 or more"
-    fs = FEATURES.create("smmhh", skips=(2,), max_len=2, n_scales=1, threshold=0.5)
+    fs = make_set("smmhh", skips=(2,), max_len=2, n_scales=1, threshold=0.5)
     assert_array_equal(fs.fit_transform([c])[0], [1, 1])
 
 
@@ -171,25 +172,25 @@ def test_smmhh_pooling_and_per_scale_threshold():
     # 2 x 2 grid: frame 1 has 4 in the top-left cell; pooled 1 x 1 video is 0, 1, 0
     c = np.zeros((3, 2, 2))
     c[1, 0, 0] = 4
-    fs = FEATURES.create("smmhh", skips=(1,), max_len=2, n_scales=2, threshold=0.5)
+    fs = make_set("smmhh", skips=(1,), max_len=2, n_scales=2, threshold=0.5)
     # scale 0: top-left diffs 4, 4 -> one run of 2; scale 1: diffs 1, 1 -> one run of 2
     # order: k0 s1 m1 (4 px), k0 s1 m2 (4 px), k1 s1 m1, k1 s1 m2
     assert_array_equal(fs.fit_transform([c])[0], [0, 0, 0, 0, 1, 0, 0, 0, 0, 1])
     names = fs.get_feature_names_out()
     assert names[4] == "smmhh_k0_s1_m2_r0_c0" and names[-1] == "smmhh_k1_s1_m2_r0_c0"
-    fs = FEATURES.create("smmhh", skips=(1,), max_len=2, n_scales=2, threshold=(0.5, 1.0))
+    fs = make_set("smmhh", skips=(1,), max_len=2, n_scales=2, threshold=(0.5, 1.0))
     assert_array_equal(fs.fit_transform([c])[0], [0, 0, 0, 0, 1, 0, 0, 0, 0, 0])  # 1 is not > 1
 
 
 def test_smmhh_sizes_and_odd_pooling():
     from touchbench.features.gaus_smmhh import pool2
 
-    assert FEATURES.create("smmhh").n_features((8, 8)) == 2125  # equation 1
+    assert make_set("smmhh").n_features((8, 8)) == 2125  # equation 1
     # 3 x 3 -> 2 x 2: means of (1,2,4,5), (3,6), (7,8), (9)
     assert_allclose(pool2(np.arange(1.0, 10.0).reshape(3, 3)), [[3, 4.5], [7.5, 9]])
-    assert FEATURES.create("smmhh").n_features((20, 20)) == 25 * (400 + 100 + 25 + 9)
+    assert make_set("smmhh").n_features((20, 20)) == 25 * (400 + 100 + 25 + 9)
     # shorter than every skip: no frame pairs, all zero
-    assert FEATURES.create("smmhh").fit_transform([np.ones((2, 8, 8))]).sum() == 0
+    assert make_set("smmhh").fit_transform([np.ones((2, 8, 8))]).sum() == 0
 
 
 # ------------------------------------------------------------------ lbptop

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from helpers import make_set
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_array_equal
@@ -58,7 +59,7 @@ def batches(draw):
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(caps=batches())
 def test_finite_fixed_length_position_invariant(name, caps):
-    fs = FEATURES.create(name)
+    fs = make_set(name)
     grid = caps[0].shape[1:]
     out = fs.fit_transform(caps)
     assert out.shape == (3, fs.n_features(grid)) and out.dtype == np.float64
@@ -73,7 +74,7 @@ def test_finite_fixed_length_position_invariant(name, caps):
 @given(t=st.integers(1, 2000), grid=st.sampled_from(GRIDS), seed=st.integers(0, 2**32 - 1))
 def test_float32_agrees_with_float64(name, t, grid, seed):
     a32 = make_capture("float", t, grid, seed).astype(np.float32)
-    fs = FEATURES.create(name)
+    fs = make_set(name)
     assert_array_equal(fs.fit_transform([a32]), fs.transform([a32.astype(np.float64)]))
     ints = make_capture("int", t, grid, seed)
     assert_array_equal(fs.transform([ints]), fs.transform([ints.astype(np.float32)]))
@@ -85,7 +86,7 @@ def test_nan_or_inf_refused_naming_the_capture(name, bad):
     good = np.zeros((5, 8, 8))
     broken = good.copy()
     broken[3, 2, 1] = bad
-    fs = FEATURES.create(name)
+    fs = make_set(name)
     with pytest.raises(FeatureInputError, match=r"capture 1 .*NaN or infinite.*frame 3, row 2, column 1"):
         fs.fit_transform([good, broken])
     meta = pd.DataFrame({"capture_id": ["ok", "s03-rub-7"], "subject": ["s01", "s03"], "gesture": ["rub", "rub"]})
@@ -96,7 +97,7 @@ def test_nan_or_inf_refused_naming_the_capture(name, bad):
 
 @pytest.mark.parametrize("name", SETS)
 def test_bad_shapes_refused(name):
-    fs = FEATURES.create(name)
+    fs = make_set(name)
     with pytest.raises(FeatureInputError, match="capture 1 has grid"):
         fs.fit_transform([np.zeros((4, 8, 8)), np.zeros((4, 8, 7))])
     with pytest.raises(FeatureInputError, match="capture 0 has no frames"):

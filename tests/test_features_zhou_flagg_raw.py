@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import make_set
 from numpy.testing import assert_allclose, assert_array_equal
 
 from touchbench.datasets.model import SensorSpec
@@ -114,7 +115,7 @@ def test_zhou_wavelet_deeper_than_signal():
 
 # ------------------------------------------------------------------- flagg
 def test_flagg_grid_channels_by_hand():
-    fs = FEATURES.create("flagg-stats", contact_threshold=1.5)
+    fs = make_set("flagg-stats", contact_threshold=1.5)
     out = fs.fit_transform([CAP])[0].reshape(7, 4)  # stats x (total, contact, x, y)
     # total pressure 4, 8, 0: max 8, min 0, mean 4, median 4, area 12, var (0+16+16)/2, tv 4 + 8
     assert_allclose(out[:, 0], [8, 0, 4, 4, 12, 16, 12])
@@ -130,7 +131,7 @@ def test_flagg_grid_channels_by_hand():
 def test_flagg_default_threshold_and_channel_sensor():
     # default contact threshold: 1.5 % of 0..1023 = 15.345: 15 is no contact, 16 is
     c = np.array([[[15, 16]]], dtype=float)
-    out = FEATURES.create("flagg-stats").fit_transform([c])[0].reshape(7, 4)
+    out = make_set("flagg-stats").fit_transform([c])[0].reshape(7, 4)
     assert out[0, 1] == 1
     fur = SensorSpec(name="fur", grid=(1, 4), frame_rate=50, value_range=(0, 1023), channels=("x", "y", "pressure", "fur"))
     c = np.array([[[1, 2, 3, 4]], [[3, 2, 1, 0]]], dtype=float)
@@ -144,12 +145,12 @@ def test_flagg_default_threshold_and_channel_sensor():
 # --------------------------------------------------------------- raw-window
 def test_raw_window_pads_with_last_frame():
     c = np.array([[[1, 2]], [[3, 4]], [[5, 6]]], dtype=np.uint16)
-    fs = FEATURES.create("raw-window", frames=5, offset=1)
+    fs = FEATURES.create("raw-window", frames=5, offset=1, shorter="pad")
     out = fs.fit_transform([c])
     assert out.dtype == np.float64
     assert_array_equal(out[0], [3, 4, 5, 6, 5, 6, 5, 6, 5, 6])  # frames 1, 2, then frame 2 repeated
     assert list(fs.get_feature_names_out()[:3]) == ["f0_r0_c0", "f0_r0_c1", "f1_r0_c0"]
-    assert_array_equal(FEATURES.create("raw-window", frames=2, offset=10).fit_transform([c])[0], [5, 6, 5, 6])
-    assert FEATURES.create("raw-window").n_features((8, 8)) == 432 * 64
+    assert_array_equal(FEATURES.create("raw-window", frames=2, offset=10, shorter="pad").fit_transform([c])[0], [5, 6, 5, 6])
+    assert make_set("raw-window").n_features((8, 8)) == 432 * 64
     big = np.arange(432 * 64, dtype=np.uint16).reshape(432, 8, 8)
-    assert_array_equal(FEATURES.create("raw-window").fit_transform([big])[0].reshape(432, 8, 8), big)
+    assert_array_equal(make_set("raw-window").fit_transform([big])[0].reshape(432, 8, 8), big)

@@ -6,7 +6,6 @@ import base64
 import json
 import re
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -14,10 +13,15 @@ import pytest
 from click.testing import CliRunner
 
 from touchbench.cli.main import cli
+from touchbench.cli.reports import parse_reference
 from touchbench.reports.html import write_report
 from touchbench.reports.leaderboard import build_leaderboards
-from touchbench.cli.reports import parse_reference
-from touchbench.reports.plots import confusion_matrix, label_offsets, plot_confusion, plot_frames
+from touchbench.reports.plots import (
+    confusion_matrix,
+    label_offsets,
+    plot_confusion,
+    plot_frames,
+)
 from touchbench.reports.results import load_results
 from touchbench.reports.testing import FakeMethod, write_fake_run
 
@@ -43,7 +47,7 @@ def runs(tmp_path_factory):
         FakeMethod("msd", "rf", wrong=_wrong([4, 4, 3, 4]), early_frames=27),
         FakeMethod("msd", "rf", wrong=_wrong([2, 2, 1, 2]), early_frames=54),
         FakeMethod("msd", "rf", wrong=_wrong([0, 1, 0, 1]), early_frames=108),
-    ], scheme={"name": "early", "base": {"name": "loso"}, "frames": [27, 54, 108]}, run_id="early")
+    ], scheme={"name": "early", "base": {"name": "loso"}, "frames": [27, 54, 108]}, run_id="early", frame_rate=54.0)
     return d
 
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from touchbench.scenes.gestures import LIBRARY, Factors, GestureParams
 from touchbench.scenes.generate import simulate
+from touchbench.scenes.gestures import LIBRARY, Factors, GestureParams
 from touchbench.scenes.hand import footprint, tracks
 
 FPS = 54.0
@@ -49,19 +49,19 @@ def steady(name: str, **changes) -> GestureParams:
 @pytest.mark.parametrize("rate,duration,expected", [(3.0, 2.0, 6), (2.0, 2.0, 4), (2.5, 1.6, 4)])
 def test_pat_has_as_many_contacts_as_its_rate_says(rate, duration, expected):
     # cut at the touch: round(duration x rate) pats
-    field, ev = simulate(steady("pat", rate_hz=rate, duration_s=duration), frame_rate=FPS)
+    field, ev = simulate(steady("pat", rate_hz=rate, duration_s=duration), grid=(8, 8), frame_rate=FPS)
     assert len(ev) == expected
     assert contacts(field) == expected
 
 
 def test_pat_rate_in_a_fixed_window():
     # 2.5 pats/s over an 8 s window (432 frames at 54 Hz): 20, +-1 for the phase
-    field, _ = simulate(steady("pat"), frames=432, frame_rate=FPS, seed=3)
+    field, _ = simulate(steady("pat"), frames=432, grid=(8, 8), frame_rate=FPS, seed=3)
     assert abs(contacts(field) - 20) <= 1
 
 
 def test_pat_is_brief_palm_contact():
-    field, ev = simulate(steady("pat", duration_s=2.0), frame_rate=FPS)
+    field, ev = simulate(steady("pat", duration_s=2.0), grid=(8, 8), frame_rate=FPS)
     on = field.sum(axis=(1, 2)) > 0.05 * field.sum(axis=(1, 2)).max()
     # each contact 0.13 s of a 0.4 s period: about a third of the time in contact
     assert 0.2 < on.mean() < 0.5
@@ -116,8 +116,8 @@ def test_scratch_is_faster_and_smaller_than_rub():
 
 def test_tickle_is_light_and_irregular():
     tk = LIBRARY["tickle"]
-    _, ev = simulate(tk, frames=540, frame_rate=FPS, seed=1)
-    _, ev_pat = simulate(steady("pat"), frames=540, frame_rate=FPS, seed=1)
+    _, ev = simulate(tk, frames=540, grid=(8, 8), frame_rate=FPS, seed=1)
+    _, ev_pat = simulate(steady("pat"), frames=540, grid=(8, 8), frame_rate=FPS, seed=1)
     cv = np.std(np.diff(ev.onset)) / np.mean(np.diff(ev.onset))
     assert cv > 0.3
     assert np.std(np.diff(ev_pat.onset)) == pytest.approx(0.0, abs=1e-12)
@@ -144,8 +144,8 @@ def _rise_time(field):
 
 
 def test_press_is_slower_than_poke_and_push_is_palm():
-    poke, _ = simulate(steady("poke"), frame_rate=FPS)
-    press, _ = simulate(steady("press"), frame_rate=FPS)
+    poke, _ = simulate(steady("poke"), grid=(8, 8), frame_rate=FPS)
+    press, _ = simulate(steady("press"), grid=(8, 8), frame_rate=FPS)
     push, _ = simulate(steady("push"), frame_rate=FPS, grid=(20, 20), pitch_mm=10.0)
     press20, _ = simulate(steady("press"), frame_rate=FPS, grid=(20, 20), pitch_mm=10.0)
     assert _rise_time(press) > 3 * _rise_time(poke)
@@ -157,7 +157,7 @@ def test_press_is_slower_than_poke_and_push_is_palm():
 
 def test_pinch_fingers_close_on_each_other():
     p = steady("pinch", closing_mm=20.0)
-    _, ev = simulate(p, frame_rate=FPS)
+    _, ev = simulate(p, grid=(8, 8), frame_rate=FPS)
     t = np.array([ev.onset[0], ev.onset[0] + ev.rise[0] + 0.01])
     tr = tracks(ev, footprint("pinch"), t)
     gap = np.hypot(tr.cx[0] - tr.cx[1], tr.cy[0] - tr.cy[1])
@@ -195,23 +195,23 @@ def test_massage_kneads():
 
 
 def test_constant_is_still():
-    field, _ = simulate(steady("constant"), frames=216, frame_rate=FPS)
+    field, _ = simulate(steady("constant"), frames=216, grid=(8, 8), frame_rate=FPS)
     x, y, tot = centroid(field, 25.4)
     assert np.ptp(x) < 1e-6 and np.ptp(y) < 1e-6
     assert np.ptp(tot) < 1e-6 * tot.max()
 
 
 def test_notouch_is_nothing():
-    field, ev = simulate(LIBRARY["notouch"], frames=100, frame_rate=FPS)
+    field, ev = simulate(LIBRARY["notouch"], frames=100, grid=(8, 8), frame_rate=FPS)
     assert len(ev) == 0 and field.shape == (100, 8, 8) and not field.any()
 
 
 def test_burst_of_three_fixes_the_number_of_movements():
     # Zhou's group A: stroke and scratch as a quick burst of three
-    _, ev = simulate(steady("stroke", cycles=3, pace=1.5), frame_rate=50.0)
+    _, ev = simulate(steady("stroke", cycles=3, pace=1.5), grid=(8, 8), frame_rate=50.0)
     assert len(ev) == 3
     s = steady("scratch", cycles=3, pace=1.5)
-    _, ev = simulate(s, frame_rate=50.0)
+    _, ev = simulate(s, grid=(8, 8), frame_rate=50.0)
     # three back-and-forth cycles at 1.5 x the scratch rate
     assert ev.dur[0] == pytest.approx(3 / (s.osc_hz * 1.5))
 
@@ -219,8 +219,8 @@ def test_burst_of_three_fixes_the_number_of_movements():
 def test_force_and_speed_factors_scale_the_gesture():
     # rough = force x 1.7, speed x 1.25: same draws, so exactly scaled
     p = steady("pat", cycles=5)
-    _, normal = simulate(p, frame_rate=FPS, seed=5)
-    _, rough = simulate(p, frame_rate=FPS, seed=5, factors=Factors(force=1.7, rate=1.25))
+    _, normal = simulate(p, grid=(8, 8), frame_rate=FPS, seed=5)
+    _, rough = simulate(p, grid=(8, 8), frame_rate=FPS, seed=5, factors=Factors(force=1.7, rate=1.25))
     assert rough.peak / normal.peak == pytest.approx(np.full(len(normal), 1.7))
     # faster: 1.25 x the contacts per second
     assert np.diff(rough.onset)[0] == pytest.approx(np.diff(normal.onset)[0] / 1.25)
@@ -228,8 +228,8 @@ def test_force_and_speed_factors_scale_the_gesture():
 
 def test_left_hand_mirrors_the_motion():
     p = steady("stroke", cycles=1, angle_deg=30.0, scatter_mm=0.0)
-    _, right = simulate(p, frame_rate=FPS, factors=Factors(dx=10.0))
-    _, left = simulate(p, frame_rate=FPS, factors=Factors(dx=10.0, mirror=True))
+    _, right = simulate(p, grid=(8, 8), frame_rate=FPS, factors=Factors(dx=10.0))
+    _, left = simulate(p, grid=(8, 8), frame_rate=FPS, factors=Factors(dx=10.0, mirror=True))
     assert left.gx[0] == pytest.approx(-right.gx[0])
     assert left.gy[0] == pytest.approx(right.gy[0])
     centre = 8 * 25.4 / 2

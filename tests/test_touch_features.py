@@ -18,10 +18,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import captures_strategy
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-
-from helpers import captures_strategy
 
 from touchbench.datasets.model import SensorSpec
 from touchbench.features.base import FEATURES
@@ -159,7 +158,7 @@ def test_bad_frame_rate_refused():
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(caps=captures_strategy())
 def test_finite_fixed_length_and_batch_invariant(name, caps):
-    fs = FEATURES.create(name).fit(caps)
+    fs = FEATURES.create(name, sensor=HAART).fit(caps)
     grid = caps[0].shape[1:]
     X = fs.transform(caps)
     assert X.shape == (len(caps), len(fs.feature_names(grid)))
@@ -177,7 +176,7 @@ def test_finite_fixed_length_and_batch_invariant(name, caps):
 def test_float_and_integer_input_agree(name, t, v):
     c = np.full((t, 3, 4), v, dtype=np.uint16)
     c[::2, 1, 2] = min(1023, v + 7)
-    fs = FEATURES.create(name)
+    fs = FEATURES.create(name, sensor=HAART)
     np.testing.assert_array_equal(fs.fit([c]).transform([c]), fs.transform([c.astype(np.float64)]))
 
 

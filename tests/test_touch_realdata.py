@@ -26,7 +26,7 @@ def test_touch_et_fast_beats_the_published_challenge_forest(real_haart_challenge
     assert (len(tr), len(te)) == (578, 251)
     X = np.stack(ds.captures).reshape(len(ds.captures), -1).astype(np.float64)
     y = ds.meta["gesture"].astype(str).to_numpy()
-    est = make_classifier("touch-et-fast", random_state=0).fit(X[tr], y[tr])
+    est = make_classifier("touch-et-fast", random_state=0, sensor=ds.sensor).fit(X[tr], y[tr])
     pred = est.predict(X[te])
     assert set(pred) <= set(y[tr]) and len(set(pred)) == 7
     assert np.mean(pred == y[te]) > GAUS_2015_CHALLENGE

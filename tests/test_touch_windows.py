@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import captures_strategy
 from hypothesis import HealthCheck, given, settings
 
-from helpers import captures_strategy
 from touchbench.datasets.model import SensorSpec
 from touchbench.features.base import FEATURES
 from touchbench.features.touch_windows import TouchWindows
@@ -38,7 +38,7 @@ def test_quarters_of_a_haart_capture():
     # active fraction of frames (touch-rhythm): 1/2 in the tapping window, 0 when nothing happens
     assert row["win_mean_active_frac"] == pytest.approx(0.125)
     # the names: every inner feature twice, mean then sd
-    inner = sum(len(FEATURES.create(n).feature_names((8, 8))) for n in ("touch-rhythm", "cell-rhythm", "contact-motion"))
+    inner = sum(len(FEATURES.create(n, sensor=HAART).feature_names((8, 8))) for n in ("touch-rhythm", "cell-rhythm", "contact-motion"))
     assert len(row) == 2 * inner
 
 
@@ -74,7 +74,7 @@ def test_shorter_than_a_window_has_no_spread():
                                           ({"sets": ("msd",)}, "sets")])
 def test_bad_parameters_refused(params, field):
     with pytest.raises(ValueError, match=field):
-        TouchWindows(**params).fit([tap_then_rest()])
+        TouchWindows(**params, sensor=HAART).fit([tap_then_rest()])
 
 
 @settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])

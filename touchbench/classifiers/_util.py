@@ -66,6 +66,49 @@ def frames_in_row(n_columns: int, grid: tuple[int, int], who: str = "") -> int:
     return n_columns // (h * w)
 
 
+class SensorError(TouchbenchError, ValueError):
+    """A raw-frame classifier without the sensor it needs, or with a grid that is not the sensor's."""
+
+
+def sensor_frames(who: str, sensor: Any, grid: Any, frame_rate: Any = None, *,
+                  need_rate: bool = False) -> tuple[tuple[int, int], float | None]:
+    """The ``(grid, frame rate)`` a raw-frame classifier works with: the sensor's.
+
+    A flattened row of frames does not say its grid, so the classifier must
+    be told: by ``sensor`` (the run engine passes the dataset's), or, from
+    Python without a sensor, by ``grid`` (and ``frame_rate`` when
+    ``need_rate``). A ``grid`` or ``frame_rate`` given with a sensor must be
+    the sensor's. Raises :class:`SensorError` naming ``who`` and the reason;
+    the rate is None when not ``need_rate``.
+    """
+    if grid is not None:
+        try:
+            g = tuple(int(v) for v in grid)
+        except (TypeError, ValueError):
+            g = ()
+        if len(g) != 2 or min(g) < 1:
+            raise SensorError(f"{who}: grid must be (H, W) with positive sizes, got {grid!r}")
+        grid = g
+    if frame_rate is not None and not (isinstance(frame_rate, (int, float)) and math.isfinite(frame_rate) and frame_rate > 0):
+        raise SensorError(f"{who}: frame_rate must be a positive number, got {frame_rate!r}")
+    if sensor is not None:
+        sg = tuple(int(v) for v in sensor.grid)
+        if grid is not None and grid != sg:
+            raise SensorError(f"{who}: grid {grid} is not the grid of sensor {sensor.describe()}; "
+                              "leave grid unset, the sensor gives it")
+        rate = float(sensor.frame_rate)
+        if need_rate and frame_rate is not None and float(frame_rate) != rate:
+            raise SensorError(f"{who}: frame_rate {frame_rate:g} is not the rate of sensor {sensor.describe()}; "
+                              "leave frame_rate unset, the sensor gives it")
+        return sg, (rate if need_rate else None)
+    if grid is None or (need_rate and frame_rate is None):
+        what = "grid and frame rate" if need_rate else "grid"
+        alt = "grid=(H, W) and frame_rate=..." if need_rate else "grid=(H, W)"
+        raise SensorError(f"{who}: needs the sensor's {what} (a row of raw frames does not say them): "
+                          f"pass sensor=SensorSpec(...) (or {alt})")
+    return grid, (float(frame_rate) if need_rate else None)
+
+
 def torch_available() -> bool:
     """Whether PyTorch can be imported, without importing it."""
     try:

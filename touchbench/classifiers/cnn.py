@@ -10,8 +10,19 @@ Input
 -----
 ``X`` is the ``raw-window`` feature set: one row per capture, the capture's
 ``F_total`` frames of ``H x W`` cells flattened in C order (``F_total`` is
-432 for HAART: 8 s at 54 Hz). ``grid=(H, W)`` gives the frame shape;
-``F_total = n_features / (H * W)``.
+raw-window's stated ``frames``: 432 for HAART, 8 s at 54 Hz). The frame
+shape ``(H, W)`` is the sensor's: the run engine passes the dataset's
+sensor (``sensor``); from Python without a sensor, ``grid=(H, W)`` must be
+given (a grid given with a sensor must be the sensor's); ``grid_``
+records it. ``F_total = n_features / (H * W)``.
+
+Other sensors (an interpretation: the paper has only HAART's 8 x 8 grid):
+the same layers on any grid. With the paper's padding and ceil-mode
+pooling every block keeps at least one cell, so even a 1 x 1 grid or a
+1 x C channel sensor gives a network (there the 2 x 2 kernels mostly see
+padding). A run whose shortest capture has fewer than L frames is refused
+before any task (:meth:`HaartCNNClassifier.check_sensor`): its windows
+would have no frame of their own, only raw-window's padding.
 
 Sub-windows (the paper's "subsamples", section 2.3, Eq. 3)
 -------------------------------------------------------
@@ -96,7 +107,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ..core.errors import TouchbenchError
-from ._util import MAX_SEED, build, frames_in_row, torch_available
+from ._util import MAX_SEED, build, frames_in_row, sensor_frames, torch_available
 from .base import CLASSIFIERS
 
 INSTALL_HINT = "pip install 'touchbench[deep]'  (or: pip install torch==2.13.0)"
@@ -173,7 +184,9 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
 
     Parameters
     ----------
-    grid : (H, W) of a frame; the row length must be a multiple of H * W.
+    sensor : the data's SensorSpec; gives the grid (the run engine passes it).
+    grid : (H, W) of a frame, only without a sensor (else it must be the
+        sensor's); the row length must be a multiple of H * W.
     L : number of sub-windows per capture; F = floor(F_total / L) frames each.
     train_windows, test_windows : ``"first"`` (the paper), ``"all"``, a
         window index or a list of indices.
@@ -190,10 +203,11 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
     verbose : print one line per epoch when > 0.
     """
 
-    def __init__(self, grid=(8, 8), L=30, train_windows="first", test_windows="first", vote="soft",
+    def __init__(self, sensor=None, grid=None, L=30, train_windows="first", test_windows="first", vote="soft",
                  max_epochs=100, batch_size=32, learning_rate=1e-3, weight_decay=0.0, patience=10,
                  validation_fraction=0.1, scaling="standard", channels=(32, 64, 128), hidden_units=256,
                  random_state=None, device="cpu", n_jobs=1, verbose=0):
+        self.sensor = sensor
         self.grid = grid
         self.L = L
         self.train_windows = train_windows
@@ -224,10 +238,19 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
         vf = self.validation_fraction
         if vf is not None and not (0.0 <= vf < 1.0):
             raise ValueError(f"validation_fraction must be in [0, 1), got {vf!r}")
-        grid = tuple(int(g) for g in self.grid)
-        if len(grid) != 2 or min(grid) < 1:
-            raise ValueError(f"grid must be (H, W) with positive sizes, got {self.grid!r}")
+        grid, _ = sensor_frames("HaartCNNClassifier", self.sensor, self.grid)
         return grid
+
+    def check_sensor(self, sensor, min_frames=None):
+        """Why the CNN cannot serve ``sensor`` with captures of at least ``min_frames`` frames, or None."""
+        try:
+            sensor_frames("HaartCNNClassifier", sensor, self.grid)
+        except ValueError as e:
+            return str(e)
+        if min_frames is not None and isinstance(self.L, (int, np.integer)) and min_frames < int(self.L):
+            return (f"cnn: L={int(self.L)} windows need captures of at least {int(self.L)} frames (one frame per window); "
+                    f"the shortest has {min_frames}: lower L")
+        return None
 
     def _windows(self, X, idx):
         """(n, F_total*H*W) rows -> (n, len(idx), F, H, W) float32 windows."""
@@ -401,7 +424,7 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
 
 
 DEFAULTS = {
-    "grid": (8, 8), "L": 30, "train_windows": "first", "test_windows": "first", "vote": "soft",
+    "L": 30, "train_windows": "first", "test_windows": "first", "vote": "soft",
     "max_epochs": 100, "batch_size": 32, "learning_rate": 1e-3, "weight_decay": 0.0, "patience": 10,
     "validation_fraction": 0.1, "scaling": "standard", "channels": (32, 64, 128), "hidden_units": 256,
     "device": "cpu", "n_jobs": 1,
@@ -410,11 +433,12 @@ DEFAULTS = {
 
 @CLASSIFIERS.register(
     "cnn",
-    description="raw-frame CNN (3 conv blocks + FC 256, softmax) on 8x8xF windows, F = floor(432/L), L = 30",
+    description="raw-frame CNN (3 conv blocks + FC 256, softmax) on H x W x F windows, F = floor(frames/L), L = 30",
     source=SOURCE, defaults=DEFAULTS, extra="deep",
+    cheap_params=dict(max_epochs=3, channels=(4, 8, 8), hidden_units=16),
 )
-def cnn(random_state=None, **params):
+def cnn(random_state=None, sensor=None, **params):
     """The CNN; raises a TouchbenchError with the install command without PyTorch."""
     if not torch_available():
         raise TouchbenchError(f"the 'cnn' classifier needs PyTorch, which is not installed: {INSTALL_HINT}")
-    return build(HaartCNNClassifier, DEFAULTS, random_state, params, name="cnn")
+    return build(HaartCNNClassifier, DEFAULTS, random_state, {**params, "sensor": sensor}, name="cnn")

@@ -9,18 +9,23 @@ beat: an off-the-shelf MiniRocket on HAART's 64 cell series is
 about 71 % on the challenge test subjects.
 
 Input: the ``raw-window`` feature set's flattened frames (frame-major,
-row-major: ``X.reshape(n, F, H, W)``). Each of the H x W cells is one
-channel of a multivariate series of F time points: the classifier passes
-aeon an ``(n, H * W, F)`` array, values as recorded (no scaling: the
-kernels' biases come from the training data's own quantiles).
+row-major: ``X.reshape(n, F, H, W)``). The grid ``(H, W)`` is the
+sensor's: the run engine passes the dataset's sensor (``sensor``); from
+Python without a sensor, ``grid`` must be given (a grid given with a
+sensor must be the sensor's). ``grid_`` records the grid a fitted peer
+used. Each of the H x W cells is one channel of a multivariate series of
+F time points: the classifier passes aeon an ``(n, H * W, F)`` array,
+values as recorded (no scaling: the kernels' biases come from the
+training data's own quantiles).
 
 Unequal lengths: aeon's Rocket family needs equal-length series here.
-``raw-window`` makes every capture exactly F frames (default 432, HAART's
-length): a shorter capture is padded by repeating its last frame, a longer
-one truncated to its first F frames. HAART's captures are all 432 frames,
-so on ``haart`` and ``haart-challenge`` nothing is padded. This is stated
-in the protocols (``touch-haart-loso``, ``touch-haart-challenge``) and so in every run's
-manifest. Series shorter than aeon's minimum (``MIN_TIMEPOINTS`` = 9, the
+``raw-window`` makes every capture exactly F frames (a stated parameter;
+432, HAART's length, in the HAART protocols): a shorter capture is
+refused or padded by repeating its last frame (raw-window's stated
+``shorter`` rule), a longer one truncated to its first F frames. HAART's
+captures are all 432 frames, so on ``haart`` and ``haart-challenge``
+nothing is padded. This is stated in the protocols (``touch-haart-loso``,
+``touch-haart-challenge``) and so in every run's manifest. Series shorter than aeon's minimum (``MIN_TIMEPOINTS`` = 9, the
 length of MiniRocket's kernels) are padded here the same way, by repeating
 the last frame (a held pose; aeon itself asks for zero padding, which on a
 pressure sensor would invent a release).
@@ -42,7 +47,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ..core.errors import TouchbenchError
-from ._util import build, frames_in_row, seed_int
+from ._util import build, frames_in_row, seed_int, sensor_frames
 from .base import CLASSIFIERS
 
 INSTALL_HINT = "pip install 'touchbench[peers]'  (or: pip install aeon)"
@@ -79,7 +84,8 @@ class _RocketPeer(ClassifierMixin, BaseEstimator):
 
     _aeon_class = ""
 
-    def __init__(self, grid=(8, 8), n_kernels=10000, max_dilations_per_kernel=32, n_jobs=1, random_state=None):
+    def __init__(self, sensor=None, grid=None, n_kernels=10000, max_dilations_per_kernel=32, n_jobs=1, random_state=None):
+        self.sensor = sensor
         self.grid = grid
         self.n_kernels = n_kernels
         self.max_dilations_per_kernel = max_dilations_per_kernel
@@ -95,15 +101,25 @@ class _RocketPeer(ClassifierMixin, BaseEstimator):
         return cls(n_kernels=int(self.n_kernels), max_dilations_per_kernel=int(self.max_dilations_per_kernel),
                    n_jobs=int(self.n_jobs), random_state=seed)
 
+    def check_sensor(self, sensor, min_frames=None):
+        """Why this peer cannot serve ``sensor`` (a ``grid`` that is not its own), or None."""
+        try:
+            sensor_frames(type(self).__name__, sensor, self.grid)
+        except ValueError as e:
+            return str(e)
+        return None
+
     def fit(self, X, y):
+        self.grid_, _ = sensor_frames(type(self).__name__, self.sensor, self.grid)
         X, y = validate_data(self, X, y, dtype=np.float64)
         check_classification_targets(y)
+        frames_in_row(X.shape[1], self.grid_, type(self).__name__)
         self.classes_ = np.unique(y)
         if len(self.classes_) == 1:
             self.model_ = None  # one class: nothing to learn
             return self
         self.model_ = self._make(seed_int(self.random_state))
-        self.model_.fit(frames_to_series(X, self.grid), y)
+        self.model_.fit(frames_to_series(X, self.grid_), y)
         return self
 
     def predict(self, X):
@@ -111,7 +127,7 @@ class _RocketPeer(ClassifierMixin, BaseEstimator):
         X = validate_data(self, X, dtype=np.float64, reset=False)
         if self.model_ is None:
             return np.repeat(self.classes_, X.shape[0])
-        return np.asarray(self.model_.predict(frames_to_series(X, self.grid)))
+        return np.asarray(self.model_.predict(frames_to_series(X, self.grid_)))
 
     def predict_proba(self, X):
         """aeon's probabilities (for the ridge estimator: one-hot of the prediction)."""
@@ -119,7 +135,7 @@ class _RocketPeer(ClassifierMixin, BaseEstimator):
         X = validate_data(self, X, dtype=np.float64, reset=False)
         if self.model_ is None:
             return np.ones((X.shape[0], 1))
-        P = np.asarray(self.model_.predict_proba(frames_to_series(X, self.grid)), dtype=np.float64)
+        P = np.asarray(self.model_.predict_proba(frames_to_series(X, self.grid_)), dtype=np.float64)
         order = [list(self.model_.classes_).index(c) for c in self.classes_]
         return P[:, order]
 
@@ -136,16 +152,16 @@ class MultiRocketPeer(_RocketPeer):
     _aeon_class = "MultiRocketClassifier"
 
 
-DEFAULTS = {"grid": (8, 8), "n_kernels": 10000, "max_dilations_per_kernel": 32, "n_jobs": 1}
+DEFAULTS = {"n_kernels": 10000, "max_dilations_per_kernel": 32, "n_jobs": 1}
 
 
-@CLASSIFIERS.register("minirocket", description="peer: aeon MiniRocket (10k kernels + ridge) on the 64 cell series of raw-window frames",
-                      source=SOURCE_MINI, defaults=DEFAULTS, extra="peers")
-def minirocket(random_state=None, **params):
-    return build(MiniRocketPeer, DEFAULTS, random_state, params, name="minirocket")
+@CLASSIFIERS.register("minirocket", description="peer: aeon MiniRocket (10k kernels + ridge) on the H x W cell series of raw-window frames",
+                      source=SOURCE_MINI, defaults=DEFAULTS, extra="peers", cheap_params=dict(n_kernels=84))
+def minirocket(random_state=None, sensor=None, **params):
+    return build(MiniRocketPeer, DEFAULTS, random_state, {**params, "sensor": sensor}, name="minirocket")
 
 
-@CLASSIFIERS.register("multirocket", description="peer: aeon MultiRocket (10k kernels, 4 poolings + ridge) on the 64 cell series of raw-window frames",
-                      source=SOURCE_MULTI, defaults=DEFAULTS, extra="peers")
-def multirocket(random_state=None, **params):
-    return build(MultiRocketPeer, DEFAULTS, random_state, params, name="multirocket")
+@CLASSIFIERS.register("multirocket", description="peer: aeon MultiRocket (10k kernels, 4 poolings + ridge) on the H x W cell series of raw-window frames",
+                      source=SOURCE_MULTI, defaults=DEFAULTS, extra="peers", cheap_params=dict(n_kernels=84))
+def multirocket(random_state=None, sensor=None, **params):
+    return build(MultiRocketPeer, DEFAULTS, random_state, {**params, "sensor": sensor}, name="multirocket")

@@ -6,7 +6,9 @@ import inspect
 
 import click
 
+from ..datasets.model import SensorSpec
 from ..features import FEATURES
+from ..features.base import make_feature_set
 from .plugins import package_of
 
 
@@ -20,9 +22,21 @@ def _grid(value: str) -> tuple[int, int]:
     return h, w
 
 
-def feature_table(grid: tuple[int, int] = (8, 8)) -> list[dict]:
-    """One row per registered set: name, paper, output size for ``grid`` (default parameters), cost,
-    description, package (touchbench or the plugin's distribution and version)."""
+def _size(name: str, sensor: SensorSpec | None) -> int | None:
+    """Output size of ``name`` with default parameters on ``sensor``; None without a sensor, or when
+    the set needs parameters stated (raw-window's frames) or refuses the sensor."""
+    if sensor is None:
+        return None
+    fs = make_feature_set(name, {}, sensor)
+    if fs.check_sensor(sensor) is not None:
+        return None
+    return fs.n_features(sensor.grid)
+
+
+def feature_table(sensor: SensorSpec | None = None) -> list[dict]:
+    """One row per registered set: name, paper, output size on ``sensor`` (default parameters;
+    None without a sensor or where the set cannot say), cost, description, package
+    (touchbench or the plugin's distribution and version)."""
     rows = []
     for e in FEATURES.entries():
         cls = e.obj
@@ -30,7 +44,7 @@ def feature_table(grid: tuple[int, int] = (8, 8)) -> list[dict]:
             {
                 "name": e.name,
                 "paper": cls.paper,
-                "size": cls().n_features(grid),
+                "size": _size(e.name, sensor),
                 "cost": cls.cost,
                 "fold_dependent": cls.fold_dependent,
                 "description": e.description,
@@ -46,21 +60,35 @@ def features() -> None:
 
 
 @features.command("list")
-@click.option("--grid", "grid", default="8x8", show_default=True, help="grid (HxW) the output sizes are computed for")
-def list_(grid: str) -> None:
-    """Every feature set with its paper, output size and cost tag."""
+@click.option("--grid", "grid", default=None, help="sensor grid (HxW) to compute the output sizes for")
+@click.option("--rate", "rate", type=float, default=None, help="sensor frame rate (Hz), with --grid")
+@click.option("--range", "value_range", type=(float, float), default=None, help="sensor value range LOW HIGH, with --grid")
+def list_(grid: str | None, rate: float | None, value_range: tuple[float, float] | None) -> None:
+    """Every feature set with its paper, output size and cost tag (sizes for the sensor
+    given by --grid, --rate and --range; '-' where a set needs parameters stated or
+    refuses that sensor)."""
     from rich.console import Console
     from rich.table import Table
 
-    g = _grid(grid)
-    rows = feature_table(g)
+    sensor = None
+    if grid is not None or rate is not None or value_range is not None:
+        if grid is None or rate is None or value_range is None:
+            raise click.UsageError("give --grid, --rate and --range together (the sensor the sizes are computed for)")
+        try:
+            sensor = SensorSpec("--grid", _grid(grid), rate, value_range)
+        except ValueError as e:
+            raise click.BadParameter(str(e)) from None
+    title = ("feature sets (output size for " + sensor.describe().replace("'--grid' ", "") + ", default parameters)"
+             if sensor is not None else "feature sets (output sizes: give --grid, --rate and --range)")
+    rows = feature_table(sensor)
     plugins = any(r["package"] != "touchbench" for r in rows)  # the package column only when a plugin added sets
-    table = Table(title=f"feature sets (output size for a {g[0]} x {g[1]} grid, default parameters)")
+    table = Table(title=title)
     for col in ("name", "paper", "size", "cost", "fold-dependent", "description") + (("package",) if plugins else ()):
         table.add_column(col, justify="right" if col == "size" else "left", overflow="fold")
     for r in rows:
-        table.add_row(r["name"], r["paper"], str(r["size"]), r["cost"], "yes" if r["fold_dependent"] else "no",
-                      r["description"], *((r["package"],) if plugins else ()))
+        size = "-" if r["size"] is None else str(r["size"])
+        table.add_row(r["name"], r["paper"], size, r["cost"], "yes" if r["fold_dependent"] else "no", r["description"],
+                      *((r["package"],) if plugins else ()))
     Console(width=max(Console().width, 140)).print(table)
 
 

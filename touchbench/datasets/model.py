@@ -76,6 +76,12 @@ class SensorSpec:
     def n_cells(self) -> int:
         return self.grid[0] * self.grid[1]
 
+    def describe(self) -> str:
+        """``'name' (H x W at R Hz)`` (channel sensors: ``1 x C channels``), for messages."""
+        h, w = self.grid
+        what = f"{h} x {w} channels" if self.channels is not None else f"{h} x {w}"
+        return f"{self.name!r} ({what} at {self.frame_rate:g} Hz)"
+
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
         d["grid"] = list(self.grid)

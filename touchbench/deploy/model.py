@@ -8,6 +8,7 @@ predict`` / ``touchbench stream`` read. It holds
   the run engine builds them (:func:`touchbench.engine.tasks.make_feature_set`,
   with the dataset's sensor);
 - the classifier, built by :func:`touchbench.classifiers.make_classifier`
+  (with the dataset's sensor, as the run engine builds it)
   and fitted, as the engine does, on integer codes ``0..C-1`` of the sorted
   class names (XGBoost needs contiguous codes), with everything limited to
   one thread;
@@ -282,7 +283,7 @@ def fit_model(
         feature_seconds = time.perf_counter() - t0
         est = None
         if len(classes) > 1:
-            est = make_classifier(classifier, random_state=seed, **classifier_params)
+            est = make_classifier(classifier, random_state=seed, sensor=sensor, **classifier_params)
             fit_kw = {}
             if accepts(est.fit, "groups"):  # the engine's own rule for group-aware classifiers
                 subjects = np.array([str(v) for v in dataset.meta["subject"].tolist()], dtype=object)

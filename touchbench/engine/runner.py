@@ -60,11 +60,13 @@ from rich.progress import (
 )
 
 from ..catalog import load_dataset
+from ..classifiers import make_classifier
 from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
+from ..core.introspect import sensor_problem
 from ..core.paths import cache_dir
 from ..core.suggest import did_you_mean
-from ..datasets.model import DatasetChangedWarning, TouchDataset
+from ..datasets.model import DatasetChangedWarning, SensorSpec, TouchDataset
 from ..features import FEATURES
 from ..protocols.schema import Protocol, expand_grid, load_protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
@@ -77,7 +79,7 @@ from .cache import FeatureCache, crop_captures
 from .identity import MAX_MODULES, Identity, classifier_identity, feature_set_identity
 from .tasks import RunContext, SetSpec, Task, execute_task, make_feature_set
 
-__all__ = ["Plan", "RunResult", "default_results_dir", "plan_run", "run_plan", "run_protocol"]
+__all__ = ["Plan", "RunResult", "check_sensor_fit", "default_results_dir", "plan_run", "run_plan", "run_protocol"]
 
 
 def default_results_dir(protocol: Protocol) -> Path:
@@ -188,6 +190,32 @@ def _label(kind: str, name: str, params: dict[str, Any]) -> str:
     return f"{kind} {name}" + (f" {canonical_json(params)}" if params else "")
 
 
+def check_sensor_fit(protocol: Protocol, sensor: SensorSpec, min_frames: int) -> None:
+    """Refuse the protocol when one of its components cannot serve ``sensor``.
+
+    Every feature set and classifier (with each of its parameter settings)
+    is built with the sensor and asked (:func:`~touchbench.core.introspect.sensor_problem`);
+    ``min_frames`` is the shortest capture a task will see. The first
+    component that cannot is refused with one message: the component, the
+    sensor and its reason.
+    """
+    for i, combo in enumerate(protocol.features):
+        for j, ref in enumerate(combo):
+            for p in expand_grid(ref.params):
+                problem = sensor_problem(make_feature_set(ref.name, p, sensor), sensor, min_frames)
+                if problem:
+                    raise protocol.error_at(("features", i, j), f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {problem}")
+    for i, spec in enumerate(protocol.classifiers):
+        for p in expand_grid(spec.params):
+            try:
+                est = make_classifier(spec.name, random_state=0, sensor=sensor, **p)
+            except Exception as e:
+                raise protocol.error_at(("classifiers", i), f"classifier {spec.name!r} rejects {p}: {type(e).__name__}: {e}") from None
+            problem = sensor_problem(est, sensor, min_frames)
+            if problem:
+                raise protocol.error_at(("classifiers", i), f"classifier {spec.name!r} cannot serve sensor {sensor.describe()}: {problem}")
+
+
 def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: TouchDataset | None = None) -> Plan:
     """Every check that needs the data, then the list of tasks (no work done)."""
 
@@ -284,6 +312,9 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                         classifier_label=clf.label, classifier_name=clf.name, classifier_params=clf.params,
                         seed=seed, crop_frames=crop_frames, base_row=base,
                     ))
+    crops = [t.crop_frames for t in tasks if t.crop_frames is not None]
+    min_frames = int(min([int(ds.n_frames.min()), *crops]))
+    check_sensor_fit(protocol, ds.sensor, min_frames)
     ids = [t.task_id for t in tasks]
     if len(set(ids)) != len(ids):
         raise protocol.error_at(("features",), "two entries of the protocol describe the same task (duplicate combination or classifier)")

@@ -224,7 +224,7 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
                 row["fit_seconds"] = 0.0
                 row["predict_seconds"] = time.perf_counter() - t0
             else:
-                est = make_classifier(task.classifier_name, random_state=task.seed, **task.classifier_params)
+                est = make_classifier(task.classifier_name, random_state=task.seed, sensor=ds.sensor, **task.classifier_params)
                 fit_kw = {}
                 if accepts(est.fit, "groups"):
                     fit_kw["groups"] = np.array([str(v) for v in ds.meta["subject"].to_numpy()[fold.train]], dtype=object)

@@ -47,12 +47,16 @@ def random_dataset(
     frames: tuple[int, int] = (8, 12),
     seed: int = 0,
     name: str = "test-random",
+    sensor: SensorSpec = SENSOR,
 ) -> TouchDataset:
     """A dataset of ``per_cell`` captures per (subject, gesture, *extra values*).
 
     ``extra`` adds metadata columns crossed with subject and gesture (e.g.
     ``{"session": [1, 2]}``); ``rows`` gives the metadata rows explicitly
-    instead (each a dict with at least subject and gesture).
+    instead (each a dict with at least subject and gesture). ``sensor``
+    gives the grid and value range (the values are clipped to it; uint8
+    when it fits in 0..255, else uint16); ``frames`` the inclusive range of
+    capture lengths.
     """
     rng = np.random.default_rng(seed)
     if rows is None:
@@ -64,14 +68,16 @@ def random_dataset(
                 rows.append(dict(zip(keys, combo)))
     meta = pd.DataFrame(rows)
     meta.insert(0, "capture_id", [f"c{i:04d}" for i in range(len(meta))])
+    lo, hi = sensor.value_range
+    dtype = np.uint8 if lo >= 0 and hi <= 255 else np.uint16
     gest = sorted({str(g) for g in meta["gesture"]})
     level = {g: 20.0 + 25.0 * i for i, g in enumerate(gest)}
     caps = []
     for g in meta["gesture"]:
         t = int(rng.integers(frames[0], frames[1] + 1))
-        base = rng.normal(level[str(g)], 15.0, size=(t, *SENSOR.grid))
-        caps.append(np.clip(base, 0, 255).astype(np.uint8))
-    return TouchDataset(name=name, captures=caps, meta=meta, sensor=SENSOR)
+        base = rng.normal(level[str(g)], 15.0, size=(t, *sensor.grid))
+        caps.append(np.clip(base, lo, hi).astype(dtype))
+    return TouchDataset(name=name, captures=caps, meta=meta, sensor=sensor)
 
 
 # ----------------------------------------------------------------- feature sets

@@ -26,10 +26,10 @@ from __future__ import annotations
 from typing import Any, ClassVar, Sequence
 
 import numpy as np
-from sklearn.base import BaseEstimator, TransformerMixin
+from sklearn.base import BaseEstimator, TransformerMixin, clone
 
 from ..core.errors import TouchbenchError
-from ..core.introspect import accepts
+from ..core.introspect import with_accepted
 from ..core.registry import Registry
 
 # Filled by every module of touchbench.features (imported on first use of the registry).
@@ -119,7 +119,29 @@ class FeatureSet(TransformerMixin, BaseEstimator):
         return self
 
     def _check_params(self) -> None:
-        """Check constructor parameters; raise ``FeatureInputError``. Nothing by default."""
+        """Check constructor parameters; raise ``FeatureInputError``. Nothing by default.
+
+        Sets whose values depend on the sensor (frame rate, value range,
+        presets) resolve them here, so a set built without the sensor it
+        needs is refused by ``fit`` / ``transform`` with the reason.
+        """
+
+    def check_sensor(self, sensor: Any, min_frames: int | None = None) -> str | None:
+        """Why this set, with its parameters, cannot serve ``sensor``; None when it can.
+
+        ``min_frames`` is the shortest capture the set will see (None:
+        unknown). The run engine asks at plan time, so ``protocols
+        validate`` and ``run`` refuse a protocol before any task. Default:
+        the parameter checks, with ``sensor`` as the set's sensor.
+        """
+        probe = self
+        if "sensor" in self.get_params(deep=False) and getattr(self, "sensor", None) != sensor:
+            probe = clone(self).set_params(sensor=sensor)
+        try:
+            probe._check_params()
+        except FeatureInputError as e:
+            return str(e)
+        return None
 
     def _fit(self, captures: list[np.ndarray], y=None) -> None:
         """Learn data-dependent parameters; nothing by default."""
@@ -179,7 +201,4 @@ def cell_names(grid: tuple[int, int]) -> list[str]:
 def make_feature_set(name: str, params: dict[str, Any], sensor: Any = None) -> FeatureSet:
     """Build the registered feature set ``name``, passing ``sensor`` when its constructor takes it."""
     cls = FEATURES.get(name)
-    kwargs = dict(params)
-    if sensor is not None and accepts(cls, "sensor"):
-        kwargs["sensor"] = sensor
-    return cls(**kwargs)
+    return cls(**with_accepted(cls, params, sensor=sensor))

@@ -61,24 +61,31 @@ class FlaggStats(FeatureSet):
       "area"), not divided by the frame rate.
     - Variance with ddof = 1 (0 for one frame); median is the usual middle
       value (mean of the two middle ones).
+    - The ``"grid"`` channels need the sensor's value range (its low end
+      is "no pressure"): the sensor's ``value_range``, or an explicit
+      ``value_range`` (for use from Python without a sensor); with neither
+      the set refuses to run rather than assume one sensor's range.
     - ``contact_threshold`` default: 1.5 % of the sensor's value range
       (15.3 on HAART's 0..1023), above the no-touch noise of the real
-      HAART recordings; without a sensor the range is 0..1023.
+      HAART recordings.
     - An empty frame (nothing above the low end) has no centroid: we use
       the grid centre ((W-1)/2, (H-1)/2), so a no-touch capture has a
       centred, motionless centroid (variance and total variation 0).
     - No normalisation by length (area and total variation grow with T).
 
-    Parameters: ``channels``, ``contact_threshold``, ``sensor``.
+    Parameters: ``channels``, ``contact_threshold``, ``value_range``
+    (replaces the sensor's), ``sensor``.
     """
 
     paper = "Flagg 2012 (MSc thesis, UBC), sections 3.4.2 and 4.3.2"
     cost = "cheap"
     fold_dependent = False
 
-    def __init__(self, channels: str = "auto", contact_threshold: float | None = None, sensor: SensorSpec | None = None):
+    def __init__(self, channels: str = "auto", contact_threshold: float | None = None,
+                 value_range: tuple[float, float] | None = None, sensor: SensorSpec | None = None):
         self.channels = channels
         self.contact_threshold = contact_threshold
+        self.value_range = value_range
         self.sensor = sensor
 
     def _mode(self) -> str:
@@ -89,10 +96,21 @@ class FlaggStats(FeatureSet):
         return self.channels
 
     def _check_params(self) -> None:
-        self._mode()
+        if self._mode() == "grid":
+            self._range()
 
     def _range(self) -> tuple[float, float]:
-        return tuple(self.sensor.value_range) if self.sensor is not None else (0.0, 1023.0)
+        """The value range: ``value_range`` if given, else the sensor's; neither is refused."""
+        if self.value_range is not None:
+            lo, hi = (float(v) for v in self.value_range)
+            if not lo < hi:
+                raise FeatureInputError(f"flagg-stats: value_range must be (low, high) with low < high, got {self.value_range!r}")
+            return lo, hi
+        if self.sensor is not None:
+            lo, hi = self.sensor.value_range
+            return float(lo), float(hi)
+        raise FeatureInputError("flagg-stats: the 'grid' channels need the sensor's value range (its low end is no pressure): "
+                                "pass sensor=SensorSpec(...) or value_range=(low, high)")
 
     def _channel_names(self, grid: tuple[int, int]) -> list[str]:
         if self._mode() == "grid":

@@ -35,22 +35,27 @@ class BinaryMotionHistory(FeatureSet):
       capture (no touch, all zero, all saturated) sets every cell to 1.
       Finite and binary for every input.
 
-    Parameters: ``preset`` ("haart" / "cost"), ``offset`` (overrides the
-    preset), ``level`` ("instance" / "frame"), ``sensor`` (unused).
+    - The preset: named, or the one of the sensor's recording setting
+      (:mod:`~touchbench.features.gaus_common`: HAART's or CoST's); on any
+      other sensor, or without one, a preset or ``offset`` must be given.
+
+    Parameters: ``preset`` ("haart", "cost" or None: the sensor's),
+    ``offset`` (overrides the preset), ``level`` ("instance" / "frame"),
+    ``sensor`` (picks the preset).
     """
 
     paper = f"{GAUS_PAPER}.2"
     cost = "cheap"
     fold_dependent = False
 
-    def __init__(self, preset: str = "haart", offset: float | None = None, level: str = "instance", sensor: SensorSpec | None = None):
+    def __init__(self, preset: str | None = None, offset: float | None = None, level: str = "instance", sensor: SensorSpec | None = None):
         self.preset = preset
         self.offset = offset
         self.level = level
         self.sensor = sensor
 
     def _check_params(self) -> None:
-        resolve("bmh", self.preset, _TABLE, "offset", self.offset)
+        resolve("bmh", self.preset, _TABLE, "offset", self.offset, self.sensor, "offset")
         if self.level not in ("instance", "frame"):
             raise FeatureInputError(f"bmh: level must be 'instance' or 'frame', got {self.level!r}")
 
@@ -58,7 +63,7 @@ class BinaryMotionHistory(FeatureSet):
         return [f"bmh_{c}" for c in cell_names(grid)]
 
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
-        off = float(resolve("bmh", self.preset, _TABLE, "offset", self.offset))
+        off = float(resolve("bmh", self.preset, _TABLE, "offset", self.offset, self.sensor, "offset"))
         n, t = stack.shape[:2]
         x = stack.reshape(n, t, -1).astype(np.float64)
         if self.level == "instance":

@@ -9,7 +9,10 @@ import numpy as np
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
-from .gaus_common import GAUS_PAPER, resolve
+from .gaus_common import GAUS_PAPER, preset_for, resolve
+
+_CONDITIONS = ("notouch", "touched", "high")
+_VALUES = "bins for notouch, touched and high, high_offset and touched_fixed"
 
 # Table 3 (conditions) and Table 4 (histcounts bin width, leading and
 # trailing edge) per dataset. "high_offset": high pressure is
@@ -124,13 +127,17 @@ class StatisticalDistribution(FeatureSet):
       maximum, so all counts equal the number of cells (clipped into the
       last bin on an 8 x 8 grid). Finite for every input.
 
-    Parameters: ``preset`` ("haart" or "cost"); ``bins`` (dict condition ->
+    - The preset: named, or the one of the sensor's recording setting
+      (:mod:`~touchbench.features.gaus_common`: HAART's or CoST's); on any
+      other sensor, or without one, a preset or every value must be given.
+
+    Parameters: ``preset`` ("haart", "cost" or None: the sensor's);
+    ``bins`` (dict condition ->
     (width, leading, trailing) overriding Table 4 for "notouch", "touched",
     "high"); ``high_offset`` (high pressure is value >= max - high_offset);
     ``touched_fixed`` (extra touched threshold, ``None`` = preset,
     ``False`` = none); ``clip``;
-    ``normalize``; ``sensor`` (unused: thresholds are relative to each
-    capture).
+    ``normalize``; ``sensor`` (picks the preset).
     """
 
     paper = f"{GAUS_PAPER}.1, Tables 3-4"
@@ -139,7 +146,7 @@ class StatisticalDistribution(FeatureSet):
 
     def __init__(
         self,
-        preset: str = "haart",
+        preset: str | None = None,
         bins: dict | None = None,
         high_offset: float | None = None,
         touched_fixed: float | bool | None = None,
@@ -158,16 +165,20 @@ class StatisticalDistribution(FeatureSet):
     # -------------------------------------------------------------- params
     def _resolved(self) -> tuple[float, float | None, dict[str, np.ndarray]]:
         name = "sd"
-        off = float(resolve(name, self.preset, _TABLE, "high_offset", self.high_offset))
-        fixed = resolve(name, self.preset, _TABLE, "touched_fixed", self.touched_fixed)
+        off = float(resolve(name, self.preset, _TABLE, "high_offset", self.high_offset, self.sensor, _VALUES))
+        fixed = resolve(name, self.preset, _TABLE, "touched_fixed", self.touched_fixed, self.sensor, _VALUES)
         if fixed is False:
             fixed = None
-        bins = dict(_TABLE[self.preset]["bins"]) if self.preset in _TABLE else {}
-        if self.bins:
-            unknown = set(self.bins) - {"notouch", "touched", "high"}
-            if unknown:
-                raise FeatureInputError(f"sd: unknown bins condition(s) {sorted(unknown)} (known: high, notouch, touched)")
-            bins.update(self.bins)
+        given = dict(self.bins or {})
+        unknown = set(given) - set(_CONDITIONS)
+        if unknown:
+            raise FeatureInputError(f"sd: unknown bins condition(s) {sorted(unknown)} (known: high, notouch, touched)")
+        bins = {}
+        if set(given) != set(_CONDITIONS):
+            preset = preset_for(name, self.preset, self.sensor, _VALUES)
+            resolve(name, preset, _TABLE, "bins", None)  # an unknown preset is refused here
+            bins = dict(_TABLE[preset]["bins"])
+        bins.update(given)
         edges = {k: histcounts_edges(*map(float, v)) for k, v in bins.items()}
         return off, (None if fixed is None else float(fixed)), edges
 

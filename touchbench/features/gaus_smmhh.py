@@ -105,9 +105,14 @@ class SpatialMultiScaleMHH(FeatureSet):
     - A capture shorter than s + 1 frames has no frame pair at skip s: its
       counts are 0. A constant capture has no motion: all 0.
 
-    Parameters: ``preset``, ``threshold`` (scalar or one per scale),
-    ``skips`` (default (2, 3, 4, 5, 6)), ``max_len`` (M, 5), ``n_scales``
-    (4), ``sensor`` (unused).
+    - The preset: named, or the one of the sensor's recording setting
+      (:mod:`~touchbench.features.gaus_common`: HAART's or CoST's); on any
+      other sensor, or without one, a preset or ``threshold`` must be given.
+
+    Parameters: ``preset`` ("haart", "cost" or None: the sensor's),
+    ``threshold`` (scalar or one per scale), ``skips`` (default
+    (2, 3, 4, 5, 6)), ``max_len`` (M, 5), ``n_scales`` (4), ``sensor``
+    (picks the preset).
     """
 
     paper = f"{GAUS_PAPER}.4, eq. 1"
@@ -116,7 +121,7 @@ class SpatialMultiScaleMHH(FeatureSet):
 
     def __init__(
         self,
-        preset: str = "haart",
+        preset: str | None = None,
         threshold: float | Sequence[float] | None = None,
         skips: Sequence[int] = (2, 3, 4, 5, 6),
         max_len: int = 5,
@@ -131,7 +136,7 @@ class SpatialMultiScaleMHH(FeatureSet):
         self.sensor = sensor
 
     def _thresholds(self) -> list[float]:
-        thr = resolve("smmhh", self.preset, _TABLE, "threshold", self.threshold)
+        thr = resolve("smmhh", self.preset, _TABLE, "threshold", self.threshold, self.sensor, "threshold")
         if np.ndim(thr) == 0:
             return [float(thr)] * int(self.n_scales)
         thr = [float(v) for v in thr]

@@ -8,47 +8,74 @@ import numpy as np
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
 
-HAART_FRAMES = 432
+SHORTER_RULES = ("refuse", "pad")
 
 
-@FEATURES.register("raw-window", description="F raw frames from an offset, flattened (CNN input)")
+@FEATURES.register("raw-window", description="F raw frames from an offset, flattened (CNN and raw-frame classifier input)")
 class RawWindow(FeatureSet):
-    """The first ``frames`` frames of a capture (from ``offset``), flattened.
+    """``frames`` frames of a capture (from ``offset``), flattened.
 
     Al-mashhadani et al. 2021, section 3: the CNN takes raw 8 x 8 x F
-    frames, no preprocessing; F = 432 / L is chosen by grid search (Fig.
-    5: L = 30, F = 14, "the first subsample is picked"). Default F = 432,
-    all frames of a HAART capture, so the classifier can choose its own
-    sub-window. Output ``(n, F * H * W)`` float64 in frame-major,
-    row-major order: column ``f{t}_r{i}_c{j}`` is frame ``offset + t``,
-    row i, column j, so ``X.reshape(n, F, H, W)`` recovers the frames.
+    frames of HAART, no preprocessing; F = 432 / L is chosen by grid search
+    (Fig. 5: L = 30, F = 14, "the first subsample is picked"). The HAART
+    protocols state ``frames: 432`` (all frames of a HAART capture), so the
+    classifier can choose its own sub-window. Output ``(n, F * H * W)``
+    float64 in frame-major, row-major order: column ``f{t}_r{i}_c{j}`` is
+    frame ``offset + t``, row i, column j, so ``X.reshape(n, F, H, W)``
+    recovers the frames.
 
     Interpretations and limits:
 
+    - The window length ``frames`` has no default: it must be stated. A
+      classifier needs every capture as a row of the same length, and no
+      length fits every sensor (HAART's 432 frames are 8 s at 54 Hz; on a
+      12 Hz grid of 5-s captures they would be 85 % padding). It is not
+      taken from the data either: the shortest training capture would
+      differ between folds (and tasks), and a set whose output width
+      depends on the fold could not be cached per capture.
+    - ``shorter`` is the stated rule for a capture with fewer than
+      ``offset + frames`` frames: ``"refuse"`` (default: nothing is
+      invented; the run is refused before any task when the dataset holds
+      such a capture) or ``"pad"``: repeat its last available frame (a
+      held pose rather than an invented "no touch" of zeros; a capture
+      with ``offset`` beyond its end repeats its last frame throughout; a
+      constant capture stays constant). A longer capture keeps its frames
+      ``offset .. offset + frames - 1``. The window length never depends on
+      the capture.
     - Values are the raw sensor values as float64 (no scaling: the paper
       feeds raw data; scaling belongs to the classifier).
-    - A capture with fewer than ``offset + frames`` frames is padded by
-      repeating its last available frame (a held pose rather than an
-      invented "no touch" of zeros); a capture with ``offset`` beyond its
-      end repeats its last frame throughout. A constant capture stays
-      constant. The window length never depends on the capture.
 
-    Parameters: ``frames`` (F >= 1, 432), ``offset`` (>= 0, 0), ``sensor``
-    (unused).
+    Parameters: ``frames`` (F >= 1, required), ``offset`` (>= 0, 0),
+    ``shorter`` ("refuse" / "pad"), ``sensor`` (unused: the grid comes with
+    the captures).
     """
 
     paper = "Al-mashhadani et al. 2021, section 3 (raw-frame CNN)"
     cost = "cheap"
     fold_dependent = False
 
-    def __init__(self, frames: int = HAART_FRAMES, offset: int = 0, sensor: SensorSpec | None = None):
+    def __init__(self, frames: int | None = None, offset: int = 0, shorter: str = "refuse", sensor: SensorSpec | None = None):
         self.frames = frames
         self.offset = offset
+        self.shorter = shorter
         self.sensor = sensor
 
     def _check_params(self) -> None:
+        if self.frames is None:
+            raise FeatureInputError("raw-window: state the window length: frames=N (every capture becomes N frames; "
+                                    "shorter ones are refused or padded as 'shorter' says)")
         if int(self.frames) < 1 or int(self.offset) < 0 or int(self.frames) != self.frames or int(self.offset) != self.offset:
             raise FeatureInputError(f"raw-window: frames must be an integer >= 1 and offset an integer >= 0, got {self.frames!r}, {self.offset!r}")
+        if self.shorter not in SHORTER_RULES:
+            raise FeatureInputError(f"raw-window: shorter must be 'refuse' or 'pad', got {self.shorter!r}")
+
+    def check_sensor(self, sensor: SensorSpec, min_frames: int | None = None) -> str | None:
+        problem = super().check_sensor(sensor, min_frames)
+        need = None if problem else int(self.offset) + int(self.frames)
+        if problem is None and self.shorter == "refuse" and min_frames is not None and min_frames < need:
+            problem = (f"raw-window: the shortest capture has {min_frames} frames, the window needs {need} "
+                       f"(offset {int(self.offset)} + frames {int(self.frames)}); lower frames or set shorter: pad")
+        return problem
 
     def feature_names(self, grid: tuple[int, int]) -> list[str]:
         h, w = grid
@@ -60,5 +87,8 @@ class RawWindow(FeatureSet):
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         n, t = stack.shape[:2]
         f, off = int(self.frames), int(self.offset)
+        if t < off + f and self.shorter == "refuse":
+            raise FeatureInputError(f"raw-window: a capture has {t} frames, the window needs {off + f} "
+                                    "(offset + frames); lower frames or set shorter='pad'")
         idx = np.minimum(np.arange(off, off + f), t - 1)  # repeat the last frame past the end
         return stack[:, idx].reshape(n, -1).astype(np.float64)

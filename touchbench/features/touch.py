@@ -38,10 +38,12 @@ pressure (HAART after the reader's ``1023 - value``).
 
 Interpretations and limits shared by the sets:
 
-- Frequencies use the sensor's frame rate (``sensor.frame_rate``; 54 Hz,
-  HAART's, when no sensor is given). Band edges are in Hz, so a capture's
-  band fractions do not depend on its length; spectra use a Hann window on
-  the mean-removed series.
+- Frequencies use the sensor's frame rate (``sensor.frame_rate``; the
+  run engine passes the dataset's sensor). An explicit ``frame_rate``
+  replaces it (for use from Python without a sensor); with neither, the
+  set refuses to run rather than assume one sensor's rate. Band edges are
+  in Hz, so a capture's band fractions do not depend on its length;
+  spectra use a Hann window on the mean-removed series.
 - A capture shorter than ``MIN_FRAMES`` (8) frames is padded by repeating
   its last frame (a held pose), so every statistic is defined; its
   features then describe a nearly constant capture.
@@ -62,7 +64,6 @@ from .base import FEATURES, FeatureInputError, FeatureSet
 from .numerics import KURT_CONSTANT, SKEW_CONSTANT, moments
 
 MIN_FRAMES = 8
-DEFAULT_FRAME_RATE = 54.0
 BASELINE_Q = 0.05
 #: spectral bands in Hz, upper edge inclusive; the last one is open-ended
 BANDS: tuple[tuple[float, float], ...] = ((0, 1), (1, 2), (2, 3), (3, 4.5), (4.5, 6), (6, 8), (8, 11), (11, 15), (15, np.inf))
@@ -90,16 +91,21 @@ class _TouchBase(FeatureSet):
         self.sensor = sensor
 
     def _fs(self) -> float:
+        """The frame rate: ``frame_rate`` if given, else the sensor's; neither is refused."""
         if self.frame_rate is not None:
             return float(self.frame_rate)
         if self.sensor is not None:
             return float(self.sensor.frame_rate)
-        return DEFAULT_FRAME_RATE
+        raise FeatureInputError(
+            f"{type(self).__name__}: needs the sensor's frame rate (its spectral bands are in Hz): "
+            "pass sensor=SensorSpec(...) or frame_rate=..."
+        )
 
     def _check_params(self) -> None:
         fs = self.frame_rate
         if fs is not None and not (isinstance(fs, (int, float)) and np.isfinite(fs) and fs > 0):
             raise FeatureInputError(f"{type(self).__name__}: frame_rate must be a positive number, got {fs!r}")
+        self._fs()
 
 
 def pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -17,6 +17,11 @@ with two forest seeds; 7 overlapping windows of 2 s gave the same.
 
 Interpretations and limits:
 
+- The window length is in seconds; its frames come from the sensor's frame
+  rate (or an explicit ``frame_rate``); without either the set refuses to
+  run. A run whose shortest capture is shorter than one window is refused
+  before any task (:meth:`TouchWindows.check_sensor`): the windows would
+  all be the whole capture.
 - Window starts are ``round(linspace(0, T - L, n_windows))`` frames (evenly
   spaced, the first at the capture's start, the last ending at its end);
   ``L = round(window_s * frame rate)``, at least 1 frame, at most ``T``: a
@@ -68,6 +73,16 @@ class TouchWindows(_TouchBase):
             raise FeatureInputError(f"TouchWindows: window_s must be a positive number of seconds, got {w!r}")
         if not self.sets or any(s not in OWN_SETS for s in self.sets):
             raise FeatureInputError(f"TouchWindows: sets must name some of {list(OWN_SETS)}, got {self.sets!r}")
+
+    def check_sensor(self, sensor: SensorSpec, min_frames: int | None = None) -> str | None:
+        problem = super().check_sensor(sensor, min_frames)
+        if problem is None and min_frames is not None:
+            rate = float(self.frame_rate) if self.frame_rate is not None else float(sensor.frame_rate)
+            length = max(1, round(float(self.window_s) * rate))
+            if length > min_frames:
+                problem = (f"touch-windows: its {float(self.window_s):g}-s windows ({length} frames at {rate:g} Hz) are longer "
+                           f"than the shortest capture ({min_frames} frames); set window_s to at most {min_frames / rate:g} s")
+        return problem
 
     def _inner(self) -> list[FeatureSet]:
         return [FEATURES.create(name, frame_rate=self._fs()) for name in self.sets]

@@ -677,6 +677,9 @@ def _classifier_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
             if k == "random_state":
                 issues.append((loc, "random_state is derived from the protocol's seed; set 'seed' instead"))
                 bad = True
+            elif k == "sensor":
+                issues.append((loc, "the engine passes the dataset's sensor; do not set 'sensor'"))
+                bad = True
             elif _is_grid(v) and not (isinstance(v["grid"], list) and v["grid"]):
                 issues.append((loc + ("grid",), "a grid must be a non-empty list of values"))
                 bad = True

@@ -62,9 +62,12 @@ def _per_fold(v: Any, i: int) -> float:
 def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Sequence[str]], methods: list[FakeMethod], *,
                    dataset: str = "fake", dataset_hash: str = "d" * 64, scheme: Any = None, target: str = "gesture",
                    seed: int = 0, run_id: str = "run1", protocol: str = "fake-protocol",
-                   platform: dict[str, Any] | None = None, frame_rate: float = 54.0,
+                   platform: dict[str, Any] | None = None, frame_rate: float | None = None,
                    finished_at: str = "2026-01-01T00:00:00+00:00", seconds: float = 1.0) -> Path:
-    """Write a results directory (see the module docstring); returns its path."""
+    """Write a results directory (see the module docstring); returns its path.
+
+    ``frame_rate``: the fake sensor's (None: the manifest gives none, so
+    reports cannot turn frames into seconds)."""
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -238,16 +238,17 @@ class _Scene:
 def simulate(
     params: GestureParams,
     *,
-    grid: tuple[int, int] = (8, 8),
+    grid: tuple[int, int],
+    frame_rate: float,
     pitch_mm: float = 25.4,
-    frame_rate: float = 54.0,
     frames: int | None = None,
     factors: Factors | None = None,
     hand_scale: float = 1.0,
     seed: int = 0,
 ) -> tuple[np.ndarray, Events]:
     """One gesture alone on a bare, ideal sensor: the force per cell (T, H,
-    W) in newtons and the contact events. ``frames`` given: a fixed window
+    W) in newtons and the contact events, on a ``grid`` of cells
+    ``pitch_mm`` apart sampled at ``frame_rate``. ``frames`` given: a fixed window
     of the continuous performance; else cut at the touch. For trying a
     gesture's kinematics and for testing each one by itself."""
     rng = np.random.default_rng(seed)
