@@ -71,7 +71,8 @@ def test_backend_option_errors(env):
 
 def test_dask_workers_see_installed_plugins(cluster, env, example_plugin):
     # no worker_setup: the workers load the plugin by themselves, like the command line does
-    text = PROTOCOL.replace("features:\n  - [msd]\n  - [sd, bmh]\n", "features:\n  - [example-pressure-stats]\n")
+    text = PROTOCOL.replace("features:\n  - [msd]\n  - [{{name: sd, params: {{preset: haart}}}}, {{name: bmh, params: {{preset: haart}}}}]\n",
+                           "features:\n  - [example-pressure-stats]\n")
     text = text.replace("  - zhou-knn\n", "  - example-nearest-centroid\n")
     (env / "p.yaml").write_text(text.format(data=env / "data.parquet", extra=""))
     proto = parse_protocol((env / "p.yaml").read_text(), env / "p.yaml")

@@ -16,7 +16,7 @@ dataset: {data}
 scheme: loso
 features:
   - [msd]
-  - [sd, bmh]
+  - [{{name: sd, params: {{preset: haart}}}}, {{name: bmh, params: {{preset: haart}}}}]
 {extra}classifiers:
   - {{name: gaus-rf, params: {{n_estimators: 20}}, label: rf20}}
   - zhou-knn

@@ -85,6 +85,7 @@ def expected_size(name: str, sensor: SensorSpec, frames: int) -> int:
         "raw-window": frames * cells,
         **own,
         "touch-windows": 2 * sum(own.values()),
+        "example-pressure-stats": 4,  # the example plugin: mean, sd, min, max of the per-frame mean pressure
     }
     assert name in sizes, f"feature set {name!r}: add its size for any grid to this test"
     return sizes[name]

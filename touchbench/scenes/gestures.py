@@ -296,7 +296,6 @@ def plan_events(
     if f.mirror:
         angle = np.pi - angle
         dx = -dx
-    ux, uy = np.cos(angle), np.sin(angle)
     h_mm, w_mm = surface_mm
     travel = p.travel_mm * f.amplitude
     cx = w_mm / 2 + dx + p.scatter_mm * rng.standard_normal(n)
