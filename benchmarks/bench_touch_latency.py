@@ -44,6 +44,7 @@ def main() -> None:
 
     from touchbench.catalog import load_dataset
     from touchbench.classifiers import make_classifier
+    from touchbench.methods import METHODS, FeaturePipeline, method_spec
 
     cpus = sorted(os.sched_getaffinity(0))
     os.sched_setaffinity(0, {cpus[-1]})
@@ -54,29 +55,34 @@ def main() -> None:
     y = ds.meta["gesture"].astype(str).to_numpy()
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     fitted, acc, fit_s = {}, {}, {}
+    caps = ds.captures
+    subjects = ds.meta["subject"].astype(str).to_numpy()
     for m in methods:
         t0 = time.perf_counter()
-        est = make_classifier(m, random_state=0, sensor=ds.sensor)
-        kw = {"groups": ds.meta["subject"].astype(str).to_numpy()[tr]} if m == "touch-et-tuned" else {}
-        est.fit(X[tr], y[tr], **kw)
+        if m in METHODS:  # a named method: the captures -> its feature sets -> its estimator
+            pipe = FeaturePipeline(method_spec(m), random_state=0, sensor=ds.sensor)
+            pipe.fit([caps[i] for i in tr], y[tr], groups=subjects[tr])
+            predict = (lambda p: lambda idx: p.predict([caps[i] for i in idx]))(pipe)
+        else:  # a classifier on the raw frames (the peers)
+            est = make_classifier(m, random_state=0, sensor=ds.sensor).fit(X[tr], y[tr])
+            predict = (lambda e: lambda idx: e.predict(X[idx]))(est)
         fit_s[m] = time.perf_counter() - t0
-        acc[m] = float(np.mean(est.predict(X[te]) == y[te]))
-        fitted[m] = est
-        est.predict(X[te[:1]])  # warm-up (compiled forest, aeon's numba kernels)
+        acc[m] = float(np.mean(predict(te) == y[te]))
+        fitted[m] = predict
+        predict(te[:1])  # warm-up (compiled forest, aeon's numba kernels)
         print(f"fitted {m}: {fit_s[m]:.1f} s, test accuracy {100 * acc[m]:.1f} %", flush=True)
 
     rng = np.random.default_rng(0)
     wall = {m: [] for m in methods}
     cpu = {m: [] for m in methods}
     for _ in range(args.runs):
-        caps = rng.choice(te, size=min(args.captures, len(te)), replace=False)
+        chosen = rng.choice(te, size=min(args.captures, len(te)), replace=False)
         w_run = {m: [] for m in methods}
         c_run = {m: [] for m in methods}
-        for i in caps:
-            x = X[i:i + 1]
+        for i in chosen:
             for m in methods:
                 c0, t0 = time.thread_time(), time.perf_counter()
-                fitted[m].predict(x)
+                fitted[m]([i])
                 w_run[m].append(time.perf_counter() - t0)
                 c_run[m].append(time.thread_time() - c0)
         for m in methods:

@@ -355,9 +355,9 @@ def test_a_classifier_identity_covers_the_estimator_its_factory_builds(user, tmp
 
 
 def test_a_classifier_identity_covers_the_feature_sets_it_names():
-    # touch-et builds its feature sets by name at fit time
-    et = classifier_identity("touch-et")
-    assert "touchbench.features.touch" in et.modules
+    # a classifier whose parameters name a registered feature set: that set's source counts too
+    named = classifier_identity("gaus-rf", {"criterion": "touch-rhythm"})
+    assert "touchbench.features.touch" in named.modules
     assert "touchbench.features.touch" not in classifier_identity("gaus-rf").modules
 
 

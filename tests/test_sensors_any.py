@@ -31,6 +31,7 @@ from touchbench.datasets.model import SensorSpec, TouchDataset
 from touchbench.engine.runner import plan_run
 from touchbench.engine.testing import random_dataset
 from touchbench.features.base import FEATURES, FeatureInputError, make_feature_set
+from touchbench.methods import METHODS, FeaturePipeline, method_spec
 from touchbench.protocols.schema import ProtocolError, parse_protocol
 
 SENSORS = {
@@ -101,8 +102,7 @@ REFUSED: dict[tuple[str, str], str] = {
     ("cnn", "32x32"): r"L=30 windows need captures of at least 30 frames.*the shortest has 20",
 }
 #: the classifiers that read raw frames: they record the grid (and rate) they used
-RAW_FRAME = {"touch-et", "touch-et-fast", "touch-et-tuned", "touch-et-win", "touch-xgb", "minirocket", "multirocket", "cnn"}
-TAKES_RATE = {"touch-et", "touch-et-fast", "touch-et-tuned", "touch-et-win", "touch-xgb"}
+RAW_FRAME = {"minirocket", "multirocket", "cnn"}
 RATE_SETS = {"touch-rhythm", "cell-rhythm", "contact-motion", "touch-windows"}
 
 
@@ -197,8 +197,25 @@ def test_every_classifier_uses_the_sensor_or_is_refused(name, key):
     assert pred.shape == (len(ds),) and set(pred.tolist()) <= {0, 1}
     if name in RAW_FRAME:
         assert tuple(est.grid_) == sensor.grid
-    if name in TAKES_RATE:
-        assert est.frame_rate_ == sensor.frame_rate
+
+
+# ------------------------------------------------------------------ named methods
+@pytest.mark.parametrize("key", list(SENSORS))
+@pytest.mark.parametrize("name", METHODS.names())
+def test_every_method_uses_the_sensor_or_is_refused(name, key):
+    """A named method's feature sets get the sensor (their sizes for this grid, worked out by hand)."""
+    ds = dataset(key)
+    sensor, n0 = ds.sensor, shortest(ds)
+    spec = method_spec(name, n_estimators=5)
+    problems = [sensor_problem(make_feature_set(n, p, sensor), sensor, n0) for n, p in spec.feature_sets]
+    if (name, key) in REFUSED:
+        assert any(p and re.search(REFUSED[name, key], p) for p in problems), problems
+        return
+    assert not any(problems), problems
+    y = np.where(ds.meta["gesture"].to_numpy() == "rub", "rub", "other")
+    pipe = FeaturePipeline(spec, random_state=0, sensor=sensor).fit(ds.captures, y)
+    assert pipe.transform(ds.captures).shape == (len(ds), sum(expected_size(n, sensor, n0) for n in spec.feature_names))
+    assert set(pipe.predict(ds.captures).tolist()) <= {"rub", "other"}
 
 
 @pytest.mark.parametrize("name", sorted(RAW_FRAME))
@@ -233,7 +250,7 @@ seed: 0
 @pytest.mark.parametrize("name,key", sorted(k for k in REFUSED if k[0] != "sd"))
 def test_the_plan_refuses_before_any_task(name, key, tmp_path):
     ds = dataset(key)
-    if name in CLASSIFIERS.names():
+    if name in CLASSIFIERS.names() or name in METHODS.names():
         text = PROTOCOL.format(data="scene:tiny", frames=shortest(ds), clf=name)
     else:
         text = PROTOCOL.format(data="scene:tiny", frames=shortest(ds), clf="zhou-lda").replace(
@@ -241,7 +258,7 @@ def test_the_plan_refuses_before_any_task(name, key, tmp_path):
     with pytest.raises(ProtocolError) as e:
         plan_run(parse_protocol(text), cache_root=tmp_path, dataset=ds)
     msg = str(e.value)
-    kind = "classifier" if name in CLASSIFIERS.names() else "feature set"
+    kind = "classifier" if name in CLASSIFIERS.names() else "method" if name in METHODS.names() else "feature set"
     sensor = ds.sensor
     assert f"{kind} {name!r} cannot serve sensor {sensor.name!r} ({sensor.grid[0]} x {sensor.grid[1]}" in msg
     assert f"at {sensor.frame_rate:g} Hz" in msg and re.search(REFUSED[name, key], msg)
@@ -255,7 +272,7 @@ def test_validate_and_run_refuse_on_the_command_line(tmp_path):
     for args in (["protocols", "validate", str(proto)], ["run", str(proto), "--out", str(tmp_path / "out")]):
         r = CliRunner().invoke(cli, args)
         assert r.exit_code == 2, r.output
-        assert "classifier 'touch-et-win' cannot serve sensor 'wide-19x24' (19 x 24 at 12 Hz)" in r.output
+        assert "method 'touch-et-win' cannot serve sensor 'wide-19x24' (19 x 24 at 12 Hz)" in r.output
         assert "longer than the shortest capture (3 frames)" in r.output
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").rglob("*.parquet"))
 
@@ -266,7 +283,7 @@ def test_a_run_on_another_sensor_gives_the_classifier_that_sensor(tmp_path):
     ds = dataset("6x6")
     data = ds.to_parquet(tmp_path / "six.parquet")
     proto = tmp_path / "p.yaml"
-    text = PROTOCOL.format(data=data, frames=40, clf="{name: touch-et-fast, params: {model_params: {n_estimators: 5}}}")
+    text = PROTOCOL.format(data=data, frames=40, clf="{name: touch-et-fast, params: {n_estimators: 5}}")
     proto.write_text(text)
     res = run_protocol(proto, out=tmp_path / "out", cache_root=tmp_path / "cache", jobs=1, progress=False)
     assert (res.scores["status"] == "ok").all(), res.scores["error"].tolist()

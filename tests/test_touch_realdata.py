@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from touchbench.classifiers import make_classifier
+from touchbench.methods import FeaturePipeline, method_spec
 
 pytestmark = pytest.mark.realdata
 
@@ -24,9 +24,10 @@ def test_touch_et_fast_beats_the_published_challenge_forest(real_haart_challenge
     split = ds.meta["split"].astype(str).to_numpy()
     tr, te = np.flatnonzero(split == "train"), np.flatnonzero(split == "test")
     assert (len(tr), len(te)) == (578, 251)
-    X = np.stack(ds.captures).reshape(len(ds.captures), -1).astype(np.float64)
+    caps = ds.captures
     y = ds.meta["gesture"].astype(str).to_numpy()
-    est = make_classifier("touch-et-fast", random_state=0, sensor=ds.sensor).fit(X[tr], y[tr])
-    pred = est.predict(X[te])
+    est = FeaturePipeline(method_spec("touch-et-fast"), random_state=0, sensor=ds.sensor)
+    est.fit([caps[i] for i in tr], y[tr])
+    pred = est.predict([caps[i] for i in te])
     assert set(pred) <= set(y[tr]) and len(set(pred)) == 7
     assert np.mean(pred == y[te]) > GAUS_2015_CHALLENGE

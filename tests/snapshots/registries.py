@@ -20,11 +20,12 @@ def registries() -> dict:
     from touchbench.datasets import DATASETS
     from touchbench.datasets.formats import FORMATS
     from touchbench.features import FEATURES
+    from touchbench.methods import METHODS
     from touchbench.protocols.splits import SPLITTERS
     from touchbench.scenes import SCENES
 
     return {"classifiers": CLASSIFIERS, "datasets": DATASETS, "evaluation schemes": SPLITTERS,
-            "features": FEATURES, "file formats": FORMATS, "scenes": SCENES}
+            "features": FEATURES, "file formats": FORMATS, "methods": METHODS, "scenes": SCENES}
 
 
 def builtin_names(reg) -> list[str]:

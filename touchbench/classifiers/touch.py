@@ -36,10 +36,8 @@ from sklearn.model_selection import GroupKFold, LeaveOneGroupOut, StratifiedKFol
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ..core.introspect import sensor_problem, with_accepted
-from ..features.base import FEATURES
-from ._util import MAX_SEED, build, frames_in_row, seed_int, sensor_frames
-from .base import CLASSIFIERS, make_classifier
+from ._util import MAX_SEED, build, seed_int
+from .base import CLASSIFIERS
 from .fastforest import compile_forest
 
 #: at most this many rows are predicted with the compiled forest (live use, latency)
@@ -169,104 +167,6 @@ class NestedTunedExtraTrees(ClassifierMixin, BaseEstimator):
         return self.classes_[np.argmax(proba, axis=1)]
 
 
-class TouchFeatureClassifier(ClassifierMixin, BaseEstimator):
-    """Raw frames -> touchbench's own feature sets -> a model, in one estimator.
-
-    Input: the ``raw-window`` feature set's flattened frames (frame-major,
-    row-major, ``X.reshape(n, F, H, W)``), so this method sits in the same
-    protocol entry as the peers (which take the same input) and its
-    ``latency_ms`` covers features + prediction of one capture, measured
-    the same way as theirs. The grid and frame rate are the sensor's: the
-    run engine passes the dataset's sensor (``sensor``); from Python
-    without a sensor, ``grid`` and ``frame_rate`` must be given (given with
-    a sensor, they must be the sensor's); ``grid_`` and ``frame_rate_``
-    record what a fitted estimator used. ``feature_sets`` names registered
-    feature sets (default the three of :mod:`touchbench.features.touch`),
-    computed at that frame rate. ``model``: ``"et"`` (:class:`SelectedExtraTrees`),
-    ``"et-tuned"`` (:class:`NestedTunedExtraTrees`, which receives the
-    training subjects as ``groups``) or ``"xgboost"`` (the registered
-    ``xgboost`` classifier: gradient boosting on the same features).
-    ``model_params`` go to that model.
-    """
-
-    def __init__(self, sensor=None, grid=None, frame_rate=None, feature_sets=("touch-rhythm", "cell-rhythm", "contact-motion"),
-                 model="et", model_params=None, random_state=None):
-        self.sensor = sensor
-        self.grid = grid
-        self.frame_rate = frame_rate
-        self.feature_sets = feature_sets
-        self.model = model
-        self.model_params = model_params
-        self.random_state = random_state
-
-    def _grid_rate(self, sensor) -> tuple[tuple[int, int], float]:
-        return sensor_frames(type(self).__name__, sensor, self.grid, self.frame_rate, need_rate=True)  # type: ignore[return-value]
-
-    def _sets(self, rate: float) -> list:
-        """The feature sets, unfitted; a set that takes a ``frame_rate`` gets ``rate``."""
-        out = []
-        for name in self.feature_sets:
-            cls = FEATURES.get(name)
-            out.append(cls(**with_accepted(cls, {}, frame_rate=rate)))
-        return out
-
-    def check_sensor(self, sensor, min_frames=None):
-        """Why this estimator cannot serve ``sensor`` (a grid or rate not the sensor's,
-        or one of its feature sets cannot), or None."""
-        try:
-            _, rate = self._grid_rate(sensor)
-        except ValueError as e:
-            return str(e)
-        for fs in self._sets(rate):
-            problem = sensor_problem(fs, sensor, min_frames)
-            if problem:
-                return problem
-        return None
-
-    def _captures(self, X: np.ndarray) -> np.ndarray:
-        h, w = self.grid_
-        return X.reshape(X.shape[0], frames_in_row(X.shape[1], (h, w)), h, w)
-
-    def _features(self, caps: np.ndarray) -> np.ndarray:
-        """The feature sets of ``caps`` at the fitted frame rate."""
-        return np.hstack([fs.fit(caps[:1]).transform(caps) for fs in self._sets(self.frame_rate_)])
-
-    def _make_model(self):
-        params = dict(self.model_params or {})
-        seed = seed_int(self.random_state)
-        if self.model == "et":
-            return build(SelectedExtraTrees, DEFAULTS_ET, seed, params, name="touch (et)")
-        if self.model == "et-tuned":
-            return build(NestedTunedExtraTrees, DEFAULTS_TUNED, seed, params, name="touch (et-tuned)")
-        if self.model == "xgboost":
-
-            return make_classifier("xgboost", random_state=seed, **params)
-        raise ValueError(f"model must be 'et', 'et-tuned' or 'xgboost', got {self.model!r}")
-
-    def fit(self, X, y, groups=None):
-        self.grid_, self.frame_rate_ = self._grid_rate(self.sensor)
-        X, y = validate_data(self, X, y, dtype=np.float64)
-        check_classification_targets(y)
-        if not self.feature_sets:
-            raise ValueError("feature_sets must name at least one feature set")
-        F = self._features(self._captures(X))
-        fit_kw = {}
-        if self.model == "et-tuned" and groups is not None:
-            fit_kw["groups"] = np.asarray(groups)
-        self.model_ = self._make_model().fit(F, y, **fit_kw)
-        self.classes_ = np.asarray(self.model_.classes_)
-        return self
-
-    def predict_proba(self, X):
-        check_is_fitted(self)
-        X = validate_data(self, X, dtype=np.float64, reset=False)
-        return np.asarray(self.model_.predict_proba(self._features(self._captures(X))), dtype=np.float64)
-
-    def predict(self, X):
-        proba = self.predict_proba(X)
-        return self.classes_[np.argmax(proba, axis=1)]
-
-
 DEFAULTS_ET = {"n_estimators": 500, "max_features": 0.3, "keep": None, "n_jobs": 1}
 DEFAULTS_FAST = {"n_estimators": 100, "max_features": 0.3, "keep": None, "n_jobs": 1}
 DEFAULTS_TUNED = {"n_estimators": 500, "grid_max_features": (0.3, "sqrt"), "grid_keep": (None, 150),
@@ -289,32 +189,3 @@ def touch_extra_trees_fast(random_state=None, **params):
                       source=SOURCE, defaults=DEFAULTS_TUNED, extra=None, cheap_params=dict(n_estimators=5, inner_folds=2))
 def touch_extra_trees_tuned(random_state=None, **params):
     return build(NestedTunedExtraTrees, DEFAULTS_TUNED, random_state, params, name="touch-extra-trees-tuned")
-
-
-DEFAULTS_TOUCH = {"feature_sets": ("touch-rhythm", "cell-rhythm", "contact-motion"), "model": "et", "model_params": None}
-
-
-def _touch(name: str, **over):
-    defaults = {**DEFAULTS_TOUCH, **over}
-
-    def factory(random_state=None, sensor=None, **params):
-        return build(TouchFeatureClassifier, defaults, random_state, {**params, "sensor": sensor}, name=name)
-
-    return defaults, factory
-
-
-_d, _f = _touch("touch-et")
-CLASSIFIERS.register("touch-et", description="touchbench: raw frames -> touch-rhythm + cell-rhythm + contact-motion -> extra-trees 500",
-                     source=SOURCE, defaults=_d, extra=None, cheap_params=dict(model_params={"n_estimators": 5}))(_f)
-_d, _f = _touch("touch-et-tuned", model="et-tuned")
-CLASSIFIERS.register("touch-et-tuned", description="touchbench: touch-et with max_features / feature selection by nested CV over training subjects",
-                     source=SOURCE, defaults=_d, extra=None, cheap_params=dict(model_params={"n_estimators": 5, "inner_folds": 2}))(_f)
-_d, _f = _touch("touch-xgb", model="xgboost")
-CLASSIFIERS.register("touch-xgb", description="touchbench: raw frames -> touch-rhythm + cell-rhythm + contact-motion -> XGBoost (gradient boosting on the combined features)",
-                     source=SOURCE, defaults=_d, extra=None, cheap_params=dict(model_params={"n_estimators": 5}))(_f)
-_d, _f = _touch("touch-et-win", feature_sets=("touch-rhythm", "cell-rhythm", "contact-motion", "touch-windows"))
-CLASSIFIERS.register("touch-et-win", description="touchbench: touch-et plus touch-windows (the three sets' mean and sd over four 2-s windows)",
-                     source=SOURCE, defaults=_d, extra=None, cheap_params=dict(model_params={"n_estimators": 5}))(_f)
-_d, _f = _touch("touch-et-fast", feature_sets=("touch-rhythm",), model_params={"n_estimators": 100})
-CLASSIFIERS.register("touch-et-fast", description="touchbench, latency-bound: raw frames -> touch-rhythm -> extra-trees 100",
-                     source=SOURCE, defaults=_d, extra=None, cheap_params=dict(model_params={"n_estimators": 5}))(_f)

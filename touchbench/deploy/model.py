@@ -38,15 +38,14 @@ from typing import Any, Sequence
 import joblib
 import numpy as np
 
-from ..classifiers import make_classifier
 from ..classifiers.fastforest import compile_forest
 from ..core.atomic import atomic_path, atomic_write_bytes
 from ..core.errors import DataError, TouchbenchError
-from ..core.introspect import accepts
 from ..core.threads import single_thread
 from ..core.versions import package_versions
 from ..datasets.model import SensorSpec, TouchDataset
 from ..features.base import make_feature_set
+from ..methods.fitting import fit_estimator
 from .windows import cut_windows, seconds_to_frames
 
 __all__ = [
@@ -268,9 +267,7 @@ def fit_model(
         lengths = hops = []
         samples, src = list(dataset.captures), np.arange(len(dataset))
     y = y_caps[src]
-    classes = np.array(sorted(set(y.tolist())), dtype=object)
-    code = {c: i for i, c in enumerate(classes)}
-    c_train = np.array([code[v] for v in y], dtype=np.int64)
+    subjects = np.array([str(v) for v in dataset.meta["subject"].tolist()], dtype=object)
 
     t0 = time.perf_counter()
     with single_thread():
@@ -281,14 +278,9 @@ def fit_model(
             fitted.append(fs)
         X = np.hstack([np.asarray(fs.transform(samples), dtype=np.float64) for fs in fitted])
         feature_seconds = time.perf_counter() - t0
-        est = None
-        if len(classes) > 1:
-            est = make_classifier(classifier, random_state=seed, sensor=sensor, **classifier_params)
-            fit_kw = {}
-            if accepts(est.fit, "groups"):  # the engine's own rule for group-aware classifiers
-                subjects = np.array([str(v) for v in dataset.meta["subject"].tolist()], dtype=object)
-                fit_kw["groups"] = subjects[src]
-            est.fit(X, c_train, **fit_kw)
+        # the run engine's own fit path: label codes, subjects as groups, a one-class training set
+        fitted_est = fit_estimator(classifier, classifier_params, seed, X, y, subjects[src], sensor=sensor)
+        est, classes = fitted_est.estimator, fitted_est.classes
     fit_seconds = time.perf_counter() - t0 - feature_seconds
 
     n = dataset.n_frames

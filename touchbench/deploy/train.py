@@ -31,6 +31,7 @@ import pandas as pd
 from ..core.errors import TouchbenchError
 from ..core.suggest import did_you_mean
 from ..engine.runner import plan_run
+from ..methods import resolve_entry
 from ..protocols.library import find_protocol
 from ..protocols.schema import load_protocol
 from ..protocols.seeding import derive_seed
@@ -139,8 +140,9 @@ def train_from_protocol(
         "where": where or {},
         "exclude": exclude or {},
     }
+    method = resolve_entry(combo.sets, clf.name, clf.params)  # a named method brings its own feature sets
     return fit_model(
-        train, combo.sets, clf.name, clf.params,
+        train, method.feature_sets, method.estimator, method.estimator_params,
         seed=default_seed if seed is None else seed, target=proto.target,
         windows=windows, train_hop=train_hop, features_label=combo.label, classifier_label=clf.label,
         selection="; ".join(parts), source=source,

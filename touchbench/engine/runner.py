@@ -68,6 +68,7 @@ from ..core.paths import cache_dir
 from ..core.suggest import did_you_mean
 from ..datasets.model import DatasetChangedWarning, SensorSpec, TouchDataset
 from ..features import FEATURES
+from ..methods import METHODS, MethodSpec, method_spec, resolve_entry
 from ..protocols.schema import Protocol, expand_grid, load_protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
 from ..protocols.splits import SplitError
@@ -190,6 +191,22 @@ def _label(kind: str, name: str, params: dict[str, Any]) -> str:
     return f"{kind} {name}" + (f" {canonical_json(params)}" if params else "")
 
 
+def _spec_index(protocol: Protocol, name: str) -> int:
+    """The index in ``classifiers:`` of the first entry named ``name`` (for error locations)."""
+    return next((i for i, s in enumerate(protocol.classifiers) if s.name == name), 0)
+
+
+def _whole_captures_note(clf: Any, sets: Any, ds: TouchDataset) -> str | None:
+    """Beside a named method, ``[raw-window]`` stands for the captures as recorded: a note when
+    its parameters would have cut or padded them (they are not applied)."""
+    frames = dict(sets[0][1]).get("frames")
+    lo, hi = int(ds.n_frames.min()), int(ds.n_frames.max())
+    if frames is not None and (lo != int(frames) or hi != int(frames)):
+        return (f"method {clf.name!r} takes the captures as recorded ({lo}..{hi} frames); the frames={frames} "
+                f"of raw-window beside it is not applied")
+    return None
+
+
 def check_sensor_fit(protocol: Protocol, sensor: SensorSpec, min_frames: int) -> None:
     """Refuse the protocol when one of its components cannot serve ``sensor``.
 
@@ -207,8 +224,18 @@ def check_sensor_fit(protocol: Protocol, sensor: SensorSpec, min_frames: int) ->
                     raise protocol.error_at(("features", i, j), f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {problem}")
     for i, spec in enumerate(protocol.classifiers):
         for p in expand_grid(spec.params):
+            if spec.name in METHODS:  # a named method: its own feature sets, then its estimator
+                m = method_spec(spec.name, **p)
+                for name, params in m.feature_sets:
+                    problem = sensor_problem(make_feature_set(name, params, sensor), sensor, min_frames)
+                    if problem:
+                        raise protocol.error_at(("classifiers", i), f"method {spec.name!r} cannot serve sensor "
+                                                                    f"{sensor.describe()}: {name}: {problem}")
+                spec_name, p = m.estimator, m.estimator_params
+            else:
+                spec_name = spec.name
             try:
-                est = make_classifier(spec.name, random_state=0, sensor=sensor, **p)
+                est = make_classifier(spec_name, random_state=0, sensor=sensor, **p)
             except Exception as e:
                 raise protocol.error_at(("classifiers", i), f"classifier {spec.name!r} rejects {p}: {type(e).__name__}: {e}") from None
             problem = sensor_problem(est, sensor, min_frames)
@@ -243,19 +270,31 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
 
     combos = protocol.combinations()
     clfs = protocol.classifier_entries()
+    # each (combination, classifier) entry is a method: the combination's sets -> the classifier,
+    # or a named method's own sets -> its estimator (the combination is then [raw-window])
+    methods: dict[tuple[int, int], MethodSpec] = {}
+    for ci, c in enumerate(combos):
+        for ki, clf in enumerate(clfs):
+            try:
+                methods[ci, ki] = resolve_entry(c.sets, clf.name, clf.params)
+            except TouchbenchError as e:
+                raise protocol.error_at(("classifiers", _spec_index(protocol, clf.name)), str(e)) from None
+            note = _whole_captures_note(clf, c.sets, ds) if clf.name in METHODS else None
+            if note:
+                notes.append(note)
     identities: dict[str, Identity] = {}
     set_info: dict[tuple, tuple[bool, str]] = {}
-    for c in combos:
-        for name, params in c.sets:
+    clf_info: dict[tuple, str] = {}
+    for m in methods.values():
+        for name, params in m.feature_sets:
             k = (name, canonical_json(params))
             if k not in set_info:
                 ident = identities[_label("feature set", name, params)] = feature_set_identity(name, params)
                 set_info[k] = (bool(getattr(FEATURES.get(name), "fold_dependent", True)), ident.digest)
-    clf_info: dict[tuple, str] = {}
-    for clf in clfs:
-        k = (clf.name, canonical_json(clf.params))
+        k = (m.estimator, canonical_json(m.estimator_params))
         if k not in clf_info:
-            ident = identities[_label("classifier", clf.name, clf.params)] = classifier_identity(clf.name, clf.params)
+            ident = identities[_label("classifier", m.estimator, m.estimator_params)] = classifier_identity(
+                m.estimator, m.estimator_params)
             clf_info[k] = ident.digest
     for label, ident in identities.items():
         if ident.incomplete:
@@ -277,21 +316,25 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
         for fold in folds:
             crop_frames = fold.crop.n_frames(ds.sensor.frame_rate) if fold.crop is not None else None
             idx_hash = hashlib.sha256(fold.train.tobytes() + b"|" + fold.test.tobytes()).hexdigest()[:16]
-            for combo in combos:
-                sets = []
-                for name, params in combo.sets:
-                    dep, ver = set_info[(name, canonical_json(params))]
-                    sets.append(SetSpec(
-                        name=name, params=params, fold_dependent=dep,
-                        key_full=None if dep else FeatureCache.key(ds.content_hash, name, params, ver, None),
-                        key_crop=None if dep or crop_frames is None else FeatureCache.key(ds.content_hash, name, params, ver, crop_frames),
-                    ))
-                for clf in clfs:
+            for ci, combo in enumerate(combos):
+                for ki, clf in enumerate(clfs):
+                    method = methods[ci, ki]
+                    sets = []
+                    for name, params in method.feature_sets:
+                        dep, ver = set_info[(name, canonical_json(params))]
+                        sets.append(SetSpec(
+                            name=name, params=params, fold_dependent=dep,
+                            key_full=None if dep else FeatureCache.key(ds.content_hash, name, params, ver, None),
+                            key_crop=None if dep or crop_frames is None else FeatureCache.key(ds.content_hash, name, params, ver, crop_frames),
+                        ))
+                    estimator = [method.estimator, method.estimator_params,
+                                 clf_info[(method.estimator, canonical_json(method.estimator_params))]]
                     identity = {
                         "dataset": ds.content_hash, "target": target, "scheme": scheme_json, "repetition": r,
                         "fold": fold.name, "indices": idx_hash, "crop": [crop_frames, bool(fold.crop and fold.crop.train)],
-                        "features": [[n, p, set_info[(n, canonical_json(p))][1]] for n, p in combo.sets],
-                        "classifier": [clf.name, clf.params, clf_info[(clf.name, canonical_json(clf.params))]],
+                        "features": [[n, p, set_info[(n, canonical_json(p))][1]] for n, p in method.feature_sets],
+                        "classifier": [clf.name, clf.params, *estimator[2:]] if clf.name == method.estimator
+                        else [clf.name, clf.params, estimator],
                         "seed": protocol.seed,
                     }
                     task_id = hashlib.sha256(canonical_json(identity).encode()).hexdigest()[:20]
@@ -301,8 +344,8 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                         "dataset_hash": ds.content_hash, "target": target, "scheme": protocol.scheme.name,
                         "repetition": r, "fold": fold.name, "fold_group": fold.group,
                         "early_frames": np.float64(crop_frames) if crop_frames is not None else np.nan,
-                        "features": combo.label, "feature_sets": "+".join(combo.names),
-                        "feature_params": canonical_json([[n, p] for n, p in combo.sets]),
+                        "features": combo.label, "feature_sets": "+".join(method.feature_names),
+                        "feature_params": canonical_json([[n, p] for n, p in method.feature_sets]),
                         "classifier": clf.label, "classifier_name": clf.name,
                         "classifier_params": canonical_json(clf.params), "seed": seed,
                         "n_train": int(len(fold.train)), "n_test": int(len(fold.test)),
@@ -311,6 +354,7 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                         task_id=task_id, repetition=r, fold=fold, features_label=combo.label, sets=tuple(sets),
                         classifier_label=clf.label, classifier_name=clf.name, classifier_params=clf.params,
                         seed=seed, crop_frames=crop_frames, base_row=base,
+                        estimator_name=method.estimator, estimator_params=method.estimator_params,
                     ))
     crops = [t.crop_frames for t in tasks if t.crop_frames is not None]
     min_frames = int(min([int(ds.n_frames.min()), *crops]))

@@ -12,9 +12,11 @@ Determinism: the classifier's ``random_state`` is the task's ``seed``
 runs with BLAS / OpenMP / torch limited to one thread, so the predictions do
 not depend on ``--jobs`` or on which worker ran the task.
 
-Labels: the classifier is fitted on integer codes ``0..C-1`` of the classes
-present in the training fold (sorted), which every estimator accepts
-(XGBoost needs contiguous codes), and predictions are decoded back.
+A task evaluates one method: its feature sets (fold-independent ones from
+the feature cache, fold-dependent ones fitted on the training fold) and its
+estimator, fitted through :func:`touchbench.methods.fitting.fit_estimator`
+(label codes, subjects as ``groups``, one-class folds), the same path
+``touchbench train`` takes.
 """
 
 from __future__ import annotations
@@ -29,12 +31,11 @@ from typing import Any, Callable
 import numpy as np
 import pandas as pd
 
-from ..classifiers import make_classifier
-from ..core.introspect import accepts
 from ..core.threads import single_thread
 from ..datasets.model import TouchDataset
 from ..evaluation.metrics import metrics
 from ..features.base import make_feature_set
+from ..methods.fitting import fit_estimator
 from ..protocols.splits import Fold, fold_notes
 from .backends import run_setup
 from .cache import FeatureCache, crop_captures
@@ -67,6 +68,8 @@ class Task:
     classifier_params: dict[str, Any]
     seed: int
     crop_frames: int | None = None  # resolved from fold.crop with the sensor's frame rate
+    estimator_name: str = ""  # the method's estimator (the classifier itself, or a named method's)
+    estimator_params: dict[str, Any] = field(default_factory=dict)
     base_row: dict[str, Any] = field(default_factory=dict)
 
 
@@ -212,36 +215,18 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
             X_tr, X_te, fitted, per_capture, feat_fit = _fold_features(task, ctx, y_train)
             row["feature_seconds_per_capture"] = per_capture
             row["feature_fit_seconds"] = feat_fit
-            classes = np.array(sorted(set(y_train)), dtype=object)
-            row["n_classes_train"] = int(len(classes))
-            code = {c: i for i, c in enumerate(classes)}
-            c_train = np.array([code[v] for v in y_train], dtype=np.int64)
-            proba = None
-            est = None
-            if len(classes) == 1:
-                t0 = time.perf_counter()
-                y_pred = np.array([classes[0]] * len(fold.test), dtype=object)
-                row["fit_seconds"] = 0.0
-                row["predict_seconds"] = time.perf_counter() - t0
-            else:
-                est = make_classifier(task.classifier_name, random_state=task.seed, sensor=ds.sensor, **task.classifier_params)
-                fit_kw = {}
-                if accepts(est.fit, "groups"):
-                    fit_kw["groups"] = np.array([str(v) for v in ds.meta["subject"].to_numpy()[fold.train]], dtype=object)
-                t0 = time.perf_counter()
-                est.fit(X_tr, c_train, **fit_kw)
-                row["fit_seconds"] = time.perf_counter() - t0
-                t0 = time.perf_counter()
-                p_codes = np.asarray(est.predict(X_te))
-                row["predict_seconds"] = time.perf_counter() - t0
-                y_pred = classes[p_codes.astype(np.int64)]
-                if hasattr(est, "predict_proba"):
-                    try:
-                        P = np.asarray(est.predict_proba(X_te), dtype=np.float64)
-                        est_classes = getattr(est, "classes_", np.arange(P.shape[1]))
-                        proba = {str(classes[int(c)]): P[:, j] for j, c in enumerate(est_classes)}
-                    except Exception:  # probabilities are optional
-                        proba = None
+            groups = ds.meta["subject"].to_numpy()[fold.train]
+            t0 = time.perf_counter()
+            fitted_est = fit_estimator(task.estimator_name or task.classifier_name,
+                                       task.estimator_params if task.estimator_name else task.classifier_params,
+                                       task.seed, X_tr, y_train, groups, sensor=ds.sensor)
+            row["fit_seconds"] = time.perf_counter() - t0 if fitted_est.estimator is not None else 0.0
+            row["n_classes_train"] = int(len(fitted_est.classes))
+            t0 = time.perf_counter()
+            y_pred = fitted_est.predict(X_te)
+            row["predict_seconds"] = time.perf_counter() - t0
+            est = fitted_est.estimator
+            proba = fitted_est.predict_proba(X_te) if est is not None else None
             row.update(metrics(y_test, y_pred))
             # latency: features + predict for one capture, after warm-up
             lat_sets = _latency_sets(task, ctx, fitted, y_train)

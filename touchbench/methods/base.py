@@ -13,7 +13,7 @@ from typing import Any
 from ..core.errors import TouchbenchError
 from ..core.registry import Registry
 
-__all__ = ["METHODS", "MethodSpec", "method_spec"]
+__all__ = ["CAPTURES", "METHODS", "MethodSpec", "method_spec", "resolve_entry"]
 
 
 @dataclass(frozen=True)
@@ -55,3 +55,29 @@ def pipeline_method(name: str, feature_sets: tuple[str, ...], estimator: str,
                           estimator_params={**base, **params})
 
     return factory
+
+
+#: the feature combination that stands for "the captures as recorded" next to a named method
+CAPTURES = "raw-window"
+
+
+def resolve_entry(sets: list[tuple[str, dict[str, Any]]] | tuple, classifier: str,
+                  params: dict[str, Any]) -> MethodSpec:
+    """The method a protocol's (feature combination, classifier) entry stands for.
+
+    A classifier of the registry with the combination's sets in front of it;
+    or, when ``classifier`` names a registered method (``touch-et``...),
+    that method, whose own feature sets replace the combination: the
+    combination must then be ``[raw-window]`` alone (the captures as
+    recorded, which is what the method takes).
+    """
+    if classifier in METHODS:
+        names = [n for n, _ in sets]
+        if names != [CAPTURES]:
+            raise TouchbenchError(
+                f"method {classifier!r} computes its own feature sets "
+                f"({', '.join(METHODS.entry(classifier).tags.get('feature_sets', ()))}): pair it with the "
+                f"feature combination [{CAPTURES}] (the captures as recorded), not [{', '.join(names)}]")
+        return method_spec(classifier, **params)
+    return MethodSpec(name=classifier, feature_sets=tuple((n, dict(p)) for n, p in sets), estimator=classifier,
+                      estimator_params=dict(params))

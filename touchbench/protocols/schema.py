@@ -83,6 +83,7 @@ from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
 from ..core.suggest import did_you_mean
 from ..features import FEATURES
+from ..methods import METHODS
 from .seeding import derive_seed
 from .splits import SPLITTERS, SplitError, Splitter, make_splitter
 
@@ -214,7 +215,13 @@ class FeatureRef(_Model):
 
 
 class ClassifierSpec(_Model):
-    """A classifier entry: registered name, parameters (may hold grids), label."""
+    """A classifier entry: registered name, parameters (may hold grids), label.
+
+    The name is a registered classifier, or a registered method
+    (:data:`touchbench.methods.METHODS`, e.g. ``touch-et``): a method brings
+    its own feature sets and takes the captures as recorded, so it is paired
+    with the ``[raw-window]`` combination, and its parameters go to its
+    estimator."""
 
     name: str
     params: dict[str, Any] = Field(default_factory=dict)
@@ -224,7 +231,7 @@ class ClassifierSpec(_Model):
     @classmethod
     def _known(cls, v: str) -> str:
 
-        return _registry_check(CLASSIFIERS, v)
+        return v if v in METHODS else _registry_check(CLASSIFIERS, v)
 
 
 def _coerce_str_list(v: Any) -> Any:
@@ -669,7 +676,12 @@ def _classifier_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
 
     issues = []
     for i, spec in enumerate(protocol.classifiers):
-        factory = CLASSIFIERS.get(spec.name)
+        base: dict[str, Any] = {}
+        if spec.name in METHODS:  # a named method's parameters go to its estimator
+            tags = METHODS.entry(spec.name).tags
+            factory, base = CLASSIFIERS.get(tags["estimator"]), dict(tags.get("defaults") or {})
+        else:
+            factory = CLASSIFIERS.get(spec.name)
         names, var_kw = _accepted_params(factory)
         bad = False
         for k, v in spec.params.items():
@@ -700,7 +712,7 @@ def _classifier_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
             continue
         for p in expand_grid(spec.params):
             try:
-                factory(random_state=0, **p)
+                factory(random_state=0, **{**base, **p})
             except Exception as e:  # any construction error is a protocol error
                 issues.append((("classifiers", i, "params"), f"classifier {spec.name!r} rejects {p}: {type(e).__name__}: {e}"))
                 break

@@ -1,8 +1,8 @@
-"""touchbench's own classifiers: raw frames -> own feature sets -> extra-trees / XGBoost.
+"""touchbench's own methods: captures -> own feature sets -> extra-trees / XGBoost.
 
-Each raw-frame method is compared with the same model fitted by hand on
-features computed through the feature registry (a separate route), so
-the classifier must reshape frames, order feature sets and seed exactly as
+Each ``touch-*`` method is compared with the same model fitted by hand on
+features computed through the feature registry (a separate route), so the
+method must order its feature sets, encode labels and seed exactly as
 documented.
 """
 
@@ -12,10 +12,11 @@ import numpy as np
 import pytest
 from sklearn.ensemble import ExtraTreesClassifier
 
-from touchbench.classifiers import make_classifier
 from touchbench.classifiers.touch import FEW_ROWS, SelectedExtraTrees
+from touchbench.core.errors import TouchbenchError
 from touchbench.datasets.model import SensorSpec
 from touchbench.features.base import FEATURES
+from touchbench.methods import FeaturePipeline, MethodSpec, method_spec
 
 OWN = ("touch-rhythm", "cell-rhythm", "contact-motion")
 
@@ -45,34 +46,41 @@ def _registry_features(caps, names=OWN):
     return np.hstack([FEATURES.create(n, frame_rate=54.0).fit(caps[:1]).transform(caps) for n in names])
 
 
+def _proba(pipe, caps):
+    """The pipeline's probabilities as a matrix, columns in the order of its classes."""
+    P = pipe.predict_proba(list(caps))
+    return np.column_stack([P[str(c)] for c in pipe.classes_])
+
+
 def test_touch_et_is_extra_trees_on_the_registry_features():
     caps, y = _captures()
     test, _ = _captures(n_per_class=3, seed=1)
-    est = make_classifier("touch-et", random_state=11, sensor=SENSOR_4X4, model_params={"n_estimators": 20})
-    est.fit(caps.reshape(len(caps), -1), y)
+    est = FeaturePipeline(method_spec("touch-et", n_estimators=20), random_state=11, sensor=SENSOR_4X4)
+    est.fit(list(caps), y)
     ref = ExtraTreesClassifier(n_estimators=20, max_features=0.3, n_jobs=1, random_state=11)
     ref.fit(_registry_features(caps), y)
-    got = est.predict_proba(test.reshape(len(test), -1))
+    got = _proba(est, test)
     assert np.array_equal(got, ref.predict_proba(_registry_features(test)))
     assert list(est.classes_) == sorted(set(y))
-    assert np.mean(est.predict(caps.reshape(len(caps), -1)) == y) == 1.0  # trees fit their training rows
+    assert np.mean(est.predict(list(caps)) == y) == 1.0  # trees fit their training rows
 
 
 def test_touch_et_fast_uses_touch_rhythm_only_and_100_trees():
     caps, y = _captures()
-    est = make_classifier("touch-et-fast", random_state=2, sensor=SENSOR_4X4).fit(caps.reshape(len(caps), -1), y)
-    assert est.feature_sets == ("touch-rhythm",)
-    assert est.model_.model_.n_estimators == 100
-    assert est.model_.model_.n_features_in_ == len(FEATURES.create("touch-rhythm", frame_rate=54.0).feature_names((4, 4)))
+    est = FeaturePipeline(method_spec("touch-et-fast"), random_state=2, sensor=SENSOR_4X4).fit(list(caps), y)
+    assert est.spec.feature_names == ["touch-rhythm"]
+    model = est.fitted_.estimator
+    assert model.model_.n_estimators == 100
+    assert model.model_.n_features_in_ == len(FEATURES.create("touch-rhythm", frame_rate=54.0).feature_names((4, 4)))
 
 
 def test_touch_xgb_gives_probabilities_of_the_training_classes():
     caps, y = _captures()
-    est = make_classifier("touch-xgb", random_state=0, sensor=SENSOR_4X4, model_params={"n_estimators": 20})
-    est.fit(caps.reshape(len(caps), -1), y)
-    P = est.predict_proba(caps.reshape(len(caps), -1))
+    est = FeaturePipeline(method_spec("touch-xgb", n_estimators=20), random_state=0, sensor=SENSOR_4X4)
+    est.fit(list(caps), y)
+    P = _proba(est, caps)
     assert P.shape == (len(y), 3) and np.allclose(P.sum(axis=1), 1.0)
-    assert np.mean(est.predict(caps.reshape(len(caps), -1)) == y) == 1.0
+    assert np.mean(est.predict(list(caps)) == y) == 1.0
 
 
 def test_selected_extra_trees_keeps_the_most_important_columns():
@@ -100,10 +108,10 @@ def test_few_rows_go_through_the_compiled_forest_with_the_same_probabilities():
 
 
 def test_bad_input_is_refused():
-    with pytest.raises(ValueError, match="4x4 frames"):
-        make_classifier("touch-et", sensor=SENSOR_4X4).fit(np.zeros((6, 17)), np.array(["a", "b"] * 3))
     caps, y = _captures(n_per_class=2)
-    with pytest.raises(ValueError, match="model must be"):
-        make_classifier("touch-et", sensor=SENSOR_4X4, model="svm").fit(caps.reshape(len(caps), -1), y)
-    with pytest.raises(ValueError, match="feature_sets"):
-        make_classifier("touch-et", sensor=SENSOR_4X4, feature_sets=()).fit(caps.reshape(len(caps), -1), y)
+    with pytest.raises(TouchbenchError, match="unknown parameter"):
+        FeaturePipeline(method_spec("touch-et", model="svm"), sensor=SENSOR_4X4).fit(list(caps), y)
+    with pytest.raises(TouchbenchError, match="at least one feature set"):
+        MethodSpec("empty", (), "touch-extra-trees")
+    with pytest.raises(TouchbenchError, match="random_state is derived"):
+        method_spec("touch-et", random_state=3)
