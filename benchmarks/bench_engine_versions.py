@@ -32,6 +32,7 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
+from touchbench.core.paths import data_dir
 from touchbench.protocols.library import find_protocol
 from workdir import bench_dir
 
@@ -70,7 +71,8 @@ def one_run(src: Path, proto: Path, cache: Path, datasets: Path, results: Path, 
     cache.mkdir(parents=True)
     if datasets.is_dir():
         shutil.copytree(datasets, cache / "datasets")
-    env = {**os.environ, "PYTHONPATH": str(src), "TOUCHBENCH_CACHE_DIR": str(cache), "PYTHONHASHSEED": "0"}
+    env = {**os.environ, "PYTHONPATH": str(src), "TOUCHBENCH_CACHE_DIR": str(cache), "PYTHONHASHSEED": "0",
+           "TOUCHBENCH_DATA_DIR": str(data_dir())}  # the base checkout lives elsewhere: name the data
     t0 = time.perf_counter()
     r = subprocess.run([sys.executable, "-c", RUN, "run", str(proto), "--out", str(results), "--jobs", str(jobs),
                         "--no-progress"], cwd=src, env=env, capture_output=True, text=True)

@@ -37,8 +37,11 @@ def validate(file: str, schema_only: bool) -> None:
     proto = load_protocol(path)
     combos = proto.combinations()
     clfs = proto.classifier_entries()
+    n_methods = len(proto.entries())
+    shape = f"{len(combos)} feature combination(s) x {len(clfs)} classifier(s)" if combos else ""
+    extra = f"{len(proto.method_entries())} method(s)" if proto.methods else ""
     click.echo(f"{path}: valid protocol {proto.name!r}: scheme {proto.scheme.name}, "
-               f"{len(combos)} feature combination(s) x {len(clfs)} classifier(s)")
+               + " + ".join(x for x in (shape, extra) if x))
     if schema_only:
         return
     from ..engine.runner import plan_run
@@ -47,7 +50,8 @@ def validate(file: str, schema_only: bool) -> None:
     ds = plan.dataset
     click.echo(f"dataset {proto.dataset.name}: {len(ds)} captures after filters, "
                f"{ds.meta['subject'].nunique()} subjects, {ds.meta[proto.target].nunique()} {proto.target} classes")
-    click.echo(f"{plan.n_folds} fold(s) x {len(combos)} x {len(clfs)} = {len(plan.tasks)} task(s)")
+    shape = f"{len(combos)} x {len(clfs)}" if not proto.methods else f"{n_methods} method(s)"
+    click.echo(f"{plan.n_folds} fold(s) x {shape} = {len(plan.tasks)} task(s)")
     for n in plan.notes:
         click.echo(f"note: {n}")
 

@@ -69,9 +69,7 @@ def select(meta: pd.DataFrame, where: dict[str, list[str]], exclude: dict[str, l
 
 
 def _choose(proto, method: str | None):
-    combos = proto.combinations()
-    clfs = proto.classifier_entries()
-    choices = [(c, k) for c in combos for k in clfs]
+    choices = proto.entries()
     names = [f"{c.label}/{k.label}" for c, k in choices]
     if method is None:
         if len(choices) == 1:

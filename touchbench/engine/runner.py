@@ -44,6 +44,7 @@ import warnings
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -222,14 +223,25 @@ def check_sensor_fit(protocol: Protocol, sensor: SensorSpec, min_frames: int) ->
                 problem = sensor_problem(make_feature_set(ref.name, p, sensor), sensor, min_frames)
                 if problem:
                     raise protocol.error_at(("features", i, j), f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {problem}")
-    for i, spec in enumerate(protocol.classifiers):
+    specs = [(("classifiers", i), s.name, s.params) for i, s in enumerate(protocol.classifiers)]
+    specs += [(("methods", i), m.name or m.estimator, m.params) for i, m in enumerate(protocol.methods)]
+    for j, m in enumerate(protocol.methods):
+        for k, ref in enumerate(m.features or []):
+            for p in expand_grid(ref.params):
+                problem = sensor_problem(make_feature_set(ref.name, p, sensor), sensor, min_frames)
+                if problem:
+                    raise protocol.error_at(("methods", j, "features", k),
+                                            f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {problem}")
+    for loc, name, params in specs:
+        spec = SimpleNamespace(name=name, params=params)
+        i = loc
         for p in expand_grid(spec.params):
             if spec.name in METHODS:  # a named method: its own feature sets, then its estimator
                 m = method_spec(spec.name, **p)
                 for name, params in m.feature_sets:
                     problem = sensor_problem(make_feature_set(name, params, sensor), sensor, min_frames)
                     if problem:
-                        raise protocol.error_at(("classifiers", i), f"method {spec.name!r} cannot serve sensor "
+                        raise protocol.error_at(i, f"method {spec.name!r} cannot serve sensor "
                                                                     f"{sensor.describe()}: {name}: {problem}")
                 spec_name, p = m.estimator, m.estimator_params
             else:
@@ -237,10 +249,10 @@ def check_sensor_fit(protocol: Protocol, sensor: SensorSpec, min_frames: int) ->
             try:
                 est = make_classifier(spec_name, random_state=0, sensor=sensor, **p)
             except Exception as e:
-                raise protocol.error_at(("classifiers", i), f"classifier {spec.name!r} rejects {p}: {type(e).__name__}: {e}") from None
+                raise protocol.error_at(i, f"classifier {spec.name!r} rejects {p}: {type(e).__name__}: {e}") from None
             problem = sensor_problem(est, sensor, min_frames)
             if problem:
-                raise protocol.error_at(("classifiers", i), f"classifier {spec.name!r} cannot serve sensor {sensor.describe()}: {problem}")
+                raise protocol.error_at(i, f"classifier {spec.name!r} cannot serve sensor {sensor.describe()}: {problem}")
 
 
 def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: TouchDataset | None = None) -> Plan:
@@ -268,20 +280,18 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                 except Exception as e:
                     raise protocol.error_at(("features", i, j), f"feature set {ref.name!r} rejects {p}: {type(e).__name__}: {e}") from None
 
-    combos = protocol.combinations()
-    clfs = protocol.classifier_entries()
+    entries = protocol.entries()
     # each (combination, classifier) entry is a method: the combination's sets -> the classifier,
     # or a named method's own sets -> its estimator (the combination is then [raw-window])
-    methods: dict[tuple[int, int], MethodSpec] = {}
-    for ci, c in enumerate(combos):
-        for ki, clf in enumerate(clfs):
-            try:
-                methods[ci, ki] = resolve_entry(c.sets, clf.name, clf.params)
-            except TouchbenchError as e:
-                raise protocol.error_at(("classifiers", _spec_index(protocol, clf.name)), str(e)) from None
-            note = _whole_captures_note(clf, c.sets, ds) if clf.name in METHODS else None
-            if note:
-                notes.append(note)
+    methods: dict[int, MethodSpec] = {}
+    for ei, (c, clf) in enumerate(entries):
+        try:
+            methods[ei] = resolve_entry(c.sets, clf.name, clf.params)
+        except TouchbenchError as e:
+            raise protocol.error_at(("classifiers", _spec_index(protocol, clf.name)), str(e)) from None
+        note = _whole_captures_note(clf, c.sets, ds) if clf.name in METHODS else None
+        if note:
+            notes.append(note)
     identities: dict[str, Identity] = {}
     set_info: dict[tuple, tuple[bool, str]] = {}
     clf_info: dict[tuple, str] = {}
@@ -316,46 +326,45 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
         for fold in folds:
             crop_frames = fold.crop.n_frames(ds.sensor.frame_rate) if fold.crop is not None else None
             idx_hash = hashlib.sha256(fold.train.tobytes() + b"|" + fold.test.tobytes()).hexdigest()[:16]
-            for ci, combo in enumerate(combos):
-                for ki, clf in enumerate(clfs):
-                    method = methods[ci, ki]
-                    sets = []
-                    for name, params in method.feature_sets:
-                        dep, ver = set_info[(name, canonical_json(params))]
-                        sets.append(SetSpec(
-                            name=name, params=params, fold_dependent=dep,
-                            key_full=None if dep else FeatureCache.key(ds.content_hash, name, params, ver, None),
-                            key_crop=None if dep or crop_frames is None else FeatureCache.key(ds.content_hash, name, params, ver, crop_frames),
-                        ))
-                    estimator = [method.estimator, method.estimator_params,
-                                 clf_info[(method.estimator, canonical_json(method.estimator_params))]]
-                    identity = {
-                        "dataset": ds.content_hash, "target": target, "scheme": scheme_json, "repetition": r,
-                        "fold": fold.name, "indices": idx_hash, "crop": [crop_frames, bool(fold.crop and fold.crop.train)],
-                        "features": [[n, p, set_info[(n, canonical_json(p))][1]] for n, p in method.feature_sets],
-                        "classifier": [clf.name, clf.params, *estimator[2:]] if clf.name == method.estimator
-                        else [clf.name, clf.params, estimator],
-                        "seed": protocol.seed,
-                    }
-                    task_id = hashlib.sha256(canonical_json(identity).encode()).hexdigest()[:20]
-                    seed = derive_seed(protocol.seed, "task", r, fold.name, combo.label, clf.label)
-                    base = {
-                        "task_id": task_id, "protocol": protocol.name, "dataset": protocol.dataset.name,
-                        "dataset_hash": ds.content_hash, "target": target, "scheme": protocol.scheme.name,
-                        "repetition": r, "fold": fold.name, "fold_group": fold.group,
-                        "early_frames": np.float64(crop_frames) if crop_frames is not None else np.nan,
-                        "features": combo.label, "feature_sets": "+".join(method.feature_names),
-                        "feature_params": canonical_json([[n, p] for n, p in method.feature_sets]),
-                        "classifier": clf.label, "classifier_name": clf.name,
-                        "classifier_params": canonical_json(clf.params), "seed": seed,
-                        "n_train": int(len(fold.train)), "n_test": int(len(fold.test)),
-                    }
-                    tasks.append(Task(
-                        task_id=task_id, repetition=r, fold=fold, features_label=combo.label, sets=tuple(sets),
-                        classifier_label=clf.label, classifier_name=clf.name, classifier_params=clf.params,
-                        seed=seed, crop_frames=crop_frames, base_row=base,
-                        estimator_name=method.estimator, estimator_params=method.estimator_params,
+            for ei, (combo, clf) in enumerate(entries):
+                method = methods[ei]
+                sets = []
+                for name, params in method.feature_sets:
+                    dep, ver = set_info[(name, canonical_json(params))]
+                    sets.append(SetSpec(
+                        name=name, params=params, fold_dependent=dep,
+                        key_full=None if dep else FeatureCache.key(ds.content_hash, name, params, ver, None),
+                        key_crop=None if dep or crop_frames is None else FeatureCache.key(ds.content_hash, name, params, ver, crop_frames),
                     ))
+                estimator = [method.estimator, method.estimator_params,
+                             clf_info[(method.estimator, canonical_json(method.estimator_params))]]
+                identity = {
+                    "dataset": ds.content_hash, "target": target, "scheme": scheme_json, "repetition": r,
+                    "fold": fold.name, "indices": idx_hash, "crop": [crop_frames, bool(fold.crop and fold.crop.train)],
+                    "features": [[n, p, set_info[(n, canonical_json(p))][1]] for n, p in method.feature_sets],
+                    "classifier": [clf.name, clf.params, *estimator[2:]] if clf.name == method.estimator
+                    else [clf.name, clf.params, estimator],
+                    "seed": protocol.seed,
+                }
+                task_id = hashlib.sha256(canonical_json(identity).encode()).hexdigest()[:20]
+                seed = derive_seed(protocol.seed, "task", r, fold.name, combo.label, clf.label)
+                base = {
+                    "task_id": task_id, "protocol": protocol.name, "dataset": protocol.dataset.name,
+                    "dataset_hash": ds.content_hash, "target": target, "scheme": protocol.scheme.name,
+                    "repetition": r, "fold": fold.name, "fold_group": fold.group,
+                    "early_frames": np.float64(crop_frames) if crop_frames is not None else np.nan,
+                    "features": combo.label, "feature_sets": "+".join(method.feature_names),
+                    "feature_params": canonical_json([[n, p] for n, p in method.feature_sets]),
+                    "classifier": clf.label, "classifier_name": clf.name,
+                    "classifier_params": canonical_json(clf.params), "seed": seed,
+                    "n_train": int(len(fold.train)), "n_test": int(len(fold.test)),
+                }
+                tasks.append(Task(
+                    task_id=task_id, repetition=r, fold=fold, features_label=combo.label, sets=tuple(sets),
+                    classifier_label=clf.label, classifier_name=clf.name, classifier_params=clf.params,
+                    seed=seed, crop_frames=crop_frames, base_row=base,
+                    estimator_name=method.estimator, estimator_params=method.estimator_params,
+                ))
     crops = [t.crop_frames for t in tasks if t.crop_frames is not None]
     min_frames = int(min([int(ds.n_frames.min()), *crops]))
     check_sensor_fit(protocol, ds.sensor, min_frames)

@@ -83,7 +83,7 @@ from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
 from ..core.suggest import did_you_mean
 from ..features import FEATURES
-from ..methods import METHODS
+from ..methods import CAPTURES, METHODS
 from .seeding import derive_seed
 from .splits import SPLITTERS, SplitError, Splitter, make_splitter
 
@@ -377,6 +377,49 @@ class Expected(_Model):
         return self
 
 
+class MethodRef(_Model):
+    """An entry of ``methods:``: a registered method, or an inline pipeline.
+
+    ``name``: a registered method (``touch-et``...), which brings its own
+    feature sets and takes the captures as recorded; ``params`` go to its
+    estimator. Or ``features`` (a combination, concatenated) and
+    ``estimator`` (a registered classifier) with its ``params``. ``params``
+    may hold grids; ``label`` names the entry in results.
+    """
+
+    name: str | None = None
+    features: list[FeatureRef] | None = Field(default=None, min_length=1)
+    estimator: str | None = None
+    params: dict[str, Any] = Field(default_factory=dict)
+    label: str | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _shorthand(cls, d: Any) -> Any:
+        if isinstance(d, str):
+            return {"name": d}
+        if isinstance(d, dict) and isinstance(d.get("features"), list):
+            d = {**d, "features": [{"name": f} if isinstance(f, str) else f for f in d["features"]]}
+        return d
+
+    @field_validator("name")
+    @classmethod
+    def _known_method(cls, v: str | None) -> str | None:
+        return None if v is None else _registry_check(METHODS, v)
+
+    @field_validator("estimator")
+    @classmethod
+    def _known_estimator(cls, v: str | None) -> str | None:
+        return None if v is None else _registry_check(CLASSIFIERS, v)
+
+    @model_validator(mode="after")
+    def _one_form(self) -> "MethodRef":
+        if (self.name is None) == (self.estimator is None) or (self.estimator is None) != (self.features is None):
+            raise ValueError("a method entry is either a registered method (name) or an inline pipeline "
+                             "(features and estimator)")
+        return self
+
+
 class FeatureCombination(BaseModel):
     """An expanded feature combination: concatenation of (name, params) sets."""
 
@@ -404,8 +447,9 @@ class Protocol(_Model):
     dataset: DatasetSpec
     target: Literal["gesture", "subject"] = "gesture"
     scheme: SchemeSpec
-    features: list[list[FeatureRef]] = Field(min_length=1)
-    classifiers: list[ClassifierSpec] = Field(min_length=1)
+    features: list[list[FeatureRef]] | None = Field(default=None, min_length=1)
+    classifiers: list[ClassifierSpec] | None = Field(default=None, min_length=1)
+    methods: list[MethodRef] = Field(default_factory=list)
     seed: int = 0
     repetitions: int = Field(default=1, ge=1)
     expected: Expected | None = None
@@ -445,6 +489,18 @@ class Protocol(_Model):
         if isinstance(clfs, list):
             d["classifiers"] = [{"name": c} if isinstance(c, str) else c for c in clfs]
         return d
+
+    @model_validator(mode="after")
+    def _methods_or_cross_product(self) -> "Protocol":
+        if (self.features is None) != (self.classifiers is None):
+            missing = "classifiers" if self.classifiers is None else "features"
+            raise _ErrorAt((missing,), "features and classifiers go together (their cross product), "
+                                       "or list methods: alone")
+        if self.features is None and not self.methods:
+            raise _ErrorAt(("methods",), "a protocol needs methods:, or features and classifiers")
+        if self.features is None:
+            self.features, self.classifiers = [], []
+        return self
 
     # ----------------------------------------------------------- accessors
     @property
@@ -505,6 +561,35 @@ class Protocol(_Model):
             if labels.count(c.label) > 1:
                 c.label = _label(c.label, c.params)
         return out
+
+    def method_entries(self) -> list[tuple[FeatureCombination, ClassifierEntry]]:
+        """The ``methods:`` entries as (combination, classifier entry) pairs, grids expanded.
+
+        A registered method is paired with ``[raw-window]``, the combination
+        that stands for the captures as recorded beside a method (exactly as
+        ``features: [[raw-window]]`` with ``classifiers: [touch-et]`` reads);
+        an inline pipeline with its own feature sets.
+        """
+        out = []
+        for m in self.methods:
+            if m.name is not None:
+                combo = FeatureCombination(label=CAPTURES, sets=[(CAPTURES, {})])
+                name = m.name
+            else:
+                sets = [(f.name, f.params) for f in (m.features or [])]
+                combo = FeatureCombination(label="+".join(_label(n, p) for n, p in sets), sets=sets)
+                name = m.estimator or ""
+            grid_keys = sorted(k for k, v in m.params.items() if _is_grid(v))
+            for p in expand_grid(m.params):
+                base = m.label or name
+                out.append((combo, ClassifierEntry(label=_label(base, p, grid_keys) if grid_keys else base,
+                                                   name=name, params=p)))
+        return out
+
+    def entries(self) -> list[tuple[FeatureCombination, ClassifierEntry]]:
+        """Every method the protocol evaluates: the features x classifiers cross product, then ``methods:``."""
+        return ([(c, k) for c in self.combinations() for k in self.classifier_entries()]
+                + self.method_entries())
 
     def best_label(self, best: ExpectedBest) -> str:
         """The label of the classifier entry that ``best`` (an entry of
@@ -672,60 +757,72 @@ def _feature_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
     return issues
 
 
-def _classifier_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
+def _estimator_issues(name: str, params: dict[str, Any], loc: tuple, what: str) -> list[tuple[tuple, str]]:
+    """Parameters of the classifier or named method ``name`` (a method's go to its estimator), at ``loc``."""
+    issues: list[tuple[tuple, str]] = []
+    base: dict[str, Any] = {}
+    if name in METHODS:  # a named method's parameters go to its estimator
+        tags = METHODS.entry(name).tags
+        factory, base = CLASSIFIERS.get(tags["estimator"]), dict(tags.get("defaults") or {})
+    else:
+        factory = CLASSIFIERS.get(name)
+    names, var_kw = _accepted_params(factory)
+    bad = False
+    for k, v in params.items():
+        at = loc + ("params", k)
+        if k == "random_state":
+            issues.append((at, "random_state is derived from the protocol's seed; set 'seed' instead"))
+            bad = True
+        elif k == "sensor":
+            issues.append((at, "the engine passes the dataset's sensor; do not set 'sensor'"))
+            bad = True
+        elif _is_grid(v) and not (isinstance(v["grid"], list) and v["grid"]):
+            issues.append((at + ("grid",), "a grid must be a non-empty list of values"))
+            bad = True
+    if var_kw:
+        # The factory forwards **params to an estimator: its get_params() names them.
+        try:
+            est = factory(random_state=0)
+            names = sorted(set(names) | set(getattr(est, "get_params", lambda: {})()))
+        except Exception:  # pragma: no cover - a broken factory is reported at construction below
+            pass
+    known = [n for n in names if n not in ("random_state",)]
+    for k in params:
+        if k != "random_state" and known and k not in names:
+            issues.append((loc + ("params", k), f"unknown parameter {k!r} for {what} {name!r}{did_you_mean(k, known)}"))
+            bad = True
+    if bad:
+        return issues
+    for p in expand_grid(params):
+        try:
+            factory(random_state=0, **{**base, **p})
+        except Exception as e:  # any construction error is a protocol error
+            issues.append((loc + ("params",), f"{what} {name!r} rejects {p}: {type(e).__name__}: {e}"))
+            break
+    return issues
 
+
+def _classifier_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
     issues = []
     for i, spec in enumerate(protocol.classifiers):
-        base: dict[str, Any] = {}
-        if spec.name in METHODS:  # a named method's parameters go to its estimator
-            tags = METHODS.entry(spec.name).tags
-            factory, base = CLASSIFIERS.get(tags["estimator"]), dict(tags.get("defaults") or {})
+        issues += _estimator_issues(spec.name, spec.params, ("classifiers", i), "classifier")
+    for i, m in enumerate(protocol.methods):
+        if m.name is not None:
+            issues += _estimator_issues(m.name, m.params, ("methods", i), "method")
         else:
-            factory = CLASSIFIERS.get(spec.name)
-        names, var_kw = _accepted_params(factory)
-        bad = False
-        for k, v in spec.params.items():
-            loc = ("classifiers", i, "params", k)
-            if k == "random_state":
-                issues.append((loc, "random_state is derived from the protocol's seed; set 'seed' instead"))
-                bad = True
-            elif k == "sensor":
-                issues.append((loc, "the engine passes the dataset's sensor; do not set 'sensor'"))
-                bad = True
-            elif _is_grid(v) and not (isinstance(v["grid"], list) and v["grid"]):
-                issues.append((loc + ("grid",), "a grid must be a non-empty list of values"))
-                bad = True
-        if var_kw:
-            # The factory forwards **params to an estimator: its get_params() names them.
-            try:
-                est = factory(random_state=0)
-                names = sorted(set(names) | set(getattr(est, "get_params", lambda: {})()))
-            except Exception:  # pragma: no cover - a broken factory is reported at construction below
-                pass
-        known = [n for n in names if n not in ("random_state",)]
-        for k in spec.params:
-            if k != "random_state" and known and k not in names:
-                issues.append((("classifiers", i, "params", k),
-                               f"unknown parameter {k!r} for classifier {spec.name!r}{did_you_mean(k, known)}"))
-                bad = True
-        if bad:
-            continue
-        for p in expand_grid(spec.params):
-            try:
-                factory(random_state=0, **{**base, **p})
-            except Exception as e:  # any construction error is a protocol error
-                issues.append((("classifiers", i, "params"), f"classifier {spec.name!r} rejects {p}: {type(e).__name__}: {e}"))
-                break
+            issues += _estimator_issues(m.estimator or "", m.params, ("methods", i), "classifier")
     return issues
 
 
 def _expected_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
     if protocol.expected is None:
         return []
-    combos = protocol.combinations()
+    entries = protocol.entries()
+    combos = [c for c, _ in entries]
     by_names = {"+".join(c.names) for c in combos} | {c.label for c in combos}
-    clfs = protocol.classifier_entries()
-    clf_names = {c.label for c in clfs} | {c.name for c in clfs} | {s.label for s in protocol.classifiers if s.label}
+    clfs = [k for _, k in entries]
+    clf_names = ({c.label for c in clfs} | {c.name for c in clfs} | {s.label for s in protocol.classifiers if s.label}
+                 | {m.label for m in protocol.methods if m.label})
     labels = sorted(c.label for c in clfs)
     issues = []
     for i, r in enumerate(protocol.expected.results):
