@@ -312,6 +312,7 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                          "edits beyond the first ones found are not noticed (use --force after editing them)")
 
     tasks: list[Task] = []
+    timed: set[tuple] = set()  # methods (and crops) whose latency task is chosen: the first in plan order
     n_folds = 0
     scheme_json = canonical_json({"name": protocol.scheme.name, **protocol.scheme.params})
     for r in range(protocol.repetitions):
@@ -364,7 +365,9 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                     classifier_label=clf.label, classifier_name=clf.name, classifier_params=clf.params,
                     seed=seed, crop_frames=crop_frames, base_row=base,
                     estimator_name=method.estimator, estimator_params=method.estimator_params,
+                    measure_latency=(combo.label, clf.label, crop_frames) not in timed,
                 ))
+                timed.add((combo.label, clf.label, crop_frames))
     crops = [t.crop_frames for t in tasks if t.crop_frames is not None]
     min_frames = int(min([int(ds.n_frames.min()), *crops]))
     check_sensor_fit(protocol, ds.sensor, min_frames)

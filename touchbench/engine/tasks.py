@@ -43,6 +43,7 @@ from .cache import FeatureCache, crop_captures
 __all__ = ["RunContext", "SetSpec", "Task", "execute_task"]
 
 LATENCY_REPEATS = 5
+LATENCY_CAPTURES = 5
 
 
 @dataclass(frozen=True)
@@ -68,6 +69,7 @@ class Task:
     classifier_params: dict[str, Any]
     seed: int
     crop_frames: int | None = None  # resolved from fold.crop with the sensor's frame rate
+    measure_latency: bool = True  # the one task per method (and crop) of a run that measures latency
     estimator_name: str = ""  # the method's estimator (the classifier itself, or a named method's)
     estimator_params: dict[str, Any] = field(default_factory=dict)
     base_row: dict[str, Any] = field(default_factory=dict)
@@ -177,20 +179,22 @@ def _latency_sets(task: Task, ctx: RunContext, fitted: list, y_train: np.ndarray
     return out
 
 
-def _measure_latency(sets: list, capture: np.ndarray, predict) -> float:
-    """Median milliseconds for features + predict of one capture, after one warm-up call."""
+def _measure_latency(sets: list, captures: list[np.ndarray], predict) -> float:
+    """Median milliseconds to label one capture (features + predict), over ``LATENCY_REPEATS``
+    passes through ``captures`` one at a time, after one warm-up call."""
 
-    def once():
+    def once(capture):
         x = np.hstack([np.asarray(fs.transform([capture]), dtype=np.float64) for fs in sets])
         if predict is not None:
             predict(x)
 
-    once()
+    once(captures[0])
     times = []
     for _ in range(LATENCY_REPEATS):
-        t0 = time.perf_counter()
-        once()
-        times.append(time.perf_counter() - t0)
+        for capture in captures:
+            t0 = time.perf_counter()
+            once(capture)
+            times.append(time.perf_counter() - t0)
     return 1000.0 * float(np.median(times))
 
 
@@ -228,12 +232,11 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
             est = fitted_est.estimator
             proba = fitted_est.predict_proba(X_te) if est is not None else None
             row.update(metrics(y_test, y_pred))
-            # latency: features + predict for one capture, after warm-up
-            lat_sets = _latency_sets(task, ctx, fitted, y_train)
-            cap = ds.captures[int(fold.test[0])]
-            if task.crop_frames is not None:
-                cap = cap[: task.crop_frames]
-            row["latency_ms"] = _measure_latency(lat_sets, cap, None if est is None else est.predict)
+            if task.measure_latency:  # once per method and run: features + predict of one capture
+                lat_sets = _latency_sets(task, ctx, fitted, y_train)
+                caps = [ds.captures[int(i)][: task.crop_frames] if task.crop_frames is not None else ds.captures[int(i)]
+                        for i in fold.test[:LATENCY_CAPTURES]]
+                row["latency_ms"] = _measure_latency(lat_sets, caps, None if est is None else est.predict)
         meta = ds.meta.iloc[fold.test]
         preds = pd.DataFrame({
             "task_id": task.task_id,
