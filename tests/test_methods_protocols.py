@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from touchbench.datasets.model import SensorSpec
+from touchbench.datasets.model import SensorSpec, TouchDataset
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
 from touchbench.features.base import make_feature_set
@@ -44,6 +44,7 @@ seed: 3
 def data(tmp_path, monkeypatch):
     monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
     ds = random_dataset(subjects=("s1", "s2", "s3"), per_cell=3, frames=(24, 24), sensor=SENSOR, name="six")
+    ds = TouchDataset(ds.name, [np.clip(c, 0, 255).astype(np.uint8) for c in ds.captures], ds.meta, ds.sensor)
     return ds.to_parquet(tmp_path / "six.parquet")
 
 
@@ -73,8 +74,6 @@ def test_a_named_method_is_the_pipeline_fitted_by_hand(data, tmp_path):
     """One fold of the run equals touch-rhythm computed through the registry -> the estimator,
     fitted with the task's seed on that fold's training captures."""
     res = _run(SHORTHAND.format(data=data), tmp_path, "one")
-    from touchbench.datasets.model import TouchDataset
-
     ds = TouchDataset.from_parquet(data)
     row = res.scores.iloc[0]
     test_subject = row["fold"].split("=")[-1]
@@ -121,3 +120,43 @@ def test_features_of_a_named_method_use_the_sensor_of_the_data():
     spec = method_spec("touch-et-fast")
     fs = make_feature_set(*spec.feature_sets[0], SENSOR)
     assert fs.sensor is SENSOR
+
+
+CAPTURES_PROTOCOL = """\
+name: c
+dataset: {data}
+scheme: loso
+features:
+  - [{{name: raw-window, params: {{frames: 24}}}}]
+classifiers:
+  - {{name: minirocket, params: {{n_kernels: 84}}}}
+seed: 5
+"""
+
+
+def test_an_estimator_that_takes_captures_gets_them_as_recorded(data, tmp_path, monkeypatch):
+    """Beside [raw-window], the peers (and the CNN) receive the fold's captures in their native
+    dtype, not a float64 matrix; they give the same predictions as on raw-window's rows."""
+    from touchbench.classifiers import make_classifier
+    from touchbench.classifiers.peers import MiniRocketPeer
+    seen = []
+    original = MiniRocketPeer.fit
+    monkeypatch.setattr(MiniRocketPeer, "fit", lambda self, X, y: seen.append(X) or original(self, X, y))
+    res = _run(CAPTURES_PROTOCOL.format(data=data), tmp_path, "captures")
+    assert (res.scores["status"] == "ok").all()
+    assert seen and all(isinstance(X, list) and X[0].dtype == np.uint8 and X[0].shape == (24, 6, 6) for X in seen)
+    assert not list((tmp_path / "features").glob("*.json"))  # no raw-window matrix was materialised
+    # one fold by hand, on raw-window's flattened rows
+    ds = TouchDataset.from_parquet(data)
+    row = res.scores.iloc[0]
+    subj = ds.meta["subject"].astype(str).to_numpy()
+    tr, te = np.flatnonzero(subj != row["fold"].split("=")[-1]), np.flatnonzero(subj == row["fold"].split("=")[-1])
+    rows = make_feature_set("raw-window", {"frames": 24}, SENSOR).fit_transform(ds.captures)
+    y = ds.meta["gesture"].astype(str).to_numpy()
+    classes = sorted(set(y[tr]))
+    codes = np.array([classes.index(v) for v in y[tr]])
+    est = make_classifier("minirocket", random_state=int(row["seed"]), sensor=SENSOR, n_kernels=84).fit(rows[tr], codes)
+    want = np.array(classes)[est.predict(rows[te]).astype(int)]
+    preds = _preds(res)
+    got = preds[preds["fold"] == row["fold"]].set_index("capture_id").loc[ds.meta["capture_id"].to_numpy()[te], "predicted"]
+    assert got.tolist() == want.tolist()

@@ -12,7 +12,7 @@ from __future__ import annotations
 import importlib.util
 import inspect
 import math
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
@@ -64,6 +64,32 @@ def frames_in_row(n_columns: int, grid: tuple[int, int], who: str = "") -> int:
     if n_columns % (h * w):
         raise ValueError(f"{who + ': ' if who else ''}{n_columns} features is not a whole number of {h}x{w} frames")
     return n_columns // (h * w)
+
+
+def is_captures(X: Any) -> bool:
+    """Whether ``X`` is a sequence of ``(T, H, W)`` captures (a list, or an ``(n, T, H, W)``
+    array) rather than a 2-D matrix of flattened frames."""
+    if isinstance(X, np.ndarray):
+        return X.ndim == 4
+    return isinstance(X, (list, tuple)) and len(X) > 0 and np.ndim(X[0]) == 3
+
+
+def captures_to_rows(captures: Sequence[np.ndarray], grid: tuple[int, int], length: int, who: str = "") -> np.ndarray:
+    """``(n, length * H * W)`` float64 rows of frames (frame-major, row-major, as ``raw-window``
+    lays them out): each capture's first ``length`` frames, a shorter one padded by repeating
+    its last frame (a held pose, not an invented release). The captures must be on ``grid``."""
+    h, w = (int(g) for g in grid)
+    out = np.empty((len(captures), int(length), h, w), dtype=np.float64)
+    for i, c in enumerate(captures):
+        c = np.asarray(c)
+        if c.ndim != 3 or c.shape[1:] != (h, w):
+            raise ValueError(f"{who + ': ' if who else ''}capture {i} has shape {c.shape}, not (T, {h}, {w}) "
+                             "frames of the sensor's grid")
+        if len(c) == 0:
+            raise ValueError(f"{who + ': ' if who else ''}capture {i} has no frames")
+        idx = np.minimum(np.arange(int(length)), len(c) - 1)
+        out[i] = c[idx]
+    return out.reshape(len(captures), -1)
 
 
 class SensorError(TouchbenchError, ValueError):

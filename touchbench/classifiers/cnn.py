@@ -107,7 +107,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ..core.errors import TouchbenchError
-from ._util import MAX_SEED, build, frames_in_row, sensor_frames, torch_available
+from ._util import MAX_SEED, build, captures_to_rows, frames_in_row, is_captures, sensor_frames, torch_available
 from .base import CLASSIFIERS
 
 INSTALL_HINT = "pip install 'touchbench[deep]'  (or: pip install torch==2.13.0)"
@@ -187,6 +187,10 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
     sensor : the data's SensorSpec; gives the grid (the run engine passes it).
     grid : (H, W) of a frame, only without a sensor (else it must be the
         sensor's); the row length must be a multiple of H * W.
+    length : frames taken from each capture when ``X`` is a list of captures (their
+        first ``length`` frames; a shorter capture padded by repeating its last
+        frame); None: the longest training capture. A 2-D ``X`` holds flattened
+        frames (``raw-window``'s layout) and gives its own length.
     L : number of sub-windows per capture; F = floor(F_total / L) frames each.
     train_windows, test_windows : ``"first"`` (the paper), ``"all"``, a
         window index or a list of indices.
@@ -203,12 +207,13 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
     verbose : print one line per epoch when > 0.
     """
 
-    def __init__(self, sensor=None, grid=None, L=30, train_windows="first", test_windows="first", vote="soft",
+    def __init__(self, sensor=None, grid=None, length=None, L=30, train_windows="first", test_windows="first", vote="soft",
                  max_epochs=100, batch_size=32, learning_rate=1e-3, weight_decay=0.0, patience=10,
                  validation_fraction=0.1, scaling="standard", channels=(32, 64, 128), hidden_units=256,
                  random_state=None, device="cpu", n_jobs=1, verbose=0):
         self.sensor = sensor
         self.grid = grid
+        self.length = length
         self.L = L
         self.train_windows = train_windows
         self.test_windows = test_windows
@@ -266,6 +271,9 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
         if given, makes the early-stopping split hold out whole groups."""
         torch = import_torch()
         grid = self._check_params()
+        if is_captures(X):  # the captures as recorded: the stated length, else the longest training capture
+            length = int(self.length) if self.length is not None else max(len(c) for c in X)
+            X = captures_to_rows(X, grid, length, "cnn")
         X, y = validate_data(self, X, y, dtype=np.float64)
         check_classification_targets(y)
         self.grid_ = grid
@@ -384,6 +392,8 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
     def _window_proba(self, X):
         torch = import_torch()
         check_is_fitted(self)
+        if is_captures(X):
+            X = captures_to_rows(X, self.grid_, self.n_frames_total_, "cnn")
         X = validate_data(self, X, dtype=np.float64, reset=False)
         idx = _window_indices(self.test_windows, int(self.L), "test_windows")
         Wx = self._windows(X, idx)
@@ -424,7 +434,7 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
 
 
 DEFAULTS = {
-    "L": 30, "train_windows": "first", "test_windows": "first", "vote": "soft",
+    "length": None, "L": 30, "train_windows": "first", "test_windows": "first", "vote": "soft",
     "max_epochs": 100, "batch_size": 32, "learning_rate": 1e-3, "weight_decay": 0.0, "patience": 10,
     "validation_fraction": 0.1, "scaling": "standard", "channels": (32, 64, 128), "hidden_units": 256,
     "device": "cpu", "n_jobs": 1,
@@ -434,7 +444,7 @@ DEFAULTS = {
 @CLASSIFIERS.register(
     "cnn",
     description="raw-frame CNN (3 conv blocks + FC 256, softmax) on H x W x F windows, F = floor(frames/L), L = 30",
-    source=SOURCE, defaults=DEFAULTS, extra="deep",
+    source=SOURCE, defaults=DEFAULTS, extra="deep", input="captures",
     cheap_params=dict(max_epochs=3, channels=(4, 8, 8), hidden_units=16),
 )
 def cnn(random_state=None, sensor=None, **params):

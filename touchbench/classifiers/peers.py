@@ -8,8 +8,11 @@ default estimator), one thread. They are the methods touchbench's own must
 beat: an off-the-shelf MiniRocket on HAART's 64 cell series is
 about 71 % on the challenge test subjects.
 
-Input: the ``raw-window`` feature set's flattened frames (frame-major,
-row-major: ``X.reshape(n, F, H, W)``). The grid ``(H, W)`` is the
+Input: the captures as recorded (a list of ``(T, H, W)`` arrays in their
+native dtype: the run engine hands a peer the captures, see
+:mod:`touchbench.methods`), or a 2-D matrix of flattened frames in
+``raw-window``'s layout (frame-major, row-major: ``X.reshape(n, F, H,
+W)``). The grid ``(H, W)`` is the
 sensor's: the run engine passes the dataset's sensor (``sensor``); from
 Python without a sensor, ``grid`` must be given (a grid given with a
 sensor must be the sensor's). ``grid_`` records the grid a fitted peer
@@ -19,7 +22,10 @@ values as recorded (no scaling: the kernels' biases come from the
 training data's own quantiles).
 
 Unequal lengths: aeon's Rocket family needs equal-length series here.
-``raw-window`` makes every capture exactly F frames (a stated parameter;
+Captures are cut to ``length`` frames (a stated parameter; beside
+``[raw-window]`` in a protocol, raw-window's ``frames``; None: the longest
+training capture), a shorter one padded by repeating its last frame.
+``raw-window`` itself makes every capture exactly F frames (a stated parameter;
 432, HAART's length, in the HAART protocols): a shorter capture is
 refused or padded by repeating its last frame (raw-window's stated
 ``shorter`` rule), a longer one truncated to its first F frames. HAART's
@@ -47,7 +53,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ..core.errors import TouchbenchError
-from ._util import build, frames_in_row, seed_int, sensor_frames
+from ._util import build, captures_to_rows, frames_in_row, is_captures, seed_int, sensor_frames
 from .base import CLASSIFIERS
 
 INSTALL_HINT = "pip install 'touchbench[peers]'  (or: pip install aeon)"
@@ -84,9 +90,11 @@ class _RocketPeer(ClassifierMixin, BaseEstimator):
 
     _aeon_class = ""
 
-    def __init__(self, sensor=None, grid=None, n_kernels=10000, max_dilations_per_kernel=32, n_jobs=1, random_state=None):
+    def __init__(self, sensor=None, grid=None, length=None, n_kernels=10000, max_dilations_per_kernel=32, n_jobs=1,
+                 random_state=None):
         self.sensor = sensor
         self.grid = grid
+        self.length = length
         self.n_kernels = n_kernels
         self.max_dilations_per_kernel = max_dilations_per_kernel
         self.n_jobs = n_jobs
@@ -109,11 +117,20 @@ class _RocketPeer(ClassifierMixin, BaseEstimator):
             return str(e)
         return None
 
+    def _rows(self, X):
+        """Captures -> rows of ``length_`` frames (see the module docstring); rows pass as they are."""
+        if is_captures(X):
+            return captures_to_rows(X, self.grid_, self.length_, type(self).__name__)
+        return X
+
     def fit(self, X, y):
         self.grid_, _ = sensor_frames(type(self).__name__, self.sensor, self.grid)
+        if is_captures(X):  # the captures as recorded: the stated length, else the longest training capture
+            self.length_ = int(self.length) if self.length is not None else max(len(c) for c in X)
+            X = self._rows(X)
         X, y = validate_data(self, X, y, dtype=np.float64)
         check_classification_targets(y)
-        frames_in_row(X.shape[1], self.grid_, type(self).__name__)
+        self.length_ = frames_in_row(X.shape[1], self.grid_, type(self).__name__)
         self.classes_ = np.unique(y)
         if len(self.classes_) == 1:
             self.model_ = None  # one class: nothing to learn
@@ -124,7 +141,7 @@ class _RocketPeer(ClassifierMixin, BaseEstimator):
 
     def predict(self, X):
         check_is_fitted(self)
-        X = validate_data(self, X, dtype=np.float64, reset=False)
+        X = validate_data(self, self._rows(X), dtype=np.float64, reset=False)
         if self.model_ is None:
             return np.repeat(self.classes_, X.shape[0])
         return np.asarray(self.model_.predict(frames_to_series(X, self.grid_)))
@@ -132,7 +149,7 @@ class _RocketPeer(ClassifierMixin, BaseEstimator):
     def predict_proba(self, X):
         """aeon's probabilities (for the ridge estimator: one-hot of the prediction)."""
         check_is_fitted(self)
-        X = validate_data(self, X, dtype=np.float64, reset=False)
+        X = validate_data(self, self._rows(X), dtype=np.float64, reset=False)
         if self.model_ is None:
             return np.ones((X.shape[0], 1))
         P = np.asarray(self.model_.predict_proba(frames_to_series(X, self.grid_)), dtype=np.float64)
@@ -152,16 +169,16 @@ class MultiRocketPeer(_RocketPeer):
     _aeon_class = "MultiRocketClassifier"
 
 
-DEFAULTS = {"n_kernels": 10000, "max_dilations_per_kernel": 32, "n_jobs": 1}
+DEFAULTS = {"length": None, "n_kernels": 10000, "max_dilations_per_kernel": 32, "n_jobs": 1}
 
 
 @CLASSIFIERS.register("minirocket", description="peer: aeon MiniRocket (10k kernels + ridge) on the H x W cell series of raw-window frames",
-                      source=SOURCE_MINI, defaults=DEFAULTS, extra="peers", cheap_params=dict(n_kernels=84))
+                      source=SOURCE_MINI, defaults=DEFAULTS, extra="peers", input="captures", cheap_params=dict(n_kernels=84))
 def minirocket(random_state=None, sensor=None, **params):
     return build(MiniRocketPeer, DEFAULTS, random_state, {**params, "sensor": sensor}, name="minirocket")
 
 
 @CLASSIFIERS.register("multirocket", description="peer: aeon MultiRocket (10k kernels, 4 poolings + ridge) on the H x W cell series of raw-window frames",
-                      source=SOURCE_MULTI, defaults=DEFAULTS, extra="peers", cheap_params=dict(n_kernels=84))
+                      source=SOURCE_MULTI, defaults=DEFAULTS, extra="peers", input="captures", cheap_params=dict(n_kernels=84))
 def multirocket(random_state=None, sensor=None, **params):
     return build(MultiRocketPeer, DEFAULTS, random_state, {**params, "sensor": sensor}, name="multirocket")

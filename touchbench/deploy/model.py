@@ -114,8 +114,11 @@ class TrainedModel:
             )
 
     # ------------------------------------------------------------ inference
-    def transform(self, captures: Sequence[np.ndarray]) -> np.ndarray:
-        """The feature matrix of ``captures`` (the combination's sets, concatenated)."""
+    def transform(self, captures: Sequence[np.ndarray]) -> np.ndarray | list[np.ndarray]:
+        """The feature matrix of ``captures`` (the combination's sets, concatenated); the captures
+        themselves for a method whose estimator takes captures (no feature sets)."""
+        if not self.feature_sets:
+            return list(captures)
         return np.hstack([np.asarray(fs.transform(captures), dtype=np.float64) for fs in self.feature_sets])
 
     def proba_from_features(self, X: np.ndarray, fast: bool = True) -> np.ndarray:
@@ -125,7 +128,7 @@ class TrainedModel:
         class. ``fast`` uses the flat-array forest walk for forests (same
         numbers as scikit-learn, see :mod:`.fastforest`).
         """
-        n, C = X.shape[0], len(self.classes)
+        n, C = len(X), len(self.classes)
         if self.estimator is None:
             return np.ones((n, 1))
         est = self.estimator
@@ -149,7 +152,7 @@ class TrainedModel:
 
     def predict_from_features(self, X: np.ndarray) -> np.ndarray:
         if self.estimator is None:
-            return np.array([self.classes[0]] * X.shape[0], dtype=object)
+            return np.array([self.classes[0]] * len(X), dtype=object)
         return self.classes[np.asarray(self.estimator.predict(X)).astype(np.int64)]
 
     # ------------------------------------------------------------ files
@@ -276,7 +279,7 @@ def fit_model(
             fs = make_feature_set(name, dict(params), sensor)
             fs.fit(samples, y)
             fitted.append(fs)
-        X = np.hstack([np.asarray(fs.transform(samples), dtype=np.float64) for fs in fitted])
+        X = np.hstack([np.asarray(fs.transform(samples), dtype=np.float64) for fs in fitted]) if fitted else list(samples)
         feature_seconds = time.perf_counter() - t0
         # the run engine's own fit path: label codes, subjects as groups, a one-class training set
         fitted_est = fit_estimator(classifier, classifier_params, seed, X, y, subjects[src], sensor=sensor)

@@ -343,7 +343,7 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                     "dataset": ds.content_hash, "target": target, "scheme": scheme_json, "repetition": r,
                     "fold": fold.name, "indices": idx_hash, "crop": [crop_frames, bool(fold.crop and fold.crop.train)],
                     "features": [[n, p, set_info[(n, canonical_json(p))][1]] for n, p in method.feature_sets],
-                    "classifier": [clf.name, clf.params, *estimator[2:]] if clf.name == method.estimator
+                    "classifier": [clf.name, method.estimator_params, *estimator[2:]] if clf.name == method.estimator
                     else [clf.name, clf.params, estimator],
                     "seed": protocol.seed,
                 }

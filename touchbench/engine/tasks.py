@@ -128,11 +128,18 @@ class RunContext:
 # ----------------------------------------------------------------- metrics
 # ----------------------------------------------------------------- features
 def _fold_features(task: Task, ctx: RunContext, y_train: np.ndarray):
-    """Training and test matrices of the task's combination, the fitted sets and timings."""
+    """Training and test matrices of the task's combination, the fitted sets and timings.
+
+    A method without feature sets (an estimator that takes captures) gets the
+    fold's captures as recorded, in their native dtype (cut for the early scheme).
+    """
     ds = ctx.dataset
     fold = task.fold
     crop_train = fold.crop is not None and fold.crop.train
     n = task.crop_frames
+    if not task.sets:
+        return (crop_captures([ds.captures[i] for i in fold.train], n if crop_train else None),
+                crop_captures([ds.captures[i] for i in fold.test], n), [], 0.0, 0.0)
     train_caps = test_caps = None
     X_tr, X_te, fitted = [], [], []
     per_capture = 0.0
@@ -184,7 +191,7 @@ def _measure_latency(sets: list, captures: list[np.ndarray], predict) -> float:
     passes through ``captures`` one at a time, after one warm-up call."""
 
     def once(capture):
-        x = np.hstack([np.asarray(fs.transform([capture]), dtype=np.float64) for fs in sets])
+        x = np.hstack([np.asarray(fs.transform([capture]), dtype=np.float64) for fs in sets]) if sets else [capture]
         if predict is not None:
             predict(x)
 

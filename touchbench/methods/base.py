@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..classifiers import CLASSIFIERS
 from ..core.errors import TouchbenchError
 from ..core.registry import Registry
 
@@ -26,8 +27,14 @@ class MethodSpec:
     estimator_params: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if not self.feature_sets:
-            raise TouchbenchError(f"method {self.name!r}: a method needs at least one feature set")
+        if not self.feature_sets and not takes_captures(self.estimator):
+            raise TouchbenchError(f"method {self.name!r}: a method needs at least one feature set "
+                                  f"(or an estimator that takes the captures themselves)")
+
+    @property
+    def takes_captures(self) -> bool:
+        """The estimator gets the captures as recorded (native dtype, their own lengths): no feature sets."""
+        return not self.feature_sets
 
     @property
     def feature_names(self) -> list[str]:
@@ -61,6 +68,11 @@ def pipeline_method(name: str, feature_sets: tuple[str, ...], estimator: str,
 CAPTURES = "raw-window"
 
 
+def takes_captures(estimator: str) -> bool:
+    """Whether the registered classifier ``estimator`` takes captures (tag ``input="captures"``)."""
+    return estimator in CLASSIFIERS and CLASSIFIERS.entry(estimator).tags.get("input") == "captures"
+
+
 def resolve_entry(sets: list[tuple[str, dict[str, Any]]] | tuple, classifier: str,
                   params: dict[str, Any]) -> MethodSpec:
     """The method a protocol's (feature combination, classifier) entry stands for.
@@ -69,7 +81,11 @@ def resolve_entry(sets: list[tuple[str, dict[str, Any]]] | tuple, classifier: st
     or, when ``classifier`` names a registered method (``touch-et``...),
     that method, whose own feature sets replace the combination: the
     combination must then be ``[raw-window]`` alone (the captures as
-    recorded, which is what the method takes).
+    recorded, which is what the method takes). A classifier that takes the
+    captures themselves (the CNN, the aeon peers: tag ``input="captures"``)
+    beside ``[raw-window]`` gets them as recorded, in their native dtype,
+    with raw-window's ``frames`` as its stated ``length`` (how many frames
+    it takes; a shorter capture padded by repeating its last frame).
     """
     if classifier in METHODS:
         names = [n for n, _ in sets]
@@ -79,5 +95,15 @@ def resolve_entry(sets: list[tuple[str, dict[str, Any]]] | tuple, classifier: st
                 f"({', '.join(METHODS.entry(classifier).tags.get('feature_sets', ()))}): pair it with the "
                 f"feature combination [{CAPTURES}] (the captures as recorded), not [{', '.join(names)}]")
         return method_spec(classifier, **params)
+    names = [n for n, _ in sets]
+    if names == [CAPTURES] and takes_captures(classifier):
+        window = dict(sets[0][1])
+        if int(window.get("offset", 0) or 0) != 0:
+            raise TouchbenchError(f"classifier {classifier!r} takes the captures from their first frame: "
+                                  f"raw-window's offset={window['offset']} beside it is not supported")
+        est_params = dict(params)
+        if "frames" in window and "length" not in est_params:
+            est_params["length"] = int(window["frames"])
+        return MethodSpec(name=classifier, feature_sets=(), estimator=classifier, estimator_params=est_params)
     return MethodSpec(name=classifier, feature_sets=tuple((n, dict(p)) for n, p in sets), estimator=classifier,
                       estimator_params=dict(params))

@@ -22,8 +22,11 @@ from .fitting import FittedEstimator, fit_estimator
 __all__ = ["FeaturePipeline", "stack_features"]
 
 
-def stack_features(sets: Sequence[Any], captures: Sequence[np.ndarray]) -> np.ndarray:
-    """The fitted feature sets' outputs for ``captures``, concatenated as float64."""
+def stack_features(sets: Sequence[Any], captures: Sequence[np.ndarray]) -> np.ndarray | list[np.ndarray]:
+    """The fitted feature sets' outputs for ``captures``, concatenated as float64; the
+    captures themselves when there are no sets (an estimator that takes captures)."""
+    if not sets:
+        return list(captures)
     return np.hstack([np.asarray(fs.transform(captures), dtype=np.float64) for fs in sets])
 
 
@@ -48,7 +51,8 @@ class FeaturePipeline:
             fs.fit(captures, y)
             self.sets_.append(fs)
         X = stack_features(self.sets_, captures)
-        self.fitted_ = fit_estimator(self.spec.estimator, self.spec.estimator_params, self.random_state, X, y, groups)
+        self.fitted_ = fit_estimator(self.spec.estimator, self.spec.estimator_params, self.random_state, X, y, groups,
+                                     sensor=self.sensor)
         self.classes_ = self.fitted_.classes
         return self
 
