@@ -305,7 +305,7 @@ def fit_model(
         "features": {
             "label": features_label or "+".join(n for n, _ in sets),
             "sets": [{"name": n, "params": dict(p)} for n, p in sets],
-            "n_columns": int(X.shape[1]),
+            "n_columns": int(X.shape[1]) if isinstance(X, np.ndarray) else None,  # None: the estimator takes captures
         },
         "classifier": {
             "label": classifier_label or classifier,

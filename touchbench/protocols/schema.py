@@ -84,6 +84,7 @@ from ..core.hashing import canonical_json
 from ..core.suggest import did_you_mean
 from ..features import FEATURES
 from ..methods import CAPTURES, METHODS
+from ..methods.base import takes_captures
 from .seeding import derive_seed
 from .splits import SPLITTERS, SplitError, Splitter, make_splitter
 
@@ -381,7 +382,8 @@ class MethodRef(_Model):
     """An entry of ``methods:``: a registered method, or an inline pipeline.
 
     ``name``: a registered method (``touch-et``...), which brings its own
-    feature sets and takes the captures as recorded; ``params`` go to its
+    feature sets and takes the captures as recorded, or a classifier that
+    takes captures itself (``minirocket``, ``cnn``...); ``params`` go to its
     estimator. Or ``features`` (a combination, concatenated) and
     ``estimator`` (a registered classifier) with its ``params``. ``params``
     may hold grids; ``label`` names the entry in results.
@@ -405,7 +407,12 @@ class MethodRef(_Model):
     @field_validator("name")
     @classmethod
     def _known_method(cls, v: str | None) -> str | None:
-        return None if v is None else _registry_check(METHODS, v)
+        if v is None or v in METHODS or takes_captures(v):
+            return v
+        capture_estimators = [n for n in CLASSIFIERS.names() if takes_captures(n)]
+        names = sorted([*METHODS.names(), *capture_estimators])
+        raise ValueError(f"unknown method {v!r}{did_you_mean(v, names)} (registered methods: "
+                         f"{', '.join(METHODS.names())}; estimators that take captures: {', '.join(capture_estimators)})")
 
     @field_validator("estimator")
     @classmethod
