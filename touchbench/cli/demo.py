@@ -11,10 +11,11 @@ from __future__ import annotations
 import click
 
 from ..core.errors import DataError
+from .run import jobs_value
 
 
 @click.command()
-@click.option("--jobs", "-j", default=2, show_default=True, help="Tasks run in parallel.")
+@click.option("--jobs", "-j", default=2, show_default=True, callback=jobs_value, help="Tasks run in parallel.")
 @click.pass_context
 def demo(ctx: click.Context, jobs: int) -> None:
     """Run the main job on the embedded default and show its leaderboard."""

@@ -5,15 +5,15 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
-import yaml
 
+from ..core.yamlsafe import load_bounded
 from ..protocols.library import find_protocol, listed_protocols, protocol_dirs
 from ..protocols.schema import load_protocol
 
 
 def _description(path: Path) -> str:
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        data, _ = load_bounded(path.read_text(encoding="utf-8"))
     except Exception:
         return "(not valid YAML)"
     if not isinstance(data, dict):

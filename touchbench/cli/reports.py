@@ -15,6 +15,7 @@ from pathlib import Path
 import click
 
 from ..core.errors import TouchbenchError
+from .run import jobs_value
 
 _FORMATS = ("terminal", "md", "csv", "json")
 
@@ -239,7 +240,7 @@ def papers_list(profile: str) -> None:
 @click.option("--out", "-o", default="results/papers", show_default=True, type=click.Path(file_okay=False),
               help="Results go to OUT/<profile>/<protocol>/; the report to OUT/REPORT.md.")
 @click.option("--only", multiple=True, help="Only protocols whose name contains this (repeatable).")
-@click.option("--jobs", "-j", default=-1, show_default=True, help="Tasks in parallel (-1: one per CPU).")
+@click.option("--jobs", "-j", default=-1, show_default=True, callback=jobs_value, help="Tasks in parallel (-1: one per CPU).")
 @click.option("--report", "report_path", default=None, type=click.Path(dir_okay=False),
               help="Where to write the report [default: OUT/REPORT.md].")
 @click.option("--progress/--no-progress", default=None, help="Progress bars [default: on a terminal only].")

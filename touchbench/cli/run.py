@@ -11,6 +11,14 @@ from ..engine.backends import backend_for_run, backend_options
 from ..protocols.library import find_protocol
 
 
+def jobs_value(ctx: click.Context, param: click.Parameter, value: int) -> int:
+    """``--jobs``: a positive number of parallel tasks, or -1 (one per CPU); anything else is a usage error."""
+    if value == 0 or value < -1:
+        raise click.BadParameter(f"{value} is not a number of parallel tasks: give 1 or more, or -1 for one per CPU "
+                                 "(more than the CPUs available runs as many as there are)")
+    return value
+
+
 def _pct(x: float) -> str:
     return "-" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{100 * x:5.1f}"
 
@@ -45,7 +53,8 @@ def format_summary(summary, expected) -> str:
 
 @click.command("run")
 @click.argument("protocol")
-@click.option("--jobs", "-j", default=1, show_default=True, help="Tasks run in parallel (-1: one per CPU).")
+@click.option("--jobs", "-j", default=1, show_default=True, callback=jobs_value,
+              help="Tasks run in parallel (-1: one per CPU; at most the CPUs available, and the tasks).")
 @click.option("--out", "-o", type=click.Path(file_okay=False), default=None,
               help="Results directory [default: results/<protocol name>/].")
 @click.option("--force", is_flag=True, help="Recompute every task, even finished ones.")

@@ -3,12 +3,25 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import sys
 from typing import Iterator
 
 from threadpoolctl import threadpool_limits
 
-__all__ = ["single_thread"]
+__all__ = ["available_cpus", "single_thread"]
+
+
+def available_cpus() -> int:
+    """The CPUs this process may run on: its affinity mask where the system has one
+    (a container or ``taskset`` limits it), else the machine's count."""
+    getaffinity = getattr(os, "sched_getaffinity", None)
+    if getaffinity is not None:
+        try:
+            return max(1, len(getaffinity(0)))
+        except OSError:  # pragma: no cover - a system that lists the call but refuses it
+            pass
+    return os.cpu_count() or 1
 
 
 @contextlib.contextmanager

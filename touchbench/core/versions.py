@@ -24,7 +24,7 @@ from typing import Iterable
 
 from .. import __version__
 
-__all__ = ["PACKAGES", "package_versions"]
+__all__ = ["PACKAGES", "missing_extra", "package_versions"]
 
 # Every package whose version can change a number touchbench reports.
 PACKAGES = (
@@ -98,4 +98,22 @@ def package_versions(installed_only: bool = False, *, modules: Iterable[str] | N
         version = _version(name)
         if version is not None or not installed_only:
             out[name] = version
+    return out
+
+
+def missing_extra(extra: str, dist: str = "touchbench") -> list[str]:
+    """The distributions of ``dist``'s optional ``extra`` (``pip install 'touchbench[EXTRA]'``) that
+    are not installed, read from the installed metadata (nothing imported); ``[]`` when ``dist``'s
+    metadata cannot be found (nothing to check against)."""
+    try:
+        reqs = metadata.requires(dist) or []
+    except metadata.PackageNotFoundError:
+        return []
+    wanted = re.compile(r"""extra\s*==\s*["']""" + re.escape(extra) + r"""["']""")
+    out = []
+    for r in reqs:
+        spec, _, marker = r.partition(";")
+        m = _REQUIREMENT_NAME.match(spec)
+        if m and wanted.search(marker) and _version(m.group(1)) is None:
+            out.append(m.group(1))
     return out

@@ -38,14 +38,16 @@ from pathlib import Path
 from typing import Callable, Iterator
 
 from joblib import parallel_config
+from joblib.parallel import BACKENDS as JOBLIB_BACKENDS
 from joblib.parallel import get_active_backend
 
 import touchbench
 
 from ..core.errors import TouchbenchError
+from ..core.threads import available_cpus
 
-__all__ = ["BACKENDS", "BackendInfo", "backend_for_run", "backend_options", "check_dask_workers", "supports_generator",
-           "use_backend"]
+__all__ = ["BACKENDS", "BackendInfo", "backend_for_run", "backend_options", "check_dask_workers", "check_jobs",
+           "is_local_backend", "local_jobs", "supports_generator", "use_backend"]
 
 BACKENDS = ("local", "dask", "ray")
 
@@ -69,6 +71,35 @@ def run_setup(setup: Callable[[], None] | None) -> None:
     if key not in _SETUP_DONE:
         setup()
         _SETUP_DONE.add(key)
+
+
+def check_jobs(jobs: int) -> None:
+    """Refuse a number of parallel tasks that means nothing (0, or below -1)."""
+    if not isinstance(jobs, int) or isinstance(jobs, bool) or jobs == 0 or jobs < -1:
+        raise TouchbenchError(f"--jobs must be a positive number of parallel tasks, or -1 for one per CPU; got {jobs!r}")
+
+
+def local_jobs(jobs: int) -> tuple[int, str | None]:
+    """``--jobs`` for local worker processes: ``(jobs to use, warning or None)``.
+
+    -1 is one per CPU available to this process (its affinity mask); more
+    than those is capped to them, with a warning (each worker is a process
+    with its own copy of the libraries: more workers than CPUs add memory,
+    not speed)."""
+    check_jobs(jobs)
+    n = available_cpus()
+    if jobs == -1:
+        return n, None
+    if jobs > n:
+        return n, f"--jobs {jobs} is more than the {n} CPU(s) available to this process: running {n} at a time"
+    return jobs, None
+
+
+def is_local_backend() -> bool:
+    """Whether joblib's active backend runs on this machine (processes or threads, not a cluster)."""
+    backend, _ = get_active_backend()
+    local = tuple(JOBLIB_BACKENDS[n] for n in ("loky", "multiprocessing", "threading", "sequential") if n in JOBLIB_BACKENDS)
+    return isinstance(backend, local)
 
 
 def supports_generator() -> bool:
@@ -195,11 +226,15 @@ def backend_for_run(backend: str, scheduler: str | None, address: str | None, ca
         raise TouchbenchError("--scheduler is the Dask scheduler's address: use it with --backend dask")
     if address and backend != "ray":
         raise TouchbenchError("--address is the Ray cluster's address: use it with --backend ray")
+    import click
+
     with use_backend(backend, scheduler or address, cache_root=cache_root) as info:
         if info.n_jobs is None:
+            jobs, warning = local_jobs(jobs)
+            if warning:
+                click.echo(f"warning: {warning}", err=True)
             yield jobs
             return
-        import click
 
         click.echo(f"backend {info.name} at {info.address or 'a local cluster'}: {info.n_jobs} parallel slots", err=True)
         for n in info.notes:

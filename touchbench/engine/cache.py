@@ -166,7 +166,8 @@ class FeatureCache:
 
             results = []
 
-            par = Parallel(n_jobs=jobs, return_as="generator" if supports_generator() else "list")
+            # never more workers than chunks
+            par = Parallel(n_jobs=min(jobs, len(chunks)), return_as="generator" if supports_generator() else "list")
             for ch, res in zip(chunks, par(delayed(_transform_chunk)(make, ch, setup) for ch in chunks)):
                 results.append(res)
                 if on_chunk:

@@ -37,7 +37,6 @@ the task ids. The classifier's ``random_state`` is
 from __future__ import annotations
 
 import hashlib
-import os
 import sys
 import time
 import warnings
@@ -76,7 +75,7 @@ from ..protocols.splits import SplitError
 from ..results.manifest import now_iso, update_manifest
 from ..results.store import ResultStore
 from ..results.summary import check_expected, summarize
-from .backends import supports_generator
+from .backends import check_jobs, is_local_backend, local_jobs, supports_generator
 from .cache import FeatureCache, crop_captures
 from .identity import MAX_MODULES, Identity, classifier_identity, feature_set_identity
 from .tasks import RunContext, SetSpec, Task, execute_task, make_feature_set
@@ -482,11 +481,12 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
     out = Path(out) if out is not None else default_results_dir(protocol)
     store = ResultStore(out)
     store.clean_stale_temporaries()
-    if jobs == -1 or jobs == 0:
-
-        jobs = os.cpu_count() or 1
-    if jobs < 1:
-        raise TouchbenchError(f"--jobs must be at least 1, got {jobs}")
+    if is_local_backend():
+        jobs, warning = local_jobs(jobs)
+        if warning:
+            warnings.warn(warning, RuntimeWarning, stacklevel=2)
+    else:
+        check_jobs(jobs)
     if force:
         store.forget(plan.task_ids)
     finished = store.finished()
@@ -514,9 +514,8 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
             tid = prog.add(f"{protocol.name}: tasks", len(pending))
             if jobs == 1 or len(pending) == 1:
                 results = (execute_task(t, ctx) for t in pending)
-            else:
-
-                results = Parallel(n_jobs=jobs, return_as="generator_unordered" if supports_generator() else "list")(
+            else:  # never more workers than tasks
+                results = Parallel(n_jobs=min(jobs, len(pending)), return_as="generator_unordered" if supports_generator() else "list")(
                     delayed(execute_task)(t, ctx) for t in pending)
             for row, preds in results:
                 if preds is not None:

@@ -50,6 +50,15 @@ class FeatureInputError(TouchbenchError, ValueError):
     """
 
 
+class SensorNeededError(FeatureInputError):
+    """A set whose parameters leave a value to the sensor, built without one.
+
+    Not a bad parameter: the run engine passes the dataset's sensor, so a
+    protocol's parameter check (which has no sensor) skips this one and the
+    plan asks again with the sensor.
+    """
+
+
 def _capture_names(captures: Any) -> tuple[Sequence[Any], list[str] | None]:
     """Unwrap a TouchDataset into (captures, capture ids); else ids are None."""
     caps = getattr(captures, "captures", None)

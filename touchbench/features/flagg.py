@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..datasets.model import SensorSpec
-from .base import FEATURES, FeatureInputError, FeatureSet, cell_names
+from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError, cell_names
 from .numerics import (
     as_f64,
     hazen_quantiles,
@@ -109,7 +109,7 @@ class FlaggStats(FeatureSet):
         if self.sensor is not None:
             lo, hi = self.sensor.value_range
             return float(lo), float(hi)
-        raise FeatureInputError("flagg-stats: the 'grid' channels need the sensor's value range (its low end is no pressure): "
+        raise SensorNeededError("flagg-stats: the 'grid' channels need the sensor's value range (its low end is no pressure): "
                                 "pass sensor=SensorSpec(...) or value_range=(low, high)")
 
     def _channel_names(self, grid: tuple[int, int]) -> list[str]:

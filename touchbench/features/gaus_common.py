@@ -24,7 +24,7 @@ from typing import Any
 
 from ..datasets.cost import COST_SENSOR
 from ..datasets.haart import HAART_SENSOR
-from .base import FeatureInputError
+from .base import FeatureInputError, SensorNeededError
 
 #: the recording setting of each preset: a sensor with the same grid, frame
 #: rate and value range gets that preset
@@ -50,7 +50,7 @@ def preset_for(owner: str, preset: str | None, sensor: Any, values: str) -> str:
     known = "; ".join(f"{n}: {s.grid[0]} x {s.grid[1]} at {s.frame_rate:g} Hz, values {s.value_range[0]:g}..{s.value_range[1]:g}"
                       for n, s in PRESET_SENSORS.items())
     what = f"sensor {sensor.describe()} has neither recording setting" if sensor is not None else "no sensor was given"
-    raise FeatureInputError(
+    raise (FeatureInputError if sensor is not None else SensorNeededError)(
         f"{owner}: the paper tunes its parameters per recording setting ({known}) and {what}: "
         f"set preset to 'haart' or 'cost' to use their values anyway, or give {values}"
     )

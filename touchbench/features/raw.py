@@ -64,7 +64,8 @@ class RawWindow(FeatureSet):
         if self.frames is None:
             raise FeatureInputError("raw-window: state the window length: frames=N (every capture becomes N frames; "
                                     "shorter ones are refused or padded as 'shorter' says)")
-        if int(self.frames) < 1 or int(self.offset) < 0 or int(self.frames) != self.frames or int(self.offset) != self.offset:
+        whole = all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in (self.frames, self.offset))
+        if not whole or int(self.frames) < 1 or int(self.offset) < 0:
             raise FeatureInputError(f"raw-window: frames must be an integer >= 1 and offset an integer >= 0, got {self.frames!r}, {self.offset!r}")
         if self.shorter not in SHORTER_RULES:
             raise FeatureInputError(f"raw-window: shorter must be 'refuse' or 'pad', got {self.shorter!r}")

@@ -60,7 +60,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..datasets.model import SensorSpec
-from .base import FEATURES, FeatureInputError, FeatureSet
+from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError
 from .numerics import KURT_CONSTANT, SKEW_CONSTANT, moments
 
 MIN_FRAMES = 8
@@ -96,7 +96,7 @@ class _TouchBase(FeatureSet):
             return float(self.frame_rate)
         if self.sensor is not None:
             return float(self.sensor.frame_rate)
-        raise FeatureInputError(
+        raise SensorNeededError(
             f"{type(self).__name__}: needs the sensor's frame rate (its spectral bands are in Hz): "
             "pass sensor=SensorSpec(...) or frame_rate=..."
         )

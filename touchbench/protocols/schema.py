@@ -45,11 +45,17 @@ product when several parameters have grids). Expanded entries are labelled
 
 **Errors.** The YAML is composed with node positions, so every error names
 the file, the line and the field: ``protocols/x.yaml:12: classifiers[1].name:
-unknown classifier 'gaus-fr'; did you mean 'gaus-rf'?``. Validation happens
-in passes: the shape (pydantic), then the scheme's own parameters (each
+unknown classifier 'gaus-fr'; did you mean 'gaus-rf'?``. The file is read
+with bounds (:mod:`touchbench.core.yamlsafe`: size, aliases, expanded
+values, depth; duplicate keys refused). Validation happens in passes: the
+shape (pydantic; ``repetitions`` at most :data:`MAX_REPETITIONS`), the
+number of entries the grids expand to (at most :data:`MAX_ENTRIES`, counted
+before anything is expanded), then the scheme's own parameters (each
 scheme has a pydantic ``Params`` model), feature and classifier parameter
-names (against the constructors; classifiers are built once with their
-parameters), and the ``expected`` references. Checks that need the data
+names (against the constructors) and values (the feature sets' own checks;
+classifiers are built with their parameters and asked scikit-learn's
+parameter validation; a missing optional extra is refused with its install
+command), and the ``expected`` references. Checks that need the data
 (filter values, metadata columns) run in :mod:`touchbench.engine.runner`
 before any work and report through :meth:`Protocol.error_at`.
 """
@@ -61,6 +67,7 @@ import hashlib
 import inspect
 import itertools
 import json
+import math
 import re
 import typing
 from pathlib import Path
@@ -82,7 +89,11 @@ from ..classifiers import CLASSIFIERS
 from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
 from ..core.suggest import did_you_mean
+from ..core.versions import missing_extra
+from ..core.yamlsafe import MAX_BYTES, load_bounded, yaml_problem
+from ..datasets.registry import WRITE_LOCATIONS
 from ..features import FEATURES
+from ..features.base import FeatureInputError, SensorNeededError, make_feature_set
 from ..methods import CAPTURES, METHODS
 from ..methods.base import takes_captures
 from .seeding import derive_seed
@@ -101,6 +112,10 @@ __all__ = [
 ]
 
 METRICS = ("accuracy", "balanced_accuracy", "macro_f1")
+#: bounds checked before anything is expanded: a protocol is a plan of work,
+#: and a typo (an extra zero, a grid of a grid) must not plan years of it
+MAX_REPETITIONS = 1000
+MAX_ENTRIES = 10_000  # feature combinations x classifier entries + methods, grids expanded
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -155,12 +170,13 @@ def _label(name: str, params: dict[str, Any], keys: list[str] | None = None) -> 
 
 
 # ----------------------------------------------------------------- YAML with lines
-def _line_map(text: str) -> dict[tuple, int]:
-    """Path (tuple of keys / indices) -> 1-based line of every YAML node."""
-    try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.YAMLError:
-        return {}
+def _line_map(root: yaml.Node | None) -> dict[tuple, int]:
+    """Path (tuple of keys / indices) -> 1-based line of every node of a composed YAML document.
+
+    The document comes from the bounded loader (``core.yamlsafe``): its
+    aliases, once expanded, stand for a bounded number of nodes, and none is
+    recursive, so this walk is bounded too.
+    """
     out: dict[tuple, int] = {}
 
     def walk(node: yaml.Node, path: tuple) -> None:
@@ -257,6 +273,14 @@ class DatasetSpec(_Model):
         if isinstance(v, dict):
             return {k: _coerce_str_list(x) for k, x in v.items()}
         return v
+
+    @model_validator(mode="after")
+    def _reads_only(self) -> "DatasetSpec":
+        for k in self.options:
+            if k in WRITE_LOCATIONS:
+                raise _ErrorAt(("options", k), f"a protocol cannot choose where touchbench writes: remove {k}; "
+                                               "set the TOUCHBENCH_CACHE_DIR environment variable to move the cache")
+        return self
 
 
 class SchemeSpec(BaseModel):
@@ -464,6 +488,13 @@ class Protocol(_Model):
     _path: Path | None = PrivateAttr(default=None)
     _text: str = PrivateAttr(default="")
     _lines: dict[tuple, int] = PrivateAttr(default_factory=dict)
+
+    @field_validator("repetitions")
+    @classmethod
+    def _few_repetitions(cls, v: int) -> int:
+        if v > MAX_REPETITIONS:
+            raise ValueError(f"{v} repetitions: at most {MAX_REPETITIONS} (each repeats the whole evaluation)")
+        return v
 
     @field_validator("name")
     @classmethod
@@ -730,6 +761,44 @@ def _accepted_params(obj: Any) -> tuple[list[str], bool]:
     return names, var_kw
 
 
+def _grid_size(params: dict[str, Any]) -> int:
+    """How many entries ``params`` expands to (a grid that is not a list counts once: refused elsewhere)."""
+    return math.prod(len(v["grid"]) if isinstance(v["grid"], list) else 1 for v in params.values() if _is_grid(v))
+
+
+def _size_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
+    """The number of entries the protocol expands to, counted without expanding anything.
+
+    Feature combinations x classifier entries + method entries, every grid
+    expanded; more than :data:`MAX_ENTRIES` is refused at the largest grid.
+    """
+    sizes: list[tuple[int, tuple]] = []
+    n_combos = 0
+    for i, combo in enumerate(protocol.features):
+        n = 1
+        for j, ref in enumerate(combo):
+            sizes.append((_grid_size(ref.params), ("features", i, j, "params")))
+            n *= sizes[-1][0]
+        n_combos += n
+    n_clf = 0
+    for i, spec in enumerate(protocol.classifiers):
+        sizes.append((_grid_size(spec.params), ("classifiers", i, "params")))
+        n_clf += sizes[-1][0]
+    n_methods = 0
+    for i, m in enumerate(protocol.methods):
+        sizes.append((_grid_size(m.params), ("methods", i, "params")))
+        n_methods += sizes[-1][0]
+    total = n_combos * n_clf + n_methods
+    if total <= MAX_ENTRIES:
+        return []
+    largest, loc = max(sizes, key=lambda x: x[0])
+    shape = f"{n_combos} feature combination(s) x {n_clf} classifier entries" + (
+        f" + {n_methods} method entries" if protocol.methods else "")
+    return [(loc if largest > 1 else ("features",),
+             f"the protocol expands to {total} entries ({shape}, grids expanded): at most {MAX_ENTRIES}"
+             + (f"; this grid gives {largest}" if largest > 1 else "") + ": make the grids smaller or split the protocol")]
+
+
 def _shape_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
     """Empty filters and empty feature combinations (named by their key / index)."""
     issues = []
@@ -744,23 +813,47 @@ def _shape_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
     return issues
 
 
+def _feature_value_issue(name: str, params: dict[str, Any]) -> str | None:
+    """The feature set's own parameter checks (``_check_params``) for every grid value, without a sensor.
+
+    A set that leaves a value to the sensor (``SensorNeededError``) is
+    asked again by the plan, with the dataset's sensor."""
+    for p in expand_grid(params):
+        try:
+            make_feature_set(name, p, None)._check_params()
+        except SensorNeededError:
+            continue
+        except FeatureInputError as e:
+            return str(e)
+        except Exception as e:  # a value of the wrong type that the check did not foresee
+            return f"feature set {name!r} rejects {p}: {type(e).__name__}: {e}"
+    return None
+
+
 def _feature_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
 
     issues = []
-    for i, combo in enumerate(protocol.features):
-        for j, ref in enumerate(combo):
-            cls = FEATURES.get(ref.name)
-            names, var_kw = _accepted_params(cls)
-            names = [n for n in names if n not in ("self",)]
-            for k, v in ref.params.items():
-                loc = ("features", i, j, "params", k)
-                if k == "sensor":
-                    issues.append((loc, "the engine passes the dataset's sensor; do not set 'sensor'"))
-                elif not var_kw and k not in names:
-                    issues.append((loc, f"unknown parameter {k!r} for feature set {ref.name!r}"
-                                        f"{did_you_mean(k, names)} (accepted: {', '.join(n for n in names if n != 'sensor') or 'none'})"))
-                elif _is_grid(v) and not (isinstance(v["grid"], list) and v["grid"]):
-                    issues.append((loc + ("grid",), "a grid must be a non-empty list of values"))
+    refs = [(("features", i, j), ref) for i, combo in enumerate(protocol.features) for j, ref in enumerate(combo)]
+    refs += [(("methods", i, "features", j), ref) for i, m in enumerate(protocol.methods)
+             for j, ref in enumerate(m.features or [])]
+    for at, ref in refs:
+        cls = FEATURES.get(ref.name)
+        names, var_kw = _accepted_params(cls)
+        names = [n for n in names if n not in ("self",)]
+        n_before = len(issues)
+        for k, v in ref.params.items():
+            loc = at + ("params", k)
+            if k == "sensor":
+                issues.append((loc, "the engine passes the dataset's sensor; do not set 'sensor'"))
+            elif not var_kw and k not in names:
+                issues.append((loc, f"unknown parameter {k!r} for feature set {ref.name!r}"
+                                    f"{did_you_mean(k, names)} (accepted: {', '.join(n for n in names if n != 'sensor') or 'none'})"))
+            elif _is_grid(v) and not (isinstance(v["grid"], list) and v["grid"]):
+                issues.append((loc + ("grid",), "a grid must be a non-empty list of values"))
+        if len(issues) == n_before:
+            problem = _feature_value_issue(ref.name, ref.params)
+            if problem:
+                issues.append((_param_loc(at + ("params",), ref.params, problem), problem))
     return issues
 
 
@@ -768,11 +861,16 @@ def _estimator_issues(name: str, params: dict[str, Any], loc: tuple, what: str) 
     """Parameters of the classifier or named method ``name`` (a method's go to its estimator), at ``loc``."""
     issues: list[tuple[tuple, str]] = []
     base: dict[str, Any] = {}
+    est_name = name
     if name in METHODS:  # a named method's parameters go to its estimator
         tags = METHODS.entry(name).tags
-        factory, base = CLASSIFIERS.get(tags["estimator"]), dict(tags.get("defaults") or {})
-    else:
-        factory = CLASSIFIERS.get(name)
+        est_name, base = tags["estimator"], dict(tags.get("defaults") or {})
+    factory = CLASSIFIERS.get(est_name)
+    extra = CLASSIFIERS.entry(est_name).tags.get("extra")
+    missing = missing_extra(extra) if extra else []
+    if missing:
+        return [(loc, f"{what} {name!r} needs the optional {extra!r} extra, not installed here "
+                      f"({', '.join(missing)} missing): pip install 'touchbench[{extra}]'")]
     names, var_kw = _accepted_params(factory)
     bad = False
     for k, v in params.items():
@@ -800,13 +898,52 @@ def _estimator_issues(name: str, params: dict[str, Any], loc: tuple, what: str) 
             bad = True
     if bad:
         return issues
+    try:  # what the estimator's own defaults break is the estimator's business (a subclass widening a domain)
+        own = set(_constraint_failures(factory(random_state=0, **base)))
+    except Exception:
+        own = set()
     for p in expand_grid(params):
         try:
-            factory(random_state=0, **{**base, **p})
+            est = factory(random_state=0, **{**base, **p})
         except Exception as e:  # any construction error is a protocol error
-            issues.append((loc + ("params",), f"{what} {name!r} rejects {p}: {type(e).__name__}: {e}"))
+            issues.append((_param_loc(loc + ("params",), p, str(e)), f"{what} {name!r} rejects {p}: {type(e).__name__}: {e}"))
+            break
+        problem = next((m for k, m in _constraint_failures(est).items() if k not in own), None)
+        if problem:
+            issues.append((_param_loc(loc + ("params",), p, problem), f"{what} {name!r} rejects {p}: {problem}"))
             break
     return issues
+
+
+def _constraint_failures(est: Any) -> dict[tuple[str, str], str]:
+    """scikit-learn's own parameter validation of ``est`` and of the estimators among its
+    parameters, without fitting: ``(path, parameter) -> message`` for each parameter that
+    ``_validate_params`` refuses against its ``_parameter_constraints`` (asked one parameter
+    at a time, so that one refusal does not hide the next)."""
+    parts: dict[str, Any] = {"": est}
+    try:
+        parts.update({k: v for k, v in est.get_params(deep=True).items() if hasattr(v, "_parameter_constraints")})
+    except Exception:  # an estimator without scikit-learn's get_params: nothing more to ask
+        pass
+    out: dict[tuple[str, str], str] = {}
+    for path, part in parts.items():
+        constraints = getattr(part, "_parameter_constraints", None)
+        if not callable(getattr(part, "_validate_params", None)) or not isinstance(constraints, dict):
+            continue
+        for k, c in constraints.items():
+            probe = copy.copy(part)
+            probe._parameter_constraints = {k: c}
+            try:
+                probe._validate_params()
+            except (ValueError, TypeError) as e:
+                out[(path, k)] = str(e)
+    return out
+
+
+def _param_loc(at: tuple, params: dict[str, Any], message: str) -> tuple:
+    """``at`` + the parameter ``message`` names, when it names exactly one of ``params``."""
+    named = [k for k in params if re.search(r"(?<![\w])" + re.escape(str(k)) + r"(?![\w])", message)]
+    return at + (named[0],) if len(named) == 1 else at
 
 
 def _classifier_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
@@ -901,17 +1038,15 @@ def parse_protocol(text: str, path: str | Path | None = None, *, deep: bool = Tr
     p = Path(path) if path is not None else None
     where = str(p) if p is not None else "<protocol>"
     try:
-        data = yaml.safe_load(text)
+        data, root = load_bounded(text)
     except yaml.YAMLError as e:
-        mark = getattr(e, "problem_mark", None)
-        line = f":{mark.line + 1}" if mark is not None else ""
-        problem = getattr(e, "problem", None) or str(e)
-        raise ProtocolError(f"{where}{line}: invalid YAML: {problem}") from None
+        line, problem = yaml_problem(e)
+        raise ProtocolError(f"{where}{'' if line is None else f':{line}'}: {problem}") from None
     if data is None:
         raise ProtocolError(f"{where}: the protocol is empty")
     if not isinstance(data, dict):
         raise ProtocolError(f"{where}:1: a protocol is a mapping of fields (name, dataset, scheme, ...), got {type(data).__name__}")
-    lines = _line_map(text)
+    lines = _line_map(root)
     data = copy.deepcopy(data)
     if "name" not in data and p is not None:
         data["name"] = p.stem.replace(".yaml", "")
@@ -922,6 +1057,9 @@ def parse_protocol(text: str, path: str | Path | None = None, *, deep: bool = Tr
     proto._path = p
     proto._text = text
     proto._lines = lines
+    issues = _size_issues(proto)  # before anything expands the grids
+    if issues:
+        raise _make_error(p, lines, issues)
     issues = _shape_issues(proto)
     issues += _scheme_issues({"name": proto.scheme.name, **proto.scheme.params}, proto.target, ("scheme",))
     issues += _dataset_issues(proto)
@@ -942,6 +1080,9 @@ def load_protocol(path: str | Path, *, deep: bool = True) -> Protocol:
     p = Path(path)
     if not p.is_file():
         raise ProtocolError(f"{p}: no such protocol file")
+    size = p.stat().st_size
+    if size > MAX_BYTES:  # refused before reading it
+        raise ProtocolError(f"{p}: the file has {size} bytes: a protocol has at most {MAX_BYTES}")
     try:
         text = p.read_text(encoding="utf-8")
     except UnicodeDecodeError:
