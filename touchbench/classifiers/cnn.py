@@ -107,7 +107,15 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ..core.errors import TouchbenchError
-from ._util import MAX_SEED, build, captures_to_rows, frames_in_row, is_captures, sensor_frames, torch_available
+from ._util import (
+    MAX_SEED,
+    build,
+    captures_to_rows,
+    frames_in_row,
+    is_captures,
+    sensor_frames,
+    torch_available,
+)
 from .base import CLASSIFIERS
 
 INSTALL_HINT = "pip install 'touchbench[deep]'  (or: pip install torch==2.13.0)"

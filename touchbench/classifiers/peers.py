@@ -53,7 +53,14 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ..core.errors import TouchbenchError
-from ._util import build, captures_to_rows, frames_in_row, is_captures, seed_int, sensor_frames
+from ._util import (
+    build,
+    captures_to_rows,
+    frames_in_row,
+    is_captures,
+    seed_int,
+    sensor_frames,
+)
 from .base import CLASSIFIERS
 
 INSTALL_HINT = "pip install 'touchbench[peers]'  (or: pip install aeon)"
