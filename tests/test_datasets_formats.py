@@ -84,8 +84,12 @@ def test_challenge_csv_capture_not_432_rows(tmp_path):
     p = tmp_path / "training.csv"
     lines = p.read_text().splitlines()
     p.write_text("\n".join(lines[:-1]) + "\n")  # the last capture loses a frame
-    with pytest.raises(DataError, match="not a multiple of 432"):
+    with pytest.raises(DataError) as e:
         read_challenge_csv(p)
+    # header on line 1, the first capture on lines 2-433, the second on 434-864 (its 432nd row gone):
+    # the error is where the capture breaks off, and says where it began
+    assert e.value.line == 864
+    assert "a capture ends after 431 rows (lines 434-864); each capture of this file has 432 rows" in str(e.value)
 
 
 @pytest.mark.realdata

@@ -124,7 +124,7 @@ def test_method_choice_and_bad_model_file(setup, tmp_path):
     assert res.exit_code == 2 and "no fold 's9'" in res.output
     (tmp_path / "junk.joblib").write_bytes(b"not a model")
     res = CliRunner().invoke(cli, ["predict", str(tmp_path / "junk.joblib"), str(data)])
-    assert res.exit_code == 2 and "not a readable touchbench model" in res.output
+    assert res.exit_code == 2 and "junk.joblib: not a touchbench model file" in res.output
     assert not (tmp_path / "m.joblib").exists()
 
 

@@ -31,8 +31,8 @@ def test_seconds_to_frames_rounds_to_whole_frames():
     assert seconds_to_frames(2.0, 54.0) == 108
     assert seconds_to_frames(0.5, 54.0) == 27
     assert seconds_to_frames(0.01, 10.0) == 1  # at least one frame
-    with pytest.raises(ValueError):
-        seconds_to_frames(0, 10.0)
+    with pytest.raises(TouchbenchError, match="--hop must be a positive number of seconds, got 0"):
+        seconds_to_frames(0, 10.0, "--hop")
 
 
 def test_cut_windows_starts_and_short_captures():

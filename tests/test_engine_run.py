@@ -113,10 +113,14 @@ def test_rerun_is_a_noop_and_force_recomputes(tmp_path):
     p = protocol(tmp_path)
     first = run_protocol(p, out=tmp_path / "out", progress=False)
     before = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
-    stamps = {f: f.stat().st_mtime_ns for f in (tmp_path / "out").rglob("*") if f.is_file()}
+    def stamps():  # every file but the lock, which each run takes (and says who holds it there)
+        return {f: f.stat().st_mtime_ns for f in (tmp_path / "out").rglob("*")
+                if f.is_file() and f.name != ".touchbench.lock"}
+
+    before_stamps = stamps()
     again = run_protocol(p, out=tmp_path / "out", progress=False)
     assert again.noop and again.n_ran == 0 and again.n_skipped == first.n_tasks
-    assert {f: f.stat().st_mtime_ns for f in (tmp_path / "out").rglob("*") if f.is_file()} == stamps
+    assert stamps() == before_stamps
     forced = run_protocol(p, out=tmp_path / "out", force=True, progress=False)
     assert forced.n_ran == first.n_tasks and not forced.noop
     after = pd.read_parquet(tmp_path / "out" / "predictions.parquet")

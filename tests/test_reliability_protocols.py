@@ -254,7 +254,7 @@ class Recording:
 
 
 def test_no_more_workers_than_feature_chunks(tmp_path, monkeypatch):
-    monkeypatch.setattr(cache, "Parallel", Recording)
+    monkeypatch.setattr(backends, "Parallel", Recording)
     monkeypatch.setattr(Recording, "calls", calls := [])
     caps = [np.full((3, 2, 2), i, dtype=np.uint16) for i in range(2 * cache.CHUNK + 1)]  # 3 chunks
     matrix, _ = cache.FeatureCache(tmp_path).compute(
@@ -264,7 +264,7 @@ def test_no_more_workers_than_feature_chunks(tmp_path, monkeypatch):
 
 
 def test_no_more_workers_than_tasks(engine_env, monkeypatch):
-    monkeypatch.setattr(runner, "Parallel", Recording)
+    monkeypatch.setattr(backends, "Parallel", Recording)
     monkeypatch.setattr(Recording, "calls", calls := [])
     monkeypatch.setattr(backends, "available_cpus", lambda: 64)
     proto = parse_protocol(HEAD + "features: [sd]\nclassifiers: [zhou-lda]\n", "p.yaml")

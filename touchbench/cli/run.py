@@ -60,9 +60,11 @@ def format_summary(summary, expected) -> str:
 @click.option("--force", is_flag=True, help="Recompute every task, even finished ones.")
 @click.option("--retry-failed", is_flag=True, help="Run the tasks that failed last time again.")
 @click.option("--progress/--no-progress", default=None, help="Progress bar [default: on a terminal only].")
+@click.option("--wait", type=click.FloatRange(min=0), default=0, show_default=True, metavar="SECONDS",
+              help="When another run holds the results directory, wait this long for it before giving up.")
 @backend_options
 def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bool, progress: bool | None,
-        backend: str, scheduler: str | None, address: str | None) -> None:
+        wait: float, backend: str, scheduler: str | None, address: str | None) -> None:
     """Evaluate PROTOCOL (a file, or the name of a shipped protocol or of one in your folders): every feature
     combination x classifier under its scheme. Finished tasks are skipped, so
     an interrupted run resumes where it stopped."""
@@ -78,7 +80,8 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
         click.echo(f"note: {n}", err=True)
     try:
         with backend_for_run(backend, scheduler, address, plan.cache_root, jobs) as jobs:
-            res = run_plan(plan, out_dir, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress)
+            res = run_plan(plan, out_dir, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
+                           wait=wait)
     except KeyboardInterrupt:
         click.echo("\ninterrupted: finished tasks are saved; run the same command again to resume", err=True)
         sys.exit(130)

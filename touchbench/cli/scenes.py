@@ -10,6 +10,7 @@ import click
 import yaml
 
 from ..core.errors import TouchbenchError
+from ..core.yamlsafe import safe_load
 
 
 def _parse_sets(values: tuple[str, ...]) -> dict:
@@ -20,7 +21,7 @@ def _parse_sets(values: tuple[str, ...]) -> dict:
             raise TouchbenchError(f"--set {item!r}: expected KEY=VALUE (e.g. protocol.repetitions=2)")
         k, v = item.split("=", 1)
         try:
-            out[k.strip()] = yaml.safe_load(v)
+            out[k.strip()] = safe_load(v)
         except yaml.YAMLError:
             raise TouchbenchError(f"--set {item!r}: value is not valid YAML") from None
     return out

@@ -17,6 +17,8 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from .errors import WriteError
+
 __all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_parquet"]
 
 
@@ -25,16 +27,23 @@ def atomic_path(path: Path) -> Iterator[str]:
     """Yield a temporary file name beside ``path``; rename it to ``path`` on success.
 
     On any error the temporary file is removed and ``path`` is left as it was.
+    An operating-system error (permissions, a read-only or full disk) becomes a
+    :class:`~touchbench.core.errors.WriteError` naming ``path``.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    except OSError as e:
+        raise WriteError(path, e) from None
     os.close(fd)
     try:
         yield tmp
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError) and not isinstance(e, WriteError):
+            raise WriteError(path, e) from None
         raise
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 from pathlib import Path
 
 
@@ -30,3 +31,22 @@ class UnknownNameError(TouchbenchError, KeyError):
 
 class RegistrationError(TouchbenchError, ValueError):
     """An entry a registry refuses: a name registered twice, a tag declared twice."""
+
+
+class WriteError(TouchbenchError, OSError):
+    """A file touchbench could not write (permissions, a read-only or full disk), naming the file;
+    the writer left nothing half-written."""
+
+    _REASONS = {
+        "EACCES": "permission denied: the folder is not writable for you (choose another output folder)",
+        "EPERM": "permission denied: the folder is not writable for you (choose another output folder)",
+        "EROFS": "the file system is read-only (choose another output folder)",
+        "ENOSPC": "no space left on the device (free some space and run again; finished work is kept)",
+        "EDQUOT": "disk quota exceeded (free some space and run again; finished work is kept)",
+    }
+
+    def __init__(self, path: str | Path, error: OSError):
+        self.path = str(path)
+        name = errno.errorcode.get(error.errno or 0, "")
+        reason = self._REASONS.get(name) or error.strerror or str(error)
+        TouchbenchError.__init__(self, f"{self.path}: cannot write: {reason}")

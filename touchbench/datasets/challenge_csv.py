@@ -86,7 +86,9 @@ def _read_one(path: Path, split: str) -> tuple[list[np.ndarray], pd.DataFrame]:
         split_bounds = []
         for a, b in bounds:
             if (b - a) % N_FRAMES:
-                raise DataError(f"a run of {b - a} rows for one capture key is not a multiple of {N_FRAMES}", path, a + 2)
+                start = a + (b - a) // N_FRAMES * N_FRAMES
+                raise DataError(f"a capture ends after {b - start} rows (lines {start + 2}-{b + 1}); each capture of "
+                                f"this file has {N_FRAMES} rows", path, b + 1)
             split_bounds += [(s, s + N_FRAMES) for s in range(a, b, N_FRAMES)]
         bounds = split_bounds
     captures, rows = [], []

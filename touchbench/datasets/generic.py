@@ -66,8 +66,10 @@ def read_long_table(
         raise DataError(f"{len(cell_cols)} cell columns for a {grid[0]} x {grid[1]} grid ({sensor.n_cells} cells)", path, 1)
     values = numeric(df, cell_cols, path, lo=value_range[0], hi=value_range[1])
     frame = numeric(df, [fr], path, integer=True)[:, 0]
-    first = frame[0]
-    bounds = runs(df[[cap]], frame - first + 1, path, frame_col)  # frames may count from 0 or 1
+    first = int(frame[0]) if len(frame) else 1
+    if first not in (0, 1):  # frames count from 0 or 1, as the file's first row says
+        raise DataError(f"the first {frame_col} is {first}; frames are numbered from 0 or 1", path, 2)
+    bounds = runs(df[[cap]], frame, path, frame_col, origin=first)
     meta_cols = [c for c in df.columns if c not in set(cell_cols) | {fr}]
     rows, captures = [], []
     for a, b in bounds:

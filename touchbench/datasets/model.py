@@ -27,7 +27,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from ..core.atomic import atomic_path
-from ..core.errors import DataError
+from ..core.errors import DataError, TouchbenchError
 from .formats import register_format
 
 FORMAT_VERSION = 2
@@ -247,27 +247,38 @@ class TouchDataset:
         raw = (table.schema.metadata or {}).get(b"touchbench")
         if raw is None or "frames" not in table.column_names:
             raise DataError("not a touchbench dataset (no touchbench metadata or frames column)", path)
-        info = json.loads(raw)
-        if info.get("format_version") != FORMAT_VERSION:
+        try:
+            info = json.loads(raw)
+            version = info.get("format_version")
+        except (ValueError, AttributeError) as e:  # not JSON, or not an object
+            raise DataError(f"its touchbench metadata is damaged ({type(e).__name__}); convert the data again",
+                            path) from None
+        if version != FORMAT_VERSION:
             raise DataError(
-                f"written by another touchbench storage format (version {info.get('format_version')}, "
+                f"written by another touchbench storage format (version {version}, "
                 f"this version reads {FORMAT_VERSION}); convert it again", path)
-        sensor = SensorSpec.from_dict(info["sensor"])
-        dtype = np.dtype(info["dtype"])
-        frames = table.column("frames").combine_chunks()
-        n = table.column("n_frames").to_numpy()
-        h, w = sensor.grid
-        if len(frames):
-            _, offsets_buf, data_buf = frames.buffers()
-            offsets = np.frombuffer(offsets_buf, dtype=np.int64)[frames.offset:frames.offset + len(frames) + 1]
-            values = np.frombuffer(data_buf, dtype=np.uint8)
-            captures = [
-                values[offsets[i]:offsets[i + 1]].view(dtype).reshape(int(n[i]), h, w) for i in range(len(n))
-            ]
-        else:
+        try:
+            sensor = SensorSpec.from_dict(info["sensor"])
+            dtype = np.dtype(info["dtype"])
+            frames = table.column("frames").combine_chunks()
+            n = table.column("n_frames").to_numpy()
+            h, w = sensor.grid
             captures = []
-        meta = table.drop_columns(["frames", "n_frames"]).to_pandas()
-        ds = cls(name=info["name"], captures=captures, meta=meta, sensor=sensor, provenance=info.get("provenance", {}))
+            if len(frames):
+                _, offsets_buf, data_buf = frames.buffers()
+                offsets = np.frombuffer(offsets_buf, dtype=np.int64)[frames.offset:frames.offset + len(frames) + 1]
+                values = np.frombuffer(data_buf, dtype=np.uint8)
+                captures = [
+                    values[offsets[i]:offsets[i + 1]].view(dtype).reshape(int(n[i]), h, w) for i in range(len(n))
+                ]
+            meta = table.drop_columns(["frames", "n_frames"]).to_pandas()
+            ds = cls(name=info["name"], captures=captures, meta=meta, sensor=sensor,
+                     provenance=info.get("provenance", {}))
+        except TouchbenchError as e:
+            raise DataError(str(e), path) from None
+        except (KeyError, TypeError, ValueError) as e:  # metadata that does not describe the frames
+            raise DataError(f"its touchbench metadata does not describe its frames ({type(e).__name__}: {e}); "
+                            "convert the data again", path) from None
         if ds.content_hash != info.get("content_hash"):
             if verify:
                 raise DataError("content does not match the hash it was saved with (file corrupted or edited)", path)

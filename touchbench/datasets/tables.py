@@ -38,7 +38,10 @@ def read_table(path: str | Path) -> pd.DataFrame:
         if path.suffix == ".parquet":
             df = pd.read_parquet(path)
         else:
-            df = pd.read_csv(path, skipinitialspace=True, low_memory=False)
+            # blank lines are kept as empty rows, so that row i is line i + 2 of the file
+            df = pd.read_csv(path, skipinitialspace=True, low_memory=False, skip_blank_lines=False)
+            filled = np.flatnonzero(df.notna().any(axis=1).to_numpy())
+            df = df.iloc[: filled[-1] + 1 if len(filled) else 0]  # blank lines at the end are no rows
     except pd.errors.ParserError as e:
         m = re.search(r"line (\d+)", str(e))
         raise DataError(f"malformed row ({e})", path, int(m.group(1)) if m else None) from None
@@ -98,11 +101,14 @@ def numeric(
     return arr
 
 
-def runs(keys: pd.DataFrame, counter: np.ndarray | None, path: Path, counter_name: str = "frame") -> list[tuple[int, int]]:
+def runs(keys: pd.DataFrame, counter: np.ndarray | None, path: Path, counter_name: str = "frame",
+         origin: int = 1) -> list[tuple[int, int]]:
     """Split rows into captures: ``[(start, stop), ...]``.
 
     A new capture starts where any key column changes, or where the frame
-    counter restarts at 1. Inside a capture the counter must climb by one.
+    counter restarts at ``origin`` (0 or 1). Inside a capture the counter must
+    climb by one. Errors quote the counter as the file has it, at the line of
+    the row at fault.
     """
     n = len(keys)
     change = np.zeros(n, dtype=bool)
@@ -111,11 +117,11 @@ def runs(keys: pd.DataFrame, counter: np.ndarray | None, path: Path, counter_nam
         k = keys.astype(str).to_numpy()
         change[1:] |= (k[1:] != k[:-1]).any(axis=1)
     if counter is not None:
-        change |= counter == 1
-        starts_bad = change & (counter != 1)
+        change |= counter == origin
+        starts_bad = change & (counter != origin)
         if starts_bad.any():
             i = int(np.flatnonzero(starts_bad)[0])
-            raise DataError(f"a capture starts with {counter_name} {counter[i]:g}, not 1", path, i + 2)
+            raise DataError(f"a capture starts with {counter_name} {counter[i]:g}, not {origin}", path, i + 2)
         step_bad = ~change[1:] & (np.diff(counter) != 1)
         if step_bad.any():
             i = int(np.flatnonzero(step_bad)[0]) + 1

@@ -17,10 +17,18 @@ predict`` / ``touchbench stream`` read. It holds
   the feature sets and classifier with their parameters and seed, the
   window lengths, the class names and the package versions.
 
-The file is a joblib pickle (``MODEL_FORMAT``, ``MODEL_VERSION``) written
-atomically; the manifest is also written beside it as ``<file>.json`` for
-reading without Python. Like every pickle, a model file runs code when
-loaded: load only files you trust.
+The file (``MODEL_FORMAT``, ``MODEL_VERSION``), written atomically, is a
+first line ``touchbench-model``, a second line of JSON (the format version,
+the SHA-256 and size of what follows, and the manifest), then a joblib
+pickle of the fitted parts. The manifest is also written beside it as
+``<file>.json`` for reading without Python. Loading checks, before anything
+is unpickled, that the pickle is the one touchbench wrote (checksum and
+size: a damaged, truncated or edited file is refused), then that the parts
+agree with the manifest: the class list as the fit encoded it (sorted,
+unique, one per class the estimator knows) and the feature sets' sensor.
+The checksum catches damage and edits, not a file crafted to harm: like
+every pickle, a model file runs code when loaded, so load only files you
+trust.
 
 Sensor check: data is refused when its sensor differs from the model's in
 grid, channels, frame rate, value range or polarity (the name alone may
@@ -29,6 +37,8 @@ differ: a user's reader names its sensor ``custom``).
 
 from __future__ import annotations
 
+import hashlib
+import io
 import json
 import time
 from dataclasses import dataclass, field
@@ -39,7 +49,7 @@ import joblib
 import numpy as np
 
 from ..classifiers.fastforest import compile_forest
-from ..core.atomic import atomic_path, atomic_write_bytes
+from ..core.atomic import atomic_write_bytes
 from ..core.errors import DataError, TouchbenchError
 from ..core.threads import single_thread
 from ..core.versions import package_versions
@@ -59,7 +69,9 @@ __all__ = [
 ]
 
 MODEL_FORMAT = "touchbench-model"
-MODEL_VERSION = 1
+MODEL_VERSION = 2
+_MAGIC = (MODEL_FORMAT + "\n").encode()
+_MAX_HEADER = 1 << 20  # bytes of the JSON line: a manifest, never more
 _VERSIONED = ("numpy", "scipy", "scikit-learn", "joblib", "pandas", "PyWavelets", "xgboost", "xgboost-cpu", "torch")
 # A pickle is only guaranteed to load with the versions that wrote it; these matter most.
 _CHECKED = ("scikit-learn", "numpy", "xgboost", "xgboost-cpu", "torch")
@@ -162,15 +174,17 @@ class TrainedModel:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         payload = {
-            "format": MODEL_FORMAT,
-            "version": MODEL_VERSION,
-            "manifest": self.manifest,
             "feature_sets": self.feature_sets,
             "estimator": self.estimator,
             "classes": [str(c) for c in self.classes],
         }
-        with atomic_path(path) as tmp:
-            joblib.dump(payload, tmp, compress=3)
+        buf = io.BytesIO()
+        joblib.dump(payload, buf, compress=3)
+        body = buf.getvalue()
+        header = {"version": MODEL_VERSION, "sha256": hashlib.sha256(body).hexdigest(), "size": len(body),
+                  "manifest": self.manifest}
+        line = json.dumps(header, sort_keys=True, default=str).encode() + b"\n"
+        atomic_write_bytes(path, _MAGIC + line + body)
         text = json.dumps(self.manifest, indent=2, sort_keys=True, default=str) + "\n"
         atomic_write_bytes(manifest_path(path), text.encode())
         return path
@@ -182,22 +196,52 @@ class TrainedModel:
         path = Path(path)
         if not path.is_file():
             raise DataError("no such model file", path)
+        header, body = _read_model_file(path)
         try:
-            payload = joblib.load(path)
-        except Exception as e:  # corrupt file, missing module, wrong pickle...
+            payload = joblib.load(io.BytesIO(body))
+        except Exception as e:  # noqa: BLE001 - a module missing here, a class changed since...
             raise DataError(f"not a readable touchbench model ({type(e).__name__}: {e})", path) from None
-        if not isinstance(payload, dict) or payload.get("format") != MODEL_FORMAT:
-            raise DataError("not a touchbench model file (train one with `touchbench train`)", path)
-        if payload.get("version") != MODEL_VERSION:
-            raise DataError(
-                f"written by another touchbench model format (version {payload.get('version')}, this version "
-                f"reads {MODEL_VERSION}); train it again", path)
-        return cls(
+        if not isinstance(payload, dict) or not {"feature_sets", "estimator", "classes"} <= payload.keys():
+            raise DataError("not a touchbench model (its parts are missing)", path)
+        model = cls(
             feature_sets=list(payload["feature_sets"]),
             estimator=payload["estimator"],
             classes=np.array(payload["classes"], dtype=object),
-            manifest=payload["manifest"],
+            manifest=header["manifest"],
         )
+        problems = model.consistency_problems()
+        if problems:
+            raise DataError("the model's parts disagree (" + "; ".join(problems) + "); train it again", path)
+        return model
+
+    def consistency_problems(self) -> list[str]:
+        """Why the fitted parts disagree with each other or with the manifest; empty when they agree.
+
+        The fit encodes the labels as the positions of the sorted class names
+        (:func:`touchbench.methods.fitting.encode_labels`), so the class list must
+        be sorted and unique, equal the manifest's, and count the classes the
+        estimator was fitted on; every feature set built for a sensor must have
+        the model's.
+        """
+        out = []
+        classes = [str(c) for c in self.classes]
+        if classes != sorted(set(classes)):
+            out.append("its class list is not the sorted list of distinct class names the fit encoded")
+        if classes != [str(c) for c in self.manifest.get("classes", [])]:
+            out.append("its class list differs from its manifest's")
+        known = getattr(self.estimator, "classes_", None)
+        if known is not None and len(known) != len(classes):
+            out.append(f"the classifier knows {len(known)} classes, the class list names {len(classes)}")
+        try:
+            sensor = self.sensor
+        except (KeyError, TypeError, ValueError):
+            return [*out, "its manifest has no readable sensor"]
+        for fs in self.feature_sets:
+            fs_sensor = getattr(fs, "sensor", None)
+            if isinstance(fs_sensor, SensorSpec) and sensor_differences(sensor, fs_sensor):
+                out.append(f"feature set {type(fs).__name__} was built for another sensor "
+                           f"({'; '.join(sensor_differences(sensor, fs_sensor))})")
+        return out
 
     def version_notes(self) -> list[str]:
         """Packages whose installed version differs from the one the model was saved with."""
@@ -225,6 +269,38 @@ class TrainedModel:
             "versions      " + ", ".join(f"{k} {v}" for k, v in m["versions"].items()),
         ]
         return "\n".join(lines)
+
+
+def _read_model_file(path: Path) -> tuple[dict[str, Any], bytes]:
+    """The header and the pickle of a model file, the pickle checked against the header's
+    checksum before anyone unpickles it."""
+    try:
+        data = path.read_bytes()
+    except OSError as e:
+        raise DataError(f"cannot read ({e.strerror or e})", path) from None
+    if not data.startswith(_MAGIC):
+        raise DataError("not a touchbench model file, or one written by an older touchbench "
+                        "(train one with `touchbench train`)", path)
+    end = data.find(b"\n", len(_MAGIC), len(_MAGIC) + _MAX_HEADER)
+    try:
+        if end < 0:
+            raise ValueError("no end of header")
+        header = json.loads(data[len(_MAGIC):end])
+        version, digest, size = header["version"], header["sha256"], header["size"]
+        header["manifest"]["sensor"]  # noqa: B018 - must be there
+    except (ValueError, KeyError, TypeError) as e:
+        raise DataError(f"the model file's header is damaged ({type(e).__name__}); train it again", path) from None
+    if version != MODEL_VERSION:
+        raise DataError(f"written by another touchbench model format (version {version}, this version reads "
+                        f"{MODEL_VERSION}); train it again", path)
+    body = data[end + 1:]
+    if len(body) != size:
+        raise DataError(f"the model file is {len(body) - size:+d} bytes off the size touchbench wrote "
+                        "(truncated or edited); nothing was loaded", path)
+    if hashlib.sha256(body).hexdigest() != digest:
+        raise DataError("the model file does not match the checksum touchbench wrote with it (damaged or "
+                        "edited); nothing was loaded", path)
+    return header, body
 
 
 def manifest_path(model_path: str | Path) -> Path:
@@ -263,8 +339,9 @@ def fit_model(
     sensor = dataset.sensor
     y_caps = np.array([str(v) for v in dataset.meta[target].tolist()], dtype=object)
     if windows:
-        lengths = [seconds_to_frames(w, sensor.frame_rate) for w in windows]
-        hops = [seconds_to_frames(train_hop, sensor.frame_rate) if train_hop else max(1, L // 2) for L in lengths]
+        lengths = [seconds_to_frames(w, sensor.frame_rate, "--window") for w in windows]
+        hops = [seconds_to_frames(train_hop, sensor.frame_rate, "--train-hop") if train_hop is not None
+                else max(1, L // 2) for L in lengths]
         samples, src = cut_windows(dataset.captures, lengths, hops)
     else:
         lengths = hops = []

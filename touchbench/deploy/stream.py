@@ -35,6 +35,7 @@ import gzip
 import json
 import math
 import time
+import zlib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import IO, Any, Callable, Iterable, Iterator
@@ -116,8 +117,8 @@ class SlidingRecognizer:
         if not windows_s:
             raise TouchbenchError("give at least one window length")
         self.windows_s = windows_s
-        self.lengths = [seconds_to_frames(w, self.frame_rate) for w in windows_s]
-        self.hop = seconds_to_frames(hop_s, self.frame_rate)
+        self.lengths = [seconds_to_frames(w, self.frame_rate, "--window") for w in windows_s]
+        self.hop = seconds_to_frames(hop_s, self.frame_rate, "--hop")
         if not 0.0 <= threshold <= 1.0:
             raise TouchbenchError(f"threshold must be in [0, 1], got {threshold}")
         if combine not in COMBINE:
@@ -207,7 +208,7 @@ def text_frames(fh: IO[str], model: TrainedModel, where: str = "<stdin>") -> Ite
     h, w = model.sensor.grid
     n = h * w
     dtype = np.dtype(model.manifest.get("capture_dtype", "<f8"))
-    for lineno, line in enumerate(iter(fh.readline, ""), start=1):
+    for lineno, line in enumerate(_lines(fh, where), start=1):
         arrived = time.perf_counter()
         s = line.strip()
         if not s:
@@ -222,6 +223,23 @@ def text_frames(fh: IO[str], model: TrainedModel, where: str = "<stdin>") -> Ite
             raise DataError(f"not a number: {bad.strip()!r}", where, lineno) from None
         _check_values(values, model, where, lineno)
         yield values.reshape(h, w).astype(dtype), arrived
+
+
+def _lines(fh: IO[str], where: str) -> Iterator[str]:
+    """The lines of ``fh`` as they arrive; a file that cannot be read to its end (a truncated
+    ``.gz``, bytes that are not text) stops with the line it reached."""
+    n = 0
+    while True:
+        try:
+            line = fh.readline()
+        except (EOFError, OSError, UnicodeDecodeError, zlib.error) as e:
+            what = ("the compressed file ends before its end marker (truncated?)" if isinstance(e, EOFError)
+                    else f"cannot read on ({type(e).__name__}: {e})")
+            raise DataError(what, where, n + 1) from None
+        if not line:
+            return
+        n += 1
+        yield line
 
 
 def _is_number(v: str) -> bool:
@@ -316,7 +334,7 @@ def _first_line_is_numbers(path: Path) -> bool:
             for line in fh:
                 if line.strip():
                     return all(_is_number(v) for v in line.strip().split(","))
-    except (OSError, UnicodeDecodeError):
+    except (EOFError, OSError, UnicodeDecodeError, zlib.error):
         return False
     return False
 

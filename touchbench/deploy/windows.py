@@ -29,15 +29,18 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
+from ..core.errors import TouchbenchError
+
 __all__ = ["COMBINE", "combine_windows", "cut_windows", "seconds_to_frames"]
 
 COMBINE = ("max", "mean")
 
 
-def seconds_to_frames(seconds: float, frame_rate: float) -> int:
-    """``seconds`` at ``frame_rate``, rounded to whole frames (at least 1)."""
-    if not seconds > 0:
-        raise ValueError(f"a window length or hop must be positive, got {seconds!r} s")
+def seconds_to_frames(seconds: float, frame_rate: float, what: str = "a window length or hop") -> int:
+    """``seconds`` at ``frame_rate``, rounded to whole frames (at least 1); ``what`` names the
+    option in the error for a length that is not positive."""
+    if not (isinstance(seconds, (int, float)) and np.isfinite(seconds) and seconds > 0):
+        raise TouchbenchError(f"{what} must be a positive number of seconds, got {seconds!r}")
     return max(1, int(round(float(seconds) * float(frame_rate))))
 
 

@@ -33,12 +33,12 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
-from joblib import Parallel, delayed
+from joblib import delayed
 from threadpoolctl import threadpool_limits
 
 from ..core.atomic import atomic_write_bytes
 from ..core.paths import cache_dir
-from .backends import run_setup, supports_generator
+from .backends import parallel, run_setup
 
 __all__ = ["CHUNK", "FeatureCache", "crop_captures", "matrix_checksum"]
 
@@ -167,7 +167,7 @@ class FeatureCache:
             results = []
 
             # never more workers than chunks
-            par = Parallel(n_jobs=min(jobs, len(chunks)), return_as="generator" if supports_generator() else "list")
+            par = parallel(min(jobs, len(chunks)))
             for ch, res in zip(chunks, par(delayed(_transform_chunk)(make, ch, setup) for ch in chunks)):
                 results.append(res)
                 if on_chunk:

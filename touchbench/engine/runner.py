@@ -48,7 +48,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from joblib import Parallel, delayed
+from joblib import delayed
 from rich.console import Console
 from rich.progress import (
     BarColumn,
@@ -75,7 +75,7 @@ from ..protocols.splits import SplitError
 from ..results.manifest import now_iso, update_manifest
 from ..results.store import ResultStore
 from ..results.summary import check_expected, summarize
-from .backends import check_jobs, is_local_backend, local_jobs, supports_generator
+from .backends import check_jobs, is_local_backend, local_jobs, parallel
 from .cache import FeatureCache, crop_captures
 from .identity import MAX_MODULES, Identity, classifier_identity, feature_set_identity
 from .tasks import RunContext, SetSpec, Task, execute_task, make_feature_set
@@ -457,7 +457,9 @@ def _dataset_copy(plan: Plan) -> Path:
     return path
 
 
-def _reports_current(store: ResultStore, plan: Plan) -> bool:
+def _reports_current(store: ResultStore, plan: Plan, notes: list[str]) -> bool:
+    """The merged files are those of this plan, as the last merge wrote them (a damaged or edited
+    one adds a note: they are rebuilt from the fragments)."""
     m = store.read_manifest()
     if not m:
         return False
@@ -465,21 +467,44 @@ def _reports_current(store: ResultStore, plan: Plan) -> bool:
         return False
     if m.get("tasks", {}).get("merged") != len(plan.tasks):
         return False
-    return all(p.is_file() for p in (store.scores_path, store.predictions_path, store.confusion_path))
+    problems = store.merged_problems(m.get("tasks", {}).get("merged_files"))
+    if problems:
+        notes.append("; ".join(problems) + ": merged again from the results of each task")
+        return False
+    return True
+
+
+def _damaged_notes(plan: Plan, problems: dict[str, str]) -> list[str]:
+    """A note per task of the plan whose saved results could not be trusted (run again)."""
+    by_id = {t.task_id: t for t in plan.tasks}
+    return [f"the saved results of {t.features_label} | {t.classifier_label}, fold {t.fold.name} (repetition "
+            f"{t.repetition}) were not used: {problems[tid]}; run again"
+            for tid, t in by_id.items() if tid in problems]
 
 
 def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force: bool = False,
-             retry_failed: bool = False, progress: bool | None = None, worker_setup=None) -> RunResult:
+             retry_failed: bool = False, progress: bool | None = None, worker_setup=None,
+             wait: float = 0.0) -> RunResult:
     """Execute the pending tasks of ``plan`` and write the reports (see the module docstring).
 
     ``worker_setup`` is a picklable function each worker process calls once
     before its first task (to register plug-in components in the workers).
+    One run at a time writes a results folder: another run holding ``out`` is
+    waited for up to ``wait`` seconds, then refused with who holds it.
     """
+    out = Path(out) if out is not None else default_results_dir(plan.protocol)
+    store = ResultStore(out)
+    with store.lock(wait=wait, command=f"touchbench run {plan.protocol.name}"):
+        return _run_locked(plan, store, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
+                           worker_setup=worker_setup)
+
+
+def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry_failed: bool,
+                progress: bool | None, worker_setup) -> RunResult:
     t_start = time.perf_counter()
     started_at = now_iso()
     protocol = plan.protocol
-    out = Path(out) if out is not None else default_results_dir(protocol)
-    store = ResultStore(out)
+    out = store.root
     store.clean_stale_temporaries()
     if is_local_backend():
         jobs, warning = local_jobs(jobs)
@@ -489,12 +514,14 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
         check_jobs(jobs)
     if force:
         store.forget(plan.task_ids)
-    finished = store.finished()
+    damaged: dict[str, str] = {}
+    finished = store.finished(damaged)
+    notes = list(plan.notes) + _damaged_notes(plan, damaged)
     pending = [t for t in plan.tasks
                if t.task_id not in finished or (retry_failed and finished[t.task_id] == "failed")]
     show = sys.stderr.isatty() if progress is None else progress
 
-    if not pending and _reports_current(store, plan):
+    if not pending and _reports_current(store, plan, notes):
         scores = pd.read_parquet(store.scores_path)
         preds = None
         if protocol.expected is not None:
@@ -502,10 +529,9 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
         return RunResult(out=out, run_id=plan.run_id, n_tasks=len(plan.tasks), n_ran=0, n_skipped=len(plan.tasks),
                          n_failed=int((scores["status"] == "failed").sum()), noop=True,
                          seconds=time.perf_counter() - t_start, scores=scores, summary=summarize(scores),
-                         expected=check_expected(protocol.expected, scores, preds), notes=plan.notes)
+                         expected=check_expected(protocol.expected, scores, preds), notes=notes)
 
     n_ran = 0
-    notes = list(plan.notes)
     with _Progress(show) as prog:
         if pending:
             notes += _fill_cache(plan, pending, jobs, prog, worker_setup)
@@ -515,7 +541,7 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
             if jobs == 1 or len(pending) == 1:
                 results = (execute_task(t, ctx) for t in pending)
             else:  # never more workers than tasks
-                results = Parallel(n_jobs=min(jobs, len(pending)), return_as="generator_unordered" if supports_generator() else "list")(
+                results = parallel(min(jobs, len(pending)), ordered=False)(
                     delayed(execute_task)(t, ctx) for t in pending)
             for row, preds in results:
                 if preds is not None:
@@ -549,7 +575,7 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
                                  for label, i in plan.identities.items()}},
         session=session,
         tasks={"total": len(plan.tasks), "merged": len(scores), "failed": n_failed, "folds": plan.n_folds,
-               "ids_hash": plan.ids_hash, "task_ids": plan.task_ids},
+               "ids_hash": plan.ids_hash, "task_ids": plan.task_ids, "merged_files": store.merged_checksums()},
         notes=notes,
         expected=expected,
     )
@@ -563,10 +589,10 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
 def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None, *, jobs: int = 1,
                  force: bool = False, retry_failed: bool = False, progress: bool | None = None,
                  cache_root: str | Path | None = None, dataset: TouchDataset | None = None,
-                 worker_setup=None) -> RunResult:
+                 worker_setup=None, wait: float = 0.0) -> RunResult:
     """Validate, plan and run a protocol (a :class:`Protocol` or a file path)."""
     if not isinstance(protocol, Protocol):
         protocol = load_protocol(protocol)
     plan = plan_run(protocol, cache_root=cache_root, dataset=dataset)
     return run_plan(plan, out, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
-                    worker_setup=worker_setup)
+                    worker_setup=worker_setup, wait=wait)

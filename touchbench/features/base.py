@@ -152,6 +152,10 @@ class FeatureSet(TransformerMixin, BaseEstimator):
             return str(e)
         return None
 
+    def _check_grid(self, grid: tuple[int, int]) -> None:
+        """Refuse a grid these parameters cannot serve (before any output is allocated); nothing
+        by default."""
+
     def _fit(self, captures: list[np.ndarray], y=None) -> None:
         """Learn data-dependent parameters; nothing by default."""
 
@@ -166,6 +170,7 @@ class FeatureSet(TransformerMixin, BaseEstimator):
         if self.fold_dependent and fitted_grid is None:
             raise FeatureInputError(f"{type(self).__name__}: call fit before transform (this set learns from the training fold)")
         self._check_params()
+        self._check_grid(tuple(grid))
         n_out = self.n_features(grid)
         out = np.empty((len(caps), n_out), dtype=np.float64)
         lengths = np.array([c.shape[0] for c in caps])
@@ -176,11 +181,32 @@ class FeatureSet(TransformerMixin, BaseEstimator):
             for k in range(0, len(idx), step):
                 part = idx[k:k + step]
                 stack = np.stack([caps[i] for i in part])
-                rows = np.asarray(self._transform_batch(stack), dtype=np.float64)
+                with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                    rows = np.asarray(self._transform_batch(stack), dtype=np.float64)
                 if rows.shape != (len(part), n_out):
                     raise AssertionError(f"{type(self).__name__}: produced {rows.shape}, expected {(len(part), n_out)}")
+                if not np.isfinite(rows).all():
+                    self._refuse_non_finite(captures, caps, part, rows)
                 out[part] = rows
         return out
+
+    def _refuse_non_finite(self, captures: Any, caps: list[np.ndarray], part: np.ndarray, rows: np.ndarray) -> None:
+        """Features are finite or refused: name the capture, its largest value and the sensor's range.
+
+        Every set is finite for values of a sensor's range (the extreme-value tests); values far
+        beyond it (1e150 and up) overflow float64 in sums of squares and products.
+        """
+        k = int(np.flatnonzero(~np.isfinite(rows).all(axis=1))[0])
+        i = int(part[k])
+        _, ids = _capture_names(captures)
+        label = f"capture {i}" + (f" ({ids[i]!r})" if ids is not None else "")
+        big = float(np.max(np.abs(caps[i].astype(np.float64))))
+        sensor = getattr(self, "sensor", None)
+        rng = getattr(sensor, "value_range", None)
+        where = (f"outside the sensor's range [{rng[0]:g}, {rng[1]:g}]" if rng is not None
+                 and (caps[i].min() < rng[0] or caps[i].max() > rng[1]) else "too large for float64 statistics")
+        raise FeatureInputError(f"{type(self).__name__}: {label} gives non-finite features: its values reach "
+                                f"{big:.3g}, {where}; give the data in the sensor's units (or rescale it)")
 
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         """Features of ``stack`` (N, T, H, W), captures of equal length."""

@@ -9,6 +9,7 @@ from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
 
 SHORTER_RULES = ("refuse", "pad")
+MAX_WINDOW_VALUES = 1 << 24  # values per capture (128 MiB of float64): 262,144 frames of 8 x 8
 
 
 @FEATURES.register("raw-window", description="F raw frames from an offset, flattened (CNN and raw-frame classifier input)")
@@ -70,8 +71,22 @@ class RawWindow(FeatureSet):
         if self.shorter not in SHORTER_RULES:
             raise FeatureInputError(f"raw-window: shorter must be 'refuse' or 'pad', got {self.shorter!r}")
 
+    def _window_problem(self, grid: tuple[int, int]) -> str | None:
+        """A window of more than ``MAX_WINDOW_VALUES`` values per capture is refused: padded, it would
+        be allocated whatever the captures' length."""
+        values = int(self.frames) * int(grid[0]) * int(grid[1])
+        if values > MAX_WINDOW_VALUES:
+            return (f"raw-window: frames={int(self.frames)} on a {grid[0]} x {grid[1]} grid is {values:,} values per "
+                    f"capture, above the {MAX_WINDOW_VALUES:,} a window may hold; lower frames")
+        return None
+
+    def _check_grid(self, grid: tuple[int, int]) -> None:
+        problem = self._window_problem(grid)
+        if problem:
+            raise FeatureInputError(problem)
+
     def check_sensor(self, sensor: SensorSpec, min_frames: int | None = None) -> str | None:
-        problem = super().check_sensor(sensor, min_frames)
+        problem = super().check_sensor(sensor, min_frames) or self._window_problem(sensor.grid)
         need = None if problem else int(self.offset) + int(self.frames)
         if problem is None and self.shorter == "refuse" and min_frames is not None and min_frames < need:
             problem = (f"raw-window: the shortest capture has {min_frames} frames, the window needs {need} "

@@ -53,6 +53,7 @@ from ..catalog import load_dataset, parse_dataset_ref
 from ..classifiers import CLASSIFIERS
 from ..core.errors import TouchbenchError
 from ..core.paths import REPO_ROOT
+from ..core.yamlsafe import safe_load
 from ..engine.runner import run_protocol
 from ..protocols.library import PAPERS_DIR
 from ..protocols.schema import (
@@ -154,7 +155,7 @@ def apply_profile(path: Path, profile: Profile) -> tuple[Any, list[str]]:
     changed protocol is re-validated from its YAML text.
     """
     original = load_protocol(path)
-    data = yaml.safe_load(original.text)
+    data = safe_load(original.text)
     changes: list[str] = []
     # classifiers
     clfs = data.get("classifiers") or []

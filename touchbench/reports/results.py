@@ -47,6 +47,7 @@ import pandas as pd
 import yaml
 
 from ..core.errors import TouchbenchError
+from ..core.yamlsafe import safe_load
 from ..results.store import ResultStore
 
 __all__ = ["ResultSet", "load_results", "machine_id", "method_id", "scheme_label"]
@@ -165,7 +166,7 @@ def _protocol_scheme(manifest: dict[str, Any]) -> Any:
     if not text:
         return None
     try:
-        return (yaml.safe_load(text) or {}).get("scheme")
+        return (safe_load(text) or {}).get("scheme")
     except yaml.YAMLError:
         return None
 

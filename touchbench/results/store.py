@@ -18,21 +18,59 @@ longer names (after an edit) stay in ``fragments/`` but are not merged.
 Merged tables are stamped with the current ``run_id`` and protocol hash at
 merge time, so adding a classifier to a protocol reuses the finished tasks
 and the report describes the protocol as it is now.
+
+Trust nothing on disk: a scores fragment counts as a finished task only when
+it is readable, names the task of its file name, and (for a task that
+succeeded) its predictions fragment is readable with one row per test
+capture; anything else is a damaged task, run again (:meth:`finished` says
+which and why). The manifest records the SHA-256 of each merged file as it
+was written (:meth:`merged_checksums`); a merged file that no longer matches
+is rebuilt from the fragments (:meth:`merged_problems`).
+
+One run at a time per results folder: :meth:`ResultStore.lock` holds an
+operating-system lock on ``.touchbench.lock`` (released by the kernel when the
+process ends, however it ends) and writes who holds it there; a second run
+waits for it or says who holds it (:class:`ResultsBusyError`).
 """
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
 import json
+import os
+import socket
 import time
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, Iterator
 
 import pandas as pd
 import pyarrow.parquet as pq
 
 from ..core.atomic import atomic_write_bytes, atomic_write_parquet
+from ..core.errors import TouchbenchError, WriteError
 
-__all__ = ["ResultStore", "atomic_write_bytes", "atomic_write_parquet", "confusion_table"]
+try:  # POSIX
+    import fcntl
+except ImportError:  # pragma: no cover - Windows
+    fcntl = None  # type: ignore[assignment]
+
+__all__ = ["ResultStore", "ResultsBusyError", "atomic_write_bytes", "atomic_write_parquet", "confusion_table"]
+
+LOCK_NAME = ".touchbench.lock"
+LOCK_POLL_SECONDS = 0.5
+
+
+class ResultsBusyError(TouchbenchError):
+    """Another run holds the results folder."""
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
 
 # Columns of the scores table, in order (the engine fills them).
 SCORE_COLUMNS = [
@@ -121,19 +159,86 @@ class ResultStore:
         return self.root / "manifest.json"
 
     # ----------------------------------------------------------- state
-    def finished(self) -> dict[str, str]:
-        """task_id -> status (``ok`` / ``failed``) of every finished task."""
+    def finished(self, problems: dict[str, str] | None = None) -> dict[str, str]:
+        """task_id -> status (``ok`` / ``failed``) of every finished task.
+
+        A damaged task is left out (so it runs again) and, when ``problems`` is given, recorded
+        there with the reason: an unreadable scores fragment, one that holds another task, or a
+        succeeded task whose predictions fragment is missing, unreadable, holds another task or
+        has not one row per test capture.
+        """
         out: dict[str, str] = {}
         if not self.fragments.is_dir():
             return out
+        problems = {} if problems is None else problems
         for p in self.fragments.glob("*.scores.parquet"):
             tid = p.name[: -len(".scores.parquet")]
-            try:
-                status = pq.read_table(p, columns=["status"]).column("status")[0].as_py()
-            except Exception:  # an unreadable fragment counts as not finished
-                continue
-            out[tid] = status
+            problem = self._fragment_problem(tid, p)
+            if isinstance(problem, str):
+                problems[tid] = problem
+            else:
+                out[tid] = problem[0]
         return out
+
+    def _fragment_problem(self, tid: str, path: Path) -> str | tuple[str]:
+        """The reason a task's fragments cannot be trusted, or ``(status,)``."""
+        try:
+            row = pq.read_table(path, columns=["task_id", "status", "n_test"]).to_pylist()
+        except Exception as e:  # noqa: BLE001 - pyarrow raises several types for a damaged file
+            return f"its scores file is unreadable ({type(e).__name__})"
+        if len(row) != 1:
+            return f"its scores file holds {len(row)} rows, not one"
+        if row[0]["task_id"] != tid:
+            return f"its scores file holds the results of another task ({row[0]['task_id']})"
+        status = row[0]["status"]
+        if status != "ok":
+            return (status,)
+        pred = self.predictions_fragment(tid)
+        try:
+            ids = pq.read_table(pred, columns=["task_id"]).column("task_id").unique().to_pylist()
+            rows = pq.read_metadata(pred).num_rows
+        except FileNotFoundError:
+            return "its predictions file is missing"
+        except Exception as e:  # noqa: BLE001
+            return f"its predictions file is unreadable ({type(e).__name__})"
+        if ids != [tid]:
+            return "its predictions file holds the results of another task"
+        if row[0]["n_test"] is not None and rows != row[0]["n_test"]:
+            return f"its predictions file has {rows} rows for {row[0]['n_test']} test captures"
+        return (status,)
+
+    # ----------------------------------------------------------- one run at a time
+    @contextlib.contextmanager
+    def lock(self, wait: float = 0.0, command: str = "touchbench run") -> Iterator[None]:
+        """Hold the results folder for one run; a second run waits up to ``wait`` seconds,
+        then :class:`ResultsBusyError` names who holds it (pid, host, start, command).
+
+        The lock is the kernel's (``flock``): it ends with the process that holds it, even one
+        killed with SIGKILL, so there is never a stale lock to clear by hand.
+        """
+        path = self.root / LOCK_NAME
+        try:
+            self.root.mkdir(parents=True, exist_ok=True)
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        except OSError as e:
+            raise WriteError(path, e) from None
+        try:
+            deadline = time.monotonic() + max(0.0, wait)
+            while not _try_lock(fd):
+                if time.monotonic() >= deadline:
+                    raise ResultsBusyError(f"{self.root}: in use by another run ({_holder(path)}); "
+                                           "wait for it to end (run with --wait SECONDS) or choose another --out")
+                time.sleep(LOCK_POLL_SECONDS)
+            holder = {"pid": os.getpid(), "host": socket.gethostname(),
+                      "since": time.strftime("%Y-%m-%d %H:%M:%S"), "command": command}
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, (json.dumps(holder) + "\n").encode(), 0)
+            try:
+                yield
+            finally:
+                os.ftruncate(fd, 0)
+        finally:
+            os.close(fd)  # closing the descriptor releases the lock
 
     def clean_stale_temporaries(self, older_than: float = 3600.0) -> int:
         """Remove temporary files an interrupted run left (older than ``older_than`` s)."""
@@ -192,7 +297,8 @@ class ResultStore:
         order of ``task_ids`` (the plan's order), independent of the order
         tasks finished in.
         """
-        done = [t for t in task_ids if self.scores_fragment(t).is_file()]
+        finished = self.finished()
+        done = [t for t in task_ids if t in finished]
         scores = self.read_scores(done)
         preds = self.read_predictions(done)
         for df in (scores, preds):
@@ -212,6 +318,27 @@ class ResultStore:
         atomic_write_parquet(self.scores_path, scores)
         return {"scores": scores, "predictions": preds, "confusion": confusion}
 
+    # ----------------------------------------------------------- merged files
+    def merged_paths(self) -> dict[str, Path]:
+        return {p.name: p for p in (self.scores_path, self.predictions_path, self.confusion_path)}
+
+    def merged_checksums(self) -> dict[str, str]:
+        """SHA-256 of each merged file as it is now (recorded in the manifest after a merge)."""
+        return {name: _sha256(p) for name, p in self.merged_paths().items() if p.is_file()}
+
+    def merged_problems(self, recorded: dict[str, str] | None) -> list[str]:
+        """Why the merged files cannot be trusted against the checksums ``recorded`` at the last
+        merge: missing, or changed since (edited, truncated, damaged). Empty when they can."""
+        if not recorded:
+            return ["the merged files have no recorded checksums"]
+        problems = []
+        for name, p in self.merged_paths().items():
+            if not p.is_file():
+                problems.append(f"{name} is missing")
+            elif recorded.get(name) != _sha256(p):
+                problems.append(f"{name} changed since the run wrote it")
+        return problems
+
     def read_manifest(self) -> dict[str, Any] | None:
         if not self.manifest_path.is_file():
             return None
@@ -223,3 +350,24 @@ class ResultStore:
     def write_manifest(self, manifest: dict[str, Any]) -> None:
         atomic_write_bytes(self.manifest_path, (json.dumps(manifest, indent=2, default=str) + "\n").encode())
 
+
+
+def _try_lock(fd: int) -> bool:
+    if fcntl is None:  # pragma: no cover - no advisory locks on this platform: one run assumed
+        return True
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return False
+    return True
+
+
+def _holder(path: Path) -> str:
+    """Who holds the lock, as its holder wrote it."""
+    try:
+        h = json.loads(path.read_text() or "{}")
+    except (OSError, json.JSONDecodeError):
+        h = {}
+    if not h:
+        return "a process that has not said who it is yet"
+    return f"pid {h.get('pid')} on {h.get('host')}, since {h.get('since')}: {h.get('command')}"

@@ -52,6 +52,7 @@ from pydantic import (
 
 from ..core.errors import DataError
 from ..core.suggest import did_you_mean
+from ..core.yamlsafe import safe_load
 from .gestures import LIBRARY, GestureParams
 
 Effect = Literal[
@@ -483,7 +484,7 @@ def read_yaml(path: str | Path) -> tuple[dict[str, Any], str]:
     except OSError as e:
         raise DataError(f"cannot read scene file ({e.strerror})", path) from None
     try:
-        raw = yaml.safe_load(text)
+        raw = safe_load(text)
     except yaml.YAMLError as e:
         mark = getattr(e, "problem_mark", None)
         raise DataError(f"invalid YAML ({getattr(e, 'problem', e)})", path, None if mark is None else mark.line + 1) from None
