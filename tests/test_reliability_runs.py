@@ -194,10 +194,9 @@ def test_the_lock_of_a_killed_run_is_free_at_once(tmp_path):
 WORKERS = """\
 import os, sys, time
 from joblib import delayed
-from touchbench.engine.backends import parallel, run_setup
+from touchbench.engine.backends import parallel
 
 def work(i, folder):
-    run_setup(None)
     open(os.path.join(folder, f"w{i}"), "w").write(str(os.getpid()))
     time.sleep(300)
 
@@ -233,6 +232,12 @@ def test_worker_processes_end_with_their_parent(tmp_path, sig):
     while any(_alive(w) for w in pids) and time.monotonic() < deadline:
         time.sleep(0.1)
     assert not [w for w in pids if _alive(w)]
+
+
+def test_a_worker_whose_parent_is_already_gone_exits_at_once():
+    code = "from touchbench.engine.backends import end_with_parent\nimport time\nend_with_parent(1)\ntime.sleep(60)\n"
+    p = subprocess.run([sys.executable, "-c", code], timeout=50)
+    assert os.getpid() != 1 and p.returncode == 1  # its parent is this process, not pid 1: it did not wait
 
 
 # ----------------------------------------------------------------- read-only and full disks

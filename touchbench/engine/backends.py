@@ -49,7 +49,7 @@ from ..core.errors import TouchbenchError
 from ..core.threads import available_cpus
 
 __all__ = ["BACKENDS", "BackendInfo", "backend_for_run", "backend_options", "check_dask_workers", "check_jobs",
-           "is_local_backend", "local_jobs", "parallel", "run_setup", "supports_generator", "use_backend"]
+           "end_with_parent", "is_local_backend", "local_jobs", "parallel", "run_setup", "supports_generator", "use_backend"]
 
 BACKENDS = ("local", "dask", "ray")
 
@@ -64,41 +64,31 @@ class BackendInfo:
 
 _SETUP_DONE: set = set()
 
-# The process that starts local workers puts its pid here before it starts them; a worker that is
-# its direct child watches it (``_guard_parent``).
-PARENT_ENV = "TOUCHBENCH_PARENT_PID"
 PARENT_POLL_SECONDS = 0.5
-_GUARDED: list[int] = []
 
 
 def parallel(n_jobs: int, *, ordered: bool = True) -> Parallel:
     """The one ``joblib.Parallel`` of the engine: results streamed back when the backend can
-    (in order, or as they finish with ``ordered=False``), and local worker processes that end
-    with the process that started them (see :func:`run_setup`)."""
-    os.environ[PARENT_ENV] = str(os.getpid())
+    (in order, or as they finish with ``ordered=False``); on the local backend, worker processes
+    that end with the process that started them (:func:`end_with_parent`)."""
+    kwargs: dict = {}
+    if is_local_backend():
+        kwargs = {"initializer": end_with_parent, "initargs": (os.getpid(),)}
     if not supports_generator():
-        return Parallel(n_jobs=n_jobs, return_as="list")
-    return Parallel(n_jobs=n_jobs, return_as="generator" if ordered else "generator_unordered")
+        return Parallel(n_jobs=n_jobs, return_as="list", **kwargs)
+    return Parallel(n_jobs=n_jobs, return_as="generator" if ordered else "generator_unordered", **kwargs)
 
 
-def _guard_parent() -> None:
-    """In a local worker process, end the process as soon as its parent is gone.
+def end_with_parent(parent: int) -> None:
+    """Start-up of a local worker process: end it as soon as its parent ``parent`` is gone.
 
     joblib's worker processes outlive a parent killed with SIGKILL or SIGTERM (they wait for
-    work for minutes, holding the dataset in memory). A worker whose parent is the process that
-    called :func:`parallel` polls its parent's pid and exits when it changes (the worker was
-    re-parented). Workers of Dask or Ray are not children of that process and are left alone, as
-    is the process itself when it runs tasks in-process."""
-    pid = os.getpid()
-    if _GUARDED == [pid]:
-        return
-    _GUARDED[:] = [pid]
-    try:
-        parent = int(os.environ.get(PARENT_ENV, "0"))
-    except ValueError:
-        return
-    if parent in (0, pid) or os.getppid() != parent:
-        return
+    work for minutes, holding the dataset in memory). Run by loky in each worker before it takes
+    any task: a worker whose parent already died exits at once; otherwise a daemon thread polls
+    the parent's pid and exits the worker when it changes (the worker was re-parented). Dask and
+    Ray workers are not children of the run and get no such start-up."""
+    if os.getppid() != parent:
+        os._exit(1)
 
     def watch() -> None:
         while os.getppid() == parent:
@@ -109,9 +99,8 @@ def _guard_parent() -> None:
 
 
 def run_setup(setup: Callable[[], None] | None) -> None:
-    """Once per process: guard a worker against outliving its parent, and call a worker set-up
-    function (a picklable module-level function, e.g. registering plug-in components)."""
-    _guard_parent()
+    """Call a worker set-up function once per process (a picklable module-level function, e.g.
+    registering plug-in components)."""
     if setup is None:
         return
     key = (getattr(setup, "__module__", ""), getattr(setup, "__qualname__", repr(setup)))
