@@ -69,11 +69,11 @@ PARENT_POLL_SECONDS = 0.5
 
 def parallel(n_jobs: int, *, ordered: bool = True) -> Parallel:
     """The one ``joblib.Parallel`` of the engine: results streamed back when the backend can
-    (in order, or as they finish with ``ordered=False``); on the local backend, worker processes
+    (in order, or as they finish with ``ordered=False``); with loky (the local backend), worker processes
     that end with the process that started them (:func:`end_with_parent`)."""
     kwargs: dict = {}
-    if is_local_backend():
-        kwargs = {"initializer": end_with_parent, "initargs": (os.getpid(),)}
+    if type(get_active_backend()[0]) is JOBLIB_BACKENDS.get("loky"):  # exactly loky: Ray's pool derives from
+        kwargs = {"initializer": end_with_parent, "initargs": (os.getpid(),)}  # a local backend
     if not supports_generator():
         return Parallel(n_jobs=n_jobs, return_as="list", **kwargs)
     return Parallel(n_jobs=n_jobs, return_as="generator" if ordered else "generator_unordered", **kwargs)
