@@ -21,6 +21,12 @@ import warnings
 from pathlib import Path
 
 
+# the reference of this checkout, whichever touchbench the environment has installed
+REPO = Path(__file__).resolve().parent.parent
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+
 def public_modules() -> list[str]:
     """``touchbench`` and every submodule without a private part in its name."""
     import touchbench
