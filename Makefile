@@ -1,7 +1,8 @@
 # touchbench: the two commands of the README, and the paper reproduction.
-#   make demo              set up .venv and run the main job
-#   make test              set up .venv (with the dev, deep, dist and peers extras and the example plugin)
-#                          and run the tests
+#   make demo              set up .venv with touchbench alone (no extras) and run the main job
+#   make test              set up .venv (with the dev, deep, dist, peers and xgboost-cpu extras and the
+#                          example plugin) and run the tests
+#   make api-docs          build the API reference (pdoc) into build/api; any warning fails
 #   make snapshots         record the names every registry holds (tests/snapshots/), after adding an entry
 #   make reproduce-papers  run touchbench/protocols/papers/ and write results/papers/REPORT.md
 #   make examples          run the example protocols on real HAART and regenerate the example
@@ -10,31 +11,41 @@
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
-EXTRAS ?= dev,deep,dist,peers
+EXTRAS ?= dev,deep,dist,peers,xgboost-cpu
+# pins for the development and CI environments only (users get pyproject.toml's ranges)
+CONSTRAINTS := constraints.txt
 PROFILE ?= quick
 JOBS ?= 2
 RUNS ?= results/runs
 TB := $(BIN)/touchbench
 
-.PHONY: setup demo test snapshots reproduce-papers examples clean
+.PHONY: setup demo test api-docs snapshots reproduce-papers examples clean
 
 PLUGIN := examples/touchbench-plugin-example
 
-# The example plugin is installed as users install one (not editable): the tests run it by name.
-$(VENV)/.installed-$(subst ,,$(EXTRAS)): pyproject.toml $(PLUGIN)/pyproject.toml $(wildcard $(PLUGIN)/src/*/*.py)
+# One stamp per set of extras: .installed-core (touchbench alone: `make demo`) or
+# .installed-dev,deep,... (`make setup`).
+$(VENV)/.installed-%: pyproject.toml $(CONSTRAINTS)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q -e ".[$(EXTRAS)]"
-	$(BIN)/python -m pip install -q ./$(PLUGIN)
+	$(BIN)/python -m pip install -q -c $(CONSTRAINTS) -e ".$(if $(filter core,$*),,[$*])"
 	touch $@
 
-setup: $(VENV)/.installed-$(subst ,,$(EXTRAS))
+# The example plugin is installed as users install one (not editable): the tests run it by name.
+$(VENV)/.plugin: $(VENV)/.installed-$(EXTRAS) $(PLUGIN)/pyproject.toml $(wildcard $(PLUGIN)/src/*/*.py)
+	$(BIN)/python -m pip install -q -c $(CONSTRAINTS) ./$(PLUGIN)
+	touch $@
 
-demo: setup
+setup: $(VENV)/.installed-$(EXTRAS) $(VENV)/.plugin
+
+demo: $(VENV)/.installed-core
 	$(BIN)/touchbench demo
 
 test: setup
 	$(BIN)/python -m pytest -q -p no:cacheprovider
+
+api-docs: setup
+	$(BIN)/python docs/build_api_docs.py build/api
 
 snapshots: setup
 	$(BIN)/python tests/snapshots/registries.py

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gzip
+import re
 from pathlib import Path
 
 import numpy as np
@@ -69,3 +70,19 @@ def captures_strategy(min_n=1, max_n=4, max_frames=40):
             caps.append(draw(arrays(np.uint16, (t, h, w), elements=st.integers(0, 1023))))
         return caps
     return make()
+
+
+README = Path(__file__).resolve().parent.parent / "README.md"
+
+
+def readme_section(title: str) -> str:
+    """The README's ``## title`` section, up to the next ``## `` heading."""
+    text = README.read_text(encoding="utf-8")
+    start = text.index(f"## {title}")
+    end = text.find("\n## ", start + 1)
+    return text[start:end if end > 0 else None]
+
+
+def code_blocks(text: str, lang: str) -> list[str]:
+    """The fenced ``lang`` code blocks of ``text``, in order."""
+    return re.findall(rf"```{lang}\n(.*?)```", text, flags=re.DOTALL)

@@ -4,6 +4,12 @@ Every ``import`` of every module under ``touchbench/`` (function-local ones
 included) is read from the source with :mod:`ast`; each module belongs to a
 layer (below, bottom first). An import may point to the same layer or one
 below, never up, and no group of modules may import each other in a circle.
+
+The package root (``touchbench/__init__.py``) holds ``__version__`` (the
+bottom layer) and the user-facing names, loaded on first use (PEP 562) from
+the layers that define them; its ``if TYPE_CHECKING:`` imports are for type
+checkers only. No module of the package takes anything but ``__version__``
+from the root, so the facade never takes part in an import.
 """
 
 from __future__ import annotations
@@ -49,8 +55,11 @@ def imports_of(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
     """The touchbench modules that ``name`` imports (a name imported from a
     package counts as its submodule when it is one)."""
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    if name == "touchbench":  # the facade's imports for type checkers (module docstring)
+        tree.body = [n for n in tree.body if not _type_checking_only(n)]
     out: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             targets = [a.name for a in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -65,6 +74,10 @@ def imports_of(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
         out.update(t for t in targets if t == "touchbench" or t.startswith("touchbench."))
     out.discard(name)
     return out
+
+
+def _type_checking_only(node: ast.stmt) -> bool:
+    return isinstance(node, ast.If) and isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING"
 
 
 def layer_of(name: str) -> int:
@@ -144,3 +157,33 @@ def test_layer_of_takes_the_longest_prefix():
     assert layer_of("touchbench.core.errors") == 0
     assert layer_of("touchbench.catalog") == 3
     assert layer_of("touchbench.cli.run") == len(LAYERS) - 1
+
+
+def root_names_used(name: str, path: Path) -> set[str]:
+    """The names ``name`` takes from the package root: ``from touchbench import X``,
+    ``from .. import X`` reaching the root, ``touchbench.X`` after ``import touchbench``."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    out: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom):
+            mod = node.module or ""
+            if node.level:
+                mod = ".".join(package.split(".")[: len(package.split(".")) - (node.level - 1)] + ([mod] if mod else []))
+            if mod == "touchbench":
+                out.update(a.name for a in node.names if f"touchbench.{a.name}" not in all_modules())
+        elif (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id == "touchbench"
+              and f"touchbench.{node.attr}" not in all_modules()):
+            out.add(node.attr)
+    return out
+
+
+def test_modules_take_only_the_version_from_the_package_root():
+    taken = {name: sorted(root_names_used(name, path) - {"__version__", "__file__"})
+             for name, path in all_modules().items() if name != "touchbench"}
+    assert not {k: v for k, v in taken.items() if v}, "modules taking facade names from the package root"
+
+
+def test_root_name_finder_on_hand_made_sources(tmp_path):
+    f = tmp_path / "m.py"
+    f.write_text("import touchbench\nfrom .. import __version__, load_dataset\nx = touchbench.run_protocol\n")
+    assert root_names_used("touchbench.engine.m", f) == {"__version__", "load_dataset", "run_protocol"}

@@ -20,7 +20,7 @@ from touchbench.core.errors import TouchbenchError, UnknownNameError
 from touchbench.datasets.haart import HAART_SENSOR
 
 EXPECTED = snapshot()["classifiers"]  # tests/snapshots/registry-names.json (make snapshots)
-EXTRAS = {"cnn": "deep", "minirocket": "peers", "multirocket": "peers"}
+EXTRAS = {"cnn": "deep", "minirocket": "peers", "multirocket": "peers", "xgboost": "xgboost"}
 
 
 def test_registry_holds_exactly_the_documented_names():
@@ -116,9 +116,9 @@ def test_cli_is_registered_in_the_main_group():
 _NO_TORCH = textwrap.dedent("""
     import sys, json
 
-    class _NoTorch:  # a finder that makes torch unimportable, as if it were not installed
+    class _NoTorch:  # a finder that makes torch and xgboost unimportable, as if they were not installed
         def find_spec(self, name, path=None, target=None):
-            if name == "torch" or name.startswith("torch."):
+            if name.split(".")[0] in ("torch", "xgboost"):
                 raise ModuleNotFoundError(f"No module named {name!r}")
             return None
 
@@ -132,6 +132,11 @@ _NO_TORCH = textwrap.dedent("""
     res = CliRunner().invoke(classifiers, ["list"])
     out["list_exit"] = res.exit_code
     out["cnn_line"] = [l for l in res.output.splitlines() if l.startswith("cnn ")][0]
+    out["xgb_line"] = [l for l in res.output.splitlines() if l.startswith("xgboost ")][0]
+    try:
+        make_classifier("xgboost").fit(np.zeros((4, 2)), ["a", "b", "a", "b"])
+    except TouchbenchError as e:
+        out["xgb_error"] = str(e)
     try:
         make_classifier("cnn")
         out["cnn_error"] = None
@@ -158,8 +163,12 @@ def test_without_torch_everything_else_works_and_cnn_says_how_to_install():
     assert "cnn" in out["names"] and out["list_exit"] == 0
     assert "not installed" in out["cnn_line"] and "pip install 'touchbench[deep]'" in out["cnn_line"]
     for key in ("cnn_error", "fit_error"):
-        assert "pip install 'touchbench[deep]'" in out[key] and "torch==2.13.0" in out[key]
+        assert "pip install 'touchbench[deep]'" in out[key] and "pip install torch)" in out[key]
     assert not out["torch_imported"]
+    # XGBoost likewise: listed as not installed, refused when fitted, with both of its extras named
+    for key in ("xgb_line", "xgb_error"):
+        assert "pip install 'touchbench[xgboost]'" in out[key] and "'touchbench[xgboost-cpu]'" in out[key]
+    assert "not installed" in out["xgb_line"]
 
 
 def test_listing_does_not_import_torch():

@@ -5,7 +5,9 @@ its example data."""
 
 from __future__ import annotations
 
+import ast
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -68,6 +70,17 @@ def test_the_installed_copy_is_the_one_that_runs(installed, empty):
     out = subprocess.run([str(installed / "python"), "-c", "import touchbench; print(touchbench.__file__)"],
                          cwd=empty, capture_output=True, text=True, check=True).stdout
     assert str(installed.parent) in out and str(REPO / "touchbench") not in out
+
+
+def test_the_wheel_ships_the_type_marker_and_the_license(installed, empty):
+    code = ("import pathlib, touchbench; from importlib import metadata; "
+            "print((pathlib.Path(touchbench.__file__).parent / 'py.typed').is_file()); "
+            "print(sorted(str(f) for f in metadata.files('touchbench') if f.name in ('py.typed', 'LICENSE')))")
+    typed, files = subprocess.run([str(installed / "python"), "-c", code], cwd=empty, capture_output=True, text=True,
+                                  check=True).stdout.splitlines()
+    listed = ast.literal_eval(files)
+    assert typed == "True" and len(listed) == 2 and "touchbench/py.typed" in listed
+    assert re.fullmatch(r"touchbench-[0-9.]+\.dist-info/licenses/LICENSE", next(f for f in listed if "LICENSE" in f))
 
 
 def test_protocols_list_shows_every_shipped_protocol(installed, empty):

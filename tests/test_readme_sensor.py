@@ -5,27 +5,15 @@ block makes the dataset, its YAML block is the protocol, its shell block's
 from __future__ import annotations
 
 import json
-import re
 import shlex
 from pathlib import Path
 
 import pandas as pd
 from click.testing import CliRunner
+from helpers import code_blocks as blocks
+from helpers import readme_section as section
 
 from touchbench.cli.main import cli
-
-README = Path(__file__).resolve().parent.parent / "README.md"
-
-
-def section(title: str) -> str:
-    text = README.read_text(encoding="utf-8")
-    start = text.index(f"## {title}")
-    end = text.find("\n## ", start + 1)
-    return text[start:end if end > 0 else None]
-
-
-def blocks(text: str, lang: str) -> list[str]:
-    return re.findall(rf"```{lang}\n(.*?)```", text, flags=re.S)
 
 
 def test_bring_your_own_sensor_runs_as_written(tmp_path, monkeypatch):

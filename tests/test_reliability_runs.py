@@ -264,7 +264,7 @@ def test_a_folder_that_cannot_be_created_names_the_file(tmp_path, monkeypatch):
     def fail(*a, **k):
         raise PermissionError(errno.EACCES, "Permission denied")
 
-    monkeypatch.setattr(atomic.tempfile, "mkstemp", fail)
+    monkeypatch.setattr(atomic, "new_temp_file", fail)
     with pytest.raises(WriteError, match=r"x\.bin: cannot write: permission denied"):
         atomic.atomic_write_bytes(tmp_path / "x.bin", b"1")
 

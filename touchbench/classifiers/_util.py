@@ -135,12 +135,17 @@ def sensor_frames(who: str, sensor: Any, grid: Any, frame_rate: Any = None, *,
     return grid, (float(frame_rate) if need_rate else None)
 
 
-def torch_available() -> bool:
-    """Whether PyTorch can be imported, without importing it."""
+def importable(module: str) -> bool:
+    """Whether the optional package ``module`` can be imported, without importing it."""
     try:
-        return importlib.util.find_spec("torch") is not None
+        return importlib.util.find_spec(module) is not None
     except (ImportError, ValueError):  # a broken or blocked install
         return False
+
+
+def torch_available() -> bool:
+    """Whether PyTorch can be imported, without importing it."""
+    return importable("torch")
 
 
 def check_sample_weight(sample_weight, n: int) -> np.ndarray:

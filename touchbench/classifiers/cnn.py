@@ -3,7 +3,7 @@ Table 1, Fig. 5), in PyTorch: the ``deep`` extra.
 
 PyTorch is imported lazily, inside this module's functions only, so the
 rest of touchbench works without it; building the ``cnn`` entry without
-PyTorch raises a :class:`~touchbench.core.errors.TouchbenchError` naming the
+PyTorch raises a :class:`touchbench.core.errors.TouchbenchError` naming the
 install command (``pip install 'touchbench[deep]'``).
 
 Input
@@ -118,7 +118,7 @@ from ._util import (
 )
 from .base import CLASSIFIERS
 
-INSTALL_HINT = "pip install 'touchbench[deep]'  (or: pip install torch==2.13.0)"
+INSTALL_HINT = "pip install 'touchbench[deep]'  (or: pip install torch)"
 SOURCE = "Al-mashhadani et al. 2021, section 2.3, Table 1, Eq. 3"
 
 

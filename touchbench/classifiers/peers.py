@@ -45,8 +45,6 @@ imported when a peer is fitted, never when the registry is listed.
 
 from __future__ import annotations
 
-import importlib.util
-
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.multiclass import check_classification_targets
@@ -57,6 +55,7 @@ from ._util import (
     build,
     captures_to_rows,
     frames_in_row,
+    importable,
     is_captures,
     seed_int,
     sensor_frames,
@@ -70,10 +69,7 @@ SOURCE_MULTI = "Tan et al. 2022 (MultiRocket), aeon 1.x MultiRocketClassifier, d
 
 def aeon_available() -> bool:
     """Whether aeon can be imported, without importing it."""
-    try:
-        return importlib.util.find_spec("aeon") is not None
-    except (ImportError, ValueError):
-        return False
+    return importable("aeon")
 
 
 MIN_TIMEPOINTS = 9

@@ -1,5 +1,10 @@
-"""Gradient-boosted trees with XGBoost (``xgboost-cpu``): not one of the four
-papers' classifiers, a modern baseline for the same feature sets.
+"""Gradient-boosted trees with XGBoost: not one of the four papers'
+classifiers, a modern baseline for the same feature sets.
+
+XGBoost is an optional install (:data:`INSTALL_HINT`): the ``xgboost``
+extra (the full build, GPU-capable; an XGBoost already installed satisfies
+it as it is) or ``xgboost-cpu`` (the CPU-only build, a few MB; the tests
+use it). Both install the same ``xgboost`` package: have one of them.
 
 Defaults for these data sizes (hundreds to a few thousand captures, tens to
 a few thousand features, 7 to 14 classes): 300 rounds of depth-4 trees at
@@ -18,8 +23,16 @@ from sklearn.preprocessing import LabelEncoder
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ._util import build, check_sample_weight, seed_int
+from ..core.errors import TouchbenchError
+from ._util import build, check_sample_weight, importable, seed_int
 from .base import CLASSIFIERS
+
+INSTALL_HINT = "pip install 'touchbench[xgboost]'  (or 'touchbench[xgboost-cpu]': the CPU-only build)"
+
+
+def xgboost_available() -> bool:
+    """Whether XGBoost (either build) can be imported, without importing it."""
+    return importable("xgboost")
 
 
 class XGBoostClassifier(ClassifierMixin, BaseEstimator):
@@ -39,7 +52,9 @@ class XGBoostClassifier(ClassifierMixin, BaseEstimator):
         self.random_state = random_state
 
     def fit(self, X, y, sample_weight=None):
-        import xgboost  # a core dependency, imported late to keep listing fast
+        if not xgboost_available():
+            raise TouchbenchError(f"the 'xgboost' classifier needs XGBoost, which is not installed: {INSTALL_HINT}")
+        import xgboost  # an optional install, imported when fitted
 
         X, y = validate_data(self, X, y, dtype=np.float64)
         check_classification_targets(y)
@@ -82,6 +97,6 @@ DEFAULTS = {"n_estimators": 300, "max_depth": 4, "learning_rate": 0.1, "subsampl
 
 @CLASSIFIERS.register("xgboost", description="XGBoost gradient-boosted trees (300 x depth 4, lr 0.1, hist)",
                       source="XGBoost (Chen & Guestrin 2016); not from the papers, a modern baseline",
-                      defaults=DEFAULTS, extra=None, cheap_params=dict(n_estimators=10))
+                      defaults=DEFAULTS, extra="xgboost", cheap_params=dict(n_estimators=10))
 def xgboost_classifier(random_state=None, **params):
     return build(XGBoostClassifier, DEFAULTS, random_state, params, name="xgboost")

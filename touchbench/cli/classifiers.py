@@ -22,11 +22,11 @@ def classifiers() -> None:
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per classifier, in a list.")
 def list_classifiers(as_json: bool) -> None:
     """List every classifier with its source and defaults."""
-    from ..classifiers import CLASSIFIERS, cnn, peers
+    from ..classifiers import CLASSIFIERS, cnn, peers, xgb
     from ..classifiers._util import torch_available
 
-    extras_ok = {"deep": torch_available(), "peers": peers.aeon_available()}
-    hints = {"deep": cnn.INSTALL_HINT, "peers": peers.INSTALL_HINT}
+    extras_ok = {"deep": torch_available(), "peers": peers.aeon_available(), "xgboost": xgb.xgboost_available()}
+    hints = {"deep": cnn.INSTALL_HINT, "peers": peers.INSTALL_HINT, "xgboost": xgb.INSTALL_HINT}
     rows = []
     for e in CLASSIFIERS.entries():
         extra = e.tags.get("extra")

@@ -4,12 +4,12 @@ sets, classifiers and splitters.
 A registry is a closed set of names. Entries are added by a decorator at
 import time; YAML and the command line can only name what is registered,
 never import an arbitrary Python path. Looking up an unknown name raises
-:class:`~touchbench.core.errors.UnknownNameError` with the nearest names.
+:class:`touchbench.core.errors.UnknownNameError` with the nearest names.
 
 A registry that takes plugins (:mod:`touchbench.core.plugins`) also holds
 the entries of installed plugins: on first use it imports its own package's
 modules, then every plugin's module. An entry a plugin adds carries the
-plugin (a :class:`~touchbench.core.plugins.PluginInfo`) in its ``plugin``
+plugin (a :class:`touchbench.core.plugins.PluginInfo`) in its ``plugin``
 tag; :attr:`Entry.plugin` reads it.
 """
 

@@ -24,7 +24,7 @@ from typing import Iterable
 
 from .. import __version__
 
-__all__ = ["PACKAGES", "missing_extra", "package_versions"]
+__all__ = ["PACKAGES", "SAME_PACKAGE", "missing_extra", "package_versions"]
 
 # Every package whose version can change a number touchbench reports.
 PACKAGES = (
@@ -33,6 +33,9 @@ PACKAGES = (
 )
 
 _REQUIREMENT_NAME = re.compile(r"^\s*([A-Za-z0-9][A-Za-z0-9._-]*)")
+
+# Distributions that install the same import package: either one installed satisfies the other.
+SAME_PACKAGE: dict[str, tuple[str, ...]] = {"xgboost": ("xgboost-cpu",), "xgboost-cpu": ("xgboost",)}
 
 
 @lru_cache(maxsize=None)
@@ -104,7 +107,8 @@ def package_versions(installed_only: bool = False, *, modules: Iterable[str] | N
 def missing_extra(extra: str, dist: str = "touchbench") -> list[str]:
     """The distributions of ``dist``'s optional ``extra`` (``pip install 'touchbench[EXTRA]'``) that
     are not installed, read from the installed metadata (nothing imported); ``[]`` when ``dist``'s
-    metadata cannot be found (nothing to check against)."""
+    metadata cannot be found (nothing to check against). A distribution counts as installed when
+    one installing the same package is (:data:`SAME_PACKAGE`: ``xgboost-cpu`` for ``xgboost``)."""
     try:
         reqs = metadata.requires(dist) or []
     except metadata.PackageNotFoundError:
@@ -114,6 +118,8 @@ def missing_extra(extra: str, dist: str = "touchbench") -> list[str]:
     for r in reqs:
         spec, _, marker = r.partition(";")
         m = _REQUIREMENT_NAME.match(spec)
-        if m and wanted.search(marker) and _version(m.group(1)) is None:
-            out.append(m.group(1))
+        if m and wanted.search(marker):
+            name = m.group(1)
+            if all(_version(d) is None for d in (name, *SAME_PACKAGE.get(name.lower(), ()))):
+                out.append(name)
     return out

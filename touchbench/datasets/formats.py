@@ -55,8 +55,8 @@ class FileFormat:
     """A file format: its reader, its writer if any, and the options the reader takes.
 
     ``reader(path, name=..., **options)`` returns a
-    :class:`~touchbench.datasets.model.TouchDataset`; a reader that also takes
-    ``like`` (a :class:`~touchbench.datasets.model.SensorSpec`) fills what the
+    :class:`touchbench.datasets.model.TouchDataset`; a reader that also takes
+    ``like`` (a :class:`touchbench.datasets.model.SensorSpec`) fills what the
     file does not say from that sensor (``predict``: the model's).
     ``writer(dataset, out_dir)`` writes into a folder and returns the files.
     ``reads`` is ``"file"``, ``"folder"`` or ``"file or folder"``; ``replay``

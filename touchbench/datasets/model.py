@@ -235,7 +235,7 @@ class TouchDataset:
         (so runs on it recompute their tasks and features), and a
         :class:`DatasetChangedWarning` says that the file changed since it
         was written. ``verify=True`` refuses such a file instead
-        (:class:`~touchbench.core.errors.DataError`).
+        (:class:`touchbench.core.errors.DataError`).
         """
         path = Path(path)
         if not path.exists():

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import os
 import re
-import tempfile
 from pathlib import Path
 from typing import Iterable, Sequence
 
@@ -18,6 +17,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.csv as pacsv
 
+from ..core.atomic import new_temp_file
 from ..core.errors import DataError
 
 
@@ -141,8 +141,7 @@ def write_csv_atomic(frames: Iterable[tuple[Path, "pa.Table"]]) -> None:
     try:
         for path, df in frames:
             path.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-            os.close(fd)
+            tmp = new_temp_file(path)
             tmps.append((tmp, path))
             pacsv.write_csv(df, tmp, pacsv.WriteOptions(quoting_style="needed"))
         for tmp, path in tmps:

@@ -34,7 +34,7 @@ __all__ = ["predict_dataset", "read_data", "write_table"]
 
 def read_data(source: str, fmt: str = "auto", model: TrainedModel | None = None, **options) -> TouchDataset:
     """Read ``source`` in the registered file format ``fmt`` with its ``options``
-    (``auto``: :func:`~touchbench.catalog.load_dataset`); the model's sensor fills what the file does not say."""
+    (``auto``: :func:`touchbench.catalog.load_dataset`); the model's sensor fills what the file does not say."""
     if fmt == "auto":
         return load_dataset(source)
     return FORMATS.get(fmt).read(source, like=None if model is None else model.sensor, **options)

@@ -5,7 +5,7 @@ the dataset, applies the protocol's filters (unknown columns or values are
 refused with the protocol line), checks the target, builds the folds of every
 repetition (a scheme that cannot be evaluated is refused with the scheme's
 message) and turns (repetition x fold x feature combination x classifier)
-into :class:`~touchbench.engine.tasks.Task` objects with stable ids.
+into :class:`touchbench.engine.tasks.Task` objects with stable ids.
 
 ``run_plan`` then
 
@@ -211,7 +211,7 @@ def check_sensor_fit(protocol: Protocol, sensor: SensorSpec, min_frames: int) ->
     """Refuse the protocol when one of its components cannot serve ``sensor``.
 
     Every feature set and classifier (with each of its parameter settings)
-    is built with the sensor and asked (:func:`~touchbench.core.introspect.sensor_problem`);
+    is built with the sensor and asked (:func:`touchbench.core.introspect.sensor_problem`);
     ``min_frames`` is the shortest capture a task will see. The first
     component that cannot is refused with one message: the component, the
     sensor and its reason.

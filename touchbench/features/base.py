@@ -9,7 +9,7 @@ captures, each a ``(T, H, W)`` array (see :mod:`touchbench.datasets.model`).
 may compute its features once per capture and cache them.
 
 ``X`` may be a list of captures, one ``(N, T, H, W)`` array, or a
-:class:`~touchbench.datasets.model.TouchDataset` (then errors name the
+:class:`touchbench.datasets.model.TouchDataset` (then errors name the
 capture by its ``capture_id``). Captures of a batch may differ in length
 but must share the grid.
 
@@ -233,7 +233,8 @@ def cell_names(grid: tuple[int, int]) -> list[str]:
     return [f"r{i}_c{j}" for i in range(h) for j in range(w)]
 
 
-def make_feature_set(name: str, params: dict[str, Any], sensor: Any = None) -> FeatureSet:
-    """Build the registered feature set ``name``, passing ``sensor`` when its constructor takes it."""
+def make_feature_set(name: str, params: dict[str, Any] | None = None, sensor: Any = None) -> FeatureSet:
+    """Build the registered feature set ``name`` with ``params``, passing ``sensor`` (a
+    :class:`touchbench.datasets.model.SensorSpec`) when its constructor takes it."""
     cls = FEATURES.get(name)
-    return cls(**with_accepted(cls, params, sensor=sensor))
+    return cls(**with_accepted(cls, params or {}, sensor=sensor))

@@ -36,7 +36,7 @@ class BinaryMotionHistory(FeatureSet):
       Finite and binary for every input.
 
     - The preset: named, or the one of the sensor's recording setting
-      (:mod:`~touchbench.features.gaus_common`: HAART's or CoST's); on any
+      (:mod:`touchbench.features.gaus_common`: HAART's or CoST's); on any
       other sensor, or without one, a preset or ``offset`` must be given.
 
     Parameters: ``preset`` ("haart", "cost" or None: the sensor's),

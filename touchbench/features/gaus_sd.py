@@ -128,7 +128,7 @@ class StatisticalDistribution(FeatureSet):
       last bin on an 8 x 8 grid). Finite for every input.
 
     - The preset: named, or the one of the sensor's recording setting
-      (:mod:`~touchbench.features.gaus_common`: HAART's or CoST's); on any
+      (:mod:`touchbench.features.gaus_common`: HAART's or CoST's); on any
       other sensor, or without one, a preset or every value must be given.
 
     Parameters: ``preset`` ("haart", "cost" or None: the sensor's);

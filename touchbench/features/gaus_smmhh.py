@@ -106,7 +106,7 @@ class SpatialMultiScaleMHH(FeatureSet):
       counts are 0. A constant capture has no motion: all 0.
 
     - The preset: named, or the one of the sensor's recording setting
-      (:mod:`~touchbench.features.gaus_common`: HAART's or CoST's); on any
+      (:mod:`touchbench.features.gaus_common`: HAART's or CoST's); on any
       other sensor, or without one, a preset or ``threshold`` must be given.
 
     Parameters: ``preset`` ("haart", "cost" or None: the sensor's),

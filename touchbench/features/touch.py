@@ -233,7 +233,7 @@ class TouchRhythm(_TouchBase):
     area = cells above max(20 % of the capture's peak, ``AREA_FLOOR``)
     (an absolute floor of 3 ADC units against noise; an interpretation);
     ``cy``, ``cx`` pressure-weighted centroid (grid centre for an empty
-    frame, as :func:`~touchbench.features.numerics.weighted_centroid`);
+    frame, as :func:`touchbench.features.numerics.weighted_centroid`);
     ``sy``, ``sx`` spread (weighted standard deviation of the row / column);
     ``speed`` centroid speed (cells per frame, central differences) in frames
     whose total pressure exceeds the area threshold, else 0; ``dP`` absolute

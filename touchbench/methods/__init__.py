@@ -1,7 +1,7 @@
 """Methods: what a protocol evaluates and a model file holds.
 
 A method is feature sets -> an estimator on the feature matrix
-(:class:`~touchbench.methods.pipeline.FeaturePipeline`). The protocol
+(:class:`touchbench.methods.pipeline.FeaturePipeline`). The protocol
 shorthand ``features`` x ``classifiers`` expands to methods; a named method
 (:data:`METHODS`, e.g. touchbench's ``touch-*`` family) declares its own
 feature sets and estimator, so the run engine computes its fold-independent

@@ -2,7 +2,7 @@
 
 :class:`FeaturePipeline` fits its feature sets (built with the sensor of
 the data) on the training captures, concatenates their outputs and fits the
-estimator through :func:`~touchbench.methods.fitting.fit_estimator`. It is
+estimator through :func:`touchbench.methods.fitting.fit_estimator`. It is
 what ``touchbench train`` saves and ``predict`` / ``stream`` apply; the run
 engine fits the same two halves, taking fold-independent features from its
 cache instead of recomputing them.

@@ -38,7 +38,7 @@ of :class:`Fold`; situations the scheme cannot evaluate raise
 engine copies into the report.
 
 Randomness (fold assignment, party assignment) comes only from
-``random_state`` through :func:`~touchbench.protocols.seeding.derive_seed`,
+``random_state`` through :func:`touchbench.protocols.seeding.derive_seed`,
 so the same protocol seed gives the same folds.
 """
 

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,7 +36,7 @@ from sklearn.metrics import precision_recall_fscore_support
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError
 from .pareto import pareto_front
-from .results import ResultSet
+from .results import ResultSet, load_results
 from .stats import PairedTest, fold_interval, holm, paired_test, wilson_interval
 
 __all__ = [
@@ -45,6 +44,7 @@ __all__ = [
     "build_leaderboards",
     "compare_methods",
     "fold_values",
+    "leaderboard",
     "resolve_method",
     "subject_values",
     "to_csv",
@@ -260,6 +260,22 @@ def build_leaderboards(rs: ResultSet, *, alpha: float = 0.05, pool_machines: boo
     for key in dict.fromkeys(rs.scores["table_key"]):
         out.append(_build_one(rs, key, ok, alpha, pool_machines, machine))
     return out
+
+
+def leaderboard(*results: Any, alpha: float = 0.05, pool_machines: bool = False,
+                machine: str | None = None) -> list[Leaderboard]:
+    """The leaderboards of one or more runs, as ``touchbench leaderboard`` shows them.
+
+    Each of ``results`` is a results directory written by a run (or a
+    folder holding several), or the :class:`touchbench.engine.runner.RunResult`
+    that ``run_protocol`` returned. One :class:`Leaderboard` per dataset,
+    target and scheme; its ``rows`` DataFrame holds one method per row, best
+    first (``rank``, ``features``, ``classifier``, ``accuracy``, ``ci_low``,
+    ``ci_high``, ``macro_f1``, ``latency_ms``, ...). ``to_markdown``,
+    ``to_csv`` and ``to_json`` of this module format a list of them.
+    """
+    paths = [getattr(r, "out", r) for r in results]
+    return build_leaderboards(load_results(paths), alpha=alpha, pool_machines=pool_machines, machine=machine)
 
 
 # ----------------------------------------------------------------- method lookup and compare
@@ -492,10 +508,9 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
 
 
 def write_text(path: Path, text: str) -> Path:
-    """Write ``text`` atomically (temporary file + rename), readable by all (0644)."""
+    """Write ``text`` atomically (temporary file + rename), with the mode the umask gives."""
 
     atomic_write_bytes(Path(path), text.encode())
-    os.chmod(path, 0o644)
     return Path(path)
 
 

@@ -1,6 +1,6 @@
 """Synthetic scenes: declarative descriptions of a sensor, a gesture
 vocabulary, a population and recording conditions, turned into a
-:class:`~touchbench.datasets.TouchDataset` with the metadata a real reader
+:class:`touchbench.datasets.TouchDataset` with the metadata a real reader
 would produce.
 
 >>> from touchbench.scenes import SCENES, generate_scene

@@ -1,4 +1,4 @@
-"""Turn a scene into a :class:`~touchbench.datasets.TouchDataset`.
+"""Turn a scene into a :class:`touchbench.datasets.TouchDataset`.
 
 The captures are enumerated in a fixed order (group, subject, session,
 variant, substrate, cover, gesture, repetition); capture ``i`` is drawn from
