@@ -64,9 +64,11 @@ examples: setup
 	    --title "touchbench example: real HAART, leave-one-subject-out"
 	$(TB) leaderboard $(RUNS)/touch-haart-loso $(RUNS)/touch-haart-challenge --out results/touch-haart \
 	    --format md --format csv
-	$(TB) plot $(RUNS)/touch-haart-loso --out docs/figures --kind pareto --name touch-haart-loso \
+	$(TB) plot $(RUNS)/example-haart-loso --out docs/figures --name example-haart-loso --format png --format svg \
+	    --kind pareto --kind confusion --kind cd --reference "Gaus 2015 challenge=66.5"
+	$(TB) plot $(RUNS)/touch-haart-loso --out docs/figures --kind pareto --name touch-haart-loso --format png --format svg \
 	    --reference "Al-mashhadani 2021 CNN=83.2"
-	$(TB) plot $(RUNS)/touch-haart-challenge --out docs/figures --kind pareto --name touch-haart-challenge \
+	$(TB) plot $(RUNS)/touch-haart-challenge --out docs/figures --kind pareto --name touch-haart-challenge --format png --format svg \
 	    --reference "best 2015 entry=70.9" --reference "Gaus 2015=66.5" --reference "2023 transformer*=72.8"
 
 clean:

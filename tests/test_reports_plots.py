@@ -61,7 +61,7 @@ def test_confusion_counts_by_hand(runs, tmp_path):
     assert list(m.index) == GESTURES and list(m.columns) == GESTURES
     assert m.loc["pat", "pat"] == 6 and m.loc["pat", "rub"] == 2 and m.loc["rub", "rub"] == 8
     assert int(m.to_numpy().sum()) == 24
-    png, svg = plot_confusion(rs, lb, best["method_id"], tmp_path / "conf")
+    pdf, svg, png = plot_confusion(rs, lb, best["method_id"], tmp_path / "conf")
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     root = ET.parse(svg).getroot()
     texts = "".join(t.text or "" for t in root.iter() if t.tag.endswith("text"))
@@ -77,7 +77,7 @@ def test_frames_plot_has_seconds_axis(runs, tmp_path):
     # accuracy grows with frames seen: 15/24, 17/24, 22/24
     acc = lb.rows.set_index("early_frames")["accuracy"]
     assert acc[27.0] == pytest.approx(9 / 24) and acc[108.0] == pytest.approx(22 / 24)
-    png, svg = plot_frames(lb, tmp_path / "frames")
+    pdf, svg, png = plot_frames(lb, tmp_path / "frames")
     texts = "".join(t.text or "" for t in ET.parse(svg).getroot().iter() if t.tag.endswith("text"))
     assert "frames seen" in texts and "seconds seen (at 54 frames/s)" in texts
 
@@ -162,7 +162,8 @@ def test_plot_name_gives_stable_file_names(runs, tmp_path):
     res = r.invoke(cli, ["plot", str(runs / "loso"), "--out", str(tmp_path / "pl"), "--kind", "pareto",
                          "--name", "figure-a"])
     assert res.exit_code == 0, res.output
-    assert sorted(p.name for p in (tmp_path / "pl").iterdir()) == ["figure-a-pareto.png", "figure-a-pareto.svg"]
+    assert sorted(p.name for p in (tmp_path / "pl").iterdir()) == ["figure-a-pareto.pdf", "figure-a-pareto.png",
+                                                                   "figure-a-pareto.svg"]
     # one name cannot serve several tables
     res = r.invoke(cli, ["plot", str(runs / "loso"), str(runs / "early"), "--out", str(tmp_path / "p2"),
                          "--name", "figure-b"])

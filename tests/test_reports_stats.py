@@ -19,12 +19,21 @@ from touchbench.reports.stats import (
 
 
 def test_fold_interval_by_hand():
-    # mean 0.8, sd 0.1, t(0.975, 2) = 4.302652729..., half = 4.3027 * 0.1 / sqrt(3) = 0.248414
-    mean, sd, lo, hi = fold_interval([0.7, 0.8, 0.9])
-    assert mean == pytest.approx(0.8)
+    # mean 0.7, sd 0.1, t(0.975, 2) = 4.302652729..., half = 4.3027 * 0.1 / sqrt(3) = 0.248414
+    mean, sd, lo, hi = fold_interval([0.6, 0.7, 0.8])  # within [0, 1]: not clipped
+    assert mean == pytest.approx(0.7)
     assert sd == pytest.approx(0.1)
-    assert lo == pytest.approx(0.8 - 0.2484138, abs=1e-6)
-    assert hi == pytest.approx(0.8 + 0.2484138, abs=1e-6)
+    assert lo == pytest.approx(0.7 - 0.2484138, abs=1e-6)
+    assert hi == pytest.approx(0.7 + 0.2484138, abs=1e-6)
+
+
+def test_fold_interval_is_clipped_to_0_and_1():
+    # mean 0.9, sd 0.1 over 3 folds: 0.9 + 0.2484138 = 1.148 runs past an accuracy's 1
+    mean, sd, lo, hi = fold_interval([0.8, 0.9, 1.0])
+    assert (lo, hi) == (pytest.approx(0.9 - 0.2484138, abs=1e-6), 1.0)
+    # mean 0.1: 0.1 - 0.2484 < 0
+    mean, sd, lo, hi = fold_interval([0.0, 0.1, 0.2])
+    assert (lo, hi) == (0.0, pytest.approx(0.1 + 0.2484138, abs=1e-6))
 
 
 def test_fold_interval_single_value_has_no_spread():

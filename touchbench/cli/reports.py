@@ -169,32 +169,47 @@ def parse_reference(text: str) -> tuple[str, float]:
 
 @click.command("plot")
 @click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
-@click.option("--out", "-o", required=True, type=click.Path(file_okay=False), help="Folder for the PNG and SVG files.")
-@click.option("--kind", "kinds", multiple=True, type=click.Choice(["pareto", "frames", "confusion", "subjects"]),
-              help="Plots to draw (repeatable) [default: all that apply].")
+@click.option("--out", "-o", required=True, type=click.Path(file_okay=False), help="Folder for the figure files.")
+@click.option("--kind", "kinds", multiple=True, type=click.Choice(["pareto", "frames", "confusion", "subjects", "cd"]),
+              help="Plots to draw (repeatable) [default: all that apply]. cd: critical difference diagram per table, "
+                   "and across the tables when there are several (needs aeon: touchbench[peers]).")
+@click.option("--size", type=click.Choice(["text", "column"]), default="text", show_default=True,
+              help="Print width: text (7 in) or column (3.5 in); fonts are at least 7 pt at that size.")
+@click.option("--format", "formats", multiple=True, type=click.Choice(["pdf", "svg", "png"]),
+              help="File formats (repeatable) [default: pdf, svg and png at 300 dpi].")
 @click.option("--method", "methods", multiple=True,
               help="Method(s) for confusion matrices (id or unambiguous label) [default: each table's best].")
 @click.option("--reference", "references", multiple=True, callback=lambda ctx, param, v: [parse_reference(r) for r in v],
               metavar="LABEL=PERCENT",
               help="A reference accuracy drawn as a dashed line on the Pareto plots, e.g. 'Gaus 2015=66.5' (repeatable).")
 @click.option("--name", default=None, metavar="STEM",
-              help="File names STEM-<kind>.png/.svg instead of <dataset>-<scheme>-<key>-<kind> (one table only).")
+              help="File names STEM-<kind>.<format> instead of <dataset>-<scheme>-<kind> (one table only).")
 @_with_table_options
-def plot(results, out, kinds, methods, references, name, dataset, scheme, alpha, pool_machines, machine) -> None:
+def plot(results, out, kinds, size, formats, methods, references, name, dataset, scheme, alpha, pool_machines,
+         machine) -> None:
     """Plot accuracy against latency / fit time / feature time (Pareto front),
     accuracy against frames and seconds seen (early scheme), confusion
     matrices (counts and row-normalised) and per-subject accuracy."""
     from ..reports.leaderboard import resolve_method
-    from ..reports.plots import KINDS, plot_table
+    from ..reports.plots import FORMATS, KINDS, plot_cd_across, plot_table
 
     rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
     if name is not None and len(lbs) > 1:
         raise TouchbenchError(f"--name {name}: the results hold {len(lbs)} tables; choose one with --dataset/--scheme")
+    taken: set[str] = set()
+    formats = tuple(formats) or FORMATS
     for lb in lbs:
         ids = [resolve_method(lb.rows, m) for m in methods] if methods else None
-        made = plot_table(rs, lb, Path(out), tuple(kinds) or KINDS, ids, references, name=name)
-        for name, paths in made.items():
-            click.echo(f"{lb.title}: {name}: " + ", ".join(str(p) for p in paths))
+        made = plot_table(rs, lb, Path(out), tuple(kinds) or KINDS, ids, references, name=name, size=size,
+                          formats=formats, taken=taken)
+        for kind, paths in made.items():
+            click.echo(f"{lb.title}: {kind}: " + ", ".join(str(p) for p in paths))
+    if "cd" in kinds and len(lbs) > 1:
+        try:
+            paths = plot_cd_across(lbs, Path(out) / "across-tables-cd", size, formats)
+            click.echo("across tables: cd: " + ", ".join(str(p) for p in paths))
+        except ValueError as e:
+            click.echo(f"across tables: no critical difference diagram: {e}", err=True)
 
 
 @click.command("report")

@@ -80,9 +80,11 @@ def render_html(rs: ResultSet, lbs: list[Leaderboard], plots: dict[str, dict[str
 
 def write_report(rs: ResultSet, lbs: list[Leaderboard], out: str | Path, title: str = "touchbench report",
                  kinds: tuple[str, ...] = KINDS) -> Path:
-    """``out/report.html`` (self-contained), ``out/plots/*.{png,svg}``, ``out/leaderboard.{md,csv,json}``."""
+    """``out/report.html`` (self-contained), ``out/plots/*.{png,svg}`` (text width, 300 dpi),
+    ``out/leaderboard.{md,csv,json}``."""
     out = Path(out)
-    plots = {lb.key: plot_table(rs, lb, out / "plots", kinds) for lb in lbs}
+    taken: set[str] = set()  # file names unique over the tables
+    plots = {lb.key: plot_table(rs, lb, out / "plots", kinds, taken=taken, formats=("svg", "png")) for lb in lbs}
     write_outputs(lbs, out, ("md", "csv", "json"))
     page = out / "report.html"
     return write_text(page, render_html(rs, lbs, plots, title))

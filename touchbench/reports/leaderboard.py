@@ -16,6 +16,15 @@ measured only elsewhere shows its own machine's, flagged in the
 ``timing_machine`` column, and the Pareto front is computed separately for
 each machine. ``pool_machines=True`` pools every machine's timings into one
 front (asked for explicitly, and said so in the table notes).
+
+Across tables (several datasets or schemes): :func:`mean_ranks` ranks the
+methods present in every table within each table (by mean accuracy, ties
+averaged) and averages the ranks, as MOABB and aeon rank pipelines across
+datasets; :func:`across_tables` gives the accuracies the critical difference
+diagram across tables uses. Titles carry the dataset, scheme and target
+(two tables of different data with one name are told apart as ``data 2``,
+``data 3``...); failed methods are shown as failed with their error; rows
+that would read the same show their feature (then classifier) parameters.
 """
 
 from __future__ import annotations
@@ -30,7 +39,9 @@ from typing import Any, Iterable
 import numpy as np
 import pandas as pd
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
+from scipy.stats import rankdata
 from sklearn.metrics import precision_recall_fscore_support
 
 from ..core.atomic import atomic_write_bytes
@@ -41,10 +52,14 @@ from .stats import PairedTest, fold_interval, holm, paired_test, wilson_interval
 
 __all__ = [
     "Leaderboard",
+    "across_tables",
     "build_leaderboards",
     "compare_methods",
     "fold_values",
     "leaderboard",
+    "mean_ranks",
+    "method_label",
+    "method_labels",
     "resolve_method",
     "subject_values",
     "to_csv",
@@ -72,10 +87,12 @@ class Leaderboard:
     alpha: float
     frame_rate: float
     notes: list[str] = field(default_factory=list)
+    #: tells apart tables of different data under one dataset name ("data 2"); empty when unique
+    variant: str = ""
 
     @property
     def title(self) -> str:
-        t = f"{self.dataset} [{self.dataset_hash[:8]}] — {self.scheme}"
+        t = f"{self.dataset}" + (f" ({self.variant})" if self.variant else "") + f" — {self.scheme}"
         return t if self.target == "gesture" else f"{t} — target {self.target}"
 
     @property
@@ -86,6 +103,14 @@ class Leaderboard:
 def _mode(s: pd.Series) -> str:
     v = s.astype(str).value_counts()
     return str(v.index[0]) if len(v) else ""
+
+
+def _first_error(g: pd.DataFrame) -> str:
+    """The first line of the first failed task's error ("" when none failed)."""
+    failed = g[g["status"] != "ok"]
+    if failed.empty or "error" not in failed:
+        return ""
+    return str(failed["error"].iloc[0]).strip().splitlines()[0] if str(failed["error"].iloc[0]).strip() else "failed"
 
 
 def fold_values(ok: pd.DataFrame) -> pd.DataFrame:
@@ -181,6 +206,7 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
             "early_frames": float(g_all["early_frames"].iloc[0]) if g_all["early_frames"].notna().any() else math.nan,
             "n_folds": int(len(f)),
             "n_failed": int((g_all["status"] != "ok").sum()),
+            "error": _first_error(g_all),
             "runs": int(g_all["run_id"].nunique()),
             "protocols": ",".join(sorted(set(g_all["protocol"].astype(str)))),
         }
@@ -259,6 +285,15 @@ def build_leaderboards(rs: ResultSet, *, alpha: float = 0.05, pool_machines: boo
     out = []
     for key in dict.fromkeys(rs.scores["table_key"]):
         out.append(_build_one(rs, key, ok, alpha, pool_machines, machine))
+    seen: dict[tuple[str, str, str], list[str]] = {}
+    for lb in out:  # one dataset name, different data: "data 2", "data 3"... in the order met
+        hashes = seen.setdefault((lb.dataset, lb.scheme, lb.target), [])
+        if lb.dataset_hash not in hashes:
+            hashes.append(lb.dataset_hash)
+        lb.variant = f"data {hashes.index(lb.dataset_hash) + 1}" if hashes.index(lb.dataset_hash) else ""
+    for lb in out:
+        if len(seen[(lb.dataset, lb.scheme, lb.target)]) > 1 and not lb.variant:
+            lb.variant = "data 1"
     return out
 
 
@@ -276,6 +311,31 @@ def leaderboard(*results: Any, alpha: float = 0.05, pool_machines: bool = False,
     """
     paths = [getattr(r, "out", r) for r in results]
     return build_leaderboards(load_results(paths), alpha=alpha, pool_machines=pool_machines, machine=machine)
+
+
+def across_tables(lbs: list[Leaderboard]) -> pd.DataFrame:
+    """Mean accuracy of each method (by label) in each table (rows: table titles); only methods
+    present, with an accuracy, in every table."""
+    cols = {}
+    for lb in lbs:
+        labels = method_labels(lb.rows)
+        r = lb.rows[lb.rows["accuracy"].notna()]
+        cols[lb.title] = pd.Series(r["accuracy"].to_numpy(float), index=[labels[m] for m in r["method_id"]])
+    acc = pd.DataFrame(cols).T
+    return acc.dropna(axis=1)
+
+
+def mean_ranks(lbs: list[Leaderboard]) -> pd.DataFrame:
+    """Methods present in every table, ranked within each table (1 = best accuracy; ties get the
+    average of their ranks) and the ranks averaged over the tables: columns ``method``,
+    ``mean_rank``, ``tables``, ``mean_accuracy``; best first."""
+    acc = across_tables(lbs)
+    if acc.empty:
+        return pd.DataFrame(columns=["method", "mean_rank", "tables", "mean_accuracy"])
+    ranks = np.vstack([rankdata(-row.to_numpy(float), method="average") for _, row in acc.iterrows()])
+    out = pd.DataFrame({"method": list(acc.columns), "mean_rank": ranks.mean(axis=0), "tables": len(acc),
+                        "mean_accuracy": acc.mean(axis=0).to_numpy(float)})
+    return out.sort_values(["mean_rank", "method"], kind="stable").reset_index(drop=True)
 
 
 # ----------------------------------------------------------------- method lookup and compare
@@ -378,6 +438,40 @@ def method_label(r: Any) -> str:
     return lab
 
 
+def _params(text: Any) -> str:
+    """Parameters as stored (canonical JSON) in a short readable form: ``{"bins": 8}`` -> ``bins=8``."""
+    try:
+        value = json.loads(str(text))
+    except (TypeError, ValueError):
+        return str(text)
+    if isinstance(value, dict):
+        return ", ".join(f"{k}={_params(json.dumps(v))}" for k, v in value.items())
+    if isinstance(value, list):
+        return "; ".join(p for p in (_params(json.dumps(v)) for v in value) if p)
+    return str(value)
+
+
+def method_labels(rows: pd.DataFrame) -> dict[str, str]:
+    """A readable label per method id: ``features / classifier`` (and frames), with the feature
+    parameters, then the classifier parameters, where two rows would otherwise read the same; a
+    ``#2`` suffix if they still do."""
+    base = {r["method_id"]: method_label(r) for _, r in rows.iterrows()}
+    out = dict(base)
+    for extra in ("feature_params", "classifier_params"):
+        counts = pd.Series(list(out.values())).value_counts()
+        for _, r in rows.iterrows():
+            if counts.get(out[r["method_id"]], 0) > 1 and r.get(extra) not in (None, "", "{}", "[]"):
+                p = _params(r[extra])
+                if p:
+                    out[r["method_id"]] += f" ({'features' if extra == 'feature_params' else 'classifier'}: {p})"
+    seen: dict[str, int] = {}
+    for mid, lab in out.items():
+        seen[lab] = seen.get(lab, 0) + 1
+        if seen[lab] > 1:
+            out[mid] = f"{lab} #{seen[lab]}"
+    return out
+
+
 def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
     """Header and formatted cells of a leaderboard (terminal, Markdown, HTML)."""
     header = ["#", "method", "features", "classifier", "folds", "accuracy % (±sd)", "95 % interval",
@@ -386,8 +480,11 @@ def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
     if show_machine:
         header.insert(11, "timing machine")
     cells = []
+    labels = method_labels(lb.rows)
     for _, r in lb.rows.iterrows():
         feats = str(r["features"])
+        extra = labels[r["method_id"]][len(method_label(r)):]  # parameters shown where rows would collide
+        feats += extra
         if np.isfinite(r["early_frames"]):
             fr = lb.frame_rate
             secs = f", {r['early_frames'] / fr:.2g} s" if np.isfinite(fr) and fr > 0 else ""
@@ -398,7 +495,12 @@ def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
         ci = f"{_pct(r['ci_low'])}–{_pct(r['ci_high'])}" if np.isfinite(r["ci_low"]) else "—"
         if r["ci_method"] == "wilson" and np.isfinite(r["ci_low"]):
             ci += " (Wilson)"
-        if r["test"] == "best":
+        failed_all = r["n_folds"] == 0 and r["n_failed"] > 0
+        if failed_all:
+            acc, ci = "failed", "—"
+        if failed_all:
+            vs = f"failed: {r.get('error') or 'see the scores'}"
+        elif r["test"] == "best":
             vs = "best"
         elif r["test"] == "none":
             vs = f"{100 * r['diff_vs_best']:+.1f}, not tested (n={r['n_pairs']})" if np.isfinite(r["diff_vs_best"]) else "not tested"
@@ -446,7 +548,17 @@ def to_markdown(lbs: list[Leaderboard], title: str | None = "Leaderboard") -> st
             out.append("")
             out.append(f"Note: {n}")
         out.append("")
+    ranks = mean_ranks(lbs) if len(lbs) > 1 else None
+    if ranks is not None and len(ranks):
+        out += [f"## Mean rank across {int(ranks['tables'].iloc[0])} tables", "",
+                "| method | mean rank | mean accuracy % |", "|---|---|---|"]
+        out += [f"| {_md_escape(r.method)} | {r.mean_rank:.2f} | {_pct(r.mean_accuracy)} |" for r in ranks.itertuples()]
+        out += ["", RANK_LEGEND, ""]
     return "\n".join(out)
+
+
+RANK_LEGEND = ("Rank: within each table by mean accuracy (1 = best; ties share the average of their ranks), "
+               "averaged over the tables; only methods present in every table.")
 
 
 def _records(lb: Leaderboard) -> list[dict[str, Any]]:
@@ -494,17 +606,26 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
     console = console or Console(width=None if sys.stdout.isatty() else 250)
     for lb in lbs:
         header, cells = display_rows(lb)
-        t = Table(title=lb.title, show_lines=False)
+        t = Table(title=escape(lb.title), show_lines=False)  # a name like "[b5830b]" is text, not markup
         for h in header:
             wrap = h in ("features", "classifier", "vs best: Δ pp, p (Holm)")
-            t.add_column(h, overflow="fold", no_wrap=not wrap)
+            t.add_column(escape(h), overflow="fold", no_wrap=not wrap)
         for c in cells:
-            t.add_row(*c)
+            t.add_row(*(escape(x) for x in c))
         console.print(t)
-        console.print(legend(lb), style="dim")
+        console.print(escape(legend(lb)), style="dim")
         for n in lb.notes:
-            console.print(f"Note: {n}", style="yellow")
+            console.print(escape(f"Note: {n}"), style="yellow")
         console.print()
+    ranks = mean_ranks(lbs) if len(lbs) > 1 else None
+    if ranks is not None and len(ranks):
+        t = Table(title=f"Mean rank across {int(ranks['tables'].iloc[0])} tables")
+        for h in ("method", "mean rank", "mean accuracy %"):
+            t.add_column(h)
+        for r in ranks.itertuples():
+            t.add_row(escape(r.method), f"{r.mean_rank:.2f}", _pct(r.mean_accuracy))
+        console.print(t)
+        console.print(RANK_LEGEND, style="dim")
 
 
 def write_text(path: Path, text: str) -> Path:

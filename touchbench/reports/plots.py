@@ -1,4 +1,7 @@
-"""Plots of a leaderboard (matplotlib, Agg backend; each written as PNG and SVG).
+"""Plots of a leaderboard (matplotlib, Agg backend), paper-ready: each written as PDF, SVG and
+300-dpi PNG (``FORMATS``), at a column or a text width (``SIZES``: 3.5 and 7 inches) with every
+font at least ``MIN_FONT_PT`` (7 pt) at that size. Titles and file names come from the dataset,
+scheme and method names (never a hash); names that would collide get ``-2``, ``-3``...
 
 - ``pareto``: accuracy (mean over folds, 95 % interval as error bar) against
   the three measured costs -- latency per capture, fit time per fold and
@@ -12,26 +15,38 @@
   the class names on both axes.
 - ``subjects``: per-subject accuracy (from the predictions) of the best
   methods of a table.
+- ``cd``: a critical difference diagram (aeon's ``plot_critical_difference``:
+  mean ranks over the folds, cliques of methods not told apart by pairwise
+  Wilcoxon tests with Holm's correction) of the methods of a table;
+  :func:`plot_cd_across` draws one across tables (datasets and schemes), a
+  table being one problem.
 """
 
 from __future__ import annotations
 
 import math
 import re
+import textwrap
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from ..core.errors import TouchbenchError
 from ..protocols.splits import _natural_key
-from .leaderboard import Leaderboard, subject_values
+from .leaderboard import Leaderboard, method_label, method_labels, subject_values
 from .results import ResultSet
 
-__all__ = ["KINDS", "plot_confusion", "plot_frames", "plot_pareto", "plot_subjects", "plot_table", "slug",
-           "confusion_matrix"]
+__all__ = ["FORMATS", "KINDS", "MIN_FONT_PT", "SIZES", "confusion_matrix", "plot_cd", "plot_cd_across",
+           "plot_confusion", "plot_frames", "plot_pareto", "plot_subjects", "plot_table", "slug", "unique_stem"]
 
-KINDS = ("pareto", "frames", "confusion", "subjects")
+KINDS = ("pareto", "frames", "confusion", "subjects", "cd")
+#: figure widths in inches: one column of a two-column paper, the text width
+SIZES = {"column": 3.5, "text": 7.0}
+FORMATS = ("pdf", "svg", "png")
+MIN_FONT_PT = 7.0
+PNG_DPI = 300
 
 
 def _plt():
@@ -40,35 +55,77 @@ def _plt():
     matplotlib.use("Agg", force=True)
     import matplotlib.pyplot as plt
 
-    # text stays text in SVG (searchable, smaller); fixed hash salt: the same plot gives the same file
-    plt.rcParams.update({"svg.hashsalt": "touchbench", "svg.fonttype": "none", "font.size": 9, "axes.titlesize": 10})
+    # text stays text in SVG (searchable, smaller); fixed hash salt: the same plot gives the same file;
+    # every font at least MIN_FONT_PT at print size (figures are drawn at their print width)
+    plt.rcParams.update({
+        "svg.hashsalt": "touchbench", "svg.fonttype": "none", "pdf.fonttype": 42,
+        "font.size": 8, "axes.titlesize": 8, "axes.labelsize": 8, "figure.titlesize": 8,
+        "xtick.labelsize": MIN_FONT_PT, "ytick.labelsize": MIN_FONT_PT, "legend.fontsize": MIN_FONT_PT,
+        "legend.title_fontsize": MIN_FONT_PT,
+    })
     return plt
 
 
+def _width(size: str) -> float:
+    if size not in SIZES:
+        raise ValueError(f"unknown figure size {size!r} (known: {', '.join(SIZES)})")
+    return SIZES[size]
+
+
+def _wrap(text: str, width_in: float) -> str:
+    """``text`` wrapped to the figure's width (about 15 characters per inch at 8 pt)."""
+    return "\n".join(textwrap.fill(line, max(20, int(width_in * 15))) for line in text.split("\n"))
+
+
+def _clean(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9._+-]+", "-", text).strip("-.").lower()
+
+
 def slug(lb: Leaderboard) -> str:
-    s = f"{lb.dataset}-{lb.scheme}"
-    s = re.sub(r"[^A-Za-z0-9._-]+", "-", s).strip("-").lower()
-    return f"{s[:60]}-{lb.key[:6]}"
+    """A file stem from the table's dataset (a file's name without its suffix), scheme and target."""
+    dataset = Path(lb.dataset).stem if lb.dataset.endswith((".parquet", ".csv", ".gz")) else lb.dataset
+    parts = [dataset, lb.scheme] + ([f"target-{lb.target}"] if lb.target != "gesture" else [])
+    parts += [lb.variant] if getattr(lb, "variant", "") else []
+    return _clean("-".join(parts))[:80] or "table"
 
 
-def _save(fig, base: Path) -> list[Path]:
+def unique_stem(stem: str, taken: set[str]) -> str:
+    """``stem``, or ``stem-2``, ``stem-3``... the first not in ``taken`` (which it joins)."""
+    out, k = stem, 1
+    while out in taken:
+        k += 1
+        out = f"{stem}-{k}"
+    taken.add(out)
+    return out
+
+
+def _save(fig, base: Path, formats: tuple[str, ...] = FORMATS, tight: bool = False) -> list[Path]:
+    """``base``.pdf/.svg/.png (``base`` may hold dots: the extension is appended, never substituted);
+    ``tight``: trimmed to what is drawn (a figure drawn by another library, not laid out by us)."""
     plt = _plt()
     base.parent.mkdir(parents=True, exist_ok=True)
     out = []
-    for ext in ("png", "svg"):
-        p = base.with_suffix(f".{ext}")
-        kw = {"metadata": {"Date": None}} if ext == "svg" else {"metadata": {"Software": None}}
-        fig.savefig(p, dpi=100, **kw)  # constrained layout: no bbox_inches="tight" (a second draw)
+    meta = {"svg": {"Date": None}, "pdf": {"CreationDate": None, "ModDate": None}, "png": {"Software": None}}
+    for ext in formats:
+        if ext not in meta:
+            raise ValueError(f"unknown figure format {ext!r} (known: {', '.join(FORMATS)})")
+        p = base.parent / f"{base.name}.{ext}"
+        # constrained layout: no bbox_inches="tight" (a second draw) unless asked
+        fig.savefig(p, dpi=PNG_DPI, metadata=meta[ext], **({"bbox_inches": "tight", "pad_inches": 0.05} if tight else {}))
         out.append(p)
     plt.close(fig)
     return out
 
 
 def _plain_log_ticks(ax) -> None:
-    """Tick labels as plain numbers (no mathtext: much faster to draw)."""
+    """Tick labels as plain numbers (no mathtext: much faster to draw); 1-2-5 ticks over at most two
+    decades, powers of ten beyond (so that labels never run into each other on a narrow panel)."""
     from matplotlib.ticker import FuncFormatter, LogLocator, NullLocator
 
-    ax.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0), numticks=8))
+    lo, hi = ax.get_xlim()
+    decades = math.log10(max(hi, 1e-12) / max(lo, 1e-12))
+    subs = (1.0, 2.0, 5.0) if decades <= 2 else (1.0,)
+    ax.xaxis.set_major_locator(LogLocator(base=10, subs=subs, numticks=8))
     ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     ax.xaxis.set_minor_locator(NullLocator())
 
@@ -110,7 +167,8 @@ def label_offsets(points_pt: np.ndarray, widths_pt: np.ndarray) -> list[tuple[in
     return out
 
 
-def plot_pareto(lb: Leaderboard, base: Path, references: list[tuple[str, float]] | None = None) -> list[Path]:
+def plot_pareto(lb: Leaderboard, base: Path, references: list[tuple[str, float]] | None = None,
+                size: str = "text", formats: tuple[str, ...] = FORMATS) -> list[Path]:
     """Accuracy against latency, fit time and feature time (see the module docstring).
 
     ``references``: (label, accuracy in %) pairs drawn as dashed horizontal
@@ -122,10 +180,14 @@ def plot_pareto(lb: Leaderboard, base: Path, references: list[tuple[str, float]]
     rows = lb.rows
     costs = [("latency_ms", "latency per capture (ms)"), ("fit_seconds", "fit time per fold (s)"),
              ("feature_ms", "feature extraction per capture (ms)")]
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), sharey=True, layout="constrained")
+    w = _width(size)
+    if size == "column":  # three panels stacked
+        fig, axes = plt.subplots(3, 1, figsize=(w, 7.0), sharey=True, layout="constrained")
+    else:
+        fig, axes = plt.subplots(1, 3, figsize=(w, 3.2), sharey=True, layout="constrained")
     machines = sorted(set(rows["timing_machine"]))
     markers = ["o", "s", "^", "D", "v"]
-    label_all = len(rows) <= 12
+    label_all = len(rows) <= (6 if size == "column" else 10)
     with_features = rows["features"].nunique() > 1
     if references:
         lows = [100 * rows["ci_low"].min(), min(v for _, v in references) - 2]
@@ -157,7 +219,8 @@ def plot_pareto(lb: Leaderboard, base: Path, references: list[tuple[str, float]]
             ax.axhline(value, color="0.45", lw=0.8, ls="--", zorder=0)
             if ax is axes[0]:
                 ax.annotate(f"{label} {value:g} %", (0.01, value), xycoords=("axes fraction", "data"),
-                            textcoords="offset points", xytext=(0, 2), fontsize=6.5, color="0.35")
+                            textcoords="offset points", xytext=(0, -9), fontsize=MIN_FONT_PT,
+                            color="0.35").set_in_layout(False)
         ax.autoscale_view()
         texts, pts = [], []
         for g, x, y in labelled:
@@ -170,29 +233,31 @@ def plot_pareto(lb: Leaderboard, base: Path, references: list[tuple[str, float]]
             offs = label_offsets(np.array(pts)[order], np.array([len(texts[i][0]) * _LABEL_CHAR_W for i in order]))
             for i, off in zip(order, offs):
                 lab, xi, yi = texts[i]
-                ax.annotate(lab, (xi, yi), textcoords="offset points", xytext=off, fontsize=7)
+                ax.annotate(lab, (xi, yi), textcoords="offset points", xytext=off,
+                            fontsize=MIN_FONT_PT).set_in_layout(False)  # labels may run over: panels keep their width
         _plain_log_ticks(ax)
         ax.set_xlabel(title)
         ax.grid(True, which="major", alpha=0.3)
     axes[0].set_ylabel("accuracy (%)")
     if len(machines) > 1:
-        axes[0].legend(title="machine", fontsize=7)
-    fig.suptitle(f"{lb.title}: accuracy vs cost (red: Pareto front on accuracy / latency)")
-    return _save(fig, base)
+        axes[0].legend(title="machine")
+    fig.suptitle(_wrap(f"{lb.title}: accuracy vs cost (red: Pareto front on accuracy / latency)", w))
+    return _save(fig, base, formats)
 
 
 def _base_method(r: Any) -> str:
     return f"{r['feature_params']}|{r['classifier_name']}|{r['classifier_params']}"
 
 
-def plot_frames(lb: Leaderboard, base: Path) -> list[Path]:
+def plot_frames(lb: Leaderboard, base: Path, size: str = "text", formats: tuple[str, ...] = FORMATS) -> list[Path]:
     """Accuracy against frames (and seconds) seen, from an ``early`` scheme."""
     plt = _plt()
     rows = lb.rows[np.isfinite(lb.rows["early_frames"])].copy()
     if rows.empty:
         raise ValueError(f"{lb.title}: not an early scheme (no frames-seen values)")
     rows["base"] = [_base_method(r) for _, r in rows.iterrows()]
-    fig, ax = plt.subplots(figsize=(7, 4.2), layout="constrained")
+    w = _width(size)
+    fig, ax = plt.subplots(figsize=(w, 0.62 * w if size == "text" else 3.4), layout="constrained")
     for _, g in rows.groupby("base", sort=False):
         g = g.sort_values("early_frames")
         x = g["early_frames"].to_numpy(float)
@@ -208,9 +273,9 @@ def plot_frames(lb: Leaderboard, base: Path) -> list[Path]:
     if np.isfinite(fr) and fr > 0:
         sec = ax.secondary_xaxis("top", functions=(lambda f: f / fr, lambda s: s * fr))
         sec.set_xlabel(f"seconds seen (at {fr:g} frames/s)")
-    ax.legend(fontsize=7)
-    ax.set_title(f"{lb.title}: accuracy vs frames seen", pad=28 if np.isfinite(fr) else 6)
-    return _save(fig, base)
+    ax.legend()
+    ax.set_title(_wrap(f"{lb.title}: accuracy vs frames seen", w), pad=20 if np.isfinite(fr) else 6)
+    return _save(fig, base, formats)
 
 
 def confusion_matrix(rs: ResultSet, lb: Leaderboard, method: str) -> pd.DataFrame:
@@ -226,8 +291,10 @@ def confusion_matrix(rs: ResultSet, lb: Leaderboard, method: str) -> pd.DataFram
     return m
 
 
-def plot_confusion(rs: ResultSet, lb: Leaderboard, method: str, base: Path) -> list[Path]:
-    """Counts and row-normalised confusion matrix of ``method``."""
+def plot_confusion(rs: ResultSet, lb: Leaderboard, method: str, base: Path, size: str = "text",
+                   formats: tuple[str, ...] = FORMATS) -> list[Path]:
+    """Counts and row-normalised confusion matrix of ``method`` (the row-normalised one alone when the
+    classes are too many for two panels at the figure's width)."""
     plt = _plt()
     m = confusion_matrix(rs, lb, method)
     counts = m.to_numpy(dtype=float)
@@ -237,31 +304,38 @@ def plot_confusion(rs: ResultSet, lb: Leaderboard, method: str, base: Path) -> l
         norm = counts / counts.sum(axis=1, keepdims=True)
     norm = np.nan_to_num(norm)
     k = len(m)
-    size = max(3.2, 0.45 * k + 1.5)
-    fig, axes = plt.subplots(1, 2, figsize=(2 * size + 1.6, size + 0.8), layout="constrained")
-    for ax, data, title, fmt in ((axes[0], counts, "counts", "{:.0f}"), (axes[1], norm, "row-normalised (recall)", "{:.2f}")):
+    w = _width(size)
+    panels = [(counts, "counts", "{:.0f}"), (norm, "row-normalised (recall)", "{:.2f}")]
+    if k * MIN_FONT_PT * 1.6 > (w - 1.2) / 2 * 72:  # tick labels no longer fit two panels
+        panels = panels[1:]
+    panel_w = (w - 0.4) / len(panels)
+    fig, axes = plt.subplots(1, len(panels), figsize=(w, min(9.0, panel_w + 1.4)), layout="constrained",
+                             squeeze=False)
+    cell_pt = (panel_w - 1.0) * 72 / max(k, 1)
+    for ax, (data, title, fmt) in zip(axes[0], panels):
         im = ax.imshow(data, cmap="Blues", vmin=0, vmax=max(1.0, counts.max()) if title == "counts" else 1.0)
-        ax.set_xticks(range(k), labels=list(m.columns), rotation=45, ha="right")
+        ax.set_xticks(range(k), labels=list(m.columns), rotation=90 if k > 8 else 45, ha="right" if k <= 8 else "center")
         ax.set_yticks(range(k), labels=list(m.index))
         ax.set_xlabel("predicted")
         ax.set_ylabel("true")
         ax.set_title(title)
         thresh = (data.max() if data.size else 0) / 2
-        if k <= 16:
+        if cell_pt >= len(fmt.format(data.max() if data.size else 0)) * MIN_FONT_PT * 0.62:  # numbers fit
             for i in range(k):
                 for j in range(k):
                     v = data[i, j]
-                    ax.text(j, i, fmt.format(v), ha="center", va="center", fontsize=7,
+                    ax.text(j, i, fmt.format(v), ha="center", va="center", fontsize=MIN_FONT_PT,
                             color="white" if v > thresh else "black")
         fig.colorbar(im, ax=ax, shrink=0.8)
     r = lb.rows[lb.rows["method_id"] == method].iloc[0]
     acc = np.trace(counts) / counts.sum() if counts.sum() else math.nan
-    fig.suptitle(f"{lb.title}\n{_short(r, 60)} [{method}]: pooled accuracy {100 * acc:.1f} % "
-                 f"over {int(counts.sum())} test captures")
-    return _save(fig, base)
+    fig.suptitle(_wrap(f"{lb.title}\n{method_label(r)}: pooled accuracy {100 * acc:.1f} % over "
+                       f"{int(counts.sum())} test captures", w))
+    return _save(fig, base, formats)
 
 
-def plot_subjects(rs: ResultSet, lb: Leaderboard, base: Path, top: int = 5) -> list[Path]:
+def plot_subjects(rs: ResultSet, lb: Leaderboard, base: Path, top: int = 5, size: str = "text",
+                  formats: tuple[str, ...] = FORMATS) -> list[Path]:
     """Per-subject accuracy of the ``top`` methods of the table."""
 
     plt = _plt()
@@ -276,7 +350,8 @@ def plot_subjects(rs: ResultSet, lb: Leaderboard, base: Path, top: int = 5) -> l
         raise ValueError(f"{lb.title}: no predictions to compute per-subject accuracy")
 
     subjects = sorted(set().union(*[set(s.index) for _, s in series.values()]), key=_natural_key)
-    fig, ax = plt.subplots(figsize=(max(6, 0.45 * len(subjects) + 3), 4), layout="constrained")
+    w = _width(size)
+    fig, ax = plt.subplots(figsize=(w, 3.4 if size == "text" else 3.0), layout="constrained")
     n = len(series)
     width = 0.8 / n
     for i, (mid, (r, s)) in enumerate(series.items()):
@@ -288,42 +363,109 @@ def plot_subjects(rs: ResultSet, lb: Leaderboard, base: Path, top: int = 5) -> l
     ax.set_ylabel("accuracy (%)")
     ax.set_ylim(0, 105)
     ax.grid(True, axis="y", alpha=0.3)
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
-    ax.set_title(f"{lb.title}: per-subject accuracy")
-    return _save(fig, base)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2 if size == "text" else 1, frameon=False)
+    ax.set_title(_wrap(f"{lb.title}: per-subject accuracy", w))
+    return _save(fig, base, formats)
+
+
+def _fit_label(label: str, width: int) -> str:
+    """``label`` in at most ``width`` characters, shortening the part before `` / `` (the features)."""
+    if len(label) <= width:
+        return label
+    head, sep, tail = label.partition(" / ")
+    if not sep:
+        return label[: width - 1] + "…"
+    keep = max(3, width - len(sep) - len(tail) - 1)
+    return head[:keep] + "…" + sep + tail
+
+
+def _critical_difference(scores: pd.DataFrame, title: str, base: Path, size: str,
+                         formats: tuple[str, ...]) -> list[Path]:
+    """aeon's critical difference diagram of ``scores`` (rows: problems, columns: methods)."""
+    try:
+        from aeon.visualisation import plot_critical_difference
+    except ImportError:
+        raise TouchbenchError("critical difference diagrams are drawn by aeon: pip install 'touchbench[peers]'") from None
+    plt = _plt()
+    scores = scores.dropna()
+    if scores.shape[1] < 2 or scores.shape[0] < 2:
+        raise ValueError(f"{title}: a critical difference diagram needs two methods and two problems "
+                         f"(got {scores.shape[1]} and {scores.shape[0]})")
+    w = _width(size)
+    # long labels would leave no room for the scale: their features are shortened, never the classifier
+    labels = [_fit_label(str(c), 22 if size == "column" else 30) for c in scores.columns]
+    # room for the labels at 8 pt (about 0.6 em per character), at most a third of the width on each side
+    textspace = min(w / 3, max(len(lab) for lab in labels) * 8 * 0.6 / 72 + 0.3)
+    fig, ax = plot_critical_difference(scores.to_numpy(dtype=float), labels, width=w, textspace=textspace)
+    for t in fig.findobj(match=lambda a: hasattr(a, "set_fontsize") and hasattr(a, "get_text")):
+        t.set_fontsize(8 if t.get_fontsize() > 8 else max(MIN_FONT_PT, t.get_fontsize()))
+    fig.suptitle(_wrap(title, w))
+    return _save(fig, base, formats, tight=True)
+
+
+def plot_cd(lb: Leaderboard, base: Path, size: str = "text", formats: tuple[str, ...] = FORMATS) -> list[Path]:
+    """Critical difference diagram of a table's methods over its folds (a fold is one problem;
+    folds some method lacks are left out)."""
+    labels = method_labels(lb.rows)
+    f = lb.folds.pivot_table(index="fold_key", columns="method_id", values="accuracy", aggfunc="mean")
+    f = f[[m for m in lb.rows["method_id"] if m in f.columns]].rename(columns=labels)
+    return _critical_difference(f, f"{lb.title}: mean rank over {len(f.dropna())} folds", base, size, formats)
+
+
+def plot_cd_across(lbs: list[Leaderboard], base: Path, size: str = "text",
+                   formats: tuple[str, ...] = FORMATS) -> list[Path]:
+    """Critical difference diagram across tables (datasets and schemes): each table is one problem,
+    a method's value its mean accuracy there; methods (by label) present in every table."""
+    from .leaderboard import across_tables
+
+    acc = across_tables(lbs)
+    return _critical_difference(acc, f"mean rank over {len(acc.dropna())} tables", base, size, formats)
 
 
 def plot_table(rs: ResultSet, lb: Leaderboard, out_dir: Path, kinds: tuple[str, ...] = KINDS,
                methods: list[str] | None = None, references: list[tuple[str, float]] | None = None,
-               name: str | None = None) -> dict[str, list[Path]]:
-    """Every applicable plot of one table into ``out_dir``; ``{name: [png, svg]}``.
+               name: str | None = None, *, size: str = "text", formats: tuple[str, ...] = FORMATS,
+               taken: set[str] | None = None) -> dict[str, list[Path]]:
+    """Every applicable plot of one table into ``out_dir``; ``{name: [pdf, svg, png]}``.
 
     ``references`` go to :func:`plot_pareto` (reference accuracies in %).
-    Files are named ``<name>-<kind>`` (``name`` defaults to :func:`slug`, the
-    table's dataset and scheme with a short key); a stable ``name`` gives
-    stable file names, e.g. for figures a document links to.
+    Files are named ``<name>-<kind>`` (``name`` defaults to :func:`slug`: the
+    table's dataset, scheme and target); confusion matrices
+    ``<name>-confusion-<features>-<classifier>``. ``taken`` (shared over the
+    tables of one call) makes names unique with ``-2``, ``-3``... A stable
+    ``name`` gives stable file names, e.g. for figures a document links to.
 
     Confusion matrices are drawn for ``methods`` (ids), by default the best
     method of the table. A plot that does not apply (``frames`` outside an
-    ``early`` scheme, ``confusion`` without predictions) is skipped.
+    ``early`` scheme, ``confusion`` without predictions, ``cd`` with fewer
+    than two methods or folds) is skipped.
     """
     out_dir = Path(out_dir)
-    s = name or slug(lb)
+    taken = set() if taken is None else taken
+    s = unique_stem(_clean(name) if name else slug(lb), taken)
     made: dict[str, list[Path]] = {}
     if "pareto" in kinds and lb.rows["accuracy"].notna().any():
-        made["pareto"] = plot_pareto(lb, out_dir / f"{s}-pareto", references)
+        made["pareto"] = plot_pareto(lb, out_dir / f"{s}-pareto", references, size, formats)
     if "frames" in kinds and lb.is_early:
-        made["frames"] = plot_frames(lb, out_dir / f"{s}-frames")
+        made["frames"] = plot_frames(lb, out_dir / f"{s}-frames", size, formats)
     has_preds = rs.predictions is not None and (rs.predictions["table_key"] == lb.key).any()
     if "confusion" in kinds and has_preds:
+        labels = method_labels(lb.rows)
+        names: set[str] = set()
         for mid in methods or [str(lb.rows["method_id"].iloc[0])]:
+            stem = unique_stem(f"confusion-{_clean(labels[mid].replace(' / ', '-'))}", names)
             try:
-                made[f"confusion-{mid}"] = plot_confusion(rs, lb, mid, out_dir / f"{s}-confusion-{mid}")
+                made[stem] = plot_confusion(rs, lb, mid, out_dir / f"{s}-{stem}", size, formats)
             except ValueError:
                 pass
     if "subjects" in kinds and has_preds:
         try:
-            made["subjects"] = plot_subjects(rs, lb, out_dir / f"{s}-subjects")
+            made["subjects"] = plot_subjects(rs, lb, out_dir / f"{s}-subjects", size=size, formats=formats)
+        except ValueError:
+            pass
+    if "cd" in kinds:
+        try:
+            made["cd"] = plot_cd(lb, out_dir / f"{s}-cd", size, formats)
         except ValueError:
             pass
     return made

@@ -55,7 +55,8 @@ EXACT_MAX_PAIRS = 15
 
 
 def fold_interval(values: Sequence[float], level: float = 0.95) -> tuple[float, float, float, float]:
-    """``(mean, sd, low, high)`` of per-fold values: Student's t interval.
+    """``(mean, sd, low, high)`` of per-fold values (accuracies): Student's t interval, clipped to
+    [0, 1].
 
     ``sd`` and the interval are NaN for fewer than two values.
     """
@@ -70,7 +71,8 @@ def fold_interval(values: Sequence[float], level: float = 0.95) -> tuple[float, 
         return (mean, math.nan, math.nan, math.nan)
     sd = float(np.std(x, ddof=1))
     half = float(stats.t.ppf(0.5 + level / 2.0, n - 1)) * sd / math.sqrt(n)
-    return (mean, sd, mean - half, mean + half)
+    # an accuracy lies in [0, 1]: the t interval, symmetric, is clipped there
+    return (mean, sd, max(0.0, mean - half), min(1.0, mean + half))
 
 
 def wilson_interval(successes: int, n: int, level: float = 0.95) -> tuple[float, float]:

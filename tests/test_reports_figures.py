@@ -1,0 +1,189 @@
+"""Paper-ready figures and leaderboards: formats and print sizes, fonts of at least 7 pt at print
+size, names without hashes and unique for a dataset given as a Parquet file, critical difference
+diagrams (aeon), intervals within [0, 100] %, failed methods shown failed, rows told apart by their
+parameters, markup-safe titles, mean ranks across tables."""
+
+from __future__ import annotations
+
+import re
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pandas as pd
+import pytest
+from rich.console import Console
+from scipy.stats import rankdata
+
+from touchbench.reports.leaderboard import (
+    build_leaderboards,
+    display_rows,
+    mean_ranks,
+    method_labels,
+    print_terminal,
+    to_markdown,
+)
+from touchbench.reports.plots import SIZES, plot_cd, plot_cd_across, plot_pareto, plot_table
+from touchbench.reports.results import load_results
+from touchbench.reports.testing import FakeMethod, write_fake_run
+
+SUBJECTS = ["s1", "s2", "s3", "s4", "s5"]
+GESTURES = ["pat", "rub", "stroke"]
+CAPS = pd.DataFrame([(f"{s}-{g}-{r}", s, g) for s in SUBJECTS for g in GESTURES for r in range(2)],
+                    columns=["capture_id", "subject", "gesture"])
+FOLDS = {f"subject={s}": CAPS[CAPS["subject"] == s]["capture_id"].tolist() for s in SUBJECTS}
+
+
+def _wrong(counts):
+    return {f: ids[:c] for (f, ids), c in zip(FOLDS.items(), counts)}
+
+
+METHODS = [  # 6 test captures per fold: accuracies (6 - wrong) / 6
+    FakeMethod("msd", "rf", wrong=_wrong([0, 1, 0, 1, 0]), latency_ms=4.0),
+    FakeMethod("sd", "rf", wrong=_wrong([2, 2, 1, 2, 2]), latency_ms=0.5),
+    FakeMethod("bmh", "lda", wrong=_wrong([3, 2, 3, 3, 2]), latency_ms=0.2),
+]
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    d = tmp_path_factory.mktemp("runs")
+    # a dataset given as a Parquet file: its name is the file's
+    write_fake_run(d / "a", CAPS, FOLDS, METHODS, dataset="my-recordings.parquet", scheme={"name": "loso"},
+                   run_id="a")
+    write_fake_run(d / "b", CAPS, FOLDS, [
+        FakeMethod("msd", "rf", wrong=_wrong([1, 1, 1, 1, 1])),
+        FakeMethod("sd", "rf", wrong=_wrong([0, 0, 1, 0, 0])),
+        FakeMethod("bmh", "lda", wrong=_wrong([2, 2, 2, 2, 2])),
+    ], dataset="other", dataset_hash="e" * 64, scheme={"name": "loso"}, run_id="b")
+    return d
+
+
+def _svg(path):
+    """Width in points and every font size (points) of an SVG matplotlib wrote (1 user unit = 1 pt)."""
+    root = ET.parse(path).getroot()
+    width = float(re.match(r"[\d.]+", root.get("width")).group())
+    sizes = [float(m) for el in root.iter() for m in re.findall(r"font-size: ([\d.]+)px", el.get("style") or "")]
+    return width, sizes
+
+
+# ----------------------------------------------------------------- names
+def test_file_names_are_unique_readable_and_hash_free_for_a_parquet_dataset(runs, tmp_path):
+    rs = load_results([runs / "a"])
+    [lb] = build_leaderboards(rs)
+    made = plot_table(rs, lb, tmp_path, methods=list(lb.rows["method_id"][:2]))
+    files = [p for paths in made.values() for p in paths]
+    assert len(files) == len({p.name for p in files}) == 3 * len(made)  # pdf, svg, png each, none overwritten
+    stems = sorted({p.name.rsplit(".", 1)[0] for p in files})
+    assert stems == ["my-recordings-loso-cd", "my-recordings-loso-confusion-msd-rf",
+                     "my-recordings-loso-confusion-sd-rf", "my-recordings-loso-pareto", "my-recordings-loso-subjects"]
+    assert lb.title == "my-recordings.parquet — loso" and "dddd" not in lb.title
+    taken = set()
+    plot_table(rs, lb, tmp_path / "two", kinds=("pareto",), taken=taken)
+    again = plot_table(rs, lb, tmp_path / "two", kinds=("pareto",), taken=taken)  # a second table of that name
+    assert [p.name for p in again["pareto"]] == ["my-recordings-loso-2-pareto.pdf", "my-recordings-loso-2-pareto.svg",
+                                                 "my-recordings-loso-2-pareto.png"]
+
+
+def test_two_datasets_of_one_name_are_told_apart_in_titles(runs, tmp_path):
+    write_fake_run(tmp_path / "c", CAPS, FOLDS, METHODS[:2], dataset="other", dataset_hash="f" * 64,
+                   scheme={"name": "loso"}, run_id="c")
+    lbs = build_leaderboards(load_results([runs / "b", tmp_path / "c"]))
+    assert sorted(lb.title for lb in lbs) == ["other (data 1) — loso", "other (data 2) — loso"]
+
+
+# ----------------------------------------------------------------- print sizes and fonts
+@pytest.mark.parametrize("size", ["text", "column"])
+def test_figures_are_at_print_width_with_fonts_of_at_least_7_pt(runs, tmp_path, size):
+    rs = load_results([runs / "a"])
+    [lb] = build_leaderboards(rs)
+    made = plot_table(rs, lb, tmp_path, size=size)
+    for kind, paths in made.items():
+        pdf, svg, png = paths
+        assert pdf.read_bytes()[:5] == b"%PDF-" and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        width, fonts = _svg(svg)
+        if kind != "cd":  # aeon sizes the diagram itself, to the width asked for
+            assert width == pytest.approx(SIZES[size] * 72)
+        assert fonts and min(fonts) >= 7.0, (kind, sorted(set(fonts)))
+
+
+def test_png_is_300_dpi(runs, tmp_path):
+    from PIL import Image
+
+    [lb] = build_leaderboards(load_results([runs / "a"]))
+    _, _, png = plot_pareto(lb, tmp_path / "p", size="text")
+    with Image.open(png) as im:
+        assert im.size[0] == 7 * 300 and round(im.info["dpi"][0]) == 300
+
+
+# ----------------------------------------------------------------- critical difference diagrams
+def test_critical_difference_diagram_per_table_and_across_tables(runs, tmp_path):
+    lbs = build_leaderboards(load_results([runs / "a", runs / "b"]))
+    for lb in lbs:
+        pdf, svg, png = plot_cd(lb, tmp_path / lb.dataset)
+        assert pdf.stat().st_size > 1000
+        text = svg.read_text()
+        assert all(label in text for label in ("msd / rf", "sd / rf", "bmh / lda"))
+    pdf, svg, png = plot_cd_across(lbs, tmp_path / "across")
+    assert "mean rank over 2 tables" in svg.read_text()
+
+
+# ----------------------------------------------------------------- leaderboard
+def test_intervals_stay_within_0_and_100(runs):
+    [lb] = build_leaderboards(load_results([runs / "a"]))
+    assert ((lb.rows["ci_low"] >= 0) & (lb.rows["ci_high"] <= 1)).all()
+    # msd: folds 1, 5/6, 1, 5/6, 1 -> mean 14/15; its t interval would pass 100 %
+    msd = lb.rows[lb.rows["features"] == "msd"].iloc[0]
+    acc = np.array([1, 5 / 6, 1, 5 / 6, 1])
+    from scipy import stats
+    half = stats.t.ppf(0.975, 4) * acc.std(ddof=1) / np.sqrt(5)
+    assert acc.mean() + half > 1 and msd["ci_high"] == 1.0
+    assert msd["ci_low"] == pytest.approx(acc.mean() - half)
+    _, cells = display_rows(lb)
+    assert cells[0][6] == f"{100 * (acc.mean() - half):.1f}–100.0"
+
+
+def test_failed_methods_show_failed_with_their_error(tmp_path):
+    write_fake_run(tmp_path / "r", CAPS, FOLDS, [METHODS[0], FakeMethod("sd", "boom", failed_folds=list(FOLDS))],
+                   scheme={"name": "loso"})
+    [lb] = build_leaderboards(load_results([tmp_path / "r"]))
+    header, cells = display_rows(lb)
+    row = next(c for c in cells if c[3] == "boom")
+    assert row[5] == "failed" and row[header.index("vs best: Δ pp, p (Holm)")].startswith("failed: ")
+    assert "not tested" not in " ".join(row)
+
+
+def test_rows_that_differ_only_by_feature_parameters_show_them(tmp_path):
+    write_fake_run(tmp_path / "r", CAPS, FOLDS, [
+        FakeMethod("sd", "gaus-rf", feature_params=[["sd", {"bins": 8}]], wrong=_wrong([0, 0, 0, 0, 0])),
+        FakeMethod("sd", "gaus-rf", feature_params=[["sd", {"bins": 16}]], wrong=_wrong([1, 1, 1, 1, 1])),
+    ], scheme={"name": "loso"})
+    [lb] = build_leaderboards(load_results([tmp_path / "r"]))
+    labels = sorted(method_labels(lb.rows).values())
+    assert labels == ["sd / gaus-rf (features: sd; bins=16)", "sd / gaus-rf (features: sd; bins=8)"]
+    _, cells = display_rows(lb)
+    assert cells[0][2] != cells[1][2] and "bins=8" in cells[0][2]
+
+
+def test_titles_are_not_read_as_markup(tmp_path):
+    write_fake_run(tmp_path / "r", CAPS, FOLDS, METHODS[:2], dataset="[b5830b]", scheme={"name": "loso"})
+    lbs = build_leaderboards(load_results([tmp_path / "r"]))
+    console = Console(record=True, width=300)
+    print_terminal(lbs, console)
+    assert "[b5830b] — loso" in console.export_text()
+
+
+def test_mean_ranks_across_tables_by_hand(runs):
+    lbs = build_leaderboards(load_results([runs / "a", runs / "b"]))
+    # table a: msd 14/15, sd 2/3 (20/30), bmh 17/30 -> ranks 1, 2, 3
+    # table b: msd 25/30, sd 29/30, bmh 20/30 -> ranks 2, 1, 3
+    ranks = mean_ranks(lbs).set_index("method")
+    assert ranks.loc["msd / rf", "mean_rank"] == pytest.approx(1.5)
+    assert ranks.loc["sd / rf", "mean_rank"] == pytest.approx(1.5)
+    assert ranks.loc["bmh / lda", "mean_rank"] == pytest.approx(3.0)
+    assert (ranks["tables"] == 2).all()
+    # the same with scipy on the table the function builds from
+    acc = np.array([[14 / 15, 20 / 30, 17 / 30], [25 / 30, 29 / 30, 20 / 30]])
+    expected = np.mean([rankdata(-row) for row in acc], axis=0)
+    assert [ranks.loc[m, "mean_rank"] for m in ("msd / rf", "sd / rf", "bmh / lda")] == pytest.approx(expected)
+    md = to_markdown(lbs)
+    assert "## Mean rank across 2 tables" in md and "| bmh / lda | 3.00 |" in md
