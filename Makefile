@@ -39,7 +39,7 @@ $(VENV)/.plugin: $(VENV)/.installed-$(EXTRAS) $(PLUGIN)/pyproject.toml $(wildcar
 setup: $(VENV)/.installed-$(EXTRAS) $(VENV)/.plugin
 
 demo: $(VENV)/.installed-core
-	$(BIN)/touchbench demo
+	$(BIN)/touchbench demo --jobs $(JOBS)
 
 test: setup
 	$(BIN)/python -m pytest -q -p no:cacheprovider
@@ -51,7 +51,7 @@ snapshots: setup
 	$(BIN)/python tests/snapshots/registries.py
 
 reproduce-papers: setup
-	$(BIN)/touchbench papers reproduce --profile $(PROFILE)
+	$(BIN)/touchbench papers reproduce --profile $(PROFILE) --jobs $(JOBS)
 
 examples: setup
 	$(TB) run example-haart-loso --out $(RUNS)/example-haart-loso --jobs $(JOBS) --no-progress

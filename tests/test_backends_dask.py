@@ -63,7 +63,7 @@ def test_cli_run_against_a_scheduler(cluster, env):
 def test_backend_option_errors(env):
     write_protocol(env)
     res = CliRunner().invoke(cli, ["run", str(env / "p.yaml"), "--scheduler", "tcp://127.0.0.1:8786"])
-    assert res.exit_code == 2 and "--scheduler is the Dask scheduler's address" in res.output
+    assert res.exit_code == 3 and "--scheduler is the Dask scheduler's address" in res.output
     with pytest.raises(TouchbenchError, match="unknown backend"):
         with use_backend("spark"):
             pass

@@ -18,7 +18,7 @@ def test_data_list_and_sample_info():
 
 def test_unknown_dataset_suggests():
     r = CliRunner().invoke(cli, ["data", "info", "haart-challange"])
-    assert r.exit_code == 2
+    assert r.exit_code == 3
     assert "did you mean 'haart-challenge'" in r.output
 
 

@@ -97,7 +97,7 @@ def test_predict_refuses_another_sensor_and_reads_long_format(setup, tmp_path):
     other = TouchDataset("other", ds.captures, ds.meta, SensorSpec("test-4x4", (4, 4), 20.0, (0.0, 255.0)))
     other.to_parquet(tmp_path / "other.parquet")
     res = CliRunner().invoke(cli, ["predict", str(tmp_path / "m.joblib"), str(tmp_path / "other.parquet")])
-    assert res.exit_code == 2
+    assert res.exit_code == 3
     assert "does not match the model's sensor" in res.output and "frame_rate: model 10.0, data 20.0" in res.output
     # the same captures in the long format, read with the model's grid and frame rate
     rows = []
@@ -117,14 +117,14 @@ def test_predict_refuses_another_sensor_and_reads_long_format(setup, tmp_path):
 def test_method_choice_and_bad_model_file(setup, tmp_path):
     ds, data, proto = setup
     res = CliRunner().invoke(cli, ["train", str(proto), "-o", str(tmp_path / "m.joblib")])
-    assert res.exit_code == 2 and "choose one with --method" in res.output and "msd+bmh/rf15" in res.output
+    assert res.exit_code == 3 and "choose one with --method" in res.output and "msd+bmh/rf15" in res.output
     res = CliRunner().invoke(cli, ["train", str(proto), "-m", "msd/rf51", "-o", str(tmp_path / "m.joblib")])
-    assert res.exit_code == 2 and "did you mean 'msd/rf15'" in res.output
+    assert res.exit_code == 3 and "did you mean 'msd/rf15'" in res.output
     res = CliRunner().invoke(cli, ["train", str(proto), "-m", "msd/rf15", "--fold", "s9", "-o", str(tmp_path / "m.joblib")])
-    assert res.exit_code == 2 and "no fold 's9'" in res.output
+    assert res.exit_code == 3 and "no fold 's9'" in res.output
     (tmp_path / "junk.joblib").write_bytes(b"not a model")
     res = CliRunner().invoke(cli, ["predict", str(tmp_path / "junk.joblib"), str(data)])
-    assert res.exit_code == 2 and "junk.joblib: not a touchbench model file" in res.output
+    assert res.exit_code == 3 and "junk.joblib: not a touchbench model file" in res.output
     assert not (tmp_path / "m.joblib").exists()
 
 
@@ -152,4 +152,4 @@ def test_stream_from_stdin_and_from_a_replayed_file(setup, tmp_path):
     assert [(d["label"], d["probability"]) for d in again] == [(d["label"], d["probability"]) for d in decisions]
     # a malformed line stops with its line number
     bad = CliRunner().invoke(cli, ["stream", str(tmp_path / "m.joblib"), "-"], input="1,2,3\n")
-    assert bad.exit_code == 2 and "<stdin>:1:" in bad.output
+    assert bad.exit_code == 3 and "<stdin>:1:" in bad.output

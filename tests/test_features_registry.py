@@ -76,7 +76,7 @@ def test_cli_features_list_and_show():
     r = CliRunner().invoke(cli, ["features", "show", "msd"])
     assert r.exit_code == 0 and "section 3.2.3" in r.output and "Interpretations" in r.output
     r = CliRunner().invoke(cli, ["features", "show", "smmh"])
-    assert r.exit_code == 2 and "did you mean 'smmhh'" in r.output
+    assert r.exit_code == 3 and "did you mean 'smmhh'" in r.output
 
 
 @pytest.mark.realdata

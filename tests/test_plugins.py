@@ -182,14 +182,14 @@ def test_a_plugin_that_fails_to_import_stops_the_registries_naming_it(tmp_path):
     where = "plugin broken-plugin 1.0 (entry point 'main' = 'broken_plugin_mod' in group 'touchbench.plugins')"
     for args in (["features", "list"], ["classifiers", "list"], ["data", "list"], ["data", "formats"]):
         r = _touchbench(site, tmp_path, *args)
-        assert r.returncode == 2, (args, r.stdout, r.stderr)
+        assert r.returncode == 3, (args, r.stdout, r.stderr)
         assert f"{where} failed to load: ModuleNotFoundError: No module named 'a_module_nobody_has'" in r.stderr, args
         assert "Traceback" not in r.stderr
     # help, and the command that says what is installed, still work
     r = _touchbench(site, tmp_path, "--help")
     assert r.returncode == 0 and "plugins" in r.stdout, r.stderr
     r = _touchbench(site, tmp_path, "plugins", "list")
-    assert r.returncode == 2
+    assert r.returncode == 3
     assert "broken-plugin 1.0  (entry point main = broken_plugin_mod)" in r.stdout
     assert "failed to load: ModuleNotFoundError" in r.stdout and where in r.stderr
 
@@ -204,7 +204,7 @@ def test_a_plugin_that_registers_an_existing_name_is_refused(tmp_path):
                  "class Mine(FeatureSet):\n    pass\n")
     # the data registry loads the plugins here: touchbench's own feature sets still come first
     r = _touchbench(site, tmp_path, "data", "list")
-    assert r.returncode == 2, r.stdout + r.stderr
+    assert r.returncode == 3, r.stdout + r.stderr
     assert ("plugin clashing-plugin 1.0 (entry point 'main' = 'clashing_plugin_mod' in group 'touchbench.plugins') "
             "failed to load: feature set 'sd' is registered twice: by module touchbench.features.gaus_sd and by "
             "plugin clashing-plugin 1.0") in r.stderr

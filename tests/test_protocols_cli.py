@@ -53,7 +53,7 @@ def test_validate_valid_and_invalid(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text((SHIPPED_DIR / "haart-loso-msd-rf.yaml").read_text().replace("name: gaus-rf", "name: gaus-fr"))
     r = invoke("protocols", "validate", str(bad))
-    assert r.exit_code == 2
+    assert r.exit_code == 3
     lines = [l for l in r.output.splitlines() if l.strip()]
     assert len(lines) == 1
     assert lines[0].startswith(f"error: {bad}:17: classifiers[0].name: unknown classifier 'gaus-fr'; did you mean 'gaus-rf'")
@@ -63,7 +63,7 @@ def test_validate_by_name_and_missing_file():
     r = invoke("protocols", "validate", "--schema-only", "tiny")
     assert r.exit_code == 0 and "valid protocol 'tiny'" in r.output
     r = invoke("protocols", "validate", "no-such-protocol")
-    assert r.exit_code == 2 and "no such protocol file" in r.output
+    assert r.exit_code == 3 and "no such protocol file" in r.output
 
 
 def test_tiny_protocol_runs_and_reruns_as_noop(tmp_path, monkeypatch):

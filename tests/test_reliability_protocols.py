@@ -70,7 +70,7 @@ def test_billion_laughs_is_refused_at_the_line_that_crosses_the_bound(tmp_path):
     f = tmp_path / "laughs.yaml"
     f.write_text(BASE + LAUGHS)
     r = invoke("protocols", "validate", "--schema-only", str(f))
-    assert r.exit_code == 2 and r.output.startswith(f"error: {f}:9: the document stands for more than")
+    assert r.exit_code == 3 and r.output.startswith(f"error: {f}:9: the document stands for more than")
     assert "Traceback" not in r.output
 
 
@@ -209,7 +209,7 @@ def test_a_protocol_cannot_choose_where_touchbench_writes(tmp_path):
     f.write_text(f"dataset:\n  name: haart-sample\n  options: {{cache_dir: {target}}}\n"
                  "scheme: loso\nfeatures: [sd]\nclassifiers: [zhou-lda]\n")
     r = invoke("protocols", "validate", str(f))
-    assert r.exit_code == 2
+    assert r.exit_code == 3
     assert r.output == (f"error: {f}:3: dataset.options.cache_dir: a protocol cannot choose where touchbench writes: "
                         "remove cache_dir; set the TOUCHBENCH_CACHE_DIR environment variable to move the cache\n")
     assert not target.exists()

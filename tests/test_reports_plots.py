@@ -117,7 +117,7 @@ def test_cli_leaderboard_compare_plot(runs, tmp_path):
     assert "exact sign-flip permutation test, two-sided p = 0.125" in res.output
     assert "subject=s1" in res.output and "pat" in res.output
     res = r.invoke(cli, ["compare", str(runs / "loso"), "--a", "msd/rf", "--b", "nope"])
-    assert res.exit_code == 2 and "no method 'nope'" in res.output
+    assert res.exit_code == 3 and "no method 'nope'" in res.output
     res = r.invoke(cli, ["plot", str(runs / "early"), "--out", str(tmp_path / "pl"), "--kind", "frames"])
     assert res.exit_code == 0, res.output
     assert len(list((tmp_path / "pl").glob("*frames.svg"))) == 1
@@ -167,4 +167,4 @@ def test_plot_name_gives_stable_file_names(runs, tmp_path):
     # one name cannot serve several tables
     res = r.invoke(cli, ["plot", str(runs / "loso"), str(runs / "early"), "--out", str(tmp_path / "p2"),
                          "--name", "figure-b"])
-    assert res.exit_code == 2 and "--name figure-b" in res.output and "tables" in res.output
+    assert res.exit_code == 3 and "--name figure-b" in res.output and "tables" in res.output

@@ -163,9 +163,9 @@ def test_cli_list_generate_calibrate(tmp_path):
     ds = load_dataset(out)
     assert len(ds) == 16 and ds.content_hash == generate_scene("tiny", seed=3, subjects=2).content_hash
     r = CliRunner().invoke(cli, ["scenes", "generate", "tiny", "--out", str(out), "--set", "protocol.repetitions=0"])
-    assert r.exit_code == 2 and "protocol.repetitions" in r.output
+    assert r.exit_code == 3 and "protocol.repetitions" in r.output
     r = CliRunner().invoke(cli, ["scenes", "generate", "nosuch", "--out", str(out)])
-    assert r.exit_code == 2 and "unknown scene" in r.output
+    assert r.exit_code == 3 and "unknown scene" in r.output
     r = CliRunner().invoke(cli, ["scenes", "calibrate", "tiny", "--features", "msd", "--trees", "10"])
     assert r.exit_code == 0, r.output
     assert "no real counterpart" in r.output and "msd+rf" in r.output

@@ -271,7 +271,7 @@ def test_validate_and_run_refuse_on_the_command_line(tmp_path):
     proto.write_text(PROTOCOL.format(data=data, frames=3, clf="touch-et-win"))
     for args in (["protocols", "validate", str(proto)], ["run", str(proto), "--out", str(tmp_path / "out")]):
         r = CliRunner().invoke(cli, args)
-        assert r.exit_code == 2, r.output
+        assert r.exit_code == 3, r.output
         assert "method 'touch-et-win' cannot serve sensor 'wide-19x24' (19 x 24 at 12 Hz)" in r.output
         assert "longer than the shortest capture (3 frames)" in r.output
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").rglob("*.parquet"))

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import json
-
 import click
 
+from .common import echo_json, example, json_option
 from .plugins import plugin_note
 
 
@@ -13,13 +12,13 @@ def _fmt(v) -> str:
     return repr(v) if isinstance(v, str) else str(v)
 
 
-@click.group("classifiers")
+@click.group("classifiers", epilog=example("touchbench classifiers list"))
 def classifiers() -> None:
     """Registered classifiers (defaults are the papers' settings)."""
 
 
-@classifiers.command("list")
-@click.option("--json", "as_json", is_flag=True, help="One JSON object per classifier, in a list.")
+@classifiers.command("list", epilog=example("touchbench classifiers list --json"))
+@json_option
 def list_classifiers(as_json: bool) -> None:
     """List every classifier with its source and defaults."""
     from ..classifiers import CLASSIFIERS, cnn, peers, xgb
@@ -44,7 +43,7 @@ def list_classifiers(as_json: bool) -> None:
             "note": plugin_note(e),
         })
     if as_json:
-        click.echo(json.dumps([{k: v for k, v in r.items() if k != "note"} for r in rows], indent=2, default=list))
+        echo_json([{k: v for k, v in r.items() if k != "note"} for r in rows])
         return
     for r in rows:
         status = ""

@@ -2,26 +2,30 @@
 
 from __future__ import annotations
 
-import json
-
 import click
 
 from ..catalog import load_dataset, parse_dataset_ref
 from ..datasets import DATASETS
 from ..datasets.formats import FORMATS
 from ..datasets.model import TouchDataset
+from .common import echo_json, example, json_option
 from .formats import FORMATS_HELP, FormatChoice, format_options
-from .plugins import plugin_note
+from .plugins import package_of, plugin_note
 
 
-@click.group()
+@click.group(epilog=example("touchbench data list", "touchbench data info haart"))
 def data() -> None:
     """Datasets: real readers, the cache, exports."""
 
 
-@data.command("list")
-def list_() -> None:
+@data.command("list", epilog=example("touchbench data list --json"))
+@json_option
+def list_(as_json: bool) -> None:
     """Registered datasets (scenes: `touchbench scenes list`)."""
+    if as_json:
+        echo_json([{"name": e.name, "description": e.description, "package": package_of(e)}
+                   for e in DATASETS.entries()])
+        return
     for e in DATASETS.entries():
         click.echo(f"{e.name:18s} {e.description}{plugin_note(e)}")
 
@@ -61,19 +65,19 @@ def format_info(info: dict) -> str:
     return "\n".join(lines)
 
 
-@data.command()
+@data.command(epilog=example("touchbench data info haart", "touchbench data info my-recordings.parquet --json"))
 @click.argument("name")
 @click.option("--cache-dir", type=click.Path(file_okay=False), default=None, help="Cache folder (default: user cache).")
 @click.option("--data-dir", type=click.Path(file_okay=False), default=None, help="Raw data folder (default: ../shared/data).")
 @click.option("--refresh", is_flag=True, help="Rebuild the cache entry.")
-@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+@json_option
 def info(name: str, cache_dir, data_dir, refresh: bool, as_json: bool) -> None:
     """Counts, ranges, placeholders and hash of dataset NAME (or scene:NAME or a Parquet file)."""
     inf = _load(name, cache_dir, data_dir, refresh).info()
-    click.echo(json.dumps(inf, indent=2) if as_json else format_info(inf))
+    echo_json(inf) if as_json else click.echo(format_info(inf))
 
 
-@data.command()
+@data.command(epilog=example("touchbench data export haart-challenge out/challenge --format challenge-csv"))
 @click.argument("name")
 @click.argument("out_dir", type=click.Path(file_okay=False))
 @click.option("--format", "fmt", type=FormatChoice("write", lambda f: f.writer is not None), default="challenge-csv",
@@ -87,7 +91,7 @@ def export(name: str, out_dir: str, fmt: str, cache_dir, data_dir) -> None:
         click.echo(str(p))
 
 
-@data.command()
+@data.command(epilog=example("touchbench data convert frames.csv mine.parquet --format long --grid 6,6 --frame-rate 50"))
 @click.argument("source", type=click.Path(exists=True))
 @click.argument("out", type=click.Path(dir_okay=False))
 @click.option("--format", "fmt", type=FormatChoice("read"), required=True,
@@ -105,9 +109,16 @@ def convert(source: str, out: str, fmt: str, name, **options) -> None:
     click.echo(f"{out}: {len(ds)} captures, hash {ds.content_hash}")
 
 
-@data.command("formats")
-def formats() -> None:
+@data.command("formats", epilog=example("touchbench data formats"))
+@json_option
+def formats(as_json: bool) -> None:
     """File formats: what reads and writes them, and the options they take."""
+    if as_json:
+        echo_json([{"name": e.name, "description": e.description, "reads": e.obj.reads,
+                    "writes": e.obj.writer is not None, "replays": bool(e.obj.replay),
+                    "options": [{"option": o.usage, "help": o.help, "required": o.required} for o in e.obj.options]}
+                   for e in FORMATS.entries()])
+        return
     for e in FORMATS.entries():
         f = e.obj
         can = [f"reads a {f.reads}"]

@@ -11,11 +11,11 @@ from __future__ import annotations
 import click
 
 from ..core.errors import DataError
-from .run import jobs_value
+from .common import example, jobs_option
 
 
-@click.command()
-@click.option("--jobs", "-j", default=2, show_default=True, callback=jobs_value, help="Tasks run in parallel.")
+@click.command(epilog=example("touchbench demo --jobs 2"))
+@jobs_option
 @click.pass_context
 def demo(ctx: click.Context, jobs: int) -> None:
     """Run the main job on the embedded default and show its leaderboard."""

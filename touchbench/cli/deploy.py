@@ -21,6 +21,7 @@ from ..deploy.stream import (
     text_frames,
 )
 from ..deploy.train import parse_selection, train_from_protocol
+from .common import example
 from .formats import FORMATS_HELP, FormatChoice
 
 
@@ -36,7 +37,7 @@ def _floats(values, option: str) -> list[float] | None:
     return out or None
 
 
-@click.command("train")
+@click.command("train", epilog=example("touchbench train demo-haart --method msd/gaus-rf --out msd.joblib"))
 @click.argument("protocol")
 @click.option("--method", "-m", default=None,
               help="FEATURES/CLASSIFIER as the results name it, e.g. msd+sd/gaus-rf (optional when the protocol has one).")
@@ -68,7 +69,7 @@ def _load_model(path: str) -> TrainedModel:
     return model
 
 
-@click.command("predict")
+@click.command("predict", epilog=example("touchbench predict msd.joblib haart-challenge --out labels.csv"))
 @click.argument("model_path", metavar="MODEL")
 @click.argument("data")
 @click.option("--format", "fmt", type=FormatChoice("read", extra=("auto",)), default="auto", show_default=True,
@@ -93,7 +94,7 @@ def predict(model_path, data, fmt, out, whole) -> None:
             click.echo(f"accuracy {100 * acc:.1f}% on {int(known.sum())} captures of known classes", err=True)
 
 
-@click.command("stream")
+@click.command("stream", epilog=example("touchbench stream msd.joblib recording.csv --window 1 --hop 0.5"))
 @click.argument("model_path", metavar="MODEL")
 @click.argument("source", default="-")
 @click.option("--window", "windows", multiple=True, metavar="SECONDS",

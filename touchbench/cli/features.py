@@ -9,6 +9,7 @@ import click
 from ..datasets.model import SensorSpec
 from ..features import FEATURES
 from ..features.base import make_feature_set
+from .common import echo_json, example, json_option
 from .plugins import package_of
 
 
@@ -54,16 +55,17 @@ def feature_table(sensor: SensorSpec | None = None) -> list[dict]:
     return rows
 
 
-@click.group()
+@click.group(epilog=example("touchbench features list --grid 8x8 --rate 54 --range 0 1023", "touchbench features show msd"))
 def features() -> None:
     """Feature sets: scikit-learn transformers over captures."""
 
 
-@features.command("list")
+@features.command("list", epilog=example("touchbench features list --grid 19x24 --rate 12 --range 0 255 --json"))
+@json_option
 @click.option("--grid", "grid", default=None, help="sensor grid (HxW) to compute the output sizes for")
 @click.option("--rate", "rate", type=float, default=None, help="sensor frame rate (Hz), with --grid")
 @click.option("--range", "value_range", type=(float, float), default=None, help="sensor value range LOW HIGH, with --grid")
-def list_(grid: str | None, rate: float | None, value_range: tuple[float, float] | None) -> None:
+def list_(as_json: bool, grid: str | None, rate: float | None, value_range: tuple[float, float] | None) -> None:
     """Every feature set with its paper, output size and cost tag (sizes for the sensor
     given by --grid, --rate and --range; '-' where a set needs parameters stated or
     refuses that sensor)."""
@@ -81,6 +83,9 @@ def list_(grid: str | None, rate: float | None, value_range: tuple[float, float]
     title = ("feature sets (output size for " + sensor.describe().replace("'--grid' ", "") + ", default parameters)"
              if sensor is not None else "feature sets (output sizes: give --grid, --rate and --range)")
     rows = feature_table(sensor)
+    if as_json:
+        echo_json(rows)
+        return
     plugins = any(r["package"] != "touchbench" for r in rows)  # the package column only when a plugin added sets
     table = Table(title=title)
     for col in ("name", "paper", "size", "cost", "fold-dependent", "description") + (("package",) if plugins else ()):
@@ -92,7 +97,7 @@ def list_(grid: str | None, rate: float | None, value_range: tuple[float, float]
     Console(width=max(Console().width, 140)).print(table)
 
 
-@features.command("show")
+@features.command("show", epilog=example("touchbench features show sd"))
 @click.argument("name")
 def show(name: str) -> None:
     """A feature set's documentation: paper section, interpretations, parameters."""

@@ -1,59 +1,41 @@
-"""The ``touchbench`` command: a click group whose subcommands live in one
-module per area (``cli/data.py``, ``cli/features.py``, ...)."""
+"""The ``touchbench`` command: a click group whose subcommands live in one module per area
+(``cli/data.py``, ``cli/features.py``, ...), imported only when a command runs, so that
+``touchbench --help`` and ``--version`` start in a fraction of a second."""
 
 from __future__ import annotations
 
 import importlib
+import signal
 import sys
+import threading
 
 import click
 
 from .. import __version__
 from ..core.errors import TouchbenchError
 from ..core.plugins import PluginError
-from ..protocols.library import add_protocol_dir
+from . import exitcodes
+from .common import example, setup_logging
 
-# (module, attribute) of each subcommand; one line per area.
-_COMMANDS: list[tuple[str, str]] = [
-    ("touchbench.cli.data", "data"),
-    ("touchbench.cli.classifiers", "classifiers"),
-    ("touchbench.cli.features", "features"),
-    ("touchbench.cli.demo", "demo"),
-    ("touchbench.cli.deploy", "train"),
-    ("touchbench.cli.deploy", "predict"),
-    ("touchbench.cli.deploy", "stream"),
-    ("touchbench.cli.protocols", "protocols"),
-    ("touchbench.cli.run", "run"),
-    ("touchbench.cli.reports", "leaderboard"),
-    ("touchbench.cli.reports", "compare"),
-    ("touchbench.cli.reports", "plot"),
-    ("touchbench.cli.reports", "report"),
-    ("touchbench.cli.reports", "papers"),
-    ("touchbench.cli.scenes", "scenes"),
-    ("touchbench.cli.plugins", "plugins"),
-]
-
-
-class _Group(click.Group):
-    """Turns a TouchbenchError anywhere below into one clear line and exit 2."""
-
-    def invoke(self, ctx):
-        try:
-            return super().invoke(ctx)
-        except TouchbenchError as e:
-            click.echo(f"error: {e}", err=True)
-            sys.exit(2)
-
-
-@click.group(cls=_Group)
-@click.version_option(__version__, prog_name="touchbench")
-@click.option("--protocols", "protocol_folders", multiple=True, type=click.Path(file_okay=False, exists=True),
-              help="A folder of your own protocols, searched by name before the shipped ones (repeatable; "
-                   "also $TOUCHBENCH_PROTOCOLS).")
-def cli(protocol_folders: tuple[str, ...]) -> None:
-    """touchbench: benchmark social touch gesture recognition."""
-    for folder in protocol_folders:
-        add_protocol_dir(folder)
+# name -> (module, attribute, one-line help shown by `touchbench --help` without importing the module)
+_COMMANDS: dict[str, tuple[str, str, str]] = {
+    "classifiers": ("touchbench.cli.classifiers", "classifiers", "Registered classifiers (defaults are the papers' settings)."),
+    "compare": ("touchbench.cli.reports", "compare", "The paired test of method A against B, per fold or subject."),
+    "data": ("touchbench.cli.data", "data", "Datasets: real readers, the cache, exports."),
+    "demo": ("touchbench.cli.demo", "demo", "Run the main job on the embedded default and show its leaderboard."),
+    "features": ("touchbench.cli.features", "features", "Feature sets: scikit-learn transformers over captures."),
+    "leaderboard": ("touchbench.cli.reports", "leaderboard", "One table per dataset and scheme: rank, accuracy, intervals, tests."),
+    "papers": ("touchbench.cli.reports", "papers", "Reproduce the four papers (the shipped papers/ protocols)."),
+    "plot": ("touchbench.cli.reports", "plot", "Paper-ready figures: Pareto front, confusion, subjects, critical difference."),
+    "plugins": ("touchbench.cli.plugins", "plugins", "Installed plugins: packages that add components."),
+    "predict": ("touchbench.cli.deploy", "predict", "Label the captures of DATA with MODEL."),
+    "protocols": ("touchbench.cli.protocols", "protocols", "Protocol files: validate them, list the shipped ones."),
+    "report": ("touchbench.cli.reports", "report", "One self-contained HTML page with every leaderboard and plot."),
+    "run": ("touchbench.cli.run", "run", "Evaluate a protocol: every method under its scheme, resumable."),
+    "scenes": ("touchbench.cli.scenes", "scenes", "Synthetic scenes: sensors, gestures and people described in YAML."),
+    "stream": ("touchbench.cli.deploy", "stream", "Label a stream of frames with MODEL, one decision per hop."),
+    "train": ("touchbench.cli.deploy", "train", "Fit one method of a protocol on its data and save the model."),
+}
 
 
 def _unavailable(name: str, error: PluginError) -> click.Command:
@@ -69,9 +51,65 @@ def _unavailable(name: str, error: PluginError) -> click.Command:
     return command
 
 
-for _mod, _attr in _COMMANDS:
-    try:
-        _command = getattr(importlib.import_module(_mod), _attr)
-    except PluginError as _error:
-        _command = _unavailable(_attr, _error)
-    cli.add_command(_command)
+def _terminate(signum, frame) -> None:  # SIGTERM: the same path as Ctrl-C (finished work is kept)
+    raise KeyboardInterrupt
+
+
+class _Group(click.Group):
+    """Subcommands imported on first use; a TouchbenchError anywhere below becomes one clear line and
+    exit status 3, an interruption exit status 130."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(_COMMANDS)
+
+    def get_command(self, ctx: click.Context, name: str) -> click.Command | None:
+        if name not in _COMMANDS:
+            return None
+        module, attr, _ = _COMMANDS[name]
+        try:
+            return getattr(importlib.import_module(module), attr)
+        except PluginError as error:
+            return _unavailable(name, error)
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        rows = [(name, _COMMANDS[name][2]) for name in self.list_commands(ctx)]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except TouchbenchError as e:
+            click.echo(f"error: {e}", err=True)
+            sys.exit(exitcodes.DATA)
+        except KeyboardInterrupt:
+            click.echo("\ninterrupted: finished work is kept; run the same command again to resume", err=True)
+            sys.exit(exitcodes.INTERRUPTED)
+
+
+@click.group(cls=_Group, epilog=exitcodes.HELP + "\n\n" + example("touchbench run demo-haart --jobs 2",
+                                                                   "touchbench leaderboard results/demo-haart"))
+@click.version_option(__version__, prog_name="touchbench")
+@click.option("--protocols", "protocol_folders", multiple=True, type=click.Path(file_okay=False, exists=True),
+              help="A folder of your own protocols, searched by name before the shipped ones (repeatable; "
+                   "also $TOUCHBENCH_PROTOCOLS).")
+@click.option("--verbose", "-v", count=True, help="More messages on stderr (repeatable).")
+@click.option("--quiet", "-q", count=True, help="Fewer messages on stderr: warnings and errors only (-qq: errors).")
+def cli(protocol_folders: tuple[str, ...], verbose: int, quiet: int) -> None:
+    """touchbench: benchmark social touch gesture recognition."""
+    setup_logging(verbose, quiet)
+    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _terminate)
+    if protocol_folders:
+        from ..protocols.library import add_protocol_dir
+
+        for folder in protocol_folders:
+            add_protocol_dir(folder)
+
+
+def main() -> None:
+    cli()
+
+
+if __name__ == "__main__":
+    main()

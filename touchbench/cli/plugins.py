@@ -11,6 +11,7 @@ from ..datasets import DATASETS
 from ..datasets.formats import FORMATS
 from ..features import FEATURES
 from ..protocols.splits import SPLITTERS
+from .common import echo_json, example, json_option
 
 # Every registry a plugin may fill, as the listings name them.
 PLUGIN_REGISTRIES: tuple[Registry, ...] = (FEATURES, CLASSIFIERS, DATASETS, FORMATS, SPLITTERS)
@@ -42,15 +43,25 @@ def plugin_entries() -> list[tuple[str, Entry]]:
     return out
 
 
-@click.group("plugins")
+@click.group("plugins", epilog=example("touchbench plugins list"))
 def plugins() -> None:
     """Installed plugins: packages that add feature sets, classifiers, datasets, file formats or schemes."""
 
 
-@plugins.command("list")
-def list_() -> None:
+@plugins.command("list", epilog=example("touchbench plugins list --json"))
+@json_option
+def list_(as_json: bool) -> None:
     """Every installed plugin with its version, its entry point and what it registered."""
     status = plugin_status()
+    if as_json:
+        added = plugin_entries()
+        echo_json([{"package": info.package, "version": info.version, "entry_point": info.entry_point,
+                    "module": info.module, "error": None if error is None else str(error),
+                    "registered": [{"registry": kind, "name": e.name, "description": e.description}
+                                   for kind, e in added if e.plugin == info]} for info, error in status])
+        if any(error is not None for _, error in status):
+            raise PluginError("a plugin failed to load (see \"error\" in the output)")
+        return
     if not status:
         click.echo(f"no plugins installed (a plugin declares an entry point in the group {GROUP!r}; "
                    "see the README, section Plugins)")

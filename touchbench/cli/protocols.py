@@ -9,6 +9,7 @@ import click
 from ..core.yamlsafe import load_bounded
 from ..protocols.library import find_protocol, listed_protocols, protocol_dirs
 from ..protocols.schema import load_protocol
+from .common import echo_json, example, json_option
 
 
 def _description(path: Path) -> str:
@@ -22,15 +23,16 @@ def _description(path: Path) -> str:
     return text.splitlines()[0] if text else ""
 
 
-@click.group()
+@click.group(epilog=example("touchbench protocols list", "touchbench protocols validate my-protocol.yaml"))
 def protocols() -> None:
     """Protocol files: validate them, list the shipped ones."""
 
 
-@protocols.command("validate")
+@protocols.command("validate", epilog=example("touchbench protocols validate my-protocol.yaml --json"))
 @click.argument("file")
 @click.option("--schema-only", is_flag=True, help="Check the file alone; do not load the dataset or build the folds.")
-def validate(file: str, schema_only: bool) -> None:
+@json_option
+def validate(file: str, schema_only: bool, as_json: bool) -> None:
     """Validate FILE: schema, names, parameters, and (unless --schema-only)
     the dataset filters and the folds of the scheme. Nothing is computed."""
     path = find_protocol(file)
@@ -40,14 +42,24 @@ def validate(file: str, schema_only: bool) -> None:
     n_methods = len(proto.entries())
     shape = f"{len(combos)} feature combination(s) x {len(clfs)} classifier(s)" if combos else ""
     extra = f"{len(proto.method_entries())} method(s)" if proto.methods else ""
-    click.echo(f"{path}: valid protocol {proto.name!r}: scheme {proto.scheme.name}, "
-               + " + ".join(x for x in (shape, extra) if x))
+    out = {"file": str(path), "valid": True, "name": proto.name, "scheme": proto.scheme.name,
+           "feature_combinations": len(combos), "classifiers": len(clfs), "methods": n_methods}
+    if not as_json:
+        click.echo(f"{path}: valid protocol {proto.name!r}: scheme {proto.scheme.name}, "
+                   + " + ".join(x for x in (shape, extra) if x))
     if schema_only:
+        if as_json:
+            echo_json(out)
         return
     from ..engine.runner import plan_run
 
     plan = plan_run(proto)
     ds = plan.dataset
+    if as_json:
+        echo_json({**out, "captures": len(ds), "subjects": int(ds.meta["subject"].nunique()),
+                   "classes": int(ds.meta[proto.target].nunique()), "folds": plan.n_folds, "tasks": len(plan.tasks),
+                   "notes": plan.notes})
+        return
     click.echo(f"dataset {proto.dataset.name}: {len(ds)} captures after filters, "
                f"{ds.meta['subject'].nunique()} subjects, {ds.meta[proto.target].nunique()} {proto.target} classes")
     shape = f"{len(combos)} x {len(clfs)}" if not proto.methods else f"{n_methods} method(s)"
@@ -56,11 +68,15 @@ def validate(file: str, schema_only: bool) -> None:
         click.echo(f"note: {n}")
 
 
-@protocols.command("list")
-def list_() -> None:
+@protocols.command("list", epilog=example("touchbench protocols list --json"))
+@json_option
+def list_(as_json: bool) -> None:
     """Protocols found by name: your folders (--protocols, $TOUCHBENCH_PROTOCOLS,
     ./protocols) and the shipped ones (papers included), with their descriptions."""
     files = listed_protocols()
+    if as_json:
+        echo_json([{"name": f.stem, "path": str(f), "description": _description(f)} for f in files])
+        return
     for f in files:
         try:
             rel = f.relative_to(Path.cwd())

@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from pathlib import Path
 
 import click
 
 from ..core.errors import TouchbenchError
-from .run import jobs_value
+from . import exitcodes
+from .common import echo_json, example, jobs_option, json_option, log
 
 _FORMATS = ("terminal", "md", "csv", "json")
 
@@ -60,14 +62,16 @@ def _boards(results, dataset, scheme, alpha, pool_machines, machine, predictions
     return rs, _filter(lbs, dataset, scheme)
 
 
-@click.command("leaderboard")
+@click.command("leaderboard", epilog=example("touchbench leaderboard results/demo-haart",
+                                             "touchbench leaderboard results/a results/b --json"))
 @click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
+@json_option
 @click.option("--format", "-f", "formats", multiple=True, type=click.Choice(_FORMATS), default=("terminal",),
               show_default=True, help="Output format (repeatable). md/csv/json go to stdout, or to files with --out.")
 @click.option("--out", "-o", type=click.Path(file_okay=False), default=None,
               help="Write leaderboard.md/.csv/.json into this folder (the --format choices, all three by default).")
 @_with_table_options
-def leaderboard(results, formats, out, dataset, scheme, alpha, pool_machines, machine) -> None:
+def leaderboard(results, as_json, formats, out, dataset, scheme, alpha, pool_machines, machine) -> None:
     """One table per dataset and scheme: rank, features, classifier, accuracy
     (mean over folds, sd, 95 % interval), macro F1, latency per capture, fit
     time, feature time, the paired test against the best method (exact
@@ -82,6 +86,10 @@ def leaderboard(results, formats, out, dataset, scheme, alpha, pool_machines, ma
     )
 
     _, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
+    if as_json:  # the same document as --format json, alone on stdout
+        formats = tuple(f for f in formats if f != "terminal") or ("json",)
+        if set(formats) != {"json"}:
+            raise click.UsageError("--json prints JSON alone: leave out the other --format values")
     if out:
         fmts = [f for f in formats if f != "terminal"] or ["md", "csv", "json"]
         for p in write_outputs(lbs, Path(out), fmts):
@@ -95,11 +103,11 @@ def leaderboard(results, formats, out, dataset, scheme, alpha, pool_machines, ma
             click.echo({"md": to_markdown, "csv": to_csv, "json": to_json}[f](lbs))
 
 
-@click.command("compare")
+@click.command("compare", epilog=example("touchbench compare results/demo-haart --a msd/gaus-rf --b sd/gaus-rf"))
 @click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
 @click.option("--a", "a", required=True, help="Method A: its id (or a prefix), or features/classifier if unambiguous.")
 @click.option("--b", "b", required=True, help="Method B, as --a.")
-@click.option("--json", "as_json", is_flag=True, help="Print the comparison as JSON.")
+@json_option
 @_with_table_options
 def compare(results, a, b, as_json, dataset, scheme, alpha, pool_machines, machine) -> None:
     """The paired test of method A against B (by fold, or by subject when
@@ -167,7 +175,7 @@ def parse_reference(text: str) -> tuple[str, float]:
     return label.strip(), pct
 
 
-@click.command("plot")
+@click.command("plot", epilog=example("touchbench plot results/demo-haart --out figures --kind pareto --size column"))
 @click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
 @click.option("--out", "-o", required=True, type=click.Path(file_okay=False), help="Folder for the figure files.")
 @click.option("--kind", "kinds", multiple=True, type=click.Choice(["pareto", "frames", "confusion", "subjects", "cd"]),
@@ -212,7 +220,7 @@ def plot(results, out, kinds, size, formats, methods, references, name, dataset,
             click.echo(f"across tables: no critical difference diagram: {e}", err=True)
 
 
-@click.command("report")
+@click.command("report", epilog=example("touchbench report results/demo-haart --out report"))
 @click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
 @click.option("--out", "-o", required=True, type=click.Path(file_okay=False), help="Folder for report.html and its files.")
 @click.option("--title", default="touchbench report", show_default=True)
@@ -228,19 +236,27 @@ def report(results, out, title, dataset, scheme, alpha, pool_machines, machine) 
     click.echo(f"wrote {page}")
 
 
-@click.group("papers")
+@click.group("papers", epilog=example("touchbench papers list", "touchbench papers reproduce --only gaus"))
 def papers() -> None:
     """Reproduce the four papers (the shipped papers/ protocols)."""
 
 
-@papers.command("list")
+@papers.command("list", epilog=example("touchbench papers list --profile full --json"))
 @click.option("--profile", default="quick", show_default=True, help="Show what this profile changes.")
-def papers_list(profile: str) -> None:
+@json_option
+def papers_list(profile: str, as_json: bool) -> None:
     """The paper protocols and what the profile changes in each."""
     from ..papers.reproduce import PROFILES, apply_profile, paper_protocols
 
     if profile not in PROFILES:
         raise TouchbenchError(f"unknown profile {profile!r} (known: {', '.join(PROFILES)})")
+    if as_json:
+        rows = []
+        for f in paper_protocols():
+            proto, changes = apply_profile(f, PROFILES[profile])
+            rows.append({"name": f.stem, "description": proto.description, "changes": changes})
+        echo_json({"profile": profile, "description": PROFILES[profile].description, "protocols": rows})
+        return
     click.echo(f"profile {profile}: {PROFILES[profile].description}")
     for f in paper_protocols():
         proto, changes = apply_profile(f, PROFILES[profile])
@@ -249,13 +265,13 @@ def papers_list(profile: str) -> None:
             click.echo(f"{'':40s}{c}")
 
 
-@papers.command("reproduce")
+@papers.command("reproduce", epilog=example("touchbench papers reproduce --profile quick --jobs 2"))
 @click.option("--profile", default="quick", show_default=True, type=click.Choice(["quick", "full"]),
               help="quick: fewer trees and epochs, smaller synthetic scenes (stated in the report); full: the papers' settings.")
 @click.option("--out", "-o", default="results/papers", show_default=True, type=click.Path(file_okay=False),
               help="Results go to OUT/<profile>/<protocol>/; the report to OUT/REPORT.md.")
 @click.option("--only", multiple=True, help="Only protocols whose name contains this (repeatable).")
-@click.option("--jobs", "-j", default=-1, show_default=True, callback=jobs_value, help="Tasks in parallel (-1: one per CPU).")
+@jobs_option
 @click.option("--report", "report_path", default=None, type=click.Path(dir_okay=False),
               help="Where to write the report [default: OUT/REPORT.md].")
 @click.option("--progress/--no-progress", default=None, help="Progress bars [default: on a terminal only].")
@@ -266,6 +282,10 @@ def papers_reproduce(profile, out, only, jobs, report_path, progress) -> None:
     protocol file."""
     from ..papers.reproduce import reproduce
 
+    failed: list[str] = []
     p = reproduce(profile, out, only=list(only) or None, jobs=jobs, progress=progress, report=report_path,
-                  echo=lambda s: click.echo(s, err=True))
+                  echo=log.info, failed=failed)
     click.echo(f"wrote {p}")
+    if failed:
+        log.warning(f"{len(failed)} protocol(s) with failed tasks: {', '.join(failed)}")
+        sys.exit(exitcodes.TASKS_FAILED)

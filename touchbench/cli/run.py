@@ -9,14 +9,10 @@ import click
 
 from ..engine.backends import backend_for_run, backend_options
 from ..protocols.library import find_protocol
+from . import exitcodes
+from .common import echo_json, example, jobs_option, jobs_value, json_option, log
 
-
-def jobs_value(ctx: click.Context, param: click.Parameter, value: int) -> int:
-    """``--jobs``: a positive number of parallel tasks, or -1 (one per CPU); anything else is a usage error."""
-    if value == 0 or value < -1:
-        raise click.BadParameter(f"{value} is not a number of parallel tasks: give 1 or more, or -1 for one per CPU "
-                                 "(more than the CPUs available runs as many as there are)")
-    return value
+__all__ = ["format_summary", "jobs_value", "run", "run_summary"]
 
 
 def _pct(x: float) -> str:
@@ -51,52 +47,81 @@ def format_summary(summary, expected) -> str:
     return "\n".join(lines)
 
 
-@click.command("run")
+def run_summary(res, plan) -> dict:
+    """What ``run --json`` prints: the run, its task counts and each method's scores."""
+    cols = [c for c in ("features", "classifier", "early_frames", "n_folds", "n_failed", "accuracy_mean",
+                        "accuracy_std", "balanced_accuracy_mean", "macro_f1_mean", "latency_ms_median")
+            if c in res.summary]
+    failed = res.scores[res.scores["status"] == "failed"] if len(res.scores) else res.scores
+    return {
+        "protocol": plan.protocol.name, "dataset": plan.protocol.dataset.name, "captures": len(plan.dataset),
+        "scheme": plan.protocol.scheme.name, "out": str(res.out), "run_id": res.run_id,
+        "tasks": {"total": res.n_tasks, "ran": res.n_ran, "skipped": res.n_skipped, "failed": res.n_failed},
+        "stopped_early": bool(getattr(res, "stopped_early", False)), "seconds": res.seconds, "notes": res.notes,
+        "methods": res.summary[cols].to_dict(orient="records"),
+        "failures": [{"task_id": r["task_id"], "fold": r["fold"], "features": r["features"],
+                      "classifier": r["classifier"], "error": str(r["error"]).strip().splitlines()[0]
+                      if str(r["error"]).strip() else ""} for _, r in failed.iterrows()],
+        "expected": res.expected,
+    }
+
+
+@click.command("run", epilog=example("touchbench run demo-haart --jobs 2",
+                                     "touchbench run my-protocol.yaml --out results/mine --fail-fast --json"))
 @click.argument("protocol")
-@click.option("--jobs", "-j", default=1, show_default=True, callback=jobs_value,
-              help="Tasks run in parallel (-1: one per CPU; at most the CPUs available, and the tasks).")
+@jobs_option
 @click.option("--out", "-o", type=click.Path(file_okay=False), default=None,
               help="Results directory [default: results/<protocol name>/].")
 @click.option("--force", is_flag=True, help="Recompute every task, even finished ones.")
 @click.option("--retry-failed", is_flag=True, help="Run the tasks that failed last time again.")
+@click.option("--fail-fast", is_flag=True, help="Stop at the first task that fails (finished tasks are kept).")
 @click.option("--progress/--no-progress", default=None, help="Progress bar [default: on a terminal only].")
 @click.option("--wait", type=click.FloatRange(min=0), default=0, show_default=True, metavar="SECONDS",
               help="When another run holds the results directory, wait this long for it before giving up.")
+@json_option
 @backend_options
-def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bool, progress: bool | None,
-        wait: float, backend: str, scheduler: str | None, address: str | None) -> None:
+def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bool, fail_fast: bool,
+        progress: bool | None, wait: float, as_json: bool, backend: str, scheduler: str | None,
+        address: str | None) -> None:
     """Evaluate PROTOCOL (a file, or the name of a shipped protocol or of one in your folders): every feature
     combination x classifier under its scheme. Finished tasks are skipped, so
-    an interrupted run resumes where it stopped."""
+    an interrupted run resumes where it stopped. Exits with status 1 when a task failed."""
     from ..engine.runner import default_results_dir, plan_run, run_plan
     from ..protocols.schema import load_protocol
 
     proto = load_protocol(find_protocol(protocol))
     plan = plan_run(proto)
     out_dir = out or default_results_dir(proto)
-    click.echo(f"{proto.name}: {proto.dataset.name} ({len(plan.dataset)} captures, {plan.dataset.content_hash[:12]}), "
-               f"scheme {proto.scheme.name}: {len(plan.tasks)} tasks -> {out_dir}", err=True)
+    log.info(f"{proto.name}: {proto.dataset.name} ({len(plan.dataset)} captures), "
+             f"scheme {proto.scheme.name}: {len(plan.tasks)} tasks -> {out_dir}")
     for n in plan.notes:
-        click.echo(f"note: {n}", err=True)
+        log.info(f"note: {n}")
     try:
         with backend_for_run(backend, scheduler, address, plan.cache_root, jobs) as jobs:
             res = run_plan(plan, out_dir, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
-                           wait=wait)
+                           wait=wait, fail_fast=fail_fast)
     except KeyboardInterrupt:
         click.echo("\ninterrupted: finished tasks are saved; run the same command again to resume", err=True)
-        sys.exit(130)
+        sys.exit(exitcodes.INTERRUPTED)
     for n in res.notes:
         if n not in plan.notes:
-            click.echo(f"note: {n}", err=True)
+            log.info(f"note: {n}")
     if res.noop:
-        click.echo(f"nothing to do: all {res.n_tasks} tasks finished (use --force to recompute)", err=True)
+        log.info(f"nothing to do: all {res.n_tasks} tasks finished (use --force to recompute)")
     else:
-        click.echo(f"ran {res.n_ran} task(s), skipped {res.n_skipped} finished, {res.n_failed} failed, "
-                   f"in {res.seconds:.1f} s", err=True)
-    click.echo(format_summary(res.summary, res.expected))
+        log.info(f"ran {res.n_ran} task(s), skipped {res.n_skipped} finished, {res.n_failed} failed, "
+                 f"in {res.seconds:.1f} s")
+    if as_json:
+        echo_json(run_summary(res, plan))
+    else:
+        click.echo(format_summary(res.summary, res.expected))
+    if res.stopped_early:
+        log.warning("stopped at the first failed task (--fail-fast); run again without it to finish the others")
     if res.n_failed:
         failed = res.scores[res.scores["status"] == "failed"]
         first = str(failed.iloc[0]["error"]).splitlines()[0]
-        click.echo(f"{res.n_failed} task(s) failed, e.g. {failed.iloc[0]['fold']} / {failed.iloc[0]['classifier']}: {first}",
-                   err=True)
-    click.echo(f"reports: {res.out}/scores.parquet, predictions.parquet, confusion.parquet, manifest.json", err=True)
+        log.warning(f"{res.n_failed} task(s) failed, e.g. {failed.iloc[0]['fold']} / {failed.iloc[0]['classifier']}: "
+                    f"{first}")
+    log.info(f"reports: {res.out}/scores.parquet, predictions.parquet, confusion.parquet, manifest.json")
+    if res.n_failed:
+        sys.exit(exitcodes.TASKS_FAILED)

@@ -11,6 +11,7 @@ import yaml
 
 from ..core.errors import TouchbenchError
 from ..core.yamlsafe import safe_load
+from .common import echo_json, example, json_option
 
 
 def _parse_sets(values: tuple[str, ...]) -> dict:
@@ -27,24 +28,30 @@ def _parse_sets(values: tuple[str, ...]) -> dict:
     return out
 
 
-@click.group()
+@click.group(epilog=example("touchbench scenes list", "touchbench scenes generate tiny --out tiny.parquet"))
 def scenes() -> None:
     """Synthetic scenes: sensors, gestures and people described in YAML."""
 
 
-@scenes.command("list")
-def list_() -> None:
+@scenes.command("list", epilog=example("touchbench scenes list --json"))
+@json_option
+def list_(as_json: bool) -> None:
     """Shipped scenes with their size and effects."""
     from ..scenes import SCENES, load_scene
     from ..scenes.spec import n_captures
 
+    if as_json:
+        echo_json([{"name": e.name, "description": e.description,
+                    "captures": n_captures(load_scene(e.name)) - load_scene(e.name).protocol.lost,
+                    "effects": list(load_scene(e.name).effects)} for e in SCENES.entries()])
+        return
     for e in SCENES.entries():
         spec = load_scene(e.name)
         click.echo(f"{e.name:12s} {n_captures(spec) - spec.protocol.lost:6d} captures  {e.description}")
         click.echo(f"{'':12s} effects: {', '.join(spec.effects)}")
 
 
-@scenes.command("generate")
+@scenes.command("generate", epilog=example("touchbench scenes generate tiny --out tiny.parquet --seed 1"))
 @click.argument("name")
 @click.option("--out", "out", type=click.Path(dir_okay=False), required=True, help="Parquet file to write")
 @click.option("--seed", type=int, default=None, help="seed (default: the scene's own)")
@@ -65,7 +72,7 @@ def generate(name: str, out: str, seed: int | None, sets: tuple[str, ...]) -> No
     )
 
 
-@scenes.command("calibrate")
+@scenes.command("calibrate", epilog=example("touchbench scenes calibrate haart-like"))
 @click.argument("name")
 @click.option("--seed", type=int, default=None, help="seed (default: the scene's own)")
 @click.option("--real", default=None, help="real dataset to hold it against (default: the scene's calibrate_against)")

@@ -133,6 +133,8 @@ class RunResult:
     summary: pd.DataFrame
     expected: list[dict[str, Any]]
     notes: list[str] = field(default_factory=list)
+    #: ``fail_fast`` stopped the run at its first failed task (the other pending tasks did not run)
+    stopped_early: bool = False
 
 
 # ----------------------------------------------------------------- dataset
@@ -484,23 +486,25 @@ def _damaged_notes(plan: Plan, problems: dict[str, str]) -> list[str]:
 
 def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force: bool = False,
              retry_failed: bool = False, progress: bool | None = None, worker_setup=None,
-             wait: float = 0.0) -> RunResult:
+             wait: float = 0.0, fail_fast: bool = False) -> RunResult:
     """Execute the pending tasks of ``plan`` and write the reports (see the module docstring).
 
     ``worker_setup`` is a picklable function each worker process calls once
     before its first task (to register plug-in components in the workers).
     One run at a time writes a results folder: another run holding ``out`` is
     waited for up to ``wait`` seconds, then refused with who holds it.
+    ``fail_fast`` stops at the first task that fails: the tasks finished so
+    far are kept and merged, the others are left pending.
     """
     out = Path(out) if out is not None else default_results_dir(plan.protocol)
     store = ResultStore(out)
     with store.lock(wait=wait, command=f"touchbench run {plan.protocol.name}"):
         return _run_locked(plan, store, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
-                           worker_setup=worker_setup)
+                           worker_setup=worker_setup, fail_fast=fail_fast)
 
 
 def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry_failed: bool,
-                progress: bool | None, worker_setup) -> RunResult:
+                progress: bool | None, worker_setup, fail_fast: bool = False) -> RunResult:
     t_start = time.perf_counter()
     started_at = now_iso()
     protocol = plan.protocol
@@ -532,6 +536,7 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
                          expected=check_expected(protocol.expected, scores, preds), notes=notes)
 
     n_ran = 0
+    stopped = False
     with _Progress(show) as prog:
         if pending:
             notes += _fill_cache(plan, pending, jobs, prog, worker_setup)
@@ -550,6 +555,11 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
                 store.write_task(row["task_id"], row, preds)
                 n_ran += 1
                 prog.advance(tid)
+                if fail_fast and row.get("status") == "failed":
+                    stopped = True
+                    break
+            if hasattr(results, "close"):
+                results.close()  # a generator left early: joblib cancels what it has not started
 
     stamp = {"run_id": plan.run_id, "protocol": protocol.name, "protocol_hash": protocol.text_hash}
     merged = store.merge(plan.task_ids, stamp)
@@ -583,16 +593,16 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
     return RunResult(out=out, run_id=plan.run_id, n_tasks=len(plan.tasks), n_ran=n_ran,
                      n_skipped=len(plan.tasks) - len(pending), n_failed=n_failed, noop=False,
                      seconds=time.perf_counter() - t_start, scores=scores, summary=summarize(scores),
-                     expected=expected, notes=notes)
+                     expected=expected, notes=notes, stopped_early=stopped)
 
 
 def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None, *, jobs: int = 1,
                  force: bool = False, retry_failed: bool = False, progress: bool | None = None,
                  cache_root: str | Path | None = None, dataset: TouchDataset | None = None,
-                 worker_setup=None, wait: float = 0.0) -> RunResult:
+                 worker_setup=None, wait: float = 0.0, fail_fast: bool = False) -> RunResult:
     """Validate, plan and run a protocol (a :class:`Protocol` or a file path)."""
     if not isinstance(protocol, Protocol):
         protocol = load_protocol(protocol)
     plan = plan_run(protocol, cache_root=cache_root, dataset=dataset)
     return run_plan(plan, out, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
-                    worker_setup=worker_setup, wait=wait)
+                    worker_setup=worker_setup, wait=wait, fail_fast=fail_fast)

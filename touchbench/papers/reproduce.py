@@ -229,12 +229,15 @@ def _dataset_key(protocol) -> str:
 
 def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, only: list[str] | None = None,
               jobs: int = 1, progress: bool | None = None, report: str | Path | None = None,
-              echo: Callable[[str], None] = print, protocols_dir: Path | None = None) -> Path:
+              echo: Callable[[str], None] = print, protocols_dir: Path | None = None,
+              failed: list[str] | None = None) -> Path:
     """Run every paper protocol under ``profile`` and write the report; returns its path.
 
     Results go to ``out/<profile>/<protocol name>/`` (resumable: a rerun
     skips finished tasks). Each dataset is loaded once for the protocols that
-    share it. A protocol that fails to run is reported, and the others go on.
+    share it. A protocol that fails to run is reported, and the others go on;
+    ``failed`` (when given) receives the name of each protocol that failed or
+    had a failed task.
     """
     if profile not in PROFILES:
         raise TouchbenchError(f"unknown profile {profile!r} (known: {', '.join(PROFILES)})")
@@ -272,6 +275,8 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
             r.n_ran = res.n_ran
             echo(f"{proto.name}: {res.n_ran} ran, {res.n_skipped} finished before, {res.n_failed} failed, "
                  f"{res.seconds:.0f} s")
+            if res.n_failed and failed is not None:
+                failed.append(proto.name)
         except TouchbenchError as e:
             r.error = str(e)
             echo(f"{proto.name}: FAILED: {e}")
@@ -279,6 +284,8 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
             r.error = f"{type(e).__name__}: {e}"
             echo(f"{proto.name}: FAILED: {r.error}")
         r.seconds = time.perf_counter() - t0
+        if r.error and failed is not None:
+            failed.append(proto.name)
         runs.append(r)
     wall = time.perf_counter() - t_all
     _stop_workers()

@@ -1,0 +1,164 @@
+"""The command line's conventions: exit statuses, ``--json`` output, ``-v`` / ``-q``, one ``--jobs``
+default, an example in every ``--help``, and a start-up that imports no command it does not run."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+
+import pytest
+from click.testing import CliRunner
+
+from touchbench.cli import exitcodes
+from touchbench.cli.common import JOBS_DEFAULT
+from touchbench.cli.main import _COMMANDS, cli
+
+OK_PROTOCOL = "name: ok\ndataset: scene:tiny\nscheme: loso\nfeatures: [sd]\nclassifiers: [zhou-lda]\n"
+# test-fail (touchbench.engine.testing) raises in fit: every task of it fails
+FAILING = "name: failing\ndataset: scene:tiny\nscheme: loso\nfeatures: [sd]\nclassifiers:\n  - name: test-fail\n"
+
+
+def invoke(*args, **kw):
+    return CliRunner().invoke(cli, list(args), **kw)
+
+
+@pytest.fixture
+def env(engine_env):
+    yield
+
+
+def _all_commands():
+    """(path, command) of every command and group."""
+    out = []
+
+    def walk(cmd, path):
+        out.append((path, cmd))
+        for name in getattr(cmd, "list_commands", lambda ctx: [])(None):
+            walk(cmd.get_command(None, name), [*path, name])
+
+    walk(cli, [])
+    return out
+
+
+# ----------------------------------------------------------------- exit statuses
+def test_exit_status_of_a_run_whose_tasks_all_fail(env, tmp_path):
+    (tmp_path / "p.yaml").write_text(FAILING)
+    r = invoke("run", str(tmp_path / "p.yaml"), "--out", str(tmp_path / "o"))
+    assert r.exit_code == exitcodes.TASKS_FAILED == 1, r.output
+    assert "task(s) failed, e.g." in r.output
+
+
+def test_exit_status_of_a_run_where_some_tasks_fail_and_fail_fast(env, tmp_path):
+    (tmp_path / "p.yaml").write_text(OK_PROTOCOL.replace("[zhou-lda]", "[zhou-lda, test-fail]"))
+    r = invoke("run", str(tmp_path / "p.yaml"), "--out", str(tmp_path / "o"), "--json")
+    assert r.exit_code == 1, r.output
+    doc = json.loads(r.stdout)
+    assert doc["tasks"]["failed"] == doc["tasks"]["total"] // 2 > 0
+    assert {f["classifier"] for f in doc["failures"]} == {"test-fail"}
+    r = invoke("run", str(tmp_path / "p.yaml"), "--out", str(tmp_path / "ff"), "--fail-fast", "--json")
+    doc = json.loads(r.stdout)
+    assert r.exit_code == 1 and doc["stopped_early"] and doc["tasks"]["failed"] == 1
+    assert doc["tasks"]["ran"] < doc["tasks"]["total"]
+
+
+def test_exit_status_of_usage_and_data_errors(env, tmp_path):
+    r = invoke("run", "--no-such-option")
+    assert r.exit_code == exitcodes.USAGE == 2 and "No such option" in r.output
+    (tmp_path / "bad.yaml").write_text("dataset: scene:tiny\nscheme: loso\nfeatures: [nope]\nclassifiers: [zhou-lda]\n")
+    r = invoke("run", str(tmp_path / "bad.yaml"))
+    assert r.exit_code == exitcodes.DATA == 3
+    assert r.output.startswith("error: ") and "bad.yaml:3" in r.output and "nope" in r.output
+    r = invoke("data", "info", str(tmp_path / "missing.parquet"))
+    assert r.exit_code == 3 and "missing.parquet" in r.output
+
+
+def test_exit_statuses_are_listed_in_help():
+    r = invoke("--help")
+    assert r.exit_code == 0
+    text = " ".join(r.output.split())
+    assert ("Exit status: 0 done; 1 some task failed; 2 usage error; 3 data, protocol or file error" in text
+            and "130 interrupted" in text)
+
+
+def test_a_successful_run_exits_0_and_its_json_is_the_only_stdout(env, tmp_path):
+    (tmp_path / "p.yaml").write_text(OK_PROTOCOL)
+    r = invoke("run", str(tmp_path / "p.yaml"), "--out", str(tmp_path / "o"), "--json")
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)
+    assert doc["tasks"]["failed"] == 0 and doc["tasks"]["ran"] == doc["tasks"]["total"] > 0
+    [m] = doc["methods"]
+    assert (m["features"], m["classifier"]) == ("sd", "zhou-lda") and 0 <= m["accuracy_mean"] <= 1
+
+
+# ----------------------------------------------------------------- --json on every command that lists or reports
+@pytest.mark.parametrize("args, check", [
+    (["data", "list", "--json"], lambda d: "haart" in {x["name"] for x in d}),
+    (["data", "formats", "--json"], lambda d: "challenge-csv" in {x["name"] for x in d}),
+    (["features", "list", "--json"], lambda d: "msd" in {x["name"] for x in d}),
+    (["classifiers", "list", "--json"], lambda d: "gaus-rf" in {x["name"] for x in d}),
+    (["protocols", "list", "--json"], lambda d: "demo-haart" in {x["name"] for x in d}),
+    (["scenes", "list", "--json"], lambda d: "tiny" in {x["name"] for x in d}),
+    (["plugins", "list", "--json"], lambda d: isinstance(d, list)),
+    (["papers", "list", "--json"], lambda d: d["profile"] == "quick" and len(d["protocols"]) > 3),
+    (["data", "info", "scene:tiny", "--json"], lambda d: d["captures"] > 0 and "by_gesture" in d),
+])
+def test_json_output_parses(args, check):
+    r = invoke(*args)
+    assert r.exit_code == 0, r.output
+    assert check(json.loads(r.stdout))
+
+
+def test_json_of_validate_leaderboard_and_compare(env, tmp_path):
+    (tmp_path / "p.yaml").write_text(OK_PROTOCOL.replace("[zhou-lda]", "[zhou-lda, zhou-knn]"))
+    r = invoke("protocols", "validate", str(tmp_path / "p.yaml"), "--json")
+    doc = json.loads(r.stdout)
+    assert r.exit_code == 0 and doc["valid"] and doc["classifiers"] == 2 and doc["tasks"] == 2 * doc["folds"]
+    assert invoke("run", str(tmp_path / "p.yaml"), "--out", str(tmp_path / "o")).exit_code == 0
+    r = invoke("leaderboard", str(tmp_path / "o"), "--json")
+    [table] = json.loads(r.stdout)["tables"]
+    assert {row["classifier"] for row in table["rows"]} == {"zhou-lda", "zhou-knn"}
+    r = invoke("compare", str(tmp_path / "o"), "--a", "sd/zhou-lda", "--b", "sd/zhou-knn", "--json")
+    assert r.exit_code == 0, r.output
+    assert isinstance(json.loads(r.stdout), (dict, list))
+
+
+# ----------------------------------------------------------------- logging, --jobs, help
+def test_quiet_silences_the_progress_messages(env, tmp_path):
+    (tmp_path / "p.yaml").write_text(OK_PROTOCOL)
+    loud = invoke("run", str(tmp_path / "p.yaml"), "--out", str(tmp_path / "o"))
+    assert "tasks ->" in loud.stderr and "reports: " in loud.stderr
+    quiet = invoke("-q", "run", str(tmp_path / "p.yaml"), "--out", str(tmp_path / "o2"))
+    assert quiet.exit_code == 0 and quiet.stderr == "" and "zhou-lda" in quiet.stdout
+    debug = invoke("-v", "run", str(tmp_path / "p.yaml"), "--out", str(tmp_path / "o2"))
+    assert "nothing to do" in debug.stderr
+
+
+def test_one_jobs_default():
+    defaults = {}
+    for path, cmd in _all_commands():
+        for p in getattr(cmd, "params", []):
+            if p.name == "jobs":
+                defaults[" ".join(path)] = p.default
+    assert set(defaults) == {"run", "demo", "papers reproduce"} and set(defaults.values()) == {JOBS_DEFAULT}
+
+
+def test_every_help_shows_an_example():
+    missing = []
+    for path, cmd in _all_commands():
+        r = invoke(*path, "--help")
+        assert r.exit_code == 0, (path, r.output)
+        if not re.search(r"Example:\n\s+touchbench ", r.output):
+            missing.append(" ".join(path) or "touchbench")
+    assert not missing
+
+
+def test_help_and_version_import_no_command_module():
+    code = ("import sys\nfrom touchbench.cli.main import cli\n"
+            "try:\n    cli(['--help'])\nexcept SystemExit:\n    pass\n"
+            "print(sorted(m for m in sys.modules if m.startswith(('touchbench.cli.', 'sklearn', 'numpy', 'pandas'))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    loaded = eval(out.strip().splitlines()[-1])
+    assert loaded == ["touchbench.cli.common", "touchbench.cli.exitcodes", "touchbench.cli.main"]
+    assert set(_COMMANDS) == set(cli.list_commands(None))
