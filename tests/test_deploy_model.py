@@ -86,7 +86,7 @@ def test_fold_model_predicts_like_the_engine(setup, tmp_path):
     ours = pd.read_csv(tmp_path / "p.csv").set_index("capture_id")
     theirs = preds[(preds["fold"] == "subject=s2") & (preds["features"] == "msd+bmh")].set_index("capture_id")
     assert len(ours) == len(theirs) == 9
-    assert (ours.loc[theirs.index, "predicted"] == theirs["predicted"]).all()
+    assert (ours.loc[theirs.index, "predicted_label"] == theirs["predicted_label"]).all()
     for c in ("pat", "rub", "stroke"):
         np.testing.assert_allclose(ours.loc[theirs.index, f"proba_{c}"], theirs[f"proba_{c}"], rtol=0, atol=1e-12)
 

@@ -57,8 +57,8 @@ def test_training_fold_lacking_a_test_class(tmp_path):
     assert s3["status"] == "ok"
     assert "classes absent from training: 'tickle' (2 test captures); counted as errors" in s3["notes"]
     preds = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
-    tickle = preds[preds["true"] == "tickle"]
-    assert len(tickle) == 2 and (tickle["predicted"] != "tickle").all()
+    tickle = preds[preds["true_label"] == "tickle"]
+    assert len(tickle) == 2 and (tickle["predicted_label"] != "tickle").all()
     # the two tickle captures are errors: accuracy at most 4/6
     assert s3["accuracy"] <= 4 / 6
     # the s3 model never learned tickle: no probability for it (the other folds' models did)
@@ -101,7 +101,7 @@ def test_test_fold_with_a_single_class_metrics(tmp_path):
     assert "test fold has a single class 'rub'" in s3["notes"]
     preds = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
     p = preds[preds["fold"] == "subject=s3"]
-    acc = (p["true"] == p["predicted"]).mean()
+    acc = (p["true_label"] == p["predicted_label"]).mean()
     assert s3["accuracy"] == pytest.approx(acc) and s3["balanced_accuracy"] == pytest.approx(acc)
 
 

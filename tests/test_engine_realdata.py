@@ -42,6 +42,6 @@ def test_loso_on_real_haart_subset(real_haart, tmp_path, monkeypatch):
     # no subject is both trained and tested: each fold's test captures are one subject
     assert (preds.groupby("fold")["subject"].nunique() == 1).all()
     # constant and notouch are easy (Gaus Table 6): well above chance (25 %) overall
-    assert np.mean(preds["true"] == preds["predicted"]) > 0.5
+    assert np.mean(preds["true_label"] == preds["predicted_label"]) > 0.5
     again = run_protocol(p, out=tmp_path / "out", dataset=real_haart, progress=False)
     assert again.noop

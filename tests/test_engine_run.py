@@ -14,10 +14,13 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 from sklearn.metrics import balanced_accuracy_score, f1_score
 
+from touchbench.core.errors import TouchbenchError
 from touchbench.engine import run_protocol
 from touchbench.engine import testing as tk
 from touchbench.engine.tasks import LATENCY_CAPTURES, LATENCY_REPEATS
@@ -42,7 +45,7 @@ SCORE_COLUMNS = [
     "classifier_params", "seed", "n_train", "n_test", "accuracy", "balanced_accuracy", "macro_f1",
     "feature_seconds_per_capture", "fit_seconds", "predict_seconds", "latency_ms", "status", "error", "notes",
 ]
-PREDICTION_COLUMNS = ["run_id", "task_id", "capture_id", "subject", "true", "predicted"]
+PREDICTION_COLUMNS = ["run_id", "task_id", "capture_id", "subject", "true_label", "predicted_label"]
 
 
 @pytest.fixture(autouse=True)
@@ -82,10 +85,16 @@ def test_reports_exist_with_their_columns(tmp_path):
         assert key in manifest
     assert manifest["protocol"]["text"] == p.text and manifest["platform"]["cpu_count"] == os.cpu_count()
     assert manifest["dataset"]["hash"] == scores["dataset_hash"].iloc[0]
-    assert set(conf["scope"]) == {"task", "pooled"}
-    # pooled confusion of one configuration sums to the number of captures
-    pooled = conf[(conf["scope"] == "pooled") & (conf["features"] == "test-mean") & (conf["classifier"] == "test-logreg")]
+    # per task: each configuration's counts sum to its test captures over the folds, once
+    one = conf[(conf["features"] == "test-mean") & (conf["classifier"] == "test-logreg")]
+    assert conf["task_id"].notna().all() and one["count"].sum() == 24 and conf["count"].sum() == len(preds)
+    # pooled over the folds, in its own file: one configuration sums to the number of captures
+    pooled_all = pd.read_parquet(out / "confusion_pooled.parquet")
+    assert "task_id" not in pooled_all and pooled_all["count"].sum() == len(preds)
+    pooled = pooled_all[(pooled_all["features"] == "test-mean") & (pooled_all["classifier"] == "test-logreg")]
     assert pooled["count"].sum() == 24
+    # every results file says its layout
+    assert pq.read_schema(out / "scores.parquet").metadata[b"touchbench_results_schema"] == b"2"
 
 
 @pytest.mark.filterwarnings("ignore:y_pred contains classes not in y_true")
@@ -102,10 +111,10 @@ def test_metrics_match_sklearn_on_the_predictions(tmp_path):
     for _, row in res.scores.iterrows():
         p = preds[preds["task_id"] == row["task_id"]]
         assert row["n_test"] == len(p)
-        assert row["accuracy"] == pytest.approx((p["true"] == p["predicted"]).mean())
-        assert row["balanced_accuracy"] == pytest.approx(balanced_accuracy_score(p["true"], p["predicted"]))
-        labels = sorted(set(p["true"]) | set(p["predicted"]))
-        assert row["macro_f1"] == pytest.approx(f1_score(p["true"], p["predicted"], average="macro", labels=labels, zero_division=0))
+        assert row["accuracy"] == pytest.approx((p["true_label"] == p["predicted_label"]).mean())
+        assert row["balanced_accuracy"] == pytest.approx(balanced_accuracy_score(p["true_label"], p["predicted_label"]))
+        labels = sorted(set(p["true_label"]) | set(p["predicted_label"]))
+        assert row["macro_f1"] == pytest.approx(f1_score(p["true_label"], p["predicted_label"], average="macro", labels=labels, zero_division=0))
     assert (res.scores["accuracy"] < 1).any()
 
 
@@ -291,7 +300,7 @@ def test_person_identification_target(tmp_path):
     text = text.replace(f"dataset: {data}", f"dataset:\n  name: {data}\n  filters: {{gesture: [rub]}}")
     res = run_protocol(parse_protocol(text, tmp_path / "pid.yaml"), out=tmp_path / "out", progress=False)
     preds = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
-    assert set(preds["gesture"]) == {"rub"} and (preds["true"] == preds["subject"]).all()
+    assert set(preds["gesture"]) == {"rub"} and (preds["true_label"] == preds["subject"]).all()
     assert {"proba_s1", "proba_s2", "proba_s3"} <= set(preds.columns)
     assert (res.scores["target"] == "subject").all()
 
@@ -311,3 +320,29 @@ def test_every_scheme_runs_end_to_end(tmp_path, scheme):
     assert len(preds) == res.scores["n_test"].sum()
     if "early" in scheme:
         assert set(res.scores["early_frames"]) == {3.0}  # 0.3 s at 10 frames/s
+
+
+def test_a_run_of_the_first_layout_is_still_read(tmp_path):
+    """Results written before the schema version (label columns ``true`` / ``predicted``, pooled rows
+    in confusion.parquet) are read in today's layout; a newer layout is refused with both versions."""
+    from touchbench.reports.results import load_results
+    from touchbench.results.store import read_results_table
+
+    p = protocol(tmp_path)
+    run_protocol(p, out=tmp_path / "out", progress=False)
+    out = tmp_path / "out"
+    preds = pd.read_parquet(out / "predictions.parquet")
+    old = preds.rename(columns={"true_label": "true", "predicted_label": "predicted"})
+    pq.write_table(pa.Table.from_pandas(old, preserve_index=False), out / "predictions.parquet")  # no version
+    back = read_results_table(out / "predictions.parquet")
+    pd.testing.assert_frame_equal(back, preds)
+    assert read_results_table(out / "predictions.parquet", columns=["task_id", "predicted_label"]).columns.tolist() == [
+        "task_id", "predicted_label"]
+    rs = load_results([out])
+    assert (rs.predictions["true_label"] == preds["true_label"].to_numpy()).all()
+    table = pa.Table.from_pandas(preds, preserve_index=False)
+    pq.write_table(table.replace_schema_metadata({**table.schema.metadata, b"touchbench_results_schema": b"9"}),
+                   out / "predictions.parquet")
+    with pytest.raises(TouchbenchError, match=r"predictions.parquet: written by a newer touchbench \(results schema 9; "
+                                              r"this version reads up to 2\)"):
+        read_results_table(out / "predictions.parquet")

@@ -66,7 +66,7 @@ def test_a_named_method_in_methods_equals_it_beside_raw_window(data, tmp_path):
     pa = _preds(a).sort_values(key).reset_index(drop=True)
     pb = _preds(b)
     pb = pb[pb["classifier"] == "touch-et-fast"].sort_values(key).reset_index(drop=True)
-    assert pa["predicted"].tolist() == pb["predicted"].tolist()  # same method, same seeds
+    assert pa["predicted_label"].tolist() == pb["predicted_label"].tolist()  # same method, same seeds
     assert sorted(b.scores["classifier"].unique()) == ["touch-et-fast", "two-sets-lda"]
 
 
@@ -84,7 +84,7 @@ def test_a_named_method_is_the_pipeline_fitted_by_hand(data, tmp_path):
     pipe.fit([ds.captures[i] for i in tr], y[tr])
     want = pd.Series(pipe.predict([ds.captures[i] for i in te]), index=ds.meta["capture_id"].to_numpy()[te])
     preds = _preds(res)
-    got = preds[preds["fold"] == row["fold"]].set_index("capture_id")["predicted"]
+    got = preds[preds["fold"] == row["fold"]].set_index("capture_id")["predicted_label"]
     assert got.loc[want.index].tolist() == want.tolist()
 
 
@@ -158,7 +158,7 @@ def test_an_estimator_that_takes_captures_gets_them_as_recorded(data, tmp_path, 
     est = make_classifier("minirocket", random_state=int(row["seed"]), sensor=SENSOR, n_kernels=84).fit(rows[tr], codes)
     want = np.array(classes)[est.predict(rows[te]).astype(int)]
     preds = _preds(res)
-    got = preds[preds["fold"] == row["fold"]].set_index("capture_id").loc[ds.meta["capture_id"].to_numpy()[te], "predicted"]
+    got = preds[preds["fold"] == row["fold"]].set_index("capture_id").loc[ds.meta["capture_id"].to_numpy()[te], "predicted_label"]
     assert got.tolist() == want.tolist()
 
 
@@ -178,5 +178,5 @@ def test_train_fits_the_same_method_as_the_run(data, tmp_path, method):
     model = train_from_protocol(tmp_path / "trained.yaml", method, fold="s2")
     test = ds.meta["subject"].astype(str).to_numpy() == "s2"
     got = model.predict([c for c, t in zip(ds.captures, test) if t])
-    want = preds.set_index("capture_id").loc[ds.meta["capture_id"].to_numpy()[test], "predicted"]
+    want = preds.set_index("capture_id").loc[ds.meta["capture_id"].to_numpy()[test], "predicted_label"]
     assert got.tolist() == want.tolist()

@@ -127,7 +127,7 @@ def test_a_protocol_runs_the_plugin_by_name_in_parallel_workers(example_plugin, 
     for s in ("s1", "s2", "s3"):
         test = (ds.meta["subject"] == s).to_numpy()
         want = dict(zip(ids[test], _nearest_centroid_by_hand(X[~test], y[~test], X[test])))
-        got = preds[preds["fold"] == f"subject={s}"].set_index("capture_id")["predicted"].to_dict()
+        got = preds[preds["fold"] == f"subject={s}"].set_index("capture_id")["predicted_label"].to_dict()
         assert got == want, s
 
 

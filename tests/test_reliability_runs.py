@@ -75,7 +75,7 @@ def one_line_error(result, text: str) -> None:
 
 
 # ----------------------------------------------------------------- merged files
-@pytest.mark.parametrize("name", ["scores.parquet", "predictions.parquet", "confusion.parquet"])
+@pytest.mark.parametrize("name", ["scores.parquet", "predictions.parquet", "confusion.parquet", "confusion_pooled.parquet"])
 def test_a_truncated_merged_file_is_rebuilt_from_the_task_results(env, name):
     first = run()
     path = Path("out") / name

@@ -21,6 +21,7 @@ from ..deploy.stream import (
     text_frames,
 )
 from ..deploy.train import parse_selection, train_from_protocol
+from ..results.store import PREDICTED, TRUE
 from .common import example
 from .formats import FORMATS_HELP, FormatChoice
 
@@ -85,12 +86,12 @@ def predict(model_path, data, fmt, out, whole) -> None:
         write_table(table, out)
         click.echo(f"{out}: {len(table)} captures labelled", err=True)
     else:
-        cols = [c for c in ("capture_id", "true", "predicted", "probability") if c in table.columns]
+        cols = [c for c in ("capture_id", TRUE, PREDICTED, "probability") if c in table.columns]
         click.echo(table[cols].to_csv(index=False, float_format="%.4f"), nl=False)
-    if "true" in table.columns:
-        known = table["true"].isin([str(c) for c in model.classes])
+    if TRUE in table.columns:
+        known = table[TRUE].isin([str(c) for c in model.classes])
         if known.any():
-            acc = float((table["true"] == table["predicted"])[known].mean())
+            acc = float((table[TRUE] == table[PREDICTED])[known].mean())
             click.echo(f"accuracy {100 * acc:.1f}% on {int(known.sum())} captures of known classes", err=True)
 
 

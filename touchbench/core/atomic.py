@@ -78,8 +78,12 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
             os.fsync(f.fileno())
 
 
-def atomic_write_parquet(path: Path, df: pd.DataFrame) -> None:
-    """Write ``df`` as Parquet through a temporary file and a rename."""
+def atomic_write_parquet(path: Path, df: pd.DataFrame, metadata: dict[str, str] | None = None) -> None:
+    """Write ``df`` as Parquet through a temporary file and a rename; ``metadata`` joins the file's
+    key-value metadata."""
     table = pa.Table.from_pandas(df, preserve_index=False)
+    if metadata:
+        table = table.replace_schema_metadata({**(table.schema.metadata or {}),
+                                               **{k.encode(): v.encode() for k, v in metadata.items()}})
     with atomic_path(path) as tmp:
         pq.write_table(table, tmp)

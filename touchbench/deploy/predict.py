@@ -26,6 +26,7 @@ from ..catalog import load_dataset
 from ..core.atomic import atomic_write_bytes, atomic_write_parquet
 from ..datasets.formats import FORMATS
 from ..datasets.model import TouchDataset
+from ..results.store import PREDICTED, TRUE
 from .model import TrainedModel
 from .windows import cut_windows
 
@@ -64,10 +65,10 @@ def predict_dataset(model: TrainedModel, ds: TouchDataset, *, whole: bool = Fals
         out["subject"] = meta["subject"].astype(str).to_numpy()
     target = model.manifest.get("target", "gesture")
     if target in meta:
-        out["true"] = meta[target].astype(str).to_numpy()
-    out["predicted"] = np.asarray(pred, dtype=object).astype(str)
+        out[TRUE] = meta[target].astype(str).to_numpy()
+    out[PREDICTED] = np.asarray(pred, dtype=object).astype(str)
     col = {c: i for i, c in enumerate(classes)}
-    out["probability"] = P[np.arange(len(ds)), [col[p] for p in out["predicted"]]]
+    out["probability"] = P[np.arange(len(ds)), [col[p] for p in out[PREDICTED]]]
     out["n_windows"] = n_windows
     for i, c in enumerate(classes):
         out[f"proba_{c}"] = P[:, i]

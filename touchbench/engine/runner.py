@@ -73,7 +73,7 @@ from ..protocols.schema import Protocol, expand_grid, load_protocol, resolve_dat
 from ..protocols.seeding import derive_seed
 from ..protocols.splits import SplitError
 from ..results.manifest import now_iso, update_manifest
-from ..results.store import ResultStore
+from ..results.store import PREDICTED, TRUE, ResultStore, read_results_table
 from ..results.summary import check_expected, summarize
 from .backends import check_jobs, is_local_backend, local_jobs, parallel
 from .cache import FeatureCache, crop_captures
@@ -526,10 +526,10 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
     show = sys.stderr.isatty() if progress is None else progress
 
     if not pending and _reports_current(store, plan, notes):
-        scores = pd.read_parquet(store.scores_path)
+        scores = read_results_table(store.scores_path)
         preds = None
         if protocol.expected is not None:
-            preds = pd.read_parquet(store.predictions_path, columns=["task_id", "true", "predicted"])
+            preds = read_results_table(store.predictions_path, columns=["task_id", TRUE, PREDICTED])
         return RunResult(out=out, run_id=plan.run_id, n_tasks=len(plan.tasks), n_ran=0, n_skipped=len(plan.tasks),
                          n_failed=int((scores["status"] == "failed").sum()), noop=True,
                          seconds=time.perf_counter() - t_start, scores=scores, summary=summarize(scores),

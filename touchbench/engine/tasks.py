@@ -37,6 +37,7 @@ from ..evaluation.metrics import metrics
 from ..features.base import make_feature_set
 from ..methods.fitting import fit_estimator
 from ..protocols.splits import Fold, fold_notes
+from ..results.store import PREDICTED, TRUE
 from .backends import run_setup
 from .cache import FeatureCache, crop_captures
 
@@ -256,8 +257,8 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
             "capture_id": meta["capture_id"].astype(str).to_numpy(),
             "subject": meta["subject"].astype(str).to_numpy(),
             "gesture": meta["gesture"].astype(str).to_numpy(),
-            "true": y_test.astype(str),
-            "predicted": y_pred.astype(str),
+            TRUE: y_test.astype(str),
+            PREDICTED: y_pred.astype(str),
             "correct": (y_test.astype(str) == y_pred.astype(str)),
         })
         if proba is not None:

@@ -66,6 +66,7 @@ from ..protocols.schema import (
 )
 from ..reports.leaderboard import write_text
 from ..results.manifest import git_revision
+from ..results.store import PREDICTED, TRUE, read_results_table
 from ..results.summary import check_expected
 
 __all__ = ["PAPERS", "PROFILES", "Profile", "apply_profile", "paper_protocols", "reproduce", "write_report"]
@@ -355,8 +356,8 @@ def _rel(p: Path) -> str:
 def _read(out: Path) -> tuple[pd.DataFrame | None, pd.DataFrame | None, dict[str, Any]]:
     if not (out / "scores.parquet").is_file():
         return None, None, {}
-    scores = pd.read_parquet(out / "scores.parquet")
-    preds = pd.read_parquet(out / "predictions.parquet") if (out / "predictions.parquet").is_file() else None
+    scores = read_results_table(out / "scores.parquet")
+    preds = read_results_table(out / "predictions.parquet") if (out / "predictions.parquet").is_file() else None
     man = json.loads((out / "manifest.json").read_text()) if (out / "manifest.json").is_file() else {}
     return scores, preds, man
 
@@ -394,7 +395,7 @@ def _confusion_section(check: ExpectedConfusion, scores: pd.DataFrame, preds: pd
     if preds is None or preds.empty:
         return lines + ["", "_no predictions: not compared_"]
     p = preds[preds["task_id"].isin(_ok_tasks(scores, check.classifier)["task_id"])]
-    ours = pd.crosstab(p["true"].astype(str), p["predicted"].astype(str)).reindex(
+    ours = pd.crosstab(p[TRUE].astype(str), p[PREDICTED].astype(str)).reindex(
         index=classes, columns=classes, fill_value=0).to_numpy(dtype=float)
     with np.errstate(invalid="ignore", divide="ignore"):
         r_paper = 100 * np.diag(paper) / paper.sum(axis=1)

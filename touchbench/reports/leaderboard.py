@@ -46,6 +46,7 @@ from sklearn.metrics import precision_recall_fscore_support
 
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError
+from ..results.store import PREDICTED, TRUE
 from .pareto import pareto_front
 from .results import ResultSet, load_results
 from .stats import PairedTest, fold_interval, holm, paired_test, wilson_interval
@@ -380,12 +381,12 @@ def _per_class(preds: pd.DataFrame | None, a: str, b: str, fold_keys: list[str])
         p = preds[(preds["method_id"] == mid) & preds["fold_key"].isin(set(fold_keys))]
         p = p.sort_values("finished_at", kind="stable").drop_duplicates(["fold_key", "seed", "capture_id"], keep="last")
         out[tag] = p
-    classes = sorted(set(out["a"]["true"].astype(str)) | set(out["b"]["true"].astype(str)))
+    classes = sorted(set(out["a"][TRUE].astype(str)) | set(out["b"][TRUE].astype(str)))
     if not classes:
         return pd.DataFrame(columns=cols)
     res = {}
     for tag, p in out.items():
-        _, r, f1, sup = precision_recall_fscore_support(p["true"].astype(str), p["predicted"].astype(str),
+        _, r, f1, sup = precision_recall_fscore_support(p[TRUE].astype(str), p[PREDICTED].astype(str),
                                                         labels=classes, zero_division=0)
         res[tag] = (r, f1, sup)
     df = pd.DataFrame({"class": classes, "support": res["a"][2], "recall_a": res["a"][0], "recall_b": res["b"][0],

@@ -35,6 +35,7 @@ import pandas as pd
 
 from ..core.errors import TouchbenchError
 from ..protocols.splits import _natural_key
+from ..results.store import PREDICTED, TRUE
 from .leaderboard import Leaderboard, method_label, method_labels, subject_values
 from .results import ResultSet
 
@@ -285,8 +286,8 @@ def confusion_matrix(rs: ResultSet, lb: Leaderboard, method: str) -> pd.DataFram
         raise ValueError("no predictions: confusion matrices need predictions.parquet")
     p = p[(p["table_key"] == lb.key) & (p["method_id"] == method)]
     p = p.sort_values("finished_at", kind="stable").drop_duplicates(["fold_key", "seed", "capture_id"], keep="last")
-    classes = sorted(set(p["true"].astype(str)) | set(p["predicted"].astype(str)))
-    m = pd.crosstab(p["true"].astype(str), p["predicted"].astype(str)).reindex(index=classes, columns=classes, fill_value=0)
+    classes = sorted(set(p[TRUE].astype(str)) | set(p[PREDICTED].astype(str)))
+    m = pd.crosstab(p[TRUE].astype(str), p[PREDICTED].astype(str)).reindex(index=classes, columns=classes, fill_value=0)
     m.index.name, m.columns.name = "true", "predicted"
     return m
 
@@ -386,7 +387,7 @@ def _critical_difference(scores: pd.DataFrame, title: str, base: Path, size: str
         from aeon.visualisation import plot_critical_difference
     except ImportError:
         raise TouchbenchError("critical difference diagrams are drawn by aeon: pip install 'touchbench[peers]'") from None
-    plt = _plt()
+    _plt()  # our rcParams for aeon's figure
     scores = scores.dropna()
     if scores.shape[1] < 2 or scores.shape[0] < 2:
         raise ValueError(f"{title}: a critical difference diagram needs two methods and two problems "

@@ -48,11 +48,11 @@ import yaml
 
 from ..core.errors import TouchbenchError
 from ..core.yamlsafe import safe_load
-from ..results.store import ResultStore
+from ..results.store import PREDICTED, TRUE, ResultStore, read_results_table
 
 __all__ = ["ResultSet", "load_results", "machine_id", "method_id", "scheme_label"]
 
-PREDICTION_COLUMNS = ["task_id", "fold", "capture_id", "subject", "true", "predicted", "correct"]
+PREDICTION_COLUMNS = ["task_id", "fold", "capture_id", "subject", TRUE, PREDICTED, "correct"]
 
 
 def _short_hash(obj: Any, n: int = 10) -> str:
@@ -192,7 +192,7 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
                 store = ResultStore(d)
                 s = store.read_scores()
             else:
-                s = pd.read_parquet(d / "scores.parquet")
+                s = read_results_table(d / "scores.parquet")
         except Exception as e:
             raise TouchbenchError(f"{d / 'scores.parquet'}: cannot read: {type(e).__name__}: {e}") from None
         if s.empty:
@@ -225,7 +225,7 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
             if store is not None:
                 p = store.read_predictions()
             elif ppath.is_file():
-                p = pd.read_parquet(ppath)
+                p = read_results_table(ppath)
         except Exception:
             p = None
         if p is not None and len(p):

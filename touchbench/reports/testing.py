@@ -23,7 +23,7 @@ import yaml
 
 from ..core.hashing import canonical_json
 from ..evaluation.metrics import metrics
-from ..results.store import confusion_table
+from ..results.store import PREDICTED, TRUE, confusion_table
 
 __all__ = ["FakeMethod", "write_fake_run"]
 
@@ -112,7 +112,7 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
                 "run_id": run_id, "task_id": task_id, "repetition": 0, "fold": fold_name, "fold_group": fold,
                 "early_frames": base["early_frames"], "features": m["features"], "classifier": m["classifier"],
                 "capture_id": ids, "subject": caps.loc[ids, "subject"].astype(str).to_numpy(),
-                "gesture": caps.loc[ids, "gesture"].astype(str).to_numpy(), "true": true, "predicted": pred.astype(str),
+                "gesture": caps.loc[ids, "gesture"].astype(str).to_numpy(), TRUE: true, PREDICTED: pred.astype(str),
                 "correct": true == pred.astype(str),
             }))
     scores = pd.DataFrame(score_rows)

@@ -22,6 +22,7 @@ from typing import Any
 from .. import __version__
 from ..core.paths import REPO_ROOT
 from ..core.versions import package_versions
+from .store import SCHEMA_VERSION
 
 __all__ = ["git_revision", "now_iso", "package_versions", "platform_info", "update_manifest"]
 
@@ -63,6 +64,7 @@ def update_manifest(previous: dict[str, Any] | None, *, run: dict[str, Any], pro
     sessions.append(session)
     return {
         "touchbench_version": __version__,
+        "results_schema": SCHEMA_VERSION,
         "git": git_revision(),
         "packages": package_versions(),
         "platform": platform_info(),

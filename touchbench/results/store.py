@@ -4,7 +4,7 @@ Layout of a results directory (``results/<protocol name>/`` by default)::
 
     fragments/<task_id>.predictions.parquet   one row per test capture
     fragments/<task_id>.scores.parquet        one row: the task's scores (written last)
-    scores.parquet  predictions.parquet  confusion.parquet  manifest.json
+    scores.parquet  predictions.parquet  confusion.parquet  confusion_pooled.parquet  manifest.json
 
 A task is finished when its scores fragment exists: the predictions fragment
 is written first, the scores fragment second, each to a temporary file that
@@ -55,7 +55,8 @@ try:  # POSIX
 except ImportError:  # pragma: no cover - Windows
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["ResultStore", "ResultsBusyError", "atomic_write_bytes", "atomic_write_parquet", "confusion_table"]
+__all__ = ["PREDICTED", "SCHEMA_VERSION", "TRUE", "ResultStore", "ResultsBusyError", "atomic_write_bytes",
+           "atomic_write_parquet", "confusion_table", "read_results_table", "upgrade", "write_results_table"]
 
 LOCK_NAME = ".touchbench.lock"
 LOCK_POLL_SECONDS = 0.5
@@ -81,14 +82,52 @@ SCORE_COLUMNS = [
     "feature_seconds_per_capture", "feature_fit_seconds", "fit_seconds", "predict_seconds", "latency_ms",
     "status", "error", "notes", "finished_at",
 ]
+#: the label columns of predictions and confusion tables (``true`` is a keyword in SQL engines)
+TRUE, PREDICTED = "true_label", "predicted_label"
 PREDICTION_COLUMNS = [
     "run_id", "task_id", "repetition", "fold", "fold_group", "early_frames", "features", "classifier",
-    "capture_id", "subject", "gesture", "true", "predicted", "correct",
+    "capture_id", "subject", "gesture", TRUE, PREDICTED, "correct",
 ]
+#: version of the layout of the files above, in each file's metadata (``touchbench_results_schema``) and
+#: the manifest: 1 (no version written) named the label columns ``true`` / ``predicted`` and kept the
+#: pooled confusion rows in ``confusion.parquet``; 2 is this layout. Readers upgrade older tables.
+SCHEMA_VERSION = 2
+SCHEMA_KEY = "touchbench_results_schema"
+_LEGACY = {"true": TRUE, "predicted": PREDICTED}
 
 
-def _read_parquet(path: Path) -> pd.DataFrame:
-    return pq.read_table(path).to_pandas()
+def upgrade(df: pd.DataFrame) -> pd.DataFrame:
+    """A results table of any earlier layout in this one (the label columns renamed)."""
+    old = {k: v for k, v in _LEGACY.items() if k in df.columns and v not in df.columns}
+    return df.rename(columns=old) if old else df
+
+
+def schema_version(path: str | Path) -> int:
+    """The results-schema version a Parquet file of a results folder was written with (1: none said)."""
+    meta = pq.read_schema(path).metadata or {}
+    try:
+        return int(meta.get(SCHEMA_KEY.encode(), b"1"))
+    except ValueError:
+        return 1
+
+
+def read_results_table(path: str | Path, columns: list[str] | None = None) -> pd.DataFrame:
+    """A table of a results folder (merged file or fragment), in this version's layout; a file of a
+    newer layout is refused with both versions."""
+    path = Path(path)
+    version = schema_version(path)
+    if version > SCHEMA_VERSION:
+        raise TouchbenchError(f"{path}: written by a newer touchbench (results schema {version}; this version "
+                              f"reads up to {SCHEMA_VERSION}): upgrade touchbench to read it")
+    if columns is not None and version < 2:
+        back = {v: k for k, v in _LEGACY.items()}
+        columns = [back.get(c, c) for c in columns]
+    return upgrade(pq.read_table(path, columns=columns).to_pandas())
+
+
+def write_results_table(path: Path, df: pd.DataFrame) -> None:
+    atomic_write_parquet(path, df, {SCHEMA_KEY: str(SCHEMA_VERSION)})
+
 
 
 def _concat(frames: list[pd.DataFrame], columns: list[str]) -> pd.DataFrame:
@@ -101,28 +140,17 @@ def _concat(frames: list[pd.DataFrame], columns: list[str]) -> pd.DataFrame:
     return df[front + sorted(rest)]
 
 
-def confusion_table(predictions: pd.DataFrame, scores: pd.DataFrame | None = None) -> pd.DataFrame:
-    """Counts per true / predicted label, per task and pooled.
-
-    ``scope == "task"`` rows have the task's ``task_id`` and ``fold``;
-    ``scope == "pooled"`` rows sum over every fold and repetition of one
-    configuration (feature combination x classifier x early length) and have
-    an empty ``task_id`` / ``fold``.
-    """
-    cols = ["run_id", "scope", "task_id", "fold", "features", "classifier", "early_frames", "true", "predicted", "count"]
+def confusion_table(predictions: pd.DataFrame, pooled: bool = False) -> pd.DataFrame:
+    """Counts per true / predicted label: per task (``task_id``, ``fold``), or ``pooled`` over every
+    fold and repetition of one configuration (feature combination x classifier x early length). The
+    two live in separate files, so that summing a file's counts never counts a capture twice."""
+    keys = (["run_id", "features", "classifier", "early_frames", TRUE, PREDICTED] if pooled else
+            ["run_id", "task_id", "fold", "features", "classifier", "early_frames", TRUE, PREDICTED])
     if predictions.empty:
-        return pd.DataFrame(columns=cols)
+        return pd.DataFrame(columns=[*keys, "count"])
     p = predictions.copy()
     p["early_frames"] = p["early_frames"].fillna(-1)
-    keys = ["run_id", "task_id", "fold", "features", "classifier", "early_frames", "true", "predicted"]
-    per_task = p.groupby(keys, dropna=False, sort=True).size().rename("count").reset_index()
-    per_task.insert(1, "scope", "task")
-    pooled_keys = ["run_id", "features", "classifier", "early_frames", "true", "predicted"]
-    pooled = p.groupby(pooled_keys, dropna=False, sort=True).size().rename("count").reset_index()
-    pooled.insert(1, "scope", "pooled")
-    pooled["task_id"] = ""
-    pooled["fold"] = ""
-    out = pd.concat([per_task[cols], pooled[cols]], ignore_index=True)
+    out = p.groupby(keys, dropna=False, sort=True).size().rename("count").reset_index()
     out["early_frames"] = out["early_frames"].astype("float64").where(out["early_frames"] >= 0)
     out["count"] = out["count"].astype("int64")
     return out
@@ -153,6 +181,10 @@ class ResultStore:
     @property
     def confusion_path(self) -> Path:
         return self.root / "confusion.parquet"
+
+    @property
+    def confusion_pooled_path(self) -> Path:
+        return self.root / "confusion_pooled.parquet"
 
     @property
     def manifest_path(self) -> Path:
@@ -266,20 +298,20 @@ class ResultStore:
     def write_task(self, task_id: str, score: dict[str, Any], predictions: pd.DataFrame | None) -> None:
         """Predictions first, scores last: the scores fragment marks the task finished."""
         if predictions is not None and len(predictions):
-            atomic_write_parquet(self.predictions_fragment(task_id), predictions)
+            write_results_table(self.predictions_fragment(task_id), predictions)
         else:
             self.predictions_fragment(task_id).unlink(missing_ok=True)
-        atomic_write_parquet(self.scores_fragment(task_id), pd.DataFrame([score]))
+        write_results_table(self.scores_fragment(task_id), pd.DataFrame([score]))
 
     # ----------------------------------------------------------- reading (merge on read)
     def read_scores(self, task_ids: Iterable[str] | None = None) -> pd.DataFrame:
         ids = self._ids(task_ids, ".scores.parquet")
-        frames = [_read_parquet(self.scores_fragment(t)) for t in ids if self.scores_fragment(t).is_file()]
+        frames = [read_results_table(self.scores_fragment(t)) for t in ids if self.scores_fragment(t).is_file()]
         return _concat(frames, SCORE_COLUMNS)
 
     def read_predictions(self, task_ids: Iterable[str] | None = None) -> pd.DataFrame:
         ids = self._ids(task_ids, ".predictions.parquet")
-        frames = [_read_parquet(self.predictions_fragment(t)) for t in ids if self.predictions_fragment(t).is_file()]
+        frames = [read_results_table(self.predictions_fragment(t)) for t in ids if self.predictions_fragment(t).is_file()]
         return _concat(frames, PREDICTION_COLUMNS)
 
     def _ids(self, task_ids: Iterable[str] | None, suffix: str) -> list[str]:
@@ -313,14 +345,17 @@ class ResultStore:
         scores = _concat([scores], SCORE_COLUMNS)
         preds = _concat([preds], PREDICTION_COLUMNS)
         confusion = confusion_table(preds)
-        atomic_write_parquet(self.predictions_path, preds)
-        atomic_write_parquet(self.confusion_path, confusion)
-        atomic_write_parquet(self.scores_path, scores)
-        return {"scores": scores, "predictions": preds, "confusion": confusion}
+        pooled = confusion_table(preds, pooled=True)
+        write_results_table(self.predictions_path, preds)
+        write_results_table(self.confusion_path, confusion)
+        write_results_table(self.confusion_pooled_path, pooled)
+        write_results_table(self.scores_path, scores)
+        return {"scores": scores, "predictions": preds, "confusion": confusion, "confusion_pooled": pooled}
 
     # ----------------------------------------------------------- merged files
     def merged_paths(self) -> dict[str, Path]:
-        return {p.name: p for p in (self.scores_path, self.predictions_path, self.confusion_path)}
+        return {p.name: p for p in (self.scores_path, self.predictions_path, self.confusion_path,
+                                    self.confusion_pooled_path)}
 
     def merged_checksums(self) -> dict[str, str]:
         """SHA-256 of each merged file as it is now (recorded in the manifest after a merge)."""

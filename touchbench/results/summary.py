@@ -16,6 +16,8 @@ import numpy as np
 import pandas as pd
 from sklearn.metrics import balanced_accuracy_score, f1_score
 
+from .store import PREDICTED, TRUE
+
 __all__ = ["CONFIG_KEYS", "check_expected", "summarize"]
 
 CONFIG_KEYS = ["features", "classifier", "early_frames"]
@@ -56,7 +58,7 @@ def _pooled_metric(preds: pd.DataFrame, metric: str) -> float:
 
     if preds.empty:
         return np.nan
-    t, p = preds["true"].astype(str), preds["predicted"].astype(str)
+    t, p = preds[TRUE].astype(str), preds[PREDICTED].astype(str)
     if metric == "accuracy":
         return float((t == p).mean())
     if metric == "balanced_accuracy":
