@@ -265,7 +265,9 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
     ds = apply_filters(protocol, full)
     target = protocol.target
     if target not in ds.meta.columns:
-        raise protocol.error_at(("target",), f"the dataset has no {target!r} column")
+        cols = sorted(c for c in ds.meta.columns if c != "capture_id")
+        raise protocol.error_at(("target",), f"the dataset has no {target!r} column{did_you_mean(target, cols)} "
+                                             f"(its metadata columns: {', '.join(cols)})")
     if ds.meta[target].isna().any():
         raise protocol.error_at(("target",), f"{int(ds.meta[target].isna().sum())} captures have no {target!r} value")
     classes = sorted({str(v) for v in ds.meta[target]})
@@ -348,6 +350,8 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                     else [clf.name, clf.params, estimator],
                     "seed": protocol.seed,
                 }
+                if protocol.metrics:  # more scores from the same predictions: a task of its own
+                    identity["metrics"] = list(protocol.metrics)
                 task_id = hashlib.sha256(canonical_json(identity).encode()).hexdigest()[:20]
                 seed = derive_seed(protocol.seed, "task", r, fold.name, combo.label, clf.label)
                 base = {
@@ -367,6 +371,7 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                     seed=seed, crop_frames=crop_frames, base_row=base,
                     estimator_name=method.estimator, estimator_params=method.estimator_params,
                     measure_latency=(combo.label, clf.label, crop_frames) not in timed,
+                    metrics=tuple(protocol.metrics),
                 ))
                 timed.add((combo.label, clf.label, crop_frames))
     crops = [t.crop_frames for t in tasks if t.crop_frames is not None]

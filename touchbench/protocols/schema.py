@@ -9,7 +9,8 @@ A protocol names everything a benchmark run needs::
       filters: {gesture: [pat, rub]}   # keep only these values (any metadata column)
       exclude: {subject: [s03]}        # drop these values
       options: {}                      # keyword arguments of the loader / scene generator
-    target: gesture                    # or subject (person identification, Flagg 2012)
+    target: gesture                    # or subject (person identification, Flagg 2012), or any metadata column
+    metrics: [f1_weighted]             # optional: scikit-learn scorer names, computed for every task
     scheme: {name: loso}               # or just `scheme: loso`; parameters beside name
     features:                          # a list of combinations; each is concatenated
       - [msd]
@@ -476,7 +477,7 @@ class Protocol(_Model):
     name: str
     description: str = ""
     dataset: DatasetSpec
-    target: Literal["gesture", "subject"] = "gesture"
+    target: str = Field(default="gesture", min_length=1)
     scheme: SchemeSpec
     features: list[list[FeatureRef]] | None = Field(default=None, min_length=1)
     classifiers: list[ClassifierSpec] | None = Field(default=None, min_length=1)
@@ -484,10 +485,34 @@ class Protocol(_Model):
     seed: int = 0
     repetitions: int = Field(default=1, ge=1)
     expected: Expected | None = None
+    #: scikit-learn scorer names computed for every task besides the three fixed metrics
+    metrics: list[str] = Field(default_factory=list)
 
     _path: Path | None = PrivateAttr(default=None)
     _text: str = PrivateAttr(default="")
     _lines: dict[tuple, int] = PrivateAttr(default_factory=dict)
+
+    @field_validator("metrics")
+    @classmethod
+    def _known_scorers(cls, v: list[str]) -> list[str]:
+        from sklearn.metrics import get_scorer_names
+
+        names = sorted(get_scorer_names())
+        for name in v:
+            if name not in names:
+                raise ValueError(f"unknown metric {name!r}{did_you_mean(name, names)}: a scikit-learn scorer name "
+                                 f"(sklearn.metrics.get_scorer_names(), e.g. f1_weighted, matthews_corrcoef, "
+                                 f"neg_log_loss)")
+        if len(set(v)) != len(v):
+            raise ValueError("a metric is named twice")
+        return v
+
+    @field_validator("target")
+    @classmethod
+    def _target_name(cls, v: str) -> str:
+        if v != v.strip() or not v:
+            raise ValueError(f"target {v!r}: the name of a metadata column of the dataset (gesture, subject, cover...)")
+        return v
 
     @field_validator("repetitions")
     @classmethod

@@ -1,0 +1,82 @@
+"""The results' vocabulary: scikit-learn scorers named by a protocol, any metadata column as the
+target; values recomputed independently from the stored predictions with scikit-learn."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from sklearn.metrics import f1_score, log_loss, matthews_corrcoef
+
+from touchbench.engine import run_protocol
+from touchbench.engine.testing import random_dataset
+from touchbench.evaluation.metrics import scorer_values
+from touchbench.protocols.schema import ProtocolError, parse_protocol
+
+
+@pytest.fixture(autouse=True)
+def env(engine_env):
+    yield
+
+
+def _protocol(tmp_path, extra="", target="gesture", ds=None):
+    data = tmp_path / "data.parquet"
+    (ds or random_dataset(subjects=("s1", "s2", "s3"), per_cell=2, extra={"cover": ["fur", "none"]}, seed=1)
+     ).to_parquet(data)
+    return parse_protocol(f"name: m\ndataset: {data}\ntarget: {target}\nscheme: loso\nfeatures: [[test-mean]]\n"
+                          f"classifiers: [test-logreg]\nseed: 2\n{extra}", tmp_path / "m.yaml")
+
+
+def test_named_scorers_are_computed_from_the_predictions(tmp_path):
+    res = run_protocol(_protocol(tmp_path, "metrics: [f1_weighted, matthews_corrcoef, neg_log_loss]"),
+                       out=tmp_path / "out", progress=False)
+    preds = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
+    assert res.n_failed == 0
+    for _, row in res.scores.iterrows():
+        p = preds[preds["task_id"] == row["task_id"]]
+        t, y = p["true_label"].to_numpy(), p["predicted_label"].to_numpy()
+        assert row["f1_weighted"] == pytest.approx(f1_score(t, y, average="weighted"))
+        assert row["matthews_corrcoef"] == pytest.approx(matthews_corrcoef(t, y))
+        classes = sorted(c[len("proba_"):] for c in p.columns if c.startswith("proba_"))
+        P = p[[f"proba_{c}" for c in classes]].to_numpy()
+        assert row["neg_log_loss"] == pytest.approx(-log_loss(t, P, labels=classes))
+
+
+def test_adding_a_metric_makes_new_tasks(tmp_path):
+    a = run_protocol(_protocol(tmp_path), out=tmp_path / "a", progress=False)
+    b = run_protocol(_protocol(tmp_path, "metrics: [f1_weighted]"), out=tmp_path / "b", progress=False)
+    assert not set(a.scores["task_id"]) & set(b.scores["task_id"])
+    assert a.scores["accuracy"].tolist() == b.scores["accuracy"].tolist()  # the same predictions
+
+
+def test_an_unknown_scorer_is_refused_with_the_nearest_name(tmp_path):
+    with pytest.raises(ProtocolError) as e:
+        _protocol(tmp_path, "metrics: [f1_wieghted]")
+    assert "m.yaml:8" in str(e.value) and "unknown metric 'f1_wieghted'" in str(e.value)
+    assert "did you mean 'f1_weighted'" in str(e.value)
+
+
+def test_scorers_without_probabilities_are_nan():
+    y = np.array(["a", "b", "a", "b"])
+    got = scorer_values(["accuracy", "roc_auc"], y, np.array(["a", "b", "b", "b"]), None)
+    assert got["accuracy"] == 0.75 and np.isnan(got["roc_auc"])
+    # binary: the positive class's column; by hand, roc auc of [.9, .2, .6, .3] for b=1: pairs (b>a) 2 of 4
+    p = {"a": np.array([0.1, 0.8, 0.4, 0.7]), "b": np.array([0.9, 0.2, 0.6, 0.3])}
+    assert scorer_values(["roc_auc"], y, y, p)["roc_auc"] == pytest.approx(0.0)
+
+
+def test_any_metadata_column_is_a_target(tmp_path):
+    res = run_protocol(_protocol(tmp_path, target="cover"), out=tmp_path / "out", progress=False)
+    preds = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
+    assert set(preds["true_label"]) == {"fur", "none"} and (res.scores["target"] == "cover").all()
+    gesture = run_protocol(_protocol(tmp_path), out=tmp_path / "g", progress=False)
+    assert not set(res.scores["task_id"]) & set(gesture.scores["task_id"])  # the target is in the task's identity
+
+
+def test_a_target_the_data_lacks_lists_the_columns(tmp_path):
+    from touchbench.engine.runner import plan_run
+
+    with pytest.raises(ProtocolError) as e:
+        plan_run(_protocol(tmp_path, target="covr"))
+    assert "the dataset has no 'covr' column" in str(e.value) and "did you mean 'cover'" in str(e.value)
+    assert "its metadata columns: cover, gesture," in str(e.value)
