@@ -32,8 +32,12 @@ $(VENV)/.installed-%: pyproject.toml $(CONSTRAINTS)
 	touch $@
 
 # The example plugin is installed as users install one (not editable): the tests run it by name.
+# tsml-eval's loader reads our `touchbench export --format tsml` files back in the tests; it is
+# installed without its dependencies: its pins (aeon<1.2, scikit-learn<1.7) would downgrade ours,
+# and its results loader needs none of them beyond what the peers extra has.
 $(VENV)/.plugin: $(VENV)/.installed-$(EXTRAS) $(PLUGIN)/pyproject.toml $(wildcard $(PLUGIN)/src/*/*.py)
 	$(BIN)/python -m pip install -q -c $(CONSTRAINTS) ./$(PLUGIN)
+	$(BIN)/python -m pip install -q --no-deps "tsml-eval==0.6.0"
 	touch $@
 
 setup: $(VENV)/.installed-$(EXTRAS) $(VENV)/.plugin

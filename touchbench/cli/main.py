@@ -23,6 +23,7 @@ _COMMANDS: dict[str, tuple[str, str, str]] = {
     "compare": ("touchbench.cli.reports", "compare", "The paired test of method A against B, per fold or subject."),
     "data": ("touchbench.cli.data", "data", "Datasets: real readers, the cache, exports."),
     "demo": ("touchbench.cli.demo", "demo", "Run the main job on the embedded default and show its leaderboard."),
+    "export": ("touchbench.cli.export", "export", "Results in other tools' formats (tsml-eval results files)."),
     "features": ("touchbench.cli.features", "features", "Feature sets: scikit-learn transformers over captures."),
     "leaderboard": ("touchbench.cli.reports", "leaderboard", "One table per dataset and scheme: rank, accuracy, intervals, tests."),
     "papers": ("touchbench.cli.reports", "papers", "Reproduce the four papers (the shipped papers/ protocols)."),

@@ -235,7 +235,7 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
             )
             s["fold_key"] = [keys.get(t, fk) for t, fk in zip(s["task_id"], s["fold_key"])]
             if predictions:
-                keep = [c for c in PREDICTION_COLUMNS if c in p.columns]
+                keep = [c for c in PREDICTION_COLUMNS if c in p.columns] + [c for c in p.columns if c.startswith("proba_")]
                 pp = p[keep].copy()
                 info = s.drop_duplicates("task_id").set_index("task_id")[
                     ["method_id", "fold_key", "seed", "finished_at", "table_key"]]
