@@ -28,7 +28,6 @@ import re
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from ..core.atomic import atomic_write_bytes
 from ..results.store import PREDICTED, TRUE
