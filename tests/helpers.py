@@ -86,3 +86,17 @@ def readme_section(title: str) -> str:
 def code_blocks(text: str, lang: str) -> list[str]:
     """The fenced ``lang`` code blocks of ``text``, in order."""
     return re.findall(rf"```{lang}\n(.*?)```", text, flags=re.DOTALL)
+
+
+def fake_loso(subjects, gestures=("pat", "rub", "stroke"), reps: int = 2):
+    """Captures (``capture_id``, ``subject``, ``gesture``) and their leave-one-subject-out folds for
+    :func:`touchbench.reports.testing.write_fake_run`, and ``wrong(counts)``: the first ``counts[i]``
+    captures of fold i predicted wrongly."""
+    caps = pd.DataFrame([(f"{s}-{g}-{r}", s, g) for s in subjects for g in gestures for r in range(reps)],
+                        columns=["capture_id", "subject", "gesture"])
+    folds = {f"subject={s}": caps[caps["subject"] == s]["capture_id"].tolist() for s in subjects}
+
+    def wrong(counts):
+        return {f: ids[:c] for (f, ids), c in zip(folds.items(), counts)}
+
+    return caps, folds, wrong

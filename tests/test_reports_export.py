@@ -10,8 +10,8 @@ import numpy as np
 import pandas as pd
 import pytest
 from click.testing import CliRunner
-
 from conftest import _missing
+
 from touchbench.cli.main import cli
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset

@@ -9,8 +9,8 @@ import re
 import xml.etree.ElementTree as ET
 
 import numpy as np
-import pandas as pd
 import pytest
+from helpers import fake_loso
 from rich.console import Console
 from scipy.stats import rankdata
 
@@ -22,19 +22,19 @@ from touchbench.reports.leaderboard import (
     print_terminal,
     to_markdown,
 )
-from touchbench.reports.plots import SIZES, plot_cd, plot_cd_across, plot_pareto, plot_table
+from touchbench.reports.plots import (
+    SIZES,
+    plot_cd,
+    plot_cd_across,
+    plot_pareto,
+    plot_table,
+)
 from touchbench.reports.results import load_results
 from touchbench.reports.testing import FakeMethod, write_fake_run
 
 SUBJECTS = ["s1", "s2", "s3", "s4", "s5"]
 GESTURES = ["pat", "rub", "stroke"]
-CAPS = pd.DataFrame([(f"{s}-{g}-{r}", s, g) for s in SUBJECTS for g in GESTURES for r in range(2)],
-                    columns=["capture_id", "subject", "gesture"])
-FOLDS = {f"subject={s}": CAPS[CAPS["subject"] == s]["capture_id"].tolist() for s in SUBJECTS}
-
-
-def _wrong(counts):
-    return {f: ids[:c] for (f, ids), c in zip(FOLDS.items(), counts)}
+CAPS, FOLDS, _wrong = fake_loso(SUBJECTS, GESTURES)
 
 
 METHODS = [  # 6 test captures per fold: accuracies (6 - wrong) / 6

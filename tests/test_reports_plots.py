@@ -8,9 +8,9 @@ import re
 import xml.etree.ElementTree as ET
 
 import numpy as np
-import pandas as pd
 import pytest
 from click.testing import CliRunner
+from helpers import fake_loso
 
 from touchbench.cli.main import cli
 from touchbench.cli.reports import parse_reference
@@ -27,13 +27,7 @@ from touchbench.reports.testing import FakeMethod, write_fake_run
 
 SUBJECTS = ["s1", "s2", "s3", "s4"]
 GESTURES = ["pat", "rub", "stroke"]
-CAPS = pd.DataFrame([(f"{s}-{g}-{r}", s, g) for s in SUBJECTS for g in GESTURES for r in range(2)],
-                    columns=["capture_id", "subject", "gesture"])
-FOLDS = {f"subject={s}": CAPS[CAPS["subject"] == s]["capture_id"].tolist() for s in SUBJECTS}
-
-
-def _wrong(counts):
-    return {f: ids[:c] for (f, ids), c in zip(FOLDS.items(), counts)}
+CAPS, FOLDS, _wrong = fake_loso(SUBJECTS, GESTURES)
 
 
 @pytest.fixture(scope="module")
