@@ -37,7 +37,7 @@ $(VENV)/.installed-%: pyproject.toml $(CONSTRAINTS)
 # and its results loader needs none of them beyond what the peers extra has.
 $(VENV)/.plugin: $(VENV)/.installed-$(EXTRAS) $(PLUGIN)/pyproject.toml $(wildcard $(PLUGIN)/src/*/*.py)
 	$(BIN)/python -m pip install -q -c $(CONSTRAINTS) ./$(PLUGIN)
-	$(BIN)/python -m pip install -q --no-deps "tsml-eval==0.6.0"
+	$(BIN)/python -m pip install -q -c $(CONSTRAINTS) --no-deps "tsml-eval==0.6.0"
 	touch $@
 
 setup: $(VENV)/.installed-$(EXTRAS) $(VENV)/.plugin

@@ -112,7 +112,7 @@ def test_content_hash_ignores_comments_and_description():
      "protocols/x.yaml:10: expected.results[0].features: no feature combination ['test-centered'] in this protocol"),
     (BASE + "  - [oops\n", "protocols/x.yaml:9: invalid YAML"),
     (BASE + "target: subject\n", "protocols/x.yaml:8: target: target 'subject' (person identification) needs each test"),
-    (BASE + "target: person\n", "protocols/x.yaml:8: target: Input should be 'gesture' or 'subject', got 'person'"),
+    (BASE + "target: ''\n", "protocols/x.yaml:8: target: String should have at least 1 character"),
     (BASE.replace("data.parquet", "haartt"), "protocols/x.yaml:2: dataset.name: unknown dataset 'haartt'; did you mean 'haart'"),
     (BASE.replace("data.parquet", "missing/file.parquet"), "protocols/x.yaml:2: dataset.name: no dataset file 'missing/file.parquet'"),
     (BASE.replace("  - test-logreg", "  - {name: test-forest, params: {n_estimators: {grid: []}}}"),
