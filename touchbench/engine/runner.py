@@ -73,7 +73,7 @@ from ..protocols.schema import Protocol, expand_grid, load_protocol, resolve_dat
 from ..protocols.seeding import derive_seed
 from ..protocols.splits import SplitError
 from ..results.manifest import now_iso, update_manifest
-from ..results.store import PREDICTED, TRUE, ResultStore, read_results_table
+from ..results.store import PREDICTED, SCHEMA_VERSION, TRUE, ResultStore, check_schema, read_results_table
 from ..results.summary import check_expected, summarize
 from .backends import check_jobs, is_local_backend, local_jobs, parallel
 from .cache import FeatureCache, crop_captures
@@ -473,6 +473,11 @@ def _reports_current(store: ResultStore, plan: Plan, notes: list[str]) -> bool:
     if m.get("run", {}).get("run_id") != plan.run_id or m.get("tasks", {}).get("ids_hash") != plan.ids_hash:
         return False
     if m.get("tasks", {}).get("merged") != len(plan.tasks):
+        return False
+    version = check_schema(m.get("results_schema"), store.manifest_path)
+    if version < SCHEMA_VERSION:
+        notes.append(f"the merged files have the layout of results schema {version}: merged again in schema "
+                     f"{SCHEMA_VERSION}")
         return False
     problems = store.merged_problems(m.get("tasks", {}).get("merged_files"))
     if problems:

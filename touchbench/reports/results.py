@@ -48,7 +48,7 @@ import yaml
 
 from ..core.errors import TouchbenchError
 from ..core.yamlsafe import safe_load
-from ..results.store import PREDICTED, TRUE, ResultStore, read_results_table
+from ..results.store import PREDICTED, TRUE, ResultStore, check_schema, read_results_table
 
 __all__ = ["ResultSet", "load_results", "machine_id", "method_id", "scheme_label"]
 
@@ -155,9 +155,12 @@ def _read_manifest(d: Path) -> dict[str, Any]:
     if not p.is_file():
         return {}
     try:
-        return json.loads(p.read_text())
+        m = json.loads(p.read_text())
     except (OSError, ValueError):
         return {}
+    if isinstance(m, dict):
+        check_schema(m.get("results_schema"), p)
+    return m
 
 
 def _protocol_scheme(manifest: dict[str, Any]) -> Any:

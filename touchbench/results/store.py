@@ -56,7 +56,8 @@ except ImportError:  # pragma: no cover - Windows
     fcntl = None  # type: ignore[assignment]
 
 __all__ = ["PREDICTED", "SCHEMA_VERSION", "TRUE", "ResultStore", "ResultsBusyError", "atomic_write_bytes",
-           "atomic_write_parquet", "confusion_table", "read_results_table", "upgrade", "write_results_table"]
+           "atomic_write_parquet", "check_schema", "confusion_table", "read_results_table", "upgrade",
+           "write_results_table"]
 
 LOCK_NAME = ".touchbench.lock"
 LOCK_POLL_SECONDS = 0.5
@@ -96,10 +97,32 @@ SCHEMA_KEY = "touchbench_results_schema"
 _LEGACY = {"true": TRUE, "predicted": PREDICTED}
 
 
-def upgrade(df: pd.DataFrame) -> pd.DataFrame:
-    """A results table of any earlier layout in this one (the label columns renamed)."""
+def upgrade(df: pd.DataFrame, pooled: bool = False) -> pd.DataFrame:
+    """A results table of any earlier layout in this one: the label columns renamed; a version-1
+    confusion table (per-task and pooled rows in one file, told apart by ``scope``) keeps the rows
+    of one kind without that column: the ``pooled`` ones (without ``task_id`` / ``fold``) or the
+    per-task ones."""
     old = {k: v for k, v in _LEGACY.items() if k in df.columns and v not in df.columns}
-    return df.rename(columns=old) if old else df
+    if old:
+        df = df.rename(columns=old)
+    if "scope" in df.columns:
+        df = df[df["scope"] == ("pooled" if pooled else "task")].drop(columns="scope").reset_index(drop=True)
+        if pooled:
+            df = df.drop(columns=[c for c in ("task_id", "fold") if c in df.columns])
+    return df
+
+
+def check_schema(version: Any, where: str | Path) -> int:
+    """``version`` (a results-schema version as a file or manifest states it; none: 1) as an int;
+    a newer one than this touchbench reads is refused with both versions."""
+    try:
+        v = 1 if version is None else int(version)
+    except (TypeError, ValueError):
+        v = 1
+    if v > SCHEMA_VERSION:
+        raise TouchbenchError(f"{where}: written by a newer touchbench (results schema {v}; this version "
+                              f"reads up to {SCHEMA_VERSION}): upgrade touchbench to read it")
+    return v
 
 
 def schema_version(path: str | Path) -> int:
@@ -111,18 +134,20 @@ def schema_version(path: str | Path) -> int:
         return 1
 
 
-def read_results_table(path: str | Path, columns: list[str] | None = None) -> pd.DataFrame:
+def read_results_table(path: str | Path, columns: list[str] | None = None, *, pooled: bool = False) -> pd.DataFrame:
     """A table of a results folder (merged file or fragment), in this version's layout; a file of a
-    newer layout is refused with both versions."""
+    newer layout is refused with both versions. ``pooled``: of a version-1 ``confusion.parquet``,
+    the pooled rows (see :func:`upgrade`)."""
     path = Path(path)
-    version = schema_version(path)
-    if version > SCHEMA_VERSION:
-        raise TouchbenchError(f"{path}: written by a newer touchbench (results schema {version}; this version "
-                              f"reads up to {SCHEMA_VERSION}): upgrade touchbench to read it")
-    if columns is not None and version < 2:
-        back = {v: k for k, v in _LEGACY.items()}
-        columns = [back.get(c, c) for c in columns]
-    return upgrade(pq.read_table(path, columns=columns).to_pandas())
+    version = check_schema(schema_version(path), path)
+    if columns is None or version >= 2:
+        return upgrade(pq.read_table(path, columns=columns).to_pandas(), pooled)
+    back = {v: k for k, v in _LEGACY.items()}
+    have = set(pq.read_schema(path).names)
+    wanted = [back.get(c, c) if back.get(c, c) in have else c for c in columns]
+    if "scope" in have:
+        wanted.append("scope")
+    return upgrade(pq.read_table(path, columns=wanted).to_pandas(), pooled)[list(columns)]
 
 
 def write_results_table(path: Path, df: pd.DataFrame) -> None:
@@ -374,13 +399,24 @@ class ResultStore:
                 problems.append(f"{name} changed since the run wrote it")
         return problems
 
+    def read_confusion(self, pooled: bool = False) -> pd.DataFrame:
+        """The merged confusion counts per task, or ``pooled`` over the folds of each configuration;
+        a run of the first layout (both in ``confusion.parquet``) gives the same two tables."""
+        if pooled and self.confusion_pooled_path.is_file():
+            return read_results_table(self.confusion_pooled_path)
+        return read_results_table(self.confusion_path, pooled=pooled)
+
     def read_manifest(self) -> dict[str, Any] | None:
+        """The manifest (``None`` when missing or unreadable); one of a newer results schema is refused."""
         if not self.manifest_path.is_file():
             return None
         try:
-            return json.loads(self.manifest_path.read_text())
+            manifest = json.loads(self.manifest_path.read_text())
         except (OSError, json.JSONDecodeError):
             return None
+        if isinstance(manifest, dict):
+            check_schema(manifest.get("results_schema"), self.manifest_path)
+        return manifest
 
     def write_manifest(self, manifest: dict[str, Any]) -> None:
         atomic_write_bytes(self.manifest_path, (json.dumps(manifest, indent=2, default=str) + "\n").encode())
