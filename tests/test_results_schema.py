@@ -42,11 +42,19 @@ def test_named_scorers_are_computed_from_the_predictions(tmp_path):
         assert row["neg_log_loss"] == pytest.approx(-log_loss(t, P, labels=classes))
 
 
-def test_adding_a_metric_makes_new_tasks(tmp_path):
-    a = run_protocol(_protocol(tmp_path), out=tmp_path / "a", progress=False)
-    b = run_protocol(_protocol(tmp_path, "metrics: [f1_weighted]"), out=tmp_path / "b", progress=False)
-    assert not set(a.scores["task_id"]) & set(b.scores["task_id"])
-    assert a.scores["accuracy"].tolist() == b.scores["accuracy"].tolist()  # the same predictions
+def test_adding_a_metric_refits_nothing(tmp_path):
+    """A metric is computed from the stored predictions: naming one more reuses every task."""
+    a = run_protocol(_protocol(tmp_path), out=tmp_path / "out", progress=False)
+    b = run_protocol(_protocol(tmp_path, "metrics: [f1_weighted, roc_auc]"), out=tmp_path / "out", progress=False)
+    assert b.n_ran == 0 and b.scores["task_id"].tolist() == a.scores["task_id"].tolist()
+    preds = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
+    for _, row in b.scores.iterrows():
+        p = preds[preds["task_id"] == row["task_id"]]
+        assert row["f1_weighted"] == pytest.approx(f1_score(p["true_label"], p["predicted_label"], average="weighted"))
+    assert "f1_weighted" in pd.read_parquet(tmp_path / "out" / "scores.parquet")
+    # roc_auc is binary only (three gestures here): NaN, and one note says why
+    assert b.scores["roc_auc"].isna().all()
+    assert [n for n in b.notes if n.startswith("metric roc_auc: not computed for 3 of 3 tasks (ValueError")]
 
 
 def test_an_unknown_scorer_is_refused_with_the_nearest_name(tmp_path):
@@ -58,9 +66,11 @@ def test_an_unknown_scorer_is_refused_with_the_nearest_name(tmp_path):
 
 def test_scorers_without_probabilities_are_nan():
     y = np.array(["a", "b", "a", "b"])
-    got = scorer_values(["accuracy", "roc_auc"], y, np.array(["a", "b", "b", "b"]), None)
+    why: dict[str, str] = {}
+    got = scorer_values(["accuracy", "roc_auc"], y, np.array(["a", "b", "b", "b"]), None, why)
     assert got["accuracy"] == 0.75 and np.isnan(got["roc_auc"])
-    # binary: the positive class's column; by hand, roc auc of [.9, .2, .6, .3] for b=1: pairs (b>a) 2 of 4
+    assert why == {"roc_auc": "it needs class probabilities and the classifier gives none"}
+    # binary: the positive class's column; by hand, roc auc of [.9, .2, .6, .3] for b=1: b above a in 0 of 4 pairs
     p = {"a": np.array([0.1, 0.8, 0.4, 0.7]), "b": np.array([0.9, 0.2, 0.6, 0.3])}
     assert scorer_values(["roc_auc"], y, y, p)["roc_auc"] == pytest.approx(0.0)
 

@@ -350,8 +350,6 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                     else [clf.name, clf.params, estimator],
                     "seed": protocol.seed,
                 }
-                if protocol.metrics:  # more scores from the same predictions: a task of its own
-                    identity["metrics"] = list(protocol.metrics)
                 task_id = hashlib.sha256(canonical_json(identity).encode()).hexdigest()[:20]
                 seed = derive_seed(protocol.seed, "task", r, fold.name, combo.label, clf.label)
                 base = {
@@ -371,7 +369,6 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                     seed=seed, crop_frames=crop_frames, base_row=base,
                     estimator_name=method.estimator, estimator_params=method.estimator_params,
                     measure_latency=(combo.label, clf.label, crop_frames) not in timed,
-                    metrics=tuple(protocol.metrics),
                 ))
                 timed.add((combo.label, clf.label, crop_frames))
     crops = [t.crop_frames for t in tasks if t.crop_frames is not None]
@@ -572,7 +569,7 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
                 results.close()  # a generator left early: joblib cancels what it has not started
 
     stamp = {"run_id": plan.run_id, "protocol": protocol.name, "protocol_hash": protocol.text_hash}
-    merged = store.merge(plan.task_ids, stamp)
+    merged = store.merge(plan.task_ids, stamp, protocol.metrics, notes)
     scores = merged["scores"]
     expected = check_expected(protocol.expected, scores, merged["predictions"])
     status = store.finished()

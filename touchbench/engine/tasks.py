@@ -33,11 +33,11 @@ import pandas as pd
 
 from ..core.threads import single_thread
 from ..datasets.model import TouchDataset
-from ..evaluation.metrics import metrics, scorer_values
+from ..evaluation.metrics import metrics
 from ..features.base import make_feature_set
 from ..methods.fitting import fit_estimator
 from ..protocols.splits import Fold, fold_notes
-from ..results.store import PREDICTED, TRUE
+from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
 from .backends import run_setup
 from .cache import FeatureCache, crop_captures
 
@@ -74,7 +74,6 @@ class Task:
     estimator_name: str = ""  # the method's estimator (the classifier itself, or a named method's)
     estimator_params: dict[str, Any] = field(default_factory=dict)
     base_row: dict[str, Any] = field(default_factory=dict)
-    metrics: tuple[str, ...] = ()  # scikit-learn scorer names, computed from the task's predictions
 
 
 class RunContext:
@@ -241,7 +240,6 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
             est = fitted_est.estimator
             proba = fitted_est.predict_proba(X_te) if est is not None else None
             row.update(metrics(y_test, y_pred))
-            row.update(scorer_values(task.metrics, y_test, y_pred, proba))
             if task.measure_latency:  # once per method and run: features + predict of one capture
                 lat_sets = _latency_sets(task, ctx, fitted, y_train)
                 caps = [ds.captures[int(i)][: task.crop_frames] if task.crop_frames is not None else ds.captures[int(i)]
@@ -265,7 +263,7 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
         })
         if proba is not None:
             for label in sorted(proba):
-                preds[f"proba_{label}"] = proba[label]
+                preds[f"{PROBA_PREFIX}{label}"] = proba[label]
     except Exception as e:  # the task fails, the run goes on
         tb = traceback.format_exc(limit=-3)
         row["status"] = "failed"

@@ -1,43 +1,42 @@
-"""The scores of one set of predictions: accuracy, balanced accuracy, macro F1, and any
-scikit-learn scorer a protocol names (``metrics:``)."""
+"""The scores of one set of predictions, every one through a scikit-learn scorer: the three every
+task has (accuracy, balanced accuracy, macro F1) and any scorer a protocol names (``metrics:``)."""
 
 from __future__ import annotations
 
 import warnings
 
 import numpy as np
-from sklearn.metrics import balanced_accuracy_score, f1_score
 
-__all__ = ["metrics", "scorer_values"]
+__all__ = ["FIXED", "metrics", "scorer_values"]
+
+#: the three scores of every task (columns of ``scores.parquet``) and the scikit-learn scorer of each
+FIXED = {"accuracy": "accuracy", "balanced_accuracy": "balanced_accuracy", "macro_f1": "f1_macro"}
 
 
 def metrics(y_true: np.ndarray, y_pred: np.ndarray) -> dict[str, float]:
     """Accuracy, balanced accuracy (mean recall over the true classes) and macro F1.
 
     Macro F1 averages over the classes present in truth or prediction
-    (a class neither present nor predicted has no F1). Computed with
-    scikit-learn; its warnings for absent classes are silenced (the fold's
-    notes describe them).
+    (a class neither present nor predicted has no F1, one never predicted
+    has F1 0). Computed by :func:`scorer_values` with the scorers of
+    :data:`FIXED`; scikit-learn's warnings for absent classes are silenced
+    (the fold's notes describe them).
     """
-    yt = np.asarray(y_true).astype(str)
-    yp = np.asarray(y_pred).astype(str)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return {
-            "accuracy": float(np.mean(yt == yp)),
-            "balanced_accuracy": float(balanced_accuracy_score(yt, yp)),
-            "macro_f1": float(f1_score(yt, yp, average="macro", labels=sorted(set(yt) | set(yp)), zero_division=0)),
-        }
+    values = scorer_values(list(FIXED.values()), y_true, y_pred)
+    return {column: values[name] for column, name in FIXED.items()}
 
 
 def scorer_values(names: tuple[str, ...] | list[str], y_true: np.ndarray, y_pred: np.ndarray,
-                  proba: dict[str, np.ndarray] | None = None) -> dict[str, float]:
+                  proba: dict[str, np.ndarray] | None = None,
+                  problems: dict[str, str] | None = None) -> dict[str, float]:
     """Each scikit-learn scorer of ``names`` (``sklearn.metrics.get_scorer``) from the predictions:
     its metric function with the scorer's own arguments and sign (so ``neg_log_loss`` is negative,
     greater is better, as in scikit-learn). Scorers on probabilities or decision values take the
     class probabilities (``proba``: class -> column; the positive class's column for a binary
     problem) and are NaN for a classifier without them; classes the training fold lacked have
-    probability 0."""
+    probability 0. A scorer that cannot be computed here (no probabilities, a binary scorer on
+    several classes, a class in the truth only...) is NaN, and ``problems`` (when given) gets the
+    reason under its name."""
     from sklearn.metrics import get_scorer
 
     yt = np.asarray(y_true).astype(str)
@@ -48,13 +47,15 @@ def scorer_values(names: tuple[str, ...] | list[str], y_true: np.ndarray, y_pred
         func, sign, kwargs = scorer._score_func, scorer._sign, dict(scorer._kwargs)
         method = scorer._response_method
         methods = (method,) if isinstance(method, str) else tuple(method)
+        value = np.nan
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             try:
                 if "predict" in methods:
                     value = func(yt, yp, **kwargs)
                 elif proba is None:
-                    value = np.nan
+                    if problems is not None:
+                        problems[name] = "it needs class probabilities and the classifier gives none"
                 else:
                     classes = sorted(set(yt) | set(proba))
                     P = np.column_stack([np.asarray(proba.get(c, np.zeros(len(yt))), dtype=np.float64)
@@ -64,7 +65,9 @@ def scorer_values(names: tuple[str, ...] | list[str], y_true: np.ndarray, y_pred
                         value = func(yt, score, labels=classes, **kwargs)
                     except TypeError:  # a metric without a labels argument
                         value = func(yt, score, **kwargs)
-            except ValueError:  # e.g. a class present in truth only: the metric is undefined here
-                value = np.nan
-        out[name] = float(sign * value) if np.isfinite(value) else np.nan
+            except (ValueError, TypeError) as e:  # undefined on these labels (e.g. a regression scorer)
+                if problems is not None:
+                    problems[name] = f"{type(e).__name__}: {e}".split("\n")[0]
+        value = float(value)
+        out[name] = sign * value if np.isfinite(value) else np.nan
     return out

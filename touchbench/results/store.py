@@ -42,13 +42,15 @@ import os
 import socket
 import time
 from pathlib import Path
-from typing import Any, Iterable, Iterator
+from typing import Any, Iterable, Iterator, Sequence
 
+import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
 from ..core.atomic import atomic_write_bytes, atomic_write_parquet
 from ..core.errors import TouchbenchError, WriteError
+from ..evaluation.metrics import scorer_values
 
 try:  # POSIX
     import fcntl
@@ -56,8 +58,8 @@ except ImportError:  # pragma: no cover - Windows
     fcntl = None  # type: ignore[assignment]
 
 __all__ = ["PREDICTED", "SCHEMA_VERSION", "TRUE", "ResultStore", "ResultsBusyError", "atomic_write_bytes",
-           "atomic_write_parquet", "check_schema", "confusion_table", "read_results_table", "upgrade",
-           "write_results_table"]
+           "atomic_write_parquet", "check_schema", "confusion_table", "read_results_table", "task_metrics",
+           "upgrade", "write_results_table"]
 
 LOCK_NAME = ".touchbench.lock"
 LOCK_POLL_SECONDS = 0.5
@@ -89,6 +91,8 @@ PREDICTION_COLUMNS = [
     "run_id", "task_id", "repetition", "fold", "fold_group", "early_frames", "features", "classifier",
     "capture_id", "subject", "gesture", TRUE, PREDICTED, "correct",
 ]
+#: the class probabilities of a prediction are the columns ``proba_<class>``
+PROBA_PREFIX = "proba_"
 #: version of the layout of the files above, in each file's metadata (``touchbench_results_schema``) and
 #: the manifest: 1 (no version written) named the label columns ``true`` / ``predicted`` and kept the
 #: pooled confusion rows in ``confusion.parquet``; 2 is this layout. Readers upgrade older tables.
@@ -179,6 +183,26 @@ def confusion_table(predictions: pd.DataFrame, pooled: bool = False) -> pd.DataF
     out["early_frames"] = out["early_frames"].astype("float64").where(out["early_frames"] >= 0)
     out["count"] = out["count"].astype("int64")
     return out
+
+
+def task_metrics(predictions: pd.DataFrame, names: Sequence[str], notes: list[str] | None = None) -> pd.DataFrame:
+    """Each scikit-learn scorer of ``names`` per task (one row per ``task_id``), from the task's
+    labels and its stored probabilities (``proba_<class>``: the classes of its training fold)
+    through :func:`touchbench.evaluation.metrics.scorer_values`. A scorer not computed for some
+    tasks gets one note in ``notes``: how many, and the first reason."""
+    rows: dict[str, dict[str, float]] = {}
+    missed: dict[str, list[str]] = {}
+    for tid, p in predictions.groupby("task_id", sort=False):
+        proba = {c[len(PROBA_PREFIX):]: p[c].to_numpy(dtype=np.float64) for c in p.columns
+                 if c.startswith(PROBA_PREFIX) and p[c].notna().all()}
+        problems: dict[str, str] = {}
+        rows[str(tid)] = scorer_values(names, p[TRUE].to_numpy(), p[PREDICTED].to_numpy(), proba or None, problems)
+        for name, why in problems.items():
+            missed.setdefault(name, []).append(why)
+    if notes is not None:
+        notes += [f"metric {name}: not computed for {len(why)} of {len(rows)} tasks ({why[0]})"
+                  for name, why in missed.items()]
+    return pd.DataFrame.from_dict(rows, orient="index", columns=list(names))
 
 
 class ResultStore:
@@ -346,13 +370,17 @@ class ResultStore:
             return []
         return sorted(p.name[: -len(suffix)] for p in self.fragments.glob(f"*{suffix}"))
 
-    def merge(self, task_ids: list[str], stamp: dict[str, Any]) -> dict[str, pd.DataFrame]:
-        """Write ``scores``, ``predictions`` and ``confusion`` for ``task_ids``.
+    def merge(self, task_ids: list[str], stamp: dict[str, Any], metrics: Sequence[str] = (),
+              notes: list[str] | None = None) -> dict[str, pd.DataFrame]:
+        """Write ``scores``, ``predictions``, ``confusion`` and ``confusion_pooled`` for ``task_ids``.
 
         ``stamp`` (``run_id``, ``protocol_hash``...) overwrites those columns,
         so the merged report describes the current protocol. Rows keep the
         order of ``task_ids`` (the plan's order), independent of the order
-        tasks finished in.
+        tasks finished in. ``metrics`` (scikit-learn scorer names) add one
+        scores column each, computed from each task's stored predictions
+        (:func:`task_metrics`), so naming a new metric refits nothing; why a
+        metric could not be computed goes to ``notes``.
         """
         finished = self.finished()
         done = [t for t in task_ids if t in finished]
@@ -367,6 +395,10 @@ class ResultStore:
             scores = scores.sort_values("task_id", key=lambda s: s.map(order), kind="stable").reset_index(drop=True)
         if len(preds):
             preds = preds.sort_values("task_id", key=lambda s: s.map(order), kind="stable").reset_index(drop=True)
+        if metrics:
+            values = task_metrics(preds, metrics, notes)
+            for name in metrics:
+                scores[name] = scores["task_id"].map(values[name]) if len(scores) else []
         scores = _concat([scores], SCORE_COLUMNS)
         preds = _concat([preds], PREDICTION_COLUMNS)
         confusion = confusion_table(preds)

@@ -9,19 +9,18 @@ over every test prediction of the configuration.
 
 from __future__ import annotations
 
-import warnings
 from typing import Any
 
 import numpy as np
 import pandas as pd
-from sklearn.metrics import balanced_accuracy_score, f1_score
 
+from ..evaluation.metrics import FIXED, metrics
 from .store import PREDICTED, TRUE
 
 __all__ = ["CONFIG_KEYS", "check_expected", "summarize"]
 
 CONFIG_KEYS = ["features", "classifier", "early_frames"]
-METRICS = ["accuracy", "balanced_accuracy", "macro_f1"]
+METRICS = list(FIXED)
 
 
 def summarize(scores: pd.DataFrame, predictions: pd.DataFrame | None = None, by: list[str] | None = None) -> pd.DataFrame:
@@ -55,18 +54,10 @@ def summarize(scores: pd.DataFrame, predictions: pd.DataFrame | None = None, by:
 
 
 def _pooled_metric(preds: pd.DataFrame, metric: str) -> float:
-
+    """``metric`` (one of :data:`METRICS`) over the predictions of every fold at once."""
     if preds.empty:
         return np.nan
-    t, p = preds[TRUE].astype(str), preds[PREDICTED].astype(str)
-    if metric == "accuracy":
-        return float((t == p).mean())
-    if metric == "balanced_accuracy":
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return float(balanced_accuracy_score(t, p))
-    return float(f1_score(t, p, average="macro", labels=sorted(set(t) | set(p)), zero_division=0))
+    return metrics(preds[TRUE].to_numpy(), preds[PREDICTED].to_numpy())[metric]
 
 
 def check_expected(expected, scores: pd.DataFrame, predictions: pd.DataFrame | None = None) -> list[dict[str, Any]]:
