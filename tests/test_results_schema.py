@@ -90,3 +90,15 @@ def test_a_target_the_data_lacks_lists_the_columns(tmp_path):
         plan_run(_protocol(tmp_path, target="covr"))
     assert "the dataset has no 'covr' column" in str(e.value) and "did you mean 'cover'" in str(e.value)
     assert "its metadata columns: cover, gesture," in str(e.value)
+
+
+@pytest.mark.parametrize("scheme", ["{name: loso, column: cover}", "{name: kfold, k: 2, grouped: true, group_column: cover}",
+                                    "{name: transfer, column: cover}"])
+def test_a_target_the_scheme_holds_out_is_refused(tmp_path, scheme):
+    data = tmp_path / "data.parquet"
+    random_dataset(subjects=("s1", "s2"), per_cell=2, extra={"cover": ["fur", "none"]}, seed=1).to_parquet(data)
+    with pytest.raises(ProtocolError) as e:
+        parse_protocol(f"name: m\ndataset: {data}\ntarget: cover\nscheme: {scheme}\nfeatures: [[test-mean]]\n"
+                       "classifiers: [test-logreg]\n", tmp_path / "m.yaml")
+    assert "m.yaml:3: target: target 'cover'" in str(e.value)
+    assert "holds out the values of 'cover', so no test capture's class would be in the training data" in str(e.value)

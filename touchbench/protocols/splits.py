@@ -208,12 +208,22 @@ class Splitter:
         """True if every kept capture is in exactly one test fold (per repeat)."""
         return False
 
+    def apart_column(self) -> str | None:
+        """The metadata column whose values are never on both sides of a fold (the one held out)."""
+        return "subject" if self.keeps_subjects_apart() else None
+
     def check_target(self) -> None:
-        """Refuse a target the scheme cannot evaluate."""
+        """Refuse a target the scheme cannot evaluate: the column it holds out (every test class
+        would be missing from the training data)."""
         if self.target == "subject" and self.keeps_subjects_apart():
             raise SplitError(
                 f"target 'subject' (person identification) needs each test subject in the training "
                 f"data, but scheme {self.name!r} keeps subjects apart; use kfold or leave-recording-out"
+            )
+        if self.target == self.apart_column():
+            raise SplitError(
+                f"target {self.target!r}: scheme {self.name!r} holds out the values of {self.target!r}, so no "
+                f"test capture's class would be in the training data; predict another column or hold out another"
             )
 
     def split(self, meta: pd.DataFrame) -> list[Fold]:
@@ -302,6 +312,9 @@ class ChallengeSplit(Splitter):
     def keeps_subjects_apart(self) -> bool:
         return self.params.test_subjects is not None
 
+    def apart_column(self) -> str | None:
+        return "subject" if self.params.test_subjects is not None else self.params.column
+
     def _split(self, meta: pd.DataFrame) -> list[Fold]:
         p = self.params
         if p.test_subjects is not None:
@@ -362,6 +375,9 @@ class LeaveOneSubjectOut(Splitter):
 
     def keeps_subjects_apart(self) -> bool:
         return self.params.column == "subject"
+
+    def apart_column(self) -> str | None:
+        return self.params.column
 
     def tests_each_capture_once(self) -> bool:
         return self.params.subjects is None
@@ -441,6 +457,9 @@ class KFold(Splitter):
 
     def keeps_subjects_apart(self) -> bool:
         return self.params.grouped and self.params.group_column == "subject"
+
+    def apart_column(self) -> str | None:
+        return self.params.group_column if self.params.grouped else None
 
     def tests_each_capture_once(self) -> bool:
         return True
@@ -640,6 +659,9 @@ class PersonIndependent(Splitter):
     def keeps_subjects_apart(self) -> bool:
         return self.params.column == "subject"
 
+    def apart_column(self) -> str | None:
+        return self.params.column
+
     def tests_each_capture_once(self) -> bool:
         return True
 
@@ -701,6 +723,9 @@ class Transfer(Splitter):
 
     def keeps_subjects_apart(self) -> bool:
         return True
+
+    def apart_column(self) -> str | None:
+        return self.params.column
 
     def _split(self, meta: pd.DataFrame) -> list[Fold]:
         p = self.params
