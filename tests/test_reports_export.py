@@ -61,3 +61,23 @@ def test_tsml_export_is_read_back_by_tsml_eval(run_dir, tmp_path):
         assert np.allclose(res.probabilities.sum(axis=1), 1.0)
         if method == "test-logreg":  # its probabilities, in the sorted class order
             assert np.allclose(res.probabilities, ours[[f"proba_{c}" for c in classes]].to_numpy())
+
+
+def test_tables_of_one_dataset_and_scheme_are_separate_problems(engine_env, tmp_path):
+    """Two targets on the same data and scheme: two problems, no file written over another."""
+    load = _loader()
+    data = tmp_path / "data.parquet"
+    random_dataset(subjects=("s1", "s2", "s3"), per_cell=2, extra={"cover": ["fur", "none"]}, seed=4).to_parquet(data)
+    for target in ("gesture", "cover"):
+        p = parse_protocol(f"name: {target}\ndataset: {data}\ntarget: {target}\nscheme: loso\n"
+                           "features: [[test-mean]]\nclassifiers: [test-logreg]\nseed: 1\n", tmp_path / f"{target}.yaml")
+        run_protocol(p, out=tmp_path / "runs" / target, progress=False)
+    r = CliRunner().invoke(cli, ["export", str(tmp_path / "runs"), "--out", str(tmp_path / "tsml"), "--json"])
+    assert r.exit_code == 0, r.output
+    files = json.loads(r.stdout)["files"]
+    assert len(files) == len(set(files)) == 2 * 3  # 2 tables x 3 subjects left out
+    problems = {f.split("/Predictions/")[1].split("/")[0] for f in files}
+    assert problems == {"data-loso", "data-loso-target-cover"}
+    for f in files:  # each file holds its own table's classes
+        res = load(f)
+        assert res.n_classes == (2 if "target-cover" in f else 3)

@@ -13,10 +13,23 @@ index, the predicted class's index, an empty field and the class probabilities (
 ``load_classifier_results``).
 
 Mapping: a *classifier* is a method (features and classifier, ``msd-gaus-rf``), a *problem* a
-table of the results (dataset, and the scheme when a folder holds several), a *resample* one
-(repetition, fold) of the scheme, numbered 0, 1, ... in the order of the run's folds: a subject
-left out for ``loso``, a fold for ``kfold``, the single split for ``challenge`` (one resample per
-repetition). The description of line 1 names the fold and repetition, and the class indices are
+table of the results (its dataset; dataset, scheme and target when several tables share a dataset),
+a *resample* one (repetition, fold) of the scheme, numbered 0, 1, ... in the order of the run's
+folds, repetition after repetition. Per scheme, a resample is:
+
+==========================  ============================================================
+``challenge``               the single train/test split (one per repetition)
+``loso``                    one subject (or ``column`` value) left out
+``kfold``                   one fold of one repeat (``repeats`` x ``k`` resamples)
+``within-subject``          one fold inside one subject
+``leave-recording-out``     one direction: train on one recording, test on the other
+``person-independent``      one party of subjects tested
+``transfer``                one ordered pair of groups (``A->B``)
+``early``                   a resample of its base scheme; each length of cut is a classifier
+                            of its own (``... @ 8 frames``)
+==========================  ============================================================
+
+The description of line 1 names the fold and repetition, and the class indices are
 positions in the sorted class names, listed there too. Probabilities are the classifier's, or 1 for
 the predicted class when it gives none; times are the task's fit and predict times in milliseconds;
 benchmark time and memory are not measured (-1).
@@ -32,6 +45,7 @@ import numpy as np
 from ..core.atomic import atomic_write_bytes
 from ..results.store import PREDICTED, TRUE
 from .leaderboard import Leaderboard, method_labels
+from .plots import slug, unique_stem
 from .results import ResultSet
 
 __all__ = ["export_tsml"]
@@ -47,18 +61,16 @@ def export_tsml(rs: ResultSet, lbs: list[Leaderboard], out: str | Path) -> list[
         raise ValueError("no predictions to export (predictions.parquet is missing)")
     out = Path(out)
     written: list[Path] = []
-    several = len({lb.dataset for lb in lbs}) < len(lbs)
-    for lb in lbs:
-        problem = _name(f"{lb.dataset}-{lb.scheme}" if several else lb.dataset)
-        if problem.endswith(".parquet"):
-            problem = problem[: -len(".parquet")]
-        labels = method_labels(lb.rows)
+    for lb, problem in zip(lbs, _problems(lbs)):
+        taken: set[str] = set()
+        labels = {mid: unique_stem(_name(lab.replace(" / ", "-")), taken)
+                  for mid, lab in method_labels(lb.rows).items()}
         preds = rs.predictions[rs.predictions["table_key"] == lb.key]
         scores = rs.scores[(rs.scores["table_key"] == lb.key) & (rs.scores["status"] == "ok")]
         classes = sorted(set(preds[TRUE].astype(str)) | set(preds[PREDICTED].astype(str)))
         index = {c: i for i, c in enumerate(classes)}
         for mid, tasks in scores.groupby("method_id", sort=False):
-            estimator = _name(labels.get(mid, mid).replace(" / ", "-"))
+            estimator = labels.get(mid) or _name(str(mid))
             tasks = tasks.drop_duplicates("task_id")
             for i, (_, task) in enumerate(tasks.iterrows()):
                 p = preds[preds["task_id"] == task["task_id"]]
@@ -83,6 +95,16 @@ def export_tsml(rs: ResultSet, lbs: list[Leaderboard], out: str | Path) -> list[
                 atomic_write_bytes(path, ("\n".join([line1, line2, line3, *rows]) + "\n").encode())
                 written.append(path)
     return written
+
+
+def _problems(lbs: list[Leaderboard]) -> list[str]:
+    """A problem name per table: its dataset (a file's name without its suffix) when the tables'
+    datasets differ, else the table's slug (dataset, scheme, target...); unique either way."""
+    names = [Path(lb.dataset).stem if lb.dataset.endswith((".parquet", ".csv", ".gz")) else lb.dataset
+             for lb in lbs]
+    distinct = len(set(names)) == len(names)
+    taken: set[str] = set()
+    return [unique_stem(_name(n) if distinct else slug(lb), taken) for n, lb in zip(names, lbs)]
 
 
 def _ms(seconds) -> int:
