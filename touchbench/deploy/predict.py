@@ -26,7 +26,7 @@ from ..catalog import load_dataset
 from ..core.atomic import atomic_write_bytes, atomic_write_parquet
 from ..datasets.formats import FORMATS
 from ..datasets.model import TouchDataset
-from ..results.store import PREDICTED, TRUE
+from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
 from .model import TrainedModel
 from .windows import cut_windows
 
@@ -71,7 +71,7 @@ def predict_dataset(model: TrainedModel, ds: TouchDataset, *, whole: bool = Fals
     out["probability"] = P[np.arange(len(ds)), [col[p] for p in out[PREDICTED]]]
     out["n_windows"] = n_windows
     for i, c in enumerate(classes):
-        out[f"proba_{c}"] = P[:, i]
+        out[f"{PROBA_PREFIX}{c}"] = P[:, i]
     return out
 
 

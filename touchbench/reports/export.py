@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.atomic import atomic_write_bytes
-from ..results.store import PREDICTED, TRUE
+from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
 from .leaderboard import Leaderboard, method_labels
 from .plots import slug, unique_stem
 from .results import ResultSet
@@ -78,7 +78,7 @@ def export_tsml(rs: ResultSet, lbs: list[Leaderboard], out: str | Path) -> list[
                     continue
                 true = p[TRUE].astype(str).map(index).to_numpy()
                 pred = p[PREDICTED].astype(str).map(index).to_numpy()
-                cols = [f"proba_{c}" for c in classes]
+                cols = [f"{PROBA_PREFIX}{c}" for c in classes]
                 if all(c in p.columns for c in cols) and p[cols].notna().all().all():
                     P = p[cols].to_numpy(dtype=np.float64)
                 else:  # no probabilities: the prediction, certain

@@ -48,7 +48,7 @@ import yaml
 
 from ..core.errors import TouchbenchError
 from ..core.yamlsafe import safe_load
-from ..results.store import PREDICTED, TRUE, ResultStore, check_schema, read_results_table
+from ..results.store import PREDICTED, PROBA_PREFIX, TRUE, ResultStore, check_schema, read_results_table
 
 __all__ = ["ResultSet", "load_results", "machine_id", "method_id", "scheme_label"]
 
@@ -238,7 +238,7 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
             )
             s["fold_key"] = [keys.get(t, fk) for t, fk in zip(s["task_id"], s["fold_key"])]
             if predictions:
-                keep = [c for c in PREDICTION_COLUMNS if c in p.columns] + [c for c in p.columns if c.startswith("proba_")]
+                keep = [c for c in PREDICTION_COLUMNS if c in p.columns] + [c for c in p.columns if c.startswith(PROBA_PREFIX)]
                 pp = p[keep].copy()
                 info = s.drop_duplicates("task_id").set_index("task_id")[
                     ["method_id", "fold_key", "seed", "finished_at", "table_key"]]

@@ -57,7 +57,7 @@ try:  # POSIX
 except ImportError:  # pragma: no cover - Windows
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["PREDICTED", "SCHEMA_VERSION", "TRUE", "ResultStore", "ResultsBusyError", "atomic_write_bytes",
+__all__ = ["PREDICTED", "PROBA_PREFIX", "SCHEMA_VERSION", "TRUE", "ResultStore", "ResultsBusyError", "atomic_write_bytes",
            "atomic_write_parquet", "check_schema", "confusion_table", "read_results_table", "task_metrics",
            "upgrade", "write_results_table"]
 
