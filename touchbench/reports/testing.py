@@ -1,7 +1,8 @@
 """Hand-built results directories for testing the reports (not used by a run).
 
 :func:`write_fake_run` writes ``scores.parquet``, ``predictions.parquet``,
-``confusion.parquet`` and ``manifest.json`` in the engine's layout (columns of
+``confusion.parquet``, ``confusion_pooled.parquet`` and ``manifest.json`` in
+the engine's layout (columns and schema version of
 :mod:`touchbench.results.store`) from a compact description: the captures,
 the folds (capture ids tested in each), and per method which test captures
 it gets right. Scores are computed from those predictions with the engine's
@@ -23,7 +24,7 @@ import yaml
 
 from ..core.hashing import canonical_json
 from ..evaluation.metrics import metrics
-from ..results.store import PREDICTED, TRUE, confusion_table
+from ..results.store import PREDICTED, SCHEMA_VERSION, TRUE, confusion_table, write_results_table
 
 __all__ = ["FakeMethod", "write_fake_run"]
 
@@ -117,14 +118,15 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
             }))
     scores = pd.DataFrame(score_rows)
     preds = pd.concat(pred_frames, ignore_index=True) if pred_frames else pd.DataFrame()
-    scores.to_parquet(out / "scores.parquet")
-    preds.to_parquet(out / "predictions.parquet")
-    confusion_table(preds).to_parquet(out / "confusion.parquet")
+    write_results_table(out / "scores.parquet", scores)
+    write_results_table(out / "predictions.parquet", preds)
+    write_results_table(out / "confusion.parquet", confusion_table(preds))
+    write_results_table(out / "confusion_pooled.parquet", confusion_table(preds, pooled=True))
     text = yaml.safe_dump({"name": protocol, "dataset": dataset, "target": target, "scheme": scheme, "seed": seed,
                            "features": [m["features"].split("+") for m in methods],
                            "classifiers": [m["classifier_name"] for m in methods]}, sort_keys=False)
     manifest = {
-        "touchbench_version": "test", "platform": platform or DEFAULT_PLATFORM, "packages": {"python": "3.11"},
+        "touchbench_version": "test", "results_schema": SCHEMA_VERSION, "platform": platform or DEFAULT_PLATFORM, "packages": {"python": "3.11"},
         "run": {"run_id": run_id, "results_dir": str(out)},
         "protocol": {"name": protocol, "text": text, "seed": seed, "scheme": scheme if isinstance(scheme, str) else scheme["name"]},
         "dataset": {"ref": dataset, "hash": dataset_hash, "captures": len(caps),
