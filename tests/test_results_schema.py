@@ -102,3 +102,20 @@ def test_a_target_the_scheme_holds_out_is_refused(tmp_path, scheme):
                        "classifiers: [test-logreg]\n", tmp_path / "m.yaml")
     assert "m.yaml:3: target: target 'cover'" in str(e.value)
     assert "holds out the values of 'cover', so no test capture's class would be in the training data" in str(e.value)
+
+
+def test_run_json_shows_the_protocol_metrics(tmp_path):
+    import json
+
+    from click.testing import CliRunner
+
+    from touchbench.cli.main import cli
+
+    p = _protocol(tmp_path, "metrics: [f1_weighted]")
+    p.path.write_text(p.text)
+    r = CliRunner().invoke(cli, ["run", str(p.path), "--out", str(tmp_path / "out"), "--json"])
+    assert r.exit_code == 0, r.output
+    (method,) = json.loads(r.stdout)["methods"]
+    preds = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
+    by_hand = [f1_score(g["true_label"], g["predicted_label"], average="weighted") for _, g in preds.groupby("task_id")]
+    assert method["f1_weighted_mean"] == pytest.approx(np.mean(by_hand))

@@ -49,8 +49,9 @@ def format_summary(summary, expected) -> str:
 
 def run_summary(res, plan) -> dict:
     """What ``run --json`` prints: the run, its task counts and each method's scores."""
-    cols = [c for c in ("features", "classifier", "early_frames", "n_folds", "n_failed", "accuracy_mean",
-                        "accuracy_std", "balanced_accuracy_mean", "macro_f1_mean", "latency_ms_median")
+    cols = [c for c in dict.fromkeys(("features", "classifier", "early_frames", "n_folds", "n_failed", "accuracy_mean",
+                                      "accuracy_std", "balanced_accuracy_mean", "macro_f1_mean", "latency_ms_median",
+                                      *(f"{m}_mean" for m in plan.protocol.metrics)))
             if c in res.summary]
     failed = res.scores[res.scores["status"] == "failed"] if len(res.scores) else res.scores
     return {

@@ -539,7 +539,7 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
             preds = read_results_table(store.predictions_path, columns=["task_id", TRUE, PREDICTED])
         return RunResult(out=out, run_id=plan.run_id, n_tasks=len(plan.tasks), n_ran=0, n_skipped=len(plan.tasks),
                          n_failed=int((scores["status"] == "failed").sum()), noop=True,
-                         seconds=time.perf_counter() - t_start, scores=scores, summary=summarize(scores),
+                         seconds=time.perf_counter() - t_start, scores=scores, summary=summarize(scores, metrics=protocol.metrics),
                          expected=check_expected(protocol.expected, scores, preds), notes=notes)
 
     n_ran = 0
@@ -599,7 +599,7 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
     store.write_manifest(manifest)
     return RunResult(out=out, run_id=plan.run_id, n_tasks=len(plan.tasks), n_ran=n_ran,
                      n_skipped=len(plan.tasks) - len(pending), n_failed=n_failed, noop=False,
-                     seconds=time.perf_counter() - t_start, scores=scores, summary=summarize(scores),
+                     seconds=time.perf_counter() - t_start, scores=scores, summary=summarize(scores, metrics=protocol.metrics),
                      expected=expected, notes=notes, stopped_early=stopped)
 
 

@@ -9,7 +9,7 @@ over every test prediction of the configuration.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 import pandas as pd
@@ -23,9 +23,12 @@ CONFIG_KEYS = ["features", "classifier", "early_frames"]
 METRICS = list(FIXED)
 
 
-def summarize(scores: pd.DataFrame, predictions: pd.DataFrame | None = None, by: list[str] | None = None) -> pd.DataFrame:
-    """One row per configuration: mean and standard deviation over folds, counts, pooled accuracy."""
+def summarize(scores: pd.DataFrame, predictions: pd.DataFrame | None = None, by: list[str] | None = None,
+              metrics: Sequence[str] = ()) -> pd.DataFrame:
+    """One row per configuration: mean and standard deviation over folds of :data:`METRICS` and of
+    ``metrics`` (a protocol's scorers), counts, pooled accuracy."""
     by = list(by or CONFIG_KEYS)
+    names = list(dict.fromkeys([*METRICS, *(m for m in metrics if m in scores.columns)]))
     if scores.empty:
         return pd.DataFrame(columns=by + ["n_folds", "n_failed"])
     s = scores.copy()
@@ -37,7 +40,7 @@ def summarize(scores: pd.DataFrame, predictions: pd.DataFrame | None = None, by:
         row: dict[str, Any] = dict(zip(by, key))
         row["n_folds"] = int(len(ok))
         row["n_failed"] = int((g["status"] == "failed").sum())
-        for m in METRICS:
+        for m in names:
             vals = ok[m].to_numpy(dtype=np.float64)
             row[f"{m}_mean"] = float(np.mean(vals)) if len(vals) else np.nan
             row[f"{m}_std"] = float(np.std(vals, ddof=1)) if len(vals) > 1 else np.nan
