@@ -91,7 +91,7 @@ def export(name: str, out_dir: str, fmt: str, cache_dir, data_dir) -> None:
         click.echo(str(p))
 
 
-@data.command(epilog=example("touchbench data convert frames.csv mine.parquet --format long --grid 6,6 --frame-rate 50"))
+@data.command(epilog=example("touchbench data convert frames.csv mine.parquet --format long --grid 6x6 --frame-rate 50"))
 @click.argument("source", type=click.Path(exists=True))
 @click.argument("out", type=click.Path(dir_okay=False))
 @click.option("--format", "fmt", type=FormatChoice("read"), required=True,
