@@ -32,6 +32,11 @@ def block(f: dict[str, float], prefix: str) -> list[float]:
     return [v for k, v in f.items() if k.startswith(prefix)]
 
 
+def hist(*bins: int, n: int = 12) -> list[int]:
+    """A histogram of ``n`` bins holding one count per bin index given."""
+    return np.bincount(bins, minlength=n).tolist()
+
+
 # ---------------------------------------------------------------------- sd
 def sd_capture() -> np.ndarray:
     """Three frames of 19 x 24 = 456 cells: all 0; 114 cells (a quarter) at 200; 228 cells (half) at 100."""
@@ -53,7 +58,6 @@ def test_sd_bins_scale_with_the_cells():
     # clipped into the last no-touch / high bin (11), and in touched bin 12 ([59.5, 64.5)).
     f = features("sd", sd_capture())
     assert len(f) == 12 + 12 + 14 + 12 + 12  # as many values as on HAART
-    hist = lambda *bins, n=12: np.bincount(bins, minlength=n).tolist()  # noqa: E731
     assert block(f, "sd_notouch_frame") == hist(11, 9, 6)
     assert block(f, "sd_notouch_instance") == hist(11, 9, 6)
     assert block(f, "sd_touched_median") == hist(12, 12, 12, n=14)
