@@ -1,5 +1,6 @@
-"""Shared fixtures. Real-data tests use ``real_haart_dir``: it fails (not
-skips) when CI=true and ../shared/data/haart is missing. Plugin tests use
+"""Shared fixtures. Real-data tests use ``real_haart_dir`` and
+``real_socialtouch_dir``: they fail (not skip) when CI=true and
+../shared/data/haart (or ../shared/data/socialtouch) is missing. Plugin tests use
 ``example_plugin``: it fails (not skips) when CI=true and the example plugin
 (examples/touchbench-plugin-example, installed by ``make setup``) is not
 installed."""
@@ -24,6 +25,13 @@ def _haart_dir():
     d = data_dir() / "haart"
     if not (d / "raw").is_dir():
         _missing(f"real HAART data not found at {d} (set TOUCHBENCH_DATA_DIR)")
+    return d
+
+
+def _socialtouch_dir():
+    d = data_dir() / "socialtouch"
+    if not (d / "raw").is_dir():
+        _missing(f"real SocialTouch data not found at {d} (set TOUCHBENCH_DATA_DIR)")
     return d
 
 
@@ -66,6 +74,27 @@ def real_haart_challenge(real_haart_dir, tb_cache):
     from touchbench.catalog import load_dataset
 
     return load_dataset("haart-challenge", cache_dir=tb_cache)
+
+
+@pytest.fixture(scope="session")
+def real_socialtouch_dir():
+    return _socialtouch_dir()
+
+
+@pytest.fixture(scope="session")
+def real_socialtouch(real_socialtouch_dir, tb_cache):
+    """SocialTouch resampled to its fixed 12 Hz (the dataset the protocols use)."""
+    from touchbench.catalog import load_dataset
+
+    return load_dataset("socialtouch", cache_dir=tb_cache)
+
+
+@pytest.fixture(scope="session")
+def real_socialtouch_recorded(real_socialtouch_dir, tb_cache):
+    """SocialTouch as recorded (irregular frames, ``time_ms``)."""
+    from touchbench.catalog import load_dataset
+
+    return load_dataset("socialtouch-recorded", cache_dir=tb_cache)
 
 
 @pytest.fixture

@@ -89,10 +89,12 @@ def test_a_rate_dependent_set_from_python_needs_the_sensor(name):
     with one it computes what the explicit frame rate gives, and not what another rate gives."""
     rng = np.random.default_rng(0)
     captures = [rng.integers(0, 256, size=(60, 4, 5)).astype(np.uint8) for _ in range(3)]
-    with pytest.raises(SensorNeededError, match=r"frame rate.*pass sensor=SensorSpec\(\.\.\.\) or frame_rate="):
+    with pytest.raises(SensorNeededError, match=r"pass sensor=SensorSpec\(\.\.\.\) or "):
         touchbench.make_feature_set(name).fit_transform(captures)
+    with pytest.raises(SensorNeededError, match=r"frame rate.*pass sensor=SensorSpec\(\.\.\.\) or frame_rate="):
+        touchbench.make_feature_set(name, {"value_range": (0, 255)}).fit_transform(captures)
     sensor = touchbench.SensorSpec("skin", grid=(4, 5), frame_rate=20.0, value_range=(0, 255))
     out = touchbench.make_feature_set(name, sensor=sensor).fit_transform(captures)
-    same = touchbench.make_feature_set(name, {"frame_rate": 20.0}).fit_transform(captures)
-    other = touchbench.make_feature_set(name, {"frame_rate": 54.0}).fit_transform(captures)
+    same = touchbench.make_feature_set(name, {"frame_rate": 20.0, "value_range": (0, 255)}).fit_transform(captures)
+    other = touchbench.make_feature_set(name, {"frame_rate": 54.0, "value_range": (0, 255)}).fit_transform(captures)
     assert np.array_equal(out, same) and not np.array_equal(out, other)

@@ -64,7 +64,7 @@ def test_data_formats_lists_every_format_with_options():
     assert r.exit_code == 0, r.output
     for e in FORMATS.entries():
         assert f"{e.name:14s} {e.description}" in r.output
-    assert "--grid H,W" in r.output and "--frame-rate" in r.output
+    assert "--grid HxW" in r.output and "--frame-rate" in r.output
 
 
 def test_command_choices_come_from_the_registry():
@@ -106,13 +106,17 @@ def test_long_format_options_from_the_command_line_or_the_model(tmp_path):
     ds = TouchDataset.from_parquet(out)
     assert ds.name == "mine" and ds.sensor.grid == (2, 3) and ds.sensor.frame_rate == 10.0
     np.testing.assert_array_equal(ds.captures[1], expected["c2"])
-    # predict: the model's sensor supplies grid, frame rate, value range and name
-    got = read_data(str(tmp_path / "mine.csv"), "long", _Model())
+    # predict: the model's sensor supplies grid, value range and name; the frame rate is the recording's
+    with pytest.raises(TouchbenchError, match="does not say its frame rate: give --frame-rate"):
+        read_data(str(tmp_path / "mine.csv"), "long", _Model())
+    got = read_data(str(tmp_path / "mine.csv"), "long", _Model(), frame_rate=SENSOR.frame_rate)
     assert got.sensor == SENSOR
     np.testing.assert_array_equal(got.captures[0], expected["c1"])
     # without a model the grid and frame rate are required
     with pytest.raises(TouchbenchError, match="needs grid and frame_rate"):
         FORMATS.get("long").read(tmp_path / "mine.csv")
+    with pytest.raises(TouchbenchError, match="goes with --format"):
+        read_data(str(tmp_path / "mine.csv"), "auto", _Model(), frame_rate=10.0)
     # an option of another format is refused, not ignored
     with pytest.raises(TouchbenchError, match="the cost-csv format takes no option 'grid'"):
         FORMATS.get("cost-csv").read(tmp_path / "mine.csv", grid=(2, 3))
@@ -130,10 +134,10 @@ def test_parquet_round_trip_through_the_registry(tmp_path):
 
 def test_stream_replays_a_registered_format(tmp_path):
     expected = _long_csv(tmp_path / "mine.csv")
-    frames, rate, what = load_replay(tmp_path / "mine.csv", _Model(), "c2", fmt="long")
+    frames, rate, what = load_replay(tmp_path / "mine.csv", _Model(), "c2", fmt="long", frame_rate=10.0)
     np.testing.assert_array_equal(frames, expected["c2"])
     assert rate == 10.0 and what == "mine.csv: capture c2"
-    frames, _, what = load_replay(tmp_path / "mine.csv", _Model(), None, fmt="long")
+    frames, _, what = load_replay(tmp_path / "mine.csv", _Model(), None, fmt="long", frame_rate=10.0)
     np.testing.assert_array_equal(frames, np.concatenate([expected["c1"], expected["c2"]]))
     assert what == "mine.csv: 2 captures"
     r = CliRunner().invoke(cli, ["stream", str(tmp_path / "m.joblib"), "-", "--format", "long"])

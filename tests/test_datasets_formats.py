@@ -194,3 +194,32 @@ def test_generic_reader_bad_input(tmp_path):
     with pytest.raises(DataError, match="NaN") as e:
         read_long_table(p, (3, 5), 30.0)
     assert e.value.line == 5
+
+
+def test_an_export_without_test_captures_reads_back(tmp_path):
+    ds = _challenge_like(n_train=3, n_test=0)
+    files = export_challenge_csv(ds, tmp_path)
+    assert [p.name for p in files] == ["training.csv", "testWITHLABELS.csv"]
+    assert len((tmp_path / "testWITHLABELS.csv").read_text().splitlines()) == 1  # the header alone
+    back = read_challenge_csv(tmp_path)
+    assert len(back) == 3 and set(back.meta["split"]) == {"train"}
+    for a, b in zip(ds.captures, back.captures):
+        assert np.array_equal(a, b)
+
+
+def test_header_only_challenge_files_are_refused_as_no_captures(tmp_path):
+    export_challenge_csv(_challenge_like(n_train=2, n_test=0), tmp_path)
+    train = tmp_path / "training.csv"
+    train.write_text(train.read_text().splitlines()[0] + "\n")
+    with pytest.raises(DataError, match="no captures: every file found has a header and no rows"):
+        read_challenge_csv(tmp_path)
+
+
+def test_one_grid_syntax(tmp_path):
+    from touchbench.datasets.formats import parse_grid
+
+    assert parse_grid("19x24") == (19, 24) and parse_grid("19X24") == (19, 24) and parse_grid("8,8") == (8, 8)
+    with pytest.raises(ValueError, match="expected HxW"):
+        parse_grid("19 by 24")
+    with pytest.raises(ValueError, match="at least 1"):
+        parse_grid("0x4")

@@ -188,7 +188,9 @@ def test_smmhh_sizes_and_odd_pooling():
     assert make_set("smmhh").n_features((8, 8)) == 2125  # equation 1
     # 3 x 3 -> 2 x 2: means of (1,2,4,5), (3,6), (7,8), (9)
     assert_allclose(pool2(np.arange(1.0, 10.0).reshape(3, 3)), [[3, 4.5], [7.5, 9]])
-    assert make_set("smmhh").n_features((20, 20)) == 25 * (400 + 100 + 25 + 9)
+    # pooled down to one cell, the paper's 8x8..1x1 rule on any grid: 20, 10, 5, 3, 2, 1
+    assert make_set("smmhh").n_features((20, 20)) == 25 * (400 + 100 + 25 + 9 + 4 + 1)
+    assert make_set("smmhh", n_scales=4).n_features((20, 20)) == 25 * (400 + 100 + 25 + 9)
     # shorter than every skip: no frame pairs, all zero
     assert make_set("smmhh").fit_transform([np.ones((2, 8, 8))]).sum() == 0
 

@@ -43,7 +43,7 @@ def _captures(n_per_class=8, frames=60, seed=0):
 
 
 def _registry_features(caps, names=OWN):
-    return np.hstack([FEATURES.create(n, frame_rate=54.0).fit(caps[:1]).transform(caps) for n in names])
+    return np.hstack([FEATURES.create(n, frame_rate=54.0, value_range=SENSOR_4X4.value_range).fit(caps[:1]).transform(caps) for n in names])
 
 
 def _proba(pipe, caps):
@@ -71,7 +71,7 @@ def test_touch_et_fast_uses_touch_rhythm_only_and_100_trees():
     assert est.spec.feature_names == ["touch-rhythm"]
     model = est.fitted_.estimator
     assert model.model_.n_estimators == 100
-    assert model.model_.n_features_in_ == len(FEATURES.create("touch-rhythm", frame_rate=54.0).feature_names((4, 4)))
+    assert model.model_.n_features_in_ == len(FEATURES.create("touch-rhythm", frame_rate=54.0, value_range=(0, 1023)).feature_names((4, 4)))
 
 
 def test_touch_xgb_gives_probabilities_of_the_training_classes():

@@ -59,13 +59,14 @@ def shortest(ds: TouchDataset) -> int:
     return int(ds.n_frames.min())
 
 
-def pyramid_cells(grid: tuple[int, int], levels: int = 4) -> int:
-    """Cells of smmhh's 4 scales: each halves the sides with ceil (6x6: 36 + 9 + 4 + 1 = 50)."""
+def pyramid_cells(grid: tuple[int, int]) -> int:
+    """Cells of smmhh's scales down to 1 x 1, each halving the sides with ceil
+    (6x6: 36 + 9 + 4 + 1 = 50; 19x24: 456 + 120 + 30 + 9 + 4 + 1 = 620)."""
     h, w = grid
-    total = 0
-    for _ in range(levels):
-        total += h * w
+    total = h * w
+    while (h, w) != (1, 1):
         h, w = -(-h // 2), -(-w // 2)
+        total += h * w
     return total
 
 
@@ -75,7 +76,7 @@ def expected_size(name: str, sensor: SensorSpec, frames: int) -> int:
     cells = h * w
     own = {"touch-rhythm": 11 * 35 + 7 + 3 * 8 + 2, "cell-rhythm": 9 + 11, "contact-motion": 3 * (12 + 4 + 2) + 1}
     sizes = {
-        "sd": 12 + 12 + 14 + 12 + 12,  # HAART's Table 4 bins (the preset named)
+        "sd": 12 + 12 + 14 + 12 + 12,  # HAART's Table 4 bins, scaled to the grid: as many bins on any grid
         "bmh": cells,
         "msd": 12 * cells,
         "smmhh": 5 * 5 * pyramid_cells(sensor.grid),  # 5 skips x 5 run lengths per pooled cell
@@ -92,10 +93,9 @@ def expected_size(name: str, sensor: SensorSpec, frames: int) -> int:
     return sizes[name]
 
 
-_PRESET = "per recording setting"
 #: (component, sensor) -> what the refusal must say
 REFUSED: dict[tuple[str, str], str] = {
-    **{(n, k): _PRESET for n in ("sd", "bmh", "smmhh") for k in SENSORS},
+    **{(n, "1x16"): r"is a channel sensor \(c0, .*not cells of a pressure surface" for n in ("sd", "bmh", "smmhh")},
     ("touch-windows", "19x24"): r"2-s windows \(24 frames at 12 Hz\) are longer than the shortest capture \(3 frames\)",
     ("touch-et-win", "19x24"): r"2-s windows \(24 frames at 12 Hz\) are longer than the shortest capture \(3 frames\)",
     ("cnn", "19x24"): r"L=30 windows need captures of at least 30 frames.*the shortest has 3",
@@ -125,7 +125,7 @@ def test_every_feature_set_uses_the_sensor_or_is_refused(name, key):
     problem = sensor_problem(fs, sensor, n0)
     if (name, key) in REFUSED:
         assert problem is not None and re.search(REFUSED[name, key], problem), problem
-        if name in ("sd", "bmh", "smmhh"):  # named, HAART's values serve any grid
+        if name in ("sd", "bmh", "smmhh"):  # named, HAART's values serve any sensor, as published
             fs = make_feature_set(name, {"preset": "haart"}, sensor)
             assert sensor_problem(fs, sensor, n0) is None
         else:
@@ -135,8 +135,9 @@ def test_every_feature_set_uses_the_sensor_or_is_refused(name, key):
     out = fs.fit_transform(ds.captures)
     assert out.shape == (len(ds), expected_size(name, sensor, n0)) and np.isfinite(out).all()
     if name in RATE_SETS:  # the sensor's rate is the one used: as if given, unlike another
-        same = make_feature_set(name, {"frame_rate": sensor.frame_rate}, None).fit_transform(ds.captures)
-        other = make_feature_set(name, {"frame_rate": 2 * sensor.frame_rate}, None).fit_transform(ds.captures)
+        given = {"frame_rate": sensor.frame_rate, "value_range": sensor.value_range}
+        same = make_feature_set(name, given, None).fit_transform(ds.captures)
+        other = make_feature_set(name, {**given, "frame_rate": 2 * sensor.frame_rate}, None).fit_transform(ds.captures)
         assert np.array_equal(out, same) and not np.array_equal(out, other)
 
 

@@ -137,7 +137,7 @@ def test_frame_rate_scales_frequencies():
     c = square_wave_capture()
     slow = SensorSpec(name="slow", grid=(8, 8), frame_rate=27.0)
     assert row(TouchRhythm, c, slow)["P_fpeak"] == pytest.approx(1.5)
-    assert TouchRhythm(frame_rate=108.0).fit([c]).transform([c])[0][
+    assert TouchRhythm(frame_rate=108.0, value_range=(0, 1023)).fit([c]).transform([c])[0][
         list(TouchRhythm().feature_names((8, 8))).index("P_fpeak")] == pytest.approx(6.0)
 
 

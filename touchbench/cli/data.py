@@ -48,6 +48,12 @@ def format_info(info: dict) -> str:
         f"sensor        {s['name']}: {s['grid'][0]} x {s['grid'][1]} at {s['frame_rate']:g} Hz, range {s['value_range']}",
         f"frames        {fpc['min']}..{fpc['max']} per capture (median {fpc['median']:g})",
         f"values        {info['value_range'][0]:g}..{info['value_range'][1]:g} ({info['dtype']})",
+    ]
+    steps = info.get("time_steps_ms")
+    if steps:
+        lines.append(f"time steps    median {steps['median']:g} ms, 95th percentile {steps['p95']:g} ms "
+                     f"({steps['min']:g}..{steps['max']:g})")
+    lines += [
         f"content hash  {info['content_hash']}",
         "by subject    " + ", ".join(f"{k}: {v}" for k, v in info["by_subject"].items()),
         "by gesture    " + ", ".join(f"{k}: {v}" for k, v in info["by_gesture"].items()),
@@ -91,7 +97,7 @@ def export(name: str, out_dir: str, fmt: str, cache_dir, data_dir) -> None:
         click.echo(str(p))
 
 
-@data.command(epilog=example("touchbench data convert frames.csv mine.parquet --format long --grid 6,6 --frame-rate 50"))
+@data.command(epilog=example("touchbench data convert frames.csv mine.parquet --format long --grid 6x6 --frame-rate 50"))
 @click.argument("source", type=click.Path(exists=True))
 @click.argument("out", type=click.Path(dir_okay=False))
 @click.option("--format", "fmt", type=FormatChoice("read"), required=True,

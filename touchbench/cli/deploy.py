@@ -23,7 +23,7 @@ from ..deploy.stream import (
 from ..deploy.train import parse_selection, train_from_protocol
 from ..results.store import PREDICTED, TRUE
 from .common import example
-from .formats import FORMATS_HELP, FormatChoice
+from .formats import FORMATS_HELP, FormatChoice, format_options
 
 
 def _floats(values, option: str) -> list[float] | None:
@@ -77,10 +77,12 @@ def _load_model(path: str) -> TrainedModel:
               help=f"Reader of DATA (auto: dataset name, scene:NAME or touchbench Parquet; {FORMATS_HELP}).")
 @click.option("--out", "-o", type=click.Path(dir_okay=False), default=None, help="Write the labels here (.csv or .parquet).")
 @click.option("--whole", is_flag=True, help="Label whole captures even when the model was trained on windows.")
-def predict(model_path, data, fmt, out, whole) -> None:
-    """Label the captures of DATA with MODEL; refuses data from another sensor."""
+@format_options
+def predict(model_path, data, fmt, out, whole, **options) -> None:
+    """Label the captures of DATA with MODEL; refuses data from another sensor (grid, frame rate beyond
+    1 %, value range), naming both."""
     model = _load_model(model_path)
-    ds = read_data(data, fmt, model)
+    ds = read_data(data, fmt, model, **{k: v for k, v in options.items() if v is not None})
     table = predict_dataset(model, ds, whole=whole, source=data)
     if out:
         write_table(table, out)
@@ -115,8 +117,9 @@ def predict(model_path, data, fmt, out, whole) -> None:
               help="Replay files at their frame rate, or as fast as possible.")
 @click.option("--jsonl", is_flag=True, help="One JSON object per decision instead of text.")
 @click.option("--summary-json", type=click.Path(dir_okay=False), default=None, help="Write the summary (latencies) here.")
+@format_options
 def stream(model_path, source, windows, hop, threshold, combine, none_label, fmt, capture, speed, realtime, jsonl,
-           summary_json) -> None:
+           summary_json, **options) -> None:
     """Label a stream of frames with MODEL: SOURCE is a CSV/Parquet file replayed at
     its frame rate, or - for standard input (one frame per line: H*W comma-separated
     values, row-major). Prints one decision per hop, then latency p50/p99."""
@@ -132,7 +135,8 @@ def stream(model_path, source, windows, hop, threshold, combine, none_label, fmt
         frames = text_frames(sys.stdin, model)
         what = "standard input"
     else:
-        arr, rate, what = load_replay(source, model, capture, fmt)
+        arr, rate, what = load_replay(source, model, capture, fmt,
+                                      **{k: v for k, v in options.items() if v is not None})
         frames = replay(arr, rate, speed=speed, realtime=realtime, late=late)
     click.echo(f"{model.method} on {what}: windows {', '.join(f'{w:g}' for w in rec.windows_s)} s, "
                f"hop {hop:g} s, threshold {threshold:g}", err=True)

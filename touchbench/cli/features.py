@@ -6,6 +6,7 @@ import inspect
 
 import click
 
+from ..datasets.formats import parse_grid
 from ..datasets.model import SensorSpec
 from ..features import FEATURES
 from ..features.base import make_feature_set
@@ -15,12 +16,9 @@ from .plugins import package_of
 
 def _grid(value: str) -> tuple[int, int]:
     try:
-        h, w = (int(v) for v in value.lower().split("x"))
-    except ValueError:
-        raise click.BadParameter(f"expected HxW such as 8x8, got {value!r}") from None
-    if h < 1 or w < 1:
-        raise click.BadParameter("grid sides must be at least 1")
-    return h, w
+        return parse_grid(value)
+    except ValueError as e:
+        raise click.BadParameter(str(e)) from None
 
 
 def _size(name: str, sensor: SensorSpec | None) -> int | None:

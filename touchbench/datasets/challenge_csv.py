@@ -70,7 +70,10 @@ def export_challenge_csv(ds: TouchDataset, out_dir: str | Path) -> list[Path]:
 
 
 def _read_one(path: Path, split: str) -> tuple[list[np.ndarray], pd.DataFrame]:
-    df = read_table(path)
+    df = read_table(path, allow_empty=True)  # a part with no captures (as export writes it): none
+    if df.empty:
+        return [], pd.DataFrame(columns=["capture_id", "subject", "substrate", "cover", "gesture", "split",
+                                         "challenge_label"])
     pid = find_column(df, PARTICIPANT_NAMES, path, "participant")
     sub = find_column(df, ("Substrate",), path, "substrate")
     cov = find_column(df, ("Cover",), path, "cover")
@@ -119,7 +122,10 @@ def read_challenge_csv(path: str | Path, name: str = "haart-challenge") -> Touch
         c, m = _read_one(f, split)
         captures += c
         metas.append(m)
-    return TouchDataset(name, captures, pd.concat(metas, ignore_index=True), HAART_SENSOR)
+    if not captures:
+        raise DataError("no captures: every file found has a header and no rows", path)
+    meta = pd.concat([m for m in metas if len(m)], ignore_index=True)
+    return TouchDataset(name, captures, meta, HAART_SENSOR)
 
 
 register_format(

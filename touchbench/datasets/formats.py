@@ -109,11 +109,15 @@ def register_format(name: str, description: str, reader: Callable[..., Any], **f
 
 
 def parse_grid(text: str) -> tuple[int, int]:
-    """``"H,W"`` -> ``(H, W)``."""
+    """``"HxW"`` (rows x columns, e.g. ``19x24``) -> ``(H, W)``: the one grid syntax of every option
+    (``H,W`` is read too, as earlier versions wrote it)."""
+    parts = str(text).strip().lower().replace(",", "x").split("x")
     try:
-        h, w = (int(x) for x in str(text).split(","))
+        h, w = (int(x) for x in parts)
     except ValueError:
-        raise ValueError("expected H,W such as 8,8") from None
+        raise ValueError(f"expected HxW (rows x columns) such as 19x24, got {text!r}") from None
+    if h < 1 or w < 1:
+        raise ValueError(f"grid sides must be at least 1, got {text!r}")
     return h, w
 
 

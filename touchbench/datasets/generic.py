@@ -98,15 +98,20 @@ def read_long_format(
     like: SensorSpec | None = None,
 ) -> TouchDataset:
     """The ``long`` file format: :func:`read_long_table` with the grid and
-    frame rate given, or else those of ``like`` (the sensor of the model that
-    is to label the data), whose value range and name the dataset then takes."""
+    frame rate given. ``like`` (the sensor of the model that is to label the
+    data) fills the grid and value range, never the frame rate: the file does
+    not say it, and a recording at another rate must be refused, not read as
+    if it had the model's."""
     kw = {}
     if like is not None:
         grid = grid or like.grid
-        frame_rate = frame_rate or like.frame_rate
         kw = {"value_range": like.value_range, "sensor_name": like.name}
-    if grid is None or frame_rate is None:
-        raise TouchbenchError("the long format needs a grid and a frame rate")
+    if frame_rate is None:
+        hint = f" (the model was trained at {like.frame_rate:g})" if like is not None else ""
+        raise TouchbenchError(f"the long format does not say its frame rate: give --frame-rate, the frames per "
+                              f"second of this recording{hint}")
+    if grid is None:
+        raise TouchbenchError("the long format does not say its grid: give --grid HxW")
     return read_long_table(path, tuple(grid), float(frame_rate), name=name, **kw)
 
 
@@ -114,7 +119,7 @@ register_format(
     "long", "your own sensor: one row per frame (capture_id, frame, subject, gesture, H x W numbered cell columns)",
     read_long_format,
     options=(
-        FormatOption("grid", "H,W of the grid", parse_grid, metavar="H,W", required=True),
+        FormatOption("grid", "Rows x columns of the grid, e.g. 19x24", parse_grid, metavar="HxW", required=True),
         FormatOption("frame_rate", "Frames per second", parse_frame_rate, required=True),
     ),
 )

@@ -37,6 +37,8 @@ class DatasetChangedWarning(UserWarning):
     """A dataset file's content no longer matches the hash it was written with (edited in place)."""
 
 REQUIRED_META = ("capture_id", "subject", "gesture")
+#: optional metadata column: each capture's frame times in ms (one increasing value per frame)
+TIME_COLUMN = "time_ms"
 
 
 @dataclass(frozen=True)
@@ -105,7 +107,9 @@ def _hash_meta(h: "hashlib._Hash", meta: pd.DataFrame) -> None:
     Numeric and boolean columns are hashed as their float64/int64 bytes,
     everything else as the JSON list of its ``str`` values (missing values
     as null), so the hash does not depend on pandas' choice between object
-    and string dtypes.
+    and string dtypes. A cell holding a sequence (a per-capture array such
+    as ``time_ms``: a list in memory, a numpy array once read from Parquet)
+    is hashed as the JSON text of its values, every value, whichever form.
     """
     for col in meta.columns:
         s = meta[col]
@@ -117,8 +121,16 @@ def _hash_meta(h: "hashlib._Hash", meta: pd.DataFrame) -> None:
         elif pd.api.types.is_float_dtype(s):
             h.update(b"float" + s.to_numpy(dtype=np.float64).tobytes())
         else:
-            vals = [None if (v is None or (isinstance(v, float) and np.isnan(v))) else str(v) for v in s.tolist()]
-            h.update(b"str" + json.dumps(vals).encode())
+            h.update(b"str" + json.dumps([_cell_text(v) for v in s.tolist()]).encode())
+
+
+def _cell_text(v: Any) -> str | None:
+    """A metadata cell as hashed text: None for missing, JSON for a sequence, else ``str``."""
+    if isinstance(v, (list, tuple, np.ndarray)):
+        return json.dumps(np.asarray(v).tolist())
+    if v is None or (isinstance(v, float) and np.isnan(v)):
+        return None
+    return str(v)
 
 
 @dataclass
@@ -158,6 +170,14 @@ class TouchDataset:
                     f"dataset {self.name!r}: capture {self.meta['capture_id'].iloc[i]!r} has shape "
                     f"{c.shape}, sensor {self.sensor.name!r} expects (T, {h}, {w})"
                 )
+        if TIME_COLUMN in self.meta.columns:
+            for i, (c, t) in enumerate(zip(self.captures, self.meta[TIME_COLUMN].tolist())):
+                t = np.asarray(t, dtype=np.float64)
+                if t.shape != (c.shape[0],) or (t.size > 1 and not (np.diff(t) > 0).all()):
+                    raise ValueError(
+                        f"dataset {self.name!r}: capture {self.meta['capture_id'].iloc[i]!r}: {TIME_COLUMN} must hold one "
+                        f"increasing time per frame ({c.shape[0]} frames, got {t.size} values)"
+                    )
 
     # ------------------------------------------------------------------ basics
     def __len__(self) -> int:
@@ -185,7 +205,7 @@ class TouchDataset:
         return self._hash
 
     def subset(self, index: Iterable[int] | np.ndarray, name: str | None = None) -> "TouchDataset":
-        """The captures at ``index`` (positions), in that order."""
+        """The captures at ``index`` (positions), in that order (the provenance kept)."""
         idx = np.asarray(list(index) if not isinstance(index, np.ndarray) else index)
         if idx.dtype == bool:
             idx = np.flatnonzero(idx)
@@ -194,6 +214,7 @@ class TouchDataset:
             captures=[self.captures[i] for i in idx],
             meta=self.meta.iloc[idx].reset_index(drop=True),
             sensor=self.sensor,
+            provenance=self.provenance,
         )
 
     def with_name(self, name: str) -> "TouchDataset":
@@ -307,11 +328,23 @@ class TouchDataset:
             "by_subject": {str(k): int(v) for k, v in self.meta["subject"].value_counts().sort_index().items()},
             "by_gesture": {str(k): int(v) for k, v in self.meta["gesture"].value_counts().sort_index().items()},
         }
+        if TIME_COLUMN in self.meta.columns:
+            out["time_steps_ms"] = time_step_summary(self.meta[TIME_COLUMN].tolist())
         if "split" in self.meta.columns:
             out["by_split"] = {str(k): int(v) for k, v in self.meta["split"].value_counts().sort_index().items()}
         if self.provenance:
             out["provenance"] = self.provenance
         return out
+
+
+def time_step_summary(times: Iterable[Sequence[float]]) -> dict[str, float]:
+    """Median, 95th percentile (linear), min and max of the steps between consecutive frame times (ms);
+    empty when no capture has two frames."""
+    steps = np.concatenate([np.diff(np.asarray(t, dtype=np.float64)) for t in times] + [np.zeros(0)])
+    if not steps.size:
+        return {}
+    return {"median": float(np.median(steps)), "p95": float(np.percentile(steps, 95)),
+            "min": float(steps.min()), "max": float(steps.max())}
 
 
 def concat(datasets: Sequence[TouchDataset], name: str) -> TouchDataset:

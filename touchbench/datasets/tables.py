@@ -26,10 +26,11 @@ def clean_name(name: object) -> str:
     return str(name).strip().strip("\"'").strip()
 
 
-def read_table(path: str | Path) -> pd.DataFrame:
+def read_table(path: str | Path, allow_empty: bool = False) -> pd.DataFrame:
     """Read a CSV (plain or gzipped) or Parquet file; header names cleaned.
 
-    A CSV row with more fields than the header is refused with its line.
+    A CSV row with more fields than the header is refused with its line; a
+    file with a header and no rows is refused unless ``allow_empty``.
     """
     path = Path(path)
     if not path.is_file():
@@ -50,7 +51,7 @@ def read_table(path: str | Path) -> pd.DataFrame:
     except Exception as e:  # unreadable Parquet, bad encoding...
         raise DataError(f"cannot read ({e})", path) from None
     df.columns = [clean_name(c) for c in df.columns]
-    if df.empty:
+    if df.empty and not allow_empty:
         raise DataError("no data rows", path)
     return df
 

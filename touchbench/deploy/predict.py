@@ -24,6 +24,7 @@ import pandas as pd
 
 from ..catalog import load_dataset
 from ..core.atomic import atomic_write_bytes, atomic_write_parquet
+from ..core.errors import TouchbenchError
 from ..datasets.formats import FORMATS
 from ..datasets.model import TouchDataset
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
@@ -37,6 +38,9 @@ def read_data(source: str, fmt: str = "auto", model: TrainedModel | None = None,
     """Read ``source`` in the registered file format ``fmt`` with its ``options``
     (``auto``: :func:`touchbench.catalog.load_dataset`); the model's sensor fills what the file does not say."""
     if fmt == "auto":
+        given = sorted(k for k, v in options.items() if v is not None)
+        if given:
+            raise TouchbenchError(f"--{given[0].replace('_', '-')} goes with --format (the reader it is for)")
         return load_dataset(source)
     return FORMATS.get(fmt).read(source, like=None if model is None else model.sensor, **options)
 

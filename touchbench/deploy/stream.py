@@ -251,7 +251,7 @@ def _is_number(v: str) -> bool:
 
 
 def load_replay(path: str | Path, model: TrainedModel, capture: str | None = None,
-                fmt: str = "auto") -> tuple[np.ndarray, float, str]:
+                fmt: str = "auto", **options) -> tuple[np.ndarray, float, str]:
     """Frames of a recorded file: ``(frames (T, H, W), frame rate, description)``.
 
     ``fmt`` is a registered file format (:mod:`touchbench.datasets.formats`),
@@ -273,7 +273,7 @@ def load_replay(path: str | Path, model: TrainedModel, capture: str | None = Non
         form = FORMATS.get(fmt)
         if not form.replay:
             raise TouchbenchError(f"the {fmt} format cannot be replayed frame by frame")
-        return replay_dataset(form.read(path, like=model.sensor), model, capture, path)
+        return replay_dataset(form.read(path, like=model.sensor, **options), model, capture, path)
     if not path.is_file():
         raise DataError("no such file", path)
     if path.suffix == ".parquet":

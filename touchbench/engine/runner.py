@@ -586,7 +586,7 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
         dataset={"ref": protocol.dataset.name, "resolved": plan.dataset_ref, "hash": plan.dataset.content_hash,
                  "source_hash": plan.source_hash, "captures": len(plan.dataset),
                  "filters": protocol.dataset.filters, "exclude": protocol.dataset.exclude,
-                 "sensor": plan.dataset.sensor.to_dict()},
+                 "sensor": plan.dataset.sensor.to_dict(), "provenance": plan.dataset.provenance},
         identity={"packages": plan.package_versions,
                   "components": {label: {"digest": i.digest, "modules": list(i.modules)}
                                  for label, i in plan.identities.items()}},

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, cell_names
-from .gaus_common import GAUS_PAPER, resolve
+from .gaus_common import GAUS_PAPER, resolve_units
 
 # Section 3.2.2: high pressure is value >= maximum - offset.
 _TABLE: dict[str, dict[str, Any]] = {"haart": {"offset": 5.0}, "cost": {"offset": 100.0}}
@@ -35,13 +35,18 @@ class BinaryMotionHistory(FeatureSet):
       capture (no touch, all zero, all saturated) sets every cell to 1.
       Finite and binary for every input.
 
-    - The preset: named, or the one of the sensor's recording setting
-      (:mod:`touchbench.features.gaus_common`: HAART's or CoST's); on any
-      other sensor, or without one, a preset or ``offset`` must be given.
+    - The preset: named (as published), or the one of the sensor's
+      recording setting (HAART's or CoST's). Any other grid sensor
+      (:mod:`touchbench.features.gaus_common`): HAART's offset scaled to
+      its value range, ``5 * (hi - lo) / 1023``, the same fraction of full
+      scale (0.49 %): 1.246 on a 0..255 sensor, so a cell counts at
+      ``max - 1`` but not ``max - 2``. A channel sensor is refused; without
+      a sensor a preset or ``offset`` must be given. The output is one
+      value per cell of any grid (nothing else depends on the grid).
 
     Parameters: ``preset`` ("haart", "cost" or None: the sensor's),
-    ``offset`` (overrides the preset), ``level`` ("instance" / "frame"),
-    ``sensor`` (picks the preset).
+    ``offset`` (overrides the preset, never scaled), ``level`` ("instance"
+    / "frame"), ``sensor`` (picks the preset or scales HAART's).
     """
 
     paper = f"{GAUS_PAPER}.2"
@@ -55,7 +60,7 @@ class BinaryMotionHistory(FeatureSet):
         self.sensor = sensor
 
     def _check_params(self) -> None:
-        resolve("bmh", self.preset, _TABLE, "offset", self.offset, self.sensor, "offset")
+        resolve_units("bmh", self.preset, _TABLE, "offset", self.offset, self.sensor, "offset")
         if self.level not in ("instance", "frame"):
             raise FeatureInputError(f"bmh: level must be 'instance' or 'frame', got {self.level!r}")
 
@@ -63,7 +68,7 @@ class BinaryMotionHistory(FeatureSet):
         return [f"bmh_{c}" for c in cell_names(grid)]
 
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
-        off = float(resolve("bmh", self.preset, _TABLE, "offset", self.offset, self.sensor, "offset"))
+        off = float(resolve_units("bmh", self.preset, _TABLE, "offset", self.offset, self.sensor, "offset"))
         n, t = stack.shape[:2]
         x = stack.reshape(n, t, -1).astype(np.float64)
         if self.level == "instance":

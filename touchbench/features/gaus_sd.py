@@ -9,7 +9,7 @@ import numpy as np
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
-from .gaus_common import GAUS_PAPER, preset_for, resolve
+from .gaus_common import GAUS_PAPER, lookup, resolve_units, setting_for
 
 _CONDITIONS = ("notouch", "touched", "high")
 _VALUES = "bins for notouch, touched and high, high_offset and touched_fixed"
@@ -121,15 +121,29 @@ class StatisticalDistribution(FeatureSet):
       datasets of varying length.
     - The edges are the published constants (Table 4) chosen once on each
       whole dataset; nothing is learnt from the training fold, so
-      ``fold_dependent = False``. A grid larger than 8 x 8 has counts above
-      the trailing edges: pass ``bins`` suited to it.
+      ``fold_dependent = False``.
+    - Another sensor (neither HAART's nor CoST's recording setting; rule in
+      :mod:`touchbench.features.gaus_common`): HAART's conditions, which
+      hold no sensor constant (= min, >= median, = max), and Table 4's
+      HAART edges scaled to the grid. Table 4's edges count cells of an
+      8 x 8 grid ("set to fit all instances", section 3.2.1): its touched
+      edges end at 65.5, just above all 64 cells. On a grid of ``N`` cells
+      every width and edge is multiplied by ``N / 64``, so each bin covers
+      the same fraction of the grid as on HAART and the output keeps its
+      62 values; e.g. on 19 x 24 (456 cells, factor 7.125) the no-touch
+      bins are 35.625 cells wide from -3.5625 to 395.4375. Equivalently, a
+      count ``c`` of ``N`` cells is binned as ``64 c / N`` with Table 4's
+      edges. Without the scaling, 8 x 8 bins on a 456-cell grid would put
+      every frame with more than 55 untouched cells into one clipped bin.
+      Explicit ``bins`` are never scaled (they are in the sensor's cells).
     - A constant capture: every cell is at the minimum, the median and the
       maximum, so all counts equal the number of cells (clipped into the
       last bin on an 8 x 8 grid). Finite for every input.
 
-    - The preset: named, or the one of the sensor's recording setting
-      (:mod:`touchbench.features.gaus_common`: HAART's or CoST's); on any
-      other sensor, or without one, a preset or every value must be given.
+    - The preset: named (as published), or the one of the sensor's
+      recording setting (HAART's or CoST's), or HAART's scaled to any other
+      grid sensor (above); a channel sensor is refused, and without a
+      sensor a preset or every value must be given.
 
     Parameters: ``preset`` ("haart", "cost" or None: the sensor's);
     ``bins`` (dict condition ->
@@ -137,7 +151,7 @@ class StatisticalDistribution(FeatureSet):
     "high"); ``high_offset`` (high pressure is value >= max - high_offset);
     ``touched_fixed`` (extra touched threshold, ``None`` = preset,
     ``False`` = none); ``clip``;
-    ``normalize``; ``sensor`` (picks the preset).
+    ``normalize``; ``sensor`` (picks the preset or scales HAART's).
     """
 
     paper = f"{GAUS_PAPER}.1, Tables 3-4"
@@ -165,8 +179,8 @@ class StatisticalDistribution(FeatureSet):
     # -------------------------------------------------------------- params
     def _resolved(self) -> tuple[float, float | None, dict[str, np.ndarray]]:
         name = "sd"
-        off = float(resolve(name, self.preset, _TABLE, "high_offset", self.high_offset, self.sensor, _VALUES))
-        fixed = resolve(name, self.preset, _TABLE, "touched_fixed", self.touched_fixed, self.sensor, _VALUES)
+        off = float(resolve_units(name, self.preset, _TABLE, "high_offset", self.high_offset, self.sensor, _VALUES))
+        fixed = resolve_units(name, self.preset, _TABLE, "touched_fixed", self.touched_fixed, self.sensor, _VALUES)
         if fixed is False:
             fixed = None
         given = dict(self.bins or {})
@@ -175,9 +189,9 @@ class StatisticalDistribution(FeatureSet):
             raise FeatureInputError(f"sd: unknown bins condition(s) {sorted(unknown)} (known: high, notouch, touched)")
         bins = {}
         if set(given) != set(_CONDITIONS):
-            preset = preset_for(name, self.preset, self.sensor, _VALUES)
-            resolve(name, preset, _TABLE, "bins", None)  # an unknown preset is refused here
-            bins = dict(_TABLE[preset]["bins"])
+            setting = setting_for(name, self.preset, self.sensor, _VALUES)
+            # bin widths and edges count cells: scaled by the sensor's cells over the preset's
+            bins = {k: tuple(float(v) * setting.cells for v in spec) for k, spec in lookup(name, _TABLE, setting, "bins").items()}
         bins.update(given)
         edges = {k: histcounts_edges(*map(float, v)) for k, v in bins.items()}
         return off, (None if fixed is None else float(fixed)), edges

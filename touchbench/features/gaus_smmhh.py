@@ -9,7 +9,7 @@ import numpy as np
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, cell_names
-from .gaus_common import GAUS_PAPER, resolve
+from .gaus_common import GAUS_PAPER, resolve_units
 from .numerics import as_f64
 
 # Motion threshold (raw sensor units): the paper says only "appropriate
@@ -37,6 +37,16 @@ def pool2(frames: np.ndarray) -> np.ndarray:
     # four strided slices: faster than a reduction over two length-2 axes
     s = frames[..., 0::2, 0::2] + frames[..., 1::2, 0::2] + frames[..., 0::2, 1::2] + frames[..., 1::2, 1::2]
     return s / cnt
+
+
+def scales_to_one_cell(grid: tuple[int, int]) -> int:
+    """Levels of the pyramid that ends at 1 x 1 (each halving with ceil): 4 for 8 x 8, 6 for 19 x 24."""
+    h, w = grid
+    levels = 1
+    while (h, w) != (1, 1):
+        h, w = (h + 1) // 2, (w + 1) // 2
+        levels += 1
+    return levels
 
 
 def pyramid_shapes(grid: tuple[int, int], n_scales: int) -> list[tuple[int, int]]:
@@ -100,19 +110,31 @@ class SpatialMultiScaleMHH(FeatureSet):
     - "resized and concatenated": flattened and concatenated; counts are
       raw (not divided by the number of frames).
     - Other grids: each pooling halves with ceil (odd edges pool the cells
-      that exist) for ``n_scales`` levels (4 by default), so a 20 x 20 grid
-      gives 20x20, 10x10, 5x5, 3x3. Output length depends on the grid only.
+      that exist). The paper pools three times, taking 8 x 8 down to a
+      single cell (the whole surface's motion); ``n_scales=None`` (default)
+      keeps that rule on any grid, pooling until 1 x 1: 4 levels on 8 x 8,
+      6 on 19 x 24 (19x24, 10x12, 5x6, 3x3, 2x2, 1x1: 620 pixels, 15500
+      values). An integer ``n_scales`` fixes the number of levels. Output
+      length depends on the grid only.
+    - Skips and run lengths are frames, never rescaled by the frame rate:
+      the paper used the same 2..6 at 54 Hz (HAART) and 135 Hz (CoST).
     - A capture shorter than s + 1 frames has no frame pair at skip s: its
       counts are 0. A constant capture has no motion: all 0.
 
-    - The preset: named, or the one of the sensor's recording setting
-      (:mod:`touchbench.features.gaus_common`: HAART's or CoST's); on any
-      other sensor, or without one, a preset or ``threshold`` must be given.
+    - The preset: named (as published), or the one of the sensor's
+      recording setting (HAART's or CoST's). Any other grid sensor
+      (:mod:`touchbench.features.gaus_common`): HAART's threshold scaled
+      to its value range, ``3 * (hi - lo) / 1023``, the same fraction of
+      full scale (0.29 %): 0.748 on a 0..255 sensor, so a change of one
+      unit is motion. This assumes the sensor's noise is the same fraction
+      of its range as HAART's; give ``threshold`` when it is not. A channel
+      sensor is refused; without a sensor a preset or ``threshold`` must be
+      given.
 
     Parameters: ``preset`` ("haart", "cost" or None: the sensor's),
-    ``threshold`` (scalar or one per scale), ``skips`` (default
-    (2, 3, 4, 5, 6)), ``max_len`` (M, 5), ``n_scales`` (4), ``sensor``
-    (picks the preset).
+    ``threshold`` (scalar or one per scale, never scaled), ``skips``
+    (default (2, 3, 4, 5, 6)), ``max_len`` (M, 5), ``n_scales`` (None:
+    down to 1 x 1), ``sensor`` (picks the preset or scales HAART's).
     """
 
     paper = f"{GAUS_PAPER}.4, eq. 1"
@@ -125,7 +147,7 @@ class SpatialMultiScaleMHH(FeatureSet):
         threshold: float | Sequence[float] | None = None,
         skips: Sequence[int] = (2, 3, 4, 5, 6),
         max_len: int = 5,
-        n_scales: int = 4,
+        n_scales: int | None = None,
         sensor: SensorSpec | None = None,
     ):
         self.preset = preset
@@ -135,25 +157,32 @@ class SpatialMultiScaleMHH(FeatureSet):
         self.n_scales = n_scales
         self.sensor = sensor
 
-    def _thresholds(self) -> list[float]:
-        thr = resolve("smmhh", self.preset, _TABLE, "threshold", self.threshold, self.sensor, "threshold")
+    def _levels(self, grid: tuple[int, int]) -> int:
+        """``n_scales`` if given, else the levels that take ``grid`` down to 1 x 1."""
+        return int(self.n_scales) if self.n_scales is not None else scales_to_one_cell(tuple(grid))
+
+    def _thresholds(self, levels: int | None = None) -> list[float]:
+        thr = resolve_units("smmhh", self.preset, _TABLE, "threshold", self.threshold, self.sensor, "threshold")
         if np.ndim(thr) == 0:
-            return [float(thr)] * int(self.n_scales)
+            return [float(thr)] * int(levels or 1)
         thr = [float(v) for v in thr]
-        if len(thr) != self.n_scales:
-            raise FeatureInputError(f"smmhh: threshold has {len(thr)} values, n_scales is {self.n_scales}")
+        if levels is not None and len(thr) != levels:
+            raise FeatureInputError(f"smmhh: threshold has {len(thr)} values for {levels} scales")
         return thr
 
     def _check_params(self) -> None:
-        self._thresholds()
-        if int(self.n_scales) < 1 or int(self.max_len) < 1:
+        self._thresholds(int(self.n_scales) if self.n_scales is not None else None)
+        if (self.n_scales is not None and int(self.n_scales) < 1) or int(self.max_len) < 1:
             raise FeatureInputError("smmhh: n_scales and max_len must be at least 1")
         if not self.skips or any(int(s) < 1 for s in self.skips):
             raise FeatureInputError(f"smmhh: skips must be positive frame offsets, got {self.skips!r}")
 
+    def _check_grid(self, grid: tuple[int, int]) -> None:
+        self._thresholds(self._levels(grid))
+
     def feature_names(self, grid: tuple[int, int]) -> list[str]:
         names = []
-        for k, shape in enumerate(pyramid_shapes(grid, int(self.n_scales))):
+        for k, shape in enumerate(pyramid_shapes(grid, self._levels(grid))):
             cells = cell_names(shape)
             for s in self.skips:
                 for m in range(1, int(self.max_len) + 1):
@@ -161,11 +190,12 @@ class SpatialMultiScaleMHH(FeatureSet):
         return names
 
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
-        thr = self._thresholds()
+        levels = self._levels(stack.shape[2:])
+        thr = self._thresholds(levels)
         skips = [int(s) for s in self.skips]
         M = int(self.max_len)
         n, t = stack.shape[:2]
-        shapes = pyramid_shapes(stack.shape[2:], int(self.n_scales))
+        shapes = pyramid_shapes(stack.shape[2:], levels)
         sizes = [h * w for h, w in shapes]
         ptot = sum(sizes)
         L = max(t - min(skips), 0)

@@ -43,7 +43,19 @@ Interpretations and limits shared by the sets:
   replaces it (for use from Python without a sensor); with neither, the
   set refuses to run rather than assume one sensor's rate. Band edges are
   in Hz, so a capture's band fractions do not depend on its length;
-  spectra use a Hann window on the mean-removed series.
+  spectra use a Hann window on the mean-removed series. Bands above the
+  sensor's Nyquist frequency hold no power (0 on a 12 Hz sensor above
+  6 Hz); autocorrelation lags and ``MIN_FRAMES`` are frames.
+- Contact floors scale with the sensor's value range: the absolute floors
+  against noise (``touch-rhythm``'s contact area and ``cell-rhythm``'s
+  blobs: 3, ``contact-motion``: 4) were chosen on HAART's 0..1023 and are
+  kept as the same fraction of full scale, ``floor * (hi - lo) / 1023``
+  (0.29 % and 0.39 %: 0.75 and 1.0 on a 0..255 sensor, so on integer data
+  any pressure of 1 counts). The value range is the sensor's
+  (``value_range`` replaces it from Python); with neither, the set
+  refuses to run. Everything else is relative (fractions of the capture's
+  peak, ranks over cells) or in cells of the grid, so the sets serve any
+  grid.
 - A capture shorter than ``MIN_FRAMES`` (8) frames is padded by repeating
   its last frame (a held pose), so every statistic is defined; its
   features then describe a nearly constant capture.
@@ -65,6 +77,8 @@ from .numerics import KURT_CONSTANT, SKEW_CONSTANT, moments
 
 MIN_FRAMES = 8
 BASELINE_Q = 0.05
+#: the full scale on which the sets' absolute contact floors were chosen (HAART's 0..1023, in raw units)
+FLOOR_SCALE = 1023.0
 #: spectral bands in Hz, upper edge inclusive; the last one is open-ended
 BANDS: tuple[tuple[float, float], ...] = ((0, 1), (1, 2), (2, 3), (3, 4.5), (4.5, 6), (6, 8), (8, 11), (11, 15), (15, np.inf))
 AC_LAGS: tuple[int, ...] = (2, 4, 6, 9, 13, 18, 27)
@@ -86,8 +100,10 @@ class _TouchBase(FeatureSet):
     cost = "cheap"
     fold_dependent = False
 
-    def __init__(self, frame_rate: float | None = None, sensor: SensorSpec | None = None):
+    def __init__(self, frame_rate: float | None = None, value_range: tuple[float, float] | None = None,
+                 sensor: SensorSpec | None = None):
         self.frame_rate = frame_rate
+        self.value_range = value_range
         self.sensor = sensor
 
     def _fs(self) -> float:
@@ -101,11 +117,39 @@ class _TouchBase(FeatureSet):
             "pass sensor=SensorSpec(...) or frame_rate=..."
         )
 
+    def _range(self) -> tuple[float, float]:
+        """The value range: ``value_range`` if given, else the sensor's; neither is refused."""
+        if self.value_range is not None:
+            lo, hi = (float(v) for v in self.value_range)
+            return lo, hi
+        if self.sensor is not None:
+            lo, hi = self.sensor.value_range
+            return float(lo), float(hi)
+        raise SensorNeededError(
+            f"{type(self).__name__}: needs the sensor's value range (its contact floors are fractions of full scale): "
+            "pass sensor=SensorSpec(...) or value_range=(low, high)"
+        )
+
+    def _floor(self, haart_units: float) -> float:
+        """A contact floor chosen on HAART's 0..1023, as the same fraction of this sensor's full scale."""
+        lo, hi = self._range()
+        return haart_units * (hi - lo) / FLOOR_SCALE
+
     def _check_params(self) -> None:
         fs = self.frame_rate
         if fs is not None and not (isinstance(fs, (int, float)) and np.isfinite(fs) and fs > 0):
             raise FeatureInputError(f"{type(self).__name__}: frame_rate must be a positive number, got {fs!r}")
+        vr = self.value_range
+        if vr is not None:
+            try:
+                lo, hi = (float(v) for v in vr)
+                ok = np.isfinite(lo) and np.isfinite(hi) and lo < hi
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                raise FeatureInputError(f"{type(self).__name__}: value_range must be (low, high) with low < high, got {vr!r}")
         self._fs()
+        self._range()
 
 
 def pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -231,7 +275,8 @@ class TouchRhythm(_TouchBase):
     ``P`` total pressure; ``logP`` = log(1 + P); ``Pn`` = P / mean(P) (level
     free; 0 when the capture has no pressure); ``M`` peak cell; ``A`` contact
     area = cells above max(20 % of the capture's peak, ``AREA_FLOOR``)
-    (an absolute floor of 3 ADC units against noise; an interpretation);
+    (an absolute floor of 3 ADC units of HAART's 0..1023 against noise, an
+    interpretation; scaled to the sensor's range, module docstring);
     ``cy``, ``cx`` pressure-weighted centroid (grid centre for an empty
     frame, as :func:`touchbench.features.numerics.weighted_centroid`);
     ``sy``, ``sx`` spread (weighted standard deviation of the row / column);
@@ -257,7 +302,7 @@ class TouchRhythm(_TouchBase):
     """
 
     AREA_REL = 0.2
-    AREA_FLOOR = 3.0
+    AREA_FLOOR = 3.0  # HAART units (0..1023), scaled by _floor
 
     def feature_names(self, grid: tuple[int, int]) -> list[str]:
         names = [f"{s}_{k}" for s in SERIES for k in _STAT_NAMES]
@@ -279,7 +324,7 @@ class TouchRhythm(_TouchBase):
         ps = s.sum(axis=2)
         M = c.max(axis=2)
         peak = s.max(axis=(1, 2))
-        thr = np.maximum(self.AREA_REL * peak, self.AREA_FLOOR)
+        thr = np.maximum(self.AREA_REL * peak, self._floor(self.AREA_FLOOR))
         A = (s > thr[:, None, None]).sum(axis=2).astype(np.float64)
         yy, xx = _grid_coords(h, w)
         empty = ps <= 0
@@ -336,7 +381,8 @@ class CellRhythm(_TouchBase):
     without variation). Neighbour correlation: correlation of horizontally /
     vertically adjacent cells' series, weighted by the product of their
     standard deviations. Blobs: cells above max(50 % of the frame's maximum,
-    3) form a binary frame; nodes minus 4-neighbour edges approximates its
+    ``BLOB_FLOOR``: 3 of HAART's 0..1023, scaled to the sensor's range) form
+    a binary frame; nodes minus 4-neighbour edges approximates its
     number of connected components (exact for blobs without holes or
     2 x 2 squares, an interpretation kept for speed); mean over active
     frames and maximum, plus the mean number of such cells.
@@ -344,6 +390,8 @@ class CellRhythm(_TouchBase):
     Interpretations: the module docstring's (baseline, padding, limits);
     the blob count approximation above.
     """
+
+    BLOB_FLOOR = 3.0  # HAART units (0..1023), scaled by _floor
 
     def feature_names(self, grid: tuple[int, int]) -> list[str]:
         return ([f"cell_band{_band_name(lo, hi)}" for lo, hi in BANDS]
@@ -388,7 +436,7 @@ class CellRhythm(_TouchBase):
             wsum = wgt.sum(axis=(1, 2)) if wgt.size else np.zeros(n)
             feats.append(np.where(wsum > 0, (corr * wgt).sum(axis=(1, 2)) / np.where(wsum > 0, wsum, 1.0), 0.0))
         fm = s.max(axis=2, keepdims=True)
-        blob = (s > np.maximum(0.5 * fm, 3.0)).reshape(n, t, h, w)
+        blob = (s > np.maximum(0.5 * fm, self._floor(self.BLOB_FLOOR))).reshape(n, t, h, w)
         nodes = blob.sum(axis=(2, 3))
         edges = (blob[:, :, :, 1:] & blob[:, :, :, :-1]).sum(axis=(2, 3)) + (blob[:, :, 1:, :] & blob[:, :, :-1, :]).sum(axis=(2, 3))
         act = nodes > 0
@@ -404,8 +452,10 @@ class ContactMotion(_TouchBase):
 
     The capture's robust peak is the 95 % order statistic (rank
     ``round(0.95 (T-1))``) of its per-frame maximum pressure. For each
-    relative threshold r in 10 %, 30 %, 50 % (absolute floor 4 ADC units,
-    an interpretation against the sensor noise seen under fur), a frame is
+    relative threshold r in 10 %, 30 %, 50 % (absolute floor
+    ``CONTACT_FLOOR``: 4 ADC units of HAART's 0..1023, an interpretation
+    against the sensor noise seen under fur, scaled to the sensor's range
+    as the module docstring says), a frame is
     active when some cell exceeds the threshold; the contact weights are
     the pressure minus the threshold, clipped at 0. Per threshold: fraction
     of active frames, touch onsets (inactive -> active), mean area over
@@ -424,6 +474,7 @@ class ContactMotion(_TouchBase):
     """
 
     POS_BANDS: tuple[tuple[float, float], ...] = ((0, 1.5), (1.5, 3), (3, 6), (6, np.inf))
+    CONTACT_FLOOR = 4.0  # HAART units (0..1023), scaled by _floor
 
     def feature_names(self, grid: tuple[int, int]) -> list[str]:
         names = []
@@ -444,9 +495,10 @@ class ContactMotion(_TouchBase):
         peak = np.sort(fmax, axis=1)[:, int(round(0.95 * (t - 1)))]
         yy, xx = _grid_coords(h, w)
         rank = lambda a, q: np.sort(a, axis=1)[:, int(round(q * (a.shape[1] - 1)))]  # noqa: E731
+        floor = self._floor(self.CONTACT_FLOOR)
         feats = []
         for r in THRESHOLDS:
-            thr = np.maximum(r * peak, 4.0)
+            thr = np.maximum(r * peak, floor)
             wt = np.maximum(s - thr[:, None, None], 0.0)
             ws = wt.sum(axis=2)
             act = ws > 0

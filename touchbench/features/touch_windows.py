@@ -19,7 +19,8 @@ Interpretations and limits:
 
 - The window length is in seconds; its frames come from the sensor's frame
   rate (or an explicit ``frame_rate``); without either the set refuses to
-  run. A run whose shortest capture is shorter than one window is refused
+  run. The inner sets get the same rate and value range (their contact
+  floors scale with it). A run whose shortest capture is shorter than one window is refused
   before any task (:meth:`TouchWindows.check_sensor`): the windows would
   all be the whole capture.
 - Window starts are ``round(linspace(0, T - L, n_windows))`` frames (evenly
@@ -57,11 +58,13 @@ class TouchWindows(_TouchBase):
     fold_dependent = False
 
     def __init__(self, n_windows: int = 4, window_s: float = 2.0, sets: tuple[str, ...] = OWN_SETS,
-                 frame_rate: float | None = None, sensor: SensorSpec | None = None):
+                 frame_rate: float | None = None, value_range: tuple[float, float] | None = None,
+                 sensor: SensorSpec | None = None):
         self.n_windows = n_windows
         self.window_s = window_s
         self.sets = sets
         self.frame_rate = frame_rate
+        self.value_range = value_range
         self.sensor = sensor
 
     def _check_params(self) -> None:
@@ -85,7 +88,7 @@ class TouchWindows(_TouchBase):
         return problem
 
     def _inner(self) -> list[FeatureSet]:
-        return [FEATURES.create(name, frame_rate=self._fs()) for name in self.sets]
+        return [FEATURES.create(name, frame_rate=self._fs(), value_range=self._range()) for name in self.sets]
 
     def feature_names(self, grid: tuple[int, int]) -> list[str]:
         inner = [n for fs in self._inner() for n in fs.feature_names(grid)]

@@ -37,6 +37,13 @@ Interpretations common to both sets:
   removed. The cut-off always uses D1, whatever ``descriptors`` selects.
 - ``descriptors`` (Table 6 ablation) selects and orders the descriptors
   the features are computed on, e.g. ``("D1", "D4")``.
+- Other sensors: no constant of these sets depends on a grid size or a
+  value range (section 4.1: the up-sampling is a factor, D6's threshold is
+  the frame's own mean + standard deviation, the cut-off 10 % of the
+  capture's own D1 range, D4's zero the sensor's low end), so they serve
+  any grid unchanged; distances are in pixels of the up-sampled grid
+  (38 x 48 for a 19 x 24 sensor) and the wavelet levels count samples, not
+  seconds, as in the paper.
 """
 
 from __future__ import annotations
