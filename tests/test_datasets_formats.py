@@ -1,4 +1,4 @@
-"""The challenge CSV, CoST and generic long-format readers, on files written
+"""The challenge CSV, CoST and table readers, on files written
 here in exactly the documented formats, quirks included."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import pytest
 
 from touchbench.datasets.challenge_csv import export_challenge_csv, read_challenge_csv
 from touchbench.datasets.cost import read_cost_csv
-from touchbench.datasets.generic import read_long_table
+from touchbench.datasets.generic import read_table_dataset
 from touchbench.datasets.haart import HAART_SENSOR
 from touchbench.datasets.model import TouchDataset
 from touchbench.core.errors import DataError
@@ -171,7 +171,7 @@ def test_generic_reader_any_grid(tmp_path, suffix):
     df = _long()
     p = tmp_path / f"mine{suffix}"
     df.to_csv(p, index=False) if suffix == ".csv" else df.to_parquet(p)
-    ds = read_long_table(p, (3, 5), 30.0, value_range=(0, 255))
+    ds = read_table_dataset(p, (3, 5), 30.0, value_range=(0, 255))
     assert list(ds.n_frames) == [4, 5, 6] and ds.sensor.grid == (3, 5)
     assert list(ds.meta.columns) == ["capture_id", "subject", "gesture", "hand"]
     np.testing.assert_array_equal(ds.captures[1][2].reshape(-1), df[df.capture_id == "c1"].iloc[2][[f"px{i}" for i in range(15)]].to_numpy(float))
@@ -183,16 +183,16 @@ def test_generic_reader_bad_input(tmp_path):
     p = tmp_path / "m.csv"
     df.to_csv(p, index=False)
     with pytest.raises(DataError, match="'hand' changes inside capture 'c1'") as e:
-        read_long_table(p, (3, 5), 30.0)
+        read_table_dataset(p, (3, 5), 30.0, value_range=(0, 255))
     assert e.value.line == 7
     df = _long()
     df.to_csv(p, index=False)
     with pytest.raises(DataError, match="cannot tell the 16 cell columns"):
-        read_long_table(p, (4, 4), 30.0)
+        read_table_dataset(p, (4, 4), 30.0, value_range=(0, 255))
     df.loc[3, "px2"] = np.nan
     df.to_csv(p, index=False)
     with pytest.raises(DataError, match="NaN") as e:
-        read_long_table(p, (3, 5), 30.0)
+        read_table_dataset(p, (3, 5), 30.0, value_range=(0, 255))
     assert e.value.line == 5
 
 

@@ -91,7 +91,7 @@ def test_fold_model_predicts_like_the_engine(setup, tmp_path):
         np.testing.assert_allclose(ours.loc[theirs.index, f"proba_{c}"], theirs[f"proba_{c}"], rtol=0, atol=1e-12)
 
 
-def test_predict_refuses_another_sensor_and_reads_long_format(setup, tmp_path):
+def test_predict_refuses_another_sensor_and_reads_the_table_format(setup, tmp_path):
     ds, data, proto = setup
     assert invoke("train", proto, "-m", "msd/rf15", "-o", tmp_path / "m.joblib").exit_code == 0
     other = TouchDataset("other", ds.captures, ds.meta, SensorSpec("test-4x4", (4, 4), 20.0, (0.0, 255.0)))
@@ -99,23 +99,23 @@ def test_predict_refuses_another_sensor_and_reads_long_format(setup, tmp_path):
     res = CliRunner().invoke(cli, ["predict", str(tmp_path / "m.joblib"), str(tmp_path / "other.parquet")])
     assert res.exit_code == 3
     assert "does not match the model's sensor" in res.output and "frame_rate: model 10.0, data 20.0" in res.output
-    # the same captures in the long format, read with the model's grid; the frame rate is the recording's
+    # the same captures in the table format, one row per frame, read with the model's grid; the frame rate is the recording's
     rows = []
     for cid, subj, g, cap in zip(ds.meta["capture_id"], ds.meta["subject"], ds.meta["gesture"], ds.captures):
         for t, frame in enumerate(cap):
             rows.append({"capture_id": cid, "frame": t + 1, "subject": subj, "gesture": g,
                          **{f"cell{i + 1}": int(v) for i, v in enumerate(frame.reshape(-1))}})
     pd.DataFrame(rows).to_csv(tmp_path / "long.csv", index=False)
-    unsaid = invoke("predict", tmp_path / "m.joblib", tmp_path / "long.csv", "--format", "long")
+    unsaid = invoke("predict", tmp_path / "m.joblib", tmp_path / "long.csv", "--format", "table")
     assert unsaid.exit_code == 3 and "give --frame-rate" in unsaid.output and "trained at 10" in unsaid.output
-    fast = invoke("predict", tmp_path / "m.joblib", tmp_path / "long.csv", "--format", "long", "--frame-rate", "20")
+    fast = invoke("predict", tmp_path / "m.joblib", tmp_path / "long.csv", "--format", "table", "--frame-rate", "20")
     assert fast.exit_code == 3 and "frame_rate: model 10.0, data 20.0" in fast.output  # a 20 Hz recording
-    near = invoke("predict", tmp_path / "m.joblib", tmp_path / "long.csv", "--format", "long", "--frame-rate", "10.05")
+    near = invoke("predict", tmp_path / "m.joblib", tmp_path / "long.csv", "--format", "table", "--frame-rate", "10.05")
     assert near.exit_code == 0  # within the 1 % tolerance
-    a = invoke("predict", tmp_path / "m.joblib", tmp_path / "long.csv", "--format", "long", "--frame-rate", "10")
+    a = invoke("predict", tmp_path / "m.joblib", tmp_path / "long.csv", "--format", "table", "--frame-rate", "10")
     b = invoke("predict", tmp_path / "m.joblib", data)
     assert a.exit_code == 0 and b.exit_code == 0
-    # long CSV values come back as float64, the Parquet as uint8: same features, same labels
+    # table CSV values come back as float64, the Parquet as uint8: same features, same labels
     assert a.stdout == b.stdout
     assert "accuracy" in b.stderr
 

@@ -37,7 +37,7 @@ from touchbench.cli.main import cli
 from touchbench.core import atomic
 from touchbench.core.errors import DataError, TouchbenchError, WriteError
 from touchbench.datasets.challenge_csv import read_challenge_csv
-from touchbench.datasets.generic import read_long_table
+from touchbench.datasets.generic import read_table_dataset
 from touchbench.datasets.model import FORMAT_VERSION, SensorSpec, TouchDataset
 from touchbench.deploy.model import TrainedModel, fit_model
 from touchbench.deploy.stream import SlidingRecognizer, load_replay
@@ -384,17 +384,19 @@ def _long_csv(path: Path, rows: list[tuple[str, int]], blank_after: int | None =
 
 
 @pytest.mark.parametrize("rows, line, text", [
-    # line 1 is the header, row k is on line k + 2
-    ([("a", 0), ("a", 1), ("a", -1), ("b", 0)], 4, "frame jumps from 1 to -1"),
-    ([("a", 0), ("a", 1), ("b", -1), ("b", 0)], 4, "a capture starts with frame -1, not 0"),
-    ([("a", -1), ("a", 0)], 2, "the first frame is -1; frames are numbered from 0 or 1"),
-    ([("a", 1), ("a", 2), ("b", 1), ("b", 3)], 5, "frame jumps from 1 to 3"),
+    # line 1 is the header, row k is on line k + 2; rows may come in any order, so a capture's frames
+    # are taken in counter order and the error names the row of the frame at fault
+    ([("a", 0), ("a", 1), ("a", -1), ("b", 0)], 4, "capture 'a' starts at frame -1; frames count from 0 or 1"),
+    ([("a", 0), ("a", 1), ("b", -1), ("b", 0)], 4, "capture 'b' starts at frame -1; frames count from 0 or 1"),
+    ([("a", -1), ("a", 0)], 2, "capture 'a' starts at frame -1; frames count from 0 or 1"),
+    ([("a", 1), ("a", 2), ("b", 1), ("b", 3)], 5, "capture 'b': frame 3 follows 1 (a frame is missing)"),
+    ([("a", 1), ("a", 2), ("a", 2)], 4, "capture 'a': frame 2 given twice"),
 ])
 def test_frame_errors_name_the_row_and_the_value_as_written(tmp_path, rows, line, text):
     path = tmp_path / "t.csv"
     _long_csv(path, rows)
     with pytest.raises(DataError) as e:
-        read_long_table(path, (2, 2), 10.0)
+        read_table_dataset(path, (2, 2), 10.0)
     assert e.value.line == line and str(e.value) == f"{path}:{line}: {text}"
 
 
@@ -402,7 +404,7 @@ def test_a_blank_line_does_not_shift_the_line_numbers(tmp_path):
     path = tmp_path / "t.csv"
     _long_csv(path, [("a", 0), ("a", 1), ("a", 2), ("a", 5)], blank_after=0)  # header, a0, blank, a1, a2, a5
     with pytest.raises(DataError) as e:
-        read_long_table(path, (2, 2), 10.0)
+        read_table_dataset(path, (2, 2), 10.0)
     assert e.value.line == 3  # the blank line itself: a row with no values
 
 
@@ -410,7 +412,7 @@ def test_blank_lines_at_the_end_are_no_rows(tmp_path):
     path = tmp_path / "t.csv"
     _long_csv(path, [("a", 0), ("a", 1)])
     path.write_text(path.read_text() + "\n\n")
-    ds = read_long_table(path, (2, 2), 10.0)
+    ds = read_table_dataset(path, (2, 2), 10.0)
     assert len(ds) == 1 and ds.captures[0].shape == (2, 2, 2)
 
 
@@ -466,7 +468,7 @@ def test_random_long_tables_are_a_dataset_or_one_data_error(tmp_path, rows, blan
         lines.insert(2, "")
     path.write_text("\n".join(lines) + "\n")
     try:
-        ds = read_long_table(path, (1, 2), 10.0)
+        ds = read_table_dataset(path, (1, 2), 10.0)
     except DataError as e:
         assert str(e).startswith(str(path))
         if e.line is not None:

@@ -1,17 +1,68 @@
-"""A reader for users' own sensors: a long-format CSV or Parquet table.
+"""The ``table`` format: a user's own sensor as a table, one file or a folder of files.
 
-One row per frame: a capture id column, a frame index column, metadata
-columns (``subject`` and ``gesture`` required; any others are kept, and must
-be constant within a capture), and one column per cell, H x W of them, in
-row-major order. The user gives the grid shape and frame rate. Cell columns
-are those named in ``cells``, or else every column whose name is a common
-prefix followed by a number (``cell1``.., ``ch1``.., ``c0``..), ordered by
-that number.
+Two layouts, told apart by the columns (``layout``: ``auto``, ``wide`` or
+``long``):
+
+``wide`` (one row per frame)
+    capture, subject and gesture columns, optionally a frame counter and a
+    time column, other metadata columns, and one column per cell, H x W of
+    them. Cell columns are named by a pattern (``cells``): ``pixel{i}`` or
+    ``cell{i}`` (one index, row-major, counting from 0 or 1 as the
+    smallest index says), or ``r{row}c{col}`` (row and column indices,
+    each counting from 0 or 1; the grid is then read from the names). By
+    default the one group of columns named by a common prefix and a
+    number (``cell1``.., ``ch1``.., ``pixel0``..) is taken, or the one
+    group named ``<prefix><row><sep><col>``-like by a ``{row}``/``{col}``
+    pattern the user gives.
+``long`` (one row per cell, a true long table)
+    the same capture, subject, gesture, frame and time columns, a value
+    column (``value_column``, default ``value``) and the cell's position:
+    ``row`` and ``col`` columns (the grid is their number of distinct
+    values, each counting from 0 or 1), or one ``cell`` index column
+    (row-major; the grid must then be given). Every cell of every frame
+    must be there exactly once. ``auto`` takes ``long`` when the table has
+    a value column and no numbered cell columns.
+
+Rows may come in any order: a capture is every row with its capture key
+(``capture_columns``: one column, default ``capture_id``, or several, such
+as ``participantID,gesture,repetition``, joined with ``-`` into the capture
+id), its frames ordered by the frame counter, or by time when there is
+none. The frame counter must then count up by one from 0 or 1 (a gap or a
+frame given twice is refused, naming the line); times must increase
+strictly. Metadata columns must be constant within a capture.
+
+A folder is every ``.csv``, ``.csv.gz`` and ``.parquet`` file below it, in
+sorted order, each read as above with its own line numbers; the file each
+capture came from is kept in the metadata column ``source``, and a capture
+key found in two files is refused.
+
+What the file cannot say, the user gives or touchbench works out, saying so:
+
+- the grid (``grid``, ``HxW``): needed unless the cell names or the row and
+  column indices give it;
+- the frame rate (``frame_rate``): given, or estimated from the time
+  column as 1 / the median step between consecutive frames over all
+  captures (robust to dropped frames), with a warning that shows the
+  estimate and the steps it came from. Frames are kept as recorded: the
+  time column's values (in ms) go into the metadata column ``time_ms``.
+  A numeric time column's unit is its name's suffix (``_ms``, ``_s``,
+  ``_us``) or ``time_unit``; a text column is read as date-times;
+- the value range (``value_range``, ``LO..HI``): given (a value outside it
+  is refused at its line), or inferred with a warning that shows it: for
+  whole numbers from 0, ``0..2^k - 1`` for the smallest k in 1, 8, 10, 12,
+  14, 16, 24, 32 that holds the largest value (the ADC ranges of common
+  converters: 12-bit data is 0..4095); for values within 0..1, ``0..1``
+  (normalised data); otherwise the smallest and largest values seen.
+
+Whole-number values are stored in the smallest unsigned integer type that
+holds the range (uint8, uint16, uint32), others as float64.
 """
 
 from __future__ import annotations
 
+import logging
 import re
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
@@ -20,106 +71,480 @@ import pandas as pd
 
 from ..core.errors import DataError, TouchbenchError
 from .formats import FormatOption, parse_frame_rate, parse_grid, register_format
-from .model import SensorSpec, TouchDataset
-from .tables import find_column, numeric, read_table, runs
+from .model import TIME_COLUMN, SensorSpec, TouchDataset, time_step_summary
+from .tables import find_column, numeric, read_table
+
+log = logging.getLogger("touchbench.datasets")
+
+__all__ = ["TableLayout", "cell_columns", "read_table_dataset", "parse_value_range"]
+
+TIME_NAMES = ("time_ms", "timestamp_ms", "time", "timestamp", "time_s", "t")
+FRAME_NAMES = ("frame", "frame_id", "frameid", "frame_index", "sequence")
+TIME_UNITS = {"s": 1000.0, "ms": 1.0, "us": 1e-3}
+ADC_BITS = (1, 8, 10, 12, 14, 16, 24, 32)
+SUFFIXES = (".csv", ".csv.gz", ".parquet")
 
 
-def cell_columns(df: pd.DataFrame, n_cells: int, path: Path) -> list[str]:
-    """The ``n_cells`` cell columns: the one group of columns named by a common prefix and a number, by number."""
-    groups: dict[str, list[tuple[int, str]]] = {}
-    for c in df.columns:
-        m = re.fullmatch(r"(.*?)(\d+)", c)
-        if m:
-            groups.setdefault(m.group(1), []).append((int(m.group(2)), c))
-    fits = [sorted(v) for v in groups.values() if len(v) == n_cells]
-    if len(fits) != 1:
-        raise DataError(
-            f"cannot tell the {n_cells} cell columns apart (name them with cells=...); "
-            f"numbered column groups: { {k: len(v) for k, v in groups.items()} }", path, 1)
-    return [c for _, c in fits[0]]
+@dataclass(frozen=True)
+class TableLayout:
+    """The columns of a table (the names the user gives; ``None``: found by the rules of the module)."""
+
+    capture: tuple[str, ...] = ("capture_id",)
+    subject: str = "subject"
+    gesture: str = "gesture"
+    frame: str | None = None
+    time: str | None = None
+    time_unit: str | None = None
+    cells: str | None = None
+    value: str | None = None
+    layout: str = "auto"
+
+    def __post_init__(self) -> None:
+        if self.layout not in ("auto", "wide", "long"):
+            raise TouchbenchError(f"layout must be auto, wide or long, got {self.layout!r}")
+        if self.time_unit is not None and self.time_unit not in TIME_UNITS:
+            raise TouchbenchError(f"time unit must be one of {', '.join(TIME_UNITS)}, got {self.time_unit!r}")
+        if self.cells is not None and "{" in self.cells:
+            _pattern_regex(self.cells)  # a bad pattern is refused before any file is read
 
 
-def read_long_table(
+# ---------------------------------------------------------------- cell columns
+def _pattern_regex(pattern: str) -> tuple[re.Pattern, tuple[str, ...]]:
+    fields = tuple(re.findall(r"\{(i|row|col)\}", pattern))
+    if sorted(fields) not in (["i"], ["col", "row"]):
+        raise TouchbenchError(f"cell pattern {pattern!r}: use {{i}} (one index) or {{row}} and {{col}}, "
+                              "such as pixel{i} or r{row}c{col}")
+    parts = re.split(r"\{(?:i|row|col)\}", pattern)
+    rx = "".join(re.escape(p) + (r"(\d+)" if k < len(fields) else "") for k, p in enumerate(parts))
+    return re.compile(rx), fields
+
+
+def _from_zero_or_one(idx: np.ndarray, what: str, path: Path) -> np.ndarray:
+    lo = int(idx.min())
+    if lo not in (0, 1):
+        raise DataError(f"{what} count from {lo}; they must count from 0 or 1", path, 1)
+    return idx - lo
+
+
+def cell_columns(df: pd.DataFrame, n_cells: int | None, path: Path, pattern: str | None = None,
+                 grid: tuple[int, int] | None = None) -> tuple[list[str], tuple[int, int] | None]:
+    """The cell columns in row-major order, and the grid their names give (``None`` for one index).
+
+    Without ``pattern``: the one group of columns named by a common prefix and a number whose size
+    is ``n_cells`` (or the only such group when the grid is not known)."""
+    if pattern is None:
+        groups: dict[str, list[tuple[int, str]]] = {}
+        for c in df.columns:
+            m = re.fullmatch(r"(.*?)(\d+)", c)
+            if m:
+                groups.setdefault(m.group(1), []).append((int(m.group(2)), c))
+        fits = [sorted(v) for v in groups.values() if len(v) > 1 and (n_cells is None or len(v) == n_cells)]
+        if len(fits) != 1:
+            want = f"the {n_cells} cell columns" if n_cells else "the cell columns"
+            raise DataError(
+                f"cannot tell {want} apart (name them with a pattern such as --cells 'pixel{{i}}'); numbered "
+                f"column groups: { {k: len(v) for k, v in groups.items()} }", path, 1)
+        idx = _from_zero_or_one(np.array([i for i, _ in fits[0]]), "the cell columns", path)
+        if not np.array_equal(idx, np.arange(len(idx))):
+            raise DataError(f"cell columns {fits[0][0][1]}..{fits[0][-1][1]} skip a number", path, 1)
+        return [c for _, c in fits[0]], None
+    rx, fields = _pattern_regex(pattern)
+    found = [(tuple(int(g) for g in m.groups()), c) for c in df.columns if (m := rx.fullmatch(c))]
+    if not found:
+        raise DataError(f"no column matches the cell pattern {pattern!r} (columns: {list(df.columns)[:8]}...)", path, 1)
+    if fields == ("i",):
+        idx = _from_zero_or_one(np.array([k[0] for k, _ in found]), "the cell columns", path)
+        order = np.argsort(idx, kind="stable")
+        if not np.array_equal(idx[order], np.arange(len(found))):
+            raise DataError(f"the columns matching {pattern!r} skip a number or give one twice", path, 1)
+        return [found[i][1] for i in order], None
+    pos = np.array([k for k, _ in found])
+    if fields == ("col", "row"):
+        pos = pos[:, ::-1]
+    r = _from_zero_or_one(pos[:, 0], "the rows of the cell columns", path)
+    c = _from_zero_or_one(pos[:, 1], "the columns of the cell columns", path)
+    shape = (int(r.max()) + 1, int(c.max()) + 1)
+    flat = r * shape[1] + c
+    if len(set(flat.tolist())) != len(found) or len(found) != shape[0] * shape[1]:
+        raise DataError(f"the columns matching {pattern!r} do not fill a {shape[0]} x {shape[1]} grid "
+                        f"({len(found)} columns)", path, 1)
+    order = np.argsort(flat)
+    return [found[i][1] for i in order], shape
+
+
+# ---------------------------------------------------------------- one file
+@dataclass
+class _Frames:
+    """A file's frames, one row each, in file order: what both layouts reduce to."""
+
+    key: np.ndarray  # (n,) capture key, str
+    order: np.ndarray  # (n,) frame counter or time, float64
+    values: np.ndarray  # (n, H*W) float64
+    lines: np.ndarray  # (n,) file line of the row (of the frame's first row in a long table)
+    meta: pd.DataFrame  # (n, k) metadata columns
+    time_ms: np.ndarray | None  # (n,) ms, or None without a time column
+
+
+def _time_ms(df: pd.DataFrame, col: str, unit: str | None, path: Path) -> np.ndarray:
+    s = df[col]
+    if not pd.api.types.is_numeric_dtype(s):
+        parsed = pd.to_datetime(s, errors="coerce", utc=True)
+        if parsed.isna().any():
+            i = int(np.flatnonzero(parsed.isna().to_numpy())[0])
+            raise DataError(f"column {col!r}: neither a number nor a date-time ({s.iloc[i]!r})", path, i + 2)
+        return (parsed - parsed.min()).dt.total_seconds().to_numpy() * 1000.0
+    if unit is None:
+        m = re.search(r"_(ms|s|us)$", col.lower())
+        if m is None:
+            raise DataError(f"the time column {col!r} does not say its unit: give --time-unit "
+                            f"{' or '.join(TIME_UNITS)} (its values run {s.min():g}..{s.max():g})", path, 1)
+        unit = m.group(1)
+    return numeric(df, [col], path)[:, 0] * TIME_UNITS[unit]
+
+
+def _optional_column(df: pd.DataFrame, given: str | None, names: Sequence[str], path: Path, what: str) -> str | None:
+    if given is not None:
+        return find_column(df, (given,), path, what)
+    lower = {c.lower(): c for c in df.columns}
+    return next((lower[n] for n in names if n in lower), None)
+
+
+def _capture_key(df: pd.DataFrame, cols: Sequence[str]) -> np.ndarray:
+    parts = [df[c].astype(str).str.strip().to_numpy(dtype=object) for c in cols]
+    key = parts[0]
+    for p in parts[1:]:
+        key = key + "-" + p
+    return key.astype(str)
+
+
+def _read_file(path: Path, lay: TableLayout, grid: tuple[int, int] | None, value_range, allow_empty: bool):
+    """One file's frames and the grid its columns give (or ``grid``)."""
+    df = read_table(path, allow_empty=allow_empty)
+    cap = [find_column(df, (c,), path, "capture") for c in lay.capture]
+    subj = find_column(df, (lay.subject,), path, "subject")
+    gest = find_column(df, (lay.gesture,), path, "gesture")
+    frame = _optional_column(df, lay.frame, FRAME_NAMES, path, "frame")
+    time = _optional_column(df, lay.time, TIME_NAMES, path, "time")
+    value = _optional_column(df, lay.value, ("value",), path, "value")
+    layout = lay.layout
+    if layout == "auto":
+        layout = "long" if value is not None and lay.cells is None and not _has_numbered_group(df) else "wide"
+    if layout == "long" and value is None:
+        raise DataError("a long table needs a value column (--value-column; found none named 'value')", path, 1)
+    lo, hi = value_range if value_range is not None else (None, None)
+    taken = {*cap, frame, time}
+    if layout == "wide":
+        n = grid[0] * grid[1] if grid is not None else None
+        cells, named_grid = cell_columns(df, n, path, lay.cells)
+        grid = _agree(grid, named_grid, path)
+        if grid is None:
+            raise DataError(f"{len(cells)} cell columns: give the grid (--grid HxW), their names do not say it", path, 1)
+        if len(cells) != grid[0] * grid[1]:
+            raise DataError(f"{len(cells)} cell columns for a {grid[0]} x {grid[1]} grid ({grid[0] * grid[1]} cells)", path, 1)
+        values = numeric(df, cells, path, lo=lo, hi=hi)
+        lines = np.arange(len(df)) + 2
+        taken |= set(cells)
+    else:
+        values, lines, df, grid = _long_to_frames(df, cap, frame, time, value, lay.cells, grid, path, lo, hi)
+        taken |= {value, *(lay.cells.split(",") if lay.cells else ()), "row", "col", "cell"}
+    meta_cols = [c for c in df.columns if c not in taken or c in (subj, gest)]
+    if frame is not None:
+        order = numeric(df, [frame], path, integer=True)[:, 0]
+    elif time is not None:
+        order = None
+    else:
+        raise DataError("no frame counter or time column to order the frames by (name one with --frame-column "
+                        "or --time-column)", path, 1)
+    t_ms = _time_ms(df, time, lay.time_unit, path) if time is not None else None
+    fr = _Frames(_capture_key(df, cap), order if order is not None else t_ms, values, lines,
+                 df[meta_cols].rename(columns={subj: "subject", gest: "gesture"}).reset_index(drop=True), t_ms)
+    return fr, grid, frame, time
+
+
+def _has_numbered_group(df: pd.DataFrame) -> bool:
+    prefixes = [m.group(1) for c in df.columns if (m := re.fullmatch(r"(.*?)(\d+)", c))]
+    return any(prefixes.count(p) > 1 for p in set(prefixes))
+
+
+def _agree(given: tuple[int, int] | None, found: tuple[int, int] | None, path: Path) -> tuple[int, int] | None:
+    if given is not None and found is not None and tuple(given) != tuple(found):
+        raise DataError(f"the cells give a {found[0]} x {found[1]} grid, not the {given[0]} x {given[1]} given", path, 1)
+    return tuple(found or given) if (found or given) else None
+
+
+def _long_to_frames(df, cap, frame, time, value, cells, grid, path, lo, hi):
+    """A long table's rows gathered into frames: values ``(frames, H*W)``, each frame's first line,
+    the frames' rows of ``df`` (for the other columns), the grid."""
+    names = cells.split(",") if cells else None
+    if names is None:
+        names = ["row", "col"] if {"row", "col"} <= {c.lower() for c in df.columns} else ["cell"]
+    pos_cols = [find_column(df, (n,), path, f"cell position ({n})") for n in names]
+    pos = numeric(df, pos_cols, path, integer=True).astype(np.int64)
+    if len(pos_cols) == 2:
+        r = _from_zero_or_one(pos[:, 0], f"the values of {pos_cols[0]!r}", path)
+        c = _from_zero_or_one(pos[:, 1], f"the values of {pos_cols[1]!r}", path)
+        grid = _agree(grid, (int(r.max()) + 1, int(c.max()) + 1), path)
+        k = r * grid[1] + c
+    elif len(pos_cols) == 1:
+        if grid is None:
+            raise DataError(f"the cell index {pos_cols[0]!r} does not say the grid: give --grid HxW", path, 1)
+        k = _from_zero_or_one(pos[:, 0], f"the values of {pos_cols[0]!r}", path)
+        if k.max() >= grid[0] * grid[1]:
+            i = int(np.argmax(k >= grid[0] * grid[1]))
+            raise DataError(f"cell {pos[i, 0]} beyond a {grid[0]} x {grid[1]} grid", path, i + 2)
+    else:
+        raise TouchbenchError(f"a long table's cells are one index column or row,col; got {cells!r}")
+    v = numeric(df, [value], path, lo=lo, hi=hi)[:, 0]
+    n_cells = grid[0] * grid[1]
+    fkey = df[frame if frame is not None else time].astype(str).to_numpy()
+    ckey = _capture_key(df, cap)
+    codes = pd.DataFrame({"c": ckey, "f": fkey}).groupby(["c", "f"], sort=False).ngroup().to_numpy()
+    order = np.lexsort((k, codes))
+    sc, sk = codes[order], k[order]
+    starts = np.flatnonzero(np.r_[True, sc[1:] != sc[:-1]])
+    counts = np.diff(np.r_[starts, len(sc)])
+    within = np.arange(len(sc)) - np.repeat(starts, counts)
+    wrong = np.flatnonzero(counts != n_cells)
+    if wrong.size:
+        i = order[starts[wrong[0]]]
+        raise DataError(f"frame {fkey[i]} of capture {str(ckey[i])!r}: {counts[wrong[0]]} cells "
+                        f"for a {grid[0]} x {grid[1]} grid", path, int(i) + 2)
+    bad = np.flatnonzero(sk != within)  # as many rows as cells, so one cell is there twice and another missing
+    if bad.size:
+        i = order[bad[0]]
+        raise DataError(f"frame {fkey[i]} of capture {str(ckey[i])!r}: cell "
+                        f"{pos[i].tolist()} given twice", path, int(i) + 2)
+    first_row = np.minimum.reduceat(order, starts)  # a frame's first row in the file (codes: first-seen order)
+    rows = df.iloc[first_row].reset_index(drop=True)
+    return v[order].reshape(-1, n_cells), first_row + 2, rows, grid
+
+
+# ---------------------------------------------------------------- captures
+def _captures(fr: _Frames, path: Path, frame_col: str | None, time_col: str | None):
+    """Group a file's frames into captures (rows in any order): ``[(key, rows in frame order)]``, the
+    captures in the order the file first gives them."""
+    codes, uniq = pd.factorize(fr.key)
+    uniq = [str(u) for u in uniq]
+    order = np.lexsort((fr.order, codes))
+    sc = codes[order]
+    starts = np.flatnonzero(np.r_[True, sc[1:] != sc[:-1]])
+    out = []
+    for a, b in zip(starts, np.r_[starts[1:], len(order)]):
+        rows = order[a:b]
+        o = fr.order[rows]
+        if frame_col is not None:
+            if o[0] not in (0, 1):
+                raise DataError(f"capture {uniq[sc[a]]!r} starts at {frame_col} {o[0]:g}; frames count from 0 or 1",
+                                path, int(fr.lines[rows[0]]))
+            gap = np.flatnonzero(np.diff(o) != 1)
+            if gap.size:
+                j = rows[gap[0] + 1]
+                what = "given twice" if o[gap[0] + 1] == o[gap[0]] else f"follows {o[gap[0]]:g} (a frame is missing)"
+                raise DataError(f"capture {uniq[sc[a]]!r}: {frame_col} {o[gap[0] + 1]:g} {what}", path, int(fr.lines[j]))
+        if fr.time_ms is not None:
+            t = fr.time_ms[rows]
+            same = np.flatnonzero(np.diff(t) <= 0)
+            if same.size:
+                raise DataError(f"capture {uniq[sc[a]]!r}: {time_col} does not increase (two frames at the same "
+                                "time, or times out of order against the frame counter)", path,
+                                int(fr.lines[rows[same[0] + 1]]))
+        meta = fr.meta.iloc[rows]
+        varying = [c for c in meta.columns if meta[c].nunique(dropna=False) > 1]
+        if varying:
+            col = meta[varying[0]].to_numpy()
+            j = rows[int(np.flatnonzero(col != col[0])[0])]
+            raise DataError(f"metadata column {varying[0]!r} changes inside capture {uniq[sc[a]]!r}", path,
+                            int(fr.lines[j]))
+        out.append((uniq[sc[a]], rows))
+    return out
+
+
+def parse_value_range(text: str) -> tuple[float, float]:
+    """``"LO..HI"`` (or ``LO,HI``) -> ``(lo, hi)``, ``lo < hi``."""
+    parts = str(text).replace(",", "..").split("..")
+    try:
+        lo, hi = (float(x) for x in parts)
+    except ValueError:
+        raise ValueError(f"expected LO..HI such as 0..4095, got {text!r}") from None
+    if not lo < hi:
+        raise ValueError(f"the range's low end must be below its high end, got {text!r}")
+    return lo, hi
+
+
+def infer_value_range(lo: float, hi: float, whole: bool) -> tuple[tuple[float, float], str]:
+    """The inferred range of values seen in ``[lo, hi]`` and the rule that gave it (module docstring)."""
+    if whole and lo >= 0:
+        bits = next((b for b in ADC_BITS if hi <= 2 ** b - 1), None)
+        if bits is not None:
+            return (0.0, float(2 ** bits - 1)), f"the smallest 2^k - 1 that holds the largest value, {hi:g} ({bits}-bit)"
+    if lo >= 0 and hi <= 1:
+        return (0.0, 1.0), f"values within 0..1 (largest {hi:g}): normalised data"
+    if lo == hi:
+        return (lo, lo + 1.0), "one value throughout: that value to one above it"
+    return (lo, hi), "the smallest and largest values seen"
+
+
+def _dtype(values_whole: bool, rng: tuple[float, float]) -> np.dtype:
+    if values_whole and rng[0] >= 0:
+        for t in (np.uint8, np.uint16, np.uint32):
+            if rng[1] <= np.iinfo(t).max:
+                return np.dtype(t)
+    return np.dtype(np.float64)
+
+
+def _files(path: Path) -> list[Path]:
+    if path.is_file():
+        return [path]
+    if not path.is_dir():
+        raise DataError("no such file or folder", path)
+    files = sorted(p for p in path.rglob("*") if p.is_file() and p.name.lower().endswith(SUFFIXES)
+                   and not p.name.startswith("."))
+    if not files:
+        raise DataError(f"no {', '.join(SUFFIXES)} file in this folder", path)
+    return files
+
+
+def read_table_dataset(
     path: str | Path,
-    grid: tuple[int, int],
-    frame_rate: float,
+    grid: tuple[int, int] | None = None,
+    frame_rate: float | None = None,
     *,
     name: str | None = None,
-    capture_col: str = "capture_id",
-    frame_col: str = "frame",
-    cells: Sequence[str] | None = None,
-    value_range: tuple[float, float] = (0.0, 1023.0),
+    columns: TableLayout = TableLayout(),
+    value_range: tuple[float, float] | None = None,
     sensor_name: str = "custom",
 ) -> TouchDataset:
+    """Read a table file or a folder of them (module docstring) into a dataset."""
     path = Path(path)
-    sensor = SensorSpec(name=sensor_name, grid=grid, frame_rate=frame_rate, value_range=value_range)
-    df = read_table(path)
-    cap = find_column(df, (capture_col,), path, "capture id")
-    fr = find_column(df, (frame_col,), path, "frame index")
-    for req in ("subject", "gesture"):
-        find_column(df, (req,), path, req)
-    cell_cols = list(cells) if cells is not None else cell_columns(df, sensor.n_cells, path)
-    missing = [c for c in cell_cols if c not in df.columns]
-    if missing:
-        raise DataError(f"cell columns not found: {missing[:5]}", path, 1)
-    if len(cell_cols) != sensor.n_cells:
-        raise DataError(f"{len(cell_cols)} cell columns for a {grid[0]} x {grid[1]} grid ({sensor.n_cells} cells)", path, 1)
-    values = numeric(df, cell_cols, path, lo=value_range[0], hi=value_range[1])
-    frame = numeric(df, [fr], path, integer=True)[:, 0]
-    first = int(frame[0]) if len(frame) else 1
-    if first not in (0, 1):  # frames count from 0 or 1, as the file's first row says
-        raise DataError(f"the first {frame_col} is {first}; frames are numbered from 0 or 1", path, 2)
-    bounds = runs(df[[cap]], frame, path, frame_col, origin=first)
-    meta_cols = [c for c in df.columns if c not in set(cell_cols) | {fr}]
-    rows, captures = [], []
-    for a, b in bounds:
-        block = df.iloc[a:b][meta_cols]
-        varying = [c for c in meta_cols if block[c].nunique(dropna=False) > 1]
-        if varying:
-            i = a + int(np.flatnonzero((block[varying[0]] != block[varying[0]].iloc[0]).to_numpy())[0])
-            raise DataError(f"metadata column {varying[0]!r} changes inside capture {df[cap].iloc[a]!r}", path, i + 2)
-        rows.append(block.iloc[0].to_dict())
-        captures.append(values[a:b].reshape(b - a, *grid))
-    meta = pd.DataFrame(rows).rename(columns={cap: "capture_id"})
+    files = _files(path)
+    per_file, found_grid = [], grid
+    for f in files:
+        fr, g, frame_col, time_col = _read_file(f, columns, found_grid, value_range, allow_empty=len(files) > 1)
+        found_grid = _agree(found_grid, g, f)
+        per_file.append((f, fr, frame_col, time_col))
+    caps, meta_rows, times, seen = [], [], [], {}
+    whole = True
+    for f, fr, frame_col, time_col in per_file:
+        if len(fr.key) == 0:
+            continue
+        whole &= bool(np.all(fr.values == np.round(fr.values)))
+        for key, rows in _captures(fr, f, frame_col, time_col):
+            if key in seen:
+                raise DataError(f"capture {key!r} is also in {seen[key].name}: a capture's rows belong in one file",
+                                f, int(fr.lines[rows[0]]))
+            seen[key] = f
+            caps.append(fr.values[rows])
+            row = {"capture_id": key, **fr.meta.iloc[rows[0]].to_dict()}
+            if len(files) > 1:
+                row["source"] = str(f.relative_to(path))
+            meta_rows.append(row)
+            times.append(None if fr.time_ms is None else fr.time_ms[rows] - fr.time_ms[rows[0]])
+    if not caps:
+        raise DataError("no data rows", path)
+    if any(t is None for t in times) and not all(t is None for t in times):
+        raise DataError("some files have a time column and others not", path)
+    if value_range is None:
+        lo = min(float(c.min()) for c in caps)
+        hi = max(float(c.max()) for c in caps)
+        value_range, why = infer_value_range(lo, hi, whole)
+        log.warning("%s: value range not given: inferred %g..%g (%s); give --value-range LO..HI to state it",
+                    path, *value_range, why)
+    if frame_rate is None:
+        if times[0] is None:
+            raise TouchbenchError(f"{path}: the table does not say its frame rate: give --frame-rate, or a time "
+                                  "column (--time-column)")
+        steps = time_step_summary(times)
+        if not steps or steps["median"] <= 0:
+            raise DataError("no capture has two frames to estimate the frame rate from: give --frame-rate", path)
+        frame_rate = 1000.0 / steps["median"]
+        log.warning("%s: frame rate estimated from the time column: %.4g Hz (1 / the median step, %.4g ms; steps "
+                    "%.4g..%.4g ms, 95th percentile %.4g ms); frames kept as recorded, their times in %r; give "
+                    "--frame-rate to state it", path, frame_rate, steps["median"], steps["min"], steps["max"],
+                    steps["p95"], TIME_COLUMN)
+    if found_grid is None:
+        raise DataError("the grid is not known: give --grid HxW", path)
+    dtype = _dtype(whole, value_range)
+    meta = pd.DataFrame(meta_rows)
     for c in ("capture_id", "subject", "gesture"):
         meta[c] = meta[c].astype(str)
-    if meta["capture_id"].duplicated().any():
-        dup = meta["capture_id"][meta["capture_id"].duplicated()].iloc[0]
-        raise DataError(f"capture {dup!r} appears in two separate runs of rows", path)
-    return TouchDataset(name or path.stem, captures, meta, sensor)
+    if times[0] is not None:
+        meta[TIME_COLUMN] = [t.tolist() for t in times]
+    sensor = SensorSpec(name=sensor_name, grid=found_grid, frame_rate=float(frame_rate), value_range=value_range)
+    return TouchDataset(name or path.name.split(".")[0], [c.reshape(len(c), *found_grid).astype(dtype) for c in caps],
+                        meta, sensor)
 
 
-def read_long_format(
+def read_table_format(
     path: str | Path,
     *,
     grid: tuple[int, int] | None = None,
     frame_rate: float | None = None,
+    value_range: tuple[float, float] | None = None,
+    capture_columns: Sequence[str] | None = None,
+    subject_column: str | None = None,
+    gesture_column: str | None = None,
+    frame_column: str | None = None,
+    time_column: str | None = None,
+    time_unit: str | None = None,
+    cells: str | None = None,
+    value_column: str | None = None,
+    layout: str | None = None,
     name: str | None = None,
     like: SensorSpec | None = None,
 ) -> TouchDataset:
-    """The ``long`` file format: :func:`read_long_table` with the grid and
-    frame rate given. ``like`` (the sensor of the model that is to label the
-    data) fills the grid and value range, never the frame rate: the file does
-    not say it, and a recording at another rate must be refused, not read as
-    if it had the model's."""
-    kw = {}
+    """The ``table`` file format (module docstring). ``like`` (the sensor of the model that is to
+    label the data) fills the grid and value range, never the frame rate: a recording at another
+    rate must be refused, not read as if it had the model's."""
+    kw = {k: v for k, v in (("capture", tuple(capture_columns) if capture_columns else None),
+                            ("subject", subject_column), ("gesture", gesture_column), ("frame", frame_column),
+                            ("time", time_column), ("time_unit", time_unit), ("cells", cells),
+                            ("value", value_column), ("layout", layout)) if v is not None}
+    sensor_name = "custom"
     if like is not None:
         grid = grid or like.grid
-        kw = {"value_range": like.value_range, "sensor_name": like.name}
-    if frame_rate is None:
-        hint = f" (the model was trained at {like.frame_rate:g})" if like is not None else ""
-        raise TouchbenchError(f"the long format does not say its frame rate: give --frame-rate, the frames per "
-                              f"second of this recording{hint}")
-    if grid is None:
-        raise TouchbenchError("the long format does not say its grid: give --grid HxW")
-    return read_long_table(path, tuple(grid), float(frame_rate), name=name, **kw)
+        value_range = value_range or like.value_range
+        sensor_name = like.name
+    try:
+        return read_table_dataset(path, grid, frame_rate, name=name, columns=TableLayout(**kw),
+                                  value_range=value_range, sensor_name=sensor_name)
+    except TouchbenchError as e:
+        if like is not None and frame_rate is None and "frame rate" in str(e):
+            raise TouchbenchError(f"{e} (the model was trained at {like.frame_rate:g})") from None
+        raise
+
+
+def _columns(text: str) -> tuple[str, ...]:
+    cols = tuple(c.strip() for c in str(text).split(",") if c.strip())
+    if not cols:
+        raise ValueError("expected one or more column names separated by commas")
+    return cols
 
 
 register_format(
-    "long", "your own sensor: one row per frame (capture_id, frame, subject, gesture, H x W numbered cell columns)",
-    read_long_format,
+    "table",
+    "your own sensor: a table or a folder of tables, one row per frame (a column per cell) or per cell "
+    "(a true long table); CSV, CSV.gz or Parquet",
+    read_table_format,
+    reads="file or folder",
     options=(
-        FormatOption("grid", "Rows x columns of the grid, e.g. 19x24", parse_grid, metavar="HxW", required=True),
-        FormatOption("frame_rate", "Frames per second", parse_frame_rate, required=True),
+        FormatOption("grid", "Rows x columns of the grid, e.g. 19x24 (when the cell names do not say it)",
+                     parse_grid, metavar="HxW"),
+        FormatOption("frame_rate", "Frames per second (default: estimated from the time column, with a warning)",
+                     parse_frame_rate),
+        FormatOption("value_range", "The sensor's value range (default: inferred, with a warning)",
+                     parse_value_range, metavar="LO..HI"),
+        FormatOption("capture_columns", "Column(s) naming a capture, comma-separated (default capture_id)",
+                     _columns, metavar="COLS"),
+        FormatOption("subject_column", "The subject column (default subject)", metavar="COL"),
+        FormatOption("gesture_column", "The gesture column (default gesture)", metavar="COL"),
+        FormatOption("frame_column", "The frame counter (default: frame, frame_id... if present)", metavar="COL"),
+        FormatOption("time_column", "The time column (default: time, time_ms, timestamp... if present)",
+                     metavar="COL"),
+        FormatOption("time_unit", "Unit of a numeric time column whose name does not say it: s, ms or us",
+                     metavar="UNIT"),
+        FormatOption("cells", "Cell columns: a pattern such as pixel{i} or r{row}c{col}; in a long table the "
+                     "position column(s), row,col or cell", metavar="PATTERN"),
+        FormatOption("value_column", "A long table's value column (default value)", metavar="COL"),
+        FormatOption("layout", "wide (a row per frame), long (a row per cell) or auto", metavar="LAYOUT"),
     ),
 )

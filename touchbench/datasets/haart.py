@@ -136,12 +136,13 @@ def read_bytes(path: Path) -> bytes:
     return data
 
 
-def parse_recording(data: bytes, path: Path) -> np.ndarray:
+def parse_recording(data: bytes, path: Path, min_lines: int = LINES_USED) -> np.ndarray:
     """Parse a recording into a ``(lines, 10)`` int array, checking every line.
 
     Refuses, naming the file and line: a non-numeric or non-integer value, a
     line without exactly ten values, a negative value or one above 1023, and
-    a recording shorter than 5400 lines (truncated).
+    a recording shorter than ``min_lines`` lines (truncated; HAART's 5400:
+    540 frames of 10 lines).
     """
     text = data.decode("ascii", errors="replace")
     try:
@@ -151,9 +152,10 @@ def parse_recording(data: bytes, path: Path) -> np.ndarray:
         ok = False
     if not ok:
         _locate_bad_line(text, path)
-    if arr.shape[0] < LINES_USED:
+    if arr.shape[0] < min_lines:
         raise DataError(
-            f"truncated recording: {arr.shape[0]} lines, a recording has {LINES_USED} (540 frames of 10 lines)",
+            f"truncated recording: {arr.shape[0]} lines, a recording has {min_lines} "
+            f"({min_lines // RAW_SIDE} frames of {RAW_SIDE} lines)",
             path,
             arr.shape[0] + 1,
         )
@@ -179,11 +181,16 @@ def _locate_bad_line(text: str, path: Path) -> None:
     raise DataError("unreadable recording", path)
 
 
+def frame_window(arr: np.ndarray, first: int, n: int) -> np.ndarray:
+    """Frames ``first .. first + n - 1`` (0-based) of a parsed recording, the inner 8 x 8 (the
+    organisers' crop: grid rows and columns 2..9), as pressure (1023 - raw), uint16."""
+    frames = arr[: (first + n) * RAW_SIDE].reshape(-1, RAW_SIDE, RAW_SIDE)
+    return (1023 - frames[first:first + n, 1:-1, 1:-1]).astype(np.uint16)
+
+
 def corrected_window(arr: np.ndarray) -> np.ndarray:
     """The middle 8 s, inner 8 x 8, as pressure (1023 - raw), uint16."""
-    frames = arr[:LINES_USED].reshape(-1, RAW_SIDE, RAW_SIDE)
-    win = frames[CORRECTED_FIRST_FRAME:CORRECTED_FIRST_FRAME + N_FRAMES, 1:-1, 1:-1]
-    return (1023 - win).astype(np.uint16)
+    return frame_window(arr, CORRECTED_FIRST_FRAME, N_FRAMES)
 
 
 def challenge_window(arr: np.ndarray) -> np.ndarray:
@@ -200,10 +207,7 @@ def challenge_window(arr: np.ndarray) -> np.ndarray:
 def _parse_notes(raw: Path, recs: list[Recording]) -> dict[tuple, str]:
     """Map recording key -> the note that names it a copy."""
     copies: dict[tuple, str] = {}
-    by_participant: dict[int, list[Recording]] = {}
-    for r in recs:
-        by_participant.setdefault(r.participant, []).append(r)
-    for note in sorted(raw.glob("*/note.txt")):
+    for note in sorted(raw.rglob("note.txt")):
         text = note.read_text(errors="replace")
         for sentence in re.split(r"[\n.;]+", text):
             s = sentence.strip()

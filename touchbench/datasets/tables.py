@@ -1,6 +1,6 @@
 """Reading tabular (one row per frame) files with errors that name the line.
 
-Shared by the challenge CSV, CoST and generic long-format readers. Line
+Shared by the challenge CSV, CoST, SocialTouch and table readers. Line
 numbers are 1-based file lines: the header is line 1, data row ``i``
 (0-based) is line ``i + 2``.
 """

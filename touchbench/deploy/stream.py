@@ -302,7 +302,7 @@ def load_replay(path: str | Path, model: TrainedModel, capture: str | None = Non
     if df.shape[1] == n:
         cols = list(df.columns)
     else:
-        cols = cell_columns(df, n, path)  # the long format's own rule for cell columns
+        cols, _ = cell_columns(df, n, path)  # the table format's own rule for cell columns
     lo, hi = model.sensor.value_range
     values = numeric(df, cols, path, lo=lo, hi=hi, integer=dtype.kind in "iu")
     return values.reshape(len(df), h, w).astype(dtype), model.sensor.frame_rate, f"{path.name}: {len(df)} frames"
