@@ -49,10 +49,11 @@ def format_info(info: dict) -> str:
         f"frames        {fpc['min']}..{fpc['max']} per capture (median {fpc['median']:g})",
         f"values        {info['value_range'][0]:g}..{info['value_range'][1]:g} ({info['dtype']})",
     ]
-    steps = info.get("time_steps_ms")
-    if steps:
-        lines.append(f"time steps    median {steps['median']:g} ms, 95th percentile {steps['p95']:g} ms "
-                     f"({steps['min']:g}..{steps['max']:g})")
+    for key, label in (("time_steps_ms", "time steps"), ("recorded_time_steps_ms", "recorded")):
+        steps = info.get(key)
+        if steps:
+            lines.append(f"{label:13s} median {steps['median']:.4g} ms, 95th percentile {steps['p95']:.4g} ms "
+                         f"({steps['min']:.4g}..{steps['max']:.4g})")
     lines += [
         f"content hash  {info['content_hash']}",
         "by subject    " + ", ".join(f"{k}: {v}" for k, v in info["by_subject"].items()),

@@ -39,6 +39,8 @@ class DatasetChangedWarning(UserWarning):
 REQUIRED_META = ("capture_id", "subject", "gesture")
 #: optional metadata column: each capture's frame times in ms (one increasing value per frame)
 TIME_COLUMN = "time_ms"
+#: optional metadata column: the frame times as recorded, where the frames were resampled
+RECORDED_TIME_COLUMN = "recorded_time_ms"
 
 
 @dataclass(frozen=True)
@@ -330,6 +332,8 @@ class TouchDataset:
         }
         if TIME_COLUMN in self.meta.columns:
             out["time_steps_ms"] = time_step_summary(self.meta[TIME_COLUMN].tolist())
+        if RECORDED_TIME_COLUMN in self.meta.columns:
+            out["recorded_time_steps_ms"] = time_step_summary(self.meta[RECORDED_TIME_COLUMN].tolist())
         if "split" in self.meta.columns:
             out["by_split"] = {str(k): int(v) for k, v in self.meta["split"].value_counts().sort_index().items()}
         if self.provenance:

@@ -69,7 +69,7 @@ import pandas as pd
 from ..core.errors import DataError
 from ..core.paths import data_dir as default_data_dir
 from .cache import cached_dataset
-from .model import SensorSpec, TouchDataset, time_step_summary
+from .model import RECORDED_TIME_COLUMN, SensorSpec, TouchDataset, time_step_summary
 from .registry import DATASETS
 from .tables import numeric, read_table, runs
 
@@ -297,7 +297,7 @@ def build_resampled(base: Path) -> TouchDataset:
     times, frames = zip(*(resample(c.time_ms, c.frames) for c in captures))
     meta["recorded_frames"] = np.array([len(c.time_ms) for c in captures], dtype=np.int64)
     meta["time_ms"] = [t.tolist() for t in times]
-    meta["recorded_time_ms"] = [c.time_ms.tolist() for c in captures]
+    meta[RECORDED_TIME_COLUMN] = [c.time_ms.tolist() for c in captures]
     ds = TouchDataset("socialtouch", list(frames), meta, SOCIALTOUCH_SENSOR)
     ds.provenance = {
         "source": SOURCE,
