@@ -236,3 +236,25 @@ def test_time_stamps_must_be_one_increasing_time_per_frame(times):
     meta = pd.DataFrame({"capture_id": ["a", "b"], "subject": "s", "gesture": "g", "time_ms": times})
     with pytest.raises(ValueError, match="time_ms must hold one increasing time per frame"):
         TouchDataset("t", caps, meta, sensor)
+
+
+# ------------------------------------------------------------------ the shipped protocols
+@pytest.mark.realdata
+def test_shipped_protocols_serve_the_sensor_and_two_methods_are_refused(real_socialtouch, tb_cache, monkeypatch,
+                                                                         tmp_path):
+    """Every method of the two protocols takes the 19 x 24 grid at 12 Hz (3 people; 3 Zhou sets x 7
+    classifiers + 17 methods = 38); touch-et-win and the CNN are refused before any work, with why."""
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tb_cache))
+    for name, plan in (("socialtouch-loso", "3 fold(s) x 38 method(s) = 114 task(s)"),
+                       ("socialtouch-within", "9 fold(s) x 38 method(s) = 342 task(s)")):
+        r = CliRunner().invoke(cli, ["protocols", "validate", name])
+        assert r.exit_code == 0 and plan in r.output, r.output
+    for method, why in (("touch-et-win", "its 2-s windows (24 frames at 12 Hz) are longer than the shortest "
+                                         "capture (3 frames)"),
+                        ("cnn", "L=30 windows need captures of at least 30 frames (one frame per window); "
+                                "the shortest has 3")):
+        p = tmp_path / f"{method}.yaml"
+        p.write_text(f"name: refused\ndataset: socialtouch\nscheme: loso\nmethods: [{method}]\n")
+        r = CliRunner().invoke(cli, ["protocols", "validate", str(p)])
+        assert r.exit_code == 3 and "cannot serve sensor 'socialtouch' (19 x 24 at 12 Hz)" in r.output
+        assert why in r.output, r.output
