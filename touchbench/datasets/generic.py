@@ -126,18 +126,24 @@ def _from_zero_or_one(idx: np.ndarray, what: str, path: Path) -> np.ndarray:
     return idx - lo
 
 
-def cell_columns(df: pd.DataFrame, n_cells: int | None, path: Path, pattern: str | None = None,
-                 grid: tuple[int, int] | None = None) -> tuple[list[str], tuple[int, int] | None]:
+def _numbered_groups(df: pd.DataFrame) -> dict[str, list[tuple[int, str]]]:
+    """Columns named by a common prefix and a number: prefix -> ``[(number, column), ...]``."""
+    groups: dict[str, list[tuple[int, str]]] = {}
+    for c in df.columns:
+        m = re.fullmatch(r"(.*?)(\d+)", c)
+        if m:
+            groups.setdefault(m.group(1), []).append((int(m.group(2)), c))
+    return groups
+
+
+def cell_columns(df: pd.DataFrame, n_cells: int | None, path: Path,
+                 pattern: str | None = None) -> tuple[list[str], tuple[int, int] | None]:
     """The cell columns in row-major order, and the grid their names give (``None`` for one index).
 
     Without ``pattern``: the one group of columns named by a common prefix and a number whose size
     is ``n_cells`` (or the only such group when the grid is not known)."""
     if pattern is None:
-        groups: dict[str, list[tuple[int, str]]] = {}
-        for c in df.columns:
-            m = re.fullmatch(r"(.*?)(\d+)", c)
-            if m:
-                groups.setdefault(m.group(1), []).append((int(m.group(2)), c))
+        groups = _numbered_groups(df)
         fits = [sorted(v) for v in groups.values() if len(v) > 1 and (n_cells is None or len(v) == n_cells)]
         if len(fits) != 1:
             want = f"the {n_cells} cell columns" if n_cells else "the cell columns"
@@ -228,7 +234,8 @@ def _read_file(path: Path, lay: TableLayout, grid: tuple[int, int] | None, value
     value = _optional_column(df, lay.value, ("value",), path, "value")
     layout = lay.layout
     if layout == "auto":
-        layout = "long" if value is not None and lay.cells is None and not _has_numbered_group(df) else "wide"
+        numbered = any(len(g) > 1 for g in _numbered_groups(df).values())
+        layout = "long" if value is not None and lay.cells is None and not numbered else "wide"
     if layout == "long" and value is None:
         raise DataError("a long table needs a value column (--value-column; found none named 'value')", path, 1)
     lo, hi = value_range if value_range is not None else (None, None)
@@ -259,11 +266,6 @@ def _read_file(path: Path, lay: TableLayout, grid: tuple[int, int] | None, value
     fr = _Frames(_capture_key(df, cap), order if order is not None else t_ms, values, lines,
                  df[meta_cols].rename(columns={subj: "subject", gest: "gesture"}).reset_index(drop=True), t_ms)
     return fr, grid, frame, time
-
-
-def _has_numbered_group(df: pd.DataFrame) -> bool:
-    prefixes = [m.group(1) for c in df.columns if (m := re.fullmatch(r"(.*?)(\d+)", c))]
-    return any(prefixes.count(p) > 1 for p in set(prefixes))
 
 
 def _agree(given: tuple[int, int] | None, found: tuple[int, int] | None, path: Path) -> tuple[int, int] | None:
