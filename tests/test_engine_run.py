@@ -94,7 +94,7 @@ def test_reports_exist_with_their_columns(tmp_path):
     pooled = pooled_all[(pooled_all["features"] == "test-mean") & (pooled_all["classifier"] == "test-logreg")]
     assert pooled["count"].sum() == 24
     # every results file says its layout
-    assert pq.read_schema(out / "scores.parquet").metadata[b"touchbench_results_schema"] == b"2"
+    assert pq.read_schema(out / "scores.parquet").metadata[b"touchbench_results_schema"] == b"3"
 
 
 @pytest.mark.filterwarnings("ignore:y_pred contains classes not in y_true")
@@ -344,5 +344,5 @@ def test_a_run_of_the_first_layout_is_still_read(tmp_path):
     pq.write_table(table.replace_schema_metadata({**table.schema.metadata, b"touchbench_results_schema": b"9"}),
                    out / "predictions.parquet")
     with pytest.raises(TouchbenchError, match=r"predictions.parquet: written by a newer touchbench \(results schema 9; "
-                                              r"this version reads up to 2\)"):
+                                              r"this version reads up to 3\)"):
         read_results_table(out / "predictions.parquet")

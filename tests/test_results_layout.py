@@ -92,17 +92,17 @@ def test_a_rerun_upgrades_a_folder_of_the_first_layout(engine_env, tmp_path):
     pd.testing.assert_frame_equal(pd.read_parquet(out / "predictions.parquet"), preds)
     pd.testing.assert_frame_equal(pd.read_parquet(out / "confusion_pooled.parquet"), pooled)
     assert "scope" not in pd.read_parquet(out / "confusion.parquet")
-    assert json.loads((out / "manifest.json").read_text())["results_schema"] == 2
+    assert json.loads((out / "manifest.json").read_text())["results_schema"] == 3
     for f in out.glob("*.parquet"):  # the merged files (fragments stay as written: readers upgrade them)
-        assert pq.read_schema(f).metadata[b"touchbench_results_schema"] == b"2", f
+        assert pq.read_schema(f).metadata[b"touchbench_results_schema"] == b"3", f
 
 
 def test_a_manifest_of_a_newer_layout_is_refused(engine_env, tmp_path):
     p, _ = _run(tmp_path)
     out = tmp_path / "out"
     manifest = json.loads((out / "manifest.json").read_text())
-    (out / "manifest.json").write_text(json.dumps({**manifest, "results_schema": 3}))
-    msg = r"manifest.json: written by a newer touchbench \(results schema 3; this version reads up to 2\)"
+    (out / "manifest.json").write_text(json.dumps({**manifest, "results_schema": 4}))
+    msg = r"manifest.json: written by a newer touchbench \(results schema 4; this version reads up to 3\)"
     with pytest.raises(TouchbenchError, match=msg):
         load_results([out])
     with pytest.raises(TouchbenchError, match=msg):  # a run never rewrites a newer layout

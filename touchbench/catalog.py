@@ -9,6 +9,10 @@ A reference is one of
   existing file): a dataset Parquet file written by touchbench;
 - anything else: the name of a registered dataset (``haart``, ...).
 
+With a ``format`` (a registered file format: ``haart-raw``, ``table``...),
+the reference is a file or folder read by that format's reader with the
+given options (a protocol's ``dataset: {name: study/, format: haart-raw}``).
+
 This module sits above both the real-data readers and the scenes, so that
 neither has to know about the other.
 """
@@ -19,11 +23,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
+from .datasets.formats import FORMATS
 from .datasets.model import TouchDataset
 from .datasets.registry import DATASETS
 from .scenes import SCENES, generate_scene
 
-__all__ = ["DatasetRef", "dataset_ref_problem", "load_dataset", "parse_dataset_ref"]
+__all__ = ["DatasetRef", "dataset_ref_problem", "format_ref_problem", "load_dataset", "parse_dataset_ref"]
 
 SCENE_PREFIX = "scene:"
 
@@ -67,12 +72,24 @@ def dataset_ref_problem(ref: DatasetRef) -> str | None:
     return None
 
 
-def load_dataset(ref: str | Path | DatasetRef, **kwargs: Any) -> TouchDataset:
-    """Load a registered dataset, a ``scene:NAME`` or a dataset Parquet file.
+def format_ref_problem(path: str | Path, fmt: str) -> str | None:
+    """Why ``path`` cannot be read in the file format ``fmt`` (unknown format, missing path), or None."""
+    if fmt not in FORMATS:
+        return FORMATS.suggest(fmt)
+    return None if Path(path).exists() else f"no file or folder {str(path)!r}"
+
+
+def load_dataset(ref: str | Path | DatasetRef, format: str | None = None, **kwargs: Any) -> TouchDataset:
+    """Load a registered dataset, a ``scene:NAME`` or a dataset Parquet file; with ``format``, a
+    file or folder read by that registered format's reader.
 
     ``kwargs`` go to the registered loader (``cache_dir``, ``data_dir``,
-    ``refresh``) or the scene generator (``seed``, overrides); a file takes none.
+    ``refresh``), the scene generator (``seed``, overrides) or the format's
+    reader (its options); a Parquet file takes none.
     """
+    if format is not None:
+        path = ref.value if isinstance(ref, DatasetRef) else str(ref)
+        return FORMATS.get(format).read(path, **kwargs)
     parsed = ref if isinstance(ref, DatasetRef) else parse_dataset_ref(ref)
     if parsed.kind == "scene":
         return generate_scene(parsed.value, **kwargs)

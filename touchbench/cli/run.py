@@ -79,28 +79,69 @@ def run_summary(res, plan) -> dict:
 @click.option("--progress/--no-progress", default=None, help="Progress bar [default: on a terminal only].")
 @click.option("--wait", type=click.FloatRange(min=0), default=0, show_default=True, metavar="SECONDS",
               help="When another run holds the results directory, wait this long for it before giving up.")
+@click.option("--evaluation", "evaluations", multiple=True, metavar="NAME",
+              help="Run only this evaluation of a protocol with several (repeatable) [default: all].")
+@click.option("--final", is_flag=True,
+              help="The run you report: refused when this test set already had a final run with other methods.")
+@click.option("--force-final", is_flag=True, help="With --final: run even so (recorded in the ledger).")
 @json_option
 @backend_options
 def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bool, fail_fast: bool,
-        progress: bool | None, wait: float, as_json: bool, backend: str, scheduler: str | None,
-        address: str | None) -> None:
+        progress: bool | None, wait: float, evaluations: tuple[str, ...], final: bool, force_final: bool,
+        as_json: bool, backend: str, scheduler: str | None, address: str | None) -> None:
     """Evaluate PROTOCOL (a file, or the name of a shipped protocol or of one in your folders): every feature
-    combination x classifier under its scheme. Finished tasks are skipped, so
-    an interrupted run resumes where it stopped. Exits with status 1 when a task failed."""
-    from ..engine.runner import default_results_dir, plan_run, run_plan
+    combination x classifier under its scheme (under each of its evaluations, each into its own
+    folder). Finished tasks are skipped, so an interrupted run resumes where it stopped. Every run
+    that scores a test set is recorded in the ledger of the results root (ledger.jsonl), which the
+    leaderboard reads. Exits with status 1 when a task failed."""
+    from ..engine.runner import plan_run, results_dirs
     from ..protocols.schema import load_protocol
 
+    if force_final and not final:
+        raise click.UsageError("--force-final goes with --final")
     proto = load_protocol(find_protocol(protocol))
-    plan = plan_run(proto)
-    out_dir = out or default_results_dir(proto)
-    log.info(f"{proto.name}: {proto.dataset.name} ({len(plan.dataset)} captures), "
+    pairs = results_dirs(proto, out)
+    if evaluations:
+        known = [sub.evaluation for sub, _ in pairs]
+        unknown = [e for e in evaluations if e not in known]
+        if unknown:
+            raise click.BadParameter(f"{unknown[0]!r} is not an evaluation of {proto.name} "
+                                     f"({', '.join(known) or 'it has none'})", param_hint="--evaluation")
+        pairs = [(sub, d) for sub, d in pairs if sub.evaluation in evaluations]
+    plans = [(plan_run(sub), d) for sub, d in pairs]  # every evaluation checked before any runs
+    failed = 0
+    summaries = []
+    for plan, out_dir in plans:
+        res = _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait, final, force_final,
+                       as_json, backend, scheduler, address)
+        summaries.append(run_summary(res, plan))
+        failed += res.n_failed
+        if res.stopped_early:
+            break
+    if as_json:
+        echo_json(summaries[0] if not proto.evaluations else {"evaluations": summaries})
+    if failed:
+        sys.exit(exitcodes.TASKS_FAILED)
+
+
+def _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait, final, force_final, as_json,
+             backend, scheduler, address):
+    """Run one evaluation's plan and report it (messages on stderr, the summary on stdout)."""
+    from ..engine.runner import run_plan
+
+    proto = plan.protocol
+    what = f"{proto.name}" + (f" / {proto.evaluation}" if proto.evaluation else "")
+    log.info(f"{what}: {proto.dataset.name} ({len(plan.dataset)} captures), "
              f"scheme {proto.scheme.name}: {len(plan.tasks)} tasks -> {out_dir}")
     for n in plan.notes:
         log.info(f"note: {n}")
+    leak = sorted({t.base_row.get("leakage", "") for t in plan.tasks} - {""})
+    for reason in leak:
+        log.warning(f"LEAKY evaluation ({reason}): its accuracy overstates accuracy on new people")
     try:
         with backend_for_run(backend, scheduler, address, plan.cache_root, jobs) as jobs:
             res = run_plan(plan, out_dir, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
-                           wait=wait, fail_fast=fail_fast)
+                           wait=wait, fail_fast=fail_fast, final=final, force_final=force_final)
     except KeyboardInterrupt:
         click.echo("\ninterrupted: finished tasks are saved; run the same command again to resume", err=True)
         sys.exit(exitcodes.INTERRUPTED)
@@ -112,9 +153,7 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
     else:
         log.info(f"ran {res.n_ran} task(s), skipped {res.n_skipped} finished, {res.n_failed} failed, "
                  f"in {res.seconds:.1f} s")
-    if as_json:
-        echo_json(run_summary(res, plan))
-    else:
+    if not as_json:
         click.echo(format_summary(res.summary, res.expected))
     if res.stopped_early:
         log.warning("stopped at the first failed task (--fail-fast); run again without it to finish the others")
@@ -124,5 +163,4 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
         log.warning(f"{res.n_failed} task(s) failed, e.g. {failed.iloc[0]['fold']} / {failed.iloc[0]['classifier']}: "
                     f"{first}")
     log.info(f"reports: {res.out}/scores.parquet, predictions.parquet, confusion.parquet, manifest.json")
-    if res.n_failed:
-        sys.exit(exitcodes.TASKS_FAILED)
+    return res

@@ -135,6 +135,31 @@ def _cell_text(v: Any) -> str | None:
     return str(v)
 
 
+#: frame rates within this relative difference are the same sensor (clock drift, a rate written
+#: rounded); beyond it, features measured in frames or seconds no longer mean what was learned
+FRAME_RATE_TOLERANCE = 0.01
+
+
+def sensor_differences(reference: SensorSpec, data: SensorSpec, names: tuple[str, str] = ("model", "data")) -> list[str]:
+    """The fields in which ``data`` differs from ``reference`` (the name is not compared; frame
+    rates within ``FRAME_RATE_TOLERANCE``, 1 %, are the same), each as ``field: NAME1 a, NAME2 b``."""
+    out = []
+    for f in ("grid", "channels", "frame_rate", "value_range", "higher_is_more_pressure"):
+        a, b = getattr(reference, f), getattr(data, f)
+        if f == "frame_rate" and a and b and abs(float(a) - float(b)) <= FRAME_RATE_TOLERANCE * float(a):
+            continue
+        if a != b:
+            out.append(f"{f}: {names[0]} {a!r}, {names[1]} {b!r}")
+    return out
+
+
+def frames_checksum(capture: np.ndarray) -> str:
+    """SHA-256 of a capture's frames as float64 values with their shape: the same recording read
+    by two readers (uint16 or float) gives the same checksum."""
+    a = np.ascontiguousarray(capture, dtype=np.float64)
+    return hashlib.sha256(f"{a.shape}".encode() + a.tobytes()).hexdigest()
+
+
 @dataclass
 class TouchDataset:
     """Ragged captures + a metadata table + a sensor spec + a content hash.

@@ -53,7 +53,7 @@ from ..core.atomic import atomic_write_bytes
 from ..core.errors import DataError, TouchbenchError
 from ..core.threads import single_thread
 from ..core.versions import package_versions
-from ..datasets.model import SensorSpec, TouchDataset
+from ..datasets.model import FRAME_RATE_TOLERANCE, SensorSpec, TouchDataset, sensor_differences
 from ..features.base import make_feature_set
 from ..methods.fitting import fit_estimator
 from .windows import cut_windows, seconds_to_frames
@@ -79,24 +79,6 @@ _CHECKED = ("scikit-learn", "numpy", "xgboost", "xgboost-cpu", "torch")
 
 class SensorMismatchError(TouchbenchError):
     """Data from a sensor the model was not trained for."""
-
-
-#: frame rates within this relative difference are the same sensor (clock drift, a rate written
-#: rounded); beyond it, features measured in frames or seconds no longer mean what the model learned
-FRAME_RATE_TOLERANCE = 0.01
-
-
-def sensor_differences(model: SensorSpec, data: SensorSpec) -> list[str]:
-    """The fields in which ``data`` differs from ``model`` (the name is not compared; frame rates
-    within ``FRAME_RATE_TOLERANCE``, 1 %, are the same)."""
-    out = []
-    for f in ("grid", "channels", "frame_rate", "value_range", "higher_is_more_pressure"):
-        a, b = getattr(model, f), getattr(data, f)
-        if f == "frame_rate" and a and b and abs(float(a) - float(b)) <= FRAME_RATE_TOLERANCE * float(a):
-            continue
-        if a != b:
-            out.append(f"{f}: model {a!r}, data {b!r}")
-    return out
 
 
 @dataclass

@@ -30,47 +30,11 @@ from typing import Iterable, Sequence
 import numpy as np
 
 from ..core.errors import TouchbenchError
+from ..datasets.windows import cut_windows, seconds_to_frames
 
 __all__ = ["COMBINE", "combine_windows", "cut_windows", "seconds_to_frames"]
 
 COMBINE = ("max", "mean")
-
-
-def seconds_to_frames(seconds: float, frame_rate: float, what: str = "a window length or hop") -> int:
-    """``seconds`` at ``frame_rate``, rounded to whole frames (at least 1); ``what`` names the
-    option in the error for a length that is not positive."""
-    if not (isinstance(seconds, (int, float)) and np.isfinite(seconds) and seconds > 0):
-        raise TouchbenchError(f"{what} must be a positive number of seconds, got {seconds!r}")
-    return max(1, int(round(float(seconds) * float(frame_rate))))
-
-
-def cut_windows(
-    captures: Sequence[np.ndarray], lengths: Iterable[int], hops: Iterable[int]
-) -> tuple[list[np.ndarray], np.ndarray]:
-    """Every window of every capture: ``(windows, source index of each window)``.
-
-    For each length ``L`` (frames) with its hop ``h``, the windows of a
-    capture of ``T`` frames start at ``0, h, 2h, ...`` up to ``T - L``. A
-    capture shorter than every length gives one window: itself. Windows are
-    views (no copy).
-    """
-    lengths = [int(v) for v in lengths]
-    hops = [int(v) for v in hops]
-    if len(lengths) != len(hops) or not lengths:
-        raise ValueError("one hop per window length, and at least one length")
-    out: list[np.ndarray] = []
-    src: list[int] = []
-    for i, c in enumerate(captures):
-        n = 0
-        for L, h in zip(lengths, hops):
-            for start in range(0, c.shape[0] - L + 1, h):
-                out.append(c[start:start + L])
-                src.append(i)
-                n += 1
-        if n == 0:
-            out.append(c)
-            src.append(i)
-    return out, np.asarray(src, dtype=np.int64)
 
 
 def combine_windows(P: np.ndarray, how: str = "max") -> tuple[np.ndarray, int | None]:

@@ -59,7 +59,6 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from ..catalog import load_dataset
 from ..classifiers import make_classifier
 from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
@@ -72,20 +71,25 @@ from ..methods import METHODS, MethodSpec, method_spec, resolve_entry
 from ..protocols.schema import Protocol, expand_grid, load_protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
 from ..protocols.splits import SplitError
+from ..results.ledger import LEDGER_NAME, check_final, record_look, test_set_hash
 from ..results.manifest import now_iso, update_manifest
 from ..results.store import PREDICTED, SCHEMA_VERSION, TRUE, ResultStore, check_schema, read_results_table
 from ..results.summary import check_expected, summarize
 from .backends import check_jobs, is_local_backend, local_jobs, parallel
 from .cache import FeatureCache, crop_captures
+from .evaluation_data import apply_filters, evaluation_dataset, load_spec
 from .identity import MAX_MODULES, Identity, classifier_identity, feature_set_identity
 from .tasks import RunContext, SetSpec, Task, execute_task, make_feature_set
 
-__all__ = ["Plan", "RunResult", "check_sensor_fit", "default_results_dir", "plan_run", "run_plan", "run_protocol"]
+__all__ = ["Plan", "RunResult", "check_sensor_fit", "default_ledger", "default_results_dir", "plan_run", "plan_test_set",
+           "results_dirs", "run_plan", "run_protocol"]
 
 
 def default_results_dir(protocol: Protocol) -> Path:
-    """``results/<protocol name>/`` under the current directory."""
-    return Path("results") / protocol.name
+    """``results/<protocol name>/`` under the current directory (``results/<protocol name>/<evaluation>/``
+    for one evaluation of a protocol with several)."""
+    root = Path("results") / protocol.name
+    return root / protocol.evaluation if protocol.evaluation else root
 
 
 @dataclass
@@ -135,57 +139,6 @@ class RunResult:
     notes: list[str] = field(default_factory=list)
     #: ``fail_fast`` stopped the run at its first failed task (the other pending tasks did not run)
     stopped_early: bool = False
-
-
-# ----------------------------------------------------------------- dataset
-def _load(protocol: Protocol, notes: list[str]) -> TouchDataset:
-    """The protocol's dataset; a dataset file changed since it was written adds a note."""
-    ref = resolve_dataset_ref(protocol)
-    try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", DatasetChangedWarning)
-            ds = load_dataset(ref, **protocol.dataset.options)
-        for w in caught:
-            if issubclass(w.category, DatasetChangedWarning):
-                notes.append(str(w.message))
-            else:
-                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
-        return ds
-    except TouchbenchError:
-        raise
-    except TypeError as e:
-        raise protocol.error_at(("dataset", "options"), f"the loader of {ref!r} rejects the options: {e}") from None
-    except Exception as e:
-        raise protocol.error_at(("dataset", "name"), f"cannot load {ref!r}: {type(e).__name__}: {e}") from None
-
-
-def apply_filters(protocol: Protocol, ds: TouchDataset) -> TouchDataset:
-    """Keep the captures the protocol's ``filters`` keep and ``exclude`` does not drop."""
-    meta = ds.meta
-    keep = np.ones(len(meta), dtype=bool)
-    for field_name, spec, include in (("filters", protocol.dataset.filters, True), ("exclude", protocol.dataset.exclude, False)):
-        for col, values in spec.items():
-            if col not in meta.columns:
-                raise protocol.error_at(
-                    ("dataset", field_name, col),
-                    f"the dataset has no metadata column {col!r}{did_you_mean(col, list(map(str, meta.columns)))} "
-                    f"(columns: {', '.join(map(str, meta.columns))})",
-                )
-            col_vals = np.array([None if pd.isna(v) else str(v) for v in meta[col].tolist()], dtype=object)
-            present = sorted({v for v in col_vals if v is not None})
-            for i, v in enumerate(values):
-                if v not in present:
-                    raise protocol.error_at(
-                        ("dataset", field_name, col, i),
-                        f"{col} {v!r} is not in the dataset{did_you_mean(v, present)} (values: {', '.join(present)})",
-                    )
-            hit = np.isin(col_vals, values)
-            keep &= hit if include else ~hit
-    if not keep.any():
-        raise protocol.error_at(("dataset",), "the filters leave no captures")
-    if keep.all():
-        return ds
-    return ds.subset(np.flatnonzero(keep))
 
 
 # ----------------------------------------------------------------- planning
@@ -261,8 +214,8 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
 
     cache_root = Path(cache_root) if cache_root is not None else cache_dir() / "features"
     notes: list[str] = []
-    full = dataset if dataset is not None else _load(protocol, notes)
-    ds = apply_filters(protocol, full)
+    full = dataset if dataset is not None else load_spec(protocol, protocol.dataset, ("dataset",), notes)
+    ds = evaluation_dataset(protocol, apply_filters(protocol, full), notes)
     target = protocol.target
     if target not in ds.meta.columns:
         cols = sorted(c for c in ds.meta.columns if c != "capture_id")
@@ -314,6 +267,11 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
             notes.append(f"the {label} imports more than {MAX_MODULES} modules of its own: "
                          "edits beyond the first ones found are not noticed (use --force after editing them)")
 
+    scheme_leak = protocol.splitter(0).leakage()
+    for ei, (c, clf) in enumerate(entries):
+        if clf.subject_id_feature and not methods[ei].feature_sets:
+            raise protocol.error_at(("methods",), f"{clf.label!r}: subject_id_feature needs a feature matrix; "
+                                                  f"{methods[ei].estimator!r} takes the captures themselves")
     tasks: list[Task] = []
     timed: set[tuple] = set()  # methods (and crops) whose latency task is chosen: the first in plan order
     n_folds = 0
@@ -350,6 +308,8 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                     else [clf.name, clf.params, estimator],
                     "seed": protocol.seed,
                 }
+                if clf.subject_id_feature:  # only then: the ids of every other task stay as they were
+                    identity["subject_id_feature"] = True
                 task_id = hashlib.sha256(canonical_json(identity).encode()).hexdigest()[:20]
                 seed = derive_seed(protocol.seed, "task", r, fold.name, combo.label, clf.label)
                 base = {
@@ -362,13 +322,16 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                     "classifier": clf.label, "classifier_name": clf.name,
                     "classifier_params": canonical_json(clf.params), "seed": seed,
                     "n_train": int(len(fold.train)), "n_test": int(len(fold.test)),
+                    "leakage": "; ".join(x for x in [scheme_leak, *clf.leakage] if x),
+                    "selection": clf.tuned_on_test,
                 }
                 tasks.append(Task(
                     task_id=task_id, repetition=r, fold=fold, features_label=combo.label, sets=tuple(sets),
                     classifier_label=clf.label, classifier_name=clf.name, classifier_params=clf.params,
                     seed=seed, crop_frames=crop_frames, base_row=base,
                     estimator_name=method.estimator, estimator_params=method.estimator_params,
-                    measure_latency=(combo.label, clf.label, crop_frames) not in timed,
+                    measure_latency=(combo.label, clf.label, crop_frames) not in timed and not clf.subject_id_feature,
+                    subject_id_feature=clf.subject_id_feature,
                 ))
                 timed.add((combo.label, clf.label, crop_frames))
     crops = [t.crop_frames for t in tasks if t.crop_frames is not None]
@@ -491,9 +454,29 @@ def _damaged_notes(plan: Plan, problems: dict[str, str]) -> list[str]:
             for tid, t in by_id.items() if tid in problems]
 
 
+def default_ledger(protocol: Protocol, out: str | Path) -> Path:
+    """The ledger of the results root: the parent of the protocol's results folder (which holds one
+    folder per evaluation when the protocol has several)."""
+    folder = Path(out).parent if protocol.evaluation else Path(out)
+    return folder.parent / LEDGER_NAME
+
+
+def plan_test_set(plan: Plan) -> str:
+    """The hash of every capture some task of the plan tests (:func:`touchbench.results.ledger.test_set_hash`)."""
+    idx = sorted({int(i) for t in plan.tasks for i in t.fold.test})
+    ds = plan.dataset
+    return test_set_hash([ds.captures[i] for i in idx], ds.meta[plan.protocol.target].astype(str).to_numpy()[idx])
+
+
+def plan_methods(plan: Plan) -> list[str]:
+    """The methods a plan evaluates, as ``features / classifier`` labels."""
+    return sorted({f"{t.features_label} / {t.classifier_label}" for t in plan.tasks})
+
+
 def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force: bool = False,
              retry_failed: bool = False, progress: bool | None = None, worker_setup=None,
-             wait: float = 0.0, fail_fast: bool = False) -> RunResult:
+             wait: float = 0.0, fail_fast: bool = False, final: bool = False, force_final: bool = False,
+             ledger: str | Path | None = None) -> RunResult:
     """Execute the pending tasks of ``plan`` and write the reports (see the module docstring).
 
     ``worker_setup`` is a picklable function each worker process calls once
@@ -502,16 +485,37 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
     waited for up to ``wait`` seconds, then refused with who holds it.
     ``fail_fast`` stops at the first task that fails: the tasks finished so
     far are kept and merged, the others are left pending.
+
+    A run that scores its test set (a task to run, or ``final``) is recorded
+    in ``ledger`` (default: :func:`default_ledger`) before any task;
+    ``final`` marks the run to report and is refused when the test set had
+    a final run with other methods, unless ``force_final``
+    (:func:`touchbench.results.ledger.check_final`).
     """
     out = Path(out) if out is not None else default_results_dir(plan.protocol)
     store = ResultStore(out)
+    ledger = Path(ledger) if ledger is not None else default_ledger(plan.protocol, out)
     with store.lock(wait=wait, command=f"touchbench run {plan.protocol.name}"):
         return _run_locked(plan, store, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
-                           worker_setup=worker_setup, fail_fast=fail_fast)
+                           worker_setup=worker_setup, fail_fast=fail_fast, final=final, force_final=force_final,
+                           ledger=ledger)
+
+
+def _record_look(plan: Plan, ledger: Path, final: bool, force_final: bool, n_pending: int) -> tuple[str, list[str]]:
+    """The plan's test-set hash; the look recorded in the ledger (when the run scores the test set)."""
+    test_set = plan_test_set(plan)
+    methods = plan_methods(plan)
+    notes = check_final(ledger, test_set, methods, force_final) if final else []
+    if n_pending or final:
+        record_look(ledger, {"time": now_iso(), "protocol": plan.protocol.name, "evaluation": plan.protocol.evaluation,
+                             "test_set": test_set, "run_id": plan.run_id, "methods": methods, "tasks": n_pending,
+                             "final": final, "forced": bool(notes)})
+    return test_set, notes
 
 
 def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry_failed: bool,
-                progress: bool | None, worker_setup, fail_fast: bool = False) -> RunResult:
+                progress: bool | None, worker_setup, fail_fast: bool = False, final: bool = False,
+                force_final: bool = False, ledger: Path | None = None) -> RunResult:
     t_start = time.perf_counter()
     started_at = now_iso()
     protocol = plan.protocol
@@ -531,8 +535,11 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
     pending = [t for t in plan.tasks
                if t.task_id not in finished or (retry_failed and finished[t.task_id] == "failed")]
     show = sys.stderr.isatty() if progress is None else progress
+    ledger = ledger if ledger is not None else default_ledger(protocol, out)
+    test_set, final_notes = _record_look(plan, ledger, final, force_final, len(pending))
+    notes += final_notes
 
-    if not pending and _reports_current(store, plan, notes):
+    if not pending and not final and _reports_current(store, plan, notes):
         scores = read_results_table(store.scores_path)
         preds = None
         if protocol.expected is not None:
@@ -569,7 +576,8 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
                 results.close()  # a generator left early: joblib cancels what it has not started
 
     stamp = {"run_id": plan.run_id, "protocol": protocol.name, "protocol_hash": protocol.text_hash}
-    merged = store.merge(plan.task_ids, stamp, protocol.metrics, notes)
+    per_task = {col: {t.task_id: t.base_row.get(col, "") for t in plan.tasks} for col in ("leakage", "selection")}
+    merged = store.merge(plan.task_ids, stamp, protocol.metrics, notes, per_task)
     scores = merged["scores"]
     expected = check_expected(protocol.expected, scores, merged["predictions"])
     status = store.finished()
@@ -582,7 +590,9 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
         run={"run_id": plan.run_id, "results_dir": str(out)},
         protocol={"name": protocol.name, "path": str(protocol.path) if protocol.path else None,
                   "text": protocol.text, "text_hash": protocol.text_hash, "content_hash": protocol.content_hash,
-                  "seed": protocol.seed, "repetitions": protocol.repetitions, "scheme": protocol.scheme.name},
+                  "seed": protocol.seed, "repetitions": protocol.repetitions, "scheme": protocol.scheme.name,
+                  "evaluation": protocol.evaluation,
+                  "design": protocol.design.model_dump(mode="json") if protocol.design is not None else None},
         dataset={"ref": protocol.dataset.name, "resolved": plan.dataset_ref, "hash": plan.dataset.content_hash,
                  "source_hash": plan.source_hash, "captures": len(plan.dataset),
                  "filters": protocol.dataset.filters, "exclude": protocol.dataset.exclude,
@@ -596,6 +606,7 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
         notes=notes,
         expected=expected,
     )
+    manifest["ledger"] = {"path": str(ledger), "test_set": test_set, "final": final}
     store.write_manifest(manifest)
     return RunResult(out=out, run_id=plan.run_id, n_tasks=len(plan.tasks), n_ran=n_ran,
                      n_skipped=len(plan.tasks) - len(pending), n_failed=n_failed, noop=False,
@@ -603,13 +614,26 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
                      expected=expected, notes=notes, stopped_early=stopped)
 
 
+def results_dirs(protocol: Protocol, out: str | Path | None = None) -> list[tuple[Protocol, Path]]:
+    """Each evaluation of ``protocol`` with its results folder: ``out`` (default
+    ``results/<name>``) itself, or ``out/<evaluation>`` for a protocol with several."""
+    root = Path(out) if out is not None else Path("results") / protocol.name
+    return [(sub, root / sub.evaluation if sub.evaluation else root) for sub in protocol.evaluation_protocols()]
+
+
 def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None, *, jobs: int = 1,
                  force: bool = False, retry_failed: bool = False, progress: bool | None = None,
                  cache_root: str | Path | None = None, dataset: TouchDataset | None = None,
-                 worker_setup=None, wait: float = 0.0, fail_fast: bool = False) -> RunResult:
-    """Validate, plan and run a protocol (a :class:`Protocol` or a file path)."""
+                 worker_setup=None, wait: float = 0.0, fail_fast: bool = False, final: bool = False,
+                 force_final: bool = False, ledger: str | Path | None = None) -> RunResult | list[RunResult]:
+    """Validate, plan and run a protocol (a :class:`Protocol` or a file path): its result, or one
+    result per evaluation (in order) for a protocol with ``evaluations``."""
     if not isinstance(protocol, Protocol):
         protocol = load_protocol(protocol)
-    plan = plan_run(protocol, cache_root=cache_root, dataset=dataset)
-    return run_plan(plan, out, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
-                    worker_setup=worker_setup, wait=wait, fail_fast=fail_fast)
+    out_list = []
+    for sub, folder in results_dirs(protocol, out):
+        plan = plan_run(sub, cache_root=cache_root, dataset=dataset)
+        out_list.append(run_plan(plan, folder, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
+                                 worker_setup=worker_setup, wait=wait, fail_fast=fail_fast, final=final,
+                                 force_final=force_final, ledger=ledger))
+    return out_list if protocol.evaluations else out_list[0]

@@ -74,6 +74,7 @@ class Task:
     estimator_name: str = ""  # the method's estimator (the classifier itself, or a named method's)
     estimator_params: dict[str, Any] = field(default_factory=dict)
     base_row: dict[str, Any] = field(default_factory=dict)
+    subject_id_feature: bool = False  # the leaky variant: the subject's id one-hot appended to the features
 
 
 class RunContext:
@@ -206,6 +207,13 @@ def _measure_latency(sets: list, captures: list[np.ndarray], predict) -> float:
     return 1000.0 * float(np.median(times))
 
 
+def _with_subject_id(ds: TouchDataset, fold: Fold, X_tr: np.ndarray, X_te: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The leaky variant's matrices: each row's subject, one-hot over the dataset's subjects, appended."""
+    subjects = ds.meta["subject"].astype(str).to_numpy()
+    onehot = (subjects[:, None] == np.unique(subjects)[None, :]).astype(np.float64)
+    return np.hstack([X_tr, onehot[fold.train]]), np.hstack([X_te, onehot[fold.test]])
+
+
 # ----------------------------------------------------------------- the task
 def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFrame | None]:
     """Run one task; a feature or classifier error becomes a ``failed`` row."""
@@ -225,6 +233,8 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
         with single_thread(), warnings.catch_warnings():
             warnings.simplefilter("ignore")
             X_tr, X_te, fitted, per_capture, feat_fit = _fold_features(task, ctx, y_train)
+            if task.subject_id_feature:
+                X_tr, X_te = _with_subject_id(ds, fold, X_tr, X_te)
             row["feature_seconds_per_capture"] = per_capture
             row["feature_fit_seconds"] = feat_fit
             groups = ds.meta["subject"].to_numpy()[fold.train]

@@ -85,7 +85,8 @@ from pydantic import (
     model_validator,
 )
 
-from ..catalog import DatasetRef, dataset_ref_problem, parse_dataset_ref
+from ..catalog import DatasetRef, dataset_ref_problem, format_ref_problem, parse_dataset_ref
+from ..datasets.formats import FORMATS
 from ..classifiers import CLASSIFIERS
 from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
@@ -264,6 +265,9 @@ class DatasetSpec(_Model):
     """Which captures: a dataset reference and metadata filters."""
 
     name: str = Field(min_length=1)
+    #: a registered file format (``haart-raw``, ``table``...): ``name`` is then a file or folder its
+    #: reader reads, with ``options`` as the reader's options
+    format: str | None = None
     filters: dict[str, list[str]] = Field(default_factory=dict)
     exclude: dict[str, list[str]] = Field(default_factory=dict)
     options: dict[str, Any] = Field(default_factory=dict)
@@ -419,6 +423,21 @@ class MethodRef(_Model):
     estimator: str | None = None
     params: dict[str, Any] = Field(default_factory=dict)
     label: str | None = None
+    #: leaky variant: each capture's subject (one-hot over the dataset's subjects) appended to the
+    #: feature matrix, as Cang et al. 2015 did with the participant id
+    subject_id_feature: bool = False
+    #: leaky variant: of the grid in ``params``, only the value with the best mean test accuracy is
+    #: reported (a parameter chosen on the test folds, as Al-mashhadani et al. chose the frame length)
+    tuned_on_test: bool = False
+
+    @model_validator(mode="after")
+    def _variants(self) -> "MethodRef":
+        if self.tuned_on_test and not any(_is_grid(v) for v in self.params.values()):
+            raise _ErrorAt(("tuned_on_test",), "tuned_on_test chooses among a grid: give params a list of values")
+        if self.subject_id_feature and self.features is None and self.name is not None and self.name not in METHODS:
+            raise _ErrorAt(("subject_id_feature",), f"{self.name!r} takes the captures themselves: no feature "
+                                                    "matrix to append the subject id to")
+        return self
 
     @model_validator(mode="before")
     @classmethod
@@ -469,6 +488,95 @@ class ClassifierEntry(BaseModel):
     label: str
     name: str
     params: dict[str, Any]
+    #: the leaky variants of a ``methods:`` entry (see :class:`MethodRef`)
+    subject_id_feature: bool = False
+    #: the entry whose grid is chosen on test accuracy (its label without the grid), "" otherwise
+    tuned_on_test: str = ""
+
+    @property
+    def leakage(self) -> list[str]:
+        """What this entry lets the test data inform (empty for an honest method)."""
+        out = []
+        if self.subject_id_feature:
+            out.append(SUBJECT_ID_LEAK)
+        if self.tuned_on_test:
+            out.append(TUNED_ON_TEST_LEAK)
+        return out
+
+
+SUBJECT_ID_LEAK = "the subject's id is a feature"
+TUNED_ON_TEST_LEAK = "a parameter chosen by its test accuracy"
+
+
+class DesignSpec(_Model):
+    """The data its methods were designed on (features, parameters chosen by looking at it).
+
+    ``subjects`` (or any metadata ``rows``: ``{split: [train]}``) name the
+    captures; ``methods`` the labels of the entries designed on them (empty:
+    every entry). The leaderboard then gives, beside each method's usual
+    figure, its accuracy on the captures outside the design data, and marks
+    the usual figure of a designed method as including them.
+    """
+
+    subjects: list[str] = Field(default_factory=list)
+    rows: dict[str, list[str]] = Field(default_factory=dict)
+    methods: list[str] = Field(default_factory=list)
+    note: str = ""
+
+    @field_validator("subjects", "methods", mode="before")
+    @classmethod
+    def _strs(cls, v: Any) -> Any:
+        return _coerce_str_list(v)
+
+    @field_validator("rows", mode="before")
+    @classmethod
+    def _lists(cls, v: Any) -> Any:
+        if isinstance(v, dict):
+            return {k: _coerce_str_list(x) for k, x in v.items()}
+        return v
+
+    @model_validator(mode="after")
+    def _some_rows(self) -> "DesignSpec":
+        if not self.subjects and not self.rows:
+            raise ValueError("design needs subjects (or rows): the data the methods were designed on")
+        return self
+
+    def filters(self) -> dict[str, list[str]]:
+        """The design data as metadata filters (a capture is design data when it matches all)."""
+        return {**({"subject": list(self.subjects)} if self.subjects else {}), **self.rows}
+
+
+class EvaluationSpec(_Model):
+    """One (dataset, scheme) pair a protocol's methods are evaluated under; results in
+    ``<results>/<protocol>/<name>/``. Fields not given are the protocol's."""
+
+    name: str
+    dataset: DatasetSpec | None = None
+    scheme: SchemeSpec
+    target: str | None = None
+    repetitions: int | None = Field(default=None, ge=1)
+    design: DesignSpec | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _shorthands(cls, d: Any) -> Any:
+        if isinstance(d, dict):
+            d = dict(d)
+            for k in ("dataset", "scheme"):
+                if isinstance(d.get(k), str):
+                    d[k] = {"name": d[k]}
+        return d
+
+    @field_validator("name")
+    @classmethod
+    def _name_ok(cls, v: str) -> str:
+        if not _NAME_RE.match(v):
+            raise ValueError(f"name {v!r} must be letters, digits, '.', '_' or '-' (it names the results folder)")
+        return v
+
+
+#: fields an evaluation may set for itself (the protocol's are the default)
+EVALUATION_FIELDS = ("dataset", "scheme", "target", "repetitions", "design")
 
 
 class Protocol(_Model):
@@ -479,6 +587,11 @@ class Protocol(_Model):
     dataset: DatasetSpec
     target: str = Field(default="gesture", min_length=1)
     scheme: SchemeSpec
+    #: several (dataset, scheme) pairs for the same methods (each its own results folder)
+    evaluations: list[EvaluationSpec] = Field(default_factory=list)
+    #: the evaluation this protocol is (set on the protocols :meth:`evaluation_protocols` gives)
+    evaluation: str = ""
+    design: DesignSpec | None = None
     features: list[list[FeatureRef]] | None = Field(default=None, min_length=1)
     classifiers: list[ClassifierSpec] | None = Field(default=None, min_length=1)
     methods: list[MethodRef] = Field(default_factory=list)
@@ -491,6 +604,7 @@ class Protocol(_Model):
     _path: Path | None = PrivateAttr(default=None)
     _text: str = PrivateAttr(default="")
     _lines: dict[tuple, int] = PrivateAttr(default_factory=dict)
+    _subs: list["Protocol"] | None = PrivateAttr(default=None)
 
     @field_validator("metrics")
     @classmethod
@@ -534,6 +648,11 @@ class Protocol(_Model):
         if not isinstance(d, dict):
             return d
         d = dict(d)
+        evs = d.get("evaluations")
+        if isinstance(evs, list) and evs and isinstance(evs[0], dict):  # the first evaluation's by default
+            for k in ("dataset", "scheme"):
+                if k not in d and k in evs[0]:
+                    d[k] = evs[0][k]
         if isinstance(d.get("dataset"), str):
             d["dataset"] = {"name": d["dataset"]}
         if isinstance(d.get("scheme"), str):
@@ -581,7 +700,35 @@ class Protocol(_Model):
 
     def content(self) -> dict[str, Any]:
         """The validated protocol as plain data (what determines results)."""
-        return self.model_dump(mode="json", exclude={"description", "expected"})
+        skip = {"description", "expected", "design"}
+        if not self.evaluations:
+            skip.add("evaluations")
+        if not self.evaluation:
+            skip.add("evaluation")
+        return self.model_dump(mode="json", exclude=skip)
+
+    def evaluation_protocols(self) -> list["Protocol"]:
+        """One protocol per evaluation (the methods, seed and metrics shared; the evaluation's
+        dataset, scheme, target, repetitions and design), or ``[self]`` without evaluations."""
+        if not self.evaluations:
+            return [self]
+        if self._subs is None:
+            base = self.model_dump(mode="python", exclude={"evaluations", "evaluation"})
+            subs = []
+            for i, ev in enumerate(self.evaluations):
+                data = dict(base, evaluation=ev.name)
+                for k in EVALUATION_FIELDS:
+                    v = getattr(ev, k)
+                    if v is not None:
+                        data[k] = v.model_dump(mode="python") if isinstance(v, BaseModel) else v
+                sub = Protocol.model_validate(data)
+                sub._path, sub._text = self._path, self._text
+                at = ("evaluations", i)
+                sub._lines = {**self._lines, **{k[2:]: v for k, v in self._lines.items()
+                                                if k[:2] == at and k[2:3] and k[2] in EVALUATION_FIELDS}}
+                subs.append(sub)
+            self._subs = subs
+        return self._subs
 
     @property
     def content_hash(self) -> str:
@@ -643,10 +790,12 @@ class Protocol(_Model):
                 combo = FeatureCombination(label="+".join(_label(n, p) for n, p in sets), sets=sets)
                 name = m.estimator or ""
             grid_keys = sorted(k for k, v in m.params.items() if _is_grid(v))
+            base = (m.label or name) + ("+subject-id" if m.subject_id_feature else "")
             for p in expand_grid(m.params):
-                base = m.label or name
                 out.append((combo, ClassifierEntry(label=_label(base, p, grid_keys) if grid_keys else base,
-                                                   name=name, params=p)))
+                                                   name=name, params=p, subject_id_feature=m.subject_id_feature,
+                                                   tuned_on_test=f"{base} ({', '.join(grid_keys)} chosen on test)"
+                                                   if m.tuned_on_test else "")))
         return out
 
     def entries(self) -> list[tuple[FeatureCombination, ClassifierEntry]]:
@@ -1040,7 +1189,12 @@ def _target_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
 
 
 def _dataset_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
-    problem = dataset_ref_problem(protocol_dataset_ref(protocol))
+    ref = protocol_dataset_ref(protocol)
+    if protocol.dataset.format is not None:
+        problem = format_ref_problem(ref.value, protocol.dataset.format)
+        return [] if problem is None else [(("dataset", "format" if protocol.dataset.format not in FORMATS
+                                             else "name"), problem)]
+    problem = dataset_ref_problem(ref)
     return [] if problem is None else [(("dataset", "name"), problem)]
 
 
@@ -1085,19 +1239,35 @@ def parse_protocol(text: str, path: str | Path | None = None, *, deep: bool = Tr
     issues = _size_issues(proto)  # before anything expands the grids
     if issues:
         raise _make_error(p, lines, issues)
-    issues = _shape_issues(proto)
-    issues += _scheme_issues({"name": proto.scheme.name, **proto.scheme.params}, proto.target, ("scheme",))
-    issues += _dataset_issues(proto)
+    names = [ev.name for ev in proto.evaluations]
+    issues = [(("evaluations", i, "name"), f"evaluation {n!r} is named twice") for i, n in enumerate(names)
+              if n in names[:i]]
+    try:
+        subs = proto.evaluation_protocols()
+    except ValidationError as e:
+        raise _make_error(p, lines, _pydantic_issues(e, Protocol)) from None
+    issues += _shape_issues(proto)
     issues += _feature_issues(proto)
     if deep:
         issues += _classifier_issues(proto)
+    for i, sub in enumerate(subs):
+        at = ("evaluations", i) if proto.evaluations else ()
+        own = _scheme_issues({"name": sub.scheme.name, **sub.scheme.params}, sub.target, ("scheme",))
+        own += _dataset_issues(sub)
+        if not own and not issues:
+            own += _target_issues(sub)
+        issues += [((at + loc) if at and loc[:1] and loc[0] in EVALUATION_FIELDS and _given(proto, i, loc[0])
+                    else loc, msg) for loc, msg in own]
     if not issues:
         issues += _expected_issues(proto)
-    if not issues:
-        issues += _target_issues(proto)
     if issues:
-        raise _make_error(p, lines, issues)
+        raise _make_error(p, lines, list(dict.fromkeys(issues)))
     return proto
+
+
+def _given(proto: Protocol, i: int, key: str) -> bool:
+    """Whether evaluation ``i`` sets ``key`` itself (else the protocol's is used)."""
+    return getattr(proto.evaluations[i], key, None) is not None
 
 
 def load_protocol(path: str | Path, *, deep: bool = True) -> Protocol:

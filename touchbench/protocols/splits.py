@@ -23,11 +23,21 @@ four papers is one registered splitter (``SPLITTERS``):
                             once (Zhou Sec. 5.4: 4 parties of 6, Fig. 9c).
 ``transfer``                train on one group, test on another, both
                             directions (Zhou Sec. 5.4, Fig. 11: A->B, B->A).
+``window-kfold``            k-fold over windows cut from the captures, the
+                            windows the samples (leaky unless grouped by
+                            subject: windows of one capture on both sides).
+``cross-dataset``           train on one dataset, test on another (adapted to
+                            the training sensor when declared).
 ``early``                   any scheme above, with test captures (optionally
                             training captures too) cut to their first N frames
                             or S seconds, N swept over a list (Al-mashhadani
                             Sec. 2.3: recognition after the first frames).
 ==========================  ====================================================
+
+A scheme that lets the test data inform training says why in
+``leakage()`` (k-fold ignoring subjects when the target is not the subject,
+window-level k-fold): the engine writes it into every result row and the
+reports flag it; no such scheme is a default.
 
 Every splitter is built as ``SPLITTERS.create(name, target=..., random_state=...,
 **params)``; its parameters are validated by a pydantic model (``Params``) so
@@ -47,7 +57,7 @@ from __future__ import annotations
 import re
 import warnings
 from dataclasses import dataclass, field, replace
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 import pandas as pd
@@ -211,6 +221,16 @@ class Splitter:
     def apart_column(self) -> str | None:
         """The metadata column whose values are never on both sides of a fold (the one held out)."""
         return "subject" if self.keeps_subjects_apart() else None
+
+    def leakage(self) -> str:
+        """Why this scheme's accuracy overstates what a new user's captures would give ("" when it
+        does not): the leaky schemes are named so every result row and report can say so."""
+        return ""
+
+    def sample_windows(self) -> tuple[int | None, float | None, int | None] | None:
+        """``(frames, seconds, hop frames)`` when the scheme's samples are windows cut from the
+        captures (the engine cuts them before splitting), else None."""
+        return None
 
     def check_target(self) -> None:
         """Refuse a target the scheme cannot evaluate: the column it holds out (every test class
@@ -421,6 +441,11 @@ class _KFoldParams(_Params):
         return self
 
 
+#: the leak of every scheme that lets one subject's captures be on both sides of a fold
+SUBJECTS_SHARED = "captures of one subject on both sides of a fold (k-fold ignoring subjects)"
+WINDOWS_SHARED = "windows of one capture on both sides of a fold"
+
+
 def _kfold_notes_small_classes(y: np.ndarray, k: int, where: str = "") -> list[str]:
     notes = []
     vals, counts = np.unique(y.astype(str), return_counts=True)
@@ -464,26 +489,37 @@ class KFold(Splitter):
     def tests_each_capture_once(self) -> bool:
         return True
 
+    def leakage(self) -> str:
+        if self.target == "subject" or self.keeps_subjects_apart():
+            return ""
+        return SUBJECTS_SHARED
+
+    def _grouping(self) -> str | None:
+        """The column no value of which is on both sides of a fold (None: not grouped)."""
+        return self.params.group_column if self.params.grouped else None
+
     def _split(self, meta: pd.DataFrame) -> list[Fold]:
         p = self.params
         n = len(meta)
         y = self._y(meta)
+        group_column = self._grouping()
         if n < p.k:
-            raise SplitError(f"scheme 'kfold': k={p.k} folds but only {n} captures; lower k")
+            raise SplitError(f"scheme {self.name!r}: k={p.k} folds but only {n} "
+                             f"{'windows' if self.sample_windows() else 'captures'}; lower k")
         folds: list[Fold] = []
-        if p.grouped:
-            _require_columns(meta, self.name, p.group_column)
-            groups = _str_col(meta, p.group_column)
+        if group_column is not None:
+            _require_columns(meta, self.name, group_column)
+            groups = _str_col(meta, group_column)
             n_groups = len(set(groups))
             if n_groups < p.k:
                 raise SplitError(
-                    f"scheme 'kfold' (grouped by {p.group_column!r}): k={p.k} folds but only {n_groups} groups; lower k"
+                    f"scheme {self.name!r} (grouped by {group_column!r}): k={p.k} folds but only {n_groups} groups; lower k"
                 )
         elif p.stratified:
             self.notes_.extend(_kfold_notes_small_classes(y, p.k))
         for r in range(p.repeats):
             seed = derive_seed(self.random_state, "kfold", r)
-            if p.grouped:
+            if group_column is not None:
 
                 if p.stratified:
                     cv = StratifiedGroupKFold(n_splits=p.k, shuffle=p.shuffle, random_state=seed if p.shuffle else None)
@@ -754,6 +790,145 @@ class Transfer(Splitter):
         return folds
 
 
+# ----------------------------------------------------------------- window-kfold
+class _WindowKFoldParams(_KFoldParams):
+    frames: int | None = Field(default=None, ge=1)
+    seconds: float | None = Field(default=None, gt=0)
+    hop: int | None = Field(default=None, ge=1)
+    group_by: Literal["none", "capture", "subject"] = "none"
+
+    @model_validator(mode="after")
+    def _one_length(self) -> "_WindowKFoldParams":
+        if (self.frames is None) == (self.seconds is None):
+            raise ValueError("give exactly one of 'frames' or 'seconds' (the window length)")
+        if self.grouped:
+            raise ValueError("window-kfold groups with group_by: none, capture or subject (not grouped)")
+        return self
+
+
+@SPLITTERS.register(
+    "window-kfold",
+    description="k-fold over windows cut from the captures (leaky unless group_by: subject)",
+    paper="Al-mashhadani et al. 2021, Sec. 2.3 and Table 3 (252 windows); Cang et al. 2015 (2-s windows)",
+)
+class WindowKFold(KFold):
+    """Captures cut into windows of ``frames`` (or ``seconds``) every ``hop``
+    frames (default: the window length, no overlap), each window a sample
+    with its capture's labels; then k-fold over the windows.
+
+    ``group_by: none`` (the default, as published evaluations did it) deals
+    windows to folds at random, so windows of one capture, a few frames
+    apart, are trained on and tested: **leaky**. ``capture`` keeps a
+    capture's windows on one side but still shares subjects (leaky when the
+    target is not the subject); ``subject`` keeps subjects apart (honest).
+    The engine cuts the windows (:meth:`sample_windows`); the metadata then
+    has ``source_capture`` and ``window`` columns. Accuracy is per window.
+    """
+
+    name = "window-kfold"
+    Params = _WindowKFoldParams
+
+    def _grouping(self) -> str | None:
+        return {"none": None, "capture": "source_capture", "subject": "subject"}[self.params.group_by]
+
+    def keeps_subjects_apart(self) -> bool:
+        return self.params.group_by == "subject"
+
+    def apart_column(self) -> str | None:
+        return "subject" if self.params.group_by == "subject" else None
+
+    def leakage(self) -> str:
+        if self.params.group_by == "none":
+            return WINDOWS_SHARED + ("" if self.target == "subject" else ", and captures of one subject")
+        return "" if self.target == "subject" or self.params.group_by == "subject" else SUBJECTS_SHARED
+
+    def sample_windows(self):
+        p = self.params
+        return (p.frames, p.seconds, p.hop)
+
+    def _split(self, meta: pd.DataFrame) -> list[Fold]:
+        _require_columns(meta, self.name, "source_capture")
+        return super()._split(meta)
+
+
+# ----------------------------------------------------------------- cross-dataset
+#: the metadata column the engine adds to a cross-dataset evaluation's combined table
+ORIGIN = "origin"
+#: the column holding each capture's frame checksum (the engine adds it)
+FRAMES_SHA = "frames_sha256"
+
+
+class _CrossParams(_Params):
+    test: dict[str, Any]
+    adapters: list[dict[str, Any]] = Field(default_factory=list)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _test_ref(cls, d: Any) -> Any:
+        if isinstance(d, dict) and isinstance(d.get("test"), str):
+            d = {**d, "test": {"name": d["test"]}}
+        return d
+
+    @model_validator(mode="after")
+    def _check(self) -> "_CrossParams":
+        if not isinstance(self.test.get("name"), str) or not self.test["name"]:
+            raise ValueError("test must name the test dataset: test: {name: DATASET}")
+        unknown = sorted(set(self.test) - {"name", "format", "filters", "exclude", "options"})
+        if unknown:
+            raise ValueError(f"test: unknown key(s) {unknown} (name, format, filters, exclude, options)")
+        return self
+
+
+@SPLITTERS.register(
+    "cross-dataset",
+    description="train on the protocol's dataset, test on another (same sensor, or declared adapters)",
+    paper="",
+)
+class CrossDataset(Splitter):
+    """One fold: train on every capture of the protocol's dataset (after its
+    filters), test on every capture of ``test`` (a dataset reference with
+    its own ``format``, ``filters``, ``exclude``, ``options``).
+
+    The engine loads the test data, adapts it to the training sensor with
+    the declared ``adapters`` (each recorded in the run's notes), refuses
+    a sensor mismatch left after them, and stacks both with an ``origin``
+    column (``train`` / ``test``) and each capture's frame checksum. A test
+    capture whose frames are those of a training capture is refused: the
+    same recording read twice would be tested on what was trained on.
+    """
+
+    name = "cross-dataset"
+    Params = _CrossParams
+
+    def keeps_subjects_apart(self) -> bool:
+        return True
+
+    def apart_column(self) -> str | None:
+        return ORIGIN
+
+    def tests_each_capture_once(self) -> bool:
+        return True
+
+    def _split(self, meta: pd.DataFrame) -> list[Fold]:
+        _require_columns(meta, self.name, ORIGIN, FRAMES_SHA)
+        origin = _str_col(meta, ORIGIN)
+        train, test = np.flatnonzero(origin == "train"), np.flatnonzero(origin == "test")
+        sha = _str_col(meta, FRAMES_SHA)
+        seen = set(sha[train].tolist())
+        again = [i for i in test.tolist() if sha[i] in seen]
+        if again:
+            ids = meta["capture_id"].astype(str).to_numpy()[again]
+            raise SplitError(f"scheme 'cross-dataset': {len(again)} test capture(s) have the frames of a training "
+                             f"capture ({', '.join(ids[:5].tolist())}{'...' if len(again) > 5 else ''}): the same "
+                             f"recordings are in both datasets; filter them out of one")
+        subj = _str_col(meta, "subject")
+        shared = sorted(set(subj[train]) & set(subj[test]), key=_natural_key)
+        if shared:
+            self.notes_.append(f"subject name(s) {shared} are in both datasets (the same people, or a clash of names)")
+        name = "train->test"
+        return [Fold(name, train, test, group=name)]
+
+
 # ----------------------------------------------------------------- early
 class _EarlyParams(_Params):
     base: dict[str, Any]
@@ -817,6 +992,12 @@ class Early(Splitter):
 
     def check_target(self) -> None:
         self.base.check_target()
+
+    def leakage(self) -> str:
+        return self.base.leakage()
+
+    def sample_windows(self):
+        return self.base.sample_windows()
 
     def _split(self, meta: pd.DataFrame) -> list[Fold]:
         base_folds = self.base.split(meta)

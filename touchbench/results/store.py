@@ -83,20 +83,23 @@ SCORE_COLUMNS = [
     "classifier_name", "classifier_params", "seed", "n_train", "n_test", "n_classes_train",
     "accuracy", "balanced_accuracy", "macro_f1",
     "feature_seconds_per_capture", "feature_fit_seconds", "fit_seconds", "predict_seconds", "latency_ms",
-    "status", "error", "notes", "finished_at",
+    "status", "error", "notes", "finished_at", "leakage", "selection",
 ]
 #: the label columns of predictions and confusion tables (``true`` is a keyword in SQL engines)
 TRUE, PREDICTED = "true_label", "predicted_label"
 PREDICTION_COLUMNS = [
     "run_id", "task_id", "repetition", "fold", "fold_group", "early_frames", "features", "classifier",
-    "capture_id", "subject", "gesture", TRUE, PREDICTED, "correct",
+    "capture_id", "subject", "gesture", TRUE, PREDICTED, "correct", "leakage",
 ]
 #: the class probabilities of a prediction are the columns ``proba_<class>``
 PROBA_PREFIX = "proba_"
 #: version of the layout of the files above, in each file's metadata (``touchbench_results_schema``) and
 #: the manifest: 1 (no version written) named the label columns ``true`` / ``predicted`` and kept the
-#: pooled confusion rows in ``confusion.parquet``; 2 is this layout. Readers upgrade older tables.
-SCHEMA_VERSION = 2
+#: pooled confusion rows in ``confusion.parquet``; 2 had no ``leakage`` column in scores and
+#: predictions (read as ``NOT_RECORDED``); 3 is this layout. Readers upgrade older tables.
+SCHEMA_VERSION = 3
+#: the leakage of a result row written before touchbench recorded it: unknown, so never read as honest
+NOT_RECORDED = "not recorded (results written before touchbench recorded leakage)"
 SCHEMA_KEY = "touchbench_results_schema"
 _LEGACY = {"true": TRUE, "predicted": PREDICTED}
 
@@ -109,6 +112,8 @@ def upgrade(df: pd.DataFrame, pooled: bool = False) -> pd.DataFrame:
     old = {k: v for k, v in _LEGACY.items() if k in df.columns and v not in df.columns}
     if old:
         df = df.rename(columns=old)
+    if "leakage" not in df.columns and ("status" in df.columns or "capture_id" in df.columns):
+        df = df.assign(leakage=NOT_RECORDED)  # scores or predictions of schema 1 or 2
     if "scope" in df.columns:
         df = df[df["scope"] == ("pooled" if pooled else "task")].drop(columns="scope").reset_index(drop=True)
         if pooled:
@@ -371,13 +376,17 @@ class ResultStore:
         return sorted(p.name[: -len(suffix)] for p in self.fragments.glob(f"*{suffix}"))
 
     def merge(self, task_ids: list[str], stamp: dict[str, Any], metrics: Sequence[str] = (),
-              notes: list[str] | None = None) -> dict[str, pd.DataFrame]:
+              notes: list[str] | None = None, per_task: dict[str, dict[str, Any]] | None = None
+              ) -> dict[str, pd.DataFrame]:
         """Write ``scores``, ``predictions``, ``confusion`` and ``confusion_pooled`` for ``task_ids``.
 
         ``stamp`` (``run_id``, ``protocol_hash``...) overwrites those columns,
         so the merged report describes the current protocol. Rows keep the
         order of ``task_ids`` (the plan's order), independent of the order
-        tasks finished in. ``metrics`` (scikit-learn scorer names) add one
+        tasks finished in. ``per_task`` (column -> task id -> value: the
+        evaluation's leakage) overwrites those columns of each task's rows in
+        both tables, so a fragment written before the column existed is
+        labelled as the plan says. ``metrics`` (scikit-learn scorer names) add one
         scores column each, computed from each task's stored predictions
         (:func:`task_metrics`), so naming a new metric refits nothing; why a
         metric could not be computed goes to ``notes``.
@@ -390,6 +399,10 @@ class ResultStore:
             for k, v in stamp.items():
                 if k in df.columns or df is scores:
                     df[k] = v
+        for col, values in (per_task or {}).items():
+            for df in (scores, preds):
+                if len(df) and (df is scores or col in PREDICTION_COLUMNS):
+                    df[col] = df["task_id"].map(values).fillna("").astype(str)
         order = {t: i for i, t in enumerate(task_ids)}
         if len(scores):
             scores = scores.sort_values("task_id", key=lambda s: s.map(order), kind="stable").reset_index(drop=True)
