@@ -98,8 +98,8 @@ def _with_origin(ds: TouchDataset, origin: str, checksums: list[str], name: str)
     return TouchDataset(name, ds.captures, meta, ds.sensor, provenance=ds.provenance)
 
 
-def _cross_dataset(protocol: Protocol, train: TouchDataset, notes: list[str]) -> TouchDataset:
-    params = protocol.scheme.params
+def _cross_dataset(protocol: Protocol, splitter: CrossDataset, train: TouchDataset, notes: list[str]) -> TouchDataset:
+    params = {"test": splitter.params.test, "adapters": splitter.params.adapters}
     loc = ("scheme", "test")
     try:
         spec = DatasetSpec.model_validate(params["test"])
@@ -128,7 +128,7 @@ def evaluation_dataset(protocol: Protocol, ds: TouchDataset, notes: list[str]) -
     docstring)."""
     splitter = protocol.splitter(0)
     if isinstance(splitter, CrossDataset):
-        ds = _cross_dataset(protocol, ds, notes)
+        ds = _cross_dataset(protocol, splitter, ds, notes)
     windows: Any = splitter.sample_windows()
     if windows is not None:
         frames, seconds, hop = windows

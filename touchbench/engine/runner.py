@@ -37,6 +37,7 @@ the task ids. The classifier's ``random_state`` is
 from __future__ import annotations
 
 import hashlib
+import os
 import sys
 import time
 import warnings
@@ -501,6 +502,20 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
                            ledger=ledger)
 
 
+def _design_captures(plan: Plan) -> list[str] | None:
+    """The ids of the captures the protocol's ``design`` names (None without one)."""
+    design = plan.protocol.design
+    if design is None:
+        return None
+    meta = plan.dataset.meta
+    keep = np.ones(len(meta), dtype=bool)
+    for col, values in design.filters().items():
+        if col not in meta.columns:
+            raise plan.protocol.error_at(("design",), f"the dataset has no metadata column {col!r}")
+        keep &= meta[col].astype(str).isin(values).to_numpy()
+    return meta["capture_id"].astype(str)[keep].tolist()
+
+
 def _record_look(plan: Plan, ledger: Path, final: bool, force_final: bool, n_pending: int) -> tuple[str, list[str]]:
     """The plan's test-set hash; the look recorded in the ledger (when the run scores the test set)."""
     test_set = plan_test_set(plan)
@@ -536,6 +551,7 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
                if t.task_id not in finished or (retry_failed and finished[t.task_id] == "failed")]
     show = sys.stderr.isatty() if progress is None else progress
     ledger = ledger if ledger is not None else default_ledger(protocol, out)
+    design_captures = _design_captures(plan)  # a design naming an unknown column is refused before any task
     test_set, final_notes = _record_look(plan, ledger, final, force_final, len(pending))
     notes += final_notes
 
@@ -606,7 +622,8 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
         notes=notes,
         expected=expected,
     )
-    manifest["ledger"] = {"path": str(ledger), "test_set": test_set, "final": final}
+    manifest["ledger"] = {"path": os.path.relpath(ledger, out), "test_set": test_set, "final": final}
+    manifest["protocol"]["design_captures"] = design_captures
     store.write_manifest(manifest)
     return RunResult(out=out, run_id=plan.run_id, n_tasks=len(plan.tasks), n_ran=n_ran,
                      n_skipped=len(plan.tasks) - len(pending), n_failed=n_failed, noop=False,

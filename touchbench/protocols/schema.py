@@ -433,7 +433,7 @@ class MethodRef(_Model):
     @model_validator(mode="after")
     def _variants(self) -> "MethodRef":
         if self.tuned_on_test and not any(_is_grid(v) for v in self.params.values()):
-            raise _ErrorAt(("tuned_on_test",), "tuned_on_test chooses among a grid: give params a list of values")
+            raise _ErrorAt(("tuned_on_test",), "tuned_on_test chooses among a grid: give a parameter {grid: [values]}")
         if self.subject_id_feature and self.features is None and self.name is not None and self.name not in METHODS:
             raise _ErrorAt(("subject_id_feature",), f"{self.name!r} takes the captures themselves: no feature "
                                                     "matrix to append the subject id to")

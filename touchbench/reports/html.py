@@ -19,6 +19,7 @@ from .results import ResultSet
 __all__ = ["render_html", "write_report"]
 
 _CSS = """
+tr.leaky td{background:#fde2e2;color:#7a0000}h2.leaky{color:#a00000}
 body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:2em auto;max-width:1400px;
 color:#222;padding:0 1em}
 h1{font-size:1.6em}h2{font-size:1.25em;margin-top:2em;border-bottom:1px solid #ccc;padding-bottom:.2em}
@@ -41,7 +42,8 @@ def _table_html(lb: Leaderboard) -> str:
     out = ["<table><thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in header) + "</tr></thead><tbody>"]
     numeric = {0, 4, 5, 6, 7, 8, 9, 10}
     for c in cells:
-        cls = ' class="best"' if c[0] == "1" else ""
+        leaky = any(x.startswith("LEAKY:") for x in c)
+        cls = ' class="leaky"' if leaky else (' class="best"' if c[0] == "1" else "")
         tds = "".join(f'<td class="num">{html.escape(x)}</td>' if i in numeric else f"<td>{html.escape(x)}</td>"
                       for i, x in enumerate(c))
         out.append(f"<tr{cls}>{tds}</tr>")
@@ -65,7 +67,7 @@ def render_html(rs: ResultSet, lbs: list[Leaderboard], plots: dict[str, dict[str
             f"<td>{html.escape(str(s.get('finished_at') or ''))}</td></tr>")
     parts.append("</tbody></table>")
     for lb in lbs:
-        parts.append(f"<h2>{html.escape(lb.title)}</h2>")
+        parts.append(f"<h2{' class=leaky' if lb.is_leaky else ''}>{html.escape(lb.title)}</h2>")
         parts.append(_table_html(lb))
         parts.append(f"<p class='legend'>{html.escape(legend(lb))}</p>")
         for n in lb.notes:

@@ -46,7 +46,8 @@ from sklearn.metrics import precision_recall_fscore_support
 
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError
-from ..results.store import PREDICTED, TRUE
+from ..results.ledger import Looks
+from ..results.store import NOT_RECORDED, PREDICTED, TRUE
 from .pareto import pareto_front
 from .results import ResultSet, load_results
 from .stats import PairedTest, fold_interval, holm, paired_test, wilson_interval
@@ -90,11 +91,21 @@ class Leaderboard:
     notes: list[str] = field(default_factory=list)
     #: tells apart tables of different data under one dataset name ("data 2"); empty when unique
     variant: str = ""
+    #: how often the table's test set was scored (from the ledger), None when no ledger names it
+    looks: Looks | None = None
+    #: the table declares design data: rows carry ``held_out_accuracy`` and ``designed``
+    has_design: bool = False
 
     @property
     def title(self) -> str:
         t = f"{self.dataset}" + (f" ({self.variant})" if self.variant else "") + f" — {self.scheme}"
-        return t if self.target == "gesture" else f"{t} — target {self.target}"
+        t = t if self.target == "gesture" else f"{t} — target {self.target}"
+        return t + (" — LEAKY evaluation" if self.is_leaky else "")
+
+    @property
+    def is_leaky(self) -> bool:
+        """Every method of the table was evaluated with a leak (a leaky scheme)."""
+        return bool(len(self.rows)) and bool((self.rows["leakage"] != "").all())
 
     @property
     def is_early(self) -> bool:
@@ -155,6 +166,35 @@ def _pair(folds: pd.DataFrame, preds: pd.DataFrame | None, a: str, b: str) -> tu
     return "", pd.DataFrame({"unit": [], "a": [], "b": []})
 
 
+def _held_out(preds: pd.DataFrame | None, mid: str, design: set[str]) -> tuple[float, int]:
+    """Mean over folds of ``mid``'s accuracy on the test captures outside the design data (folds
+    without such a capture left out), and how many such captures were tested."""
+    if preds is None or preds.empty:
+        return math.nan, 0
+    p = preds[(preds["method_id"] == mid) & ~preds["capture_id"].astype(str).isin(design)]
+    if p.empty:
+        return math.nan, 0
+    p = p.sort_values("finished_at", kind="stable").drop_duplicates(["fold_key", "seed", "capture_id"], keep="last")
+    per_fold = p.groupby(["fold_key", "seed"])["correct"].mean().groupby(level=0).mean()
+    return float(per_fold.mean()), int(p["capture_id"].nunique())
+
+
+def _tuned_on_test(df: pd.DataFrame) -> pd.DataFrame:
+    """Entries whose grid is chosen on test accuracy (``selection``): only the best of each grid
+    is kept, its label the entry's, what was chosen in its parameters."""
+    if "selection" not in df or not (df["selection"] != "").any():
+        return df
+    keep = []
+    for sel, g in df.groupby("selection", sort=False):
+        if sel == "":
+            keep += list(g.index)
+            continue
+        best = g.sort_values(["accuracy", "method_id"], ascending=[False, True], na_position="last").index[0]
+        df.loc[best, "classifier"] = f"{sel}: {df.loc[best, 'classifier']}"
+        keep.append(best)
+    return df.loc[sorted(keep)].reset_index(drop=True)
+
+
 def _timings(s: pd.DataFrame) -> dict[str, float]:
     return {
         "latency_ms": float(s["latency_ms"].median()) if s["latency_ms"].notna().any() else math.nan,
@@ -173,6 +213,20 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
     preds = rs.predictions[rs.predictions["table_key"] == key] if rs.predictions is not None else None
     machines = dict(zip(s_all["machine"], s_all["machine_desc"]))
     notes: list[str] = []
+    sources = [rs.source(p) for p in dict.fromkeys(s_all["source"])] if "source" in s_all else []
+    designs = [s for s in sources if s.get("design_captures") is not None]
+    design = {c for s in designs for c in s["design_captures"]} if designs else None
+    design_methods = {m for s in designs for m in (s.get("design") or {}).get("methods", [])}
+    for s in designs:
+        d = s.get("design") or {}
+        what = ", ".join(f"{k} {', '.join(v)}" for k, v in ({"subject": d.get("subjects")} | (d.get("rows") or {})).items() if v)
+        notes.append(f"methods marked † were designed on {what}" + (f" ({d['note']})" if d.get("note") else "")
+                     + ": their usual figure includes that data; 'held out' is the accuracy on the other test captures")
+    table_looks = [s["looks"] for s in sources if s.get("looks") is not None]
+    looks_here = max(table_looks, key=lambda x: x.runs) if table_looks else None
+    if looks_here is not None:
+        notes.append(looks_here.describe() + " (ledger of test-set looks): the more methods compared and the more "
+                     "runs, the more the best of them flatters")
     # reference machine: measured the most methods (ties: smallest id)
     timed = ok[ok["latency_ms"].notna()]
     per_machine = timed.groupby("machine")["method_id"].nunique().sort_index()
@@ -210,6 +264,8 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
             "error": _first_error(g_all),
             "runs": int(g_all["run_id"].nunique()),
             "protocols": ",".join(sorted(set(g_all["protocol"].astype(str)))),
+            "leakage": _mode(g_all["leakage"]) if "leakage" in g_all else NOT_RECORDED,
+            "selection": _mode(g_all["selection"]) if "selection" in g_all else "",
         }
         mean, sd, lo, hi = fold_interval(f["accuracy"].to_numpy())
         ci_method = "t"
@@ -240,8 +296,11 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
             gt = g[g["machine"] == tm]
         row["timing_machine"] = tm
         row.update(_timings(gt) if len(gt) else {"latency_ms": math.nan, "fit_seconds": math.nan, "feature_ms": math.nan})
+        if design is not None:
+            row["held_out_accuracy"], row["n_held_out"] = _held_out(preds, mid, design)
+            row["designed"] = not design_methods or bool({row["classifier"], method_label(row)} & design_methods)
         rows.append(row)
-    df = pd.DataFrame(rows)
+    df = _tuned_on_test(pd.DataFrame(rows))
     df = df.sort_values(["accuracy", "macro_f1", "method_id"], ascending=[False, False, True], na_position="last",
                         kind="stable").reset_index(drop=True)
     df.insert(0, "rank", df["accuracy"].rank(method="min", ascending=False, na_option="bottom").astype(int))
@@ -272,10 +331,15 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
     if untested and len(df) > 1:
         notes.append(f"{len(untested)} method(s) share fewer than two folds or subjects with the best: not tested")
     fr = s_all["frame_rate"].dropna()
+    leaks = sorted(set(df["leakage"]) - {""})
+    for reason in leaks:
+        notes.insert(0, f"LEAKY: {reason}. Its accuracy overstates accuracy on new people; never compare it "
+                        "with an honest evaluation")
     return Leaderboard(
         key=key, dataset=str(first["dataset"]), dataset_hash=str(first["dataset_hash"]), target=str(first["target"]),
         scheme=str(first["scheme_label"]), rows=df, folds=folds, machines=machines, reference_machine=ref,
         pooled_machines=pool_machines, alpha=alpha, frame_rate=float(fr.iloc[0]) if len(fr) else math.nan, notes=notes,
+        looks=looks_here, has_design=design is not None,
     )
 
 
@@ -480,6 +544,11 @@ def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
     show_machine = len(set(lb.rows["timing_machine"])) > 1
     if show_machine:
         header.insert(11, "timing machine")
+    show_leak = bool((lb.rows["leakage"] != "").any())
+    if lb.has_design:
+        header.insert(7, "held out %")
+    if show_leak:
+        header.insert(2, "evaluation")
     cells = []
     labels = method_labels(lb.rows)
     for _, r in lb.rows.iterrows():
@@ -515,6 +584,12 @@ def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
                "★" if r["pareto"] else ""]
         if show_machine:
             row.insert(11, str(r["timing_machine"]))
+        if lb.has_design:
+            if r.get("designed"):
+                row[5] += " †"
+            row.insert(7, _pct(r["held_out_accuracy"]) + (f" (n={int(r['n_held_out'])})" if r.get("n_held_out") else ""))
+        if show_leak:
+            row.insert(2, f"LEAKY: {r['leakage']}" if r["leakage"] else "honest")
         cells.append(row)
     return header, cells
 
@@ -526,7 +601,11 @@ def legend(lb: Leaderboard) -> str:
             f"predict it; fit: median seconds per fold; features: median ms per capture. Δ: mean paired difference "
             f"to the best method in percentage points; p: exact sign-flip permutation test (≤15 pairs) or Wilcoxon "
             f"signed-rank test, Holm-adjusted over the table; * = differs at α={lb.alpha:g}. ★ = on the accuracy / "
-            f"latency Pareto front.")
+            f"latency Pareto front."
+            + (" † = the method was designed on part of this data (see the note); held out: accuracy on the "
+               "test captures outside the design data (mean over folds)." if lb.has_design else "")
+            + (" LEAKY rows: the evaluation let test data inform training (see the notes)."
+               if bool((lb.rows["leakage"] != "").any()) else ""))
 
 
 def _md_escape(s: str) -> str:
@@ -585,6 +664,7 @@ def to_json(lbs: list[Leaderboard]) -> str:
             "dataset": lb.dataset, "dataset_hash": lb.dataset_hash, "target": lb.target, "scheme": lb.scheme,
             "alpha": lb.alpha, "machines": lb.machines, "reference_machine": lb.reference_machine,
             "pooled_machines": lb.pooled_machines, "notes": lb.notes, "rows": _records(lb),
+            "leaky": lb.is_leaky, "looks": None if lb.looks is None else vars(lb.looks),
         })
     return json.dumps({"tables": tables}, indent=2) + "\n"
 

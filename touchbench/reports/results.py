@@ -48,6 +48,8 @@ import yaml
 
 from ..core.errors import TouchbenchError
 from ..core.yamlsafe import safe_load
+from ..protocols.schema import SUBJECT_ID_LEAK
+from ..results.ledger import Looks, looks
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE, ResultStore, check_schema, read_results_table
 
 __all__ = ["ResultSet", "load_results", "machine_id", "method_id", "scheme_label"]
@@ -60,8 +62,9 @@ def _short_hash(obj: Any, n: int = 10) -> str:
 
 
 def method_id(target: str, feature_params: str, classifier_name: str, classifier_params: str,
-              early_frames: float | None) -> str:
-    """The hash that identifies a method (see the module docstring)."""
+              early_frames: float | None, variant: str = "") -> str:
+    """The hash that identifies a method (see the module docstring); ``variant`` tells a leaky
+    variant of a method (its subject id as a feature) from the method itself."""
     def _parse(s: str) -> Any:
         try:
             return json.loads(s)
@@ -69,10 +72,11 @@ def method_id(target: str, feature_params: str, classifier_name: str, classifier
             return s
 
     frames = None if early_frames is None or (isinstance(early_frames, float) and math.isnan(early_frames)) else int(early_frames)
-    return _short_hash({
-        "target": target, "features": _parse(feature_params), "classifier": classifier_name,
-        "params": _parse(classifier_params), "early_frames": frames,
-    })
+    ident = {"target": target, "features": _parse(feature_params), "classifier": classifier_name,
+             "params": _parse(classifier_params), "early_frames": frames}
+    if variant:
+        ident["variant"] = variant
+    return _short_hash(ident)
 
 
 def machine_id(platform: dict[str, Any] | None) -> tuple[str, str]:
@@ -119,6 +123,10 @@ class ResultSet:
     scores: pd.DataFrame
     predictions: pd.DataFrame | None
     sources: list[dict[str, Any]] = field(default_factory=list)
+
+    def source(self, path: str) -> dict[str, Any]:
+        """The source entry of a results folder (its ``path`` as in the ``source`` column)."""
+        return next((s for s in self.sources if s["path"] == path), {})
 
     @property
     def ok(self) -> pd.DataFrame:
@@ -177,6 +185,15 @@ def _protocol_scheme(manifest: dict[str, Any]) -> Any:
 _CROP_PREFIX = re.compile(r"^first[^/]*/")
 
 
+def _looks(manifest: dict[str, Any], folder: Path) -> Looks | None:
+    """How often the run's test set was scored, from the ledger its manifest names (relative to the
+    results folder; None: no ledger)."""
+    info = manifest.get("ledger") or {}
+    if not info.get("path") or not info.get("test_set"):
+        return None
+    return looks(folder / info["path"], info["test_set"])
+
+
 def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> ResultSet:
     """Read and combine results directories (see the module docstring)."""
     dirs: list[Path] = []
@@ -211,10 +228,11 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
         s["machine_desc"] = mdesc
         s["frame_rate"] = float(sensor.get("frame_rate")) if sensor.get("frame_rate") else np.nan
         s["scheme_label"] = scheme_label(scheme, fallback=str(s["scheme"].iloc[0])) if scheme is not None else s["scheme"].astype(str)
+        variants = ["subject-id" if SUBJECT_ID_LEAK in str(x) else "" for x in s["leakage"]]
         s["method_id"] = [
-            method_id(t, fp, cn, cp, ef)
-            for t, fp, cn, cp, ef in zip(s["target"], s["feature_params"], s["classifier_name"],
-                                         s["classifier_params"], s["early_frames"])
+            method_id(t, fp, cn, cp, ef, v)
+            for t, fp, cn, cp, ef, v in zip(s["target"], s["feature_params"], s["classifier_name"],
+                                            s["classifier_params"], s["early_frames"], variants)
         ]
         s["table_key"] = [
             _short_hash([dh, t, sc], 8) for dh, t, sc in zip(s["dataset_hash"], s["target"], s["scheme_label"])
@@ -255,6 +273,9 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
             "versions": m.get("packages") or {}, "touchbench_version": m.get("touchbench_version"),
             "git": m.get("git") or {}, "n_tasks": int(len(s)), "n_failed": int((s["status"] != "ok").sum()),
             "seconds": sum(float(x.get("seconds") or 0) for x in (m.get("sessions") or [])),
+            "design": (m.get("protocol") or {}).get("design"),
+            "design_captures": (m.get("protocol") or {}).get("design_captures"),
+            "looks": _looks(m, d),
         })
     if not score_frames:
         raise TouchbenchError(f"no scores in {', '.join(map(str, dirs))} (every run is empty)")

@@ -1,0 +1,310 @@
+"""Evaluation integrity: leaky schemes flagged everywhere, cross-dataset transfer that never tests a
+training capture, several evaluations per protocol, design data, the ledger of test-set looks.
+
+Expected values are worked out from the datasets built here (which captures each fold holds,
+how many windows a capture gives), never read from the code's own output.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing as mp
+import os
+import signal
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from touchbench.cli.main import cli as main
+from touchbench.core.errors import TouchbenchError
+from touchbench.datasets.adapt import AdapterError, adapt
+from touchbench.datasets.model import SensorSpec, TouchDataset, frames_checksum
+from touchbench.datasets.windows import window_dataset
+from touchbench.engine import run_protocol
+from touchbench.engine.runner import plan_run
+from touchbench.engine.testing import SENSOR, random_dataset
+from touchbench.protocols.schema import ProtocolError, parse_protocol
+from touchbench.protocols.splits import SUBJECTS_SHARED, SplitError, make_splitter
+from touchbench.reports.html import write_report
+from touchbench.reports.leaderboard import build_leaderboards, display_rows, to_markdown
+from touchbench.reports.results import load_results
+from touchbench.results.ledger import FinalRunError, Looks, looks, read_ledger, record_look
+
+SUBJECTS = ("s1", "s2", "s3", "s4")
+
+
+@pytest.fixture(autouse=True)
+def env(engine_env):
+    yield
+
+
+def _data(tmp_path: Path, name="data.parquet", **kw) -> Path:
+    p = tmp_path / name
+    random_dataset(subjects=kw.pop("subjects", SUBJECTS), per_cell=kw.pop("per_cell", 2), **kw).to_parquet(p)
+    return p
+
+
+def _protocol(tmp_path: Path, body: str, name="p") -> Path:
+    p = tmp_path / f"{name}.yaml"
+    p.write_text(f"name: {name}\n" + body)
+    return p
+
+
+# ----------------------------------------------------------------- leaky schemes
+def test_kfold_ignoring_subjects_is_leaky_and_grouped_kfold_and_loso_are_not():
+    assert make_splitter("kfold", k=3).leakage() == SUBJECTS_SHARED
+    assert make_splitter("kfold", k=3, grouped=True).leakage() == ""
+    assert make_splitter("kfold", k=3, target="subject").leakage() == ""  # person identification needs it
+    assert make_splitter("loso").leakage() == ""
+    assert make_splitter("early", base={"name": "kfold", "k": 3}, frames=[2]).leakage() == SUBJECTS_SHARED
+    assert "windows of one capture" in make_splitter("window-kfold", k=3, frames=4).leakage()
+    assert make_splitter("window-kfold", k=3, frames=4, group_by="subject").leakage() == ""
+
+
+def test_window_dataset_cuts_every_capture_into_its_windows():
+    ds = random_dataset(subjects=("s1",), gestures=("pat",), per_cell=2, frames=(10, 10))
+    w = window_dataset(ds, frames=4)  # 10 frames: windows at 0 and 4 (8 would need 12 frames)
+    assert len(w) == 4
+    assert w.meta["source_capture"].tolist() == ["c0000", "c0000", "c0001", "c0001"]
+    assert w.meta["capture_id"].tolist() == ["c0000#w0", "c0000#w1", "c0001#w0", "c0001#w1"]
+    np.testing.assert_array_equal(w.captures[1], ds.captures[0][4:8])
+    w2 = window_dataset(ds, frames=4, hop=2)  # starts 0, 2, 4, 6
+    assert len(w2) == 8
+
+
+def test_window_kfold_puts_windows_of_one_capture_on_both_sides_unless_grouped(tmp_path):
+    data = _data(tmp_path, frames=(12, 12))
+    for group_by, shared in (("none", True), ("capture", False)):
+        proto = parse_protocol(f"name: w\ndataset: {data}\nscheme: {{name: window-kfold, k: 3, frames: 4, "
+                               f"group_by: {group_by}}}\nfeatures: [[test-mean]]\nclassifiers: [test-logreg]\n")
+        plan = plan_run(proto)
+        assert len(plan.dataset) == 2 * len(SUBJECTS) * 3 * 3  # 48 captures x 3 windows of 4 frames
+        src = plan.dataset.meta["source_capture"].to_numpy()
+        both = [bool(set(src[t.fold.train]) & set(src[t.fold.test])) for t in plan.tasks]
+        assert any(both) == shared
+
+
+def test_leaky_rows_leaderboard_and_html_say_so(tmp_path):
+    data = _data(tmp_path)
+    p = _protocol(tmp_path, f"""dataset: {data}
+scheme: {{name: kfold, k: 3}}
+features: [[test-mean]]
+classifiers: [test-logreg]
+methods:
+  - {{features: [test-mean], estimator: test-logreg, subject_id_feature: true}}
+""")
+    res = run_protocol(p, out=tmp_path / "out", progress=False)
+    assert (res.scores["leakage"].str.startswith(SUBJECTS_SHARED)).all()
+    with_id = res.scores[res.scores["classifier"].str.contains("subject-id")]
+    assert len(with_id) == 3 and with_id["leakage"].str.contains("the subject's id is a feature").all()
+    preds = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
+    assert (preds["leakage"] != "").all()
+    rs = load_results([tmp_path / "out"])
+    lbs = build_leaderboards(rs)
+    assert len(lbs) == 1 and lbs[0].is_leaky and "LEAKY" in lbs[0].title
+    assert len(lbs[0].rows) == 2  # the subject-id variant is a method of its own
+    header, cells = display_rows(lbs[0])
+    col = header.index("evaluation")
+    assert all(c[col].startswith("LEAKY: ") for c in cells)
+    assert "LEAKY" in to_markdown(lbs)
+    page = write_report(rs, lbs, tmp_path / "report", kinds=()).read_text()
+    assert "LEAKY evaluation" in page and page.count('<tr class="leaky">') == 2
+
+
+def test_an_honest_scheme_shows_no_leak_column(tmp_path):
+    data = _data(tmp_path)
+    p = _protocol(tmp_path, f"dataset: {data}\nscheme: loso\nfeatures: [[test-mean]]\nclassifiers: [test-logreg]\n")
+    run_protocol(p, out=tmp_path / "out", progress=False)
+    lb = build_leaderboards(load_results([tmp_path / "out"]))[0]
+    assert not lb.is_leaky and "evaluation" not in display_rows(lb)[0]
+
+
+def test_tuned_on_test_keeps_the_grid_value_with_the_best_test_accuracy(tmp_path):
+    data = _data(tmp_path)
+    p = _protocol(tmp_path, f"""dataset: {data}
+scheme: loso
+methods:
+  - {{features: [test-mean], estimator: test-logreg, params: {{C: {{grid: [0.0001, 1.0]}}}}, tuned_on_test: true}}
+""")
+    res = run_protocol(p, out=tmp_path / "out", progress=False)
+    assert (res.scores["leakage"] == "a parameter chosen by its test accuracy").all()
+    per_value = res.scores.groupby("classifier")["accuracy"].mean()
+    lb = build_leaderboards(load_results([tmp_path / "out"]))[0]
+    assert len(lb.rows) == 1
+    assert lb.rows["accuracy"].iloc[0] == pytest.approx(per_value.max())
+    assert "chosen on test" in lb.rows["classifier"].iloc[0]
+
+
+def test_subject_id_feature_is_refused_for_an_estimator_on_captures(tmp_path):
+    with pytest.raises(ProtocolError, match="takes the captures themselves"):
+        parse_protocol("name: x\ndataset: haart-sample\nscheme: loso\nmethods:\n"
+                       "  - {name: minirocket, subject_id_feature: true}\n", deep=False)
+
+
+# ----------------------------------------------------------------- cross-dataset
+def test_cross_dataset_trains_on_one_dataset_and_tests_on_the_other(tmp_path):
+    train = _data(tmp_path, "train.parquet", subjects=("a1", "a2"), seed=1)
+    test = _data(tmp_path, "test.parquet", subjects=("b1",), seed=2)
+    p = _protocol(tmp_path, f"dataset: {train}\nscheme: {{name: cross-dataset, test: {test}}}\n"
+                            "features: [[test-mean]]\nclassifiers: [test-logreg]\n")
+    plan = plan_run(parse_protocol(p.read_text(), p))
+    (t,) = plan.tasks
+    meta = plan.dataset.meta
+    assert set(meta["origin"].to_numpy()[t.fold.train]) == {"train"} and len(t.fold.train) == 2 * 3 * 2
+    assert set(meta["origin"].to_numpy()[t.fold.test]) == {"test"} and len(t.fold.test) == 3 * 2
+    assert set(meta["subject"].to_numpy()[t.fold.test]) == {"b1"}
+    res = run_protocol(p, out=tmp_path / "out", progress=False)
+    assert res.scores["leakage"].tolist() == [""]
+
+
+def test_cross_dataset_refuses_test_captures_that_are_training_ones(tmp_path):
+    train = random_dataset(subjects=("a1", "a2"), per_cell=2, seed=1)
+    same = train.subset([0, 5])  # two training recordings, read again as another study's
+    meta = same.meta.assign(subject="b1", capture_id=["x0", "x1"])
+    other = random_dataset(subjects=("b2",), per_cell=2, seed=3)
+    test = TouchDataset("other", [*same.captures, *other.captures],
+                        pd.concat([meta, other.meta.assign(capture_id=lambda m: "y" + m["capture_id"])]), SENSOR)
+    train.to_parquet(tmp_path / "train.parquet")
+    test.to_parquet(tmp_path / "test.parquet")
+    p = _protocol(tmp_path, f"dataset: {tmp_path / 'train.parquet'}\nscheme: {{name: cross-dataset, test: "
+                            f"{tmp_path / 'test.parquet'}}}\nfeatures: [[test-mean]]\nclassifiers: [test-logreg]\n")
+    with pytest.raises(ProtocolError, match="2 test capture\\(s\\) have the frames of a training capture"):
+        plan_run(parse_protocol(p.read_text(), p))
+    # filtered out of the test data, the evaluation runs and no test capture is a training one
+    p.write_text(f"name: p\ndataset: {tmp_path / 'train.parquet'}\nscheme:\n  name: cross-dataset\n  test:\n"
+                 f"    name: {tmp_path / 'test.parquet'}\n    exclude: {{subject: [b1]}}\n"
+                 "features: [[test-mean]]\nclassifiers: [test-logreg]\n")
+    plan = plan_run(parse_protocol(p.read_text(), p))
+    sha = plan.dataset.meta["frames_sha256"].to_numpy()
+    (t,) = plan.tasks
+    assert not set(sha[t.fold.test]) & set(sha[t.fold.train])
+    assert {frames_checksum(c) for c in same.captures}.isdisjoint(sha[t.fold.test])
+
+
+def test_adapters_bring_another_sensor_to_the_training_one():
+    src = SensorSpec("big", (6, 6), 100.0, (0.0, 4095.0))
+    to = SensorSpec("train", (4, 4), 50.0, (0.0, 1023.0))
+    cap = np.arange(10 * 36, dtype=np.float64).reshape(10, 6, 6) % 4096
+    ds = TouchDataset("d", [cap], pd.DataFrame({"capture_id": ["c"], "subject": ["s"], "gesture": ["g"]}), src)
+    with pytest.raises(AdapterError, match="grid: training \\(4, 4\\), test \\(6, 6\\)"):
+        adapt(ds, to, [])
+    out, notes = adapt(ds, to, [{"crop": {"top": 1, "left": 2}}, {"resample": "linear"}, {"rescale": "linear"}])
+    assert out.sensor == to and len(notes) == 3
+    c = out.captures[0]
+    assert c.shape == (5, 4, 4)  # 10 frames at 100 Hz -> 5 at 50 Hz
+    # frame k at 50 Hz is the frame 2k at 100 Hz (the times coincide), cropped, scaled 1023/4095
+    np.testing.assert_allclose(c[2], cap[4, 1:5, 2:6] * 1023.0 / 4095.0)
+    with pytest.raises(AdapterError, match="does not fit"):
+        adapt(ds, to, [{"crop": {"top": 3, "left": 0}}])
+
+
+# ----------------------------------------------------------------- several evaluations, design
+def test_one_methods_block_under_several_evaluations(tmp_path):
+    data = _data(tmp_path, extra={"substrate": ["flat", "curve", "foam"]}, per_cell=1)
+    p = _protocol(tmp_path, f"""dataset: {data}
+features: [[test-mean]]
+classifiers: [test-logreg]
+design: {{subjects: [s1, s2], note: chosen by looking at them}}
+evaluations:
+  - {{name: loso, scheme: loso}}
+  - name: to-curve
+    scheme: {{name: challenge, column: substrate, train: [flat, foam], test: [curve]}}
+""", name="multi")
+    res = run_protocol(p, out=tmp_path / "results" / "multi", progress=False)
+    assert isinstance(res, list) and [r.out.name for r in res] == ["loso", "to-curve"]
+    assert len(res[0].scores) == 4 and len(res[1].scores) == 1
+    preds = pd.read_parquet(res[1].out / "predictions.parquet")
+    train_sub = pd.read_parquet(data)  # no curve capture is trained on: the test captures are all curve
+    assert len(preds) == (train_sub["substrate"] == "curve").sum()
+    lbs = build_leaderboards(load_results([tmp_path / "results" / "multi"]))
+    assert len(lbs) == 2
+    lb = next(lb for lb in lbs if lb.scheme == "loso")
+    # held out: the folds of s3 and s4 only (mean of their accuracies)
+    folds = res[0].scores.set_index("fold")["accuracy"]
+    assert lb.rows["held_out_accuracy"].iloc[0] == pytest.approx((folds["subject=s3"] + folds["subject=s4"]) / 2)
+    header, cells = display_rows(lb)
+    assert "held out %" in header and cells[0][header.index("accuracy % (±sd)")].endswith("†")
+
+
+def test_evaluation_errors_name_the_evaluation_field(tmp_path):
+    data = _data(tmp_path)
+    p = _protocol(tmp_path, f"""dataset: {data}
+features: [[test-mean]]
+classifiers: [test-logreg]
+evaluations:
+  - {{name: a, scheme: loso}}
+  - {{name: b, scheme: {{name: kfold, k: 1}}}}
+""")
+    with pytest.raises(ProtocolError, match=r"p.yaml:7: evaluations\[1\]\.scheme\.k: Input should be greater than or equal to 2"):
+        parse_protocol(p.read_text(), p)
+
+
+# ----------------------------------------------------------------- ledger and --final
+def test_the_ledger_counts_looks_and_final_refuses_other_methods(tmp_path):
+    data = _data(tmp_path)
+    body = f"dataset: {data}\nscheme: loso\nfeatures: [[test-mean]]\nclassifiers: [{{clf}}]\n"
+    one = _protocol(tmp_path, body.format(clf="test-logreg"), name="one")
+    two = _protocol(tmp_path, body.format(clf="test-forest"), name="two")
+    root = tmp_path / "results"
+    run_protocol(one, out=root / "one", progress=False)
+    run_protocol(one, out=root / "one", progress=False)  # nothing computed: not a look
+    run_protocol(two, out=root / "two", progress=False)
+    entries = read_ledger(root / "ledger.jsonl")
+    assert len(entries) == 2 and entries[0]["test_set"] == entries[1]["test_set"]
+    lb = build_leaderboards(load_results([root / "two"]))[0]
+    assert (lb.looks.runs, lb.looks.methods) == (2, 2)
+    assert any("scored by 2 run(s), 2 method(s)" in n for n in lb.notes)
+    run_protocol(one, out=root / "one", progress=False, final=True)
+    run_protocol(one, out=root / "one", progress=False, final=True)  # the same methods again: allowed
+    with pytest.raises(FinalRunError, match="already had a final run"):
+        run_protocol(two, out=root / "two", progress=False, final=True)
+    res = run_protocol(two, out=root / "two", progress=False, final=True, force_final=True)
+    assert any(n.startswith("forced:") for n in res.notes)
+    last = read_ledger(root / "ledger.jsonl")[-1]
+    assert last["final"] and last["forced"]
+    # the refused run scored nothing: 2 plain looks + 2 finals of one + the forced final of two
+    assert looks(root / "ledger.jsonl", last["test_set"]) == Looks(runs=5, methods=2, finals=3)
+
+
+def test_final_from_the_command_line_exits_with_a_data_error(tmp_path):
+    data = _data(tmp_path)
+    body = f"dataset: {data}\nscheme: loso\nfeatures: [[test-mean]]\nclassifiers: [{{clf}}]\n"
+    one = _protocol(tmp_path, body.format(clf="test-logreg"), name="one")
+    two = _protocol(tmp_path, body.format(clf="test-forest"), name="two")
+    runner = CliRunner()
+    assert runner.invoke(main, ["-q", "run", str(one), "--final"]).exit_code == 0
+    r = runner.invoke(main, ["-q", "run", str(two), "--final"])
+    assert r.exit_code == 3 and "--force-final" in r.output
+    assert runner.invoke(main, ["-q", "run", str(two), "--final", "--force-final"]).exit_code == 0
+    assert runner.invoke(main, ["run", str(two), "--force-final"]).exit_code == 2
+
+
+def _append_forever(path: str, started) -> None:
+    started.set()
+    i = 0
+    while True:
+        record_look(path, {"test_set": "t", "methods": [f"m{i}"], "pad": "x" * 5000})
+        i += 1
+
+
+def test_the_ledger_survives_a_writer_killed_mid_line(tmp_path):
+    path = tmp_path / "ledger.jsonl"
+    ctx = mp.get_context("fork")
+    started = ctx.Event()
+    proc = ctx.Process(target=_append_forever, args=(str(path), started))
+    proc.start()
+    started.wait(10)
+    time.sleep(0.3)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.join()
+    n = len(read_ledger(path))
+    with open(path, "ab") as f:  # a line cut short, as a crash between two writes leaves it
+        f.write(b'{"test_set": "t", "meth')
+    record_look(path, {"test_set": "t", "methods": ["after"]})
+    entries = read_ledger(path)
+    assert len(entries) == n + 1 and entries[-1]["methods"] == ["after"]
+    assert all(json.loads(line) for line in path.read_text().splitlines()[-1:])
