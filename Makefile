@@ -60,19 +60,18 @@ reproduce-papers: setup
 examples: setup
 	$(TB) run example-haart-loso --out $(RUNS)/example-haart-loso --jobs $(JOBS) --no-progress
 	$(TB) run example-haart-early --out $(RUNS)/example-haart-early --jobs $(JOBS) --no-progress
-	$(TB) run touch-haart-loso --out $(RUNS)/touch-haart-loso --jobs $(JOBS) --no-progress
-	$(TB) run touch-haart-challenge --out $(RUNS)/touch-haart-challenge --jobs $(JOBS) --no-progress
+	$(TB) run touch-haart --out $(RUNS)/touch-haart --jobs $(JOBS) --no-progress
 	$(TB) leaderboard $(RUNS)/example-haart-loso $(RUNS)/example-haart-early --out results/examples \
 	    --format md --format csv --format json
 	$(TB) report $(RUNS)/example-haart-loso $(RUNS)/example-haart-early --out results/examples \
 	    --title "touchbench example: real HAART, leave-one-subject-out"
-	$(TB) leaderboard $(RUNS)/touch-haart-loso $(RUNS)/touch-haart-challenge --out results/touch-haart \
+	$(TB) leaderboard $(RUNS)/touch-haart --out results/touch-haart \
 	    --format md --format csv
 	$(TB) plot $(RUNS)/example-haart-loso --out docs/figures --name example-haart-loso --format png --format svg \
 	    --kind pareto --kind confusion --kind cd --reference "Gaus 2015 challenge=66.5"
-	$(TB) plot $(RUNS)/touch-haart-loso --out docs/figures --kind pareto --name touch-haart-loso --format png --format svg \
+	$(TB) plot $(RUNS)/touch-haart/loso --out docs/figures --kind pareto --name touch-haart-loso --format png --format svg \
 	    --reference "Al-mashhadani 2021 CNN=83.2"
-	$(TB) plot $(RUNS)/touch-haart-challenge --out docs/figures --kind pareto --name touch-haart-challenge --format png --format svg \
+	$(TB) plot $(RUNS)/touch-haart/challenge --out docs/figures --kind pareto --name touch-haart-challenge --format png --format svg \
 	    --reference "best 2015 entry=70.9" --reference "Gaus 2015=66.5" --reference "2023 transformer*=72.8"
 
 clean:

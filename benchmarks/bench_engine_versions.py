@@ -1,7 +1,7 @@
 """One protocol under two versions of touchbench, side by side: wall time and accuracies.
 
-    python benchmarks/bench_engine_versions.py --base 7c44a25 --protocol touch-haart-loso --jobs 2 --runs 1
-    python benchmarks/bench_engine_versions.py --base 7c44a25 --protocol touch-haart-loso \\
+    python benchmarks/bench_engine_versions.py --base 7c44a25 --protocol example-haart-loso --jobs 2 --runs 1
+    python benchmarks/bench_engine_versions.py --base 7c44a25 --protocol example-haart-loso \\
         --filter subject=s01,s02,s03 --runs 3
 
 ``--base REV`` is checked out into a git worktree under this benchmark's

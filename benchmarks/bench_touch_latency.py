@@ -2,7 +2,7 @@
 
     python benchmarks/bench_touch_latency.py [--runs 5] [--captures 40] [--methods touch-et-fast,minirocket]
 
-Every method of the shipped protocol ``touch-haart-challenge`` but the CNN (and
+Every method of the shipped protocol ``touch-haart`` (its challenge evaluation) but the CNN (and
 the CNN too with ``--methods``) is fitted once on the challenge's training
 captures of ``haart-challenge`` (578 captures, seed 0, the protocol's
 parameters), then times the path a live recogniser takes: one capture's

@@ -30,8 +30,8 @@ training capture), a shorter one padded by repeating its last frame.
 refused or padded by repeating its last frame (raw-window's stated
 ``shorter`` rule), a longer one truncated to its first F frames. HAART's
 captures are all 432 frames, so on ``haart`` and ``haart-challenge``
-nothing is padded. This is stated in the protocols (``touch-haart-loso``,
-``touch-haart-challenge``) and so in every run's manifest. Series shorter than aeon's minimum (``MIN_TIMEPOINTS`` = 9, the
+nothing is padded. This is stated in the protocol (``touch-haart``) and so
+in every run's manifest. Series shorter than aeon's minimum (``MIN_TIMEPOINTS`` = 9, the
 length of MiniRocket's kernels) are padded here the same way, by repeating
 the last frame (a held pose; aeon itself asks for zero padding, which on a
 pressure sensor would invent a release).

@@ -53,19 +53,30 @@ def validate(file: str, schema_only: bool, as_json: bool) -> None:
         return
     from ..engine.runner import plan_run
 
-    plan = plan_run(proto)
-    ds = plan.dataset
+    evaluations = []
+    for sub in proto.evaluation_protocols():
+        plan = plan_run(sub)
+        ds = plan.dataset
+        evaluations.append({"evaluation": sub.evaluation, "dataset": sub.dataset.name, "scheme": sub.scheme.name,
+                            "captures": len(ds), "subjects": int(ds.meta["subject"].nunique()),
+                            "classes": int(ds.meta[sub.target].nunique()), "folds": plan.n_folds,
+                            "tasks": len(plan.tasks), "notes": plan.notes,
+                            "leakage": sorted({t.base_row.get("leakage", "") for t in plan.tasks} - {""})})
+        if as_json:
+            continue
+        at = f"evaluation {sub.evaluation} ({sub.scheme.name}): " if sub.evaluation else ""
+        click.echo(f"{at}dataset {sub.dataset.name}: {len(ds)} captures after filters, "
+                   f"{ds.meta['subject'].nunique()} subjects, {ds.meta[sub.target].nunique()} {sub.target} classes")
+        shape = f"{len(combos)} x {len(clfs)}" if not proto.methods else f"{n_methods} method(s)"
+        click.echo(f"{plan.n_folds} fold(s) x {shape} = {len(plan.tasks)} task(s)")
+        for reason in evaluations[-1]["leakage"]:
+            click.echo(f"LEAKY: {reason}")
+        for n in plan.notes:
+            click.echo(f"note: {n}")
     if as_json:
-        echo_json({**out, "captures": len(ds), "subjects": int(ds.meta["subject"].nunique()),
-                   "classes": int(ds.meta[proto.target].nunique()), "folds": plan.n_folds, "tasks": len(plan.tasks),
-                   "notes": plan.notes})
-        return
-    click.echo(f"dataset {proto.dataset.name}: {len(ds)} captures after filters, "
-               f"{ds.meta['subject'].nunique()} subjects, {ds.meta[proto.target].nunique()} {proto.target} classes")
-    shape = f"{len(combos)} x {len(clfs)}" if not proto.methods else f"{n_methods} method(s)"
-    click.echo(f"{plan.n_folds} fold(s) x {shape} = {len(plan.tasks)} task(s)")
-    for n in plan.notes:
-        click.echo(f"note: {n}")
+        first = evaluations[0]
+        echo_json({**out, **{k: v for k, v in first.items() if k not in ("evaluation", "dataset", "scheme")},
+                   **({"evaluations": evaluations} if proto.evaluations else {})})
 
 
 @protocols.command("list", epilog=example("touchbench protocols list --json"))

@@ -714,6 +714,9 @@ class Protocol(_Model):
             return [self]
         if self._subs is None:
             base = self.model_dump(mode="python", exclude={"evaluations", "evaluation"})
+            if not base.get("features"):  # methods: alone
+                base.pop("features", None)
+                base.pop("classifiers", None)
             subs = []
             for i, ev in enumerate(self.evaluations):
                 data = dict(base, evaluation=ev.name)
