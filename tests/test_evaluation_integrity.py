@@ -308,3 +308,38 @@ def test_the_ledger_survives_a_writer_killed_mid_line(tmp_path):
     entries = read_ledger(path)
     assert len(entries) == n + 1 and entries[-1]["methods"] == ["after"]
     assert all(json.loads(line) for line in path.read_text().splitlines()[-1:])
+
+
+# ----------------------------------------------------------------- audit
+def test_audit_runs_the_honest_scheme_and_each_leaky_variant(tmp_path):
+    data = _data(tmp_path, frames=(12, 12), per_cell=3)
+    p = _protocol(tmp_path, f"""dataset: {data}
+scheme: loso
+features: [[test-mean]]
+classifiers: [{{name: test-logreg, params: {{C: 1.0}}}}]
+expected:
+  results: [{{features: [test-mean], classifier: test-logreg, value: 50.0, source: made up}}]
+  tolerance: 2.0
+""", name="aud")
+    r = CliRunner().invoke(main, ["-q", "audit", str(p), "--k", "3", "--window-seconds", "0.4", "--tune",
+                                  "C=0.0001,1.0", "--out", str(tmp_path / "audit"), "--json"])
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)
+    rows = pd.DataFrame(doc["rows"])
+    assert list(dict.fromkeys(rows["variant"])) == ["honest", "capture-kfold", "window-kfold", "subject-id",
+                                                     "tuned-on-test"]
+    # every variant's number is its own run's mean over folds, and the inflation is against the honest one
+    honest = pd.read_parquet(tmp_path / "audit" / "honest" / "scores.parquet")
+    assert rows.loc[rows["variant"] == "honest", "accuracy"].item() == pytest.approx(honest["accuracy"].mean())
+    windows = pd.read_parquet(tmp_path / "audit" / "window-kfold" / "scores.parquet")
+    assert (windows["leakage"].str.contains("windows of one capture")).all()
+    assert windows["n_test"].sum() == 4 * 3 * 3 * 3  # 108 captures of 12 frames -> 3 windows of 4 frames each
+    row = rows[rows["variant"] == "window-kfold"].iloc[0]
+    assert row["inflation_pp"] == pytest.approx(100 * (windows["accuracy"].mean() - honest["accuracy"].mean()))
+    tuned = pd.read_parquet(tmp_path / "audit" / "tuned-on-test" / "scores.parquet")
+    best = tuned.groupby("classifier")["accuracy"].mean().max()
+    assert rows.loc[rows["variant"] == "tuned-on-test", "accuracy"].item() == pytest.approx(best)
+    assert not rows["within_tolerance"].any()  # the gestures are easy: every variant is far above a made-up 50 %
+    for f in ("audit.md", "audit.html", "audit.png", "audit.svg", "honest/protocol.yaml"):
+        assert (tmp_path / "audit" / f).is_file(), f
+    assert "capture-kfold % (Δ pp)" in (tmp_path / "audit" / "audit.md").read_text()

@@ -19,6 +19,7 @@ from .common import example, setup_logging
 
 # name -> (module, attribute, one-line help shown by `touchbench --help` without importing the module)
 _COMMANDS: dict[str, tuple[str, str, str]] = {
+    "audit": ("touchbench.cli.audit", "audit", "A protocol's methods under the honest scheme and each leaky variant."),
     "classifiers": ("touchbench.cli.classifiers", "classifiers", "Registered classifiers (defaults are the papers' settings)."),
     "compare": ("touchbench.cli.reports", "compare", "The paired test of method A against B, per fold or subject."),
     "data": ("touchbench.cli.data", "data", "Datasets: real readers, the cache, exports."),

@@ -275,7 +275,9 @@ def papers_list(profile: str, as_json: bool) -> None:
 @click.option("--report", "report_path", default=None, type=click.Path(dir_okay=False),
               help="Where to write the report [default: OUT/REPORT.md].")
 @click.option("--progress/--no-progress", default=None, help="Progress bars [default: on a terminal only].")
-def papers_reproduce(profile, out, only, jobs, report_path, progress) -> None:
+@click.option("--audit", is_flag=True, help="Also run the leakage audit of the protocols that declare one "
+                                           "(OUT/<profile>/<protocol>-audit/); the report shows it.")
+def papers_reproduce(profile, out, only, jobs, report_path, progress, audit) -> None:
     """Run every shipped paper protocol (touchbench/protocols/papers/) under PROFILE (resuming
     finished tasks) and write REPORT.md: for each table and figure, the
     paper's number, ours, the difference, real or synthetic data, and the
@@ -284,7 +286,7 @@ def papers_reproduce(profile, out, only, jobs, report_path, progress) -> None:
 
     failed: list[str] = []
     p = reproduce(profile, out, only=list(only) or None, jobs=jobs, progress=progress, report=report_path,
-                  echo=log.info, failed=failed)
+                  echo=log.info, failed=failed, audit=audit)
     click.echo(f"wrote {p}")
     if failed:
         log.warning(f"{len(failed)} protocol(s) with failed tasks: {', '.join(failed)}")

@@ -54,6 +54,7 @@ from ..classifiers import CLASSIFIERS
 from ..core.errors import TouchbenchError
 from ..core.paths import REPO_ROOT
 from ..core.yamlsafe import safe_load
+from ..engine.audit import run_audit
 from ..engine.runner import run_protocol
 from ..protocols.library import PAPERS_DIR
 from ..protocols.schema import (
@@ -64,6 +65,7 @@ from ..protocols.schema import (
     parse_protocol,
     resolve_dataset_ref,
 )
+from ..reports.audit import audit_markdown, write_audit
 from ..reports.leaderboard import write_text
 from ..results.manifest import git_revision
 from ..results.store import PREDICTED, TRUE, read_results_table
@@ -231,14 +233,16 @@ def _dataset_key(protocol) -> str:
 def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, only: list[str] | None = None,
               jobs: int = 1, progress: bool | None = None, report: str | Path | None = None,
               echo: Callable[[str], None] = print, protocols_dir: Path | None = None,
-              failed: list[str] | None = None) -> Path:
+              failed: list[str] | None = None, audit: bool = False) -> Path:
     """Run every paper protocol under ``profile`` and write the report; returns its path.
 
     Results go to ``out/<profile>/<protocol name>/`` (resumable: a rerun
     skips finished tasks). Each dataset is loaded once for the protocols that
     share it. A protocol that fails to run is reported, and the others go on;
     ``failed`` (when given) receives the name of each protocol that failed or
-    had a failed task.
+    had a failed task. ``audit``: a protocol with an ``audit:`` block is also
+    audited (:func:`touchbench.engine.audit.run_audit`) into
+    ``out/<profile>/<protocol name>-audit/``; REPORT.md shows every audit found there.
     """
     if profile not in PROFILES:
         raise TouchbenchError(f"unknown profile {profile!r} (known: {', '.join(PROFILES)})")
@@ -278,6 +282,12 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
                  f"{res.seconds:.0f} s")
             if res.n_failed and failed is not None:
                 failed.append(proto.name)
+            if audit and proto.audit is not None:
+                echo(f"{proto.name}: leakage audit -> {audit_dir(r.out)}")
+                a = run_audit(proto, audit_dir(r.out), jobs=jobs, k=proto.audit.k,
+                              window_seconds=proto.audit.window_seconds, tune=proto.audit.tune,
+                              variants=tuple(proto.audit.variants), progress=progress)
+                write_audit(a.table, audit_dir(r.out), a.published, a.notes, title=f"Leakage audit: {proto.name}")
         except TouchbenchError as e:
             r.error = str(e)
             echo(f"{proto.name}: FAILED: {e}")
@@ -478,6 +488,35 @@ class _Section:
     status: str = "ran"
 
 
+def audit_dir(out: Path) -> Path:
+    """Where ``papers reproduce --audit`` audits the protocol whose results are in ``out``."""
+    return out.parent / f"{out.name}-audit"
+
+
+def _audit_section(proto, out: Path) -> list[str]:
+    """The leakage audit of a protocol, as measured (its ``audit.json``), with the variants that
+    come within the paper's tolerance; or how to run it."""
+    if proto.audit is None:
+        return []
+    path = audit_dir(out) / "audit.json"
+    if not path.is_file():
+        return ["", f"_Leakage audit not run: `touchbench papers reproduce --audit` (or `touchbench audit "
+                    f"{proto.name} --out {_rel(audit_dir(out))}`)._", ""]
+    doc = json.loads(path.read_text())
+    table = pd.DataFrame(doc["rows"])
+    lines = ["", f"Leakage audit (`{_rel(audit_dir(out))}`): the same method under the honest scheme and each "
+                 "leaky variant, measured:", ""]
+    lines += audit_markdown(table, doc.get("published"), title="", notes=doc.get("notes")).splitlines()[2:]
+    for method, pub in (doc.get("published") or {}).items():
+        g = table[table["method"] == method]
+        hits = [v for v, a in zip(g["variant"], g["accuracy"]) if abs(100 * a - pub["value"]) <= pub["tolerance"]]
+        honest = g.loc[g["variant"] == "honest", "accuracy"]
+        lines.append(f"**{method}: the paper's {pub['value']:g} % (tolerance {pub['tolerance']:g}) is reproduced by "
+                     + (", ".join(f"`{v}`" for v in hits) if hits else "no variant")
+                     + (f"; the honest figure is {100 * float(honest.iloc[0]):.1f} %." if len(honest) else ".") + "**")
+    return lines + [""]
+
+
 def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
     """The report section of one protocol: the comparison with the paper."""
     sec = _Section([], [])
@@ -535,6 +574,7 @@ def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
                 flags.append(f"{e['cell']} (`{r.name}`): ours {e['observed']:.2f} %, paper "
                              f"{e['expected']:.2f} %, {e['difference']:+.2f} points (tolerance {e['tolerance']:g})")
         body.append("")
+    body += _audit_section(proto, r.out)
     others = _other_sections(proto, scores, preds, flags)
     for lines in others:
         body += lines + [""]

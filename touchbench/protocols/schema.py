@@ -245,12 +245,21 @@ class ClassifierSpec(_Model):
     name: str
     params: dict[str, Any] = Field(default_factory=dict)
     label: str | None = None
+    #: leaky variant: of the grid in ``params``, only the value with the best mean test accuracy
+    #: is reported (see :class:`MethodRef`)
+    tuned_on_test: bool = False
 
     @field_validator("name")
     @classmethod
     def _known(cls, v: str) -> str:
 
         return v if v in METHODS else _registry_check(CLASSIFIERS, v)
+
+    @model_validator(mode="after")
+    def _grid_to_tune(self) -> "ClassifierSpec":
+        if self.tuned_on_test and not any(_is_grid(v) for v in self.params.values()):
+            raise _ErrorAt(("tuned_on_test",), "tuned_on_test chooses among a grid: give a parameter {grid: [values]}")
+        return self
 
 
 def _coerce_str_list(v: Any) -> Any:
@@ -575,6 +584,17 @@ class EvaluationSpec(_Model):
         return v
 
 
+class AuditSpec(_Model):
+    """How ``touchbench audit`` and ``papers reproduce --audit`` audit this protocol: the leaky
+    variants to run, the folds of the k-fold ones, the window of window-kfold, the grid tuned on test."""
+
+    variants: list[Literal["honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test"]] = Field(
+        default_factory=lambda: ["honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test"])
+    k: int = Field(default=10, ge=2)
+    window_seconds: float = Field(default=2.0, gt=0)
+    tune: dict[str, list[Any]] = Field(default_factory=dict)
+
+
 #: fields an evaluation may set for itself (the protocol's are the default)
 EVALUATION_FIELDS = ("dataset", "scheme", "target", "repetitions", "design")
 
@@ -592,6 +612,8 @@ class Protocol(_Model):
     #: the evaluation this protocol is (set on the protocols :meth:`evaluation_protocols` gives)
     evaluation: str = ""
     design: DesignSpec | None = None
+    #: the leakage audit of this protocol's methods (see :mod:`touchbench.engine.audit`)
+    audit: AuditSpec | None = None
     features: list[list[FeatureRef]] | None = Field(default=None, min_length=1)
     classifiers: list[ClassifierSpec] | None = Field(default=None, min_length=1)
     methods: list[MethodRef] = Field(default_factory=list)
@@ -700,7 +722,7 @@ class Protocol(_Model):
 
     def content(self) -> dict[str, Any]:
         """The validated protocol as plain data (what determines results)."""
-        skip = {"description", "expected", "design"}
+        skip = {"description", "expected", "design", "audit"}
         if not self.evaluations:
             skip.add("evaluations")
         if not self.evaluation:
@@ -768,7 +790,8 @@ class Protocol(_Model):
             for p in expand_grid(spec.params):
                 base = spec.label or spec.name
                 label = _label(base, p, grid_keys) if grid_keys else base
-                out.append(ClassifierEntry(label=label, name=spec.name, params=p))
+                out.append(ClassifierEntry(label=label, name=spec.name, params=p, tuned_on_test=(
+                    f"{base} ({', '.join(grid_keys)} chosen on test)" if spec.tuned_on_test else "")))
         labels = [c.label for c in out]
         for c in out:
             if labels.count(c.label) > 1:

@@ -1,0 +1,87 @@
+"""``touchbench audit``: how much each leaky evaluation inflates a protocol's methods."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ..engine.backends import backend_for_run, backend_options
+from ..protocols.library import find_protocol
+from .common import echo_json, example, jobs_option, json_option, log
+
+
+def _tune(values: tuple[str, ...]) -> dict[str, list]:
+    from ..core.yamlsafe import safe_load
+
+    out = {}
+    for v in values:
+        name, sep, grid = v.partition("=")
+        if not sep or not name or not grid:
+            raise click.BadParameter(f"{v!r}: expected PARAM=V1,V2,... (e.g. L=10,20,30)", param_hint="--tune")
+        out[name] = [safe_load(x) for x in grid.split(",")]
+    return out
+
+
+@click.command("audit", epilog=example("touchbench audit cnn-table2-loso-haart --tune L=10,30,86 --jobs 2",
+                                       "touchbench audit my-protocol.yaml --variant honest --variant capture-kfold"))
+@click.argument("protocol")
+@click.option("--evaluation", default=None, metavar="NAME", help="The evaluation to audit, of a protocol with several.")
+@click.option("--variant", "variants", multiple=True,
+              type=click.Choice(["honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test"]),
+              help="Variants to run (repeatable) [default: every applicable one].")
+@click.option("--k", default=10, show_default=True, type=click.IntRange(min=2), help="Folds of the k-fold variants.")
+@click.option("--window-seconds", default=2.0, show_default=True, type=click.FloatRange(min=0, min_open=True),
+              help="Window length of window-kfold for methods without sub-windows of their own.")
+@click.option("--tune", multiple=True, metavar="PARAM=V1,V2,...",
+              help="The grid tuned-on-test chooses from by test accuracy (e.g. L=10,20,30).")
+@click.option("--out", "-o", type=click.Path(file_okay=False), default=None,
+              help="Results folder [default: results/audit/<protocol>].")
+@jobs_option
+@json_option
+@backend_options
+def audit(protocol: str, evaluation: str | None, variants: tuple[str, ...], k: int, window_seconds: float,
+          tune: tuple[str, ...], out: str | None, jobs: int, as_json: bool, backend: str, scheduler: str | None,
+          address: str | None) -> None:
+    """Run PROTOCOL's methods under the honest scheme (subjects kept apart, nothing chosen on test data)
+    and under each applicable leaky variant (k-fold over captures ignoring subjects, k-fold over windows
+    cut from the captures, the subject's id as a feature, a parameter chosen by its test accuracy), and
+    report the inflation of each: a table, audit.md, audit.html and a figure in the results folder. Every
+    variant is a protocol of its own in its folder; finished tasks are reused."""
+    from ..engine.audit import VARIANTS, run_audit
+    from ..engine.runner import plan_run
+    from ..protocols.schema import load_protocol
+    from ..reports.audit import audit_rows, write_audit
+
+    proto = load_protocol(find_protocol(protocol))
+    subs = proto.evaluation_protocols()
+    if evaluation is not None:
+        subs = [s for s in subs if s.evaluation == evaluation]
+        if not subs:
+            raise click.BadParameter(f"{evaluation!r} is not an evaluation of {proto.name}", param_hint="--evaluation")
+    sub = subs[0]
+    folder = Path(out) if out else Path("results") / "audit" / (proto.name + (f"-{sub.evaluation}" if sub.evaluation else ""))
+    with backend_for_run(backend, scheduler, address, plan_run(sub).cache_root, jobs) as jobs:
+        result = run_audit(sub, folder, jobs=jobs, k=k, window_seconds=window_seconds, tune=_tune(tune),
+                           variants=variants or VARIANTS)
+    files = write_audit(result.table, folder, result.published, result.notes,
+                        title=f"Leakage audit: {proto.name}" + (f" / {sub.evaluation}" if sub.evaluation else ""))
+    if as_json:
+        echo_json({"rows": result.table.to_dict(orient="records"), "published": result.published,
+                   "notes": result.notes, "files": [str(f) for f in files]})
+        return
+    header, cells = audit_rows(result.table, result.published)
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    t = Table(title=f"Leakage audit: {escape(proto.name)}")
+    for h in header:
+        t.add_column(escape(h))
+    for row in cells:
+        t.add_row(*(escape(x) for x in row))
+    console = Console(width=200)
+    console.print(t)
+    for n in result.notes:
+        log.info(f"note: {n}")
+    log.info(f"audit: {', '.join(str(f) for f in files)}")

@@ -1,0 +1,225 @@
+"""Leakage audit: a protocol's methods under the honest scheme and each applicable leaky variant.
+
+Published accuracies on touch data are often measured in ways that let the
+test data inform training. :func:`run_audit` evaluates the same methods,
+on the same data, under
+
+==================  ==========================================================
+``honest``          the protocol's own scheme when it keeps subjects apart and
+                    leaks nothing, else leave one subject out
+``capture-kfold``   k-fold over captures ignoring subjects (stratified): one
+                    person's captures on both sides of a fold
+``window-kfold``    the captures cut into windows, k-fold over the windows: a
+                    capture's windows on both sides (a method with sub-windows
+                    of its own, the CNN's ``L``, gets windows of
+                    ``floor(frames / L)`` frames and ``L = 1``: one window is
+                    what it saw of a capture; otherwise windows of
+                    ``window_seconds``)
+``subject-id``      capture-kfold with the subject's id appended to the
+                    features (methods with a feature matrix only)
+``tuned-on-test``   the honest scheme, a parameter grid (``tune``), only the
+                    value with the best mean test accuracy reported
+==================  ==========================================================
+
+Each variant is a protocol of its own (written beside its results as
+``protocol.yaml``), run by the engine into ``<out>/<variant>/``, so every
+number is reproducible and every result row carries its leakage. The
+inflation of a variant is its accuracy minus the honest one, in percentage
+points; with the protocol's ``expected`` results, each variant is compared
+with the published number and its tolerance.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+import yaml
+
+from ..core.atomic import atomic_write_bytes
+from ..core.errors import TouchbenchError
+from ..core.yamlsafe import safe_load
+from ..methods import METHODS
+from ..methods.base import takes_captures
+from ..protocols.schema import CAPTURES, Protocol, parse_protocol
+from .runner import plan_run, run_plan
+
+__all__ = ["VARIANTS", "Audit", "audit_protocols", "run_audit"]
+
+VARIANTS = ("honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test")
+
+
+@dataclass
+class Audit:
+    """The audit's table (one row per method and variant) and where each variant's results are."""
+
+    table: pd.DataFrame
+    folders: dict[str, Path]
+    notes: list[str] = field(default_factory=list)
+    published: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+
+def _base_data(protocol: Protocol) -> dict[str, Any]:
+    data = safe_load(protocol.text) if protocol.text else protocol.model_dump(mode="json")
+    data = copy.deepcopy(data or {})
+    for k in ("expected", "evaluations", "design", "repetitions", "audit"):
+        data.pop(k, None)
+    data["dataset"] = protocol.dataset.model_dump(mode="json", exclude_defaults=True)
+    data["target"] = protocol.target
+    return data
+
+
+def _entries_with_l(protocol: Protocol) -> bool:
+    return any("L" in clf.params for _, clf in protocol.entries())
+
+
+def _window_frames(protocol: Protocol, n_frames: int, frame_rate: float, window_seconds: float) -> tuple[int, str]:
+    ls = {int(clf.params["L"]) for _, clf in protocol.entries() if "L" in clf.params}
+    if len(ls) == 1:
+        L = ls.pop()
+        return max(1, n_frames // L), f"floor({n_frames} / L={L})"
+    return max(1, int(round(window_seconds * frame_rate))), f"{window_seconds:g} s"
+
+
+def _window_entries(data: dict[str, Any], frames: int) -> dict[str, Any]:
+    """The protocol's entries on windows: raw-window's frames set to the window, an L set to 1."""
+    for combo in data.get("features") or []:
+        for ref in (combo if isinstance(combo, list) else [combo]):
+            if isinstance(ref, dict) and ref.get("name") == CAPTURES:
+                ref.setdefault("params", {})["frames"] = frames
+    for spec in [*(data.get("classifiers") or []), *(data.get("methods") or [])]:
+        if isinstance(spec, dict) and "L" in (spec.get("params") or {}):
+            spec["params"]["L"] = 1
+    return data
+
+
+def _subject_id_entries(protocol: Protocol) -> list[dict[str, Any]]:
+    """The protocol's entries that have a feature matrix, as methods with the subject id appended."""
+    out = []
+    for combo, clf in protocol.entries():
+        if combo.names == [CAPTURES]:
+            if clf.name in METHODS:
+                out.append({"name": clf.name, "params": clf.params, "label": clf.label, "subject_id_feature": True})
+            continue  # an estimator on captures: nothing to append the id to
+        if takes_captures(clf.name):
+            continue
+        out.append({"features": [{"name": n, "params": p} for n, p in combo.sets], "estimator": clf.name,
+                    "params": clf.params, "label": clf.label, "subject_id_feature": True})
+    return out
+
+
+def _tuned_entries(data: dict[str, Any], tune: dict[str, list[Any]]) -> dict[str, Any] | None:
+    """The entries whose estimator takes a tuned parameter, given the grid and ``tuned_on_test``."""
+    hit = False
+    for spec in [*(data.get("classifiers") or []), *(data.get("methods") or [])]:
+        if not isinstance(spec, dict):
+            continue
+        params = spec.setdefault("params", {})
+        for k, values in tune.items():
+            if k in params:
+                params[k] = {"grid": list(values)}
+                spec["tuned_on_test"] = True
+                hit = True
+    return data if hit else None
+
+
+def audit_protocols(protocol: Protocol, *, k: int = 10, window_seconds: float = 2.0,
+                    tune: dict[str, list[Any]] | None = None, variants: tuple[str, ...] = VARIANTS
+                    ) -> tuple[dict[str, Protocol], list[str]]:
+    """The protocol of each applicable variant, and notes on the ones left out (and why)."""
+    notes: list[str] = []
+    own = protocol.splitter(0)
+    honest_scheme: dict[str, Any] = ({"name": protocol.scheme.name, **protocol.scheme.params}
+                                     if own.keeps_subjects_apart() and not own.leakage() and not own.sample_windows()
+                                     else {"name": "loso"})
+    if honest_scheme["name"] == "loso" and protocol.scheme.name != "loso":
+        notes.append(f"the protocol's scheme {protocol.scheme.name!r} does not keep subjects apart: the honest "
+                     "figure is leave one subject out")
+    base = _base_data(protocol)
+    name = protocol.name + (f"-{protocol.evaluation}" if protocol.evaluation else "")
+    plan = plan_run(protocol)  # the data, to size the windows
+    n_frames = int(plan.dataset.n_frames.min())
+    out: dict[str, Any] = {}
+    kfold = {"name": "kfold", "k": k}
+    if "honest" in variants:
+        out["honest"] = dict(base, scheme=honest_scheme)
+    if "capture-kfold" in variants:
+        out["capture-kfold"] = dict(base, scheme=kfold)
+    if "window-kfold" in variants:
+        frames, why = _window_frames(protocol, n_frames, plan.dataset.sensor.frame_rate, window_seconds)
+        out["window-kfold"] = _window_entries(dict(copy.deepcopy(base), scheme={**kfold, "name": "window-kfold",
+                                                                              "frames": frames}), frames)
+        notes.append(f"window-kfold: windows of {frames} frames ({why}), no overlap")
+    if "subject-id" in variants:
+        entries = _subject_id_entries(protocol)
+        if entries:
+            d = {k2: v for k2, v in base.items() if k2 not in ("features", "classifiers", "methods")}
+            out["subject-id"] = dict(d, scheme=kfold, methods=entries)
+        else:
+            notes.append("subject-id: no method with a feature matrix to append the subject id to")
+    if "tuned-on-test" in variants:
+        tuned = _tuned_entries(copy.deepcopy(base), tune or {}) if tune else None
+        if tuned is not None:
+            out["tuned-on-test"] = dict(tuned, scheme=honest_scheme)
+        else:
+            notes.append("tuned-on-test: give a parameter grid (--tune PARAM=V1,V2,...) that a method takes")
+    protos = {}
+    for variant, data in out.items():
+        data["name"] = f"{name}-{variant}"
+        text = yaml.safe_dump(data, sort_keys=False)
+        protos[variant] = parse_protocol(text, protocol.path)
+    return protos, notes
+
+
+def _accuracies(scores: pd.DataFrame) -> dict[str, float]:
+    """Mean accuracy over folds (repetitions averaged) per ``features / classifier``; an entry tuned on
+    test keeps its best grid value, a subject-id entry its label without the suffix."""
+    ok = scores[scores["status"] == "ok"]
+    out: dict[str, float] = {}
+    for (feats, clf, sel), g in ok.groupby(["features", "classifier", "selection"], sort=False):
+        acc = float(g.groupby("fold")["accuracy"].mean().mean())
+        key = f"{feats} / {sel.split(' (')[0] if sel else clf.removesuffix('+subject-id')}"
+        out[key] = max(out.get(key, -math.inf), acc)
+    return out
+
+
+def run_audit(protocol: Protocol, out: str | Path, *, jobs: int = 1, k: int = 10, window_seconds: float = 2.0,
+              tune: dict[str, list[Any]] | None = None, variants: tuple[str, ...] = VARIANTS,
+              progress: bool | None = None) -> Audit:
+    """Run every variant (finished tasks are reused) and tabulate accuracy and inflation per method."""
+    out = Path(out)
+    protos, notes = audit_protocols(protocol, k=k, window_seconds=window_seconds, tune=tune, variants=variants)
+    if "honest" not in protos:
+        raise TouchbenchError("the audit needs the honest variant to measure inflation against")
+    accs: dict[str, dict[str, float]] = {}
+    folders = {}
+    for variant, proto in protos.items():
+        folder = out / variant
+        folder.mkdir(parents=True, exist_ok=True)
+        atomic_write_bytes(folder / "protocol.yaml", proto.text.encode())
+        res = run_plan(plan_run(proto), folder, jobs=jobs, progress=progress)
+        accs[variant] = _accuracies(res.scores)
+        folders[variant] = folder
+    rows = []
+    for method, honest in accs["honest"].items():
+        for variant in protos:
+            acc = accs[variant].get(method, math.nan)
+            rows.append({"method": method, "variant": variant, "accuracy": acc,
+                         "inflation_pp": 100.0 * (acc - honest), "leaky": variant != "honest"})
+    published = {}
+    if protocol.expected is not None:
+        for r in protocol.expected.results:
+            tol = r.tolerance if r.tolerance is not None else protocol.expected.tolerance
+            published[f"{'+'.join(r.features)} / {r.classifier}"] = {"value": r.value, "tolerance": tol,
+                                                                     "source": r.source or protocol.expected.source}
+    table = pd.DataFrame(rows)
+    if published and len(table):
+        pub = table["method"].map(lambda m: published.get(m, {}).get("value", math.nan))
+        tol = table["method"].map(lambda m: published.get(m, {}).get("tolerance", math.nan))
+        table["published"] = pub
+        table["within_tolerance"] = (100.0 * table["accuracy"] - pub).abs() <= tol
+    return Audit(table=table, folders=folders, notes=notes, published=published)
