@@ -141,7 +141,7 @@ def test_one_jobs_default():
         for p in getattr(cmd, "params", []):
             if p.name == "jobs":
                 defaults[" ".join(path)] = p.default
-    assert set(defaults) == {"run", "demo", "papers reproduce"} and set(defaults.values()) == {JOBS_DEFAULT}
+    assert set(defaults) == {"run", "demo", "papers reproduce", "audit"} and set(defaults.values()) == {JOBS_DEFAULT}
 
 
 def test_every_help_shows_an_example():

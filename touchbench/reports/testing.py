@@ -92,7 +92,7 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
                 "feature_params": canonical_json(m["feature_params"]), "classifier": m["classifier"],
                 "classifier_name": m["classifier_name"], "classifier_params": canonical_json(m["classifier_params"]),
                 "seed": zlib.crc32(f"{m['features']}|{m['classifier']}|{fold_name}".encode()), "n_train": len(caps) - len(ids), "n_test": len(ids), "n_classes_train": len(classes),
-                "finished_at": finished_at, "notes": "",
+                "finished_at": finished_at, "notes": "", "leakage": "", "selection": "",
             }
             if fold in m["failed_folds"]:
                 base.update(status="failed", error="ValueError: fake", accuracy=np.nan, balanced_accuracy=np.nan,
@@ -114,7 +114,7 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
                 "early_frames": base["early_frames"], "features": m["features"], "classifier": m["classifier"],
                 "capture_id": ids, "subject": caps.loc[ids, "subject"].astype(str).to_numpy(),
                 "gesture": caps.loc[ids, "gesture"].astype(str).to_numpy(), TRUE: true, PREDICTED: pred.astype(str),
-                "correct": true == pred.astype(str),
+                "correct": true == pred.astype(str), "leakage": "",
             }))
     scores = pd.DataFrame(score_rows)
     preds = pd.concat(pred_frames, ignore_index=True) if pred_frames else pd.DataFrame()
