@@ -61,7 +61,7 @@ def validate(file: str, schema_only: bool, as_json: bool) -> None:
                             "captures": len(ds), "subjects": int(ds.meta["subject"].nunique()),
                             "classes": int(ds.meta[sub.target].nunique()), "folds": plan.n_folds,
                             "tasks": len(plan.tasks), "notes": plan.notes,
-                            "leakage": sorted({t.base_row.get("leakage", "") for t in plan.tasks} - {""})})
+                            "leakage": plan.leakages})
         if as_json:
             continue
         at = f"evaluation {sub.evaluation} ({sub.scheme.name}): " if sub.evaluation else ""

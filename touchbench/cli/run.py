@@ -135,8 +135,7 @@ def _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait
              f"scheme {proto.scheme.name}: {len(plan.tasks)} tasks -> {out_dir}")
     for n in plan.notes:
         log.info(f"note: {n}")
-    leak = sorted({t.base_row.get("leakage", "") for t in plan.tasks} - {""})
-    for reason in leak:
+    for reason in plan.leakages:
         log.warning(f"LEAKY evaluation ({reason}): its accuracy overstates accuracy on new people")
     try:
         with backend_for_run(backend, scheduler, address, plan.cache_root, jobs) as jobs:

@@ -73,10 +73,6 @@ def _base_data(protocol: Protocol) -> dict[str, Any]:
     return data
 
 
-def _entries_with_l(protocol: Protocol) -> bool:
-    return any("L" in clf.params for _, clf in protocol.entries())
-
-
 def _window_frames(protocol: Protocol, n_frames: int, frame_rate: float, window_seconds: float) -> tuple[int, str]:
     ls = {int(clf.params["L"]) for _, clf in protocol.entries() if "L" in clf.params}
     if len(ls) == 1:
@@ -141,8 +137,6 @@ def audit_protocols(protocol: Protocol, *, k: int = 10, window_seconds: float = 
                      "figure is leave one subject out")
     base = _base_data(protocol)
     name = protocol.name + (f"-{protocol.evaluation}" if protocol.evaluation else "")
-    plan = plan_run(protocol)  # the data, to size the windows
-    n_frames = int(plan.dataset.n_frames.min())
     out: dict[str, Any] = {}
     kfold = {"name": "kfold", "k": k}
     if "honest" in variants:
@@ -150,7 +144,8 @@ def audit_protocols(protocol: Protocol, *, k: int = 10, window_seconds: float = 
     if "capture-kfold" in variants:
         out["capture-kfold"] = dict(base, scheme=kfold)
     if "window-kfold" in variants:
-        frames, why = _window_frames(protocol, n_frames, plan.dataset.sensor.frame_rate, window_seconds)
+        ds = plan_run(protocol).dataset  # the data, to size the windows
+        frames, why = _window_frames(protocol, int(ds.n_frames.min()), ds.sensor.frame_rate, window_seconds)
         out["window-kfold"] = _window_entries(dict(copy.deepcopy(base), scheme={**kfold, "name": "window-kfold",
                                                                               "frames": frames}), frames)
         notes.append(f"window-kfold: windows of {frames} frames ({why}), no overlap")

@@ -116,6 +116,11 @@ class Plan:
         return dict(sorted(out.items()))
 
     @property
+    def leakages(self) -> list[str]:
+        """The distinct reasons the plan's tasks leak (empty when every task is honest)."""
+        return sorted({t.base_row.get("leakage", "") for t in self.tasks} - {""})
+
+    @property
     def task_ids(self) -> list[str]:
         return [t.task_id for t in self.tasks]
 
@@ -530,7 +535,7 @@ def _record_look(plan: Plan, ledger: Path, final: bool, force_final: bool, n_pen
 
 def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry_failed: bool,
                 progress: bool | None, worker_setup, fail_fast: bool = False, final: bool = False,
-                force_final: bool = False, ledger: Path | None = None) -> RunResult:
+                force_final: bool = False, ledger: Path) -> RunResult:
     t_start = time.perf_counter()
     started_at = now_iso()
     protocol = plan.protocol
@@ -550,10 +555,7 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
     pending = [t for t in plan.tasks
                if t.task_id not in finished or (retry_failed and finished[t.task_id] == "failed")]
     show = sys.stderr.isatty() if progress is None else progress
-    ledger = ledger if ledger is not None else default_ledger(protocol, out)
     design_captures = _design_captures(plan)  # a design naming an unknown column is refused before any task
-    test_set, final_notes = _record_look(plan, ledger, final, force_final, len(pending))
-    notes += final_notes
 
     if not pending and not final and _reports_current(store, plan, notes):
         scores = read_results_table(store.scores_path)
@@ -565,6 +567,8 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
                          seconds=time.perf_counter() - t_start, scores=scores, summary=summarize(scores, metrics=protocol.metrics),
                          expected=check_expected(protocol.expected, scores, preds), notes=notes)
 
+    test_set, final_notes = _record_look(plan, ledger, final, force_final, len(pending))  # before any task
+    notes += final_notes
     n_ran = 0
     stopped = False
     with _Progress(show) as prog:

@@ -262,6 +262,13 @@ class ClassifierSpec(_Model):
         return self
 
 
+def _coerce_str_lists(v: Any) -> Any:
+    """A mapping of column -> values (filters, design rows) with every value list coerced."""
+    if isinstance(v, dict):
+        return {k: _coerce_str_list(x) for k, x in v.items()}
+    return v
+
+
 def _coerce_str_list(v: Any) -> Any:
     if isinstance(v, (str, int, float, bool)):
         return [str(v)]
@@ -281,12 +288,7 @@ class DatasetSpec(_Model):
     exclude: dict[str, list[str]] = Field(default_factory=dict)
     options: dict[str, Any] = Field(default_factory=dict)
 
-    @field_validator("filters", "exclude", mode="before")
-    @classmethod
-    def _lists(cls, v: Any) -> Any:
-        if isinstance(v, dict):
-            return {k: _coerce_str_list(x) for k, x in v.items()}
-        return v
+    _lists = field_validator("filters", "exclude", mode="before")(_coerce_str_lists)
 
     @model_validator(mode="after")
     def _reads_only(self) -> "DatasetSpec":
@@ -537,12 +539,7 @@ class DesignSpec(_Model):
     def _strs(cls, v: Any) -> Any:
         return _coerce_str_list(v)
 
-    @field_validator("rows", mode="before")
-    @classmethod
-    def _lists(cls, v: Any) -> Any:
-        if isinstance(v, dict):
-            return {k: _coerce_str_list(x) for k, x in v.items()}
-        return v
+    _lists = field_validator("rows", mode="before")(_coerce_str_lists)
 
     @model_validator(mode="after")
     def _some_rows(self) -> "DesignSpec":

@@ -192,6 +192,13 @@ class _Params(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
+def _named(d: Any, key: str) -> Any:
+    """Parameters where ``key: NAME`` is short for ``key: {name: NAME}``."""
+    if isinstance(d, dict) and isinstance(d.get(key), str):
+        return {**d, key: {"name": d[key]}}
+    return d
+
+
 # ----------------------------------------------------------------- base
 class Splitter:
     """Base class: subclasses set ``Params`` and implement ``_split``.
@@ -865,9 +872,7 @@ class _CrossParams(_Params):
     @model_validator(mode="before")
     @classmethod
     def _test_ref(cls, d: Any) -> Any:
-        if isinstance(d, dict) and isinstance(d.get("test"), str):
-            d = {**d, "test": {"name": d["test"]}}
-        return d
+        return _named(d, "test")
 
     @model_validator(mode="after")
     def _check(self) -> "_CrossParams":
@@ -939,9 +944,7 @@ class _EarlyParams(_Params):
     @model_validator(mode="before")
     @classmethod
     def _base(cls, d: Any) -> Any:
-        if isinstance(d, dict) and isinstance(d.get("base"), str):
-            d = {**d, "base": {"name": d["base"]}}
-        return d
+        return _named(d, "base")
 
     @model_validator(mode="after")
     def _check(self) -> "_EarlyParams":

@@ -142,8 +142,12 @@ def subject_values(predictions: pd.DataFrame | None, method: str, fold_keys: Ite
         p = p[p["fold_key"].isin(set(fold_keys))]
     if p.empty:
         return pd.Series(dtype=np.float64)
-    p = p.sort_values("finished_at", kind="stable").drop_duplicates(["fold_key", "seed", "capture_id"], keep="last")
-    return p.groupby("subject")["correct"].mean().astype(np.float64)
+    return _latest(p).groupby("subject")["correct"].mean().astype(np.float64)
+
+
+def _latest(p: pd.DataFrame) -> pd.DataFrame:
+    """One prediction per fold, seed and capture: the last written (a rerun's replaces the earlier)."""
+    return p.sort_values("finished_at", kind="stable").drop_duplicates(["fold_key", "seed", "capture_id"], keep="last")
 
 
 def _pair(folds: pd.DataFrame, preds: pd.DataFrame | None, a: str, b: str) -> tuple[str, pd.DataFrame]:
@@ -174,7 +178,7 @@ def _held_out(preds: pd.DataFrame | None, mid: str, design: set[str]) -> tuple[f
     p = preds[(preds["method_id"] == mid) & ~preds["capture_id"].astype(str).isin(design)]
     if p.empty:
         return math.nan, 0
-    p = p.sort_values("finished_at", kind="stable").drop_duplicates(["fold_key", "seed", "capture_id"], keep="last")
+    p = _latest(p)
     per_fold = p.groupby(["fold_key", "seed"])["correct"].mean().groupby(level=0).mean()
     return float(per_fold.mean()), int(p["capture_id"].nunique())
 
