@@ -213,15 +213,26 @@ evaluations:
   - {{name: loso, scheme: loso}}
   - name: to-curve
     scheme: {{name: challenge, column: substrate, train: [flat, foam], test: [curve]}}
+  - name: to-s4
+    scheme: {{name: challenge, column: subject, train: [s1, s2, s3], test: [s4]}}
 """, name="multi")
     res = run_protocol(p, out=tmp_path / "results" / "multi", progress=False)
-    assert isinstance(res, list) and [r.out.name for r in res] == ["loso", "to-curve"]
+    assert isinstance(res, list) and [r.out.name for r in res] == ["loso", "to-curve", "to-s4"]
     assert len(res[0].scores) == 4 and len(res[1].scores) == 1
     preds = pd.read_parquet(res[1].out / "predictions.parquet")
     train_sub = pd.read_parquet(data)  # no curve capture is trained on: the test captures are all curve
     assert len(preds) == (train_sub["substrate"] == "curve").sum()
     lbs = build_leaderboards(load_results([tmp_path / "results" / "multi"]))
-    assert len(lbs) == 2
+    assert len(lbs) == 3
+    # a test set without design subjects: the usual figure is the held-out one, not marked
+    challenge = sorted((lb for lb in lbs if lb.scheme.startswith("challenge(")), key=lambda lb: bool(lb.rows["designed"].iloc[0]))
+    lb4, curve = challenge  # to-s4 tests no design subject; to-curve tests all four subjects
+    assert lb4.rows["n_held_out"].iloc[0] == res[2].scores["n_test"].iloc[0]
+    assert lb4.rows["held_out_accuracy"].iloc[0] == pytest.approx(res[2].scores["accuracy"].iloc[0])
+    assert any("already a held-out one" for n in lb4.notes) and any("marked †" for n in curve.notes)
+    for table, marked in ((lb4, False), (curve, True)):
+        h, c = display_rows(table)
+        assert c[0][h.index("accuracy % (±sd)")].endswith("†") is marked
     lb = next(lb for lb in lbs if lb.scheme == "loso")
     # held out: the folds of s3 and s4 only (mean of their accuracies)
     folds = res[0].scores.set_index("fold")["accuracy"]

@@ -172,14 +172,20 @@ def _read_manifest(d: Path) -> dict[str, Any]:
 
 
 def _protocol_scheme(manifest: dict[str, Any]) -> Any:
-
-    text = (manifest.get("protocol") or {}).get("text")
+    """The run's scheme entry: the protocol's, or for one of several evaluations that evaluation's
+    (so that two evaluations of one dataset under differently set schemes get their own tables)."""
+    proto = manifest.get("protocol") or {}
+    text = proto.get("text")
     if not text:
         return None
     try:
-        return (safe_load(text) or {}).get("scheme")
+        doc = safe_load(text) or {}
     except yaml.YAMLError:
         return None
+    for ev in doc.get("evaluations") or []:
+        if isinstance(ev, dict) and ev.get("name") == proto.get("evaluation") and "scheme" in ev:
+            return ev["scheme"]
+    return doc.get("scheme")
 
 
 _CROP_PREFIX = re.compile(r"^first[^/]*/")
