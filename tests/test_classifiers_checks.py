@@ -1,6 +1,7 @@
 """scikit-learn's estimator checks for every registered classifier but the
-CNN and the aeon peers (tests/test_classifiers_cnn.py and
-tests/test_classifiers_peers.py run them for those).
+deep ones and the aeon peers (tests/test_classifiers_cnn.py,
+tests/test_classifiers_inception.py and tests/test_classifiers_peers.py run
+them for those).
 
 The papers' defaults (1000 trees, 500 boosting iterations, 500 MLP epochs,
 L-BFGS to 1e-10) are slow, so each classifier is checked with the smaller
@@ -34,7 +35,8 @@ NOT_APPLICABLE = {
     "zhou-tree": dict.fromkeys(_EQUIV, "min_samples_split=10 (MATLAB's MinParentSize) counts rows, not weights"),
 }
 
-NAMES = [n for n in CLASSIFIERS.names() if n != "cnn" and CLASSIFIERS.entry(n).tags.get("extra") != "peers"]
+NAMES = [n for n in CLASSIFIERS.names()
+         if not {"deep", "peers"} & set((CLASSIFIERS.entry(n).tags.get("extra") or "").split(","))]
 
 
 def _expected(est):

@@ -1,4 +1,4 @@
-"""The aeon peers: MiniRocket and MultiRocket on the cell series of raw frames.
+"""The aeon peers: MiniRocket, MultiRocket, MultiRocket-Hydra, QUANT and RDST on the cell series of raw frames.
 
 The cell-series layout is checked on a capture whose every value names its
 frame and cell; the peers are checked against aeon's own classifiers called
@@ -26,9 +26,6 @@ from sklearn.utils.estimator_checks import parametrize_with_checks  # noqa: E402
 
 from touchbench.classifiers import make_classifier  # noqa: E402
 from touchbench.classifiers.peers import MIN_TIMEPOINTS, frames_to_series  # noqa: E402
-
-SMALL = dict(grid=(1, 1), n_kernels=84)
-
 
 def _labelled_capture(frames: int, h: int, w: int) -> np.ndarray:
     """value = 1000 * frame + cell (row-major), flattened frame-major as raw-window does."""
@@ -72,23 +69,61 @@ def _toy(n_per_class=12, frames=40, seed=0):
     return np.array(X), np.array(y)
 
 
-@pytest.mark.parametrize("name,aeon_class", [("minirocket", "MiniRocketClassifier"), ("multirocket", "MultiRocketClassifier")])
-def test_same_predictions_as_aeon_called_directly(name, aeon_class):
-    from aeon.classification import convolution_based
+#: peer -> (aeon module, aeon class, small settings given to both)
+AEON = {
+    "minirocket": ("convolution_based", "MiniRocketClassifier", dict(n_kernels=84, n_jobs=1)),
+    "multirocket": ("convolution_based", "MultiRocketClassifier", dict(n_kernels=84, n_jobs=1)),
+    "multirocket-hydra": ("convolution_based", "MultiRocketHydraClassifier", dict(n_groups=4, n_jobs=1)),
+    "quant": ("interval_based", "QUANTClassifier", dict(interval_depth=3)),
+    "rdst": ("shapelet_based", "RDSTClassifier", dict(max_shapelets=32, n_jobs=1)),
+}
 
+
+@pytest.mark.parametrize("name", list(AEON))
+def test_same_predictions_as_aeon_called_directly(name):
+    import importlib
+
+    module, aeon_class, small = AEON[name]
     X, y = _toy()
     Xt, yt = _toy(seed=1)
-    est = make_classifier(name, random_state=7, grid=(2, 2), n_kernels=84).fit(X, y)
+    est = make_classifier(name, random_state=7, grid=(2, 2), **small).fit(X, y)
     # the same series built by hand: channel c = cell (c // 2, c % 2) over the frames
     def series(A):
         caps = A.reshape(len(A), -1, 2, 2)
         return np.stack([np.stack([caps[i, :, c // 2, c % 2] for c in range(4)]) for i in range(len(A))])
-    ref = getattr(convolution_based, aeon_class)(n_kernels=84, n_jobs=1, random_state=7).fit(series(X), y)
+    cls = getattr(importlib.import_module(f"aeon.classification.{module}"), aeon_class)
+    ref = cls(**small, random_state=7).fit(series(X), y)
     assert est.predict(Xt).tolist() == ref.predict(series(Xt)).tolist()
+    assert np.allclose(est.predict_proba(Xt), ref.predict_proba(series(Xt)))
     assert np.mean(est.predict(Xt) == yt) >= 0.9  # slow vs fast is easy
     P = est.predict_proba(Xt)
     assert P.shape == (len(Xt), 2) and np.allclose(P.sum(axis=1), 1.0)
     assert list(est.classes_) == ["fast", "slow"]
+
+
+@pytest.mark.parametrize("name", ["quant", "multirocket-hydra"])
+def test_same_seed_same_predictions_across_fits(name):
+    """The PyTorch-backed peers are seeded: two fits with one seed predict the same probabilities."""
+    X, y = _toy()
+    Xt, _ = _toy(seed=2)
+    small = AEON[name][2]
+    a = make_classifier(name, random_state=3, grid=(2, 2), **small).fit(X, y).predict_proba(Xt)
+    b = make_classifier(name, random_state=3, grid=(2, 2), **small).fit(X, y).predict_proba(Xt)
+    assert np.array_equal(a, b)
+
+
+def test_multirocket_hydra_pads_to_ten_frames():
+    """Nine frames are too few for MultiRocket-Hydra's difference series (aeon fails on them); ten pass."""
+    from touchbench.classifiers.peers import MultiRocketHydraPeer
+
+    X = np.arange(2 * 9 * 4, dtype=np.float64).reshape(2, 36)
+    est = MultiRocketHydraPeer(grid=(2, 2))
+    est.grid_ = (2, 2)
+    assert est._series(X).shape == (2, 4, MIN_TIMEPOINTS + 1)
+    rng = np.random.default_rng(0)
+    Xs, ys = rng.normal(size=(10, 9 * 4)), np.array(list("ab") * 5)
+    pred = make_classifier("multirocket-hydra", random_state=0, grid=(2, 2), n_groups=4).fit(Xs, ys).predict(Xs)
+    assert set(pred.tolist()) <= {"a", "b"}
 
 
 def test_one_class_training_predicts_that_class():
@@ -98,7 +133,7 @@ def test_one_class_training_predicts_that_class():
     assert est.predict_proba(X[:2]).tolist() == [[1.0], [1.0]]
 
 
-@parametrize_with_checks([make_classifier(n, random_state=0, **SMALL) for n in ("minirocket", "multirocket")])
+@parametrize_with_checks([make_classifier(n, random_state=0, grid=(1, 1), **AEON[n][2]) for n in AEON])
 def test_sklearn_estimator_checks(estimator, check):
     check(estimator)
 
@@ -128,6 +163,17 @@ def test_without_aeon_the_peer_says_how_to_install():
     assert "TouchbenchError" in proc.stdout and "pip install 'touchbench[peers]'" in proc.stdout
 
 
+_NO_TORCH = _NO_AEON.replace('name == "aeon" or name.startswith("aeon.")', 'name == "torch" or name.startswith("torch.")').replace(
+    '"minirocket"', '"quant"')
+
+
+def test_a_peer_aeon_runs_in_pytorch_says_so_without_it():
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    proc = subprocess.run([sys.executable, "-c", _NO_TORCH], capture_output=True, text=True, env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert "needs torch" in proc.stdout and "pip install 'touchbench[peers,deep]'" in proc.stdout
+
+
 def test_listing_does_not_import_aeon_and_marks_the_extra():
     code = ("import sys, json; from click.testing import CliRunner; from touchbench.cli.classifiers import classifiers; "
             "rows = json.loads(CliRunner().invoke(classifiers, ['list', '--json']).output); "
@@ -137,4 +183,5 @@ def test_listing_does_not_import_aeon_and_marks_the_extra():
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout.strip().splitlines()[-1])
     assert out["aeon"] is False
-    assert out["extra"]["minirocket"] == out["extra"]["multirocket"] == "peers"
+    assert out["extra"]["minirocket"] == out["extra"]["multirocket"] == out["extra"]["rdst"] == "peers"
+    assert out["extra"]["quant"] == out["extra"]["multirocket-hydra"] == "peers,deep"

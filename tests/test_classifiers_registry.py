@@ -20,7 +20,8 @@ from touchbench.core.errors import TouchbenchError, UnknownNameError
 from touchbench.datasets.haart import HAART_SENSOR
 
 EXPECTED = snapshot()["classifiers"]  # tests/snapshots/registry-names.json (make snapshots)
-EXTRAS = {"cnn": "deep", "minirocket": "peers", "multirocket": "peers", "xgboost": "xgboost"}
+EXTRAS = {"cnn": "deep", "inception-time": "deep", "minirocket": "peers", "multirocket": "peers", "multirocket-hydra": "peers,deep", "quant": "peers,deep",
+          "rdst": "peers", "xgboost": "xgboost"}
 
 
 def test_registry_holds_exactly_the_documented_names():

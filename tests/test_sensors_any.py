@@ -102,7 +102,7 @@ REFUSED: dict[tuple[str, str], str] = {
     ("cnn", "32x32"): r"L=30 windows need captures of at least 30 frames.*the shortest has 20",
 }
 #: the classifiers that read raw frames: they record the grid (and rate) they used
-RAW_FRAME = {"minirocket", "multirocket", "cnn"}
+RAW_FRAME = {"minirocket", "multirocket", "multirocket-hydra", "quant", "rdst", "cnn", "inception-time"}
 RATE_SETS = {"touch-rhythm", "cell-rhythm", "contact-motion", "touch-windows"}
 
 

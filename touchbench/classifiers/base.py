@@ -5,7 +5,8 @@ Each entry is a factory ``f(random_state=None, **params) -> estimator``
 needs the sensor: the run engine passes the dataset's)
 registered with ``description`` (one line), ``source`` (paper and section),
 ``defaults`` (the paper's settings, as a dict), ``extra`` (the optional
-install it needs: None, ``"deep"``, ``"peers"`` or ``"xgboost"``) and, where the defaults
+install it needs: None, ``"deep"``, ``"peers"``, ``"xgboost"``, or several
+joined by commas, ``"peers,deep"``) and, where the defaults
 are slow, ``cheap_params`` (smaller settings that run the same code paths in
 seconds: the tests' estimator checks use them). The estimators are plain
 scikit-learn estimators (or follow that API), so users can use them in their

@@ -96,8 +96,6 @@ a given seed and ``n_jobs`` give bit-identical weights and predictions.
 
 from __future__ import annotations
 
-import copy
-import os
 from typing import Any
 
 import numpy as np
@@ -117,18 +115,9 @@ from ._util import (
     torch_available,
 )
 from .base import CLASSIFIERS
+from .torch_fit import INSTALL_HINT, Threads, import_torch, softmax_batches, train, validation_split
 
-INSTALL_HINT = "pip install 'touchbench[deep]'  (or: pip install torch)"
 SOURCE = "Al-mashhadani et al. 2021, section 2.3, Table 1, Eq. 3"
-
-
-def import_torch():
-    """Import PyTorch or raise a TouchbenchError with the install command."""
-    try:
-        import torch
-    except ImportError as e:
-        raise TouchbenchError(f"the 'cnn' classifier needs PyTorch, which is not installed: {INSTALL_HINT}") from e
-    return torch
 
 
 def build_network(torch, in_channels: int, grid: tuple[int, int], n_classes: int,
@@ -163,27 +152,6 @@ def _window_indices(spec: Any, n_windows: int, what: str) -> np.ndarray:
     if idx.min() < 0 or idx.max() >= n_windows:
         raise ValueError(f"{what}: window index out of range 0..{n_windows - 1}: {spec!r}")
     return idx.astype(np.int64)
-
-
-class _Threads:
-    """Set torch's thread count and deterministic mode for a block, then restore."""
-
-    def __init__(self, torch, n_jobs):
-        self.torch = torch
-        self.n = (os.cpu_count() or 1) if n_jobs in (None, -1) else max(int(n_jobs), 1)
-
-    def __enter__(self):
-        t = self.torch
-        self.prev_threads = t.get_num_threads()
-        self.prev_det = t.are_deterministic_algorithms_enabled()
-        t.set_num_threads(self.n)
-        t.use_deterministic_algorithms(True)
-        return self
-
-    def __exit__(self, *exc):
-        self.torch.set_num_threads(self.prev_threads)
-        self.torch.use_deterministic_algorithms(self.prev_det)
-        return False
 
 
 class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
@@ -277,7 +245,7 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
     def fit(self, X, y, groups=None):
         """Fit on captures ``X`` with labels ``y``; ``groups`` (e.g. subjects),
         if given, makes the early-stopping split hold out whole groups."""
-        torch = import_torch()
+        torch = import_torch("cnn")
         grid = self._check_params()
         if is_captures(X):  # the captures as recorded: the stated length, else the longest training capture
             length = int(self.length) if self.length is not None else max(len(c) for c in X)
@@ -296,8 +264,7 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
         rs = check_random_state(self.random_state)
         seed = int(rs.randint(MAX_SEED))
         rng = np.random.default_rng(seed)
-        self.validation_groups_ = None
-        fit_rows, val_rows = self._validation_split(yi, groups, rng)
+        fit_rows, val_rows, self.validation_groups_ = validation_split(yi, groups, rng, self.validation_fraction)
         self.validation_size_ = len(val_rows)
 
         Wtr = self._windows(X[fit_rows], train_idx)  # (n, w, F, H, W)
@@ -315,90 +282,30 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
             yva = np.repeat(yi[val_rows], len(train_idx))
             Wva = (Wva.reshape(-1, *Wva.shape[2:]) - np.float32(self.scale_mean_)) / np.float32(self.scale_std_)
 
-        with _Threads(torch, self.n_jobs), torch.random.fork_rng(devices=[]):
+        with Threads(torch, self.n_jobs), torch.random.fork_rng(devices=[]):
             torch.manual_seed(seed)
             dev = torch.device(self.device)
             net = build_network(torch, self.frames_per_window_, grid, len(self.classes_),
                                 tuple(self.channels), int(self.hidden_units)).to(dev)
             opt = torch.optim.Adam(net.parameters(), lr=self.learning_rate, weight_decay=self.weight_decay)
-            loss_fn = torch.nn.CrossEntropyLoss()
             xt = torch.from_numpy(np.ascontiguousarray(Wtr)).to(dev)
             yt = torch.from_numpy(ytr.astype(np.int64)).to(dev)
+            xv = yv = None
             if len(val_rows):
                 xv = torch.from_numpy(np.ascontiguousarray(Wva)).to(dev)
                 yv = torch.from_numpy(yva.astype(np.int64)).to(dev)
-            best_loss, best_state, best_epoch, stale = np.inf, None, 0, 0
-            self.history_ = []
-            bs = max(int(self.batch_size), 1)
-            for epoch in range(1, int(self.max_epochs) + 1):
-                net.train()
-                perm = torch.from_numpy(rng.permutation(len(yt))).to(dev)
-                total = 0.0
-                for start in range(0, len(perm), bs):
-                    b = perm[start:start + bs]
-                    opt.zero_grad()
-                    loss = loss_fn(net(xt[b]), yt[b])
-                    loss.backward()
-                    opt.step()
-                    total += float(loss.detach()) * len(b)
-                rec = {"epoch": epoch, "train_loss": total / max(len(yt), 1)}
-                if len(val_rows):
-                    net.eval()
-                    with torch.no_grad():
-                        vl = float(loss_fn(net(xv), yv))
-                    rec["val_loss"] = vl
-                    if vl < best_loss:
-                        best_loss, best_epoch, stale = vl, epoch, 0
-                        best_state = copy.deepcopy(net.state_dict())
-                    else:
-                        stale += 1
-                self.history_.append(rec)
-                if self.verbose:
-                    print(rec, flush=True)
-                if len(val_rows) and stale >= int(self.patience):
-                    break
-            if best_state is not None:
-                net.load_state_dict(best_state)
-            else:
-                best_epoch = len(self.history_)
+            self.history_, best_epoch = train(torch, net, opt, xt, yt, rng, max_epochs=int(self.max_epochs),
+                                              batch_size=int(self.batch_size), xv=xv, yv=yv,
+                                              patience=int(self.patience), verbose=self.verbose)
         net.eval()
         self.net_ = net.to("cpu") if self.device != "cpu" else net
         self.best_epoch_ = best_epoch
         self.n_epochs_ = len(self.history_)
         return self
 
-    def _validation_split(self, yi, groups, rng):
-        n = len(yi)
-        rows = np.arange(n)
-        frac = self.validation_fraction or 0.0
-        if frac <= 0 or n < 4:
-            return rows, rows[:0]
-        if groups is not None:
-            g = np.asarray(groups)
-            if len(g) != n:
-                raise ValueError(f"groups has {len(g)} entries for {n} captures")
-            uniq = np.unique(g)
-            if len(uniq) >= 2:
-                n_val = min(max(1, int(round(frac * len(uniq)))), len(uniq) - 1)
-                val_groups = rng.permutation(uniq)[:n_val]
-                self.validation_groups_ = sorted(val_groups.tolist())
-                val = np.isin(g, val_groups)
-                return rows[~val], rows[val]
-        # stratified: the same share of every class, at least one training capture per class
-        val = []
-        for c in np.unique(yi):
-            members = rng.permutation(rows[yi == c])
-            k = int(round(frac * len(members)))
-            if len(members) - k >= 1 and k >= 1:
-                val.extend(members[:k].tolist())
-        if not val:
-            return rows, rows[:0]
-        val = np.sort(np.asarray(val))
-        return np.setdiff1d(rows, val), val
-
     # -- predict --------------------------------------------------------------
     def _window_proba(self, X):
-        torch = import_torch()
+        torch = import_torch("cnn")
         check_is_fitted(self)
         if is_captures(X):
             X = captures_to_rows(X, self.grid_, self.n_frames_total_, "cnn")
@@ -407,12 +314,8 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
         Wx = self._windows(X, idx)
         n, w = Wx.shape[:2]
         Wx = (Wx.reshape(n * w, *Wx.shape[2:]) - np.float32(self.scale_mean_)) / np.float32(self.scale_std_)
-        out = []
-        with _Threads(torch, self.n_jobs), torch.no_grad():
-            xt = torch.from_numpy(np.ascontiguousarray(Wx))
-            for start in range(0, len(xt), 1024):
-                out.append(torch.softmax(self.net_(xt[start:start + 1024]), dim=1).double().numpy())
-        p = np.concatenate(out) if out else np.zeros((0, len(self.classes_)))
+        with Threads(torch, self.n_jobs):
+            p = softmax_batches(torch, self.net_, torch.from_numpy(np.ascontiguousarray(Wx)), len(self.classes_))
         return p.reshape(n, w, len(self.classes_))
 
     def predict_proba(self, X):

@@ -1,12 +1,29 @@
 """Peers: off-the-shelf time-series classifiers from aeon, run on the cell series.
 
-MiniRocket (Dempster, Schmidt and Webb, KDD 2021) and MultiRocket (Tan,
-Dempster, Bergmeir and Webb, DMKD 2022) as aeon ships them
-(``aeon.classification.convolution_based``), defaults unchanged: 10,000
-kernels, a ridge classifier with cross-validated regularisation (aeon's
-default estimator), one thread. They are the methods touchbench's own must
-beat: an off-the-shelf MiniRocket on HAART's 64 cell series is
-about 71 % on the challenge test subjects.
+As aeon ships them, defaults unchanged (one thread where they take one):
+
+- MiniRocket (Dempster, Schmidt and Webb, KDD 2021) and MultiRocket (Tan,
+  Dempster, Bergmeir and Webb, DMKD 2022),
+  ``aeon.classification.convolution_based``: 10,000 kernels, a ridge
+  classifier with cross-validated regularisation (aeon's default
+  estimator). An off-the-shelf MiniRocket on HAART's 64 cell series is
+  about 71 % on the challenge test subjects.
+- MultiRocket-Hydra (Dempster, Schmidt and Webb, "Hydra: competing
+  convolutional kernels for fast and accurate time series
+  classification", DMKD 2023, section 5: Hydra's features concatenated with
+  MultiRocket's, a ridge classifier): 64 groups of 8 kernels. aeon runs
+  Hydra in PyTorch, so it needs the ``deep`` extra too.
+- QUANT (Dempster, Schmidt and Webb, "QUANT: a minimalist interval method
+  for time series classification", DMKD 2024): quantiles over dyadic
+  intervals (depth 6, a quarter of each interval's values) of the series,
+  its first and second differences and its Fourier magnitudes, fed to
+  extra-trees (aeon's default: 200 trees, ``max_features=0.1``,
+  entropy). aeon computes the quantiles in PyTorch (``deep`` extra).
+- RDST (Guillaume, Vrain and Elloumi, "Random dilated shapelet
+  transform", ICPRAM 2022): 10,000 random dilated shapelets, a ridge
+  classifier, ``aeon.classification.shapelet_based``.
+
+These are the methods touchbench's own must beat.
 
 Input: the captures as recorded (a list of ``(T, H, W)`` arrays in their
 native dtype: the run engine hands a peer the captures, see
@@ -45,6 +62,8 @@ imported when a peer is fitted, never when the registry is listed.
 
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.multiclass import check_classification_targets
@@ -63,6 +82,7 @@ from ._util import (
 from .base import CLASSIFIERS
 
 INSTALL_HINT = "pip install 'touchbench[peers]'  (or: pip install aeon)"
+INSTALL_HINT_TORCH = "pip install 'touchbench[peers,deep]'  (or: pip install aeon torch)"
 SOURCE_MINI = "Dempster et al. 2021 (MiniRocket), aeon 1.x MiniRocketClassifier, defaults"
 SOURCE_MULTI = "Tan et al. 2022 (MultiRocket), aeon 1.x MultiRocketClassifier, defaults"
 
@@ -75,42 +95,46 @@ def aeon_available() -> bool:
 MIN_TIMEPOINTS = 9
 
 
-def frames_to_series(X: np.ndarray, grid: tuple[int, int]) -> np.ndarray:
-    """Flattened frames ``(n, F * H * W)`` -> cell series ``(n, H * W, max(F, 9))`` float64, C-contiguous.
+def frames_to_series(X: np.ndarray, grid: tuple[int, int], minimum: int = MIN_TIMEPOINTS) -> np.ndarray:
+    """Flattened frames ``(n, F * H * W)`` -> cell series ``(n, H * W, max(F, minimum))`` float64, C-contiguous.
 
-    Fewer than ``MIN_TIMEPOINTS`` frames are padded by repeating the last one.
+    Fewer than ``minimum`` frames are padded by repeating the last one.
     """
     f = frames_in_row(X.shape[1], grid)
     cells = int(grid[0]) * int(grid[1])
     S = X.reshape(X.shape[0], f, cells).transpose(0, 2, 1)
-    if f < MIN_TIMEPOINTS:
-        S = np.concatenate([S, np.repeat(S[:, :, -1:], MIN_TIMEPOINTS - f, axis=2)], axis=2)
+    if f < minimum:
+        S = np.concatenate([S, np.repeat(S[:, :, -1:], minimum - f, axis=2)], axis=2)
     return np.ascontiguousarray(S, dtype=np.float64)
 
 
-class _RocketPeer(ClassifierMixin, BaseEstimator):
-    """An aeon Rocket-family classifier over the cells of raw frames."""
+class _AeonPeer(ClassifierMixin, BaseEstimator):
+    """An aeon classifier over the cells of raw frames.
 
+    A subclass names aeon's module and class, the parameters it forwards
+    (``_aeon_params``, each also one of its own), the packages aeon needs
+    for it (``_requires``) and the shortest series it takes.
+    """
+
+    _aeon_module = "aeon.classification.convolution_based"
     _aeon_class = ""
-
-    def __init__(self, sensor=None, grid=None, length=None, n_kernels=10000, max_dilations_per_kernel=32, n_jobs=1,
-                 random_state=None):
-        self.sensor = sensor
-        self.grid = grid
-        self.length = length
-        self.n_kernels = n_kernels
-        self.max_dilations_per_kernel = max_dilations_per_kernel
-        self.n_jobs = n_jobs
-        self.random_state = random_state
+    _aeon_params: tuple[str, ...] = ()
+    _requires: tuple[str, ...] = ("aeon",)
+    _min_timepoints = MIN_TIMEPOINTS
 
     def _make(self, seed: int):
-        if not aeon_available():
-            raise TouchbenchError(f"the {type(self).__name__} peer needs aeon, which is not installed: {INSTALL_HINT}")
-        from aeon.classification import convolution_based
+        missing = [m for m in self._requires if not importable(m)]
+        if missing:
+            hint = INSTALL_HINT if missing == ["aeon"] else INSTALL_HINT_TORCH
+            raise TouchbenchError(f"the {type(self).__name__} peer needs {' and '.join(missing)}, "
+                                  f"which {'is' if len(missing) == 1 else 'are'} not installed: {hint}")
+        cls = getattr(importlib.import_module(self._aeon_module), self._aeon_class)
+        params = {p: getattr(self, p) for p in self._aeon_params}
+        return cls(**{k: (int(v) if isinstance(v, (int, np.integer)) and not isinstance(v, bool) else v)
+                      for k, v in params.items()}, random_state=seed)
 
-        cls = getattr(convolution_based, self._aeon_class)
-        return cls(n_kernels=int(self.n_kernels), max_dilations_per_kernel=int(self.max_dilations_per_kernel),
-                   n_jobs=int(self.n_jobs), random_state=seed)
+    def _series(self, X):
+        return frames_to_series(X, self.grid_, self._min_timepoints)
 
     def check_sensor(self, sensor, min_frames=None):
         """Why this peer cannot serve ``sensor`` (a ``grid`` that is not its own), or None."""
@@ -139,7 +163,7 @@ class _RocketPeer(ClassifierMixin, BaseEstimator):
             self.model_ = None  # one class: nothing to learn
             return self
         self.model_ = self._make(seed_int(self.random_state))
-        self.model_.fit(frames_to_series(X, self.grid_), y)
+        self.model_.fit(self._series(X), y)
         return self
 
     def predict(self, X):
@@ -147,17 +171,31 @@ class _RocketPeer(ClassifierMixin, BaseEstimator):
         X = validate_data(self, self._rows(X), dtype=np.float64, reset=False)
         if self.model_ is None:
             return np.repeat(self.classes_, X.shape[0])
-        return np.asarray(self.model_.predict(frames_to_series(X, self.grid_)))
+        return np.asarray(self.model_.predict(self._series(X)))
 
     def predict_proba(self, X):
-        """aeon's probabilities (for the ridge estimator: one-hot of the prediction)."""
+        """aeon's probabilities (for a ridge estimator: one-hot of the prediction)."""
         check_is_fitted(self)
         X = validate_data(self, self._rows(X), dtype=np.float64, reset=False)
         if self.model_ is None:
             return np.ones((X.shape[0], 1))
-        P = np.asarray(self.model_.predict_proba(frames_to_series(X, self.grid_)), dtype=np.float64)
+        P = np.asarray(self.model_.predict_proba(self._series(X)), dtype=np.float64)
         order = [list(self.model_.classes_).index(c) for c in self.classes_]
         return P[:, order]
+
+
+class _RocketPeer(_AeonPeer):
+    _aeon_params = ("n_kernels", "max_dilations_per_kernel", "n_jobs")
+
+    def __init__(self, sensor=None, grid=None, length=None, n_kernels=10000, max_dilations_per_kernel=32, n_jobs=1,
+                 random_state=None):
+        self.sensor = sensor
+        self.grid = grid
+        self.length = length
+        self.n_kernels = n_kernels
+        self.max_dilations_per_kernel = max_dilations_per_kernel
+        self.n_jobs = n_jobs
+        self.random_state = random_state
 
 
 class MiniRocketPeer(_RocketPeer):
@@ -170,6 +208,57 @@ class MultiRocketPeer(_RocketPeer):
     """aeon's ``MultiRocketClassifier`` on the H x W cell series."""
 
     _aeon_class = "MultiRocketClassifier"
+
+
+class MultiRocketHydraPeer(_AeonPeer):
+    """aeon's ``MultiRocketHydraClassifier`` on the H x W cell series (aeon runs Hydra in PyTorch)."""
+
+    _aeon_class = "MultiRocketHydraClassifier"
+    _aeon_params = ("n_kernels", "n_groups", "n_jobs")
+    _requires = ("aeon", "torch")
+    _min_timepoints = MIN_TIMEPOINTS + 1  # its MultiRocket half also convolves the first differences
+
+    def __init__(self, sensor=None, grid=None, length=None, n_kernels=8, n_groups=64, n_jobs=1, random_state=None):
+        self.sensor = sensor
+        self.grid = grid
+        self.length = length
+        self.n_kernels = n_kernels
+        self.n_groups = n_groups
+        self.n_jobs = n_jobs
+        self.random_state = random_state
+
+
+class QuantPeer(_AeonPeer):
+    """aeon's ``QUANTClassifier`` on the H x W cell series (aeon computes the quantiles in PyTorch)."""
+
+    _aeon_module = "aeon.classification.interval_based"
+    _aeon_class = "QUANTClassifier"
+    _aeon_params = ("interval_depth", "quantile_divisor")
+    _requires = ("aeon", "torch")
+
+    def __init__(self, sensor=None, grid=None, length=None, interval_depth=6, quantile_divisor=4, random_state=None):
+        self.sensor = sensor
+        self.grid = grid
+        self.length = length
+        self.interval_depth = interval_depth
+        self.quantile_divisor = quantile_divisor
+        self.random_state = random_state
+
+
+class RDSTPeer(_AeonPeer):
+    """aeon's ``RDSTClassifier`` (random dilated shapelets + ridge) on the H x W cell series."""
+
+    _aeon_module = "aeon.classification.shapelet_based"
+    _aeon_class = "RDSTClassifier"
+    _aeon_params = ("max_shapelets", "n_jobs")
+
+    def __init__(self, sensor=None, grid=None, length=None, max_shapelets=10000, n_jobs=1, random_state=None):
+        self.sensor = sensor
+        self.grid = grid
+        self.length = length
+        self.max_shapelets = max_shapelets
+        self.n_jobs = n_jobs
+        self.random_state = random_state
 
 
 DEFAULTS = {"length": None, "n_kernels": 10000, "max_dilations_per_kernel": 32, "n_jobs": 1}
@@ -185,3 +274,32 @@ def minirocket(random_state=None, sensor=None, **params):
                       source=SOURCE_MULTI, defaults=DEFAULTS, extra="peers", input="captures", cheap_params=dict(n_kernels=84))
 def multirocket(random_state=None, sensor=None, **params):
     return build(MultiRocketPeer, DEFAULTS, random_state, {**params, "sensor": sensor}, name="multirocket")
+
+
+SOURCE_MRHYDRA = "Dempster, Schmidt and Webb 2023 (Hydra, with MultiRocket), aeon 1.x MultiRocketHydraClassifier, defaults"
+SOURCE_QUANT = "Dempster, Schmidt and Webb 2024 (QUANT), aeon 1.x QUANTClassifier, defaults"
+SOURCE_RDST = "Guillaume, Vrain and Elloumi 2022 (RDST), aeon 1.x RDSTClassifier, defaults"
+DEFAULTS_MRHYDRA = {"length": None, "n_kernels": 8, "n_groups": 64, "n_jobs": 1}
+DEFAULTS_QUANT = {"length": None, "interval_depth": 6, "quantile_divisor": 4}
+DEFAULTS_RDST = {"length": None, "max_shapelets": 10000, "n_jobs": 1}
+
+
+@CLASSIFIERS.register("multirocket-hydra", description="peer: aeon MultiRocket-Hydra (Hydra's competing kernels + MultiRocket, ridge) on the H x W cell series of raw-window frames",
+                      source=SOURCE_MRHYDRA, defaults=DEFAULTS_MRHYDRA, extra="peers,deep", input="captures",
+                      cheap_params=dict(n_groups=4))
+def multirocket_hydra(random_state=None, sensor=None, **params):
+    return build(MultiRocketHydraPeer, DEFAULTS_MRHYDRA, random_state, {**params, "sensor": sensor}, name="multirocket-hydra")
+
+
+@CLASSIFIERS.register("quant", description="peer: aeon QUANT (quantiles over dyadic intervals + extra-trees) on the H x W cell series of raw-window frames",
+                      source=SOURCE_QUANT, defaults=DEFAULTS_QUANT, extra="peers,deep", input="captures",
+                      cheap_params=dict(interval_depth=2))
+def quant(random_state=None, sensor=None, **params):
+    return build(QuantPeer, DEFAULTS_QUANT, random_state, {**params, "sensor": sensor}, name="quant")
+
+
+@CLASSIFIERS.register("rdst", description="peer: aeon RDST (random dilated shapelets + ridge) on the H x W cell series of raw-window frames",
+                      source=SOURCE_RDST, defaults=DEFAULTS_RDST, extra="peers", input="captures",
+                      cheap_params=dict(max_shapelets=32))
+def rdst(random_state=None, sensor=None, **params):
+    return build(RDSTPeer, DEFAULTS_RDST, random_state, {**params, "sensor": sensor}, name="rdst")

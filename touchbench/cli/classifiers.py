@@ -29,7 +29,8 @@ def list_classifiers(as_json: bool) -> None:
     rows = []
     for e in CLASSIFIERS.entries():
         extra = e.tags.get("extra")
-        available = extra is None or extras_ok.get(extra, False)
+        needs = extra.split(",") if extra else []  # e.g. "peers,deep": every one of them
+        available = all(extras_ok.get(x, False) for x in needs)
         rows.append({
             "name": e.name,
             "description": e.description,

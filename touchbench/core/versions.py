@@ -108,7 +108,10 @@ def missing_extra(extra: str, dist: str = "touchbench") -> list[str]:
     """The distributions of ``dist``'s optional ``extra`` (``pip install 'touchbench[EXTRA]'``) that
     are not installed, read from the installed metadata (nothing imported); ``[]`` when ``dist``'s
     metadata cannot be found (nothing to check against). A distribution counts as installed when
-    one installing the same package is (:data:`SAME_PACKAGE`: ``xgboost-cpu`` for ``xgboost``)."""
+    one installing the same package is (:data:`SAME_PACKAGE`: ``xgboost-cpu`` for ``xgboost``).
+    Several extras joined by commas (``"peers,deep"``) give the missing ones of all of them."""
+    if "," in extra:
+        return [m for part in extra.split(",") for m in missing_extra(part.strip(), dist)]
     try:
         reqs = metadata.requires(dist) or []
     except metadata.PackageNotFoundError:
