@@ -354,3 +354,31 @@ expected:
     for f in ("audit.md", "audit.html", "audit.png", "audit.svg", "honest/protocol.yaml"):
         assert (tmp_path / "audit" / f).is_file(), f
     assert "capture-kfold % (Δ pp)" in (tmp_path / "audit" / "audit.md").read_text()
+
+
+def test_a_component_a_sensor_refuses_is_left_out_of_that_evaluation_only_and_said(tmp_path):
+    if os.environ.get("CI", "").lower() != "true":  # CI installs the deep extra: there a missing torch fails
+        pytest.importorskip("torch")
+    long = _data(tmp_path, "long.parquet", frames=(12, 12))
+    short = _data(tmp_path, "short.parquet", frames=(5, 6))
+    cnn = "{name: cnn, params: {L: 10, max_epochs: 1, channels: [2, 2, 2], hidden_units: 4}}"
+    p = _protocol(tmp_path, f"""features: [[test-mean]]
+classifiers: [test-logreg]
+methods: [{cnn}]
+evaluations:
+  - {{name: long, dataset: {long}, scheme: loso}}
+  - {{name: short, dataset: {short}, scheme: loso}}
+""", name="both")
+    res = run_protocol(p, out=tmp_path / "results" / "both", progress=False)
+    # 12-frame captures serve L = 10 windows; 5 or 6 frames cannot (one frame per window at least)
+    assert sorted(set(res[0].scores["classifier_name"])) == ["cnn", "test-logreg"]
+    assert set(res[1].scores["classifier_name"]) == {"test-logreg"}
+    manifest = json.loads((res[1].out / "manifest.json").read_text())
+    left = [n for n in manifest["notes"] if n.startswith("left out of evaluation 'short'")]
+    assert len(left) == 1 and "L=10 windows need captures of at least 10 frames" in left[0] and "the shortest has 5" in left[0]
+    lbs = build_leaderboards(load_results([tmp_path / "results" / "both"]))
+    assert [any(n.startswith("left out of evaluation") for n in lb.notes) for lb in lbs] == [False, True]
+    # one protocol, one dataset: the refusal stays a refusal, naming the field
+    single = _protocol(tmp_path, f"dataset: {short}\nscheme: loso\nmethods: [{cnn}]\n", name="single")
+    with pytest.raises(ProtocolError, match=r"methods\[0\].*L=10 windows need captures of at least 10 frames"):
+        run_protocol(single, out=tmp_path / "results" / "single", progress=False)

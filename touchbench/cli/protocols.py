@@ -67,7 +67,9 @@ def validate(file: str, schema_only: bool, as_json: bool) -> None:
         at = f"evaluation {sub.evaluation} ({sub.scheme.name}): " if sub.evaluation else ""
         click.echo(f"{at}dataset {sub.dataset.name}: {len(ds)} captures after filters, "
                    f"{ds.meta['subject'].nunique()} subjects, {ds.meta[sub.target].nunique()} {sub.target} classes")
-        shape = f"{len(combos)} x {len(clfs)}" if not proto.methods else f"{n_methods} method(s)"
+        ran = plan.protocol  # without what this evaluation's sensor refused (one of several evaluations)
+        shape = (f"{len(ran.combinations())} x {len(ran.classifier_entries())}" if not ran.methods
+                 else f"{len(ran.entries())} method(s)")
         click.echo(f"{plan.n_folds} fold(s) x {shape} = {len(plan.tasks)} task(s)")
         for reason in evaluations[-1]["leakage"]:
             click.echo(f"LEAKY: {reason}")

@@ -73,7 +73,7 @@ from ..protocols.schema import Protocol, expand_grid, load_protocol, resolve_dat
 from ..protocols.seeding import derive_seed
 from ..protocols.splits import SplitError
 from ..results.ledger import LEDGER_NAME, check_final, record_look, test_set_hash
-from ..results.manifest import now_iso, update_manifest
+from ..results.manifest import LEFT_OUT, now_iso, update_manifest
 from ..results.store import PREDICTED, SCHEMA_VERSION, TRUE, ResultStore, check_schema, read_results_table
 from ..results.summary import check_expected, summarize
 from .backends import check_jobs, is_local_backend, local_jobs, parallel
@@ -82,7 +82,7 @@ from .evaluation_data import apply_filters, evaluation_dataset, load_spec
 from .identity import MAX_MODULES, Identity, classifier_identity, feature_set_identity
 from .tasks import RunContext, SetSpec, Task, execute_task, make_feature_set
 
-__all__ = ["Plan", "RunResult", "check_sensor_fit", "default_ledger", "default_results_dir", "plan_run", "plan_test_set",
+__all__ = ["Plan", "RunResult", "check_sensor_fit", "sensor_refusals", "default_ledger", "default_results_dir", "plan_run", "plan_test_set",
            "results_dirs", "run_plan", "run_protocol"]
 
 
@@ -168,51 +168,75 @@ def _whole_captures_note(clf: Any, sets: Any, ds: TouchDataset) -> str | None:
     return None
 
 
-def check_sensor_fit(protocol: Protocol, sensor: SensorSpec, min_frames: int) -> None:
-    """Refuse the protocol when one of its components cannot serve ``sensor``.
+def sensor_refusals(protocol: Protocol, sensor: SensorSpec, min_frames: int) -> list[tuple[tuple, str]]:
+    """Every component of the protocol that cannot serve ``sensor``: ``(field, message)`` pairs.
 
     Every feature set and classifier (with each of its parameter settings)
     is built with the sensor and asked (:func:`touchbench.core.introspect.sensor_problem`);
-    ``min_frames`` is the shortest capture a task will see. The first
-    component that cannot is refused with one message: the component, the
-    sensor and its reason.
+    ``min_frames`` is the shortest capture a task will see. One pair per
+    entry (feature combination, classifier or method), its first reason.
     """
+    out: list[tuple[tuple, str]] = []
     for i, combo in enumerate(protocol.features):
-        for j, ref in enumerate(combo):
-            for p in expand_grid(ref.params):
-                problem = sensor_problem(make_feature_set(ref.name, p, sensor), sensor, min_frames)
-                if problem:
-                    raise protocol.error_at(("features", i, j), f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {problem}")
-    specs = [(("classifiers", i), s.name, s.params) for i, s in enumerate(protocol.classifiers)]
-    specs += [(("methods", i), m.name or m.estimator, m.params) for i, m in enumerate(protocol.methods)]
+        problem = next(((("features", i, j), f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {pr}")
+                        for j, ref in enumerate(combo) for p in expand_grid(ref.params)
+                        if (pr := sensor_problem(make_feature_set(ref.name, p, sensor), sensor, min_frames))), None)
+        if problem:
+            out.append(problem)
+    refused_methods = set()
     for j, m in enumerate(protocol.methods):
-        for k, ref in enumerate(m.features or []):
-            for p in expand_grid(ref.params):
-                problem = sensor_problem(make_feature_set(ref.name, p, sensor), sensor, min_frames)
-                if problem:
-                    raise protocol.error_at(("methods", j, "features", k),
-                                            f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {problem}")
+        problem = next(((("methods", j, "features", k), f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {pr}")
+                        for k, ref in enumerate(m.features or []) for p in expand_grid(ref.params)
+                        if (pr := sensor_problem(make_feature_set(ref.name, p, sensor), sensor, min_frames))), None)
+        if problem:
+            out.append(problem)
+            refused_methods.add(j)
+    specs = [(("classifiers", i), s.name, s.params) for i, s in enumerate(protocol.classifiers)]
+    specs += [(("methods", i), m.name or m.estimator, m.params) for i, m in enumerate(protocol.methods)
+              if i not in refused_methods]
     for loc, name, params in specs:
-        spec = SimpleNamespace(name=name, params=params)
-        i = loc
-        for p in expand_grid(spec.params):
-            if spec.name in METHODS:  # a named method: its own feature sets, then its estimator
-                m = method_spec(spec.name, **p)
-                for name, params in m.feature_sets:
-                    problem = sensor_problem(make_feature_set(name, params, sensor), sensor, min_frames)
-                    if problem:
-                        raise protocol.error_at(i, f"method {spec.name!r} cannot serve sensor "
-                                                                    f"{sensor.describe()}: {name}: {problem}")
-                spec_name, p = m.estimator, m.estimator_params
-            else:
-                spec_name = spec.name
-            try:
-                est = make_classifier(spec_name, random_state=0, sensor=sensor, **p)
-            except Exception as e:
-                raise protocol.error_at(i, f"classifier {spec.name!r} rejects {p}: {type(e).__name__}: {e}") from None
-            problem = sensor_problem(est, sensor, min_frames)
-            if problem:
-                raise protocol.error_at(i, f"classifier {spec.name!r} cannot serve sensor {sensor.describe()}: {problem}")
+        problem = _classifier_refusal(name, params, sensor, min_frames)
+        if problem:
+            out.append((loc, problem))
+    return out
+
+
+def _classifier_refusal(name: str, params: dict, sensor: SensorSpec, min_frames: int) -> str | None:
+    """Why the classifier or named method ``name`` (any of its parameter settings) cannot serve ``sensor``."""
+    for p in expand_grid(params):
+        spec_name = name
+        if name in METHODS:  # a named method: its own feature sets, then its estimator
+            m = method_spec(name, **p)
+            for set_name, set_params in m.feature_sets:
+                problem = sensor_problem(make_feature_set(set_name, set_params, sensor), sensor, min_frames)
+                if problem:
+                    return f"method {name!r} cannot serve sensor {sensor.describe()}: {set_name}: {problem}"
+            spec_name, p = m.estimator, m.estimator_params
+        try:
+            est = make_classifier(spec_name, random_state=0, sensor=sensor, **p)
+        except Exception as e:
+            return f"classifier {name!r} rejects {p}: {type(e).__name__}: {e}"
+        problem = sensor_problem(est, sensor, min_frames)
+        if problem:
+            return f"classifier {name!r} cannot serve sensor {sensor.describe()}: {problem}"
+    return None
+
+
+def check_sensor_fit(protocol: Protocol, sensor: SensorSpec, min_frames: int) -> None:
+    """Refuse the protocol when one of its components cannot serve ``sensor`` (:func:`sensor_refusals`):
+    the first such component, with one message naming it, the sensor and its reason."""
+    refusals = sensor_refusals(protocol, sensor, min_frames)
+    if refusals:
+        raise protocol.error_at(*refusals[0])
+
+
+def without_refused(protocol: Protocol, refusals: list[tuple[tuple, str]]) -> Protocol:
+    """``protocol`` without the entries ``refusals`` name (a feature combination, classifier or method)."""
+    drop: dict[str, set[int]] = {"features": set(), "classifiers": set(), "methods": set()}
+    for loc, _ in refusals:
+        drop[loc[0]].add(int(loc[1]))
+    update = {k: [x for i, x in enumerate(getattr(protocol, k)) if i not in drop[k]] for k in drop}
+    return protocol.model_copy(update=update)
 
 
 def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: TouchDataset | None = None) -> Plan:
@@ -342,7 +366,17 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
                 timed.add((combo.label, clf.label, crop_frames))
     crops = [t.crop_frames for t in tasks if t.crop_frames is not None]
     min_frames = int(min([int(ds.n_frames.min()), *crops]))
-    check_sensor_fit(protocol, ds.sensor, min_frames)
+    refusals = sensor_refusals(protocol, ds.sensor, min_frames)
+    if refusals and protocol.evaluation is not None:
+        # one of several evaluations: what cannot serve this evaluation's sensor is left out of it, said
+        reduced = without_refused(protocol, refusals)
+        if not reduced.entries():
+            raise protocol.error_at(*refusals[0])
+        plan = plan_run(reduced, cache_root=cache_root, dataset=full)
+        plan.notes[:0] = [f"{LEFT_OUT}{protocol.evaluation!r}: {msg}" for _, msg in refusals]
+        return plan
+    if refusals:
+        raise protocol.error_at(*refusals[0])
     ids = [t.task_id for t in tasks]
     if len(set(ids)) != len(ids):
         raise protocol.error_at(("features",), "two entries of the protocol describe the same task (duplicate combination or classifier)")

@@ -229,6 +229,7 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
         d = s.get("design") or {}
         what = ", ".join(f"{k} {', '.join(v)}" for k, v in ({"subject": d.get("subjects")} | (d.get("rows") or {})).items() if v)
         design_notes.append(f"{what}" + (f" ({d['note']})" if d.get("note") else ""))
+    notes += list(dict.fromkeys(n for s in sources for n in s.get("left_out") or []))
     table_looks = [s["looks"] for s in sources if s.get("looks") is not None]
     looks_here = max(table_looks, key=lambda x: x.runs) if table_looks else None
     if looks_here is not None:

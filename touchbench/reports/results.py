@@ -50,6 +50,7 @@ from ..core.errors import TouchbenchError
 from ..core.yamlsafe import safe_load
 from ..protocols.schema import SUBJECT_ID_LEAK
 from ..results.ledger import Looks, looks
+from ..results.manifest import LEFT_OUT
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE, ResultStore, check_schema, read_results_table
 
 __all__ = ["ResultSet", "load_results", "machine_id", "method_id", "scheme_label"]
@@ -282,6 +283,7 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
             "design": (m.get("protocol") or {}).get("design"),
             "design_captures": (m.get("protocol") or {}).get("design_captures"),
             "looks": _looks(m, d),
+            "left_out": [n for n in (m.get("notes") or []) if str(n).startswith(LEFT_OUT)],
         })
     if not score_frames:
         raise TouchbenchError(f"no scores in {', '.join(map(str, dirs))} (every run is empty)")
