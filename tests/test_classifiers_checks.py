@@ -1,7 +1,8 @@
 """scikit-learn's estimator checks for every registered classifier but the
 deep ones and the aeon peers (tests/test_classifiers_cnn.py,
 tests/test_classifiers_inception.py and tests/test_classifiers_peers.py run
-them for those).
+them for those) and the nested search over methods, which takes captures
+(tests/test_methods_nested_select.py).
 
 The papers' defaults (1000 trees, 500 boosting iterations, 500 MLP epochs,
 L-BFGS to 1e-10) are slow, so each classifier is checked with the smaller
@@ -36,7 +37,8 @@ NOT_APPLICABLE = {
 }
 
 NAMES = [n for n in CLASSIFIERS.names()
-         if not {"deep", "peers"} & set((CLASSIFIERS.entry(n).tags.get("extra") or "").split(","))]
+         if not {"deep", "peers"} & set((CLASSIFIERS.entry(n).tags.get("extra") or "").split(","))
+         and not CLASSIFIERS.entry(n).tags.get("candidates")]
 
 
 def _expected(est):

@@ -192,7 +192,10 @@ def test_every_classifier_uses_the_sensor_or_is_refused(name, key):
         return
     assert problem is None, problem
     # raw-frame classifiers read raw-window's frames; the others any feature matrix (flagg-stats here)
-    X = _frames(ds) if name in RAW_FRAME else make_feature_set("flagg-stats", {}, sensor).fit_transform(ds.captures)
+    if CLASSIFIERS.entry(name).tags.get("candidates"):  # a search over methods takes the captures
+        X = ds.captures
+    else:
+        X = _frames(ds) if name in RAW_FRAME else make_feature_set("flagg-stats", {}, sensor).fit_transform(ds.captures)
     y = (ds.meta["gesture"].to_numpy() == "rub").astype(np.int64)
     pred = np.asarray(est.fit(X, y).predict(X))
     assert pred.shape == (len(ds),) and set(pred.tolist()) <= {0, 1}
@@ -201,8 +204,12 @@ def test_every_classifier_uses_the_sensor_or_is_refused(name, key):
 
 
 # ------------------------------------------------------------------ named methods
+#: named methods that search over candidate methods (their candidates' sets are the other methods')
+SEARCHES = [n for n in METHODS.names() if CLASSIFIERS.entry(METHODS.entry(n).tags["estimator"]).tags.get("candidates")]
+
+
 @pytest.mark.parametrize("key", list(SENSORS))
-@pytest.mark.parametrize("name", METHODS.names())
+@pytest.mark.parametrize("name", [n for n in METHODS.names() if n not in SEARCHES])
 def test_every_method_uses_the_sensor_or_is_refused(name, key):
     """A named method's feature sets get the sensor (their sizes for this grid, worked out by hand)."""
     ds = dataset(key)
@@ -217,6 +224,20 @@ def test_every_method_uses_the_sensor_or_is_refused(name, key):
     pipe = FeaturePipeline(spec, random_state=0, sensor=sensor).fit(ds.captures, y)
     assert pipe.transform(ds.captures).shape == (len(ds), sum(expected_size(n, sensor, n0) for n in spec.feature_names))
     assert set(pipe.predict(ds.captures).tolist()) <= {"rub", "other"}
+
+
+@pytest.mark.parametrize("key", list(SENSORS))
+@pytest.mark.parametrize("name", SEARCHES)
+def test_a_search_serves_a_sensor_when_one_of_its_candidates_does(name, key):
+    ds = dataset(key)
+    sensor, n0 = ds.sensor, shortest(ds)
+    spec = method_spec(name)
+    refused = []
+    for c in spec.estimator_params["candidates"]:
+        problems = [sensor_problem(make_feature_set(n, p, sensor), sensor, n0) for n, p in c["features"]]
+        refused.append(any(problems))
+    est = make_classifier(spec.estimator, random_state=0, sensor=sensor, **spec.estimator_params)
+    assert (sensor_problem(est, sensor, n0) is None) == (not all(refused))
 
 
 @pytest.mark.parametrize("name", sorted(RAW_FRAME))

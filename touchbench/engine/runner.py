@@ -68,7 +68,7 @@ from ..core.paths import cache_dir
 from ..core.suggest import did_you_mean
 from ..datasets.model import DatasetChangedWarning, SensorSpec, TouchDataset
 from ..features import FEATURES
-from ..methods import METHODS, MethodSpec, method_spec, resolve_entry
+from ..methods import METHODS, MethodSpec, expand_candidates, method_spec, resolve_entry
 from ..protocols.schema import Protocol, expand_grid, load_protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
 from ..protocols.splits import SplitError
@@ -213,6 +213,7 @@ def _classifier_refusal(name: str, params: dict, sensor: SensorSpec, min_frames:
                     return f"method {name!r} cannot serve sensor {sensor.describe()}: {set_name}: {problem}"
             spec_name, p = m.estimator, m.estimator_params
         try:
+            p = expand_candidates(spec_name, p)
             est = make_classifier(spec_name, random_state=0, sensor=sensor, **p)
         except Exception as e:
             return f"classifier {name!r} rejects {p}: {type(e).__name__}: {e}"
@@ -367,7 +368,7 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
     crops = [t.crop_frames for t in tasks if t.crop_frames is not None]
     min_frames = int(min([int(ds.n_frames.min()), *crops]))
     refusals = sensor_refusals(protocol, ds.sensor, min_frames)
-    if refusals and protocol.evaluation is not None:
+    if refusals and protocol.evaluation:
         # one of several evaluations: what cannot serve this evaluation's sensor is left out of it, said
         reduced = without_refused(protocol, refusals)
         if not reduced.entries():

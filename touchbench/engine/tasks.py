@@ -248,6 +248,8 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
             y_pred = fitted_est.predict(X_te)
             row["predict_seconds"] = time.perf_counter() - t0
             est = fitted_est.estimator
+            if getattr(est, "selection_note_", None):  # a method that searched inside the training fold says what it chose
+                notes.append(est.selection_note_)
             proba = fitted_est.predict_proba(X_te) if est is not None else None
             row.update(metrics(y_test, y_pred))
             if task.measure_latency:  # once per method and run: features + predict of one capture

@@ -14,7 +14,7 @@ from ..classifiers import CLASSIFIERS
 from ..core.errors import TouchbenchError
 from ..core.registry import Registry
 
-__all__ = ["CAPTURES", "METHODS", "MethodSpec", "method_spec", "resolve_entry"]
+__all__ = ["CAPTURES", "METHODS", "MethodSpec", "expand_candidates", "method_spec", "resolve_entry"]
 
 
 @dataclass(frozen=True)
@@ -73,6 +73,29 @@ def takes_captures(estimator: str) -> bool:
     return estimator in CLASSIFIERS and CLASSIFIERS.entry(estimator).tags.get("input") == "captures"
 
 
+def expand_candidates(classifier: str, params: dict[str, Any]) -> dict[str, Any]:
+    """``params`` with the ``candidates`` of a searching classifier (tag ``candidates=True``, e.g.
+    ``nested-select``) written out: a registered method's name, or ``{name, params}``, becomes its
+    feature sets and estimator (``{label, features, estimator, params}``), so the classifier never
+    needs the method registry and the task's identity covers every candidate's code."""
+    if classifier not in CLASSIFIERS or not CLASSIFIERS.entry(classifier).tags.get("candidates"):
+        return params
+    out = []
+    for c in params.get("candidates") or []:
+        name, p = (c, {}) if isinstance(c, str) else (c.get("name"), dict(c.get("params") or {})) if isinstance(c, dict) else (None, {})
+        if name is not None and name in METHODS:
+            m = method_spec(name, **p)
+            out.append({"label": c.get("label", name) if isinstance(c, dict) else name,
+                        "features": [[n, dict(sp)] for n, sp in m.feature_sets], "estimator": m.estimator,
+                        "params": dict(m.estimator_params)})
+        elif name is not None:
+            raise TouchbenchError(f"classifier {classifier!r}: candidate {name!r} is not a registered method; "
+                                  f"write it as {{features: [...], estimator: ..., params: {{...}}}}")
+        else:
+            out.append(c)
+    return {**params, "candidates": out}
+
+
 def resolve_entry(sets: list[tuple[str, dict[str, Any]]] | tuple, classifier: str,
                   params: dict[str, Any]) -> MethodSpec:
     """The method a protocol's (feature combination, classifier) entry stands for.
@@ -101,8 +124,8 @@ def resolve_entry(sets: list[tuple[str, dict[str, Any]]] | tuple, classifier: st
         if int(window.get("offset", 0) or 0) != 0:
             raise TouchbenchError(f"classifier {classifier!r} takes the captures from their first frame: "
                                   f"raw-window's offset={window['offset']} beside it is not supported")
-        est_params = dict(params)
-        if "frames" in window and "length" not in est_params:
+        est_params = expand_candidates(classifier, dict(params))
+        if "frames" in window and "length" not in est_params and "length" in (CLASSIFIERS.entry(classifier).tags.get("defaults") or {}):
             est_params["length"] = int(window["frames"])
         return MethodSpec(name=classifier, feature_sets=(), estimator=classifier, estimator_params=est_params)
     return MethodSpec(name=classifier, feature_sets=tuple((n, dict(p)) for n, p in sets), estimator=classifier,

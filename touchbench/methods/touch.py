@@ -12,14 +12,17 @@ estimator sees the same matrix a user's own pipeline would.
 - ``touch-et-tuned``: the same with max_features and feature selection chosen by nested CV over the training subjects;
 - ``touch-xgb``: the same sets -> XGBoost;
 - ``touch-et-win``: the three sets plus touch-windows (their mean and sd over four 2-s windows) -> extra-trees;
-- ``touch-et-fast``: touch-rhythm alone -> extra-trees of 100 trees (the latency-bound entry).
+- ``touch-et-fast``: touch-rhythm alone -> extra-trees of 100 trees (the latency-bound entry);
+- ``touch-select``: the design itself as a method: touch-et, touch-xgb, touch-et-win and touch-et-fast
+  scored by leaving one training subject out at a time, inside every outer fold, the best refitted
+  (``nested-select``, :mod:`touchbench.classifiers.search`); a candidate the sensor refuses is left out.
 
 Parameters given to a method go to its estimator.
 """
 
 from __future__ import annotations
 
-from .base import METHODS, pipeline_method
+from .base import METHODS, expand_candidates, pipeline_method
 
 SOURCE = "touchbench (docs/research/touch-methods.md)"
 THREE = ("touch-rhythm", "cell-rhythm", "contact-motion")
@@ -40,3 +43,10 @@ _TOUCH = {
 for _name, (_desc, _sets, _est, _params) in _TOUCH.items():
     METHODS.register(_name, description=_desc, source=SOURCE, feature_sets=_sets, estimator=_est,
                      defaults=dict(_params))(pipeline_method(_name, _sets, _est, _params))
+
+SELECT_FROM = ("touch-et", "touch-xgb", "touch-et-win", "touch-et-fast")
+_select = expand_candidates("nested-select", {"candidates": list(SELECT_FROM)})
+METHODS.register("touch-select", description="touchbench: the touch method with the best inner LOSO accuracy over the "
+                 "training subjects (touch-et, touch-xgb, touch-et-win, touch-et-fast), refitted",
+                 source=SOURCE, feature_sets=(), estimator="nested-select",
+                 defaults=dict(_select))(pipeline_method("touch-select", (), "nested-select", _select))

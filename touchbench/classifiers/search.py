@@ -1,0 +1,275 @@
+"""Nested design as a method: choose among candidate methods inside the training subjects only.
+
+``nested-select`` takes the captures as recorded and a list of
+``candidates``, each feature sets -> an estimator with its parameters
+(in a protocol a candidate may also name a registered method such as
+``touch-et``: the run engine writes out its feature sets and estimator
+before the search is built, so their code and versions enter the task's
+identity). ``fit`` scores every candidate by an inner cross-validation
+over the training captures it is given, grouped by their subjects
+(``groups``, which the run engine passes: the training fold's subjects),
+keeps the candidate with the highest mean inner accuracy (ties: the one
+listed first; a candidate that raises in an inner part is not chosen,
+and the note says why) and refits it on all training captures. The test captures
+are never seen: ``predict`` only applies the refitted candidate.
+
+This is what a researcher does by hand when designing a method on
+training subjects (docs/research/touch-methods.md), written as a method
+any protocol can rerun, inside every outer fold.
+
+Inner folds: ``inner_folds=None`` leaves one training subject out at a
+time; an integer k gives k folds of whole subjects (scikit-learn's
+``GroupKFold``). With fewer than two training subjects (or no ``groups``)
+the folds are stratified by label instead (``StratifiedKFold``, at most k
+or 5 folds, at most the rarest class's count), which the selection note
+says. A feature set that learns nothing from data (``fold_dependent =
+False``) is computed once over the training captures; one that learns is
+refitted on every inner training part. An estimator is fitted on the
+contiguous codes of the classes its inner training part holds.
+
+After ``fit``: ``chosen_`` (the label of the chosen candidate),
+``cv_results_`` (label -> inner accuracies), ``selection_note_`` (one
+line the run engine adds to the task's notes) and the refitted
+candidate's ``sets_`` / ``estimator_``.
+
+A candidate that cannot serve the data's sensor (a window longer than the
+shortest training capture...) is left out of the search, and the note
+says why; the search is refused only when no candidate serves.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.model_selection import GroupKFold, LeaveOneGroupOut, StratifiedKFold
+from sklearn.utils.multiclass import check_classification_targets
+from sklearn.utils.validation import check_is_fitted
+
+from ..core.errors import TouchbenchError
+from ..core.introspect import accepts, sensor_problem
+from ..features.base import FEATURES, make_feature_set
+from ._util import build, seed_int
+from .base import CLASSIFIERS, make_classifier
+
+SOURCE = "touchbench: nested selection over candidate methods by inner cross-validation over training subjects"
+
+
+def candidate(entry: Any) -> dict[str, Any]:
+    """A candidate as ``{"label", "features": [(name, params)...], "estimator", "params"}``.
+
+    ``entry``: a mapping with ``features`` (names, ``{name, params}`` mappings or
+    ``[name, params]`` pairs), ``estimator`` and optional ``params`` and
+    ``label``; a registered method's name must have been written out before
+    (the run engine does it).
+    """
+    if isinstance(entry, str):
+        raise TouchbenchError(f"nested-select: candidate {entry!r} is not a feature set -> estimator mapping; "
+                              f"a registered method's name is written out by the run engine (protocols), "
+                              f"from Python give {{features: [...], estimator: ..., params: {{...}}}}")
+    if not isinstance(entry, dict) or "estimator" not in entry:
+        raise TouchbenchError(f"nested-select: a candidate needs 'estimator' (and 'features'), got {entry!r}")
+    sets = []
+    for f in entry.get("features") or []:
+        if isinstance(f, str):
+            sets.append((f, {}))
+        elif isinstance(f, dict):
+            sets.append((str(f["name"]), dict(f.get("params") or {})))
+        else:
+            name, params = f
+            sets.append((str(name), dict(params or {})))
+    est, params = str(entry["estimator"]), dict(entry.get("params") or {})
+    label = entry.get("label") or ("+".join(n for n, _ in sets) + (" -> " if sets else "") + est)
+    return {"label": str(label), "features": sets, "estimator": est, "params": params}
+
+
+class NestedSelection(ClassifierMixin, BaseEstimator):
+    """Choose a candidate method by inner cross-validation over the training subjects (module docstring).
+
+    Parameters
+    ----------
+    candidates : list of candidate mappings (:func:`candidate`).
+    inner_folds : None (one per training subject) or k folds of whole subjects.
+    sensor : the data's SensorSpec (the run engine passes it); given to every
+        feature set and to estimators that take one.
+    random_state : seed of every candidate's estimator (the same for all, so
+        the choice compares methods, not seeds).
+    """
+
+    def __init__(self, candidates=(), inner_folds=None, sensor=None, random_state=None):
+        self.candidates = candidates
+        self.inner_folds = inner_folds
+        self.sensor = sensor
+        self.random_state = random_state
+
+    def _candidates(self) -> list[dict[str, Any]]:
+        cands = [candidate(c) for c in (self.candidates or [])]
+        if not cands:
+            raise TouchbenchError("nested-select needs at least one candidate")
+        labels = [c["label"] for c in cands]
+        if len(set(labels)) != len(labels):
+            raise TouchbenchError(f"nested-select: two candidates share a label ({', '.join(labels)}); give each a 'label'")
+        return cands
+
+    @staticmethod
+    def _refusal(cand, sensor, min_frames) -> str | None:
+        """Why ``cand`` cannot serve ``sensor`` (its feature set or estimator), or None."""
+        for name, params in cand["features"]:
+            problem = sensor_problem(make_feature_set(name, params, sensor), sensor, min_frames)
+            if problem:
+                return f"{name}: {problem}"
+        return sensor_problem(make_classifier(cand["estimator"], random_state=0, sensor=sensor, **cand["params"]),
+                              sensor, min_frames)
+
+    def check_sensor(self, sensor, min_frames=None):
+        """Why no candidate can serve ``sensor``, or None (a candidate that cannot is left out by ``fit``)."""
+        cands = self._candidates()
+        problems = [self._refusal(c, sensor, min_frames) for c in cands]
+        if all(problems):
+            return "no candidate serves this sensor: " + "; ".join(f"{c['label']}: {p}" for c, p in zip(cands, problems))
+        return None
+
+    # -- pieces ---------------------------------------------------------------
+    def _splits(self, y: np.ndarray, groups) -> tuple[list[tuple[np.ndarray, np.ndarray]], str]:
+        rows = np.zeros((len(y), 1))
+        if groups is not None and len(np.unique(groups)) >= 2:
+            g = np.asarray(groups)
+            if self.inner_folds is None:
+                return list(LeaveOneGroupOut().split(rows, y, g)), "one training subject left out at a time"
+            k = min(int(self.inner_folds), len(np.unique(g)))
+            return list(GroupKFold(n_splits=k).split(rows, y, g)), f"{k} folds of whole training subjects"
+        counts = np.unique(y, return_counts=True)[1]
+        k = min(int(self.inner_folds or 5), int(counts.min()))
+        if k < 2:
+            return [], "no inner folds (a class with a single training capture)"
+        seed = seed_int(self.random_state)
+        return (list(StratifiedKFold(n_splits=k, shuffle=True, random_state=seed).split(rows, y)),
+                f"{k} stratified folds (fewer than two training subjects given)")
+
+    def _fit_sets(self, cand, captures, y) -> list:
+        sets = []
+        for name, params in cand["features"]:
+            fs = make_feature_set(name, dict(params), self.sensor)
+            fs.fit(captures, y)
+            sets.append(fs)
+        return sets
+
+    @staticmethod
+    def _stack(sets, captures):
+        if not sets:
+            return list(captures)
+        return np.hstack([np.asarray(fs.transform(captures), dtype=np.float64) for fs in sets])
+
+    def _fit_estimator(self, cand, X, y, groups):
+        """(estimator or None for one class, classes) fitted on contiguous codes of ``y``."""
+        classes, codes = np.unique(y, return_inverse=True)
+        if len(classes) < 2:
+            return None, classes
+        est = make_classifier(cand["estimator"], random_state=seed_int(self.random_state), sensor=self.sensor,
+                              **cand["params"])
+        kw = {"groups": np.asarray(groups)} if groups is not None and accepts(est.fit, "groups") else {}
+        est.fit(X, codes, **kw)
+        return est, classes
+
+    @staticmethod
+    def _predict(est, classes, X) -> np.ndarray:
+        if est is None:
+            return np.repeat(classes[:1], len(X))
+        return classes[np.asarray(est.predict(X)).astype(np.int64)]
+
+    def _inner_scores(self, cand, captures, y, groups, splits) -> list[float]:
+        fixed = all(not getattr(FEATURES.get(n), "fold_dependent", True) for n, _ in cand["features"])
+        X_all = self._stack(self._fit_sets(cand, captures, y), captures) if fixed else None
+        scores = []
+        for tr, te in splits:
+            g_tr = None if groups is None else np.asarray(groups)[tr]
+            if fixed:
+                X_tr = X_all[tr] if isinstance(X_all, np.ndarray) else [X_all[i] for i in tr]
+                X_te = X_all[te] if isinstance(X_all, np.ndarray) else [X_all[i] for i in te]
+            else:
+                caps_tr = [captures[i] for i in tr]
+                sets = self._fit_sets(cand, caps_tr, y[tr])
+                X_tr, X_te = self._stack(sets, caps_tr), self._stack(sets, [captures[i] for i in te])
+            est, classes = self._fit_estimator(cand, X_tr, y[tr], g_tr)
+            scores.append(float(np.mean(self._predict(est, classes, X_te) == y[te])))
+        return scores
+
+    # -- API ------------------------------------------------------------------
+    def fit(self, X: Sequence[np.ndarray], y, groups=None):
+        """Score every candidate by inner CV over ``groups`` (the training subjects), refit the best."""
+        captures = list(X)
+        y = np.asarray(y)
+        check_classification_targets(y)
+        self.classes_ = np.unique(y)
+        cands, left_out = [], []
+        shortest = min(len(c) for c in captures) if captures and np.ndim(captures[0]) == 3 else None
+        for c in self._candidates():
+            problem = self._refusal(c, self.sensor, shortest) if self.sensor is not None else None
+            (left_out.append(f"{c['label']} ({problem})") if problem else cands.append(c))
+        if not cands:
+            raise TouchbenchError("nested-select: no candidate serves this data: " + "; ".join(left_out))
+        splits, how = self._splits(y, groups)
+        self.cv_results_ = {}
+        failed = []
+        if len(cands) > 1 and splits:
+            means = []
+            for c in cands:
+                try:
+                    self.cv_results_[c["label"]] = self._inner_scores(c, captures, y, groups, splits)
+                    means.append(float(np.mean(self.cv_results_[c["label"]])))
+                except Exception as e:  # a candidate that cannot fit an inner part is not chosen
+                    failed.append(f"{c['label']} ({type(e).__name__}: {e})")
+                    means.append(-np.inf)
+            if len(failed) == len(cands):
+                raise TouchbenchError("nested-select: every candidate failed in the inner folds: " + "; ".join(failed))
+            best = int(np.argmax(means))  # the first of equal means
+        else:
+            best = 0
+        chosen = cands[best]
+        self.chosen_ = chosen["label"]
+        scored = ", ".join(f"{lab} {100 * np.mean(s):.1f} %" for lab, s in self.cv_results_.items())
+        self.selection_note_ = (f"nested-select chose {self.chosen_} by inner CV ({how}): {scored}" if scored
+                                else f"nested-select took {self.chosen_} ({how if len(cands) > 1 else 'one candidate'})")
+        if failed:
+            self.selection_note_ += "; failed in the inner folds: " + ", ".join(failed)
+        if left_out:
+            self.selection_note_ += "; left out for this sensor: " + ", ".join(left_out)
+        self.sets_ = self._fit_sets(chosen, captures, y)
+        self.estimator_, self.est_classes_ = self._fit_estimator(chosen, self._stack(self.sets_, captures), y, groups)
+        return self
+
+    def predict(self, X):
+        check_is_fitted(self)
+        return self._predict(self.estimator_, self.est_classes_, self._stack(self.sets_, list(X)))
+
+    def predict_proba(self, X):
+        """The chosen candidate's probabilities over ``classes_`` (zeros for a class it never saw)."""
+        check_is_fitted(self)
+        Xs = self._stack(self.sets_, list(X))
+        out = np.zeros((len(Xs), len(self.classes_)))
+        if self.estimator_ is None:
+            out[:, np.searchsorted(self.classes_, self.est_classes_[0])] = 1.0
+            return out
+        if not hasattr(self.estimator_, "predict_proba"):
+            pred = self._predict(self.estimator_, self.est_classes_, Xs)
+            out[np.arange(len(Xs)), np.searchsorted(self.classes_, pred)] = 1.0
+            return out
+        P = np.asarray(self.estimator_.predict_proba(Xs), dtype=np.float64)
+        cols = np.searchsorted(self.classes_, self.est_classes_[np.asarray(self.estimator_.classes_).astype(np.int64)])
+        out[:, cols] = P
+        return out
+
+
+DEFAULTS = {"candidates": (), "inner_folds": None}
+
+
+@CLASSIFIERS.register(
+    "nested-select",
+    description="nested design: the candidate method (feature sets -> estimator) with the best inner-CV accuracy over the training subjects, refitted",
+    source=SOURCE, defaults=DEFAULTS, extra=None, input="captures", candidates=True,
+    cheap_params=dict(candidates=[{"features": ["flagg-stats"], "estimator": "zhou-lda"},
+                                  {"features": ["flagg-stats"], "estimator": "zhou-tree"}]),
+)
+def nested_select(random_state=None, sensor=None, **params):
+    return build(NestedSelection, DEFAULTS, random_state, {**params, "sensor": sensor}, name="nested-select")
