@@ -23,8 +23,9 @@ time; an integer k gives k folds of whole subjects (scikit-learn's
 the folds are stratified by label instead (``StratifiedKFold``, at most k
 or 5 folds, at most the rarest class's count), which the selection note
 says. A feature set that learns nothing from data (``fold_dependent =
-False``) is computed once over the training captures; one that learns is
-refitted on every inner training part. An estimator is fitted on the
+False``) is computed once per ``fit`` over the training captures (once
+for all the candidates that share it); one that learns is refitted on
+every inner training part. An estimator is fitted on the
 contiguous codes of the classes its inner training part holds.
 
 After ``fit``: ``chosen_`` (the label of the chosen candidate),
@@ -178,9 +179,21 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
             return np.repeat(classes[:1], len(X))
         return classes[np.asarray(est.predict(X)).astype(np.int64)]
 
-    def _inner_scores(self, cand, captures, y, groups, splits) -> list[float]:
+    def _fixed_matrix(self, cand, captures, y, cache: dict) -> np.ndarray | list:
+        """The candidate's features over all ``captures`` (sets that learn nothing), each set computed once per fit."""
+        if not cand["features"]:
+            return list(captures)
+        blocks = []
+        for name, params in cand["features"]:
+            key = (name, repr(sorted(params.items())))
+            if key not in cache:
+                cache[key] = self._stack(self._fit_sets({"features": [(name, params)]}, captures, y), captures)
+            blocks.append(cache[key])
+        return np.hstack(blocks)
+
+    def _inner_scores(self, cand, captures, y, groups, splits, cache: dict) -> list[float]:
         fixed = all(not getattr(FEATURES.get(n), "fold_dependent", True) for n, _ in cand["features"])
-        X_all = self._stack(self._fit_sets(cand, captures, y), captures) if fixed else None
+        X_all = self._fixed_matrix(cand, captures, y, cache) if fixed else None
         scores = []
         for tr, te in splits:
             g_tr = None if groups is None else np.asarray(groups)[tr]
@@ -211,12 +224,12 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
             raise TouchbenchError("nested-select: no candidate serves this data: " + "; ".join(left_out))
         splits, how = self._splits(y, groups)
         self.cv_results_ = {}
-        failed = []
+        failed, cache = [], {}
         if len(cands) > 1 and splits:
             means = []
             for c in cands:
                 try:
-                    self.cv_results_[c["label"]] = self._inner_scores(c, captures, y, groups, splits)
+                    self.cv_results_[c["label"]] = self._inner_scores(c, captures, y, groups, splits, cache)
                     means.append(float(np.mean(self.cv_results_[c["label"]])))
                 except Exception as e:  # a candidate that cannot fit an inner part is not chosen
                     failed.append(f"{c['label']} ({type(e).__name__}: {e})")
@@ -236,7 +249,9 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
         if left_out:
             self.selection_note_ += "; left out for this sensor: " + ", ".join(left_out)
         self.sets_ = self._fit_sets(chosen, captures, y)
-        self.estimator_, self.est_classes_ = self._fit_estimator(chosen, self._stack(self.sets_, captures), y, groups)
+        fixed = all(not getattr(FEATURES.get(n), "fold_dependent", True) for n, _ in chosen["features"])
+        X = self._fixed_matrix(chosen, captures, y, cache) if fixed else self._stack(self.sets_, captures)
+        self.estimator_, self.est_classes_ = self._fit_estimator(chosen, X, y, groups)
         return self
 
     def predict(self, X):
