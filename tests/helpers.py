@@ -100,3 +100,19 @@ def fake_loso(subjects, gestures=("pat", "rub", "stroke"), reps: int = 2):
         return {f: ids[:c] for (f, ids), c in zip(folds.items(), counts)}
 
     return caps, folds, wrong
+
+
+def slow_fast_rows(n_per_class=12, frames=40, seed=0):
+    """Two classes of 2 x 2 captures flattened as raw-window rows: a slow and a fast oscillation
+    (periods 16 and 4 frames), random phase and gain per cell, a little noise."""
+    rng = np.random.default_rng(seed)
+    X, y = [], []
+    t = np.arange(frames)
+    for label, period in (("slow", 16.0), ("fast", 4.0)):
+        for _ in range(n_per_class):
+            cap = np.empty((frames, 2, 2))
+            for c in range(4):
+                cap[:, c // 2, c % 2] = rng.uniform(5, 20) * np.sin(2 * np.pi * t / period + rng.uniform(0, 6.3))
+            X.append((cap + rng.normal(0, 0.5, cap.shape)).reshape(-1))
+            y.append(label)
+    return np.array(X), np.array(y)

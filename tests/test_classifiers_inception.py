@@ -25,6 +25,7 @@ from touchbench.classifiers import CLASSIFIERS, make_classifier  # noqa: E402
 from touchbench.classifiers.inception import build_network  # noqa: E402
 from touchbench.classifiers.torch_fit import Plateau, train, validation_split  # noqa: E402
 from touchbench.datasets.model import SensorSpec  # noqa: E402
+from helpers import slow_fast_rows  # noqa: E402
 
 
 def _n_params(module) -> int:
@@ -70,19 +71,7 @@ def test_same_padding_keeps_the_length_and_pads_like_keras(length):
     assert net(x).shape == (2, 2)
 
 
-def _toy(n_per_class=12, frames=40, seed=0):
-    """Two classes of 2 x 2 captures: a slow and a fast oscillation, random phase and gain."""
-    rng = np.random.default_rng(seed)
-    X, y = [], []
-    t = np.arange(frames)
-    for label, period in (("slow", 16.0), ("fast", 4.0)):
-        for _ in range(n_per_class):
-            cap = np.empty((frames, 2, 2))
-            for c in range(4):
-                cap[:, c // 2, c % 2] = rng.uniform(5, 20) * np.sin(2 * np.pi * t / period + rng.uniform(0, 6.3))
-            X.append((cap + rng.normal(0, 0.5, cap.shape)).reshape(-1))
-            y.append(label)
-    return np.array(X), np.array(y)
+_toy = slow_fast_rows  # slow vs fast oscillations, 2 x 2 cells
 
 
 SMALL = dict(n_networks=2, depth=3, n_filters=8, kernel_size=8, bottleneck_size=8, max_epochs=25, batch_size=8)

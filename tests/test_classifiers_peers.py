@@ -26,6 +26,8 @@ from sklearn.utils.estimator_checks import parametrize_with_checks  # noqa: E402
 
 from touchbench.classifiers import make_classifier  # noqa: E402
 from touchbench.classifiers.peers import MIN_TIMEPOINTS, frames_to_series  # noqa: E402
+from helpers import slow_fast_rows  # noqa: E402
+
 
 def _labelled_capture(frames: int, h: int, w: int) -> np.ndarray:
     """value = 1000 * frame + cell (row-major), flattened frame-major as raw-window does."""
@@ -54,19 +56,7 @@ def test_frames_must_fill_the_grid():
         frames_to_series(np.zeros((1, 10)), (2, 2))
 
 
-def _toy(n_per_class=12, frames=40, seed=0):
-    """Two classes of 2 x 2 captures: a slow and a fast oscillation, random phase and gain."""
-    rng = np.random.default_rng(seed)
-    X, y = [], []
-    t = np.arange(frames)
-    for label, period in (("slow", 16.0), ("fast", 4.0)):
-        for _ in range(n_per_class):
-            cap = np.empty((frames, 2, 2))
-            for c in range(4):
-                cap[:, c // 2, c % 2] = rng.uniform(5, 20) * np.sin(2 * np.pi * t / period + rng.uniform(0, 6.3))
-            X.append((cap + rng.normal(0, 0.5, cap.shape)).reshape(-1))
-            y.append(label)
-    return np.array(X), np.array(y)
+_toy = slow_fast_rows  # slow vs fast oscillations, 2 x 2 cells
 
 
 #: peer -> (aeon module, aeon class, small settings given to both)
