@@ -382,3 +382,23 @@ evaluations:
     single = _protocol(tmp_path, f"dataset: {short}\nscheme: loso\nmethods: [{cnn}]\n", name="single")
     with pytest.raises(ProtocolError, match=r"methods\[0\].*L=10 windows need captures of at least 10 frames"):
         run_protocol(single, out=tmp_path / "results" / "single", progress=False)
+
+
+def test_run_some_methods_now_and_the_others_later(tmp_path):
+    data = _data(tmp_path)
+    p = _protocol(tmp_path, f"""dataset: {data}
+scheme: loso
+features: [[test-mean]]
+classifiers: [test-logreg, {{name: test-forest, params: {{n_estimators: 3}}}}]
+""", name="some")
+    out = tmp_path / "results" / "some"
+    first = run_protocol(p, out=out, progress=False, methods=["test-logreg"])
+    assert first.n_ran == 4 and set(first.scores["classifier_name"]) == {"test-logreg"}  # 4 subjects
+    r = CliRunner().invoke(main, ["run", str(p), "--out", str(out), "--method", "test-forest"])
+    assert r.exit_code == 0, r.output
+    both = pd.read_parquet(out / "scores.parquet")
+    assert sorted(both.groupby("classifier_name").size().items()) == [("test-forest", 4), ("test-logreg", 4)]
+    r = CliRunner().invoke(main, ["run", str(p), "--out", str(out), "--method", "nope"])
+    assert r.exit_code != 0 and "'nope' is not a method of some" in r.output and "test-logreg" in r.output
+    r = CliRunner().invoke(main, ["run", str(p), "--out", str(out), "--method", "test-logreg", "--final"])
+    assert r.exit_code != 0 and "--final reports every method" in r.output

@@ -81,14 +81,17 @@ def run_summary(res, plan) -> dict:
               help="When another run holds the results directory, wait this long for it before giving up.")
 @click.option("--evaluation", "evaluations", multiple=True, metavar="NAME",
               help="Run only this evaluation of a protocol with several (repeatable) [default: all].")
+@click.option("--method", "methods", multiple=True, metavar="LABEL",
+              help="Run only this method's tasks (its label in the leaderboard; repeatable) [default: all]; "
+                   "the tables hold every finished task of the protocol.")
 @click.option("--final", is_flag=True,
               help="The run you report: refused when this test set already had a final run with other methods.")
 @click.option("--force-final", is_flag=True, help="With --final: run even so (recorded in the ledger).")
 @json_option
 @backend_options
 def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bool, fail_fast: bool,
-        progress: bool | None, wait: float, evaluations: tuple[str, ...], final: bool, force_final: bool,
-        as_json: bool, backend: str, scheduler: str | None, address: str | None) -> None:
+        progress: bool | None, wait: float, evaluations: tuple[str, ...], methods: tuple[str, ...], final: bool,
+        force_final: bool, as_json: bool, backend: str, scheduler: str | None, address: str | None) -> None:
     """Evaluate PROTOCOL (a file, or the name of a shipped protocol or of one in your folders): every feature
     combination x classifier under its scheme (under each of its evaluations, each into its own
     folder). Finished tasks are skipped, so an interrupted run resumes where it stopped. Every run
@@ -99,6 +102,8 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
 
     if force_final and not final:
         raise click.UsageError("--force-final goes with --final")
+    if final and methods:
+        raise click.UsageError("--final reports every method of the protocol: run it without --method")
     proto = load_protocol(find_protocol(protocol))
     pairs = results_dirs(proto, out)
     if evaluations:
@@ -109,11 +114,20 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
                                      f"({', '.join(known) or 'it has none'})", param_hint="--evaluation")
         pairs = [(sub, d) for sub, d in pairs if sub.evaluation in evaluations]
     plans = [(plan_run(sub), d) for sub, d in pairs]  # every evaluation checked before any runs
+    if methods:
+        labels = {t.classifier_label for plan, _ in plans for t in plan.tasks}
+        unknown = [m for m in methods if m not in labels]
+        if unknown:
+            raise click.BadParameter(f"{unknown[0]!r} is not a method of {proto.name} "
+                                     f"({', '.join(sorted(labels))})", param_hint="--method")
     failed = 0
     summaries = []
     for plan, out_dir in plans:
+        present = [m for m in methods if m in {t.classifier_label for t in plan.tasks}]
+        if methods and not present:  # left out of this evaluation (its sensor refused them)
+            continue
         res = _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait, final, force_final,
-                       as_json, backend, scheduler, address)
+                       as_json, backend, scheduler, address, present)
         summaries.append(run_summary(res, plan))
         failed += res.n_failed
         if res.stopped_early:
@@ -125,7 +139,7 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
 
 
 def _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait, final, force_final, as_json,
-             backend, scheduler, address):
+             backend, scheduler, address, methods=()):
     """Run one evaluation's plan and report it (messages on stderr, the summary on stdout)."""
     from ..engine.runner import run_plan
 
@@ -140,7 +154,8 @@ def _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait
     try:
         with backend_for_run(backend, scheduler, address, plan.cache_root, jobs) as jobs:
             res = run_plan(plan, out_dir, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
-                           wait=wait, fail_fast=fail_fast, final=final, force_final=force_final)
+                           wait=wait, fail_fast=fail_fast, final=final, force_final=force_final,
+                           methods=list(methods) or None)
     except KeyboardInterrupt:
         click.echo("\ninterrupted: finished tasks are saved; run the same command again to resume", err=True)
         sys.exit(exitcodes.INTERRUPTED)

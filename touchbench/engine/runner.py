@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from types import SimpleNamespace
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 import pandas as pd
@@ -517,8 +517,12 @@ def plan_methods(plan: Plan) -> list[str]:
 def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force: bool = False,
              retry_failed: bool = False, progress: bool | None = None, worker_setup=None,
              wait: float = 0.0, fail_fast: bool = False, final: bool = False, force_final: bool = False,
-             ledger: str | Path | None = None) -> RunResult:
+             ledger: str | Path | None = None, methods: Sequence[str] | None = None) -> RunResult:
     """Execute the pending tasks of ``plan`` and write the reports (see the module docstring).
+
+    ``methods`` (classifier or method labels of the plan) runs only their tasks: the tables
+    still hold every finished task of the plan, the others stay pending (a slow method can
+    wait, a new one can join a finished run).
 
     ``worker_setup`` is a picklable function each worker process calls once
     before its first task (to register plug-in components in the workers).
@@ -536,10 +540,24 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
     out = Path(out) if out is not None else default_results_dir(plan.protocol)
     store = ResultStore(out)
     ledger = Path(ledger) if ledger is not None else default_ledger(plan.protocol, out)
+    only = check_methods(plan, methods)
     with store.lock(wait=wait, command=f"touchbench run {plan.protocol.name}"):
         return _run_locked(plan, store, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
                            worker_setup=worker_setup, fail_fast=fail_fast, final=final, force_final=force_final,
-                           ledger=ledger)
+                           ledger=ledger, methods=only)
+
+
+def check_methods(plan: Plan, methods: Sequence[str] | None) -> set[str] | None:
+    """The method labels ``methods`` names in ``plan`` (None: all); an unknown one is refused naming the known."""
+    if not methods:
+        return None
+    known = list(dict.fromkeys(t.classifier_label for t in plan.tasks))
+    unknown = [m for m in methods if m not in known]
+    if unknown:
+        raise TouchbenchError(f"{unknown[0]!r} is not a method of {plan.protocol.name}"
+                              + (f" / {plan.protocol.evaluation}" if plan.protocol.evaluation else "")
+                              + f" (its methods: {', '.join(known)})")
+    return set(methods)
 
 
 def _design_captures(plan: Plan) -> list[str] | None:
@@ -570,7 +588,7 @@ def _record_look(plan: Plan, ledger: Path, final: bool, force_final: bool, n_pen
 
 def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry_failed: bool,
                 progress: bool | None, worker_setup, fail_fast: bool = False, final: bool = False,
-                force_final: bool = False, ledger: Path) -> RunResult:
+                force_final: bool = False, ledger: Path, methods: set[str] | None = None) -> RunResult:
     t_start = time.perf_counter()
     started_at = now_iso()
     protocol = plan.protocol
@@ -589,6 +607,8 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
     notes = list(plan.notes) + _damaged_notes(plan, damaged)
     pending = [t for t in plan.tasks
                if t.task_id not in finished or (retry_failed and finished[t.task_id] == "failed")]
+    if methods is not None:  # only these methods run; every finished task is still merged
+        pending = [t for t in pending if t.classifier_label in methods]
     show = sys.stderr.isatty() if progress is None else progress
     design_captures = _design_captures(plan)  # a design naming an unknown column is refused before any task
 
@@ -681,15 +701,18 @@ def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None,
                  force: bool = False, retry_failed: bool = False, progress: bool | None = None,
                  cache_root: str | Path | None = None, dataset: TouchDataset | None = None,
                  worker_setup=None, wait: float = 0.0, fail_fast: bool = False, final: bool = False,
-                 force_final: bool = False, ledger: str | Path | None = None) -> RunResult | list[RunResult]:
+                 force_final: bool = False, ledger: str | Path | None = None,
+                 methods: Sequence[str] | None = None) -> RunResult | list[RunResult]:
     """Validate, plan and run a protocol (a :class:`Protocol` or a file path): its result, or one
-    result per evaluation (in order) for a protocol with ``evaluations``."""
+    result per evaluation (in order) for a protocol with ``evaluations``. ``methods``: run only
+    these methods' tasks (:func:`run_plan`)."""
     if not isinstance(protocol, Protocol):
         protocol = load_protocol(protocol)
     out_list = []
     for sub, folder in results_dirs(protocol, out):
         plan = plan_run(sub, cache_root=cache_root, dataset=dataset)
+        present = [m for m in methods or () if m in {t.classifier_label for t in plan.tasks}]
         out_list.append(run_plan(plan, folder, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
                                  worker_setup=worker_setup, wait=wait, fail_fast=fail_fast, final=final,
-                                 force_final=force_final, ledger=ledger))
+                                 force_final=force_final, ledger=ledger, methods=present or methods))
     return out_list if protocol.evaluations else out_list[0]
