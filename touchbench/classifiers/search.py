@@ -119,7 +119,7 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
         for name, params in cand["features"]:
             problem = sensor_problem(make_feature_set(name, params, sensor), sensor, min_frames)
             if problem:
-                return f"{name}: {problem}"
+                return problem if problem.startswith(f"{name}:") else f"{name}: {problem}"
         return sensor_problem(make_classifier(cand["estimator"], random_state=0, sensor=sensor, **cand["params"]),
                               sensor, min_frames)
 

@@ -210,7 +210,8 @@ def _classifier_refusal(name: str, params: dict, sensor: SensorSpec, min_frames:
             for set_name, set_params in m.feature_sets:
                 problem = sensor_problem(make_feature_set(set_name, set_params, sensor), sensor, min_frames)
                 if problem:
-                    return f"method {name!r} cannot serve sensor {sensor.describe()}: {set_name}: {problem}"
+                    what = problem if problem.startswith(f"{set_name}:") else f"{set_name}: {problem}"
+                    return f"method {name!r} cannot serve sensor {sensor.describe()}: {what}"
             spec_name, p = m.estimator, m.estimator_params
         try:
             p = expand_candidates(spec_name, p)
