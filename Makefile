@@ -8,6 +8,10 @@
 #   make examples          run the example protocols on real HAART and regenerate the example
 #                          leaderboards and report (results/examples/, results/touch-haart/) and
 #                          the figures the README shows (docs/figures/, stable names)
+#   make touch-all         every method of touch-all under its five evaluations (hours on two cores:
+#                          QUANT and RDST; METHODS="--method touch-et --method minirocket" runs some),
+#                          then its leaderboard (results/touch-all/) and the README's figures
+#   make touch-all-figures the leaderboard and figures alone, from the finished tasks
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
@@ -19,7 +23,7 @@ JOBS ?= 2
 RUNS ?= results/runs
 TB := $(BIN)/touchbench
 
-.PHONY: setup demo test api-docs snapshots reproduce-papers examples clean
+.PHONY: setup demo test api-docs snapshots reproduce-papers examples touch-all touch-all-figures clean
 
 PLUGIN := examples/touchbench-plugin-example
 
@@ -73,6 +77,21 @@ examples: setup
 	    --reference "Al-mashhadani 2021 CNN=83.2"
 	$(TB) plot $(RUNS)/touch-haart/challenge --out docs/figures --kind pareto --name touch-haart-challenge --format png --format svg \
 	    --reference "best 2015 entry=70.9" --reference "Gaus 2015=66.5" --reference "2023 transformer*=72.8"
+
+TOUCH_ALL := $(RUNS)/touch-all
+touch-all: setup
+	$(TB) run touch-all --out $(TOUCH_ALL) --jobs $(JOBS) --no-progress $(METHODS)
+	$(MAKE) touch-all-figures
+
+touch-all-figures: setup
+	$(TB) leaderboard $(TOUCH_ALL) --out results/touch-all --format md --format csv
+	$(TB) plot $(TOUCH_ALL)/loso --out docs/figures --kind pareto --kind cd --name touch-all-loso \
+	    --format png --format svg --reference "Al-mashhadani 2021 CNN=83.2" --reference "target=84"
+	$(TB) plot $(TOUCH_ALL)/challenge --out docs/figures --kind pareto --name touch-all-challenge \
+	    --format png --format svg --reference "best 2015 entry=70.9" --reference "target=80"
+	$(TB) plot $(TOUCH_ALL)/socialtouch --out docs/figures --kind pareto --name touch-all-socialtouch \
+	    --format png --format svg --reference "target=75"
+	$(TB) plot $(TOUCH_ALL) --out docs/figures/touch-all --kind cd --format png --format svg
 
 clean:
 	rm -rf $(VENV) build *.egg-info
