@@ -151,6 +151,32 @@ def test_label_offsets_move_colliding_labels_apart():
             assert min(a[3], b[3]) <= max(a[1], b[1])  # no vertical overlap
 
 
+def test_label_offsets_avoid_drawn_text_and_the_panel_edge():
+    # a label 40 pt wide at (100, 100); the box right of it at the first offset, (104..144, 103..111.5),
+    # is taken by other text: the next offset (4, -9) is free
+    offs = label_offsets(np.array([[100.0, 100.0]]), np.array([40.0]), taken=[(104.0, 103.0, 144.0, 111.5)])
+    assert offs == [(4, -9)]
+    # a point 10 pt from the panel's right edge (x1 = 110): no box right of it fits, so the label goes
+    # left of the point at the first height: x from 100 - 40 - 4 = 56 to 96
+    offs = label_offsets(np.array([[100.0, 100.0]]), np.array([40.0]), bounds=(0.0, 0.0, 110.0, 200.0))
+    assert offs == [(-44, 3)]
+
+
+def test_pareto_leaves_out_a_cost_a_method_does_not_have(tmp_path):
+    # one method computes its features inside its estimator (feature time 0): a log axis has no 0,
+    # so it is left out of that panel only, and the panel says so
+    write_fake_run(tmp_path / "run", CAPS, FOLDS, [
+        FakeMethod("msd", "rf", wrong=_wrong([0, 1, 0, 1]), latency_ms=4.0, feature_seconds_per_capture=2e-3),
+        FakeMethod("raw", "rocket", wrong=_wrong([2, 2, 1, 2]), latency_ms=0.5, feature_seconds_per_capture=0.0),
+    ], scheme={"name": "loso"}, run_id="zero")
+    res = CliRunner().invoke(cli, ["plot", str(tmp_path / "run"), "--out", str(tmp_path / "pl"), "--kind", "pareto",
+                                   "--format", "svg"])
+    assert res.exit_code == 0, res.output
+    svg = next((tmp_path / "pl").glob("*pareto.svg")).read_text()
+    assert svg.count("not shown: 1 without this cost") == 1
+    assert "1e-06" not in svg
+
+
 def test_plot_name_gives_stable_file_names(runs, tmp_path):
     r = CliRunner()
     res = r.invoke(cli, ["plot", str(runs / "loso"), "--out", str(tmp_path / "pl"), "--kind", "pareto",

@@ -28,7 +28,7 @@ import math
 import re
 import textwrap
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 import pandas as pd
@@ -139,33 +139,63 @@ def _short(r: Any, width: int = 28, with_features: bool = True) -> str:
 #: a label's height and its width per character at fontsize 7, in points (a generous estimate)
 _LABEL_H, _LABEL_CHAR_W = 8.5, 4.3
 #: offsets (points) tried in turn for a label, right of its point
-_LABEL_OFFSETS = ((4, 3), (4, -9), (4, 11), (4, -17), (4, 19), (4, -25), (4, 27))
+_LABEL_OFFSETS = ((4, 3), (4, -9), (4, 11), (4, -17), (4, 19), (4, -25), (4, 27), (4, -33), (4, 35), (4, -41), (4, 43))
 
 
-def label_offsets(points_pt: np.ndarray, widths_pt: np.ndarray) -> list[tuple[int, int]]:
+def label_offsets(points_pt: np.ndarray, widths_pt: np.ndarray, taken: Sequence[tuple[float, float, float, float]] = (),
+                  bounds: tuple[float, float, float, float] | None = None) -> list[tuple[int, int]]:
     """Offsets (points) for labels at ``points_pt`` (N, 2 display points) so that their boxes do not overlap.
 
     Greedy, in the given order: each label takes the first offset of
-    ``_LABEL_OFFSETS`` whose box (``widths_pt`` wide, ``_LABEL_H`` high,
-    lower-left corner at point + offset) overlaps no box placed before it;
-    when every offset collides, the least overlapping one.
+    ``_LABEL_OFFSETS`` (right of its point), then of the same heights to
+    the left of its point, whose box (``widths_pt`` wide, ``_LABEL_H``
+    high) overlaps no box placed before it nor a box of ``taken`` (other
+    text already drawn, in the same points) and stays inside ``bounds``
+    (x0, y0, x1, y1: the panel, when given); when every offset collides,
+    the one with the least overlap and area outside the panel.
     """
-    placed: list[tuple[float, float, float, float]] = []
+    placed: list[tuple[float, float, float, float]] = [tuple(map(float, b)) for b in taken]
     out = []
     for (x, y), w in zip(np.asarray(points_pt, dtype=float), np.asarray(widths_pt, dtype=float)):
-        best, best_overlap = _LABEL_OFFSETS[0], np.inf
-        for dx, dy in _LABEL_OFFSETS:
+        candidates = list(_LABEL_OFFSETS) + [(-int(math.ceil(w)) - dx, dy) for dx, dy in _LABEL_OFFSETS]
+        best, best_cost = candidates[0], np.inf
+        for dx, dy in candidates:
             box = (x + dx, y + dy, x + dx + w, y + dy + _LABEL_H)
-            overlap = sum(max(0.0, min(box[2], b[2]) - max(box[0], b[0])) * max(0.0, min(box[3], b[3]) - max(box[1], b[1]))
-                          for b in placed)
-            if overlap < best_overlap:
-                best, best_overlap = (dx, dy), overlap
-            if overlap == 0:
+            cost = sum(_overlap(box, b) for b in placed)
+            if bounds is not None:
+                cost += w * _LABEL_H - _overlap(box, bounds)
+            if cost < best_cost:
+                best, best_cost = (dx, dy), cost
+            if cost == 0:
                 break
         dx, dy = best
         placed.append((x + dx, y + dy, x + dx + w, y + dy + _LABEL_H))
         out.append(best)
     return out
+
+
+def _overlap(a: Sequence[float], b: Sequence[float]) -> float:
+    """Area shared by two boxes (x0, y0, x1, y1)."""
+    return max(0.0, min(a[2], b[2]) - max(a[0], b[0])) * max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
+
+
+def _reference_labels(ax, fig, references: list[tuple[str, float]]) -> list[tuple[float, float, float, float]]:
+    """Write each reference's label at the left of the panel, below its line, or above it when that
+    would run into the label of a reference close by; their boxes (points), for the point labels to avoid."""
+    x0 = ax.transAxes.transform((0.01, 0.0))[0] * 72.0 / fig.dpi
+    boxes: list[tuple[float, float, float, float]] = []
+    for label, value in sorted(references, key=lambda r: -r[1]):
+        text = f"{label} {value:g} %"
+        w = len(text) * _LABEL_CHAR_W
+        y = ax.transData.transform((1.0, value))[1] * 72.0 / fig.dpi
+        for dy in (-9, 2, -18, 11):
+            box = (x0, y + dy, x0 + w, y + dy + _LABEL_H)
+            if not any(_overlap(box, b) for b in boxes):
+                break
+        boxes.append(box)
+        ax.annotate(text, (0.01, value), xycoords=("axes fraction", "data"), textcoords="offset points",
+                    xytext=(0, dy), fontsize=MIN_FONT_PT, color="0.35").set_in_layout(False)
+    return boxes
 
 
 def plot_pareto(lb: Leaderboard, base: Path, references: list[tuple[str, float]] | None = None,
@@ -195,12 +225,14 @@ def plot_pareto(lb: Leaderboard, base: Path, references: list[tuple[str, float]]
         highs = [100 * rows["ci_high"].max(), max(v for _, v in references) + 3]
         axes[0].set_ylim(np.nanmin(lows), np.nanmax(highs))
     for ax, (col, title) in zip(axes, costs):
-        labelled = []
+        labelled, n_zero = [], 0
         for mi, m in enumerate(machines):
             g = rows[(rows["timing_machine"] == m) & np.isfinite(rows[col]) & np.isfinite(rows["accuracy"])]
+            n_zero += int((g[col] <= 0).sum())
+            g = g[g[col] > 0]  # a log axis has no 0: a method whose features are computed by its estimator
             if g.empty:
                 continue
-            x = np.maximum(g[col].to_numpy(dtype=float), 1e-6)
+            x = g[col].to_numpy(dtype=float)
             y = 100 * g["accuracy"].to_numpy(dtype=float)
             lo = 100 * g["ci_low"].to_numpy(dtype=float)
             hi = 100 * g["ci_high"].to_numpy(dtype=float)
@@ -212,17 +244,21 @@ def plot_pareto(lb: Leaderboard, base: Path, references: list[tuple[str, float]]
             if col == "latency_ms":
                 front = g[g["pareto"].to_numpy(dtype=bool)].sort_values("latency_ms")
                 if len(front) > 1:
-                    ax.step(np.maximum(front["latency_ms"].to_numpy(float), 1e-6), 100 * front["accuracy"].to_numpy(float),
+                    ax.step(front["latency_ms"].to_numpy(float), 100 * front["accuracy"].to_numpy(float),
                             where="post", color="tab:red", lw=1, alpha=0.6)
             labelled.append((g, x, y))
         ax.set_xscale("log")
-        for label, value in references or []:
+        for _, value in references or []:
             ax.axhline(value, color="0.45", lw=0.8, ls="--", zorder=0)
-            if ax is axes[0]:
-                ax.annotate(f"{label} {value:g} %", (0.01, value), xycoords=("axes fraction", "data"),
-                            textcoords="offset points", xytext=(0, -9), fontsize=MIN_FONT_PT,
-                            color="0.35").set_in_layout(False)
+        if n_zero:
+            ax.annotate(f"not shown: {n_zero} without this cost", (0.99, 0.02), xycoords="axes fraction",
+                        ha="right", fontsize=MIN_FONT_PT, color="0.35")
         ax.autoscale_view()
+        if labelled:
+            lo, hi = ax.get_xlim()  # room on the log axis for the labels beside the extreme points
+            ax.set_xlim(lo / 1.3, hi * 1.3)
+        fig.draw_without_rendering()  # the constrained layout places the panels: label boxes in final points
+        taken = _reference_labels(ax, fig, references) if references and ax is axes[0] else []
         texts, pts = [], []
         for g, x, y in labelled:
             for (_, r), xi, yi in zip(g.iterrows(), x, y):
@@ -231,11 +267,16 @@ def plot_pareto(lb: Leaderboard, base: Path, references: list[tuple[str, float]]
                     pts.append(ax.transData.transform((xi, yi)) * 72.0 / fig.dpi)
         if texts:
             order = np.argsort([-p[1] for p in pts], kind="stable")  # top to bottom
-            offs = label_offsets(np.array(pts)[order], np.array([len(texts[i][0]) * _LABEL_CHAR_W for i in order]))
+            bbox = ax.get_window_extent()
+            bounds = tuple(v * 72.0 / fig.dpi for v in (bbox.x0, bbox.y0, bbox.x1, bbox.y1))
+            offs = label_offsets(np.array(pts)[order], np.array([len(texts[i][0]) * _LABEL_CHAR_W for i in order]),
+                                 taken=taken, bounds=bounds)
             for i, off in zip(order, offs):
                 lab, xi, yi = texts[i]
-                ax.annotate(lab, (xi, yi), textcoords="offset points", xytext=off,
-                            fontsize=MIN_FONT_PT).set_in_layout(False)  # labels may run over: panels keep their width
+                leader = None if off == _LABEL_OFFSETS[0] else {"arrowstyle": "-", "color": "0.6", "lw": 0.5,
+                                                                "shrinkA": 0, "shrinkB": 0}
+                ax.annotate(lab, (xi, yi), textcoords="offset points", xytext=off, fontsize=MIN_FONT_PT,
+                            va="bottom", arrowprops=leader).set_in_layout(False)  # a label moved away: a line to its point
         _plain_log_ticks(ax)
         ax.set_xlabel(title)
         ax.grid(True, which="major", alpha=0.3)
