@@ -85,7 +85,7 @@ touch-all: setup
 
 touch-all-figures: setup
 	$(TB) leaderboard $(TOUCH_ALL) --out results/touch-all --format md --format csv
-	$(TB) plot $(TOUCH_ALL)/loso --out docs/figures --kind pareto --kind cd --name touch-all-loso \
+	$(TB) plot $(TOUCH_ALL)/loso --out docs/figures --kind pareto --name touch-all-loso \
 	    --format png --format svg --reference "Al-mashhadani 2021 CNN=83.2" --reference "target=84"
 	$(TB) plot $(TOUCH_ALL)/challenge --out docs/figures --kind pareto --name touch-all-challenge \
 	    --format png --format svg --reference "best 2015 entry=70.9" --reference "target=80"
