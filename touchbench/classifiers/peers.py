@@ -111,14 +111,14 @@ def frames_to_series(X: np.ndarray, grid: tuple[int, int], minimum: int = MIN_TI
 class _AeonPeer(ClassifierMixin, BaseEstimator):
     """An aeon classifier over the cells of raw frames.
 
-    A subclass names aeon's module and class, the parameters it forwards
-    (``_aeon_params``, each also one of its own), the packages aeon needs
-    for it (``_requires``) and the shortest series it takes.
+    A subclass names aeon's module and class, the packages aeon needs for
+    it (``_requires``) and the shortest series it takes; every parameter of
+    its own beyond :data:`_OWN` is forwarded to aeon under the same name.
     """
 
+    _OWN = ("sensor", "grid", "length", "random_state")
     _aeon_module = "aeon.classification.convolution_based"
     _aeon_class = ""
-    _aeon_params: tuple[str, ...] = ()
     _requires: tuple[str, ...] = ("aeon",)
     _min_timepoints = MIN_TIMEPOINTS
 
@@ -129,7 +129,7 @@ class _AeonPeer(ClassifierMixin, BaseEstimator):
             raise TouchbenchError(f"the {type(self).__name__} peer needs {' and '.join(missing)}, "
                                   f"which {'is' if len(missing) == 1 else 'are'} not installed: {hint}")
         cls = getattr(importlib.import_module(self._aeon_module), self._aeon_class)
-        params = {p: getattr(self, p) for p in self._aeon_params}
+        params = {p: v for p, v in self.get_params(deep=False).items() if p not in self._OWN}
         return cls(**{k: (int(v) if isinstance(v, (int, np.integer)) and not isinstance(v, bool) else v)
                       for k, v in params.items()}, random_state=seed)
 
@@ -185,7 +185,7 @@ class _AeonPeer(ClassifierMixin, BaseEstimator):
 
 
 class _RocketPeer(_AeonPeer):
-    _aeon_params = ("n_kernels", "max_dilations_per_kernel", "n_jobs")
+    """MiniRocket and MultiRocket: the parameters they share."""
 
     def __init__(self, sensor=None, grid=None, length=None, n_kernels=10000, max_dilations_per_kernel=32, n_jobs=1,
                  random_state=None):
@@ -214,7 +214,6 @@ class MultiRocketHydraPeer(_AeonPeer):
     """aeon's ``MultiRocketHydraClassifier`` on the H x W cell series (aeon runs Hydra in PyTorch)."""
 
     _aeon_class = "MultiRocketHydraClassifier"
-    _aeon_params = ("n_kernels", "n_groups", "n_jobs")
     _requires = ("aeon", "torch")
     _min_timepoints = MIN_TIMEPOINTS + 1  # its MultiRocket half also convolves the first differences
 
@@ -233,7 +232,6 @@ class QuantPeer(_AeonPeer):
 
     _aeon_module = "aeon.classification.interval_based"
     _aeon_class = "QUANTClassifier"
-    _aeon_params = ("interval_depth", "quantile_divisor")
     _requires = ("aeon", "torch")
 
     def __init__(self, sensor=None, grid=None, length=None, interval_depth=6, quantile_divisor=4, random_state=None):
@@ -250,7 +248,6 @@ class RDSTPeer(_AeonPeer):
 
     _aeon_module = "aeon.classification.shapelet_based"
     _aeon_class = "RDSTClassifier"
-    _aeon_params = ("max_shapelets", "n_jobs")
 
     def __init__(self, sensor=None, grid=None, length=None, max_shapelets=10000, n_jobs=1, random_state=None):
         self.sensor = sensor

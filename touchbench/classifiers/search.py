@@ -50,7 +50,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..core.errors import TouchbenchError
 from ..core.introspect import accepts, sensor_problem
-from ..features.base import FEATURES, make_feature_set
+from ..features.base import FEATURES, feature_set_refusal, make_feature_set
 from ._util import build, seed_int
 from .base import CLASSIFIERS, make_classifier
 
@@ -117,9 +117,9 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
     def _refusal(cand, sensor, min_frames) -> str | None:
         """Why ``cand`` cannot serve ``sensor`` (its feature set or estimator), or None."""
         for name, params in cand["features"]:
-            problem = sensor_problem(make_feature_set(name, params, sensor), sensor, min_frames)
+            problem = feature_set_refusal(name, params, sensor, min_frames)
             if problem:
-                return problem if problem.startswith(f"{name}:") else f"{name}: {problem}"
+                return problem
         return sensor_problem(make_classifier(cand["estimator"], random_state=0, sensor=sensor, **cand["params"]),
                               sensor, min_frames)
 
@@ -179,6 +179,11 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
             return np.repeat(classes[:1], len(X))
         return classes[np.asarray(est.predict(X)).astype(np.int64)]
 
+    @staticmethod
+    def _learns_nothing(cand) -> bool:
+        """Whether every feature set of ``cand`` is computed without fitting (``fold_dependent = False``)."""
+        return all(not getattr(FEATURES.get(n), "fold_dependent", True) for n, _ in cand["features"])
+
     def _fixed_matrix(self, cand, captures, y, cache: dict) -> np.ndarray | list:
         """The candidate's features over all ``captures`` (sets that learn nothing), each set computed once per fit."""
         if not cand["features"]:
@@ -192,7 +197,7 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
         return np.hstack(blocks)
 
     def _inner_scores(self, cand, captures, y, groups, splits, cache: dict) -> list[float]:
-        fixed = all(not getattr(FEATURES.get(n), "fold_dependent", True) for n, _ in cand["features"])
+        fixed = self._learns_nothing(cand)
         X_all = self._fixed_matrix(cand, captures, y, cache) if fixed else None
         scores = []
         for tr, te in splits:
@@ -249,8 +254,8 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
         if left_out:
             self.selection_note_ += "; left out for this sensor: " + ", ".join(left_out)
         self.sets_ = self._fit_sets(chosen, captures, y)
-        fixed = all(not getattr(FEATURES.get(n), "fold_dependent", True) for n, _ in chosen["features"])
-        X = self._fixed_matrix(chosen, captures, y, cache) if fixed else self._stack(self.sets_, captures)
+        X = (self._fixed_matrix(chosen, captures, y, cache) if self._learns_nothing(chosen)
+             else self._stack(self.sets_, captures))
         self.estimator_, self.est_classes_ = self._fit_estimator(chosen, X, y, groups)
         return self
 

@@ -97,7 +97,7 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
     folder). Finished tasks are skipped, so an interrupted run resumes where it stopped. Every run
     that scores a test set is recorded in the ledger of the results root (ledger.jsonl), which the
     leaderboard reads. Exits with status 1 when a task failed."""
-    from ..engine.runner import plan_run, results_dirs
+    from ..engine.runner import method_labels, plan_run, results_dirs
     from ..protocols.schema import load_protocol
 
     if force_final and not final:
@@ -115,7 +115,7 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
         pairs = [(sub, d) for sub, d in pairs if sub.evaluation in evaluations]
     plans = [(plan_run(sub), d) for sub, d in pairs]  # every evaluation checked before any runs
     if methods:
-        labels = {t.classifier_label for plan, _ in plans for t in plan.tasks}
+        labels = {m for plan, _ in plans for m in method_labels(plan)}
         unknown = [m for m in methods if m not in labels]
         if unknown:
             raise click.BadParameter(f"{unknown[0]!r} is not a method of {proto.name} "
@@ -123,7 +123,8 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
     failed = 0
     summaries = []
     for plan, out_dir in plans:
-        present = [m for m in methods if m in {t.classifier_label for t in plan.tasks}]
+        labels = set(method_labels(plan))
+        present = [m for m in methods if m in labels]
         if methods and not present:  # left out of this evaluation (its sensor refused them)
             continue
         res = _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait, final, force_final,

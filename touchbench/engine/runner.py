@@ -68,6 +68,7 @@ from ..core.paths import cache_dir
 from ..core.suggest import did_you_mean
 from ..datasets.model import DatasetChangedWarning, SensorSpec, TouchDataset
 from ..features import FEATURES
+from ..features.base import feature_set_refusal
 from ..methods import METHODS, MethodSpec, expand_candidates, method_spec, resolve_entry
 from ..protocols.schema import Protocol, expand_grid, load_protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
@@ -82,7 +83,7 @@ from .evaluation_data import apply_filters, evaluation_dataset, load_spec
 from .identity import MAX_MODULES, Identity, classifier_identity, feature_set_identity
 from .tasks import RunContext, SetSpec, Task, execute_task, make_feature_set
 
-__all__ = ["Plan", "RunResult", "check_sensor_fit", "sensor_refusals", "default_ledger", "default_results_dir", "plan_run", "plan_test_set",
+__all__ = ["Plan", "RunResult", "check_sensor_fit", "sensor_refusals", "default_ledger", "default_results_dir", "method_labels", "plan_run", "plan_test_set",
            "results_dirs", "run_plan", "run_protocol"]
 
 
@@ -178,16 +179,12 @@ def sensor_refusals(protocol: Protocol, sensor: SensorSpec, min_frames: int) -> 
     """
     out: list[tuple[tuple, str]] = []
     for i, combo in enumerate(protocol.features):
-        problem = next(((("features", i, j), f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {pr}")
-                        for j, ref in enumerate(combo) for p in expand_grid(ref.params)
-                        if (pr := sensor_problem(make_feature_set(ref.name, p, sensor), sensor, min_frames))), None)
+        problem = _sets_refusal(combo, ("features", i), sensor, min_frames)
         if problem:
             out.append(problem)
     refused_methods = set()
     for j, m in enumerate(protocol.methods):
-        problem = next(((("methods", j, "features", k), f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {pr}")
-                        for k, ref in enumerate(m.features or []) for p in expand_grid(ref.params)
-                        if (pr := sensor_problem(make_feature_set(ref.name, p, sensor), sensor, min_frames))), None)
+        problem = _sets_refusal(m.features or [], ("methods", j, "features"), sensor, min_frames)
         if problem:
             out.append(problem)
             refused_methods.add(j)
@@ -201,6 +198,17 @@ def sensor_refusals(protocol: Protocol, sensor: SensorSpec, min_frames: int) -> 
     return out
 
 
+def _sets_refusal(refs: Sequence[Any], field: tuple, sensor: SensorSpec, min_frames: int) -> tuple[tuple, str] | None:
+    """The first feature set of ``refs`` (any of its parameter settings) that cannot serve ``sensor``:
+    its protocol field (``field`` + its index) and the message, or None."""
+    for k, ref in enumerate(refs):
+        for p in expand_grid(ref.params):
+            problem = sensor_problem(make_feature_set(ref.name, p, sensor), sensor, min_frames)
+            if problem:
+                return (*field, k), f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {problem}"
+    return None
+
+
 def _classifier_refusal(name: str, params: dict, sensor: SensorSpec, min_frames: int) -> str | None:
     """Why the classifier or named method ``name`` (any of its parameter settings) cannot serve ``sensor``."""
     for p in expand_grid(params):
@@ -208,10 +216,9 @@ def _classifier_refusal(name: str, params: dict, sensor: SensorSpec, min_frames:
         if name in METHODS:  # a named method: its own feature sets, then its estimator
             m = method_spec(name, **p)
             for set_name, set_params in m.feature_sets:
-                problem = sensor_problem(make_feature_set(set_name, set_params, sensor), sensor, min_frames)
+                problem = feature_set_refusal(set_name, set_params, sensor, min_frames)
                 if problem:
-                    what = problem if problem.startswith(f"{set_name}:") else f"{set_name}: {problem}"
-                    return f"method {name!r} cannot serve sensor {sensor.describe()}: {what}"
+                    return f"method {name!r} cannot serve sensor {sensor.describe()}: {problem}"
             spec_name, p = m.estimator, m.estimator_params
         try:
             p = expand_candidates(spec_name, p)
@@ -369,16 +376,15 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
     crops = [t.crop_frames for t in tasks if t.crop_frames is not None]
     min_frames = int(min([int(ds.n_frames.min()), *crops]))
     refusals = sensor_refusals(protocol, ds.sensor, min_frames)
-    if refusals and protocol.evaluation:
-        # one of several evaluations: what cannot serve this evaluation's sensor is left out of it, said
-        reduced = without_refused(protocol, refusals)
-        if not reduced.entries():
+    if refusals:
+        # one of several evaluations: what cannot serve this evaluation's sensor is left out of it, said;
+        # a protocol of one evaluation (or one left with nothing) is refused
+        reduced = without_refused(protocol, refusals) if protocol.evaluation else None
+        if reduced is None or not reduced.entries():
             raise protocol.error_at(*refusals[0])
         plan = plan_run(reduced, cache_root=cache_root, dataset=full)
         plan.notes[:0] = [f"{LEFT_OUT}{protocol.evaluation!r}: {msg}" for _, msg in refusals]
         return plan
-    if refusals:
-        raise protocol.error_at(*refusals[0])
     ids = [t.task_id for t in tasks]
     if len(set(ids)) != len(ids):
         raise protocol.error_at(("features",), "two entries of the protocol describe the same task (duplicate combination or classifier)")
@@ -548,11 +554,16 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
                            ledger=ledger, methods=only)
 
 
+def method_labels(plan: Plan) -> list[str]:
+    """The method labels (``--method``'s values) of ``plan``'s tasks, in plan order."""
+    return list(dict.fromkeys(t.classifier_label for t in plan.tasks))
+
+
 def check_methods(plan: Plan, methods: Sequence[str] | None) -> set[str] | None:
     """The method labels ``methods`` names in ``plan`` (None: all); an unknown one is refused naming the known."""
     if not methods:
         return None
-    known = list(dict.fromkeys(t.classifier_label for t in plan.tasks))
+    known = method_labels(plan)
     unknown = [m for m in methods if m not in known]
     if unknown:
         raise TouchbenchError(f"{unknown[0]!r} is not a method of {plan.protocol.name}"
@@ -712,7 +723,8 @@ def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None,
     out_list = []
     for sub, folder in results_dirs(protocol, out):
         plan = plan_run(sub, cache_root=cache_root, dataset=dataset)
-        present = [m for m in methods or () if m in {t.classifier_label for t in plan.tasks}]
+        labels = set(method_labels(plan))
+        present = [m for m in methods or () if m in labels]
         out_list.append(run_plan(plan, folder, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
                                  worker_setup=worker_setup, wait=wait, fail_fast=fail_fast, final=final,
                                  force_final=force_final, ledger=ledger, methods=present or methods))

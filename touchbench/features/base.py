@@ -29,7 +29,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin, clone
 
 from ..core.errors import TouchbenchError
-from ..core.introspect import with_accepted
+from ..core.introspect import sensor_problem, with_accepted
 from ..core.registry import Registry
 
 # Filled by every module of touchbench.features (imported on first use of the registry).
@@ -238,3 +238,12 @@ def make_feature_set(name: str, params: dict[str, Any] | None = None, sensor: An
     :class:`touchbench.datasets.model.SensorSpec`) when its constructor takes it."""
     cls = FEATURES.get(name)
     return cls(**with_accepted(cls, params or {}, sensor=sensor))
+
+
+def feature_set_refusal(name: str, params: dict[str, Any] | None, sensor: Any, min_frames: int | None = None) -> str | None:
+    """Why the feature set ``name`` with ``params`` cannot serve ``sensor`` (captures from ``min_frames``
+    frames), as ``"name: reason"`` with the name said once, or None."""
+    problem = sensor_problem(make_feature_set(name, params, sensor), sensor, min_frames)
+    if not problem:
+        return None
+    return problem if problem.startswith(f"{name}:") else f"{name}: {problem}"

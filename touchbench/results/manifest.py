@@ -29,6 +29,7 @@ __all__ = ["git_revision", "now_iso", "package_versions", "platform_info", "upda
 def now_iso() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
 
+
 #: how a run's notes begin for a component left out of one of several evaluations (its sensor refused it)
 LEFT_OUT = "left out of evaluation "
 
