@@ -224,6 +224,7 @@ def plot_pareto(lb: Leaderboard, base: Path, references: list[tuple[str, float]]
         lows = [100 * rows["ci_low"].min(), min(v for _, v in references) - 2]
         highs = [100 * rows["ci_high"].max(), max(v for _, v in references) + 3]
         axes[0].set_ylim(np.nanmin(lows), np.nanmax(highs))
+    panels = []
     for ax, (col, title) in zip(axes, costs):
         labelled, n_zero = [], 0
         for mi, m in enumerate(machines):
@@ -257,34 +258,44 @@ def plot_pareto(lb: Leaderboard, base: Path, references: list[tuple[str, float]]
         if labelled:
             lo, hi = ax.get_xlim()  # room on the log axis for the labels beside the extreme points
             ax.set_xlim(lo / 1.3, hi * 1.3)
-        fig.draw_without_rendering()  # the constrained layout places the panels: label boxes in final points
-        taken = _reference_labels(ax, fig, references) if references and ax is axes[0] else []
-        texts, pts = [], []
-        for g, x, y in labelled:
-            for (_, r), xi, yi in zip(g.iterrows(), x, y):
-                if label_all or r["pareto"]:
-                    texts.append((_short(r, with_features=with_features), xi, yi))
-                    pts.append(ax.transData.transform((xi, yi)) * 72.0 / fig.dpi)
-        if texts:
-            order = np.argsort([-p[1] for p in pts], kind="stable")  # top to bottom
-            bbox = ax.get_window_extent()
-            bounds = tuple(v * 72.0 / fig.dpi for v in (bbox.x0, bbox.y0, bbox.x1, bbox.y1))
-            offs = label_offsets(np.array(pts)[order], np.array([len(texts[i][0]) * _LABEL_CHAR_W for i in order]),
-                                 taken=taken, bounds=bounds)
-            for i, off in zip(order, offs):
-                lab, xi, yi = texts[i]
-                leader = None if off == _LABEL_OFFSETS[0] else {"arrowstyle": "-", "color": "0.6", "lw": 0.5,
-                                                                "shrinkA": 0, "shrinkB": 0}
-                ax.annotate(lab, (xi, yi), textcoords="offset points", xytext=off, fontsize=MIN_FONT_PT,
-                            va="bottom", arrowprops=leader).set_in_layout(False)  # a label moved away: a line to its point
         _plain_log_ticks(ax)
         ax.set_xlabel(title)
         ax.grid(True, which="major", alpha=0.3)
+        panels.append((ax, labelled))
     axes[0].set_ylabel("accuracy (%)")
     if len(machines) > 1:
         axes[0].legend(title="machine")
     fig.suptitle(_wrap(f"{lb.title}: accuracy vs cost (red: Pareto front on accuracy / latency)", w))
+    fig.draw_without_rendering()  # the constrained layout places the panels: label boxes in final points
+    for ax, labelled in panels:
+        taken = _reference_labels(ax, fig, references) if references and ax is axes[0] else []
+        _label_points(ax, fig, labelled, label_all, with_features, taken)
     return _save(fig, base, formats)
+
+
+def _label_points(ax, fig, labelled: list, label_all: bool, with_features: bool,
+                  taken: list[tuple[float, float, float, float]]) -> None:
+    """Label the points of ``labelled`` ((rows, x, y) per machine; all, or the Pareto front's) apart from
+    each other, from ``taken`` and from the panel's edge, with a line to a label moved away."""
+    texts, pts = [], []
+    for g, x, y in labelled:
+        for (_, r), xi, yi in zip(g.iterrows(), x, y):
+            if label_all or r["pareto"]:
+                texts.append((_short(r, with_features=with_features), xi, yi))
+                pts.append(ax.transData.transform((xi, yi)) * 72.0 / fig.dpi)
+    if not texts:
+        return
+    order = np.argsort([-p[1] for p in pts], kind="stable")  # top to bottom
+    bbox = ax.get_window_extent()
+    bounds = tuple(v * 72.0 / fig.dpi for v in (bbox.x0, bbox.y0, bbox.x1, bbox.y1))
+    offs = label_offsets(np.array(pts)[order], np.array([len(texts[i][0]) * _LABEL_CHAR_W for i in order]),
+                         taken=taken, bounds=bounds)
+    for i, off in zip(order, offs):
+        lab, xi, yi = texts[i]
+        leader = None if off == _LABEL_OFFSETS[0] else {"arrowstyle": "-", "color": "0.6", "lw": 0.5,
+                                                        "shrinkA": 0, "shrinkB": 0}
+        ax.annotate(lab, (xi, yi), textcoords="offset points", xytext=off, fontsize=MIN_FONT_PT,
+                    va="bottom", arrowprops=leader).set_in_layout(False)  # labels may run over: panels keep their width
 
 
 def _base_method(r: Any) -> str:
