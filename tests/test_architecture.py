@@ -5,11 +5,12 @@ included) is read from the source with :mod:`ast`; each module belongs to a
 layer (below, bottom first). An import may point to the same layer or one
 below, never up, and no group of modules may import each other in a circle.
 
-The package root (``touchbench/__init__.py``) holds ``__version__`` (the
-bottom layer) and the user-facing names, loaded on first use (PEP 562) from
-the layers that define them; its ``if TYPE_CHECKING:`` imports are for type
-checkers only. No module of the package takes anything but ``__version__``
-from the root, so the facade never takes part in an import.
+The package root (``touchbench/__init__.py``) is the top layer: the
+user-facing names, loaded on first use (PEP 562) from the layers that define
+them, and ``__version__`` taken from ``touchbench.core.version`` (the bottom
+layer, where every module reads it); its ``if TYPE_CHECKING:`` imports are
+for type checkers only. No module of the package takes anything from the
+root, so the facade never takes part in an import.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "touchbench"
 
 # Bottom first. A module belongs to the layer of the longest prefix it matches.
 LAYERS: list[tuple[str, ...]] = [
-    ("touchbench", "touchbench.core"),               # errors, registry, paths, hashing, atomic IO, versions
+    ("touchbench.core",),                            # errors, registry, paths, hashing, atomic IO, versions
     ("touchbench.datasets",),                        # the data model and the real-data readers
     ("touchbench.scenes",),                          # synthetic scenes
     ("touchbench.catalog",),                         # dataset references: registered name, scene:NAME, file
@@ -37,6 +38,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("touchbench.papers",),                          # the paper reproduction (runs the engine, writes reports)
     ("touchbench.deploy",),                          # train / predict / stream
     ("touchbench.cli",),
+    ("touchbench",),                                 # the facade: user-level names, loaded on first use
 ]
 
 
@@ -156,7 +158,8 @@ def test_circle_finder_on_hand_made_graphs(graph, expected):
 def test_layer_of_takes_the_longest_prefix():
     assert layer_of("touchbench.core.errors") == 0
     assert layer_of("touchbench.catalog") == 3
-    assert layer_of("touchbench.cli.run") == len(LAYERS) - 1
+    assert layer_of("touchbench.cli.run") == len(LAYERS) - 2
+    assert layer_of("touchbench") == len(LAYERS) - 1
 
 
 def root_names_used(name: str, path: Path) -> set[str]:
@@ -177,8 +180,8 @@ def root_names_used(name: str, path: Path) -> set[str]:
     return out
 
 
-def test_modules_take_only_the_version_from_the_package_root():
-    taken = {name: sorted(root_names_used(name, path) - {"__version__", "__file__"})
+def test_modules_take_nothing_from_the_package_root():
+    taken = {name: sorted(root_names_used(name, path) - {"__file__"})
              for name, path in all_modules().items() if name != "touchbench"}
     assert not {k: v for k, v in taken.items() if v}, "modules taking facade names from the package root"
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+from .core.version import __version__
 
 # name -> the module that defines it; loaded on first attribute access.
 _LAZY: dict[str, str] = {

@@ -11,7 +11,7 @@ import threading
 
 import click
 
-from .. import __version__
+from ..core.version import __version__
 from ..core.errors import TouchbenchError
 from ..core.plugins import PluginError
 from . import exitcodes

@@ -22,7 +22,7 @@ from functools import lru_cache
 from importlib import metadata
 from typing import Iterable
 
-from .. import __version__
+from .version import __version__
 
 __all__ = ["PACKAGES", "SAME_PACKAGE", "missing_extra", "package_versions"]
 

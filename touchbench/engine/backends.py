@@ -43,10 +43,9 @@ from joblib import Parallel, parallel_config
 from joblib.parallel import BACKENDS as JOBLIB_BACKENDS
 from joblib.parallel import get_active_backend
 
-import touchbench
-
 from ..core.errors import TouchbenchError
 from ..core.threads import available_cpus
+from ..core.version import __version__
 
 __all__ = ["BACKENDS", "BackendInfo", "backend_for_run", "backend_options", "check_dask_workers", "check_jobs",
            "end_with_parent", "is_local_backend", "local_jobs", "parallel", "run_setup", "supports_generator", "use_backend"]
@@ -150,7 +149,7 @@ def _probe(cache_root: str) -> dict:
     """Run on a worker: its touchbench version and whether it sees the cache folder."""
 
     p = Path(cache_root)
-    return {"version": touchbench.__version__, "cache_visible": p.is_dir() and os.access(p, os.W_OK)}
+    return {"version": __version__, "cache_visible": p.is_dir() and os.access(p, os.W_OK)}
 
 
 def check_dask_workers(client, cache_root: str | Path) -> None:
@@ -167,9 +166,9 @@ def check_dask_workers(client, cache_root: str | Path) -> None:
     if not answers:
         raise TouchbenchError("the Dask cluster has no workers")
     for worker, a in sorted(answers.items()):
-        if a["version"] != touchbench.__version__:
+        if a["version"] != __version__:
             raise TouchbenchError(f"Dask worker {worker} runs touchbench {a['version']}, this client "
-                                  f"{touchbench.__version__}; install the same version everywhere")
+                                  f"{__version__}; install the same version everywhere")
         if not a["cache_visible"]:
             raise TouchbenchError(f"Dask worker {worker} cannot write the cache folder {root}: put "
                                   "TOUCHBENCH_CACHE_DIR on a file system shared by the client and every worker, "

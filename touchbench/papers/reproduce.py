@@ -48,7 +48,7 @@ import pandas as pd
 import yaml
 from joblib.externals.loky import get_reusable_executor
 
-from .. import __version__
+from ..core.version import __version__
 from ..catalog import load_dataset, parse_dataset_ref
 from ..classifiers import CLASSIFIERS
 from ..core.errors import TouchbenchError

@@ -19,7 +19,7 @@ import sys
 from datetime import datetime, timezone
 from typing import Any
 
-from .. import __version__
+from ..core.version import __version__
 from ..core.paths import REPO_ROOT
 from ..core.versions import package_versions
 from .store import SCHEMA_VERSION
