@@ -30,7 +30,8 @@ from touchbench.core.versions import package_versions
 from touchbench.datasets.model import DatasetChangedWarning, TouchDataset
 from touchbench.engine.cache import FeatureCache
 from touchbench.engine.identity import classifier_identity, feature_set_identity
-from touchbench.engine.runner import plan_run, run_plan
+from touchbench.engine.planning import plan_run
+from touchbench.engine.runner import run_plan
 from touchbench.engine.testing import random_dataset
 from touchbench.features import FEATURES
 from touchbench.protocols.schema import parse_protocol
@@ -176,7 +177,7 @@ def run(tmp_path: Path, out: str = "out", **kw):
     """``(result, {task_id: (features, classifier, fold)}, plan)`` of one run."""
     plan = plan_run(make_protocol(tmp_path))
     res = run_plan(plan, tmp_path / out, progress=False, **kw)
-    return res, {t.task_id: (t.features_label, t.classifier_label, t.fold.name) for t in plan.tasks}, plan
+    return res, {t.task_id: (t.method.features_label, t.method.label, t.fold.name) for t in plan.tasks}, plan
 
 
 def finished_at(tmp_path: Path, out: str = "out") -> dict[str, str]:

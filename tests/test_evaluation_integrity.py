@@ -25,7 +25,7 @@ from touchbench.datasets.adapt import AdapterError, adapt
 from touchbench.datasets.model import SensorSpec, TouchDataset, frames_checksum
 from touchbench.datasets.windows import window_dataset
 from touchbench.engine import run_protocol
-from touchbench.engine.runner import plan_run
+from touchbench.engine.planning import plan_run
 from touchbench.engine.testing import SENSOR, random_dataset
 from touchbench.protocols.schema import ProtocolError, parse_protocol
 from touchbench.protocols.splits import SUBJECTS_SHARED, SplitError, make_splitter

@@ -16,7 +16,7 @@ import pytest
 
 from touchbench.datasets.model import frames_checksum
 from touchbench.engine import run_protocol
-from touchbench.engine.runner import plan_run
+from touchbench.engine.planning import plan_run
 from touchbench.protocols.schema import ProtocolError, load_protocol
 
 STEMS = ("curvefurpat", "foamfurstroke", "nonenonetickle", "curveshortrub")

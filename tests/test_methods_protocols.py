@@ -162,10 +162,11 @@ def test_an_estimator_that_takes_captures_gets_them_as_recorded(data, tmp_path, 
     assert got.tolist() == want.tolist()
 
 
-@pytest.mark.parametrize("method", ["raw-window/touch-et-fast", "raw-window/minirocket"])
+@pytest.mark.parametrize("method", ["touch-rhythm/touch-et-fast", "minirocket"])
 def test_train_fits_the_same_method_as_the_run(data, tmp_path, method):
-    """``train --fold F`` fits the method the run evaluated (a named method; an estimator that
-    takes captures, named in methods:) and labels that fold's test captures as the run did."""
+    """``train --fold F`` fits the method the run evaluated (a named method, named by its features
+    and label; an estimator that takes captures, named in methods: and by its label alone) and
+    labels that fold's test captures as the run did."""
     from touchbench.deploy.train import train_from_protocol
 
     text = METHODS.format(data=data).replace(
@@ -174,7 +175,7 @@ def test_train_fits_the_same_method_as_the_run(data, tmp_path, method):
     res = _run(text, tmp_path, "trained")
     ds = TouchDataset.from_parquet(data)
     preds = _preds(res)
-    preds = preds[(preds["fold"] == "subject=s2") & (preds["classifier"] == method.split("/")[1])]
+    preds = preds[(preds["fold"] == "subject=s2") & (preds["classifier"] == method.split("/")[-1])]
     model = train_from_protocol(tmp_path / "trained.yaml", method, fold="s2")
     test = ds.meta["subject"].astype(str).to_numpy() == "s2"
     got = model.predict([c for c, t in zip(ds.captures, test) if t])

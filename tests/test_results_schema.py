@@ -84,7 +84,7 @@ def test_any_metadata_column_is_a_target(tmp_path):
 
 
 def test_a_target_the_data_lacks_lists_the_columns(tmp_path):
-    from touchbench.engine.runner import plan_run
+    from touchbench.engine.planning import plan_run
 
     with pytest.raises(ProtocolError) as e:
         plan_run(_protocol(tmp_path, target="covr"))

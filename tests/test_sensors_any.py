@@ -28,7 +28,7 @@ from touchbench.classifiers import CLASSIFIERS, make_classifier
 from touchbench.cli.main import cli
 from touchbench.core.introspect import sensor_problem
 from touchbench.datasets.model import SensorSpec, TouchDataset
-from touchbench.engine.runner import plan_run
+from touchbench.engine.planning import plan_run
 from touchbench.engine.testing import random_dataset
 from touchbench.features.base import FEATURES, FeatureInputError, make_feature_set
 from touchbench.methods import METHODS, FeaturePipeline, method_spec

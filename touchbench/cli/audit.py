@@ -49,7 +49,7 @@ def audit(protocol: str, evaluation: str | None, variants: tuple[str, ...], k: i
     report the inflation of each: a table, audit.md, audit.html and a figure in the results folder. Every
     variant is a protocol of its own in its folder; finished tasks are reused."""
     from ..engine.audit import VARIANTS, run_audit
-    from ..engine.runner import plan_run
+    from ..engine.planning import default_cache_root
     from ..protocols.schema import load_protocol
     from ..reports.audit import audit_rows, write_audit
 
@@ -61,7 +61,7 @@ def audit(protocol: str, evaluation: str | None, variants: tuple[str, ...], k: i
             raise click.BadParameter(f"{evaluation!r} is not an evaluation of {proto.name}", param_hint="--evaluation")
     sub = subs[0]
     folder = Path(out) if out else Path("results") / "audit" / (proto.name + (f"-{sub.evaluation}" if sub.evaluation else ""))
-    with backend_for_run(backend, scheduler, address, plan_run(sub).cache_root, jobs) as jobs:
+    with backend_for_run(backend, scheduler, address, default_cache_root(), jobs) as jobs:
         result = run_audit(sub, folder, jobs=jobs, k=k, window_seconds=window_seconds, tune=_tune(tune),
                            variants=variants or VARIANTS)
     files = write_audit(result.table, folder, result.published, result.notes,

@@ -41,19 +41,22 @@ def _floats(values, option: str) -> list[float] | None:
 @click.command("train", epilog=example("touchbench train demo-haart --method msd/gaus-rf --out msd.joblib"))
 @click.argument("protocol")
 @click.option("--method", "-m", default=None,
-              help="FEATURES/CLASSIFIER as the results name it, e.g. msd+sd/gaus-rf (optional when the protocol has one).")
+              help="FEATURES/METHOD as the results name it, e.g. msd+sd/gaus-rf, or a method's label alone when "
+                   "unique, e.g. touch-et (optional when the protocol has one).")
 @click.option("--out", "-o", required=True, type=click.Path(dir_okay=False), help="Model file to write (.joblib).")
 @click.option("--fold", default=None, help="Train on the training part of this fold of the protocol's scheme only.")
+@click.option("--evaluation", default=None, help="The evaluation to train on, for a protocol with several.")
 @click.option("--where", multiple=True, metavar="COL=V1,V2", help="Keep only captures with these values (repeatable).")
 @click.option("--exclude", multiple=True, metavar="COL=V1,V2", help="Drop captures with these values (repeatable).")
 @click.option("--window", "windows", multiple=True, metavar="SECONDS",
               help="Train on sliding windows of this length (repeatable, or comma-separated) for `stream`.")
 @click.option("--train-hop", type=float, default=None, help="Hop between training windows, seconds [default: half a window].")
 @click.option("--seed", type=int, default=None, help="Classifier seed [default: derived from the protocol seed].")
-def train(protocol, method, out, fold, where, exclude, windows, train_hop, seed) -> None:
-    """Fit one method of PROTOCOL on its data and save it with its manifest."""
+def train(protocol, method, out, fold, evaluation, where, exclude, windows, train_hop, seed) -> None:
+    """Fit one method of PROTOCOL on its evaluation's training side (never a test capture of it) and save it
+    with its manifest."""
     model = train_from_protocol(
-        protocol, method, fold=fold, where=parse_selection(where, "--where"),
+        protocol, method, fold=fold, evaluation=evaluation, where=parse_selection(where, "--where"),
         exclude=parse_selection(exclude, "--exclude"), windows=_floats(windows, "--window"),
         train_hop=train_hop, seed=seed,
     )

@@ -39,9 +39,9 @@ def validate(file: str, schema_only: bool, as_json: bool) -> None:
     proto = load_protocol(path)
     combos = proto.combinations()
     clfs = proto.classifier_entries()
-    n_methods = len(proto.entries())
+    n_methods = len(proto.evaluated_methods())
     shape = f"{len(combos)} feature combination(s) x {len(clfs)} classifier(s)" if combos else ""
-    extra = f"{len(proto.method_entries())} method(s)" if proto.methods else ""
+    extra = f"{n_methods - len(combos) * len(clfs)} method(s)" if proto.methods else ""
     out = {"file": str(path), "valid": True, "name": proto.name, "scheme": proto.scheme.name,
            "feature_combinations": len(combos), "classifiers": len(clfs), "methods": n_methods}
     if not as_json:
@@ -51,7 +51,7 @@ def validate(file: str, schema_only: bool, as_json: bool) -> None:
         if as_json:
             echo_json(out)
         return
-    from ..engine.runner import plan_run
+    from ..engine.planning import plan_run
 
     evaluations = []
     for sub in proto.evaluation_protocols():
@@ -69,7 +69,7 @@ def validate(file: str, schema_only: bool, as_json: bool) -> None:
                    f"{ds.meta['subject'].nunique()} subjects, {ds.meta[sub.target].nunique()} {sub.target} classes")
         ran = plan.protocol  # without what this evaluation's sensor refused (one of several evaluations)
         shape = (f"{len(ran.combinations())} x {len(ran.classifier_entries())}" if not ran.methods
-                 else f"{len(ran.entries())} method(s)")
+                 else f"{len(ran.evaluated_methods())} method(s)")
         click.echo(f"{plan.n_folds} fold(s) x {shape} = {len(plan.tasks)} task(s)")
         for reason in evaluations[-1]["leakage"]:
             click.echo(f"LEAKY: {reason}")

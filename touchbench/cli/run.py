@@ -97,7 +97,8 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
     folder). Finished tasks are skipped, so an interrupted run resumes where it stopped. Every run
     that scores a test set is recorded in the ledger of the results root (ledger.jsonl), which the
     leaderboard reads. Exits with status 1 when a task failed."""
-    from ..engine.runner import method_labels, plan_run, results_dirs
+    from ..engine.planning import method_labels, plan_run
+    from ..engine.runner import results_dirs
     from ..protocols.schema import load_protocol
 
     if force_final and not final:

@@ -1,23 +1,25 @@
-"""``touchbench train``: fit one method of a protocol on its data and save it.
+"""``touchbench train``: fit one method of a protocol on an evaluation's training side and save it.
 
-A *method* is what a leaderboard row names: a feature combination label and
-a classifier label of the protocol, written ``FEATURES/CLASSIFIER`` (for
-example ``msd+sd/gaus-rf``, or ``sd/rf100`` for a classifier entry labelled
-``rf100``); the labels are those of the run engine's results
-(:meth:`Protocol.combinations`, :meth:`Protocol.classifier_entries`).
+A *method* is what a leaderboard row names: ``FEATURES/METHOD`` as the
+results write it (for example ``msd+sd/gaus-rf``, or ``sd/rf100`` for a
+classifier entry labelled ``rf100``), or the method's label alone when it
+is unique (``touch-et``); see :meth:`Protocol.evaluated_methods`.
 
-The training data is the protocol's dataset after its filters, and then
-either all of it, or the training part of one fold of the protocol's scheme
-(``fold="subject=s01"``, or ``"s01"`` for short, under LOSO: every
-subject but s01; ``fold="challenge"``
-under the challenge split: the released training set), optionally narrowed
-further by ``--where COL=V1,V2`` and ``--exclude COL=V1,V2``.
+The training data is the evaluation's training side, never one of its test
+captures (:func:`touchbench.engine.planning.training_side`): the captures
+some fold trains on -- every capture under cross-validation, the released
+training set of a challenge split, the training dataset of a cross-dataset
+transfer -- or the training part of one fold (``fold="subject=s01"``, or
+``"s01"`` for short, under LOSO: every subject but s01; ``fold="challenge"``
+under the challenge split), optionally narrowed further by ``--where
+COL=V1,V2`` and ``--exclude COL=V1,V2``. A protocol with several evaluations
+names one with ``evaluation``.
 
-Seeds: the classifier's ``random_state`` is derived from the protocol seed
+Seeds: the estimator's ``random_state`` is derived from the protocol seed
 as the engine derives it. For a fold it is the seed of that fold's task in
-repetition 0, so ``train --fold F`` fits the same classifier, on the same
+repetition 0, so ``train --fold F`` fits the same estimator, on the same
 features, as the run engine did for fold F (their test predictions agree);
-for all the data it is ``derive_seed(seed, "train", features, classifier)``.
+for the whole training side it is ``derive_seed(seed, "train", method id)``.
 """
 
 from __future__ import annotations
@@ -30,11 +32,12 @@ import pandas as pd
 
 from ..core.errors import TouchbenchError
 from ..core.suggest import did_you_mean
-from ..engine.runner import plan_run
-from ..methods import resolve_entry
+from ..engine.planning import Prepared, fold_seed, prepare_evaluation, serving_protocol, training_side
+from ..methods import Method
 from ..protocols.library import find_protocol
-from ..protocols.schema import load_protocol
+from ..protocols.schema import Protocol, load_protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
+from ..protocols.splits import Fold
 from .model import TrainedModel, fit_model
 
 __all__ = ["parse_selection", "select", "train_from_protocol"]
@@ -68,18 +71,52 @@ def select(meta: pd.DataFrame, where: dict[str, list[str]], exclude: dict[str, l
     return np.flatnonzero(keep)
 
 
-def _choose(proto, method: str | None):
-    choices = proto.entries()
-    names = [f"{c.label}/{k.label}" for c, k in choices]
+def _choose(proto: Protocol, method: str | None) -> Method:
+    """The protocol's method named ``FEATURES/METHOD`` or by a unique label (optional when it has one)."""
+    methods = proto.evaluated_methods()
+    names = [f"{m.features_label}/{m.label}" for m in methods]
     if method is None:
-        if len(choices) == 1:
-            return choices[0]
-        raise TouchbenchError(f"protocol {proto.name!r} has {len(choices)} methods; choose one with --method "
+        if len(methods) == 1:
+            return methods[0]
+        raise TouchbenchError(f"protocol {proto.name!r} has {len(methods)} methods; choose one with --method "
                               f"({', '.join(names)})")
     if method in names:
-        return choices[names.index(method)]
+        return methods[names.index(method)]
+    by_label = [m for m in methods if m.label == method]
+    if len(by_label) == 1:
+        return by_label[0]
     hint = did_you_mean(method, names, cutoff=0.4)
     raise TouchbenchError(f"protocol {proto.name!r} has no method {method!r}{hint} (methods: {', '.join(names)})")
+
+
+def _evaluation(proto: Protocol, name: str | None) -> Protocol:
+    """The evaluation ``name`` of a protocol (the protocol itself when it has none)."""
+    subs = proto.evaluation_protocols()
+    if not proto.evaluations:
+        if name is not None:
+            raise TouchbenchError(f"protocol {proto.name!r} has no evaluations; leave out --evaluation")
+        return proto
+    known = [s.evaluation for s in subs]
+    if name is None and len(subs) > 1:
+        raise TouchbenchError(f"protocol {proto.name!r} has {len(subs)} evaluations; choose one with --evaluation "
+                              f"({', '.join(known)})")
+    if name is not None and name not in known:
+        raise TouchbenchError(f"protocol {proto.name!r} has no evaluation {name!r}{did_you_mean(name, known)} "
+                              f"(evaluations: {', '.join(known)})")
+    return subs[known.index(name) if name is not None else 0]
+
+
+def _fold(proto: Protocol, prepared: Prepared, fold: str) -> Fold:
+    """The fold of the first repetition named ``fold`` (or by its value alone when that is unique)."""
+    folds = prepared.folds[0]
+    names = [f.name for f in folds]
+    named = [f for f in folds if f.name == fold] or [f for f in folds if f.name.split("=", 1)[-1] == fold]
+    if len(named) != 1:
+        raise TouchbenchError(f"scheme {proto.scheme.name!r} of {proto.name!r} has no fold {fold!r} "
+                              f"(folds: {', '.join(names)})")
+    if named[0].crop is not None:
+        raise TouchbenchError(f"fold {named[0].name!r} crops captures (early recognition); train on whole captures instead")
+    return named[0]
 
 
 def train_from_protocol(
@@ -87,6 +124,7 @@ def train_from_protocol(
     method: str | None = None,
     *,
     fold: str | None = None,
+    evaluation: str | None = None,
     where: dict[str, list[str]] | None = None,
     exclude: dict[str, list[str]] | None = None,
     windows: Sequence[float] | None = None,
@@ -94,54 +132,40 @@ def train_from_protocol(
     seed: int | None = None,
 ) -> TrainedModel:
     """Fit the protocol's ``method`` (see the module docstring) and return the model."""
-
     path = find_protocol(str(protocol))
-    proto = load_protocol(path)
-    combo, clf = _choose(proto, method)
-    plan = plan_run(proto)  # loads the data, applies the filters, checks everything
-    ds = plan.dataset
+    proto = _evaluation(load_protocol(path), evaluation)
+    m = _choose(proto, method)
+    prepared = prepare_evaluation(proto)  # loads the data, applies the filters, builds the folds
+    served, left_out = serving_protocol(prepared)  # refuses what cannot serve the sensor
+    if m not in served.evaluated_methods():
+        raise TouchbenchError(f"method {m.label!r} cannot serve this evaluation: {'; '.join(left_out)}")
+    ds = prepared.dataset
     parts = [f"protocol {proto.name} filters" if (proto.dataset.filters or proto.dataset.exclude) else "all captures"]
-    idx = np.arange(len(ds))
     if fold is not None:
-        folds = list(dict.fromkeys(t.fold.name for t in plan.tasks if t.repetition == 0))
-        # a fold by its full name (``subject=s01``) or by the value alone (``s01``) when that is unique
-        named = [f for f in folds if f == fold] or [f for f in folds if f.split("=", 1)[-1] == fold]
-        if len(named) != 1:
-            raise TouchbenchError(f"scheme {proto.scheme.name!r} of {proto.name!r} has no fold {fold!r} "
-                                  f"(folds: {', '.join(folds)})")
-        fold = named[0]
-        tasks = [t for t in plan.tasks if t.repetition == 0 and t.fold.name == fold
-                 and t.features_label == combo.label and t.classifier_label == clf.label]
-        task = tasks[0]
-        if task.crop_frames is not None:
-            raise TouchbenchError(f"fold {fold!r} crops captures (early recognition); train on whole captures instead")
-        idx = np.asarray(task.fold.train)
-        default_seed = task.seed
+        chosen = _fold(proto, prepared, fold)
+        fold, idx, default_seed = chosen.name, np.asarray(chosen.train), fold_seed(prepared, m, chosen)
         parts.append(f"training part of fold {fold} ({proto.scheme.name})")
     else:
-        default_seed = derive_seed(proto.seed, "train", combo.label, clf.label)
+        idx = training_side(prepared)
+        default_seed = derive_seed(proto.seed, "train", *m.seed_labels)
+        if len(idx) < len(ds):
+            parts.append(f"the training side of {proto.scheme.name} ({len(ds) - len(idx)} test captures left out)")
     if where or exclude:
-        keep = select(ds.meta.iloc[idx].reset_index(drop=True), where or {}, exclude or {})
-        idx = idx[keep]
+        idx = idx[select(ds.meta.iloc[idx].reset_index(drop=True), where or {}, exclude or {})]
         parts += [f"where {k}={','.join(v)}" for k, v in (where or {}).items()]
         parts += [f"exclude {k}={','.join(v)}" for k, v in (exclude or {}).items()]
     if len(idx) == 0:
         raise TouchbenchError("the selection leaves no captures to train on")
-    train = ds.subset(idx)
     source: dict[str, Any] = {
-        "ref": proto.dataset.name,
-        "resolved": plan.dataset_ref,
-        "source_hash": plan.source_hash,
+        "ref": proto.dataset.name, "resolved": resolve_dataset_ref(proto), "source_hash": prepared.source.content_hash,
         "protocol": {"name": proto.name, "path": str(path), "content_hash": proto.content_hash,
-                     "text_hash": proto.text_hash, "seed": proto.seed, "scheme": proto.scheme.name},
-        "fold": fold,
-        "where": where or {},
-        "exclude": exclude or {},
+                     "text_hash": proto.text_hash, "seed": proto.seed, "scheme": proto.scheme.name,
+                     "evaluation": proto.evaluation},
+        "fold": fold, "where": where or {}, "exclude": exclude or {},
     }
-    method = resolve_entry(combo.sets, clf.name, clf.params)  # a named method brings its own feature sets
     return fit_model(
-        train, method.feature_sets, method.estimator, method.estimator_params,
+        ds.subset(idx), m.spec.feature_sets, m.spec.estimator, m.spec.estimator_params,
         seed=default_seed if seed is None else seed, target=proto.target,
-        windows=windows, train_hop=train_hop, features_label=combo.label, classifier_label=clf.label,
+        windows=windows, train_hop=train_hop, features_label=m.features_label, classifier_label=m.label,
         selection="; ".join(parts), source=source,
     )

@@ -46,7 +46,8 @@ from ..core.yamlsafe import safe_load
 from ..methods import METHODS
 from ..methods.base import takes_captures
 from ..protocols.schema import CAPTURES, Protocol, parse_protocol
-from .runner import plan_run, run_plan
+from .planning import prepare_evaluation
+from .runner import run_protocol
 
 __all__ = ["VARIANTS", "Audit", "audit_protocols", "run_audit"]
 
@@ -74,7 +75,7 @@ def _base_data(protocol: Protocol) -> dict[str, Any]:
 
 
 def _window_frames(protocol: Protocol, n_frames: int, frame_rate: float, window_seconds: float) -> tuple[int, str]:
-    ls = {int(clf.params["L"]) for _, clf in protocol.entries() if "L" in clf.params}
+    ls = {int(m.params["L"]) for m in protocol.evaluated_methods() if "L" in m.params}
     if len(ls) == 1:
         L = ls.pop()
         return max(1, n_frames // L), f"floor({n_frames} / L={L})"
@@ -94,17 +95,15 @@ def _window_entries(data: dict[str, Any], frames: int) -> dict[str, Any]:
 
 
 def _subject_id_entries(protocol: Protocol) -> list[dict[str, Any]]:
-    """The protocol's entries that have a feature matrix, as methods with the subject id appended."""
+    """The protocol's methods that have a feature matrix, as methods with the subject id appended."""
     out = []
-    for combo, clf in protocol.entries():
-        if combo.names == [CAPTURES]:
-            if clf.name in METHODS:
-                out.append({"name": clf.name, "params": clf.params, "label": clf.label, "subject_id_feature": True})
-            continue  # an estimator on captures: nothing to append the id to
-        if takes_captures(clf.name):
-            continue
-        out.append({"features": [{"name": n, "params": p} for n, p in combo.sets], "estimator": clf.name,
-                    "params": clf.params, "label": clf.label, "subject_id_feature": True})
+    for m in protocol.evaluated_methods():
+        if m.name in METHODS:
+            out.append({"name": m.name, "params": m.params, "label": m.label, "subject_id_feature": True})
+        elif not (m.spec.takes_captures or takes_captures(m.name)):  # on captures: nothing to append the id to
+            out.append({"features": [{"name": n, "params": p} for n, p in m.spec.feature_sets],
+                        "estimator": m.spec.estimator, "params": m.params, "label": m.label,
+                        "subject_id_feature": True})
     return out
 
 
@@ -144,7 +143,7 @@ def audit_protocols(protocol: Protocol, *, k: int = 10, window_seconds: float = 
     if "capture-kfold" in variants:
         out["capture-kfold"] = dict(base, scheme=kfold)
     if "window-kfold" in variants:
-        ds = plan_run(protocol).dataset  # the data, to size the windows
+        ds = prepare_evaluation(protocol).dataset  # the data, to size the windows
         frames, why = _window_frames(protocol, int(ds.n_frames.min()), ds.sensor.frame_rate, window_seconds)
         out["window-kfold"] = _window_entries(dict(copy.deepcopy(base), scheme={**kfold, "name": "window-kfold",
                                                                               "frames": frames}), frames)
@@ -196,7 +195,7 @@ def run_audit(protocol: Protocol, out: str | Path, *, jobs: int = 1, k: int = 10
         folder = out / variant
         folder.mkdir(parents=True, exist_ok=True)
         atomic_write_bytes(folder / "protocol.yaml", proto.text.encode())
-        res = run_plan(plan_run(proto), folder, jobs=jobs, progress=progress)
+        res = run_protocol(proto, folder, jobs=jobs, progress=progress)
         accs[variant] = _accuracies(res.scores)
         folders[variant] = folder
     rows = []

@@ -1,42 +1,27 @@
-"""The run engine: protocol -> plan of tasks -> parallel execution -> reports.
+"""Running a plan: pending tasks -> feature cache -> tasks (in parallel) -> stored results.
 
-``plan_run`` does every check that needs the data before any work: it loads
-the dataset, applies the protocol's filters (unknown columns or values are
-refused with the protocol line), checks the target, builds the folds of every
-repetition (a scheme that cannot be evaluated is refused with the scheme's
-message) and turns (repetition x fold x feature combination x classifier)
-into :class:`touchbench.engine.tasks.Task` objects with stable ids.
-
-``run_plan`` then
+The plan comes from :mod:`touchbench.engine.planning` (prepare -> serve ->
+plan). ``run_plan`` then
 
 1. skips finished tasks (their scores fragment exists; ``force`` recomputes,
-   ``retry_failed`` reruns failed ones),
-2. computes the fold-independent features of the pending tasks once, into
+   ``retry_failed`` reruns failed ones; ``methods`` runs only some methods'
+   tasks),
+2. records the look at the test set in the ledger, before any task,
+3. computes the fold-independent features of the pending tasks once, into
    the on-disk feature cache (``engine.cache``),
-3. runs the pending tasks, in parallel with joblib when ``jobs > 1``, each
+4. runs the pending tasks, in parallel with joblib when ``jobs > 1``, each
    result written as soon as it arrives (one atomic fragment per task),
-4. merges the fragments into ``scores`` / ``predictions`` / ``confusion``
+5. merges the fragments into ``scores`` / ``predictions`` / ``confusion``
    and writes ``manifest.json``.
 
 A rerun of a finished run loads the dataset, rebuilds the plan, sees that
 every task is finished and the reports are current, and does nothing else.
-
-Identity and seeds: a task id is a hash of everything that determines its
-result: the dataset's content hash (recomputed from the data when it is
-loaded), target, scheme and its parameters, repetition, fold name and
-indices, the feature sets and the classifier with their parameters and
-their identities (:mod:`touchbench.engine.identity`: the source of their
-modules and of the helper modules these import, touchbench's or the user's,
-and the versions of the third-party packages they import), and the protocol
-seed. Editing a component's code, or a helper it imports, recomputes exactly
-the tasks that use it. The run id is a hash of the protocol, the dataset and
-the task ids. The classifier's ``random_state`` is
-``derive_seed(seed, "task", repetition, fold, features, classifier)``.
+:func:`run_protocol` is the one entry point that runs a protocol, every
+evaluation of it into its own folder.
 """
 
 from __future__ import annotations
 
-import hashlib
 import os
 import sys
 import time
@@ -44,7 +29,6 @@ import warnings
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
-from types import SimpleNamespace
 from typing import Any, Sequence
 
 import numpy as np
@@ -60,31 +44,19 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from ..classifiers import make_classifier
 from ..core.errors import TouchbenchError
-from ..core.hashing import canonical_json
-from ..core.introspect import sensor_problem
-from ..core.paths import cache_dir
-from ..core.suggest import did_you_mean
-from ..datasets.model import DatasetChangedWarning, SensorSpec, TouchDataset
-from ..features import FEATURES
-from ..features.base import feature_set_refusal
-from ..methods import METHODS, MethodSpec, expand_candidates, method_spec, resolve_entry
-from ..protocols.schema import Protocol, expand_grid, load_protocol, resolve_dataset_ref
-from ..protocols.seeding import derive_seed
-from ..protocols.splits import SplitError
-from ..results.ledger import LEDGER_NAME, check_final, record_look, test_set_hash
-from ..results.manifest import LEFT_OUT, now_iso, update_manifest
+from ..datasets.model import TouchDataset
+from ..protocols.schema import Protocol, load_protocol
+from ..results.ledger import LEDGER_NAME, check_final, record_look
+from ..results.manifest import now_iso, update_manifest
 from ..results.store import PREDICTED, SCHEMA_VERSION, TRUE, ResultStore, check_schema, read_results_table
 from ..results.summary import check_expected, summarize
 from .backends import check_jobs, is_local_backend, local_jobs, parallel
 from .cache import FeatureCache, crop_captures
-from .evaluation_data import apply_filters, evaluation_dataset, load_spec
-from .identity import MAX_MODULES, Identity, classifier_identity, feature_set_identity
-from .tasks import RunContext, SetSpec, Task, execute_task, make_feature_set
+from .planning import Plan, check_methods, method_labels, plan_methods, plan_run, plan_test_set
+from .tasks import RunContext, Task, execute_task, make_feature_set
 
-__all__ = ["Plan", "RunResult", "check_sensor_fit", "sensor_refusals", "default_ledger", "default_results_dir", "method_labels", "plan_run", "plan_test_set",
-           "results_dirs", "run_plan", "run_protocol"]
+__all__ = ["RunResult", "default_ledger", "default_results_dir", "results_dirs", "run_plan", "run_protocol"]
 
 
 def default_results_dir(protocol: Protocol) -> Path:
@@ -92,42 +64,6 @@ def default_results_dir(protocol: Protocol) -> Path:
     for one evaluation of a protocol with several)."""
     root = Path("results") / protocol.name
     return root / protocol.evaluation if protocol.evaluation else root
-
-
-@dataclass
-class Plan:
-    protocol: Protocol
-    dataset: TouchDataset
-    dataset_ref: str
-    source_hash: str
-    tasks: list[Task]
-    notes: list[str]
-    run_id: str
-    cache_root: Path
-    n_folds: int = 0
-    #: the identity of every component the tasks use, by label ("feature set msd {...}")
-    identities: dict[str, Identity] = field(default_factory=dict)
-
-    @property
-    def package_versions(self) -> dict[str, str | None]:
-        """Every package version that entered a task id (the union over the components)."""
-        out: dict[str, str | None] = {}
-        for ident in self.identities.values():
-            out.update(ident.packages)
-        return dict(sorted(out.items()))
-
-    @property
-    def leakages(self) -> list[str]:
-        """The distinct reasons the plan's tasks leak (empty when every task is honest)."""
-        return sorted({t.base_row.get("leakage", "") for t in self.tasks} - {""})
-
-    @property
-    def task_ids(self) -> list[str]:
-        return [t.task_id for t in self.tasks]
-
-    @property
-    def ids_hash(self) -> str:
-        return hashlib.sha256("\n".join(self.task_ids).encode()).hexdigest()[:16]
 
 
 @dataclass
@@ -146,256 +82,6 @@ class RunResult:
     notes: list[str] = field(default_factory=list)
     #: ``fail_fast`` stopped the run at its first failed task (the other pending tasks did not run)
     stopped_early: bool = False
-
-
-# ----------------------------------------------------------------- planning
-def _label(kind: str, name: str, params: dict[str, Any]) -> str:
-    return f"{kind} {name}" + (f" {canonical_json(params)}" if params else "")
-
-
-def _spec_index(protocol: Protocol, name: str) -> int:
-    """The index in ``classifiers:`` of the first entry named ``name`` (for error locations)."""
-    return next((i for i, s in enumerate(protocol.classifiers) if s.name == name), 0)
-
-
-def _whole_captures_note(clf: Any, sets: Any, ds: TouchDataset) -> str | None:
-    """Beside a named method, ``[raw-window]`` stands for the captures as recorded: a note when
-    its parameters would have cut or padded them (they are not applied)."""
-    frames = dict(sets[0][1]).get("frames")
-    lo, hi = int(ds.n_frames.min()), int(ds.n_frames.max())
-    if frames is not None and (lo != int(frames) or hi != int(frames)):
-        return (f"method {clf.name!r} takes the captures as recorded ({lo}..{hi} frames); the frames={frames} "
-                f"of raw-window beside it is not applied")
-    return None
-
-
-def sensor_refusals(protocol: Protocol, sensor: SensorSpec, min_frames: int) -> list[tuple[tuple, str]]:
-    """Every component of the protocol that cannot serve ``sensor``: ``(field, message)`` pairs.
-
-    Every feature set and classifier (with each of its parameter settings)
-    is built with the sensor and asked (:func:`touchbench.core.introspect.sensor_problem`);
-    ``min_frames`` is the shortest capture a task will see. One pair per
-    entry (feature combination, classifier or method), its first reason.
-    """
-    out: list[tuple[tuple, str]] = []
-    for i, combo in enumerate(protocol.features):
-        problem = _sets_refusal(combo, ("features", i), sensor, min_frames)
-        if problem:
-            out.append(problem)
-    refused_methods = set()
-    for j, m in enumerate(protocol.methods):
-        problem = _sets_refusal(m.features or [], ("methods", j, "features"), sensor, min_frames)
-        if problem:
-            out.append(problem)
-            refused_methods.add(j)
-    specs = [(("classifiers", i), s.name, s.params) for i, s in enumerate(protocol.classifiers)]
-    specs += [(("methods", i), m.name or m.estimator, m.params) for i, m in enumerate(protocol.methods)
-              if i not in refused_methods]
-    for loc, name, params in specs:
-        problem = _classifier_refusal(name, params, sensor, min_frames)
-        if problem:
-            out.append((loc, problem))
-    return out
-
-
-def _sets_refusal(refs: Sequence[Any], field: tuple, sensor: SensorSpec, min_frames: int) -> tuple[tuple, str] | None:
-    """The first feature set of ``refs`` (any of its parameter settings) that cannot serve ``sensor``:
-    its protocol field (``field`` + its index) and the message, or None."""
-    for k, ref in enumerate(refs):
-        for p in expand_grid(ref.params):
-            problem = sensor_problem(make_feature_set(ref.name, p, sensor), sensor, min_frames)
-            if problem:
-                return (*field, k), f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {problem}"
-    return None
-
-
-def _classifier_refusal(name: str, params: dict, sensor: SensorSpec, min_frames: int) -> str | None:
-    """Why the classifier or named method ``name`` (any of its parameter settings) cannot serve ``sensor``."""
-    for p in expand_grid(params):
-        spec_name = name
-        if name in METHODS:  # a named method: its own feature sets, then its estimator
-            m = method_spec(name, **p)
-            for set_name, set_params in m.feature_sets:
-                problem = feature_set_refusal(set_name, set_params, sensor, min_frames)
-                if problem:
-                    return f"method {name!r} cannot serve sensor {sensor.describe()}: {problem}"
-            spec_name, p = m.estimator, m.estimator_params
-        try:
-            p = expand_candidates(spec_name, p)
-            est = make_classifier(spec_name, random_state=0, sensor=sensor, **p)
-        except Exception as e:
-            return f"classifier {name!r} rejects {p}: {type(e).__name__}: {e}"
-        problem = sensor_problem(est, sensor, min_frames)
-        if problem:
-            return f"classifier {name!r} cannot serve sensor {sensor.describe()}: {problem}"
-    return None
-
-
-def check_sensor_fit(protocol: Protocol, sensor: SensorSpec, min_frames: int) -> None:
-    """Refuse the protocol when one of its components cannot serve ``sensor`` (:func:`sensor_refusals`):
-    the first such component, with one message naming it, the sensor and its reason."""
-    refusals = sensor_refusals(protocol, sensor, min_frames)
-    if refusals:
-        raise protocol.error_at(*refusals[0])
-
-
-def without_refused(protocol: Protocol, refusals: list[tuple[tuple, str]]) -> Protocol:
-    """``protocol`` without the entries ``refusals`` name (a feature combination, classifier or method)."""
-    drop: dict[str, set[int]] = {"features": set(), "classifiers": set(), "methods": set()}
-    for loc, _ in refusals:
-        drop[loc[0]].add(int(loc[1]))
-    update = {k: [x for i, x in enumerate(getattr(protocol, k)) if i not in drop[k]] for k in drop}
-    return protocol.model_copy(update=update)
-
-
-def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: TouchDataset | None = None) -> Plan:
-    """Every check that needs the data, then the list of tasks (no work done)."""
-
-    cache_root = Path(cache_root) if cache_root is not None else cache_dir() / "features"
-    notes: list[str] = []
-    full = dataset if dataset is not None else load_spec(protocol, protocol.dataset, ("dataset",), notes)
-    ds = evaluation_dataset(protocol, apply_filters(protocol, full), notes)
-    target = protocol.target
-    if target not in ds.meta.columns:
-        cols = sorted(c for c in ds.meta.columns if c != "capture_id")
-        raise protocol.error_at(("target",), f"the dataset has no {target!r} column{did_you_mean(target, cols)} "
-                                             f"(its metadata columns: {', '.join(cols)})")
-    if ds.meta[target].isna().any():
-        raise protocol.error_at(("target",), f"{int(ds.meta[target].isna().sum())} captures have no {target!r} value")
-    classes = sorted({str(v) for v in ds.meta[target]})
-    if len(classes) < 2:
-        raise protocol.error_at(("target",), f"after the filters the target {target!r} has a single value {classes}: nothing to classify")
-
-    # feature sets must build with their parameters and this dataset's sensor
-    for i, combo in enumerate(protocol.features):
-        for j, ref in enumerate(combo):
-            for p in expand_grid(ref.params):
-                try:
-                    make_feature_set(ref.name, p, ds.sensor)
-                except Exception as e:
-                    raise protocol.error_at(("features", i, j), f"feature set {ref.name!r} rejects {p}: {type(e).__name__}: {e}") from None
-
-    entries = protocol.entries()
-    # each (combination, classifier) entry is a method: the combination's sets -> the classifier,
-    # or a named method's own sets -> its estimator (the combination is then [raw-window])
-    methods: dict[int, MethodSpec] = {}
-    for ei, (c, clf) in enumerate(entries):
-        try:
-            methods[ei] = resolve_entry(c.sets, clf.name, clf.params)
-        except TouchbenchError as e:
-            raise protocol.error_at(("classifiers", _spec_index(protocol, clf.name)), str(e)) from None
-        note = _whole_captures_note(clf, c.sets, ds) if clf.name in METHODS else None
-        if note:
-            notes.append(note)
-    identities: dict[str, Identity] = {}
-    set_info: dict[tuple, tuple[bool, str]] = {}
-    clf_info: dict[tuple, str] = {}
-    for m in methods.values():
-        for name, params in m.feature_sets:
-            k = (name, canonical_json(params))
-            if k not in set_info:
-                ident = identities[_label("feature set", name, params)] = feature_set_identity(name, params)
-                set_info[k] = (bool(getattr(FEATURES.get(name), "fold_dependent", True)), ident.digest)
-        k = (m.estimator, canonical_json(m.estimator_params))
-        if k not in clf_info:
-            ident = identities[_label("classifier", m.estimator, m.estimator_params)] = classifier_identity(
-                m.estimator, m.estimator_params)
-            clf_info[k] = ident.digest
-    for label, ident in identities.items():
-        if ident.incomplete:
-            notes.append(f"the {label} imports more than {MAX_MODULES} modules of its own: "
-                         "edits beyond the first ones found are not noticed (use --force after editing them)")
-
-    scheme_leak = protocol.splitter(0).leakage()
-    for ei, (c, clf) in enumerate(entries):
-        if clf.subject_id_feature and not methods[ei].feature_sets:
-            raise protocol.error_at(("methods",), f"{clf.label!r}: subject_id_feature needs a feature matrix; "
-                                                  f"{methods[ei].estimator!r} takes the captures themselves")
-    tasks: list[Task] = []
-    timed: set[tuple] = set()  # methods (and crops) whose latency task is chosen: the first in plan order
-    n_folds = 0
-    scheme_json = canonical_json({"name": protocol.scheme.name, **protocol.scheme.params})
-    for r in range(protocol.repetitions):
-        splitter = protocol.splitter(r)
-        try:
-            folds = splitter.split(ds.meta)
-        except SplitError as e:
-            raise protocol.error_at(("scheme",), str(e)) from None
-        prefix = f"repetition {r}: " if protocol.repetitions > 1 else ""
-        notes += [prefix + n for n in splitter.notes_]
-        n_folds += len(folds)
-        for fold in folds:
-            crop_frames = fold.crop.n_frames(ds.sensor.frame_rate) if fold.crop is not None else None
-            idx_hash = hashlib.sha256(fold.train.tobytes() + b"|" + fold.test.tobytes()).hexdigest()[:16]
-            for ei, (combo, clf) in enumerate(entries):
-                method = methods[ei]
-                sets = []
-                for name, params in method.feature_sets:
-                    dep, ver = set_info[(name, canonical_json(params))]
-                    sets.append(SetSpec(
-                        name=name, params=params, fold_dependent=dep,
-                        key_full=None if dep else FeatureCache.key(ds.content_hash, name, params, ver, None),
-                        key_crop=None if dep or crop_frames is None else FeatureCache.key(ds.content_hash, name, params, ver, crop_frames),
-                    ))
-                estimator = [method.estimator, method.estimator_params,
-                             clf_info[(method.estimator, canonical_json(method.estimator_params))]]
-                identity = {
-                    "dataset": ds.content_hash, "target": target, "scheme": scheme_json, "repetition": r,
-                    "fold": fold.name, "indices": idx_hash, "crop": [crop_frames, bool(fold.crop and fold.crop.train)],
-                    "features": [[n, p, set_info[(n, canonical_json(p))][1]] for n, p in method.feature_sets],
-                    "classifier": [clf.name, method.estimator_params, *estimator[2:]] if clf.name == method.estimator
-                    else [clf.name, clf.params, estimator],
-                    "seed": protocol.seed,
-                }
-                if clf.subject_id_feature:  # only then: the ids of every other task stay as they were
-                    identity["subject_id_feature"] = True
-                task_id = hashlib.sha256(canonical_json(identity).encode()).hexdigest()[:20]
-                seed = derive_seed(protocol.seed, "task", r, fold.name, combo.label, clf.label)
-                base = {
-                    "task_id": task_id, "protocol": protocol.name, "dataset": protocol.dataset.name,
-                    "dataset_hash": ds.content_hash, "target": target, "scheme": protocol.scheme.name,
-                    "repetition": r, "fold": fold.name, "fold_group": fold.group,
-                    "early_frames": np.float64(crop_frames) if crop_frames is not None else np.nan,
-                    "features": combo.label, "feature_sets": "+".join(method.feature_names),
-                    "feature_params": canonical_json([[n, p] for n, p in method.feature_sets]),
-                    "classifier": clf.label, "classifier_name": clf.name,
-                    "classifier_params": canonical_json(clf.params), "seed": seed,
-                    "n_train": int(len(fold.train)), "n_test": int(len(fold.test)),
-                    "leakage": "; ".join(x for x in [scheme_leak, *clf.leakage] if x),
-                    "selection": clf.tuned_on_test,
-                }
-                tasks.append(Task(
-                    task_id=task_id, repetition=r, fold=fold, features_label=combo.label, sets=tuple(sets),
-                    classifier_label=clf.label, classifier_name=clf.name, classifier_params=clf.params,
-                    seed=seed, crop_frames=crop_frames, base_row=base,
-                    estimator_name=method.estimator, estimator_params=method.estimator_params,
-                    measure_latency=(combo.label, clf.label, crop_frames) not in timed and not clf.subject_id_feature,
-                    subject_id_feature=clf.subject_id_feature,
-                ))
-                timed.add((combo.label, clf.label, crop_frames))
-    crops = [t.crop_frames for t in tasks if t.crop_frames is not None]
-    min_frames = int(min([int(ds.n_frames.min()), *crops]))
-    refusals = sensor_refusals(protocol, ds.sensor, min_frames)
-    if refusals:
-        # one of several evaluations: what cannot serve this evaluation's sensor is left out of it, said;
-        # a protocol of one evaluation (or one left with nothing) is refused
-        reduced = without_refused(protocol, refusals) if protocol.evaluation else None
-        if reduced is None or not reduced.entries():
-            raise protocol.error_at(*refusals[0])
-        plan = plan_run(reduced, cache_root=cache_root, dataset=full)
-        plan.notes[:0] = [f"{LEFT_OUT}{protocol.evaluation!r}: {msg}" for _, msg in refusals]
-        return plan
-    ids = [t.task_id for t in tasks]
-    if len(set(ids)) != len(ids):
-        raise protocol.error_at(("features",), "two entries of the protocol describe the same task (duplicate combination or classifier)")
-    # The run is the set of its tasks: a change of protocol, data, component source or
-    # package version that changes any task gives another run id.
-    run_id = hashlib.sha256(canonical_json(
-        {"protocol": protocol.content_hash, "dataset": ds.content_hash,
-         "tasks": hashlib.sha256("\n".join(ids).encode()).hexdigest()}).encode()).hexdigest()[:12]
-    return Plan(protocol=protocol, dataset=ds, dataset_ref=resolve_dataset_ref(protocol), source_hash=full.content_hash,
-                tasks=tasks, notes=list(dict.fromkeys(notes)), run_id=run_id, cache_root=cache_root, n_folds=n_folds,
-                identities=identities)
 
 
 # ----------------------------------------------------------------- progress
@@ -497,7 +183,7 @@ def _reports_current(store: ResultStore, plan: Plan, notes: list[str]) -> bool:
 def _damaged_notes(plan: Plan, problems: dict[str, str]) -> list[str]:
     """A note per task of the plan whose saved results could not be trusted (run again)."""
     by_id = {t.task_id: t for t in plan.tasks}
-    return [f"the saved results of {t.features_label} | {t.classifier_label}, fold {t.fold.name} (repetition "
+    return [f"the saved results of {t.method.features_label} | {t.method.label}, fold {t.fold.name} (repetition "
             f"{t.repetition}) were not used: {problems[tid]}; run again"
             for tid, t in by_id.items() if tid in problems]
 
@@ -507,18 +193,6 @@ def default_ledger(protocol: Protocol, out: str | Path) -> Path:
     folder per evaluation when the protocol has several)."""
     folder = Path(out).parent if protocol.evaluation else Path(out)
     return folder.parent / LEDGER_NAME
-
-
-def plan_test_set(plan: Plan) -> str:
-    """The hash of every capture some task of the plan tests (:func:`touchbench.results.ledger.test_set_hash`)."""
-    idx = sorted({int(i) for t in plan.tasks for i in t.fold.test})
-    ds = plan.dataset
-    return test_set_hash([ds.captures[i] for i in idx], ds.meta[plan.protocol.target].astype(str).to_numpy()[idx])
-
-
-def plan_methods(plan: Plan) -> list[str]:
-    """The methods a plan evaluates, as ``features / classifier`` labels."""
-    return sorted({f"{t.features_label} / {t.classifier_label}" for t in plan.tasks})
 
 
 def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force: bool = False,
@@ -554,24 +228,6 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
                            ledger=ledger, methods=only)
 
 
-def method_labels(plan: Plan) -> list[str]:
-    """The method labels (``--method``'s values) of ``plan``'s tasks, in plan order."""
-    return list(dict.fromkeys(t.classifier_label for t in plan.tasks))
-
-
-def check_methods(plan: Plan, methods: Sequence[str] | None) -> set[str] | None:
-    """The method labels ``methods`` names in ``plan`` (None: all); an unknown one is refused naming the known."""
-    if not methods:
-        return None
-    known = method_labels(plan)
-    unknown = [m for m in methods if m not in known]
-    if unknown:
-        raise TouchbenchError(f"{unknown[0]!r} is not a method of {plan.protocol.name}"
-                              + (f" / {plan.protocol.evaluation}" if plan.protocol.evaluation else "")
-                              + f" (its methods: {', '.join(known)})")
-    return set(methods)
-
-
 def _design_captures(plan: Plan) -> list[str] | None:
     """The ids of the captures the protocol's ``design`` names (None without one)."""
     design = plan.protocol.design
@@ -598,82 +254,67 @@ def _record_look(plan: Plan, ledger: Path, final: bool, force_final: bool, n_pen
     return test_set, notes
 
 
-def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry_failed: bool,
-                progress: bool | None, worker_setup, fail_fast: bool = False, final: bool = False,
-                force_final: bool = False, ledger: Path, methods: set[str] | None = None) -> RunResult:
-    t_start = time.perf_counter()
-    started_at = now_iso()
-    protocol = plan.protocol
-    out = store.root
-    store.clean_stale_temporaries()
+def _jobs_for_backend(jobs: int) -> int:
+    """``jobs`` capped to the CPUs on the local backend (a warning), checked on a cluster."""
     if is_local_backend():
         jobs, warning = local_jobs(jobs)
         if warning:
-            warnings.warn(warning, RuntimeWarning, stacklevel=2)
+            warnings.warn(warning, RuntimeWarning, stacklevel=3)
     else:
         check_jobs(jobs)
-    if force:
-        store.forget(plan.task_ids)
-    damaged: dict[str, str] = {}
-    finished = store.finished(damaged)
-    notes = list(plan.notes) + _damaged_notes(plan, damaged)
-    pending = [t for t in plan.tasks
-               if t.task_id not in finished or (retry_failed and finished[t.task_id] == "failed")]
-    if methods is not None:  # only these methods run; every finished task is still merged
-        pending = [t for t in pending if t.classifier_label in methods]
-    show = sys.stderr.isatty() if progress is None else progress
-    design_captures = _design_captures(plan)  # a design naming an unknown column is refused before any task
+    return jobs
 
-    if not pending and not final and _reports_current(store, plan, notes):
-        scores = read_results_table(store.scores_path)
-        preds = None
-        if protocol.expected is not None:
-            preds = read_results_table(store.predictions_path, columns=["task_id", TRUE, PREDICTED])
-        return RunResult(out=out, run_id=plan.run_id, n_tasks=len(plan.tasks), n_ran=0, n_skipped=len(plan.tasks),
-                         n_failed=int((scores["status"] == "failed").sum()), noop=True,
-                         seconds=time.perf_counter() - t_start, scores=scores, summary=summarize(scores, metrics=protocol.metrics),
-                         expected=check_expected(protocol.expected, scores, preds), notes=notes)
 
-    test_set, final_notes = _record_look(plan, ledger, final, force_final, len(pending))  # before any task
-    notes += final_notes
-    n_ran = 0
-    stopped = False
-    with _Progress(show) as prog:
-        if pending:
-            notes += _fill_cache(plan, pending, jobs, prog, worker_setup)
-            ds_path = _dataset_copy(plan) if jobs > 1 and len(pending) > 1 else None
-            ctx = RunContext(plan.dataset, protocol.target, plan.cache_root, ds_path, setup=worker_setup)
-            tid = prog.add(f"{protocol.name}: tasks", len(pending))
-            if jobs == 1 or len(pending) == 1:
-                results = (execute_task(t, ctx) for t in pending)
-            else:  # never more workers than tasks
-                results = parallel(min(jobs, len(pending)), ordered=False)(
-                    delayed(execute_task)(t, ctx) for t in pending)
-            for row, preds in results:
-                if preds is not None:
-                    preds.insert(0, "run_id", plan.run_id)
-                row["run_id"] = plan.run_id
-                store.write_task(row["task_id"], row, preds)
-                n_ran += 1
-                prog.advance(tid)
-                if fail_fast and row.get("status") == "failed":
-                    stopped = True
-                    break
-            if hasattr(results, "close"):
-                results.close()  # a generator left early: joblib cancels what it has not started
+def _selected(plan: Plan, methods: set[str] | None) -> list[Task]:
+    """The tasks of the methods this run is about (all of them without ``methods``)."""
+    return [t for t in plan.tasks if methods is None or t.method.label in methods]
 
-    stamp = {"run_id": plan.run_id, "protocol": protocol.name, "protocol_hash": protocol.text_hash}
-    per_task = {col: {t.task_id: t.base_row.get(col, "") for t in plan.tasks} for col in ("leakage", "selection")}
-    merged = store.merge(plan.task_ids, stamp, protocol.metrics, notes, per_task)
-    scores = merged["scores"]
-    expected = check_expected(protocol.expected, scores, merged["predictions"])
-    status = store.finished()
-    n_failed = sum(1 for t in plan.task_ids if status.get(t) == "failed")
-    session = {"started_at": started_at, "finished_at": now_iso(), "jobs": jobs, "ran": n_ran,
-               "skipped": len(plan.tasks) - len(pending), "force": force,
-               "seconds": round(time.perf_counter() - t_start, 3)}
-    manifest = update_manifest(
-        store.read_manifest(),
+
+def _noop_result(plan: Plan, store: ResultStore, n_selected: int, notes: list[str], t_start: float) -> RunResult:
+    """The result of a run with nothing to do: the merged tables as they are."""
+    protocol = plan.protocol
+    scores = read_results_table(store.scores_path)
+    preds = None
+    if protocol.expected is not None:
+        preds = read_results_table(store.predictions_path, columns=["task_id", TRUE, PREDICTED])
+    return RunResult(out=store.root, run_id=plan.run_id, n_tasks=n_selected, n_ran=0, n_skipped=n_selected,
+                     n_failed=int((scores["status"] == "failed").sum()), noop=True,
+                     seconds=time.perf_counter() - t_start, scores=scores,
+                     summary=summarize(scores, metrics=protocol.metrics),
+                     expected=check_expected(protocol.expected, scores, preds, protocol.features_label_of),
+                     notes=notes)
+
+
+def _execute(plan: Plan, store: ResultStore, pending: list[Task], jobs: int, prog: "_Progress", worker_setup,
+             fail_fast: bool) -> tuple[int, bool]:
+    """Run ``pending``, each result stored as it arrives: (tasks run, stopped at a failure)."""
+    ds_path = _dataset_copy(plan) if jobs > 1 and len(pending) > 1 else None
+    ctx = RunContext(plan.dataset, plan.protocol.target, plan.cache_root, ds_path, setup=worker_setup)
+    tid = prog.add(f"{plan.protocol.name}: tasks", len(pending))
+    if jobs == 1 or len(pending) == 1:
+        results = (execute_task(t, ctx) for t in pending)
+    else:  # never more workers than tasks
+        results = parallel(min(jobs, len(pending)), ordered=False)(delayed(execute_task)(t, ctx) for t in pending)
+    n_ran, stopped = 0, False
+    for row, preds in results:
+        if preds is not None:
+            preds.insert(0, "run_id", plan.run_id)
+        row["run_id"] = plan.run_id
+        store.write_task(row["task_id"], row, preds)
+        n_ran += 1
+        prog.advance(tid)
+        if fail_fast and row.get("status") == "failed":
+            stopped = True
+            break
+    if hasattr(results, "close"):
+        results.close()  # a generator left early: joblib cancels what it has not started
+    return n_ran, stopped
+
+
+def _manifest_blocks(plan: Plan, out: Path) -> dict[str, Any]:
+    """The manifest's description of the run's protocol, dataset and component identities."""
+    protocol = plan.protocol
+    return dict(
         run={"run_id": plan.run_id, "results_dir": str(out)},
         protocol={"name": protocol.name, "path": str(protocol.path) if protocol.path else None,
                   "text": protocol.text, "text_hash": protocol.text_hash, "content_hash": protocol.content_hash,
@@ -687,19 +328,83 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
         identity={"packages": plan.package_versions,
                   "components": {label: {"digest": i.digest, "modules": list(i.modules)}
                                  for label, i in plan.identities.items()}},
-        session=session,
+    )
+
+
+@dataclass
+class _Session:
+    """What one invocation did, for the manifest and the result."""
+
+    started_at: str
+    t_start: float
+    jobs: int
+    force: bool
+    n_selected: int
+    n_pending: int
+    n_ran: int = 0
+    stopped: bool = False
+    notes: list[str] = field(default_factory=list)
+
+    def block(self) -> dict[str, Any]:
+        return {"started_at": self.started_at, "finished_at": now_iso(), "jobs": self.jobs, "ran": self.n_ran,
+                "skipped": self.n_selected - self.n_pending, "force": self.force,
+                "seconds": round(time.perf_counter() - self.t_start, 3)}
+
+
+def _merge_and_record(plan: Plan, store: ResultStore, session: _Session, ledger: Path, test_set: str,
+                      final: bool, design_captures: list[str] | None) -> RunResult:
+    """Merge every finished task of the plan into the tables and write the manifest."""
+    protocol, out = plan.protocol, store.root
+    stamp = {"run_id": plan.run_id, "protocol": protocol.name, "protocol_hash": protocol.text_hash}
+    # what the plan says of each task, over what its fragment says: how it leaks, and how it is named
+    # (a label renamed in the protocol changes no task, only the name its rows carry)
+    per_task = {col: {t.task_id: t.base_row.get(col, "") for t in plan.tasks}
+                for col in ("leakage", "selection", "features", "classifier")}
+    merged = store.merge(plan.task_ids, stamp, protocol.metrics, session.notes, per_task)
+    scores = merged["scores"]
+    expected = check_expected(protocol.expected, scores, merged["predictions"], protocol.features_label_of)
+    status = store.finished()
+    n_failed = sum(1 for t in plan.task_ids if status.get(t) == "failed")
+    manifest = update_manifest(
+        store.read_manifest(), **_manifest_blocks(plan, out), session=session.block(),
         tasks={"total": len(plan.tasks), "merged": len(scores), "failed": n_failed, "folds": plan.n_folds,
                "ids_hash": plan.ids_hash, "task_ids": plan.task_ids, "merged_files": store.merged_checksums()},
-        notes=notes,
-        expected=expected,
-    )
+        notes=session.notes, expected=expected)
     manifest["ledger"] = {"path": os.path.relpath(ledger, out), "test_set": test_set, "final": final}
     manifest["protocol"]["design_captures"] = design_captures
     store.write_manifest(manifest)
-    return RunResult(out=out, run_id=plan.run_id, n_tasks=len(plan.tasks), n_ran=n_ran,
-                     n_skipped=len(plan.tasks) - len(pending), n_failed=n_failed, noop=False,
-                     seconds=time.perf_counter() - t_start, scores=scores, summary=summarize(scores, metrics=protocol.metrics),
-                     expected=expected, notes=notes, stopped_early=stopped)
+    return RunResult(out=out, run_id=plan.run_id, n_tasks=session.n_selected, n_ran=session.n_ran,
+                     n_skipped=session.n_selected - session.n_pending, n_failed=n_failed, noop=False,
+                     seconds=time.perf_counter() - session.t_start, scores=scores,
+                     summary=summarize(scores, metrics=protocol.metrics), expected=expected, notes=session.notes,
+                     stopped_early=session.stopped)
+
+
+def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry_failed: bool,
+                progress: bool | None, worker_setup, fail_fast: bool = False, final: bool = False,
+                force_final: bool = False, ledger: Path, methods: set[str] | None = None) -> RunResult:
+    t_start, started_at = time.perf_counter(), now_iso()
+    store.clean_stale_temporaries()
+    jobs = _jobs_for_backend(jobs)
+    if force:
+        store.forget(plan.task_ids)
+    damaged: dict[str, str] = {}
+    finished = store.finished(damaged)
+    notes = list(plan.notes) + _damaged_notes(plan, damaged)
+    selected = _selected(plan, methods)  # only these run; every finished task of the plan is still merged
+    pending = [t for t in selected
+               if t.task_id not in finished or (retry_failed and finished[t.task_id] == "failed")]
+    design_captures = _design_captures(plan)  # a design naming an unknown column is refused before any task
+    if not pending and not final and _reports_current(store, plan, notes):
+        return _noop_result(plan, store, len(selected), notes, t_start)
+
+    test_set, final_notes = _record_look(plan, ledger, final, force_final, len(pending))  # before any task
+    session = _Session(started_at, t_start, jobs, force, len(selected), len(pending), notes=notes + final_notes)
+    with _Progress(sys.stderr.isatty() if progress is None else progress) as prog:
+        if pending:
+            session.notes += _fill_cache(plan, pending, jobs, prog, worker_setup)
+            session.n_ran, session.stopped = _execute(plan, store, pending, jobs, prog, worker_setup, fail_fast)
+    return _merge_and_record(plan, store, session, ledger, test_set, final, design_captures)
 
 
 def results_dirs(protocol: Protocol, out: str | Path | None = None) -> list[tuple[Protocol, Path]]:

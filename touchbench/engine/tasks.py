@@ -1,4 +1,4 @@
-"""One task: (repetition, fold, feature combination, classifier) -> scores and predictions.
+"""One task: (repetition, fold, method) -> scores and predictions.
 
 A task is independent of every other: it reads the dataset (shared,
 read-only), the fold's indices and the feature cache, fits the combination's
@@ -35,6 +35,7 @@ from ..core.threads import single_thread
 from ..datasets.model import TouchDataset
 from ..evaluation.metrics import metrics
 from ..features.base import make_feature_set
+from ..methods import Method
 from ..methods.fitting import fit_estimator
 from ..protocols.splits import Fold, fold_notes
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
@@ -60,21 +61,17 @@ class SetSpec:
 
 @dataclass(frozen=True)
 class Task:
+    """(evaluation, fold, method): the unit the engine runs and stores."""
+
     task_id: str
     repetition: int
     fold: Fold
-    features_label: str
-    sets: tuple[SetSpec, ...]
-    classifier_label: str
-    classifier_name: str
-    classifier_params: dict[str, Any]
+    method: Method
+    sets: tuple[SetSpec, ...]  # the method's feature sets with their cache keys
     seed: int
     crop_frames: int | None = None  # resolved from fold.crop with the sensor's frame rate
     measure_latency: bool = True  # the one task per method (and crop) of a run that measures latency
-    estimator_name: str = ""  # the method's estimator (the classifier itself, or a named method's)
-    estimator_params: dict[str, Any] = field(default_factory=dict)
     base_row: dict[str, Any] = field(default_factory=dict)
-    subject_id_feature: bool = False  # the leaky variant: the subject's id one-hot appended to the features
 
 
 class RunContext:
@@ -233,15 +230,15 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
         with single_thread(), warnings.catch_warnings():
             warnings.simplefilter("ignore")
             X_tr, X_te, fitted, per_capture, feat_fit = _fold_features(task, ctx, y_train)
-            if task.subject_id_feature:
+            if task.method.subject_id_feature:
                 X_tr, X_te = _with_subject_id(ds, fold, X_tr, X_te)
             row["feature_seconds_per_capture"] = per_capture
             row["feature_fit_seconds"] = feat_fit
             groups = ds.meta["subject"].to_numpy()[fold.train]
             t0 = time.perf_counter()
-            fitted_est = fit_estimator(task.estimator_name or task.classifier_name,
-                                       task.estimator_params if task.estimator_name else task.classifier_params,
-                                       task.seed, X_tr, y_train, groups, sensor=ds.sensor)
+            spec = task.method.spec
+            fitted_est = fit_estimator(spec.estimator, spec.estimator_params, task.seed, X_tr, y_train, groups,
+                                       sensor=ds.sensor)
             row["fit_seconds"] = time.perf_counter() - t0 if fitted_est.estimator is not None else 0.0
             row["n_classes_train"] = int(len(fitted_est.classes))
             t0 = time.perf_counter()
@@ -264,8 +261,8 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
             "fold": fold.name,
             "fold_group": fold.group,
             "early_frames": np.float64(task.crop_frames) if task.crop_frames is not None else np.nan,
-            "features": task.features_label,
-            "classifier": task.classifier_label,
+            "features": task.method.features_label,
+            "classifier": task.method.label,
             "capture_id": meta["capture_id"].astype(str).to_numpy(),
             "subject": meta["subject"].astype(str).to_numpy(),
             "gesture": meta["gesture"].astype(str).to_numpy(),

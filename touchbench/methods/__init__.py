@@ -13,9 +13,9 @@ training set of one class, and limits threads: the engine's tasks and
 ``touchbench train`` both fit through it.
 """
 
-from .base import CAPTURES, METHODS, MethodSpec, expand_candidates, method_spec, resolve_entry
+from .base import CAPTURES, METHODS, Method, MethodSpec, expand_candidates, features_label, method_spec, resolve_entry
 from .fitting import FittedEstimator, fit_estimator
 from .pipeline import FeaturePipeline
 
-__all__ = ["CAPTURES", "METHODS", "FeaturePipeline", "FittedEstimator", "MethodSpec", "expand_candidates",
-           "fit_estimator", "method_spec", "resolve_entry"]
+__all__ = ["CAPTURES", "METHODS", "FeaturePipeline", "FittedEstimator", "Method", "MethodSpec", "expand_candidates",
+           "features_label", "fit_estimator", "method_spec", "resolve_entry"]

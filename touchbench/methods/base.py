@@ -7,14 +7,20 @@ protocol may write ``{name: touch-et, params: {n_estimators: 100}}``.
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, field
 from typing import Any
 
 from ..classifiers import CLASSIFIERS
 from ..core.errors import TouchbenchError
+from ..core.hashing import canonical_json
 from ..core.registry import Registry
 
-__all__ = ["CAPTURES", "METHODS", "MethodSpec", "expand_candidates", "method_spec", "resolve_entry"]
+__all__ = ["CAPTURES", "METHODS", "Method", "MethodSpec", "SUBJECT_ID_LEAK", "TUNED_ON_TEST_LEAK",
+           "expand_candidates", "method_spec", "resolve_entry"]
+
+SUBJECT_ID_LEAK = "the subject's id is a feature"
+TUNED_ON_TEST_LEAK = "a parameter chosen by its test accuracy"
 
 
 @dataclass(frozen=True)
@@ -39,6 +45,74 @@ class MethodSpec:
     @property
     def feature_names(self) -> list[str]:
         return [n for n, _ in self.feature_sets]
+
+
+@dataclass(frozen=True)
+class Method:
+    """One method a protocol evaluates: the unit of a task, a results row and a model file.
+
+    Every spelling of a protocol (``features`` x ``classifiers``, a registered
+    method, an inline pipeline, a classifier on captures) is read into one of
+    these, so nothing downstream knows which spelling it came from.
+
+    - ``spec``: what is fitted (feature sets -> estimator, with parameters);
+    - ``name`` and ``params``: the registered method or classifier the
+      protocol named, with the parameters it gave (grids expanded);
+    - ``label``: how reports name the method (the protocol's ``label``, or
+      ``name`` with the grid values); ``features_label``: how reports name its
+      input (the protocol's feature combination, the method's own feature
+      sets, or ``captures`` for an estimator that takes the captures);
+    - the leaky variants: ``subject_id_feature`` (the subject one-hot
+      appended to the features) and ``tuned_on_test`` (the label of the
+      entry whose grid value is chosen by its test accuracy, "" otherwise).
+
+    :attr:`key` is the method's content (never a display label): its
+    :attr:`method_id` and, with the evaluation and the fold, its tasks'
+    identities and seeds come from it, so renaming a label changes neither.
+    """
+
+    label: str
+    spec: MethodSpec
+    name: str
+    params: dict[str, Any] = field(default_factory=dict)
+    features_label: str = ""
+    subject_id_feature: bool = False
+    tuned_on_test: str = ""
+    #: the frame count the protocol stated for the captures a registered method takes as recorded
+    input_frames: int | None = None
+    seed_labels: tuple[str, ...] = ()
+
+    @property
+    def key(self) -> dict[str, Any]:
+        """What determines the method's results: feature sets, estimator, parameters, variant."""
+        key: dict[str, Any] = {"features": [[n, dict(p)] for n, p in self.spec.feature_sets],
+                               "estimator": [self.spec.estimator, dict(self.spec.estimator_params)]}
+        if self.subject_id_feature:
+            key["subject_id_feature"] = True
+        return key
+
+    @property
+    def method_id(self) -> str:
+        """A short hash of :attr:`key`."""
+        return hashlib.sha256(canonical_json(self.key).encode()).hexdigest()[:12]
+
+    @property
+    def leakage(self) -> list[str]:
+        """What this method lets the test data inform (empty for an honest method)."""
+        return [why for why, on in ((SUBJECT_ID_LEAK, self.subject_id_feature),
+                                    (TUNED_ON_TEST_LEAK, bool(self.tuned_on_test))) if on]
+
+
+def features_label(spec: MethodSpec, combination_label: str) -> str:
+    """How reports name a method's input: the protocol's combination for a pipeline of its
+    own, the method's own feature sets for a registered method, ``captures`` for an
+    estimator that takes the captures (with the length it takes when one is set)."""
+    if spec.takes_captures:
+        length = spec.estimator_params.get("length")
+        return "captures" + (f"(frames={length})" if length is not None else "")
+    if spec.name in METHODS:
+        return "+".join(spec.feature_names)
+    return combination_label
 
 
 # Filled by every module of touchbench.methods (imported on first use of the registry).

@@ -469,7 +469,7 @@ def _other_sections(proto, scores: pd.DataFrame, preds: pd.DataFrame | None, fla
 def _expected_rows(proto, scores: pd.DataFrame, preds: pd.DataFrame | None) -> list[dict[str, Any]]:
     if proto.expected is None:
         return []
-    rows = check_expected(proto.expected, scores, preds)
+    rows = check_expected(proto.expected, scores, preds, proto.features_label_of)
     for r, e in zip(rows, proto.expected.results):
         r["cell"] = e.source or ""
     return rows

@@ -96,7 +96,7 @@ from ..core.yamlsafe import MAX_BYTES, load_bounded, yaml_problem
 from ..datasets.registry import WRITE_LOCATIONS
 from ..features import FEATURES
 from ..features.base import FeatureInputError, SensorNeededError, make_feature_set
-from ..methods import CAPTURES, METHODS
+from ..methods import CAPTURES, METHODS, Method, features_label, resolve_entry
 from ..methods.base import takes_captures
 from .seeding import derive_seed
 from .splits import SPLITTERS, SplitError, Splitter, make_splitter
@@ -504,20 +504,6 @@ class ClassifierEntry(BaseModel):
     #: the entry whose grid is chosen on test accuracy (its label without the grid), "" otherwise
     tuned_on_test: str = ""
 
-    @property
-    def leakage(self) -> list[str]:
-        """What this entry lets the test data inform (empty for an honest method)."""
-        out = []
-        if self.subject_id_feature:
-            out.append(SUBJECT_ID_LEAK)
-        if self.tuned_on_test:
-            out.append(TUNED_ON_TEST_LEAK)
-        return out
-
-
-SUBJECT_ID_LEAK = "the subject's id is a feature"
-TUNED_ON_TEST_LEAK = "a parameter chosen by its test accuracy"
-
 
 class DesignSpec(_Model):
     """The data its methods were designed on (features, parameters chosen by looking at it).
@@ -795,16 +781,16 @@ class Protocol(_Model):
                 c.label = _label(c.label, c.params)
         return out
 
-    def method_entries(self) -> list[tuple[FeatureCombination, ClassifierEntry]]:
-        """The ``methods:`` entries as (combination, classifier entry) pairs, grids expanded.
+    def _method_entries(self) -> list[tuple[int, FeatureCombination, ClassifierEntry]]:
+        """The ``methods:`` entries (index, combination, classifier entry), grids expanded.
 
-        A registered method is paired with ``[raw-window]``, the combination
-        that stands for the captures as recorded beside a method (exactly as
-        ``features: [[raw-window]]`` with ``classifiers: [touch-et]`` reads);
-        an inline pipeline with its own feature sets.
+        A registered method, or an estimator on captures, stands beside the
+        ``[raw-window]`` combination (the captures as recorded), exactly as
+        ``features: [[raw-window]]`` with ``classifiers: [touch-et]`` reads;
+        an inline pipeline has its own feature sets.
         """
         out = []
-        for m in self.methods:
+        for i, m in enumerate(self.methods):
             if m.name is not None:
                 combo = FeatureCombination(label=CAPTURES, sets=[(CAPTURES, {})])
                 name = m.name
@@ -815,16 +801,47 @@ class Protocol(_Model):
             grid_keys = sorted(k for k, v in m.params.items() if _is_grid(v))
             base = (m.label or name) + ("+subject-id" if m.subject_id_feature else "")
             for p in expand_grid(m.params):
-                out.append((combo, ClassifierEntry(label=_label(base, p, grid_keys) if grid_keys else base,
-                                                   name=name, params=p, subject_id_feature=m.subject_id_feature,
-                                                   tuned_on_test=f"{base} ({', '.join(grid_keys)} chosen on test)"
-                                                   if m.tuned_on_test else "")))
+                out.append((i, combo, ClassifierEntry(label=_label(base, p, grid_keys) if grid_keys else base,
+                                                      name=name, params=p, subject_id_feature=m.subject_id_feature,
+                                                      tuned_on_test=f"{base} ({', '.join(grid_keys)} chosen on test)"
+                                                      if m.tuned_on_test else "")))
         return out
 
-    def entries(self) -> list[tuple[FeatureCombination, ClassifierEntry]]:
-        """Every method the protocol evaluates: the features x classifiers cross product, then ``methods:``."""
-        return ([(c, k) for c in self.combinations() for k in self.classifier_entries()]
-                + self.method_entries())
+    def _entry_pairs(self) -> list[tuple[FeatureCombination, ClassifierEntry, tuple]]:
+        """Every (combination, classifier entry) pair as the protocol spells it, with its field:
+        the ``features`` x ``classifiers`` cross product, then ``methods:`` (grids expanded)."""
+        out = [(c, k, ("classifiers", self._classifier_index(k.name)))
+               for c in self.combinations() for k in self.classifier_entries()]
+        return out + [(c, k, ("methods", i)) for i, c, k in self._method_entries()]
+
+    def evaluated_methods(self) -> list[Method]:
+        """Every method the protocol evaluates, each spelling read into a :class:`Method`."""
+        return [self._method(c, k, loc) for c, k, loc in self._entry_pairs()]
+
+    def _classifier_index(self, name: str) -> int:
+        """The index in ``classifiers:`` of the first entry named ``name`` (for error locations)."""
+        return next((i for i, s in enumerate(self.classifiers) if s.name == name), 0)
+
+    def _method(self, combo: FeatureCombination, clf: ClassifierEntry, loc: tuple) -> Method:
+        """The method of one (combination, classifier entry) pair; a pairing that means nothing
+        (a registered method beside feature sets of its own) is refused at ``loc``."""
+        try:
+            spec = resolve_entry(combo.sets, clf.name, clf.params)
+        except TouchbenchError as e:
+            raise self.error_at(loc, str(e)) from None
+        frames = dict(combo.sets[0][1]).get("frames") if clf.name in METHODS else None
+        return Method(label=clf.label, spec=spec, name=clf.name, params=dict(clf.params),
+                      features_label=features_label(spec, combo.label), subject_id_feature=clf.subject_id_feature,
+                      tuned_on_test=clf.tuned_on_test, input_frames=None if frames is None else int(frames),
+                      seed_labels=(combo.label, clf.label))
+
+    def features_label_of(self, names: list[str]) -> str:
+        """The features label reports give the methods of the combination ``names`` (an
+        ``expected`` reference names the combination as the protocol wrote it)."""
+        key = "+".join(names)
+        labels = {self._method(c, k, loc).features_label for c, k, loc in self._entry_pairs()
+                  if c.names == list(names) or c.label == key}
+        return labels.pop() if len(labels) == 1 else key
 
     def best_label(self, best: ExpectedBest) -> str:
         """The label of the classifier entry that ``best`` (an entry of
@@ -1158,10 +1175,10 @@ def _classifier_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
 def _expected_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
     if protocol.expected is None:
         return []
-    entries = protocol.entries()
-    combos = [c for c, _ in entries]
+    entries = protocol._entry_pairs()
+    combos = [c for c, _, _ in entries]
     by_names = {"+".join(c.names) for c in combos} | {c.label for c in combos}
-    clfs = [k for _, k in entries]
+    clfs = [k for _, k, _ in entries]
     clf_names = ({c.label for c in clfs} | {c.name for c in clfs} | {s.label for s in protocol.classifiers if s.label}
                  | {m.label for m in protocol.methods if m.label})
     labels = sorted(c.label for c in clfs)

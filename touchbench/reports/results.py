@@ -48,7 +48,7 @@ import yaml
 
 from ..core.errors import TouchbenchError
 from ..core.yamlsafe import safe_load
-from ..protocols.schema import SUBJECT_ID_LEAK
+from ..methods.base import SUBJECT_ID_LEAK
 from ..results.ledger import Looks, looks
 from ..results.manifest import LEFT_OUT
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE, ResultStore, check_schema, read_results_table

@@ -384,7 +384,7 @@ class ResultStore:
         so the merged report describes the current protocol. Rows keep the
         order of ``task_ids`` (the plan's order), independent of the order
         tasks finished in. ``per_task`` (column -> task id -> value: the
-        evaluation's leakage) overwrites those columns of each task's rows in
+        evaluation's leakage, the method's names) overwrites those columns of each task's rows in
         both tables, so a fragment written before the column existed is
         labelled as the plan says. ``metrics`` (scikit-learn scorer names) add one
         scores column each, computed from each task's stored predictions

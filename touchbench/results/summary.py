@@ -9,7 +9,7 @@ over every test prediction of the configuration.
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 import pandas as pd
@@ -63,8 +63,14 @@ def _pooled_metric(preds: pd.DataFrame, metric: str) -> float:
     return metrics(preds[TRUE].to_numpy(), preds[PREDICTED].to_numpy())[metric]
 
 
-def check_expected(expected, scores: pd.DataFrame, predictions: pd.DataFrame | None = None) -> list[dict[str, Any]]:
+def check_expected(expected, scores: pd.DataFrame, predictions: pd.DataFrame | None = None,
+                   features_label_of: Callable[[list[str]], str] | None = None) -> list[dict[str, Any]]:
     """Compare a protocol's ``expected`` block (values in percent) with the scores.
+
+    An expected result names a feature combination as the protocol wrote it;
+    ``features_label_of`` (the protocol's
+    :meth:`touchbench.protocols.schema.Protocol.features_label_of`) gives the
+    features label the results carry for its methods.
 
     One dict per expected result: ``observed`` (percent, ``None`` when the
     configuration has no successful fold), ``difference`` and ``within``
@@ -78,7 +84,8 @@ def check_expected(expected, scores: pd.DataFrame, predictions: pd.DataFrame | N
         metric = r.metric or expected.metric
         tol = r.tolerance if r.tolerance is not None else expected.tolerance
         key = "+".join(r.features)
-        sel = ok[(ok["feature_sets"] == key) | (ok["features"] == key)] if not ok.empty else ok
+        keys = {key, features_label_of(list(r.features))} if features_label_of is not None else {key}
+        sel = ok[ok["feature_sets"].isin(keys) | ok["features"].isin(keys)] if not ok.empty else ok
         if not sel.empty:
             by_label = sel[sel["classifier"] == r.classifier]
             sel = by_label if not by_label.empty else sel[sel["classifier_name"] == r.classifier]

@@ -1,0 +1,110 @@
+"""The staged run path: an evaluation's training side, methods chosen by label, seeds from content.
+
+Every expected count is worked out from the datasets built here (``random_dataset``: ``per_cell``
+captures per subject and gesture, three gestures), never read from the code's own output.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from touchbench.cli.main import cli as main
+from touchbench.datasets.model import TouchDataset
+from touchbench.deploy.model import TrainedModel
+from touchbench.engine import run_protocol
+from touchbench.engine.planning import plan_run, prepare_evaluation, training_side
+from touchbench.engine.testing import random_dataset
+from touchbench.protocols.schema import parse_protocol
+
+GESTURES = 3
+
+
+@pytest.fixture(autouse=True)
+def env(engine_env):
+    yield
+
+
+def _protocol(tmp_path: Path, body: str, name: str = "p") -> Path:
+    p = tmp_path / f"{name}.yaml"
+    p.write_text(f"name: {name}\n" + body)
+    return p
+
+
+def _cross_dataset(tmp_path: Path) -> tuple[Path, Path, Path]:
+    train, test = tmp_path / "train.parquet", tmp_path / "test.parquet"
+    random_dataset(subjects=("a1", "a2", "a3"), per_cell=2, seed=1).to_parquet(train)
+    random_dataset(subjects=("b1",), per_cell=3, seed=2).to_parquet(test)
+    p = _protocol(tmp_path, f"dataset: {train}\nscheme: {{name: cross-dataset, test: {test}}}\n"
+                            "features: [[test-mean]]\nclassifiers: [test-logreg]\n")
+    return p, train, test
+
+
+def test_train_on_a_transfer_fits_the_training_dataset_alone(tmp_path):
+    p, train, test = _cross_dataset(tmp_path)
+    res = run_protocol(p, out=tmp_path / "out", progress=False)
+    out = tmp_path / "model.joblib"
+    r = CliRunner().invoke(main, ["train", str(p), "--out", str(out)], catch_exceptions=False)
+    assert r.exit_code == 0, r.output
+    manifest = json.loads(Path(str(out) + ".json").read_text())
+    assert manifest["dataset"]["n_captures"] == 3 * GESTURES * 2  # the training dataset: 3 subjects
+    test_ds = TouchDataset.from_parquet(test)
+    model = TrainedModel.load(out)
+    got = model.predict(test_ds.captures)
+    accuracy = float(np.mean(got == test_ds.meta["gesture"].astype(str).to_numpy()))
+    assert accuracy == pytest.approx(float(res.scores["accuracy"].iloc[0]))  # the run's one fold
+
+
+def test_training_side_leaves_out_captures_that_are_only_tested(tmp_path):
+    p, _, _ = _cross_dataset(tmp_path)
+    prepared = prepare_evaluation(parse_protocol(p.read_text(), p))
+    side = training_side(prepared)
+    assert len(prepared.dataset) == 3 * GESTURES * 2 + 1 * GESTURES * 3
+    assert set(prepared.dataset.meta["origin"].to_numpy()[side]) == {"train"} and len(side) == 18
+    data = tmp_path / "one.parquet"
+    random_dataset(subjects=("s1", "s2", "s3"), per_cell=1).to_parquet(data)
+    loso = _protocol(tmp_path, f"dataset: {data}\nscheme: loso\nfeatures: [[test-mean]]\nclassifiers: [test-logreg]\n",
+                     "loso")
+    assert len(training_side(prepare_evaluation(parse_protocol(loso.read_text(), loso)))) == 3 * GESTURES
+
+
+def _two_methods(tmp_path: Path) -> Path:
+    data = tmp_path / "d.parquet"
+    random_dataset(subjects=("s1", "s2", "s3"), per_cell=1).to_parquet(data)
+    return _protocol(tmp_path, f"dataset: {data}\nscheme: loso\nfeatures: [[test-mean]]\n"
+                               "classifiers: [test-logreg, {name: test-forest, label: forest}]\n")
+
+
+def _run_json(p: Path, out: Path, *args: str) -> dict:
+    r = CliRunner().invoke(main, ["run", str(p), "--out", str(out), "--json", *args], catch_exceptions=False)
+    assert r.exit_code == 0, r.output
+    return json.loads(r.stdout)
+
+
+def test_run_method_counts_only_the_selected_methods_tasks(tmp_path):
+    p, out = _two_methods(tmp_path), tmp_path / "out"
+    first = _run_json(p, out, "--method", "forest")
+    assert first["tasks"] == {"total": 3, "ran": 3, "skipped": 0, "failed": 0}  # 3 subjects, one method
+    second = _run_json(p, out, "--method", "test-logreg")  # the forest's 3 finished tasks are not this run's
+    assert second["tasks"] == {"total": 3, "ran": 3, "skipped": 0, "failed": 0}
+    again = _run_json(p, out, "--method", "forest")
+    assert again["tasks"] == {"total": 3, "ran": 0, "skipped": 3, "failed": 0}
+    assert len(pd.read_parquet(out / "scores.parquet")) == 6  # the tables hold both methods
+
+
+def test_a_named_method_is_reported_by_its_own_feature_sets(tmp_path):
+    data = tmp_path / "d.parquet"
+    random_dataset(subjects=("s1", "s2"), per_cell=1, frames=(60, 60)).to_parquet(data)
+    p = _protocol(tmp_path, f"dataset: {data}\nscheme: loso\nmethods: [touch-et-fast]\n")
+    (method,) = parse_protocol(p.read_text(), p).evaluated_methods()
+    assert method.features_label == "touch-rhythm" and method.label == "touch-et-fast"
+    p2 = _protocol(tmp_path, f"dataset: {data}\nscheme: loso\nfeatures: [[{{name: raw-window, params: {{frames: 60}}}}]]\n"
+                            "classifiers: [touch-et-fast]\n",
+                   "p2")
+    (same,) = parse_protocol(p2.read_text(), p2).evaluated_methods()
+    assert same.key == method.key and same.features_label == "touch-rhythm"
