@@ -97,6 +97,31 @@ def test_run_method_counts_only_the_selected_methods_tasks(tmp_path):
     assert len(pd.read_parquet(out / "scores.parquet")) == 6  # the tables hold both methods
 
 
+def _forest(tmp_path: Path, label: str, name: str) -> Path:
+    data = tmp_path / "d.parquet"
+    if not data.exists():
+        random_dataset(subjects=("s1", "s2", "s3"), per_cell=2).to_parquet(data)
+    return _protocol(tmp_path, f"dataset: {data}\nscheme: loso\nfeatures: [[test-mean]]\n"
+                               f"classifiers: [{{name: test-forest, label: {label}}}]\n", name)
+
+
+def test_renaming_a_label_changes_no_seed_and_no_stored_result(tmp_path):
+    before = plan_run(parse_protocol(_forest(tmp_path, "a", "p").read_text(), tmp_path / "p.yaml"))
+    res_a = run_protocol(tmp_path / "p.yaml", out=tmp_path / "out", progress=False)
+    renamed = _forest(tmp_path, "b", "p")
+    after = plan_run(parse_protocol(renamed.read_text(), renamed))
+    assert [t.seed for t in after.tasks] == [t.seed for t in before.tasks]
+    assert after.task_ids == before.task_ids
+    res_b = run_protocol(renamed, out=tmp_path / "out", progress=False)
+    assert res_b.n_ran == 0  # nothing recomputed ...
+    assert set(res_b.scores["classifier"]) == {"b"}  # ... and the tables carry the new name
+    preds = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
+    assert set(preds["classifier"]) == {"b"}
+    fresh = run_protocol(renamed, out=tmp_path / "fresh", progress=False)  # the same method, anew
+    np.testing.assert_array_equal(fresh.scores["accuracy"].to_numpy(), res_a.scores["accuracy"].to_numpy())
+    np.testing.assert_array_equal(fresh.scores["seed"].to_numpy(), res_a.scores["seed"].to_numpy())
+
+
 def test_a_named_method_is_reported_by_its_own_feature_sets(tmp_path):
     data = tmp_path / "d.parquet"
     random_dataset(subjects=("s1", "s2"), per_cell=1, frames=(60, 60)).to_parquet(data)

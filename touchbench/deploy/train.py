@@ -147,7 +147,7 @@ def train_from_protocol(
         parts.append(f"training part of fold {fold} ({proto.scheme.name})")
     else:
         idx = training_side(prepared)
-        default_seed = derive_seed(proto.seed, "train", *m.seed_labels)
+        default_seed = derive_seed(proto.seed, "train", m.method_id)
         if len(idx) < len(ds):
             parts.append(f"the training side of {proto.scheme.name} ({len(ds) - len(idx)} test captures left out)")
     if where or exclude:

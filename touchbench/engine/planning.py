@@ -393,8 +393,10 @@ def _base_row(place: _FoldPlace, m: Method, task_id: str, seed: int) -> dict[str
 
 
 def _task_seed(place: _FoldPlace, m: Method) -> int:
-    """The estimator's seed of ``m`` at ``place``."""
-    return derive_seed(place.protocol.seed, "task", place.repetition, place.fold.name, *m.seed_labels)
+    """The estimator's seed of ``m`` at ``place``: the protocol seed, the evaluation's content, the
+    repetition, the fold and the method's content -- never a display label."""
+    return derive_seed(place.protocol.seed, "task", place.evaluation_key, place.repetition, place.fold.name,
+                       m.method_id)
 
 
 def fold_seed(prepared: Prepared, m: Method, fold: Fold, repetition: int = 0) -> int:

@@ -80,7 +80,6 @@ class Method:
     tuned_on_test: str = ""
     #: the frame count the protocol stated for the captures a registered method takes as recorded
     input_frames: int | None = None
-    seed_labels: tuple[str, ...] = ()
 
     @property
     def key(self) -> dict[str, Any]:

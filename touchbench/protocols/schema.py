@@ -832,8 +832,7 @@ class Protocol(_Model):
         frames = dict(combo.sets[0][1]).get("frames") if clf.name in METHODS else None
         return Method(label=clf.label, spec=spec, name=clf.name, params=dict(clf.params),
                       features_label=features_label(spec, combo.label), subject_id_feature=clf.subject_id_feature,
-                      tuned_on_test=clf.tuned_on_test, input_frames=None if frames is None else int(frames),
-                      seed_labels=(combo.label, clf.label))
+                      tuned_on_test=clf.tuned_on_test, input_frames=None if frames is None else int(frames))
 
     def features_label_of(self, names: list[str]) -> str:
         """The features label reports give the methods of the combination ``names`` (an
