@@ -72,7 +72,7 @@ from ..features.base import feature_set_refusal
 from ..methods import METHODS, MethodSpec, expand_candidates, method_spec, resolve_entry
 from ..protocols.schema import Protocol, expand_grid, load_protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
-from ..protocols.splits import SplitError
+from ..protocols.schemes import SplitError
 from ..results.ledger import LEDGER_NAME, check_final, record_look, test_set_hash
 from ..results.manifest import LEFT_OUT, now_iso, update_manifest
 from ..results.store import PREDICTED, SCHEMA_VERSION, TRUE, ResultStore, check_schema, read_results_table
@@ -318,7 +318,7 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
     for r in range(protocol.repetitions):
         splitter = protocol.splitter(r)
         try:
-            folds = splitter.split(ds.meta)
+            folds = splitter.folds(ds.meta)
         except SplitError as e:
             raise protocol.error_at(("scheme",), str(e)) from None
         prefix = f"repetition {r}: " if protocol.repetitions > 1 else ""
