@@ -162,6 +162,17 @@ def test_cross_dataset_trains_on_one_dataset_and_tests_on_the_other(tmp_path):
     assert res.scores["leakage"].tolist() == [""]
 
 
+def test_early_prepares_the_data_as_its_base_does(tmp_path):
+    train = _data(tmp_path, "train.parquet", subjects=("a1", "a2"), seed=1)
+    test = _data(tmp_path, "test.parquet", subjects=("b1",), seed=2)
+    p = _protocol(tmp_path, f"dataset: {train}\nscheme: {{name: early, frames: [2, 3], base: {{name: cross-dataset, "
+                            f"test: {test}}}}}\nfeatures: [[test-mean]]\nclassifiers: [test-logreg]\n")
+    plan = plan_run(parse_protocol(p.read_text(), p))
+    origin = plan.dataset.meta["origin"].to_numpy()
+    assert [t.fold.name for t in plan.tasks] == ["first2f/train->test", "first3f/train->test"]
+    assert all(set(origin[t.fold.train]) == {"train"} and set(origin[t.fold.test]) == {"test"} for t in plan.tasks)
+
+
 def test_cross_dataset_refuses_test_captures_that_are_training_ones(tmp_path):
     train = random_dataset(subjects=("a1", "a2"), per_cell=2, seed=1)
     same = train.subset([0, 5])  # two training recordings, read again as another study's
