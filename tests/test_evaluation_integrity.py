@@ -28,7 +28,8 @@ from touchbench.engine import run_protocol
 from touchbench.engine.planning import plan_run
 from touchbench.engine.testing import SENSOR, random_dataset
 from touchbench.protocols.schema import ProtocolError, parse_protocol
-from touchbench.protocols.splits import SUBJECTS_SHARED, SplitError, make_splitter
+from touchbench.protocols.schemes import SplitError, make_splitter
+from touchbench.protocols.schemes.kfold import SUBJECTS_SHARED
 from touchbench.reports.html import write_report
 from touchbench.reports.leaderboard import build_leaderboards, display_rows, to_markdown
 from touchbench.reports.results import load_results
@@ -159,6 +160,17 @@ def test_cross_dataset_trains_on_one_dataset_and_tests_on_the_other(tmp_path):
     assert set(meta["subject"].to_numpy()[t.fold.test]) == {"b1"}
     res = run_protocol(p, out=tmp_path / "out", progress=False)
     assert res.scores["leakage"].tolist() == [""]
+
+
+def test_early_prepares_the_data_as_its_base_does(tmp_path):
+    train = _data(tmp_path, "train.parquet", subjects=("a1", "a2"), seed=1)
+    test = _data(tmp_path, "test.parquet", subjects=("b1",), seed=2)
+    p = _protocol(tmp_path, f"dataset: {train}\nscheme: {{name: early, frames: [2, 3], base: {{name: cross-dataset, "
+                            f"test: {test}}}}}\nfeatures: [[test-mean]]\nclassifiers: [test-logreg]\n")
+    plan = plan_run(parse_protocol(p.read_text(), p))
+    origin = plan.dataset.meta["origin"].to_numpy()
+    assert [t.fold.name for t in plan.tasks] == ["first2f/train->test", "first3f/train->test"]
+    assert all(set(origin[t.fold.train]) == {"train"} and set(origin[t.fold.test]) == {"test"} for t in plan.tasks)
 
 
 def test_cross_dataset_refuses_test_captures_that_are_training_ones(tmp_path):

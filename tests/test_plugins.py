@@ -157,6 +157,28 @@ def test_entries_registered_while_a_plugin_is_imported_carry_it():
     assert "plugin touchbench-plugin-test 2.0" in reg.entry("theirs").origin
 
 
+def test_a_plugin_registers_a_scheme_beside_the_package_s_own():
+    from touchbench.protocols.schemes import SPLITTERS, Fold, Splitter, make_splitter
+
+    info = PluginInfo("touchbench-plugin-test", "2.0", "t", "tp")
+    own = SPLITTERS.names()  # the package's modules, found by the registry
+    try:
+        with importing(info):
+            @SPLITTERS.register("every-other", description="even rows trained on, odd rows tested")
+            class EveryOther(Splitter):
+                name = "every-other"
+
+                def _split(self, meta):
+                    idx = np.arange(len(meta))
+                    return [Fold("odd", idx[idx % 2 == 0], idx[idx % 2 == 1])]
+
+        assert SPLITTERS.entry("every-other").plugin == info and "loso" in own
+        train, test = next(make_splitter("every-other").split(pd.DataFrame({"gesture": list("abcd")})))
+        assert train.tolist() == [0, 2] and test.tolist() == [1, 3]
+    finally:
+        SPLITTERS._entries.pop("every-other", None)
+
+
 # ------------------------------------------------------------- broken plugins
 def _fake_plugin(root: Path, package: str, module: str, source: str) -> None:
     """An installed distribution ``package`` 1.0 whose entry point ``main`` names ``module``."""

@@ -45,9 +45,9 @@ _LAZY: dict[str, str] = {
     "MethodSpec": "touchbench.methods.base",
     "method_spec": "touchbench.methods.base",
     "FeaturePipeline": "touchbench.methods.pipeline",
-    "SPLITTERS": "touchbench.protocols.splits",
-    "Fold": "touchbench.protocols.splits",
-    "make_splitter": "touchbench.protocols.splits",
+    "SPLITTERS": "touchbench.protocols.schemes",
+    "Fold": "touchbench.protocols.schemes",
+    "make_splitter": "touchbench.protocols.schemes",
     "Protocol": "touchbench.protocols.schema",
     "load_protocol": "touchbench.protocols.schema",
     "parse_protocol": "touchbench.protocols.schema",
@@ -130,7 +130,7 @@ if TYPE_CHECKING:  # for type checkers and editors; at run time the names come f
     from .methods.pipeline import FeaturePipeline
     from .protocols.library import find_protocol
     from .protocols.schema import Protocol, load_protocol, parse_protocol
-    from .protocols.splits import SPLITTERS, Fold, make_splitter
+    from .protocols.schemes import SPLITTERS, Fold, make_splitter
     from .reports.leaderboard import (
         Leaderboard,
         build_leaderboards,

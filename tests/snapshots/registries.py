@@ -21,7 +21,7 @@ def registries() -> dict:
     from touchbench.datasets.formats import FORMATS
     from touchbench.features import FEATURES
     from touchbench.methods import METHODS
-    from touchbench.protocols.splits import SPLITTERS
+    from touchbench.protocols.schemes import SPLITTERS
     from touchbench.scenes import SCENES
 
     return {"classifiers": CLASSIFIERS, "datasets": DATASETS, "evaluation schemes": SPLITTERS,

@@ -10,7 +10,7 @@ from ..core.registry import Entry, Registry
 from ..datasets import DATASETS
 from ..datasets.formats import FORMATS
 from ..features import FEATURES
-from ..protocols.splits import SPLITTERS
+from ..protocols.schemes import SPLITTERS
 from .common import echo_json, example, json_option
 
 # Every registry a plugin may fill, as the listings name them.

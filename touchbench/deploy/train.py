@@ -37,7 +37,7 @@ from ..methods import Method
 from ..protocols.library import find_protocol
 from ..protocols.schema import Protocol, load_protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
-from ..protocols.splits import Fold
+from ..protocols.schemes import Fold
 from .model import TrainedModel, fit_model
 
 __all__ = ["parse_selection", "select", "train_from_protocol"]

@@ -6,18 +6,17 @@
 - :func:`apply_filters` keeps the captures an entry's ``filters`` keep and
   its ``exclude`` does not drop (unknown columns or values are refused at
   their protocol line).
-- :func:`evaluation_dataset` applies the scheme: ``cross-dataset`` loads the
-  test data, filters it, brings it to the training sensor with the declared
-  adapters (:mod:`touchbench.datasets.adapt`, each recorded in the notes)
-  and stacks both with an ``origin`` column and each capture's frame
-  checksum (the splitter refuses test captures that are training ones); a
-  scheme whose samples are windows (``window-kfold``) gets every capture cut
-  into its windows (:func:`touchbench.datasets.windows.window_dataset`).
+- :func:`evaluation_dataset` is what the scheme makes of the dataset: its
+  :meth:`~touchbench.protocols.schemes.Splitter.prepare` (``cross-dataset``
+  loads, filters and adapts its test data and stacks both; ``window-kfold``
+  cuts the captures into windows), given the protocol's services as a
+  :class:`~touchbench.protocols.schemes.DataContext`.
 """
 
 from __future__ import annotations
 
 import warnings
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -26,11 +25,9 @@ import pandas as pd
 from ..catalog import load_dataset, parse_dataset_ref
 from ..core.errors import TouchbenchError
 from ..core.suggest import did_you_mean
-from ..datasets.adapt import AdapterError, adapt
-from ..datasets.model import DatasetChangedWarning, TouchDataset, concat, frames_checksum
-from ..datasets.windows import seconds_to_frames, window_dataset
+from ..datasets.model import DatasetChangedWarning, TouchDataset
 from ..protocols.schema import DatasetSpec, Protocol
-from ..protocols.splits import FRAMES_SHA, ORIGIN, CrossDataset
+from ..protocols.schemes import DataContext
 
 __all__ = ["apply_filters", "evaluation_dataset", "load_spec"]
 
@@ -90,52 +87,18 @@ def apply_filters(protocol: Protocol, ds: TouchDataset, spec: DatasetSpec | None
     return ds.subset(np.flatnonzero(keep))
 
 
-def _with_origin(ds: TouchDataset, origin: str, checksums: list[str], name: str) -> TouchDataset:
-    meta = ds.meta.copy()
-    meta["capture_id"] = [f"{origin}:{c}" for c in meta["capture_id"].astype(str)]
-    meta[ORIGIN] = origin
-    meta[FRAMES_SHA] = checksums
-    return TouchDataset(name, ds.captures, meta, ds.sensor, provenance=ds.provenance)
-
-
-def _cross_dataset(protocol: Protocol, splitter: CrossDataset, train: TouchDataset, notes: list[str]) -> TouchDataset:
-    params = {"test": splitter.params.test, "adapters": splitter.params.adapters}
-    loc = ("scheme", "test")
+def _load_entry(protocol: Protocol, notes: list[str], entry: Any, loc: tuple) -> TouchDataset:
+    """The dataset entry ``entry`` (a mapping given at ``loc``), loaded and filtered."""
     try:
-        spec = DatasetSpec.model_validate(params["test"])
+        spec = DatasetSpec.model_validate(entry)
     except Exception as e:
         raise protocol.error_at(loc, f"not a dataset entry: {e}") from None
-    test = apply_filters(protocol, load_spec(protocol, spec, loc, notes), spec, loc)
-    test_sha = [frames_checksum(c) for c in test.captures]  # before adapting: the recordings as read
-    try:
-        test, steps = adapt(test, train.sensor, list(params.get("adapters") or []), "scheme.adapters")
-    except AdapterError as e:
-        raise protocol.error_at(("scheme", "adapters") if params.get("adapters") else loc, str(e)) from None
-    notes += steps
-    notes.append(f"trained on {len(train)} captures of {protocol.dataset.name}, tested on {len(test)} of {spec.name}")
-    both = [_with_origin(train, "train", [frames_checksum(c) for c in train.captures], train.name),
-            _with_origin(test, "test", test_sha, train.name)]
-    if {c.dtype for c in both[0].captures} != {c.dtype for c in both[1].captures}:  # one dtype for the stack
-        both = [TouchDataset(d.name, [np.asarray(c, dtype=np.float64) for c in d.captures], d.meta, d.sensor,
-                             provenance=d.provenance) for d in both]
-    out = concat(both, f"{train.name}->{spec.name}")
-    out.provenance = {"train": train.provenance, "test": test.provenance}
-    return out
+    return apply_filters(protocol, load_spec(protocol, spec, loc, notes), spec, loc)
 
 
 def evaluation_dataset(protocol: Protocol, ds: TouchDataset, notes: list[str]) -> TouchDataset:
     """``ds`` (the protocol's filtered dataset) as the protocol's scheme evaluates it (see the module
     docstring)."""
-    splitter = protocol.splitter(0)
-    if isinstance(splitter, CrossDataset):
-        ds = _cross_dataset(protocol, splitter, ds, notes)
-    windows: Any = splitter.sample_windows()
-    if windows is not None:
-        frames, seconds, hop = windows
-        if frames is None:
-            frames = seconds_to_frames(seconds, ds.sensor.frame_rate, "the window length")
-        n = len(ds)
-        ds = window_dataset(ds, frames, hop)
-        notes.append(f"the samples are windows of {frames} frames every {hop or frames} (from {n} captures: "
-                     f"{len(ds)} windows)")
-    return ds
+    context = DataContext(dataset_name=protocol.dataset.name, notes=notes,
+                          load=partial(_load_entry, protocol, notes), error_at=protocol.error_at)
+    return protocol.splitter(0).prepare(ds, context)

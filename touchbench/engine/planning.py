@@ -47,7 +47,7 @@ from ..features.base import feature_set_refusal
 from ..methods import METHODS, Method, expand_candidates, method_spec
 from ..protocols.schema import Protocol, expand_grid, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
-from ..protocols.splits import Fold, SplitError
+from ..protocols.schemes import Fold, SplitError
 from ..results.ledger import test_set_hash
 from ..results.manifest import LEFT_OUT
 from .cache import FeatureCache
@@ -117,7 +117,7 @@ def _folds(protocol: Protocol, ds: TouchDataset, repetition: int, notes: list[st
     """The scheme's folds of ``repetition`` (a scheme that cannot split the data is refused)."""
     splitter = protocol.splitter(repetition)
     try:
-        folds = splitter.split(ds.meta)
+        folds = splitter.folds(ds.meta)
     except SplitError as e:
         raise protocol.error_at(("scheme",), str(e)) from None
     prefix = f"repetition {repetition}: " if protocol.repetitions > 1 else ""

@@ -37,7 +37,7 @@ from ..evaluation.metrics import metrics
 from ..features.base import make_feature_set
 from ..methods import Method
 from ..methods.fitting import fit_estimator
-from ..protocols.splits import Fold, fold_notes
+from ..protocols.schemes import Fold, fold_notes
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
 from .backends import run_setup
 from .cache import FeatureCache, crop_captures

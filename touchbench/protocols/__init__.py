@@ -1,5 +1,5 @@
 """Protocols: the YAML schema (``schema``) and the evaluation schemes (``splits``)."""
 
-from .splits import SPLITTERS, Crop, Fold, SplitError, Splitter, make_splitter
+from .schemes import SPLITTERS, Crop, Fold, SplitError, Splitter, make_splitter
 
 __all__ = ["SPLITTERS", "Crop", "Fold", "SplitError", "Splitter", "make_splitter"]

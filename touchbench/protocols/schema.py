@@ -99,7 +99,7 @@ from ..features.base import FeatureInputError, SensorNeededError, make_feature_s
 from ..methods import CAPTURES, METHODS, Method, features_label, resolve_entry
 from ..methods.base import takes_captures
 from .seeding import derive_seed
-from .splits import SPLITTERS, SplitError, Splitter, make_splitter
+from .schemes import SPLITTERS, SplitError, Splitter, make_splitter
 
 __all__ = [
     "ClassifierEntry",
@@ -948,11 +948,12 @@ def _scheme_issues(spec: dict[str, Any], target: str, prefix: tuple) -> list[tup
         validated = cls.Params.model_validate(params)
     except ValidationError as e:
         return _pydantic_issues(e, cls.Params, prefix)
-    if name == "early":
-        base = dict(validated.base)
+    key = cls.base_param  # a scheme that wraps another: that one is checked too
+    if key is not None:
+        base = dict(getattr(validated, key))
         if not isinstance(base.get("name"), str):
-            return [(prefix + ("base",), "base must name a scheme: base: {name: loso}")]
-        issues = _scheme_issues(base, target, prefix + ("base",))
+            return [(prefix + (key,), f"{key} must name a scheme: {key}: {{name: loso}}")]
+        issues = _scheme_issues(base, target, prefix + (key,))
         if issues:
             return issues
     return []

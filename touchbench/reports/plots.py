@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 
 from ..core.errors import TouchbenchError
-from ..protocols.splits import _natural_key
+from ..protocols.schemes.base import natural_key
 from ..results.store import PREDICTED, TRUE
 from .leaderboard import Leaderboard, method_label, method_labels, subject_values
 from .results import ResultSet
@@ -402,7 +402,7 @@ def plot_subjects(rs: ResultSet, lb: Leaderboard, base: Path, top: int = 5, size
     if not series:
         raise ValueError(f"{lb.title}: no predictions to compute per-subject accuracy")
 
-    subjects = sorted(set().union(*[set(s.index) for _, s in series.values()]), key=_natural_key)
+    subjects = sorted(set().union(*[set(s.index) for _, s in series.values()]), key=natural_key)
     w = _width(size)
     fig, ax = plt.subplots(figsize=(w, 3.4 if size == "text" else 3.0), layout="constrained")
     n = len(series)

@@ -19,8 +19,9 @@ adds the columns the reports need:
   (platform string, architecture, processor, CPU count), ``machine_desc``
   its readable form. Timings are compared only within one machine.
 - ``scheme_label``: the scheme with its parameters, read from the protocol
-  text in the manifest (``kfold(k=10,grouped=false)``); the frame list of
-  the ``early`` scheme is left out so runs with different lists combine.
+  text in the manifest (``kfold(k=10,grouped=false)``); the parameters a
+  scheme sweeps over (``Splitter.swept_params``: the frame list of the
+  ``early`` scheme) are left out so runs with different lists combine.
 - ``frame_rate``: the dataset's frame rate from the manifest (to express
   frames seen in seconds).
 
@@ -49,6 +50,7 @@ import yaml
 from ..core.errors import TouchbenchError
 from ..core.yamlsafe import safe_load
 from ..methods.base import SUBJECT_ID_LEAK
+from ..protocols.schemes.base import scheme_class
 from ..results.ledger import Looks, looks
 from ..results.manifest import LEFT_OUT
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE, ResultStore, check_schema, read_results_table
@@ -106,12 +108,12 @@ def scheme_label(scheme: Any, fallback: str = "?") -> str:
     if not isinstance(scheme, dict) or "name" not in scheme:
         return fallback
     params = {k: v for k, v in scheme.items() if k != "name"}
-    if scheme["name"] == "early":
-        params.pop("frames", None)
-        params.pop("seconds", None)
-        base = params.get("base")
-        if isinstance(base, dict):
-            params["base"] = scheme_label(base)
+    cls = scheme_class(str(scheme["name"]))
+    if cls is not None:
+        for k in cls.swept_params:
+            params.pop(k, None)
+        if cls.base_param is not None and isinstance(params.get(cls.base_param), dict):
+            params[cls.base_param] = scheme_label(params[cls.base_param])
     if not params:
         return str(scheme["name"])
     return f"{scheme['name']}(" + ",".join(f"{k}={_fmt(params[k])}" for k in sorted(params)) + ")"
