@@ -2,6 +2,8 @@
 #   make demo              set up .venv with touchbench alone (no extras) and run the main job
 #   make test              set up .venv (with the dev, deep, dist, peers and xgboost-cpu extras and the
 #                          example plugin) and run the tests
+#   make lint              check every function of touchbench/: at most 80 lines, cyclomatic
+#                          complexity at most 15 (flake8, configured in pyproject.toml)
 #   make api-docs          build the API reference (pdoc) into build/api; any warning fails
 #   make snapshots         record the names every registry holds (tests/snapshots/), after adding an entry
 #   make reproduce-papers  run touchbench/protocols/papers/ and write results/papers/REPORT.md
@@ -23,7 +25,7 @@ JOBS ?= 2
 RUNS ?= results/runs
 TB := $(BIN)/touchbench
 
-.PHONY: setup demo test api-docs snapshots reproduce-papers examples touch-all touch-all-figures clean
+.PHONY: setup demo test lint api-docs snapshots reproduce-papers examples touch-all touch-all-figures clean
 
 PLUGIN := examples/touchbench-plugin-example
 
@@ -51,6 +53,9 @@ demo: $(VENV)/.installed-core
 
 test: setup
 	$(BIN)/python -m pytest -q -p no:cacheprovider
+
+lint: setup
+	$(BIN)/flake8 touchbench
 
 api-docs: setup
 	$(BIN)/python docs/build_api_docs.py build/api

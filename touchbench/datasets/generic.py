@@ -406,24 +406,20 @@ def _files(path: Path) -> list[Path]:
     return files
 
 
-def read_table_dataset(
-    path: str | Path,
-    grid: tuple[int, int] | None = None,
-    frame_rate: float | None = None,
-    *,
-    name: str | None = None,
-    columns: TableLayout = TableLayout(),
-    value_range: tuple[float, float] | None = None,
-    sensor_name: str = "custom",
-) -> TouchDataset:
-    """Read a table file or a folder of them (module docstring) into a dataset."""
-    path = Path(path)
-    files = _files(path)
+def _read_files(files: list[Path], columns: TableLayout, grid: tuple[int, int] | None,
+                value_range: tuple[float, float] | None) -> tuple[list, tuple[int, int] | None]:
+    """Each file's frames and frame and time columns, and the grid they agree on."""
     per_file, found_grid = [], grid
     for f in files:
         fr, g, frame_col, time_col = _read_file(f, columns, found_grid, value_range, allow_empty=len(files) > 1)
         found_grid = _agree(found_grid, g, f)
         per_file.append((f, fr, frame_col, time_col))
+    return per_file, found_grid
+
+
+def _gather_captures(path: Path, per_file: list) -> tuple[list, list, list, bool]:
+    """The captures of every file, their metadata rows, their frame times (ms from the first frame)
+    and whether every value is whole; a capture split across two files is refused."""
     caps, meta_rows, times, seen = [], [], [], {}
     whole = True
     for f, fr, frame_col, time_col in per_file:
@@ -437,32 +433,61 @@ def read_table_dataset(
             seen[key] = f
             caps.append(fr.values[rows])
             row = {"capture_id": key, **fr.meta.iloc[rows[0]].to_dict()}
-            if len(files) > 1:
+            if len(per_file) > 1:
                 row["source"] = str(f.relative_to(path))
             meta_rows.append(row)
             times.append(None if fr.time_ms is None else fr.time_ms[rows] - fr.time_ms[rows[0]])
+    return caps, meta_rows, times, whole
+
+
+def _inferred_value_range(path: Path, caps: list, whole: bool) -> tuple[float, float]:
+    """The value range inferred from the values seen, with a warning that says how."""
+    lo = min(float(c.min()) for c in caps)
+    hi = max(float(c.max()) for c in caps)
+    value_range, why = infer_value_range(lo, hi, whole)
+    log.warning("%s: value range not given: inferred %g..%g (%s); give --value-range LO..HI to state it",
+                path, *value_range, why)
+    return value_range
+
+
+def _estimated_frame_rate(path: Path, times: list) -> float:
+    """The frame rate estimated from the time column (1 / the median step), with a warning that says how."""
+    if times[0] is None:
+        raise TouchbenchError(f"{path}: the table does not say its frame rate: give --frame-rate, or a time "
+                              "column (--time-column)")
+    steps = time_step_summary(times)
+    if not steps or steps["median"] <= 0:
+        raise DataError("no capture has two frames to estimate the frame rate from: give --frame-rate", path)
+    frame_rate = 1000.0 / steps["median"]
+    log.warning("%s: frame rate estimated from the time column: %.4g Hz (1 / the median step, %.4g ms; steps "
+                "%.4g..%.4g ms, 95th percentile %.4g ms); frames kept as recorded, their times in %r; give "
+                "--frame-rate to state it", path, frame_rate, steps["median"], steps["min"], steps["max"],
+                steps["p95"], TIME_COLUMN)
+    return frame_rate
+
+
+def read_table_dataset(
+    path: str | Path,
+    grid: tuple[int, int] | None = None,
+    frame_rate: float | None = None,
+    *,
+    name: str | None = None,
+    columns: TableLayout = TableLayout(),
+    value_range: tuple[float, float] | None = None,
+    sensor_name: str = "custom",
+) -> TouchDataset:
+    """Read a table file or a folder of them (module docstring) into a dataset."""
+    path = Path(path)
+    per_file, found_grid = _read_files(_files(path), columns, grid, value_range)
+    caps, meta_rows, times, whole = _gather_captures(path, per_file)
     if not caps:
         raise DataError("no data rows", path)
     if any(t is None for t in times) and not all(t is None for t in times):
         raise DataError("some files have a time column and others not", path)
     if value_range is None:
-        lo = min(float(c.min()) for c in caps)
-        hi = max(float(c.max()) for c in caps)
-        value_range, why = infer_value_range(lo, hi, whole)
-        log.warning("%s: value range not given: inferred %g..%g (%s); give --value-range LO..HI to state it",
-                    path, *value_range, why)
+        value_range = _inferred_value_range(path, caps, whole)
     if frame_rate is None:
-        if times[0] is None:
-            raise TouchbenchError(f"{path}: the table does not say its frame rate: give --frame-rate, or a time "
-                                  "column (--time-column)")
-        steps = time_step_summary(times)
-        if not steps or steps["median"] <= 0:
-            raise DataError("no capture has two frames to estimate the frame rate from: give --frame-rate", path)
-        frame_rate = 1000.0 / steps["median"]
-        log.warning("%s: frame rate estimated from the time column: %.4g Hz (1 / the median step, %.4g ms; steps "
-                    "%.4g..%.4g ms, 95th percentile %.4g ms); frames kept as recorded, their times in %r; give "
-                    "--frame-rate to state it", path, frame_rate, steps["median"], steps["min"], steps["max"],
-                    steps["p95"], TIME_COLUMN)
+        frame_rate = _estimated_frame_rate(path, times)
     if found_grid is None:
         raise DataError("the grid is not known: give --grid HxW", path)
     dtype = _dtype(whole, value_range)

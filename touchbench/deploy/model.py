@@ -328,31 +328,10 @@ def fit_model(
     classifier_params = dict(classifier_params or {})
     sensor = dataset.sensor
     y_caps = np.array([str(v) for v in dataset.meta[target].tolist()], dtype=object)
-    if windows:
-        lengths = [seconds_to_frames(w, sensor.frame_rate, "--window") for w in windows]
-        hops = [seconds_to_frames(train_hop, sensor.frame_rate, "--train-hop") if train_hop is not None
-                else max(1, L // 2) for L in lengths]
-        samples, src = cut_windows(dataset.captures, lengths, hops)
-    else:
-        lengths = hops = []
-        samples, src = list(dataset.captures), np.arange(len(dataset))
+    samples, src, lengths, hops = _training_samples(dataset, windows, train_hop)
     y = y_caps[src]
     subjects = np.array([str(v) for v in dataset.meta["subject"].tolist()], dtype=object)
-
-    t0 = time.perf_counter()
-    with single_thread():
-        fitted = []
-        for name, params in sets:
-            fs = make_feature_set(name, dict(params), sensor)
-            fs.fit(samples, y)
-            fitted.append(fs)
-        X = np.hstack([np.asarray(fs.transform(samples), dtype=np.float64) for fs in fitted]) if fitted else list(samples)
-        feature_seconds = time.perf_counter() - t0
-        # the run engine's own fit path: label codes, subjects as groups, a one-class training set
-        fitted_est = fit_estimator(classifier, classifier_params, seed, X, y, subjects[src], sensor=sensor)
-        est, classes = fitted_est.estimator, fitted_est.classes
-    fit_seconds = time.perf_counter() - t0 - feature_seconds
-
+    fit = _fit_pipeline(sets, classifier, classifier_params, seed, samples, y, subjects[src], sensor)
     n = dataset.n_frames
     manifest = {
         "format": MODEL_FORMAT,
@@ -372,7 +351,7 @@ def fit_model(
         "features": {
             "label": features_label or "+".join(n for n, _ in sets),
             "sets": [{"name": n, "params": dict(p)} for n, p in sets],
-            "n_columns": int(X.shape[1]) if isinstance(X, np.ndarray) else None,  # None: the estimator takes captures
+            "n_columns": fit.n_columns,  # None: the estimator takes captures
         },
         "classifier": {
             "label": classifier_label or classifier,
@@ -380,16 +359,72 @@ def fit_model(
             "params": classifier_params,
             "random_state": int(seed),
         },
-        "classes": [str(c) for c in classes],
-        "windows": None if not windows else {
-            "lengths_s": [float(w) for w in windows],
-            "lengths_frames": [int(v) for v in lengths],
-            "train_hop_s": float(train_hop) if train_hop else float(min(hops) / sensor.frame_rate),
-            "train_hop_frames": [int(v) for v in hops],
-        },
+        "classes": [str(c) for c in fit.classes],
+        "windows": _windows_manifest(windows, lengths, hops, train_hop, sensor.frame_rate),
         "capture_frames": {"min": int(n.min()), "median": float(np.median(n)), "max": int(n.max())},
         "capture_dtype": np.dtype(dataset.captures[0].dtype).str,
-        "timings": {"features_s": round(feature_seconds, 3), "fit_s": round(fit_seconds, 3)},
+        "timings": {"features_s": round(fit.feature_seconds, 3), "fit_s": round(fit.fit_seconds, 3)},
         "versions": package_versions(installed_only=True),
     }
-    return TrainedModel(fitted, est, classes, manifest)
+    return TrainedModel(fit.fitted, fit.estimator, fit.classes, manifest)
+
+
+def _training_samples(dataset: TouchDataset, windows: Sequence[float] | None,
+                      train_hop: float | None) -> tuple[list[np.ndarray], np.ndarray, list[int], list[int]]:
+    """The samples to train on and the capture each comes from: windows of each length (frames) cut
+    every hop (frames; default half a window), or the whole captures (no lengths, no hops)."""
+    if not windows:
+        return list(dataset.captures), np.arange(len(dataset)), [], []
+    rate = dataset.sensor.frame_rate
+    lengths = [seconds_to_frames(w, rate, "--window") for w in windows]
+    hops = [seconds_to_frames(train_hop, rate, "--train-hop") if train_hop is not None
+            else max(1, L // 2) for L in lengths]
+    samples, src = cut_windows(dataset.captures, lengths, hops)
+    return samples, src, lengths, hops
+
+
+@dataclass
+class _FittedPipeline:
+    """Feature sets and estimator fitted, with the number of feature columns (None: the estimator
+    takes captures) and the seconds each step took."""
+
+    fitted: list[Any]
+    estimator: Any
+    classes: Any
+    n_columns: int | None
+    feature_seconds: float
+    fit_seconds: float
+
+
+def _fit_pipeline(sets: Sequence[tuple[str, dict[str, Any]]], classifier: str, classifier_params: dict[str, Any],
+                  seed: int, samples: list[np.ndarray], y: np.ndarray, groups: np.ndarray,
+                  sensor: SensorSpec) -> _FittedPipeline:
+    """The feature sets fitted on ``samples``, then the classifier on their columns (the run engine's
+    own fit path), in one thread."""
+    t0 = time.perf_counter()
+    with single_thread():
+        fitted = []
+        for name, params in sets:
+            fs = make_feature_set(name, dict(params), sensor)
+            fs.fit(samples, y)
+            fitted.append(fs)
+        X = np.hstack([np.asarray(fs.transform(samples), dtype=np.float64) for fs in fitted]) if fitted else list(samples)
+        feature_seconds = time.perf_counter() - t0
+        # the run engine's own fit path: label codes, subjects as groups, a one-class training set
+        fitted_est = fit_estimator(classifier, classifier_params, seed, X, y, groups, sensor=sensor)
+    fit_seconds = time.perf_counter() - t0 - feature_seconds
+    return _FittedPipeline(fitted, fitted_est.estimator, fitted_est.classes,
+                           int(X.shape[1]) if isinstance(X, np.ndarray) else None, feature_seconds, fit_seconds)
+
+
+def _windows_manifest(windows: Sequence[float] | None, lengths: list[int], hops: list[int],
+                      train_hop: float | None, frame_rate: float) -> dict[str, Any] | None:
+    """The training windows a model file records (None: whole captures)."""
+    if not windows:
+        return None
+    return {
+        "lengths_s": [float(w) for w in windows],
+        "lengths_frames": [int(v) for v in lengths],
+        "train_hop_s": float(train_hop) if train_hop else float(min(hops) / frame_rate),
+        "train_hop_frames": [int(v) for v in hops],
+    }

@@ -192,39 +192,56 @@ def use_backend(name: str = "local", address: str | None = None, *, cache_root: 
         if address:
             raise TouchbenchError("--scheduler/--address need --backend dask or ray")
         yield BackendInfo("local", None, None)
-        return
+    elif name == "dask":
+        with _use_dask(address, cache_root, timeout, local_workers) as info:
+            yield info
+    else:
+        with _use_ray(address, local_workers) as info:
+            yield info
 
-    if name == "dask":
-        try:
-            from distributed import Client, LocalCluster
-        except ImportError:
-            raise TouchbenchError("--backend dask needs the dist extra: pip install 'touchbench[dist]'") from None
-        cluster = None
-        try:
-            if address:
-                client = Client(address, timeout=timeout)
-            else:
-                cluster = LocalCluster(n_workers=local_workers, threads_per_worker=1, processes=True,
-                                       host="127.0.0.1", dashboard_address=None)
-                client = Client(cluster, timeout=timeout)
-        except OSError as e:
-            if cluster is not None:
-                cluster.close()
-            raise TouchbenchError(f"cannot connect to the Dask scheduler {address!r}: {e}") from None
-        try:
-            client.wait_for_workers(1, timeout=timeout)
-            if cache_root is not None:
-                check_dask_workers(client, cache_root)
-            n = sum(client.nthreads().values())
-            with parallel_config(backend="dask"):
-                yield BackendInfo("dask", client.scheduler.address, n)
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
-        return
 
-    # ray
+def _dask_client(address: str | None, timeout: float, local_workers: int):
+    """A Dask client of the scheduler at ``address``, or of a local cluster started here (then also returned)."""
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise TouchbenchError("--backend dask needs the dist extra: pip install 'touchbench[dist]'") from None
+    cluster = None
+    try:
+        if address:
+            client = Client(address, timeout=timeout)
+        else:
+            cluster = LocalCluster(n_workers=local_workers, threads_per_worker=1, processes=True,
+                                   host="127.0.0.1", dashboard_address=None)
+            client = Client(cluster, timeout=timeout)
+    except OSError as e:
+        if cluster is not None:
+            cluster.close()
+        raise TouchbenchError(f"cannot connect to the Dask scheduler {address!r}: {e}") from None
+    return client, cluster
+
+
+@contextlib.contextmanager
+def _use_dask(address: str | None, cache_root: str | Path | None, timeout: float,
+              local_workers: int) -> Iterator[BackendInfo]:
+    """:func:`use_backend` on Dask: the workers checked, the client (and a cluster started here) closed on exit."""
+    client, cluster = _dask_client(address, timeout, local_workers)
+    try:
+        client.wait_for_workers(1, timeout=timeout)
+        if cache_root is not None:
+            check_dask_workers(client, cache_root)
+        n = sum(client.nthreads().values())
+        with parallel_config(backend="dask"):
+            yield BackendInfo("dask", client.scheduler.address, n)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+@contextlib.contextmanager
+def _use_ray(address: str | None, local_workers: int) -> Iterator[BackendInfo]:
+    """:func:`use_backend` on Ray: a Ray instance started here (none if one runs) is shut down on exit."""
     try:
         import ray
         from ray.util.joblib import register_ray

@@ -252,6 +252,28 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
         jobs = os.cpu_count() or 1
     cpu0 = _cpu_seconds()
     load0 = _load()
+    planned = _planned_protocols(protocols_dir, only, prof)
+    runs: list[ProtocolRun] = []
+    t_all = time.perf_counter()
+    loaded = _LoadedDataset()
+    for proto, changes, f in planned:
+        r = ProtocolRun(path=f, name=proto.name, out=out / profile / proto.name, changes=changes)
+        _run_guarded(proto, r, loaded, echo=echo, jobs=jobs, progress=progress, failed=failed, audit=audit)
+        runs.append(r)
+    wall = time.perf_counter() - t_all
+    _stop_workers()
+    timing = {"wall_seconds": wall, "cpu_seconds": _cpu_seconds() - cpu0, "load": [load0, _load()], "jobs": jobs,
+              "cpus": os.cpu_count(), "tasks_ran": sum(r.n_ran for r in runs),
+              "protocols": len(runs), "finished_at": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+    timing = _kept_timing(timing, out / profile / "invocation.json", subset=bool(only))
+    report_path = Path(report) if report is not None else out / "REPORT.md"
+    write_report(runs, prof, report_path, timing=timing)
+    return report_path
+
+
+def _planned_protocols(protocols_dir: Path | None, only: list[str] | None, prof) -> list[tuple]:
+    """The paper protocols chosen by ``only``, under the profile, each with its changes and file,
+    ordered so that the protocols of one dataset run together."""
     files = paper_protocols(protocols_dir)
     if only:
         files = [f for f in files if any(o == f.stem or o in f.stem for o in only)]
@@ -262,58 +284,75 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
         proto, changes = apply_profile(f, prof)
         planned.append((proto, changes, f))
     planned.sort(key=lambda t: (_dataset_key(t[0]), t[2].name))  # one dataset in memory at a time
-    runs: list[ProtocolRun] = []
-    t_all = time.perf_counter()
-    cache_key, cache_ds = None, None
-    for proto, changes, f in planned:
-        r = ProtocolRun(path=f, name=proto.name, out=out / profile / proto.name, changes=changes)
-        t0 = time.perf_counter()
-        try:
-            key = _dataset_key(proto)
-            if key != cache_key:
-                cache_key, cache_ds = None, None
-                echo(f"loading {proto.dataset.name} {proto.dataset.options or ''}")
-                cache_ds = load_dataset(resolve_dataset_ref(proto), **proto.dataset.options)
-                cache_key = key
-            echo(f"{proto.name}: running -> {r.out}")
-            res = run_protocol(proto, r.out, jobs=jobs, progress=progress, dataset=cache_ds)
-            r.n_ran = res.n_ran
-            echo(f"{proto.name}: {res.n_ran} ran, {res.n_skipped} finished before, {res.n_failed} failed, "
-                 f"{res.seconds:.0f} s")
-            if res.n_failed and failed is not None:
-                failed.append(proto.name)
-            if audit and proto.audit is not None:
-                echo(f"{proto.name}: leakage audit -> {audit_dir(r.out)}")
-                a = run_audit(proto, audit_dir(r.out), jobs=jobs, k=proto.audit.k,
-                              window_seconds=proto.audit.window_seconds, tune=proto.audit.tune,
-                              variants=tuple(proto.audit.variants), progress=progress)
-                write_audit(a.table, audit_dir(r.out), a.published, a.notes, title=f"Leakage audit: {proto.name}")
-        except TouchbenchError as e:
-            r.error = str(e)
-            echo(f"{proto.name}: FAILED: {e}")
-        except Exception as e:  # a broken component must not stop the other reproductions
-            r.error = f"{type(e).__name__}: {e}"
-            echo(f"{proto.name}: FAILED: {r.error}")
-        r.seconds = time.perf_counter() - t0
-        if r.error and failed is not None:
-            failed.append(proto.name)
-        runs.append(r)
-    wall = time.perf_counter() - t_all
-    _stop_workers()
-    timing = {"wall_seconds": wall, "cpu_seconds": _cpu_seconds() - cpu0, "load": [load0, _load()], "jobs": jobs,
-              "cpus": os.cpu_count(), "tasks_ran": sum(r.n_ran for r in runs),
-              "protocols": len(runs), "finished_at": datetime.now(timezone.utc).isoformat(timespec="seconds")}
-    timing_path = out / profile / "invocation.json"
-    if timing["tasks_ran"] and not only:
+    return planned
+
+
+class _LoadedDataset:
+    """The dataset last loaded, kept for the protocols after it that read the same one."""
+
+    def __init__(self) -> None:
+        self.key: str | None = None
+        self.dataset = None
+
+    def get(self, proto, echo: Callable[[str], None]):
+        """The dataset of ``proto``: the one kept, or loaded now (and kept in its place)."""
+        key = _dataset_key(proto)
+        if key != self.key:
+            self.key, self.dataset = None, None
+            echo(f"loading {proto.dataset.name} {proto.dataset.options or ''}")
+            self.dataset = load_dataset(resolve_dataset_ref(proto), **proto.dataset.options)
+            self.key = key
+        return self.dataset
+
+
+def _run_guarded(proto, r: ProtocolRun, loaded: _LoadedDataset, *, echo: Callable[[str], None], jobs: int,
+                 progress: bool | None, failed: list[str] | None, audit: bool) -> None:
+    """Run one protocol into ``r``: any error is recorded in ``r.error`` (and the protocol's name in
+    ``failed``) instead of raised, so that the other reproductions go on."""
+    t0 = time.perf_counter()
+    try:
+        dataset = loaded.get(proto, echo)
+        _run_one(proto, r, dataset, echo=echo, jobs=jobs, progress=progress, failed=failed, audit=audit)
+    except TouchbenchError as e:
+        r.error = str(e)
+        echo(f"{proto.name}: FAILED: {e}")
+    except Exception as e:  # a broken component must not stop the other reproductions
+        r.error = f"{type(e).__name__}: {e}"
+        echo(f"{proto.name}: FAILED: {r.error}")
+    r.seconds = time.perf_counter() - t0
+    if r.error and failed is not None:
+        failed.append(proto.name)
+
+
+def _run_one(proto, r: ProtocolRun, dataset, *, echo: Callable[[str], None], jobs: int, progress: bool | None,
+             failed: list[str] | None, audit: bool) -> None:
+    """Run one protocol on ``dataset`` into ``r.out``, and its leakage audit when asked."""
+    echo(f"{proto.name}: running -> {r.out}")
+    res = run_protocol(proto, r.out, jobs=jobs, progress=progress, dataset=dataset)
+    r.n_ran = res.n_ran
+    echo(f"{proto.name}: {res.n_ran} ran, {res.n_skipped} finished before, {res.n_failed} failed, "
+         f"{res.seconds:.0f} s")
+    if res.n_failed and failed is not None:
+        failed.append(proto.name)
+    if audit and proto.audit is not None:
+        echo(f"{proto.name}: leakage audit -> {audit_dir(r.out)}")
+        a = run_audit(proto, audit_dir(r.out), jobs=jobs, k=proto.audit.k,
+                      window_seconds=proto.audit.window_seconds, tune=proto.audit.tune,
+                      variants=tuple(proto.audit.variants), progress=progress)
+        write_audit(a.table, audit_dir(r.out), a.published, a.notes, title=f"Leakage audit: {proto.name}")
+
+
+def _kept_timing(timing: dict, timing_path: Path, *, subset: bool) -> dict:
+    """The timing the report shows: this invocation's, written to ``timing_path``, when it ran tasks of
+    every protocol; else the one recorded there by the run that computed them (if any)."""
+    if timing["tasks_ran"] and not subset:
         write_text(timing_path, json.dumps(timing, indent=2) + "\n")
     elif timing_path.is_file():  # nothing (or only a subset) computed now: report the run that computed them
         try:
             timing = {**json.loads(timing_path.read_text()), "reused": True}
         except (OSError, ValueError):
             pass
-    report_path = Path(report) if report is not None else out / "REPORT.md"
-    write_report(runs, prof, report_path, timing=timing)
-    return report_path
+    return timing
 
 
 def _cpu_seconds() -> float:

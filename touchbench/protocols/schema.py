@@ -1073,45 +1073,68 @@ def _feature_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
 
 def _estimator_issues(name: str, params: dict[str, Any], loc: tuple, what: str) -> list[tuple[tuple, str]]:
     """Parameters of the classifier or named method ``name`` (a method's go to its estimator), at ``loc``."""
-    issues: list[tuple[tuple, str]] = []
-    base: dict[str, Any] = {}
-    est_name = name
-    if name in METHODS:  # a named method's parameters go to its estimator
-        tags = METHODS.entry(name).tags
-        est_name, base = tags["estimator"], dict(tags.get("defaults") or {})
+    est_name, base = _estimator_and_defaults(name)
     factory = CLASSIFIERS.get(est_name)
     extra = CLASSIFIERS.entry(est_name).tags.get("extra")
     missing = missing_extra(extra) if extra else []
     if missing:
         return [(loc, f"{what} {name!r} needs the optional {extra!r} extra, not installed here "
                       f"({', '.join(missing)} missing): pip install 'touchbench[{extra}]'")]
-    names, var_kw = _accepted_params(factory)
-    bad = False
+    issues = _reserved_param_issues(params, loc)
+    issues += _unknown_param_issues(name, params, _estimator_param_names(factory), loc, what)
+    if issues:
+        return issues
+    return _construction_issues(factory, base, name, params, loc, what)
+
+
+def _estimator_and_defaults(name: str) -> tuple[str, dict[str, Any]]:
+    """The classifier ``name`` builds and the parameters it sets: a named method's estimator and
+    defaults, else ``name`` itself and none."""
+    if name in METHODS:  # a named method's parameters go to its estimator
+        tags = METHODS.entry(name).tags
+        return tags["estimator"], dict(tags.get("defaults") or {})
+    return name, {}
+
+
+def _reserved_param_issues(params: dict[str, Any], loc: tuple) -> list[tuple[tuple, str]]:
+    """The parameters a protocol may not set (``random_state``, ``sensor``) and empty grids."""
+    issues: list[tuple[tuple, str]] = []
     for k, v in params.items():
         at = loc + ("params", k)
         if k == "random_state":
             issues.append((at, "random_state is derived from the protocol's seed; set 'seed' instead"))
-            bad = True
         elif k == "sensor":
             issues.append((at, "the engine passes the dataset's sensor; do not set 'sensor'"))
-            bad = True
         elif _is_grid(v) and not (isinstance(v["grid"], list) and v["grid"]):
             issues.append((at + ("grid",), "a grid must be a non-empty list of values"))
-            bad = True
+    return issues
+
+
+def _estimator_param_names(factory: Any) -> list[str]:
+    """The parameters ``factory`` accepts: its own, and, when it forwards ``**params`` to an
+    estimator, the names that estimator's ``get_params()`` gives."""
+    names, var_kw = _accepted_params(factory)
     if var_kw:
-        # The factory forwards **params to an estimator: its get_params() names them.
         try:
             est = factory(random_state=0)
             names = sorted(set(names) | set(getattr(est, "get_params", lambda: {})()))
         except Exception:  # pragma: no cover - a broken factory is reported at construction below
             pass
+    return names
+
+
+def _unknown_param_issues(name: str, params: dict[str, Any], names: list[str], loc: tuple,
+                          what: str) -> list[tuple[tuple, str]]:
+    """The parameters of ``params`` that are not among ``names`` (none when ``names`` is empty)."""
     known = [n for n in names if n not in ("random_state",)]
-    for k in params:
-        if k != "random_state" and known and k not in names:
-            issues.append((loc + ("params", k), f"unknown parameter {k!r} for {what} {name!r}{did_you_mean(k, known)}"))
-            bad = True
-    if bad:
-        return issues
+    return [(loc + ("params", k), f"unknown parameter {k!r} for {what} {name!r}{did_you_mean(k, known)}")
+            for k in params if k != "random_state" and known and k not in names]
+
+
+def _construction_issues(factory: Any, base: dict[str, Any], name: str, params: dict[str, Any], loc: tuple,
+                         what: str) -> list[tuple[tuple, str]]:
+    """The first point of the grid ``params`` that the estimator refuses to be built with, or whose
+    values its own parameter validation refuses (beyond what its defaults already break)."""
     try:  # what the estimator's own defaults break is the estimator's business (a subclass widening a domain)
         own = set(_constraint_failures(factory(random_state=0, **base)))
     except Exception:
@@ -1120,13 +1143,11 @@ def _estimator_issues(name: str, params: dict[str, Any], loc: tuple, what: str) 
         try:
             est = factory(random_state=0, **{**base, **p})
         except Exception as e:  # any construction error is a protocol error
-            issues.append((_param_loc(loc + ("params",), p, str(e)), f"{what} {name!r} rejects {p}: {type(e).__name__}: {e}"))
-            break
+            return [(_param_loc(loc + ("params",), p, str(e)), f"{what} {name!r} rejects {p}: {type(e).__name__}: {e}")]
         problem = next((m for k, m in _constraint_failures(est).items() if k not in own), None)
         if problem:
-            issues.append((_param_loc(loc + ("params",), p, problem), f"{what} {name!r} rejects {p}: {problem}"))
-            break
-    return issues
+            return [(_param_loc(loc + ("params",), p, problem), f"{what} {name!r} rejects {p}: {problem}")]
+    return []
 
 
 def _constraint_failures(est: Any) -> dict[tuple[str, str], str]:
@@ -1255,16 +1276,7 @@ def parse_protocol(text: str, path: str | Path | None = None, *, deep: bool = Tr
     ``deep=False`` skips the checks that build classifiers (for listing).
     """
     p = Path(path) if path is not None else None
-    where = str(p) if p is not None else "<protocol>"
-    try:
-        data, root = load_bounded(text)
-    except yaml.YAMLError as e:
-        line, problem = yaml_problem(e)
-        raise ProtocolError(f"{where}{'' if line is None else f':{line}'}: {problem}") from None
-    if data is None:
-        raise ProtocolError(f"{where}: the protocol is empty")
-    if not isinstance(data, dict):
-        raise ProtocolError(f"{where}:1: a protocol is a mapping of fields (name, dataset, scheme, ...), got {type(data).__name__}")
+    data, root = _load_mapping(text, str(p) if p is not None else "<protocol>")
     lines = _line_map(root)
     data = copy.deepcopy(data)
     if "name" not in data and p is not None:
@@ -1290,19 +1302,41 @@ def parse_protocol(text: str, path: str | Path | None = None, *, deep: bool = Tr
     issues += _feature_issues(proto)
     if deep:
         issues += _classifier_issues(proto)
-    for i, sub in enumerate(subs):
-        at = ("evaluations", i) if proto.evaluations else ()
-        own = _scheme_issues({"name": sub.scheme.name, **sub.scheme.params}, sub.target, ("scheme",))
-        own += _dataset_issues(sub)
-        if not own and not issues:
-            own += _target_issues(sub)
-        issues += [((at + loc) if at and loc[:1] and loc[0] in EVALUATION_FIELDS and _given(proto, i, loc[0])
-                    else loc, msg) for loc, msg in own]
+    issues += _evaluation_issues(proto, subs, clean_so_far=not issues)
     if not issues:
         issues += _expected_issues(proto)
     if issues:
         raise _make_error(p, lines, list(dict.fromkeys(issues)))
     return proto
+
+
+def _load_mapping(text: str, where: str) -> tuple[dict, Any]:
+    """The YAML mapping of protocol ``text`` and its node tree; anything else is a :class:`ProtocolError`."""
+    try:
+        data, root = load_bounded(text)
+    except yaml.YAMLError as e:
+        line, problem = yaml_problem(e)
+        raise ProtocolError(f"{where}{'' if line is None else f':{line}'}: {problem}") from None
+    if data is None:
+        raise ProtocolError(f"{where}: the protocol is empty")
+    if not isinstance(data, dict):
+        raise ProtocolError(f"{where}:1: a protocol is a mapping of fields (name, dataset, scheme, ...), got {type(data).__name__}")
+    return data, root
+
+
+def _evaluation_issues(proto: Protocol, subs: list[Protocol], *, clean_so_far: bool) -> list[tuple[tuple, str]]:
+    """Each evaluation's scheme and dataset, and (while nothing else is wrong: ``clean_so_far``
+    and its own are clean) its target; located in the evaluation that sets the field."""
+    issues: list[tuple[tuple, str]] = []
+    for i, sub in enumerate(subs):
+        at = ("evaluations", i) if proto.evaluations else ()
+        own = _scheme_issues({"name": sub.scheme.name, **sub.scheme.params}, sub.target, ("scheme",))
+        own += _dataset_issues(sub)
+        if not own and clean_so_far and not issues:
+            own += _target_issues(sub)
+        issues += [((at + loc) if at and loc[:1] and loc[0] in EVALUATION_FIELDS and _given(proto, i, loc[0])
+                    else loc, msg) for loc, msg in own]
+    return issues
 
 
 def _given(proto: Protocol, i: int, key: str) -> bool:

@@ -213,114 +213,190 @@ def _timings(s: pd.DataFrame) -> dict[str, float]:
 
 def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool_machines: bool,
                machine: str | None) -> Leaderboard:
+    """The leaderboard of table ``key`` of ``rs``."""
     s_all = rs.scores[rs.scores["table_key"] == key]
     ok = ok_all[ok_all["table_key"] == key]
     first = s_all.iloc[0]
     folds = fold_values(ok) if len(ok) else pd.DataFrame(columns=["table_key", "method_id", "fold_key", *METRICS, "n_test", "fold", "fold_group"])
     preds = rs.predictions[rs.predictions["table_key"] == key] if rs.predictions is not None else None
     machines = dict(zip(s_all["machine"], s_all["machine_desc"]))
-    notes: list[str] = []
     sources = [rs.source(p) for p in dict.fromkeys(s_all["source"])] if "source" in s_all else []
-    designs = [s for s in sources if s.get("design_captures") is not None]
-    design = {c for s in designs for c in s["design_captures"]} if designs else None
-    design_methods = {m for s in designs for m in (s.get("design") or {}).get("methods", [])}
-    design_notes = []
-    for s in designs:
-        d = s.get("design") or {}
-        what = ", ".join(f"{k} {', '.join(v)}" for k, v in ({"subject": d.get("subjects")} | (d.get("rows") or {})).items() if v)
-        design_notes.append(f"{what}" + (f" ({d['note']})" if d.get("note") else ""))
-    notes += list(dict.fromkeys(n for s in sources for n in s.get("left_out") or []))
+    design = _Design.of(sources)
+    notes, looks_here = _source_notes(sources)
+    ref = _reference_machine(ok, machines, machine, first)
+    notes += _machines_notes(machines, ref, pool_machines)
+    rows = [_method_row(mid, g_all, ok[ok["method_id"] == mid], folds[folds["method_id"] == mid], preds,
+                        ref, pool_machines, design)
+            for mid, g_all in s_all.groupby("method_id", sort=False)]
+    notes += design.row_notes(rows)
+    df = _ranked(_tuned_on_test(pd.DataFrame(rows)))
+    _add_tests_against_best(df, folds, preds, alpha)
+    _mark_pareto_fronts(df)
+    _add_closing_notes(df, notes)
+    fr = s_all["frame_rate"].dropna()
+    return Leaderboard(
+        key=key, dataset=str(first["dataset"]), dataset_hash=str(first["dataset_hash"]), target=str(first["target"]),
+        scheme=str(first["scheme_label"]), rows=df, folds=folds, machines=machines, reference_machine=ref,
+        pooled_machines=pool_machines, alpha=alpha, frame_rate=float(fr.iloc[0]) if len(fr) else math.nan, notes=notes,
+        looks=looks_here, has_design=design.captures is not None,
+    )
+
+
+@dataclass
+class _Design:
+    """The captures the table's methods were designed on (None: no source says), the methods so
+    designed (empty: all of them) and what each source's design data was."""
+
+    captures: set[str] | None
+    methods: set[str]
+    what: list[str]
+
+    @classmethod
+    def of(cls, sources: list[dict]) -> "_Design":
+        """The design recorded by the sources of a table."""
+        designs = [s for s in sources if s.get("design_captures") is not None]
+        captures = {c for s in designs for c in s["design_captures"]} if designs else None
+        methods = {m for s in designs for m in (s.get("design") or {}).get("methods", [])}
+        what = []
+        for s in designs:
+            d = s.get("design") or {}
+            named = ", ".join(f"{k} {', '.join(v)}" for k, v in ({"subject": d.get("subjects")} | (d.get("rows") or {})).items() if v)
+            what.append(f"{named}" + (f" ({d['note']})" if d.get("note") else ""))
+        return cls(captures, methods, what)
+
+    def row_fields(self, preds: pd.DataFrame | None, mid: str, row: dict[str, Any]) -> dict[str, Any]:
+        """A method's accuracy on the test captures outside the design data, and whether it was designed on them."""
+        if self.captures is None:
+            return {}
+        held_out, n_held_out, tests_design = _held_out(preds, mid, self.captures)
+        designed = tests_design and (not self.methods or bool({row["classifier"], method_label(row)} & self.methods))
+        return {"held_out_accuracy": held_out, "n_held_out": n_held_out, "designed": designed}
+
+    def row_notes(self, rows: list[dict[str, Any]]) -> list[str]:
+        """One note per source's design data: which methods it flatters, if any."""
+        notes = []
+        for what in self.what:
+            if any(r.get("designed") for r in rows):
+                notes.append(f"methods marked † were designed on {what}: their usual figure includes that data; "
+                             "'held out' is the accuracy on the other test captures")
+            else:
+                notes.append(f"the methods were designed on {what}; no test capture of this table is among them, "
+                             "so the usual figure is already a held-out one")
+        return notes
+
+
+def _source_notes(sources: list[dict]) -> tuple[list[str], Looks | None]:
+    """The notes the sources carry (methods left out, the looks at the test set) and the ledger's
+    count of looks of the source with the most runs."""
+    notes = list(dict.fromkeys(n for s in sources for n in s.get("left_out") or []))
     table_looks = [s["looks"] for s in sources if s.get("looks") is not None]
     looks_here = max(table_looks, key=lambda x: x.runs) if table_looks else None
     if looks_here is not None:
         notes.append(looks_here.describe() + " (ledger of test-set looks): the more methods compared and the more "
                      "runs, the more the best of them flatters")
-    # reference machine: measured the most methods (ties: smallest id)
+    return notes, looks_here
+
+
+def _reference_machine(ok: pd.DataFrame, machines: dict[str, str], machine: str | None, first: pd.Series) -> str | None:
+    """The machine whose timings the table shows: ``machine`` if given, else the one that measured the
+    most methods (ties: smallest id)."""
     timed = ok[ok["latency_ms"].notna()]
     per_machine = timed.groupby("machine")["method_id"].nunique().sort_index()
-    ref = None
     if machine is not None:
         if machine not in machines:
             raise TouchbenchError(f"machine {machine!r} has no runs in {first['dataset']} / {first['scheme_label']}; "
                                   f"machines: {', '.join(sorted(machines))}")
-        ref = machine
-    elif len(per_machine):
-        ref = str(per_machine.sort_values(ascending=False, kind="stable").index[0])
+        return machine
+    if len(per_machine):
+        return str(per_machine.sort_values(ascending=False, kind="stable").index[0])
+    return None
+
+
+def _machines_notes(machines: dict[str, str], ref: str | None, pool_machines: bool) -> list[str]:
+    """The note on timings from several machines: shown per machine, or pooled."""
     if len(machines) > 1 and not pool_machines:
-        notes.append(
+        return [
             "results from several machines: " + "; ".join(f"{k} = {v}" for k, v in sorted(machines.items()))
             + f". Timings are shown for {ref} where measured there, otherwise for the machine named in "
-              "'timing machine'; the Pareto front is computed per machine.")
-    elif len(machines) > 1:
-        notes.append("timings of several machines are pooled (asked with --pool-machines): "
-                     + "; ".join(f"{k} = {v}" for k, v in sorted(machines.items())))
+              "'timing machine'; the Pareto front is computed per machine."]
+    if len(machines) > 1:
+        return ["timings of several machines are pooled (asked with --pool-machines): "
+                + "; ".join(f"{k} = {v}" for k, v in sorted(machines.items()))]
+    return []
 
-    rows = []
-    for mid, g_all in s_all.groupby("method_id", sort=False):
-        g = ok[ok["method_id"] == mid]
-        f = folds[folds["method_id"] == mid]
-        row: dict[str, Any] = {
-            "method_id": mid,
-            "features": _mode(g_all["features"]),
-            "classifier": _mode(g_all["classifier"]),
-            "classifier_name": _mode(g_all["classifier_name"]),
-            "feature_params": _mode(g_all["feature_params"]),
-            "classifier_params": _mode(g_all["classifier_params"]),
-            "early_frames": float(g_all["early_frames"].iloc[0]) if g_all["early_frames"].notna().any() else math.nan,
-            "n_folds": int(len(f)),
-            "n_failed": int((g_all["status"] != "ok").sum()),
-            "error": _first_error(g_all),
-            "runs": int(g_all["run_id"].nunique()),
-            "protocols": ",".join(sorted(set(g_all["protocol"].astype(str)))),
-            "leakage": _mode(g_all["leakage"]) if "leakage" in g_all else NOT_RECORDED,
-            "selection": _mode(g_all["selection"]) if "selection" in g_all else "",
-        }
-        mean, sd, lo, hi = fold_interval(f["accuracy"].to_numpy())
-        ci_method = "t"
-        n_seeds = 1
-        if len(f) == 1:
-            n = int(f["n_test"].iloc[0])
-            lo, hi = wilson_interval(int(round(mean * n)), n)
-            ci_method = "wilson"
-            # one fold evaluated with several seeds (repetitions): the spread over the seeds
-            per_seed = g.groupby(["repetition", "seed"])["accuracy"].mean()
-            n_seeds = int(len(per_seed))
-            if n_seeds > 1:
-                sd = float(per_seed.std(ddof=1))
-        row.update(accuracy=mean, accuracy_sd=sd, n_seeds=n_seeds, ci_low=lo, ci_high=hi, ci_method=ci_method,
-                   balanced_accuracy=float(f["balanced_accuracy"].mean()) if len(f) else math.nan,
-                   macro_f1=float(f["macro_f1"].mean()) if len(f) else math.nan,
-                   n_test=int(f["n_test"].sum()) if len(f) else 0)
-        if pool_machines:
-            tm, gt = "pooled", g
-        else:
-            measured = g[g["latency_ms"].notna()]
-            if ref is not None and (measured["machine"] == ref).any():
-                tm = ref
-            elif len(measured):
-                tm = _mode(measured["machine"])
-            else:
-                tm = ref or ""
-            gt = g[g["machine"] == tm]
-        row["timing_machine"] = tm
-        row.update(_timings(gt) if len(gt) else {"latency_ms": math.nan, "fit_seconds": math.nan, "feature_ms": math.nan})
-        if design is not None:
-            row["held_out_accuracy"], row["n_held_out"], tests_design = _held_out(preds, mid, design)
-            row["designed"] = tests_design and (not design_methods
-                                                or bool({row["classifier"], method_label(row)} & design_methods))
-        rows.append(row)
-    for what in design_notes:
-        if any(r.get("designed") for r in rows):
-            notes.append(f"methods marked † were designed on {what}: their usual figure includes that data; "
-                         "'held out' is the accuracy on the other test captures")
-        else:
-            notes.append(f"the methods were designed on {what}; no test capture of this table is among them, "
-                         "so the usual figure is already a held-out one")
-    df = _tuned_on_test(pd.DataFrame(rows))
+
+def _method_row(mid: str, g_all: pd.DataFrame, g: pd.DataFrame, f: pd.DataFrame, preds: pd.DataFrame | None,
+                ref: str | None, pool_machines: bool, design: _Design) -> dict[str, Any]:
+    """A method's row: its description, accuracy over its folds ``f``, timings and design."""
+    row: dict[str, Any] = {
+        "method_id": mid,
+        "features": _mode(g_all["features"]),
+        "classifier": _mode(g_all["classifier"]),
+        "classifier_name": _mode(g_all["classifier_name"]),
+        "feature_params": _mode(g_all["feature_params"]),
+        "classifier_params": _mode(g_all["classifier_params"]),
+        "early_frames": float(g_all["early_frames"].iloc[0]) if g_all["early_frames"].notna().any() else math.nan,
+        "n_folds": int(len(f)),
+        "n_failed": int((g_all["status"] != "ok").sum()),
+        "error": _first_error(g_all),
+        "runs": int(g_all["run_id"].nunique()),
+        "protocols": ",".join(sorted(set(g_all["protocol"].astype(str)))),
+        "leakage": _mode(g_all["leakage"]) if "leakage" in g_all else NOT_RECORDED,
+        "selection": _mode(g_all["selection"]) if "selection" in g_all else "",
+    }
+    row.update(_accuracy_fields(g, f))
+    tm = _timing_machine(g, ref, pool_machines)
+    gt = g if pool_machines else g[g["machine"] == tm]
+    row["timing_machine"] = tm
+    row.update(_timings(gt) if len(gt) else {"latency_ms": math.nan, "fit_seconds": math.nan, "feature_ms": math.nan})
+    row.update(design.row_fields(preds, mid, row))
+    return row
+
+
+def _accuracy_fields(g: pd.DataFrame, f: pd.DataFrame) -> dict[str, Any]:
+    """A method's accuracy over its folds ``f`` (mean, spread, 95 % interval) and its other metrics;
+    a single fold: the Wilson interval over its captures, the spread over its seeds (scores ``g``)."""
+    mean, sd, lo, hi = fold_interval(f["accuracy"].to_numpy())
+    ci_method = "t"
+    n_seeds = 1
+    if len(f) == 1:
+        n = int(f["n_test"].iloc[0])
+        lo, hi = wilson_interval(int(round(mean * n)), n)
+        ci_method = "wilson"
+        # one fold evaluated with several seeds (repetitions): the spread over the seeds
+        per_seed = g.groupby(["repetition", "seed"])["accuracy"].mean()
+        n_seeds = int(len(per_seed))
+        if n_seeds > 1:
+            sd = float(per_seed.std(ddof=1))
+    return dict(accuracy=mean, accuracy_sd=sd, n_seeds=n_seeds, ci_low=lo, ci_high=hi, ci_method=ci_method,
+                balanced_accuracy=float(f["balanced_accuracy"].mean()) if len(f) else math.nan,
+                macro_f1=float(f["macro_f1"].mean()) if len(f) else math.nan,
+                n_test=int(f["n_test"].sum()) if len(f) else 0)
+
+
+def _timing_machine(g: pd.DataFrame, ref: str | None, pool_machines: bool) -> str:
+    """The machine whose timings a method shows: the reference machine where it was measured there,
+    else the machine that measured it most; ``"pooled"`` when machines are pooled."""
+    if pool_machines:
+        return "pooled"
+    measured = g[g["latency_ms"].notna()]
+    if ref is not None and (measured["machine"] == ref).any():
+        return ref
+    if len(measured):
+        return _mode(measured["machine"])
+    return ref or ""
+
+
+def _ranked(df: pd.DataFrame) -> pd.DataFrame:
+    """The rows by accuracy (then macro F1, then id), with their rank (ties share the best rank)."""
     df = df.sort_values(["accuracy", "macro_f1", "method_id"], ascending=[False, False, True], na_position="last",
                         kind="stable").reset_index(drop=True)
     df.insert(0, "rank", df["accuracy"].rank(method="min", ascending=False, na_option="bottom").astype(int))
-    # paired tests against the best
+    return df
+
+
+def _add_tests_against_best(df: pd.DataFrame, folds: pd.DataFrame, preds: pd.DataFrame | None, alpha: float) -> None:
+    """Each method's paired test against the best (the first row), Holm-adjusted over the table."""
     best = df["method_id"].iloc[0]
     tests: list[PairedTest | None] = []
     for mid in df["method_id"]:
@@ -338,25 +414,25 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
     df["p_value"] = pvals
     df["p_holm"] = adj
     df["differs"] = [bool(np.isfinite(p) and p < alpha) for p in adj]
-    # Pareto front (accuracy vs latency), per timing machine
+
+
+def _mark_pareto_fronts(df: pd.DataFrame) -> None:
+    """The accuracy / latency Pareto front, per timing machine."""
     df["pareto"] = False
     for tm, g in df.groupby("timing_machine"):
         mask = pareto_front(g["accuracy"].to_numpy(), g["latency_ms"].to_numpy())
         df.loc[g.index[mask], "pareto"] = True
+
+
+def _add_closing_notes(df: pd.DataFrame, notes: list[str]) -> None:
+    """The note on methods left untested, then each leaky evaluation's warning first of all."""
     untested = [str(r.method_id) for r in df.itertuples() if r.test == "none"]
     if untested and len(df) > 1:
         notes.append(f"{len(untested)} method(s) share fewer than two folds or subjects with the best: not tested")
-    fr = s_all["frame_rate"].dropna()
     leaks = sorted(set(df["leakage"]) - {""})
     for reason in leaks:
         notes.insert(0, f"LEAKY: {reason}. Its accuracy overstates accuracy on new people; never compare it "
                         "with an honest evaluation")
-    return Leaderboard(
-        key=key, dataset=str(first["dataset"]), dataset_hash=str(first["dataset_hash"]), target=str(first["target"]),
-        scheme=str(first["scheme_label"]), rows=df, folds=folds, machines=machines, reference_machine=ref,
-        pooled_machines=pool_machines, alpha=alpha, frame_rate=float(fr.iloc[0]) if len(fr) else math.nan, notes=notes,
-        looks=looks_here, has_design=design is not None,
-    )
 
 
 def build_leaderboards(rs: ResultSet, *, alpha: float = 0.05, pool_machines: bool = False,
@@ -568,32 +644,12 @@ def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
     cells = []
     labels = method_labels(lb.rows)
     for _, r in lb.rows.iterrows():
-        feats = str(r["features"])
-        extra = labels[r["method_id"]][len(method_label(r)):]  # parameters shown where rows would collide
-        feats += extra
-        if np.isfinite(r["early_frames"]):
-            fr = lb.frame_rate
-            secs = f", {r['early_frames'] / fr:.2g} s" if np.isfinite(fr) and fr > 0 else ""
-            feats += f" @ {int(r['early_frames'])} frames{secs}"
-        acc = _pct(r["accuracy"]) + (f" ± {_pct(r['accuracy_sd'])}" if np.isfinite(r["accuracy_sd"]) else "")
-        if r["ci_method"] == "wilson" and r.get("n_seeds", 1) > 1:
-            acc += f" ({int(r['n_seeds'])} seeds)"
-        ci = f"{_pct(r['ci_low'])}–{_pct(r['ci_high'])}" if np.isfinite(r["ci_low"]) else "—"
-        if r["ci_method"] == "wilson" and np.isfinite(r["ci_low"]):
-            ci += " (Wilson)"
+        feats = _features_cell(r, labels[r["method_id"]][len(method_label(r)):], lb.frame_rate)
+        acc, ci = _accuracy_cells(r)
         failed_all = r["n_folds"] == 0 and r["n_failed"] > 0
         if failed_all:
             acc, ci = "failed", "—"
-        if failed_all:
-            vs = f"failed: {r.get('error') or 'see the scores'}"
-        elif r["test"] == "best":
-            vs = "best"
-        elif r["test"] == "none":
-            vs = f"{100 * r['diff_vs_best']:+.1f}, not tested (n={r['n_pairs']})" if np.isfinite(r["diff_vs_best"]) else "not tested"
-        else:
-            star = " *" if r["differs"] else ""
-            vs = (f"{100 * r['diff_vs_best']:+.1f}, p={_p(r['p_holm'])}{star} "
-                  f"({'perm' if r['test'] == 'exact-permutation' else 'Wilcoxon'}, n={r['n_pairs']} {r['paired_by']}s)")
+        vs = _versus_best_cell(r, failed_all)
         row = [str(r["rank"]), str(r["method_id"]), feats, str(r["classifier"]),
                f"{r['n_folds']}" + (f" (+{r['n_failed']} failed)" if r["n_failed"] else ""), acc, ci,
                _pct(r["macro_f1"]), _num(r["latency_ms"]), _num(r["fit_seconds"]), _num(r["feature_ms"]), vs,
@@ -608,6 +664,40 @@ def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
             row.insert(2, f"LEAKY: {r['leakage']}" if r["leakage"] else "honest")
         cells.append(row)
     return header, cells
+
+
+def _features_cell(r: pd.Series, extra: str, frame_rate: float) -> str:
+    """A row's feature sets, with the parameters ``extra`` that tell colliding rows apart and its early
+    cut (frames, and seconds where the frame rate is known)."""
+    feats = str(r["features"]) + extra  # parameters shown where rows would collide
+    if np.isfinite(r["early_frames"]):
+        secs = f", {r['early_frames'] / frame_rate:.2g} s" if np.isfinite(frame_rate) and frame_rate > 0 else ""
+        feats += f" @ {int(r['early_frames'])} frames{secs}"
+    return feats
+
+
+def _accuracy_cells(r: pd.Series) -> tuple[str, str]:
+    """A row's accuracy (± sd, and the seeds behind a single fold's spread) and its 95 % interval."""
+    acc = _pct(r["accuracy"]) + (f" ± {_pct(r['accuracy_sd'])}" if np.isfinite(r["accuracy_sd"]) else "")
+    if r["ci_method"] == "wilson" and r.get("n_seeds", 1) > 1:
+        acc += f" ({int(r['n_seeds'])} seeds)"
+    ci = f"{_pct(r['ci_low'])}–{_pct(r['ci_high'])}" if np.isfinite(r["ci_low"]) else "—"
+    if r["ci_method"] == "wilson" and np.isfinite(r["ci_low"]):
+        ci += " (Wilson)"
+    return acc, ci
+
+
+def _versus_best_cell(r: pd.Series, failed_all: bool) -> str:
+    """A row's comparison with the best method: the difference, its Holm-adjusted p and test."""
+    if failed_all:
+        return f"failed: {r.get('error') or 'see the scores'}"
+    if r["test"] == "best":
+        return "best"
+    if r["test"] == "none":
+        return f"{100 * r['diff_vs_best']:+.1f}, not tested (n={r['n_pairs']})" if np.isfinite(r["diff_vs_best"]) else "not tested"
+    star = " *" if r["differs"] else ""
+    return (f"{100 * r['diff_vs_best']:+.1f}, p={_p(r['p_holm'])}{star} "
+            f"({'perm' if r['test'] == 'exact-permutation' else 'Wilcoxon'}, n={r['n_pairs']} {r['paired_by']}s)")
 
 
 def legend(lb: Leaderboard) -> str:

@@ -194,6 +194,101 @@ def _protocol_scheme(manifest: dict[str, Any]) -> Any:
 _CROP_PREFIX = re.compile(r"^first[^/]*/")
 
 
+def _result_dirs(paths: Iterable[str | Path]) -> list[Path]:
+    """The results directories found under ``paths``, each once, in the order met."""
+    dirs: list[Path] = []
+    for p in paths:
+        for d in _find_dirs(Path(p)):
+            if d.resolve() not in [x.resolve() for x in dirs]:
+                dirs.append(d)
+    if not dirs:
+        raise TouchbenchError("no results given")
+    return dirs
+
+
+def _read_scores(d: Path) -> tuple[pd.DataFrame, ResultStore | None]:
+    """The scores of results directory ``d`` and, when it holds fragments alone, the store that merged them."""
+    store = None
+    try:
+        if _fragments_only(d):  # merge on read (touchbench.results.store)
+            store = ResultStore(d)
+            s = store.read_scores()
+        else:
+            s = read_results_table(d / "scores.parquet")
+    except Exception as e:
+        raise TouchbenchError(f"{d / 'scores.parquet'}: cannot read: {type(e).__name__}: {e}") from None
+    return s, store
+
+
+def _labelled_scores(s: pd.DataFrame, d: Path, m: dict[str, Any], mid: str, mdesc: str) -> pd.DataFrame:
+    """The scores of ``d`` with the columns that place them: source, machine, frame rate, scheme label,
+    method id, table key and fold key (``m``: the run's manifest)."""
+    sensor = (m.get("dataset") or {}).get("sensor") or {}
+    scheme = _protocol_scheme(m)
+    proto_seed = (m.get("protocol") or {}).get("seed")
+    s = s.copy()
+    s["source"] = str(d)
+    s["machine"] = mid
+    s["machine_desc"] = mdesc
+    s["frame_rate"] = float(sensor.get("frame_rate")) if sensor.get("frame_rate") else np.nan
+    s["scheme_label"] = scheme_label(scheme, fallback=str(s["scheme"].iloc[0])) if scheme is not None else s["scheme"].astype(str)
+    variants = ["subject-id" if SUBJECT_ID_LEAK in str(x) else "" for x in s["leakage"]]
+    s["method_id"] = [
+        method_id(t, fp, cn, cp, ef, v)
+        for t, fp, cn, cp, ef, v in zip(s["target"], s["feature_params"], s["classifier_name"],
+                                        s["classifier_params"], s["early_frames"], variants)
+    ]
+    s["table_key"] = [
+        _short_hash([dh, t, sc], 8) for dh, t, sc in zip(s["dataset_hash"], s["target"], s["scheme_label"])
+    ]
+    base_fold = s["fold"].astype(str).str.replace(_CROP_PREFIX, "", regex=True)
+    s["fold_key"] = [f"{proto_seed}/{r}/{f}" for r, f in zip(s["repetition"], base_fold)]
+    s["finished_at"] = s["finished_at"].astype(str) if "finished_at" in s else ""
+    return s
+
+
+def _read_predictions(d: Path, store: ResultStore | None) -> pd.DataFrame | None:
+    """The predictions of results directory ``d`` (None: none, or unreadable)."""
+    ppath = d / "predictions.parquet"
+    try:
+        if store is not None:
+            return store.read_predictions()
+        if ppath.is_file():
+            return read_results_table(ppath)
+    except Exception:
+        return None
+    return None
+
+
+def _labelled_predictions(p: pd.DataFrame, s: pd.DataFrame, d: Path) -> pd.DataFrame:
+    """The prediction columns of ``p`` with their task's method, fold key, seed, time and table (from ``s``)."""
+    keep = [c for c in PREDICTION_COLUMNS if c in p.columns] + [c for c in p.columns if c.startswith(PROBA_PREFIX)]
+    pp = p[keep].copy()
+    info = s.drop_duplicates("task_id").set_index("task_id")[
+        ["method_id", "fold_key", "seed", "finished_at", "table_key"]]
+    pp = pp.join(info, on="task_id", how="inner")
+    pp["source"] = str(d)
+    return pp
+
+
+def _source_record(d: Path, m: dict[str, Any], s: pd.DataFrame, mid: str, mdesc: str) -> dict[str, Any]:
+    """What a results directory says about its run: protocol, machine, versions, design, looks..."""
+    return {
+        "path": str(d), "run_id": (m.get("run") or {}).get("run_id") or str(s["run_id"].iloc[0]),
+        "protocol": (m.get("protocol") or {}).get("name") or str(s["protocol"].iloc[0]),
+        "protocol_path": (m.get("protocol") or {}).get("path"),
+        "machine": mid, "machine_desc": mdesc, "dataset": str(s["dataset"].iloc[0]),
+        "started_at": m.get("started_at"), "finished_at": m.get("finished_at"),
+        "versions": m.get("packages") or {}, "touchbench_version": m.get("touchbench_version"),
+        "git": m.get("git") or {}, "n_tasks": int(len(s)), "n_failed": int((s["status"] != "ok").sum()),
+        "seconds": sum(float(x.get("seconds") or 0) for x in (m.get("sessions") or [])),
+        "design": (m.get("protocol") or {}).get("design"),
+        "design_captures": (m.get("protocol") or {}).get("design_captures"),
+        "looks": _looks(m, d),
+        "left_out": [n for n in (m.get("notes") or []) if str(n).startswith(LEFT_OUT)],
+    }
+
+
 def _looks(manifest: dict[str, Any], folder: Path) -> Looks | None:
     """How often the run's test set was scored, from the ledger its manifest names (relative to the
     results folder; None: no ledger)."""
@@ -205,59 +300,16 @@ def _looks(manifest: dict[str, Any], folder: Path) -> Looks | None:
 
 def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> ResultSet:
     """Read and combine results directories (see the module docstring)."""
-    dirs: list[Path] = []
-    for p in paths:
-        for d in _find_dirs(Path(p)):
-            if d.resolve() not in [x.resolve() for x in dirs]:
-                dirs.append(d)
-    if not dirs:
-        raise TouchbenchError("no results given")
+    dirs = _result_dirs(paths)
     score_frames, pred_frames, sources = [], [], []
     for d in dirs:
-        store = None
-        try:
-            if _fragments_only(d):  # merge on read (touchbench.results.store)
-
-                store = ResultStore(d)
-                s = store.read_scores()
-            else:
-                s = read_results_table(d / "scores.parquet")
-        except Exception as e:
-            raise TouchbenchError(f"{d / 'scores.parquet'}: cannot read: {type(e).__name__}: {e}") from None
+        s, store = _read_scores(d)
         if s.empty:
             continue
         m = _read_manifest(d)
         mid, mdesc = machine_id(m.get("platform"))
-        sensor = (m.get("dataset") or {}).get("sensor") or {}
-        scheme = _protocol_scheme(m)
-        proto_seed = (m.get("protocol") or {}).get("seed")
-        s = s.copy()
-        s["source"] = str(d)
-        s["machine"] = mid
-        s["machine_desc"] = mdesc
-        s["frame_rate"] = float(sensor.get("frame_rate")) if sensor.get("frame_rate") else np.nan
-        s["scheme_label"] = scheme_label(scheme, fallback=str(s["scheme"].iloc[0])) if scheme is not None else s["scheme"].astype(str)
-        variants = ["subject-id" if SUBJECT_ID_LEAK in str(x) else "" for x in s["leakage"]]
-        s["method_id"] = [
-            method_id(t, fp, cn, cp, ef, v)
-            for t, fp, cn, cp, ef, v in zip(s["target"], s["feature_params"], s["classifier_name"],
-                                            s["classifier_params"], s["early_frames"], variants)
-        ]
-        s["table_key"] = [
-            _short_hash([dh, t, sc], 8) for dh, t, sc in zip(s["dataset_hash"], s["target"], s["scheme_label"])
-        ]
-        base_fold = s["fold"].astype(str).str.replace(_CROP_PREFIX, "", regex=True)
-        s["fold_key"] = [f"{proto_seed}/{r}/{f}" for r, f in zip(s["repetition"], base_fold)]
-        s["finished_at"] = s["finished_at"].astype(str) if "finished_at" in s else ""
-        p = None
-        ppath = d / "predictions.parquet"
-        try:
-            if store is not None:
-                p = store.read_predictions()
-            elif ppath.is_file():
-                p = read_results_table(ppath)
-        except Exception:
-            p = None
+        s = _labelled_scores(s, d, m, mid, mdesc)
+        p = _read_predictions(d, store)
         if p is not None and len(p):
             keys = (
                 p.groupby("task_id", sort=False)["capture_id"]
@@ -265,28 +317,9 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
             )
             s["fold_key"] = [keys.get(t, fk) for t, fk in zip(s["task_id"], s["fold_key"])]
             if predictions:
-                keep = [c for c in PREDICTION_COLUMNS if c in p.columns] + [c for c in p.columns if c.startswith(PROBA_PREFIX)]
-                pp = p[keep].copy()
-                info = s.drop_duplicates("task_id").set_index("task_id")[
-                    ["method_id", "fold_key", "seed", "finished_at", "table_key"]]
-                pp = pp.join(info, on="task_id", how="inner")
-                pp["source"] = str(d)
-                pred_frames.append(pp)
+                pred_frames.append(_labelled_predictions(p, s, d))
         score_frames.append(s)
-        sources.append({
-            "path": str(d), "run_id": (m.get("run") or {}).get("run_id") or str(s["run_id"].iloc[0]),
-            "protocol": (m.get("protocol") or {}).get("name") or str(s["protocol"].iloc[0]),
-            "protocol_path": (m.get("protocol") or {}).get("path"),
-            "machine": mid, "machine_desc": mdesc, "dataset": str(s["dataset"].iloc[0]),
-            "started_at": m.get("started_at"), "finished_at": m.get("finished_at"),
-            "versions": m.get("packages") or {}, "touchbench_version": m.get("touchbench_version"),
-            "git": m.get("git") or {}, "n_tasks": int(len(s)), "n_failed": int((s["status"] != "ok").sum()),
-            "seconds": sum(float(x.get("seconds") or 0) for x in (m.get("sessions") or [])),
-            "design": (m.get("protocol") or {}).get("design"),
-            "design_captures": (m.get("protocol") or {}).get("design_captures"),
-            "looks": _looks(m, d),
-            "left_out": [n for n in (m.get("notes") or []) if str(n).startswith(LEFT_OUT)],
-        })
+        sources.append(_source_record(d, m, s, mid, mdesc))
     if not score_frames:
         raise TouchbenchError(f"no scores in {', '.join(map(str, dirs))} (every run is empty)")
     scores = pd.concat(score_frames, ignore_index=True, sort=False)

@@ -144,6 +144,8 @@ class _Scene:
 
     # ------------------------------------------------------------ capture
     def capture(self, index: int, row: Row) -> np.ndarray:
+        """Capture ``index`` (its own random stream): the gesture planned, pressed through the cover,
+        substrate and curvature, rendered on the sensor and read out through its electronics."""
         spec, fx, pro = self.spec, self.fx, self.spec.protocol
         sen = spec.sensor
         rng = np.random.default_rng([self.seed, index])
@@ -170,6 +172,26 @@ class _Scene:
             max_s=seg.max_s,
         )
         T = seg.frames if seg.frames is not None else max(1, int(round((ev.t_end - ev.t_start) * self.fps)))
+        tr = self._covered_tracks(row, ev, p, person, T, rng)
+        curve = self.curvature(row)
+        if curve is not None:
+            tr = S.apply_curvature(tr, curve[0], curve[1])
+        leak = None
+        if "crosstalk" in fx and sen.kind == "grid":
+            c = float(sen.crosstalk)  # type: ignore[arg-type]
+            leak = lambda w: S.crosstalk_lines(w, c)  # noqa: E731
+        field = render(tr, self.grid, self.pitch, line_filter=leak)  # type: ignore[arg-type]
+        x = self._readout(field, tr)
+        x = self._with_rest(x, row, curve, rng)
+        if "noise" in fx:
+            x = S.add_noise(x, sen.noise_sd, rng)  # type: ignore[arg-type]
+        return S.adc(x, tuple(sen.value_range), sen.dtype)  # type: ignore[arg-type]
+
+    def _covered_tracks(self, row: Row, ev: Events, p: GestureParams, person: Person, T: int,
+                        rng: np.random.Generator) -> Tracks:
+        """The contacts of ``ev`` over ``T`` frames, through the capture's cover and substrate (a
+        substrate's delay simulated from frames before the first, then cut off)."""
+        fx, pro = self.fx, self.spec.protocol
         sub = pro.substrates[row.substrate] if ("substrate" in fx and row.substrate is not None) else None  # type: ignore[index]
         lead = int(np.ceil(4 * sub.delay_s * self.fps)) if (sub is not None and sub.delay_s > 0) else 0
         t = ev.t_start + (np.arange(-lead, T, dtype=np.float64)) / self.fps
@@ -181,15 +203,12 @@ class _Scene:
             tr = S.apply_substrate(tr, sub.spread_mm, sub.delay_s, sub.gain, self.fps)
         if lead:
             tr = Tracks(tr.cx[:, lead:], tr.cy[:, lead:], tr.force[:, lead:], tr.sdx, tr.sdy, tr.conform)
-        curve = self.curvature(row)
-        if curve is not None:
-            tr = S.apply_curvature(tr, curve[0], curve[1])
-        leak = None
-        if "crosstalk" in fx and sen.kind == "grid":
-            c = float(sen.crosstalk)  # type: ignore[arg-type]
-            leak = lambda w: S.crosstalk_lines(w, c)  # noqa: E731
-        field = render(tr, self.grid, self.pitch, line_filter=leak)  # type: ignore[arg-type]
+        return tr
 
+    def _readout(self, field: np.ndarray, tr: Tracks) -> np.ndarray:
+        """The sensor's reading of the force ``field``: its channels (fur sensor), or the grid's gain;
+        saturated where the scene says so."""
+        sen, fx = self.spec.sensor, self.fx
         if sen.kind == "channels":
             r = sen.response
             assert r is not None
@@ -207,14 +226,20 @@ class _Scene:
             if "saturation" in fx:
                 rest_p = r.rest["pressure"]
                 x[:, 2] = rest_p + S.saturate(x[:, 2] - rest_p, sen.saturation)  # type: ignore[arg-type]
-            x = x[:, None, :]
-        else:
-            # the electronics in float32: counts up to a few thousand keep
-            # ~1e-4 resolution, and the passes over the field cost half
-            x = field.astype(np.float32)
-            x *= np.float32(sen.gain)
-            if "saturation" in fx:
-                x = S.saturate(x, sen.saturation)  # type: ignore[arg-type]
+            return x[:, None, :]
+        # the electronics in float32: counts up to a few thousand keep
+        # ~1e-4 resolution, and the passes over the field cost half
+        x = field.astype(np.float32)
+        x *= np.float32(sen.gain)
+        if "saturation" in fx:
+            x = S.saturate(x, sen.saturation)  # type: ignore[arg-type]
+        return x
+
+    def _with_rest(self, x: np.ndarray, row: Row, curve: tuple[float, str, float] | None,
+                   rng: np.random.Generator) -> np.ndarray:
+        """``x`` on the sensor's resting level: the baseline (its drift drawn from ``rng``) and a
+        curved sheet's tension."""
+        sen, fx = self.spec.sensor, self.fx
         rest = None
         if "baseline" in fx:
             b = sen.baseline
@@ -230,9 +255,7 @@ class _Scene:
                 x = x + S.tension(self.grid, curve[2], curve[1]).astype(x.dtype)[None]  # type: ignore[arg-type]
         if rest is not None:
             x = x + rest.astype(x.dtype)[None]
-        if "noise" in fx:
-            x = S.add_noise(x, sen.noise_sd, rng)  # type: ignore[arg-type]
-        return S.adc(x, tuple(sen.value_range), sen.dtype)  # type: ignore[arg-type]
+        return x
 
 
 def simulate(

@@ -252,62 +252,14 @@ def plan_events(
             return _empty(0.0, float(window_s))
         return _empty(0.0, _clip_span(duration, min_s, max_s))
 
-    sustained = p.rate_hz is None
     osc_hz = p.osc_hz * f.osc * speed
-    if sustained:
-        if fixed:
-            onset = np.array([-1.0])
-            dur = np.array([float(window_s) + 2.0])
-        else:
-            d = (p.cycles / osc_hz) if (p.cycles and osc_hz > 0) else duration * f.contact
-            onset = np.array([0.0])
-            dur = np.array([d])
+    if p.rate_hz is None:
+        onset, dur = _sustained_contact(p, f, duration, osc_hz, window_s)
     else:
-        rate = float(p.rate_hz) * speed
-        period = 1.0 / rate
-        contact = min(p.contact_s * f.contact / speed ** 0.5, 0.95 * period) if p.cycles is None else p.contact_s * f.contact / speed ** 0.5
-        if fixed:
-            t0 = -rng.uniform(0.0, period)
-            n = int(np.ceil((float(window_s) - t0) / period)) + 1
-        else:
-            t0 = 0.0
-            n = p.cycles if p.cycles is not None else max(1, int(round(duration * rate)))
-        k = np.arange(n, dtype=np.float64)
-        onset = t0 + k * period
-        if p.jitter > 0 and n > 1:
-            onset = onset + p.jitter * period * rng.standard_normal(n)
-            onset.sort()
-            if not fixed:
-                onset -= onset[0]
-        dur = np.full(n, contact) * np.exp(0.15 * rng.standard_normal(n))
+        onset, dur = _tapping_contacts(p, f, speed, duration, window_s, rng)
     n = len(onset)
-
-    rise = np.full(n, p.rise_s / speed ** 0.5)
-    fall = np.full(n, p.fall_s / speed ** 0.5)
-    over = (rise + fall) / (0.9 * dur)
-    scale = np.where(over > 1.0, 1.0 / np.maximum(over, 1e-12), 1.0)
-    rise *= scale
-    fall *= scale
-    peak = p.force_n * f.force * np.exp(p.force_cv * rng.standard_normal(n) - 0.5 * p.force_cv**2)
-
-    # geometry: hand axis angle; the left hand mirrors the x direction
-    angle = np.deg2rad(p.angle_deg) + f.angle
-    dx = f.dx
-    if f.mirror:
-        angle = np.pi - angle
-        dx = -dx
-    h_mm, w_mm = surface_mm
-    travel = p.travel_mm * f.amplitude
-    cx = w_mm / 2 + dx + p.scatter_mm * rng.standard_normal(n)
-    cy = h_mm / 2 + f.dy + p.scatter_mm * rng.standard_normal(n)
-    cx = np.clip(cx, 0.0, w_mm)
-    cy = np.clip(cy, 0.0, h_mm)
-    ang = np.full(n, angle) + (np.deg2rad(20.0) * rng.standard_normal(n) if p.scatter_mm > 20 else 0.0)
-    gx = travel * np.cos(ang)
-    gy = travel * np.sin(ang)
-    x0 = cx - gx / 2
-    y0 = cy - gy / 2
-
+    rise, fall, peak = _force_envelopes(p, f, speed, dur, rng)
+    x0, y0, gx, gy, ang = _strokes(p, f, surface_mm, n, rng)
     ev = Events(
         onset=onset,
         dur=dur,
@@ -334,15 +286,92 @@ def plan_events(
     if fixed:
         ev.t_start, ev.t_end = 0.0, float(window_s)
     else:
-        first = float(onset.min())
-        last = float((onset + dur).max())
-        a = first - rng.uniform(0.0, pad_s)
-        b = last + rng.uniform(0.0, pad_s)
-        span = _clip_span(b - a, min_s, max_s)
-        if span > b - a:  # too short: pad both sides evenly
-            a -= (span - (b - a)) / 2
-        ev.t_start, ev.t_end = a, a + span
+        ev.t_start, ev.t_end = _contact_window(onset, dur, pad_s, min_s, max_s, rng)
     return ev
+
+
+def _sustained_contact(p: GestureParams, f: Factors, duration: float, osc_hz: float,
+                       window_s: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """The onset and duration of a sustained gesture's one contact: over the whole window (fixed
+    segmentation), else its cycles of oscillation or its drawn duration."""
+    if window_s is not None:
+        return np.array([-1.0]), np.array([float(window_s) + 2.0])
+    d = (p.cycles / osc_hz) if (p.cycles and osc_hz > 0) else duration * f.contact
+    return np.array([0.0]), np.array([d])
+
+
+def _tapping_contacts(p: GestureParams, f: Factors, speed: float, duration: float, window_s: float | None,
+                      rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """The onsets and durations of a repeated gesture's contacts, one per period: from a random phase
+    through the window (fixed segmentation), else its cycles or its drawn duration's worth; jittered."""
+    fixed = window_s is not None
+    rate = float(p.rate_hz) * speed
+    period = 1.0 / rate
+    contact = min(p.contact_s * f.contact / speed ** 0.5, 0.95 * period) if p.cycles is None else p.contact_s * f.contact / speed ** 0.5
+    if fixed:
+        t0 = -rng.uniform(0.0, period)
+        n = int(np.ceil((float(window_s) - t0) / period)) + 1
+    else:
+        t0 = 0.0
+        n = p.cycles if p.cycles is not None else max(1, int(round(duration * rate)))
+    k = np.arange(n, dtype=np.float64)
+    onset = t0 + k * period
+    if p.jitter > 0 and n > 1:
+        onset = onset + p.jitter * period * rng.standard_normal(n)
+        onset.sort()
+        if not fixed:
+            onset -= onset[0]
+    dur = np.full(n, contact) * np.exp(0.15 * rng.standard_normal(n))
+    return onset, dur
+
+
+def _force_envelopes(p: GestureParams, f: Factors, speed: float, dur: np.ndarray,
+                     rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each contact's rise and fall times (shrunk to fit in 90 % of the contact) and peak force."""
+    n = len(dur)
+    rise = np.full(n, p.rise_s / speed ** 0.5)
+    fall = np.full(n, p.fall_s / speed ** 0.5)
+    over = (rise + fall) / (0.9 * dur)
+    scale = np.where(over > 1.0, 1.0 / np.maximum(over, 1e-12), 1.0)
+    rise *= scale
+    fall *= scale
+    peak = p.force_n * f.force * np.exp(p.force_cv * rng.standard_normal(n) - 0.5 * p.force_cv**2)
+    return rise, fall, peak
+
+
+def _strokes(p: GestureParams, f: Factors, surface_mm: tuple[float, float], n: int,
+             rng: np.random.Generator) -> tuple[np.ndarray, ...]:
+    """Each contact's start point, travel vector and angle: about the surface's centre, along the hand's
+    axis (the left hand mirrors the x direction)."""
+    angle = np.deg2rad(p.angle_deg) + f.angle
+    dx = f.dx
+    if f.mirror:
+        angle = np.pi - angle
+        dx = -dx
+    h_mm, w_mm = surface_mm
+    travel = p.travel_mm * f.amplitude
+    cx = w_mm / 2 + dx + p.scatter_mm * rng.standard_normal(n)
+    cy = h_mm / 2 + f.dy + p.scatter_mm * rng.standard_normal(n)
+    cx = np.clip(cx, 0.0, w_mm)
+    cy = np.clip(cy, 0.0, h_mm)
+    ang = np.full(n, angle) + (np.deg2rad(20.0) * rng.standard_normal(n) if p.scatter_mm > 20 else 0.0)
+    gx = travel * np.cos(ang)
+    gy = travel * np.sin(ang)
+    return cx - gx / 2, cy - gy / 2, gx, gy, ang
+
+
+def _contact_window(onset: np.ndarray, dur: np.ndarray, pad_s: float, min_s: float | None, max_s: float | None,
+                    rng: np.random.Generator) -> tuple[float, float]:
+    """The capture's start and end under contact segmentation: the first contact to the last, padded by
+    up to ``pad_s`` either side, kept within [``min_s``, ``max_s``] (a short one padded evenly)."""
+    first = float(onset.min())
+    last = float((onset + dur).max())
+    a = first - rng.uniform(0.0, pad_s)
+    b = last + rng.uniform(0.0, pad_s)
+    span = _clip_span(b - a, min_s, max_s)
+    if span > b - a:  # too short: pad both sides evenly
+        a -= (span - (b - a)) / 2
+    return a, a + span
 
 
 def _clip_span(span: float, min_s: float | None, max_s: float | None) -> float:

@@ -337,6 +337,23 @@ class SceneSpec(_Strict):
     @model_validator(mode="after")
     def _effects_match_configuration(self) -> "SceneSpec":
         fx = set(self.effects)
+        s, pro = self.sensor, self.protocol
+        self._check_configured_effects(fx)
+        self._check_curvature(fx)
+        self._check_sessions_and_hands(fx)
+        self._check_people()
+        self._check_split()
+        if s.kind == "channels" and ("crosstalk" in fx or "curvature" in fx):
+            raise ValueError("effects: crosstalk and curvature apply to grid sensors only")
+        if pro.segmentation.mode == "fixed" and (pro.segmentation.min_s or pro.segmentation.max_s):
+            raise ValueError("protocol.segmentation: min_s/max_s apply to contact segmentation only")
+        n_total = n_captures(self)
+        if pro.lost >= n_total:
+            raise ValueError(f"protocol.lost: {pro.lost} is not fewer than the {n_total} captures")
+        return self
+
+    def _check_configured_effects(self, fx: set[str]) -> None:
+        """Each effect that one field configures is listed exactly when that field is given."""
         s, pop, pro = self.sensor, self.population, self.protocol
         # (effect, configured?, field that configures it)
         pairs = [
@@ -356,6 +373,10 @@ class SceneSpec(_Strict):
                 raise ValueError(f"{where}: given, but effect {effect!r} is not listed in effects")
             if effect in fx and not configured:
                 raise ValueError(f"effects: {effect!r} is listed but {where} is not given")
+
+    def _check_curvature(self, fx: set[str]) -> None:
+        """'curvature' is listed exactly when the sensor or a substrate is curved; the curved gestures are the scene's."""
+        s, pro = self.sensor, self.protocol
         curved_substrates = [k for k, v in (pro.substrates or {}).items() if v.radius_mm is not None]
         has_curve = s.curvature is not None or bool(curved_substrates)
         if has_curve and "curvature" not in fx:
@@ -367,6 +388,10 @@ class SceneSpec(_Strict):
             bad = [g for g in s.curvature.gestures if g not in self.gestures]
             if bad:
                 raise ValueError(f"sensor.curvature.gestures: {bad} not in the scene's gestures")
+
+    def _check_sessions_and_hands(self, fx: set[str]) -> None:
+        """'session' is listed exactly when someone has several sessions; 'handedness' when a group uses both hands."""
+        pro = self.protocol
         multi_session = pro.sessions > 1 or any(g.sessions > 1 for g in (pro.groups or {}).values())
         if multi_session and "session" not in fx:
             raise ValueError("protocol.sessions: more than one session, but effect 'session' is not listed in effects")
@@ -375,7 +400,10 @@ class SceneSpec(_Strict):
         both_hands = any(g.hands == "both" for g in (pro.groups or {}).values())
         if both_hands and "handedness" not in fx:
             raise ValueError("protocol.groups: a group uses both hands, but effect 'handedness' is not listed in effects")
-        # people
+
+    def _check_people(self) -> None:
+        """The number of subjects (given, or the groups'), and each group's sessions and instructions."""
+        pop, pro = self.population, self.protocol
         if pro.groups is not None:
             n = sum(g.subjects for g in pro.groups.values())
             if pop.subjects is not None and pop.subjects != n:
@@ -389,24 +417,20 @@ class SceneSpec(_Strict):
                     _check_gesture_override(f"protocol.groups.{gname}.instructions", g, over)
         elif pop.subjects is None:
             raise ValueError("population.subjects: required (or give protocol.groups)")
-        # split
-        if pro.split is not None:
-            subjects = set(subject_ids(self))
-            unknown = sorted((set(pro.split.train) | set(pro.split.test)) - subjects)
-            if unknown:
-                raise ValueError(f"protocol.split: unknown subjects {unknown} (the scene has {min(subjects)}..{max(subjects)})")
-            if pro.split.variants is not None:
-                bad = [v for v in pro.split.variants if v not in (pro.variants or {})]
-                if bad:
-                    raise ValueError(f"protocol.split.variants: {bad} are not variants of the scene")
-        if s.kind == "channels" and ("crosstalk" in fx or "curvature" in fx):
-            raise ValueError("effects: crosstalk and curvature apply to grid sensors only")
-        if pro.segmentation.mode == "fixed" and (pro.segmentation.min_s or pro.segmentation.max_s):
-            raise ValueError("protocol.segmentation: min_s/max_s apply to contact segmentation only")
-        n_total = n_captures(self)
-        if pro.lost >= n_total:
-            raise ValueError(f"protocol.lost: {pro.lost} is not fewer than the {n_total} captures")
-        return self
+
+    def _check_split(self) -> None:
+        """The split's subjects and variants are the scene's."""
+        pro = self.protocol
+        if pro.split is None:
+            return
+        subjects = set(subject_ids(self))
+        unknown = sorted((set(pro.split.train) | set(pro.split.test)) - subjects)
+        if unknown:
+            raise ValueError(f"protocol.split: unknown subjects {unknown} (the scene has {min(subjects)}..{max(subjects)})")
+        if pro.split.variants is not None:
+            bad = [v for v in pro.split.variants if v not in (pro.variants or {})]
+            if bad:
+                raise ValueError(f"protocol.split.variants: {bad} are not variants of the scene")
 
     # ------------------------------------------------------------ helpers
     def gesture_params(self, gesture: str, group: str | None = None) -> GestureParams:
