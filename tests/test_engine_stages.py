@@ -133,3 +133,24 @@ def test_a_named_method_is_reported_by_its_own_feature_sets(tmp_path):
                    "p2")
     (same,) = parse_protocol(p2.read_text(), p2).evaluated_methods()
     assert same.key == method.key and same.features_label == "touch-rhythm"
+
+
+def test_every_report_names_a_named_method_and_its_own_feature_sets(tmp_path):
+    from touchbench.reports.leaderboard import build_leaderboards, display_rows, to_markdown
+    from touchbench.reports.results import load_results
+
+    data = tmp_path / "d.parquet"
+    random_dataset(subjects=("s1", "s2"), per_cell=2, frames=(60, 60)).to_parquet(data)
+    p = _protocol(tmp_path, f"dataset: {data}\nscheme: loso\n"
+                            "methods: [touch-et-fast, {name: minirocket, params: {n_kernels: 84}}]\n")
+    run_protocol(p, out=tmp_path / "out", progress=False)
+    (lb,) = build_leaderboards(load_results([tmp_path / "out"]))
+    header, cells = display_rows(lb)
+    named = {row[header.index("method")]: row[header.index("features")] for row in cells}
+    assert named == {"touch-et-fast": "touch-rhythm", "minirocket": "captures"}
+    text = to_markdown([lb])
+    assert "raw-window" not in text
+    for mid in lb.rows["method_id"]:
+        assert str(mid) not in text
+    preds = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
+    assert set(preds["features"]) == {"touch-rhythm", "captures"}

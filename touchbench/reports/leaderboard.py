@@ -608,30 +608,40 @@ def _params(text: Any) -> str:
     return str(value)
 
 
-def method_labels(rows: pd.DataFrame) -> dict[str, str]:
-    """A readable label per method id: ``features / classifier`` (and frames), with the feature
-    parameters, then the classifier parameters, where two rows would otherwise read the same; a
-    ``#2`` suffix if they still do."""
+def _label_parts(rows: pd.DataFrame) -> dict[str, list[str]]:
+    """Per method id, what its readable label adds to ``features / method``: the feature parameters,
+    then the method's parameters, where two rows would otherwise read the same, and a ``#2`` suffix if
+    they still do (``[feature part, method part, suffix]``)."""
     base = {r["method_id"]: method_label(r) for _, r in rows.iterrows()}
-    out = dict(base)
-    for extra in ("feature_params", "classifier_params"):
-        counts = pd.Series(list(out.values())).value_counts()
+    parts = {mid: ["", "", ""] for mid in base}
+    for i, extra in enumerate(("feature_params", "classifier_params")):
+        full = {mid: base[mid] + "".join(parts[mid]) for mid in base}
+        counts = pd.Series(list(full.values())).value_counts()
         for _, r in rows.iterrows():
-            if counts.get(out[r["method_id"]], 0) > 1 and r.get(extra) not in (None, "", "{}", "[]"):
+            if counts.get(full[r["method_id"]], 0) > 1 and r.get(extra) not in (None, "", "{}", "[]"):
                 p = _params(r[extra])
                 if p:
-                    out[r["method_id"]] += f" ({'features' if extra == 'feature_params' else 'classifier'}: {p})"
+                    parts[r["method_id"]][i] += f" ({'features' if i == 0 else 'method'}: {p})"
     seen: dict[str, int] = {}
-    for mid, lab in out.items():
+    for mid in base:
+        lab = base[mid] + "".join(parts[mid])
         seen[lab] = seen.get(lab, 0) + 1
         if seen[lab] > 1:
-            out[mid] = f"{lab} #{seen[lab]}"
-    return out
+            parts[mid][2] = f" #{seen[lab]}"
+    return parts
+
+
+def method_labels(rows: pd.DataFrame) -> dict[str, str]:
+    """A readable label per method id: ``features / method`` (and frames), with the feature
+    parameters, then the method's parameters, where two rows would otherwise read the same; a
+    ``#2`` suffix if they still do."""
+    parts = _label_parts(rows)
+    return {r["method_id"]: method_label(r) + "".join(parts[r["method_id"]]) for _, r in rows.iterrows()}
 
 
 def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
     """Header and formatted cells of a leaderboard (terminal, Markdown, HTML)."""
-    header = ["#", "method", "features", "classifier", "folds", "accuracy % (±sd)", "95 % interval",
+    header = ["#", "method", "features", "estimator", "folds", "accuracy % (±sd)", "95 % interval",
               "macro F1 %", "latency ms", "fit s", "features ms", "vs best: Δ pp, p (Holm)", "Pareto"]
     show_machine = len(set(lb.rows["timing_machine"])) > 1
     if show_machine:
@@ -642,15 +652,16 @@ def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
     if show_leak:
         header.insert(2, "evaluation")
     cells = []
-    labels = method_labels(lb.rows)
+    parts = _label_parts(lb.rows)
     for _, r in lb.rows.iterrows():
-        feats = _features_cell(r, labels[r["method_id"]][len(method_label(r)):], lb.frame_rate)
+        feat_extra, method_extra, suffix = parts[r["method_id"]]
+        feats = _features_cell(r, feat_extra, lb.frame_rate)
         acc, ci = _accuracy_cells(r)
         failed_all = r["n_folds"] == 0 and r["n_failed"] > 0
         if failed_all:
             acc, ci = "failed", "—"
         vs = _versus_best_cell(r, failed_all)
-        row = [str(r["rank"]), str(r["method_id"]), feats, str(r["classifier"]),
+        row = [str(r["rank"]), str(r["classifier"]) + method_extra + suffix, feats, str(r["classifier_name"]),
                f"{r['n_folds']}" + (f" (+{r['n_failed']} failed)" if r["n_failed"] else ""), acc, ci,
                _pct(r["macro_f1"]), _num(r["latency_ms"]), _num(r["fit_seconds"]), _num(r["feature_ms"]), vs,
                "★" if r["pareto"] else ""]
@@ -795,7 +806,7 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
         header, cells = display_rows(lb)
         t = Table(title=escape(lb.title), show_lines=False)  # a name like "[b5830b]" is text, not markup
         for h in header:
-            wrap = h in ("features", "classifier", "vs best: Δ pp, p (Holm)")
+            wrap = h in ("method", "features", "vs best: Δ pp, p (Holm)")
             t.add_column(escape(h), overflow="fold", no_wrap=not wrap)
         for c in cells:
             t.add_row(*(escape(x) for x in c))
