@@ -7,10 +7,10 @@
   its ``exclude`` does not drop (unknown columns or values are refused at
   their protocol line).
 - :func:`evaluation_dataset` is what the scheme makes of the dataset: its
-  :meth:`~touchbench.protocols.schemes.Splitter.prepare` (``cross-dataset``
+  :meth:`touchbench.protocols.schemes.Splitter.prepare` (``cross-dataset``
   loads, filters and adapts its test data and stacks both; ``window-kfold``
   cuts the captures into windows), given the protocol's services as a
-  :class:`~touchbench.protocols.schemes.DataContext`.
+  :class:`touchbench.protocols.schemes.DataContext`.
 """
 
 from __future__ import annotations
