@@ -78,10 +78,10 @@ def bench_overhead(work: Path, repeats: int) -> dict:
         per_task.append(wall / n)
         bare.append(b)
         over.append(wall / n - b)
-        # the one-capture latency measurement: a warm-up + LATENCY_REPEATS timed calls
-        from touchbench.engine.tasks import LATENCY_REPEATS
+        # the one-capture latency measurement: a warm-up + at least LATENCY_MIN_CALLS timed calls
+        from touchbench.engine.tasks import LATENCY_MIN_CALLS
 
-        lat.append(float(s["latency_ms"].mean()) / 1000 * (LATENCY_REPEATS + 1))
+        lat.append(float(s["latency_ms"].mean()) / 1000 * (LATENCY_MIN_CALLS + 1))
     return {"tasks": n, "wall_per_task_s": statistics.median(per_task), "bare_fit_predict_s": statistics.median(bare),
             "overhead_per_task_s": statistics.median(over), "latency_measurement_s": statistics.median(lat),
             "runs": repeats}

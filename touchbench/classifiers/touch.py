@@ -57,6 +57,9 @@ class SelectedExtraTrees(ClassifierMixin, BaseEstimator):
     the test rows), so selection happens inside the training fold.
     """
 
+    #: ``predict`` is ``classes_`` at the argmax of ``predict_proba`` (the run engine asks once for both)
+    labels_are_argmax_proba = True
+
     def __init__(self, n_estimators=500, max_features=0.3, keep=None, n_jobs=1, random_state=None):
         self.n_estimators = n_estimators
         self.max_features = max_features
@@ -105,6 +108,9 @@ class NestedTunedExtraTrees(ClassifierMixin, BaseEstimator):
     ``StratifiedKFold(inner_folds)``.
     Ties go to the earlier grid entry (the cheaper, default-like one).
     """
+
+    #: ``predict`` is ``classes_`` at the argmax of ``predict_proba`` (the run engine asks once for both)
+    labels_are_argmax_proba = True
 
     def __init__(self, n_estimators=500, grid_max_features=(0.3, "sqrt"), grid_keep=(None, 150),
                  inner_folds=3, max_groups_loo=0, n_jobs=1, random_state=None):

@@ -7,7 +7,7 @@ import os
 import sys
 from typing import Iterator
 
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 __all__ = ["available_cpus", "single_thread"]
 
@@ -24,12 +24,23 @@ def available_cpus() -> int:
     return os.cpu_count() or 1
 
 
+_CONTROLLER: list = [None, -1]  # the thread pools found, and how many modules were imported then
+
+
+def _thread_pools() -> ThreadpoolController:
+    """The native thread pools of the process: found once (a scan of the loaded libraries), again
+    when a module was imported since (it may have loaded a library with a pool of its own)."""
+    if _CONTROLLER[0] is None or _CONTROLLER[1] != len(sys.modules):
+        _CONTROLLER[:] = [ThreadpoolController(), len(sys.modules)]
+    return _CONTROLLER[0]
+
+
 @contextlib.contextmanager
 def single_thread() -> Iterator[None]:
     """BLAS/OpenMP and torch (when already imported) limited to one thread."""
     torch = sys.modules.get("torch")
     prev = torch.get_num_threads() if torch is not None else None
-    with threadpool_limits(limits=1):
+    with _thread_pools().limit(limits=1):
         if torch is not None:
             torch.set_num_threads(1)
         try:

@@ -286,8 +286,9 @@ def _noop_result(plan: Plan, store: ResultStore, n_selected: int, notes: list[st
 
 
 def _execute(plan: Plan, store: ResultStore, pending: list[Task], jobs: int, prog: "_Progress", worker_setup,
-             fail_fast: bool) -> tuple[int, bool]:
-    """Run ``pending``, each result stored as it arrives: (tasks run, stopped at a failure)."""
+             fail_fast: bool, status: dict[str, str]) -> tuple[int, bool]:
+    """Run ``pending``, each result stored as it arrives (its status recorded in ``status``):
+    (tasks run, stopped at a failure)."""
     ds_path = _dataset_copy(plan) if jobs > 1 and len(pending) > 1 else None
     ctx = RunContext(plan.dataset, plan.protocol.target, plan.cache_root, ds_path, setup=worker_setup)
     tid = prog.add(f"{plan.protocol.name}: tasks", len(pending))
@@ -301,6 +302,7 @@ def _execute(plan: Plan, store: ResultStore, pending: list[Task], jobs: int, pro
             preds.insert(0, "run_id", plan.run_id)
         row["run_id"] = plan.run_id
         store.write_task(row["task_id"], row, preds)
+        status[row["task_id"]] = row["status"]
         n_ran += 1
         prog.advance(tid)
         if fail_fast and row.get("status") == "failed":
@@ -341,6 +343,7 @@ class _Session:
     force: bool
     n_selected: int
     n_pending: int
+    status: dict[str, str] = field(default_factory=dict)  # task id -> ok / failed, of every finished task
     n_ran: int = 0
     stopped: bool = False
     notes: list[str] = field(default_factory=list)
@@ -360,11 +363,10 @@ def _merge_and_record(plan: Plan, store: ResultStore, session: _Session, ledger:
     # (a label renamed in the protocol changes no task, only the name its rows carry)
     per_task = {col: {t.task_id: t.base_row.get(col, "") for t in plan.tasks}
                 for col in ("leakage", "selection", "features", "classifier")}
-    merged = store.merge(plan.task_ids, stamp, protocol.metrics, session.notes, per_task)
+    merged = store.merge(plan.task_ids, stamp, protocol.metrics, session.notes, per_task, session.status)
     scores = merged["scores"]
     expected = check_expected(protocol.expected, scores, merged["predictions"], protocol.features_label_of)
-    status = store.finished()
-    n_failed = sum(1 for t in plan.task_ids if status.get(t) == "failed")
+    n_failed = sum(1 for t in plan.task_ids if session.status.get(t) == "failed")
     manifest = update_manifest(
         store.read_manifest(), **_manifest_blocks(plan, out), session=session.block(),
         tasks={"total": len(plan.tasks), "merged": len(scores), "failed": n_failed, "folds": plan.n_folds,
@@ -399,11 +401,13 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
         return _noop_result(plan, store, len(selected), notes, t_start)
 
     test_set, final_notes = _record_look(plan, ledger, final, force_final, len(pending))  # before any task
-    session = _Session(started_at, t_start, jobs, force, len(selected), len(pending), notes=notes + final_notes)
+    session = _Session(started_at, t_start, jobs, force, len(selected), len(pending), dict(finished),
+                       notes=notes + final_notes)
     with _Progress(sys.stderr.isatty() if progress is None else progress) as prog:
         if pending:
             session.notes += _fill_cache(plan, pending, jobs, prog, worker_setup)
-            session.n_ran, session.stopped = _execute(plan, store, pending, jobs, prog, worker_setup, fail_fast)
+            session.n_ran, session.stopped = _execute(plan, store, pending, jobs, prog, worker_setup, fail_fast,
+                                                      session.status)
     return _merge_and_record(plan, store, session, ledger, test_set, final, design_captures)
 
 

@@ -44,8 +44,13 @@ from .cache import FeatureCache, crop_captures
 
 __all__ = ["RunContext", "SetSpec", "Task", "execute_task"]
 
-LATENCY_REPEATS = 5
+#: the one-capture latency: the fold's first LATENCY_CAPTURES test captures, labelled one at a time in
+#: turn after a warm-up, at least LATENCY_MIN_CALLS times and until LATENCY_BUDGET_S seconds were timed,
+#: at most LATENCY_MAX_CALLS times: a fast method gets many calls, a slow one costs the run little
 LATENCY_CAPTURES = 5
+LATENCY_MIN_CALLS = 5
+LATENCY_MAX_CALLS = 25
+LATENCY_BUDGET_S = 0.05
 
 
 @dataclass(frozen=True)
@@ -186,8 +191,9 @@ def _latency_sets(task: Task, ctx: RunContext, fitted: list, y_train: np.ndarray
 
 
 def _measure_latency(sets: list, captures: list[np.ndarray], predict) -> float:
-    """Median milliseconds to label one capture (features + predict), over ``LATENCY_REPEATS``
-    passes through ``captures`` one at a time, after one warm-up call."""
+    """Median milliseconds to label one capture (features + predict): ``captures`` in turn, one at a
+    time, after one warm-up call; at least ``LATENCY_MIN_CALLS`` calls and until ``LATENCY_BUDGET_S``
+    seconds were timed, at most ``LATENCY_MAX_CALLS``."""
 
     def once(capture):
         x = np.hstack([np.asarray(fs.transform([capture]), dtype=np.float64) for fs in sets]) if sets else [capture]
@@ -195,12 +201,11 @@ def _measure_latency(sets: list, captures: list[np.ndarray], predict) -> float:
             predict(x)
 
     once(captures[0])
-    times = []
-    for _ in range(LATENCY_REPEATS):
-        for capture in captures:
-            t0 = time.perf_counter()
-            once(capture)
-            times.append(time.perf_counter() - t0)
+    times: list[float] = []
+    while len(times) < LATENCY_MAX_CALLS and (len(times) < LATENCY_MIN_CALLS or sum(times) < LATENCY_BUDGET_S):
+        t0 = time.perf_counter()
+        once(captures[len(times) % len(captures)])
+        times.append(time.perf_counter() - t0)
     return 1000.0 * float(np.median(times))
 
 
@@ -242,12 +247,13 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
             row["fit_seconds"] = time.perf_counter() - t0 if fitted_est.estimator is not None else 0.0
             row["n_classes_train"] = int(len(fitted_est.classes))
             t0 = time.perf_counter()
-            y_pred = fitted_est.predict(X_te)
+            y_pred, proba = fitted_est.predict_in_one_pass(X_te)  # probabilities too where the same pass gives them
             row["predict_seconds"] = time.perf_counter() - t0
             est = fitted_est.estimator
             if getattr(est, "selection_note_", None):  # a method that searched inside the training fold says what it chose
                 notes.append(est.selection_note_)
-            proba = fitted_est.predict_proba(X_te) if est is not None else None
+            if proba is None and est is not None:
+                proba = fitted_est.predict_proba(X_te)
             row.update(metrics(y_test, y_pred))
             if task.measure_latency:  # once per method and run: features + predict of one capture
                 lat_sets = _latency_sets(task, ctx, fitted, y_train)

@@ -21,11 +21,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from sklearn.ensemble._forest import ForestClassifier
 
 from ..classifiers import make_classifier
 from ..core.introspect import accepts
 
-__all__ = ["FittedEstimator", "encode_labels", "fit_estimator"]
+__all__ = ["FittedEstimator", "encode_labels", "fit_estimator", "labels_are_argmax"]
 
 
 def encode_labels(y: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -56,11 +57,35 @@ class FittedEstimator:
         if not hasattr(self.estimator, "predict_proba"):
             return None
         try:
-            P = np.asarray(self.estimator.predict_proba(X), dtype=np.float64)
+            P = self.estimator.predict_proba(X)
         except Exception:  # probabilities are optional (e.g. an SVM without them)
             return None
+        return self._by_label(P)
+
+    def _by_label(self, P: Any) -> dict[str, np.ndarray]:
+        P = np.asarray(P, dtype=np.float64)
         est_classes = getattr(self.estimator, "classes_", np.arange(P.shape[1]))
         return {str(self.classes[int(c)]): P[:, j] for j, c in enumerate(est_classes)}
+
+    def predict_in_one_pass(self, X: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray] | None]:
+        """The labels, and the probabilities when the same pass gives them: an estimator whose
+        labels are the argmax of its probabilities (:func:`labels_are_argmax`) is asked once;
+        any other is asked for its labels alone (probabilities None: ask :meth:`predict_proba`)."""
+        est = self.estimator
+        if est is None or not labels_are_argmax(est):
+            return self.predict(X), None
+        P = est.predict_proba(X)
+        codes = np.asarray(est.classes_.take(np.argmax(P, axis=1), axis=0)).astype(np.int64)
+        return self.classes[codes], self._by_label(P)
+
+
+def labels_are_argmax(est: Any) -> bool:
+    """Whether ``est.predict`` is ``classes_`` at the argmax of ``est.predict_proba``, computed the
+    same way: scikit-learn's forests (their own ``predict``, one output) and an estimator that
+    declares it (class attribute ``labels_are_argmax_proba``)."""
+    if getattr(type(est), "labels_are_argmax_proba", False):
+        return True
+    return type(est).predict is ForestClassifier.predict and getattr(est, "n_outputs_", 1) == 1
 
 
 def fit_estimator(name: str, params: dict[str, Any], seed: int | None, X: np.ndarray, y: Any,

@@ -376,8 +376,8 @@ class ResultStore:
         return sorted(p.name[: -len(suffix)] for p in self.fragments.glob(f"*{suffix}"))
 
     def merge(self, task_ids: list[str], stamp: dict[str, Any], metrics: Sequence[str] = (),
-              notes: list[str] | None = None, per_task: dict[str, dict[str, Any]] | None = None
-              ) -> dict[str, pd.DataFrame]:
+              notes: list[str] | None = None, per_task: dict[str, dict[str, Any]] | None = None,
+              finished: dict[str, str] | None = None) -> dict[str, pd.DataFrame]:
         """Write ``scores``, ``predictions``, ``confusion`` and ``confusion_pooled`` for ``task_ids``.
 
         ``stamp`` (``run_id``, ``protocol_hash``...) overwrites those columns,
@@ -389,9 +389,10 @@ class ResultStore:
         labelled as the plan says. ``metrics`` (scikit-learn scorer names) add one
         scores column each, computed from each task's stored predictions
         (:func:`task_metrics`), so naming a new metric refits nothing; why a
-        metric could not be computed goes to ``notes``.
+        metric could not be computed goes to ``notes``. ``finished``: the
+        state :meth:`finished` gives, when the caller holds it already.
         """
-        finished = self.finished()
+        finished = self.finished() if finished is None else finished
         done = [t for t in task_ids if t in finished]
         scores = self.read_scores(done)
         preds = self.read_predictions(done)
