@@ -2,6 +2,7 @@
 
     python benchmarks/bench_engine.py                 # all three, 3 repeats each
     python benchmarks/bench_engine.py --what cache --repeats 1
+    python benchmarks/bench_engine.py --what overhead --base f2fe39c --repeats 3
 
 Everything runs on the real HAART data in a fresh cache and results folder
 under ``cache_dir() / "benchmarks" / "engine"``, removed afterwards (the
@@ -28,6 +29,16 @@ cache
 jobs
     The overhead protocol, warm feature cache, new results folder, with
     ``--jobs 1`` and ``--jobs 2``.
+
+``--base REV`` (with ``--what overhead``): the overhead of REV's code and of
+this checkout's, side by side. REV is checked out with ``git worktree add
+--detach`` into a temporary folder (removed afterwards); each of the
+``--repeats`` rounds runs base then head, each a subprocess of this script
+(``--repeats 1``) with ``PYTHONPATH`` set to that side's root and that
+side's own feature cache (filled by the side's first run, which also does
+the warm-up). This script drives both sides, so both must have
+``run_protocol``, ``parse_protocol`` and ``LATENCY_REPEATS`` as used here.
+Printed: each side's median overhead and wall time per task, and head / base.
 """
 
 from __future__ import annotations
@@ -37,11 +48,13 @@ import json
 import os
 import shutil
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
-from workdir import fresh_dir
+from workdir import bench_dir, fresh_dir
 
 OVERHEAD_PROTOCOL = """\
 name: bench-overhead
@@ -64,11 +77,12 @@ def _run(proto, out: Path, jobs: int = 1):
     return time.perf_counter() - t0, res
 
 
-def bench_overhead(work: Path, repeats: int) -> dict:
+def bench_overhead(work: Path, repeats: int, warmup: bool = True) -> dict:
     from touchbench.protocols.schema import parse_protocol
 
     proto = parse_protocol(OVERHEAD_PROTOCOL, work / "overhead.yaml")
-    _run(proto, work / "warmup-overhead")  # fills the feature cache
+    if warmup:
+        _run(proto, work / "warmup-overhead")  # fills the feature cache
     per_task, bare, over, lat = [], [], [], []
     for i in range(repeats):
         wall, res = _run(proto, work / f"overhead-{i}")
@@ -129,12 +143,22 @@ def main(argv=None) -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--protocol", default="gaus-tables6-7-haart", help="The protocol of the cache benchmark.")
     ap.add_argument("--json", default=None, help="Also write the figures here.")
+    ap.add_argument("--base", default=None, metavar="REV",
+                    help="With --what overhead: measure REV's code and this checkout's, alternating.")
+    ap.add_argument("--cache", default=None, help=argparse.SUPPRESS)  # a side's feature cache (--base)
     args = ap.parse_args(argv)
+    if args.base:
+        if args.what != "overhead":
+            ap.error("--base measures the overhead only: add --what overhead")
+        compare_overhead(args.base, args.repeats)
+        return
 
     json_path = Path(args.json).resolve() if args.json else None
     home = os.getcwd()
     with fresh_dir(__file__) as work:
-        os.environ["TOUCHBENCH_CACHE_DIR"] = str(work / "cache")
+        cache = Path(args.cache).resolve() if args.cache else work / "cache"
+        args.warmup = not cache.is_dir()
+        os.environ["TOUCHBENCH_CACHE_DIR"] = str(cache)
         os.chdir(work)
         try:
             figures = run_all(args, work)
@@ -152,7 +176,7 @@ def run_all(args, work: Path) -> dict:
     print(f"cpus {os.cpu_count()}, load average {os.getloadavg()[0]:.1f}", file=sys.stderr)
     figures = {}
     if args.what in ("all", "overhead"):
-        figures["overhead"] = r = bench_overhead(work, args.repeats)
+        figures["overhead"] = r = bench_overhead(work, args.repeats, getattr(args, "warmup", True))
         print(f"overhead: {r['tasks']} tasks, {1000 * r['wall_per_task_s']:.0f} ms per task, bare fit+predict "
               f"{1000 * r['bare_fit_predict_s']:.0f} ms, overhead {1000 * r['overhead_per_task_s']:.0f} ms per task, "
               f"of which ~{1000 * r['latency_measurement_s']:.0f} ms measure the one-capture latency "
@@ -168,6 +192,47 @@ def run_all(args, work: Path) -> dict:
               f"(median of {r['runs']})")
     figures["load_average_end"] = os.getloadavg()[0]
     return figures
+
+
+def overhead_once(root: Path, cache: Path, out: Path) -> dict:
+    """One overhead run of the code in ``root`` (a subprocess of this script) with the feature cache ``cache``."""
+    from touchbench.core.paths import data_dir
+
+    env = {**os.environ, "PYTHONPATH": str(root), "TOUCHBENCH_DATA_DIR": str(data_dir())}
+    cmd = [sys.executable, str(Path(__file__).resolve()), "--what", "overhead", "--repeats", "1",
+           "--json", str(out), "--cache", str(cache)]
+    r = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"{root}: overhead run failed:\n{r.stdout[-3000:]}\n{r.stderr[-3000:]}")
+    return json.loads(out.read_text())["overhead"]
+
+
+def compare_overhead(rev: str, repeats: int) -> None:
+    """The overhead per task of ``rev``'s code and this checkout's, runs alternating (base, head, base, ...)."""
+    from compare_runs import REPO, checkout
+
+    work = Path(tempfile.mkdtemp(prefix="versions-", dir=bench_dir(__file__)))
+    runs: dict[str, list[dict]] = {"base": [], "head": []}
+    print(f"cpus {os.cpu_count()}, load average {os.getloadavg()[0]:.1f}", file=sys.stderr)
+    try:
+        with checkout(rev, work) as base_root:
+            roots = {"base": base_root, "head": REPO}
+            for i in range(repeats):
+                for side, root in roots.items():
+                    r = overhead_once(root, work / f"cache-{side}", work / f"{side}-{i}.json")
+                    runs[side].append(r)
+                    print(f"run {i + 1} {side}: {1000 * r['overhead_per_task_s']:.0f} ms overhead, "
+                          f"{1000 * r['wall_per_task_s']:.0f} ms per task", flush=True)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    med = {side: {k: statistics.median(r[k] for r in rs) for k in ("overhead_per_task_s", "wall_per_task_s")}
+           for side, rs in runs.items()}
+    for side, name in (("base", rev), ("head", "this checkout")):
+        print(f"overhead {side} ({name}): {1000 * med[side]['overhead_per_task_s']:.0f} ms per task, "
+              f"{1000 * med[side]['wall_per_task_s']:.0f} ms wall per task (median of {repeats})")
+    print(f"head / base: overhead {med['head']['overhead_per_task_s'] / med['base']['overhead_per_task_s']:.2f}x, "
+          f"wall per task {med['head']['wall_per_task_s'] / med['base']['wall_per_task_s']:.2f}x")
+
 
 if __name__ == "__main__":
     main()
