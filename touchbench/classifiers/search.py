@@ -49,10 +49,11 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted
 
 from ..core.errors import TouchbenchError
-from ..core.introspect import accepts, sensor_problem
-from ..features.base import FEATURES, feature_set_refusal, make_feature_set
+from ..core.introspect import sensor_problem
+from ..features.base import FEATURES, feature_set_refusal, make_feature_set, stack_features
 from ._util import build, seed_int
 from .base import CLASSIFIERS, make_classifier
+from .fitting import FittedEstimator, fit_on_codes
 
 SOURCE = "touchbench: nested selection over candidate methods by inner cross-validation over training subjects"
 
@@ -156,28 +157,10 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
             sets.append(fs)
         return sets
 
-    @staticmethod
-    def _stack(sets, captures):
-        if not sets:
-            return list(captures)
-        return np.hstack([np.asarray(fs.transform(captures), dtype=np.float64) for fs in sets])
-
-    def _fit_estimator(self, cand, X, y, groups):
-        """(estimator or None for one class, classes) fitted on contiguous codes of ``y``."""
-        classes, codes = np.unique(y, return_inverse=True)
-        if len(classes) < 2:
-            return None, classes
-        est = make_classifier(cand["estimator"], random_state=seed_int(self.random_state), sensor=self.sensor,
-                              **cand["params"])
-        kw = {"groups": np.asarray(groups)} if groups is not None and accepts(est.fit, "groups") else {}
-        est.fit(X, codes, **kw)
-        return est, classes
-
-    @staticmethod
-    def _predict(est, classes, X) -> np.ndarray:
-        if est is None:
-            return np.repeat(classes[:1], len(X))
-        return classes[np.asarray(est.predict(X)).astype(np.int64)]
+    def _fit_estimator(self, cand, X, y, groups) -> FittedEstimator:
+        """The candidate's estimator fitted on contiguous codes of ``y`` (none for one class)."""
+        return fit_on_codes(cand["estimator"], cand["params"], seed_int(self.random_state), X, y, groups,
+                            sensor=self.sensor)
 
     @staticmethod
     def _learns_nothing(cand) -> bool:
@@ -192,7 +175,7 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
         for name, params in cand["features"]:
             key = (name, repr(sorted(params.items())))
             if key not in cache:
-                cache[key] = self._stack(self._fit_sets({"features": [(name, params)]}, captures, y), captures)
+                cache[key] = stack_features(self._fit_sets({"features": [(name, params)]}, captures, y), captures)
             blocks.append(cache[key])
         return np.hstack(blocks)
 
@@ -208,9 +191,9 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
             else:
                 caps_tr = [captures[i] for i in tr]
                 sets = self._fit_sets(cand, caps_tr, y[tr])
-                X_tr, X_te = self._stack(sets, caps_tr), self._stack(sets, [captures[i] for i in te])
-            est, classes = self._fit_estimator(cand, X_tr, y[tr], g_tr)
-            scores.append(float(np.mean(self._predict(est, classes, X_te) == y[te])))
+                X_tr, X_te = stack_features(sets, caps_tr), stack_features(sets, [captures[i] for i in te])
+            fitted = self._fit_estimator(cand, X_tr, y[tr], g_tr)
+            scores.append(float(np.mean(fitted.predict(X_te) == y[te])))
         return scores
 
     # -- API ------------------------------------------------------------------
@@ -255,24 +238,25 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
             self.selection_note_ += "; left out for this sensor: " + ", ".join(left_out)
         self.sets_ = self._fit_sets(chosen, captures, y)
         X = (self._fixed_matrix(chosen, captures, y, cache) if self._learns_nothing(chosen)
-             else self._stack(self.sets_, captures))
-        self.estimator_, self.est_classes_ = self._fit_estimator(chosen, X, y, groups)
+             else stack_features(self.sets_, captures))
+        self.fitted_ = self._fit_estimator(chosen, X, y, groups)
+        self.estimator_, self.est_classes_ = self.fitted_.estimator, self.fitted_.classes
         return self
 
     def predict(self, X):
         check_is_fitted(self)
-        return self._predict(self.estimator_, self.est_classes_, self._stack(self.sets_, list(X)))
+        return self.fitted_.predict(stack_features(self.sets_, list(X)))
 
     def predict_proba(self, X):
         """The chosen candidate's probabilities over ``classes_`` (zeros for a class it never saw)."""
         check_is_fitted(self)
-        Xs = self._stack(self.sets_, list(X))
+        Xs = stack_features(self.sets_, list(X))
         out = np.zeros((len(Xs), len(self.classes_)))
         if self.estimator_ is None:
             out[:, np.searchsorted(self.classes_, self.est_classes_[0])] = 1.0
             return out
         if not hasattr(self.estimator_, "predict_proba"):
-            pred = self._predict(self.estimator_, self.est_classes_, Xs)
+            pred = self.fitted_.predict(Xs)
             out[np.arange(len(Xs)), np.searchsorted(self.classes_, pred)] = 1.0
             return out
         P = np.asarray(self.estimator_.predict_proba(Xs), dtype=np.float64)

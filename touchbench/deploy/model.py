@@ -54,7 +54,7 @@ from ..core.errors import DataError, TouchbenchError
 from ..core.threads import single_thread
 from ..core.versions import package_versions
 from ..datasets.model import FRAME_RATE_TOLERANCE, SensorSpec, TouchDataset, sensor_differences
-from ..features.base import make_feature_set
+from ..features.base import make_feature_set, stack_features
 from ..methods.fitting import fit_estimator
 from .windows import cut_windows, seconds_to_frames
 
@@ -121,7 +121,7 @@ class TrainedModel:
         themselves for a method whose estimator takes captures (no feature sets)."""
         if not self.feature_sets:
             return list(captures)
-        return np.hstack([np.asarray(fs.transform(captures), dtype=np.float64) for fs in self.feature_sets])
+        return stack_features(self.feature_sets, captures)
 
     def proba_from_features(self, X: np.ndarray, fast: bool = True) -> np.ndarray:
         """``(n, C)`` probabilities, columns in the order of :attr:`classes`.
@@ -408,7 +408,7 @@ def _fit_pipeline(sets: Sequence[tuple[str, dict[str, Any]]], classifier: str, c
             fs = make_feature_set(name, dict(params), sensor)
             fs.fit(samples, y)
             fitted.append(fs)
-        X = np.hstack([np.asarray(fs.transform(samples), dtype=np.float64) for fs in fitted]) if fitted else list(samples)
+        X = stack_features(fitted, samples)
         feature_seconds = time.perf_counter() - t0
         # the run engine's own fit path: label codes, subjects as groups, a one-class training set
         fitted_est = fit_estimator(classifier, classifier_params, seed, X, y, groups, sensor=sensor)

@@ -34,7 +34,7 @@ import pandas as pd
 from ..core.threads import single_thread
 from ..datasets.model import TouchDataset
 from ..evaluation.metrics import metrics
-from ..features.base import make_feature_set
+from ..features.base import make_feature_set, stack_features
 from ..methods import Method
 from ..methods.fitting import fit_estimator
 from ..protocols.schemes import Fold, fold_notes
@@ -196,7 +196,7 @@ def _measure_latency(sets: list, captures: list[np.ndarray], predict) -> float:
     seconds were timed, at most ``LATENCY_MAX_CALLS``."""
 
     def once(capture):
-        x = np.hstack([np.asarray(fs.transform([capture]), dtype=np.float64) for fs in sets]) if sets else [capture]
+        x = stack_features(sets, [capture])
         if predict is not None:
             predict(x)
 

@@ -233,6 +233,14 @@ def cell_names(grid: tuple[int, int]) -> list[str]:
     return [f"r{i}_c{j}" for i in range(h) for j in range(w)]
 
 
+def stack_features(sets: Sequence[Any], captures: Sequence[np.ndarray]) -> np.ndarray | list[np.ndarray]:
+    """The fitted feature sets' outputs for ``captures``, concatenated as float64; the captures
+    themselves when there are no sets (an estimator that takes captures)."""
+    if not sets:
+        return list(captures)
+    return np.hstack([np.asarray(fs.transform(captures), dtype=np.float64) for fs in sets])
+
+
 def make_feature_set(name: str, params: dict[str, Any] | None = None, sensor: Any = None) -> FeatureSet:
     """Build the registered feature set ``name`` with ``params``, passing ``sensor`` (a
     :class:`touchbench.datasets.model.SensorSpec`) when its constructor takes it."""

@@ -7,10 +7,10 @@ shorthand ``features`` x ``classifiers`` expands to methods; a named method
 feature sets and estimator, so the run engine computes its fold-independent
 features once per dataset in the feature cache instead of inside every task.
 
-:mod:`touchbench.methods.fitting` is the one place that turns labels into
-codes, routes training subjects to estimators that take ``groups``, handles a
-training set of one class, and limits threads: the engine's tasks and
-``touchbench train`` both fit through it.
+:mod:`touchbench.methods.fitting` fits a method's estimator through the one
+fit path (:mod:`touchbench.classifiers.fitting`: labels into codes, training
+subjects to estimators that take ``groups``, a training set of one class):
+the engine's tasks, ``touchbench train`` and the nested search all fit there.
 """
 
 from .base import CAPTURES, METHODS, Method, MethodSpec, expand_candidates, features_label, method_spec, resolve_entry

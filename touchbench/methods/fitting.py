@@ -1,103 +1,35 @@
-"""The one fit path from a feature matrix and labels to a fitted estimator.
+"""The fit path of a method's estimator: labels as text, subjects as text.
 
-Used by the run engine's tasks and by ``touchbench train`` alike, so both
-treat labels, subjects and degenerate folds the same way:
-
-- labels: the estimator is fitted on integer codes ``0..C-1`` of the
-  classes present in the training rows (sorted as strings), which every
-  estimator accepts (XGBoost needs contiguous codes); predictions are
-  decoded back to the labels;
-- subjects: an estimator whose ``fit`` takes ``groups`` receives the
-  training rows' subjects (for subject-grouped inner cross-validation);
-- one class: a training set with a single class gets no estimator; every
-  prediction is that class (the caller notes it).
-
-Threads are the caller's business (:func:`touchbench.core.threads.single_thread`).
+:func:`fit_estimator` is :func:`touchbench.classifiers.fitting.fit_on_codes`
+(label codes, subjects as ``groups``, one-class folds) with every label and
+subject read as a string, so the codes are those of the sorted class names
+whatever type the metadata column has. The engine's tasks and
+``touchbench train`` fit through it.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from sklearn.ensemble._forest import ForestClassifier
 
-from ..classifiers import make_classifier
-from ..core.introspect import accepts
+from ..classifiers.fitting import FittedEstimator, fit_on_codes, label_codes
 
-__all__ = ["FittedEstimator", "encode_labels", "fit_estimator", "labels_are_argmax"]
+__all__ = ["FittedEstimator", "encode_labels", "fit_estimator"]
+
+
+def _as_text(values: Any) -> np.ndarray:
+    return np.array([str(v) for v in np.asarray(values, dtype=object).tolist()], dtype=object)
 
 
 def encode_labels(y: Any) -> tuple[np.ndarray, np.ndarray]:
     """``(classes, codes)``: the sorted distinct labels (as str) and each row's index into them."""
-    labels = np.array([str(v) for v in np.asarray(y, dtype=object).tolist()], dtype=object)
-    classes = np.array(sorted(set(labels.tolist())), dtype=object)
-    code = {c: i for i, c in enumerate(classes)}
-    return classes, np.array([code[v] for v in labels], dtype=np.int64)
-
-
-@dataclass
-class FittedEstimator:
-    """A fitted estimator with the labels its codes stand for (``estimator`` None: one class)."""
-
-    classes: np.ndarray
-    estimator: Any | None
-
-    def predict(self, X: np.ndarray) -> np.ndarray:
-        if self.estimator is None:
-            return np.array([self.classes[0]] * len(X), dtype=object)
-        codes = np.asarray(self.estimator.predict(X)).astype(np.int64)
-        return self.classes[codes]
-
-    def predict_proba(self, X: np.ndarray) -> dict[str, np.ndarray] | None:
-        """Probability of each training class (by label), or None when the estimator gives none."""
-        if self.estimator is None:
-            return {str(self.classes[0]): np.ones(len(X), dtype=np.float64)}
-        if not hasattr(self.estimator, "predict_proba"):
-            return None
-        try:
-            P = self.estimator.predict_proba(X)
-        except Exception:  # probabilities are optional (e.g. an SVM without them)
-            return None
-        return self._by_label(P)
-
-    def _by_label(self, P: Any) -> dict[str, np.ndarray]:
-        P = np.asarray(P, dtype=np.float64)
-        est_classes = getattr(self.estimator, "classes_", np.arange(P.shape[1]))
-        return {str(self.classes[int(c)]): P[:, j] for j, c in enumerate(est_classes)}
-
-    def predict_in_one_pass(self, X: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray] | None]:
-        """The labels, and the probabilities when the same pass gives them: an estimator whose
-        labels are the argmax of its probabilities (:func:`labels_are_argmax`) is asked once;
-        any other is asked for its labels alone (probabilities None: ask :meth:`predict_proba`)."""
-        est = self.estimator
-        if est is None or not labels_are_argmax(est):
-            return self.predict(X), None
-        P = est.predict_proba(X)
-        codes = np.asarray(est.classes_.take(np.argmax(P, axis=1), axis=0)).astype(np.int64)
-        return self.classes[codes], self._by_label(P)
-
-
-def labels_are_argmax(est: Any) -> bool:
-    """Whether ``est.predict`` is ``classes_`` at the argmax of ``est.predict_proba``, computed the
-    same way: scikit-learn's forests (their own ``predict``, one output) and an estimator that
-    declares it (class attribute ``labels_are_argmax_proba``)."""
-    if getattr(type(est), "labels_are_argmax_proba", False):
-        return True
-    return type(est).predict is ForestClassifier.predict and getattr(est, "n_outputs_", 1) == 1
+    return label_codes(_as_text(y))
 
 
 def fit_estimator(name: str, params: dict[str, Any], seed: int | None, X: np.ndarray, y: Any,
                   groups: Any = None, **build: Any) -> FittedEstimator:
     """Build the registered estimator ``name`` (``random_state=seed``, ``params``,
-    and ``build`` keywords such as the sensor) and fit it on ``X``, ``y``."""
-    classes, codes = encode_labels(y)
-    if len(classes) < 2:
-        return FittedEstimator(classes, None)
-    est = make_classifier(name, random_state=seed, **build, **params)
-    fit_kw = {}
-    if groups is not None and accepts(est.fit, "groups"):
-        fit_kw["groups"] = np.array([str(g) for g in np.asarray(groups, dtype=object).tolist()], dtype=object)
-    est.fit(X, codes, **fit_kw)
-    return FittedEstimator(classes, est)
+    and ``build`` keywords such as the sensor) and fit it on ``X``, ``y`` (labels as text; the
+    subjects ``groups`` as text to an estimator that takes them)."""
+    return fit_on_codes(name, params, seed, X, _as_text(y), None if groups is None else _as_text(groups), **build)

@@ -15,19 +15,11 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..datasets.model import SensorSpec
-from ..features.base import make_feature_set
+from ..features.base import make_feature_set, stack_features
 from .base import MethodSpec
 from .fitting import FittedEstimator, fit_estimator
 
-__all__ = ["FeaturePipeline", "stack_features"]
-
-
-def stack_features(sets: Sequence[Any], captures: Sequence[np.ndarray]) -> np.ndarray | list[np.ndarray]:
-    """The fitted feature sets' outputs for ``captures``, concatenated as float64; the
-    captures themselves when there are no sets (an estimator that takes captures)."""
-    if not sets:
-        return list(captures)
-    return np.hstack([np.asarray(fs.transform(captures), dtype=np.float64) for fs in sets])
+__all__ = ["FeaturePipeline"]
 
 
 class FeaturePipeline:

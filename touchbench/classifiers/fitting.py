@@ -1,0 +1,102 @@
+"""The one fit path from a feature matrix and labels to a fitted estimator, and its predictions.
+
+The run engine's tasks, ``touchbench train`` (through
+:func:`touchbench.methods.fitting.fit_estimator`) and the nested search over
+candidate methods (:mod:`touchbench.classifiers.search`) all fit here, so
+they treat labels, subjects and degenerate folds the same way:
+
+- labels: the estimator is fitted on integer codes ``0..C-1`` of the
+  classes present in the training rows, sorted (:func:`label_codes`),
+  which every estimator accepts (XGBoost needs contiguous codes);
+  predictions are decoded back to the labels;
+- subjects: an estimator whose ``fit`` takes ``groups`` receives them (the
+  training rows' subjects, for subject-grouped inner cross-validation);
+- one class: a training set with a single class gets no estimator; every
+  prediction is that class (the caller notes it).
+
+Threads are the caller's business (:func:`touchbench.core.threads.single_thread`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from sklearn.ensemble._forest import ForestClassifier
+
+from ..core.introspect import accepts
+from .base import make_classifier
+
+__all__ = ["FittedEstimator", "fit_on_codes", "label_codes", "labels_are_argmax"]
+
+
+def label_codes(y: Any) -> tuple[np.ndarray, np.ndarray]:
+    """``(classes, codes)``: the sorted distinct values of ``y`` and each row's index into them."""
+    classes, codes = np.unique(np.asarray(y), return_inverse=True)
+    return classes, codes.astype(np.int64)
+
+
+@dataclass
+class FittedEstimator:
+    """A fitted estimator with the labels its codes stand for (``estimator`` None: one class)."""
+
+    classes: np.ndarray
+    estimator: Any | None
+
+    def predict(self, X: np.ndarray) -> np.ndarray:
+        if self.estimator is None:
+            return np.repeat(self.classes[:1], len(X))
+        codes = np.asarray(self.estimator.predict(X)).astype(np.int64)
+        return self.classes[codes]
+
+    def predict_proba(self, X: np.ndarray) -> dict[str, np.ndarray] | None:
+        """Probability of each training class (by label), or None when the estimator gives none."""
+        if self.estimator is None:
+            return {str(self.classes[0]): np.ones(len(X), dtype=np.float64)}
+        if not hasattr(self.estimator, "predict_proba"):
+            return None
+        try:
+            P = self.estimator.predict_proba(X)
+        except Exception:  # probabilities are optional (e.g. an SVM without them)
+            return None
+        return self._by_label(P)
+
+    def _by_label(self, P: Any) -> dict[str, np.ndarray]:
+        P = np.asarray(P, dtype=np.float64)
+        est_classes = getattr(self.estimator, "classes_", np.arange(P.shape[1]))
+        return {str(self.classes[int(c)]): P[:, j] for j, c in enumerate(est_classes)}
+
+    def predict_in_one_pass(self, X: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray] | None]:
+        """The labels, and the probabilities when the same pass gives them: an estimator whose
+        labels are the argmax of its probabilities (:func:`labels_are_argmax`) is asked once;
+        any other is asked for its labels alone (probabilities None: ask :meth:`predict_proba`)."""
+        est = self.estimator
+        if est is None or not labels_are_argmax(est):
+            return self.predict(X), None
+        P = est.predict_proba(X)
+        codes = np.asarray(est.classes_.take(np.argmax(P, axis=1), axis=0)).astype(np.int64)
+        return self.classes[codes], self._by_label(P)
+
+
+def labels_are_argmax(est: Any) -> bool:
+    """Whether ``est.predict`` is ``classes_`` at the argmax of ``est.predict_proba``, computed the
+    same way: scikit-learn's forests (their own ``predict``, one output) and an estimator that
+    declares it (class attribute ``labels_are_argmax_proba``)."""
+    if getattr(type(est), "labels_are_argmax_proba", False):
+        return True
+    return type(est).predict is ForestClassifier.predict and getattr(est, "n_outputs_", 1) == 1
+
+
+def fit_on_codes(name: str, params: dict[str, Any], seed: int | None, X: Any, y: Any, groups: Any = None,
+                 **build: Any) -> FittedEstimator:
+    """Build the registered estimator ``name`` (``random_state=seed``, ``params``, and ``build``
+    keywords such as the sensor) and fit it on ``X`` and the codes of ``y`` (:func:`label_codes`);
+    ``groups`` go to an estimator whose ``fit`` takes them."""
+    classes, codes = label_codes(y)
+    if len(classes) < 2:
+        return FittedEstimator(classes, None)
+    est = make_classifier(name, random_state=seed, **build, **params)
+    fit_kw = {"groups": np.asarray(groups)} if groups is not None and accepts(est.fit, "groups") else {}
+    est.fit(X, codes, **fit_kw)
+    return FittedEstimator(classes, est)
