@@ -53,12 +53,13 @@ def pin_one_core() -> int:
 
 def train(ds, trees: int, out: Path | None):
     from touchbench.deploy.model import fit_model
+    from touchbench.methods import MethodSpec
 
     train_ds = ds.subset(np.flatnonzero(ds.meta["subject"].to_numpy() != "s01"))
     t0 = time.perf_counter()
-    model = fit_model(train_ds, GAUS, "gaus-rf", {"n_estimators": trees}, seed=0, windows=[2.0], train_hop=2.0,
-                      features_label="sd+bmh+msd+smmhh+lbptop", classifier_label="gaus-rf",
-                      selection="haart subjects s02..s10")
+    spec = MethodSpec("gaus-rf", tuple(GAUS), "gaus-rf", {"n_estimators": trees})
+    model = fit_model(train_ds, spec, seed=0, windows=[2.0], train_hop=2.0,
+                      features_label="sd+bmh+msd+smmhh+lbptop", label="gaus-rf", selection="haart subjects s02..s10")
     print(f"trained in {time.perf_counter() - t0:.0f} s on {model.manifest['dataset']['n_samples']} windows",
           file=sys.stderr)
     if out is not None:

@@ -18,6 +18,7 @@ from sklearn.linear_model import LogisticRegression
 
 from touchbench.datasets.model import SensorSpec
 from touchbench.classifiers.fastforest import compile_forest
+from touchbench.classifiers.fitting import FittedEstimator, FittedMethod
 from touchbench.deploy.model import SensorMismatchError, TrainedModel, sensor_differences
 from touchbench.deploy.stream import SlidingRecognizer, replay, run_stream, text_frames
 from touchbench.deploy.windows import combine_windows, cut_windows, seconds_to_frames
@@ -116,7 +117,8 @@ def stub_model(windows=None, dtype="<f8") -> TrainedModel:
         "sensor": SENSOR.to_dict(), "windows": windows, "capture_frames": {"min": 20, "median": 20.0, "max": 20},
         "capture_dtype": dtype, "features": {"label": "mean"}, "classifier": {"label": "linear"}, "target": "gesture",
     }
-    return TrainedModel([_MeanLevel()], _Linear().fit(None, None), np.array(["low", "high"], dtype=object), manifest)
+    return TrainedModel(FittedMethod([_MeanLevel()], FittedEstimator(np.array(["low", "high"], dtype=object),
+                                                                     _Linear().fit(None, None))), manifest)
 
 
 def frames_at(levels):

@@ -29,6 +29,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+
 from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -45,6 +46,7 @@ from touchbench.engine import runner
 from touchbench.engine.testing import SENSOR, random_dataset
 from touchbench.features import FEATURES
 from touchbench.features.base import FeatureInputError, make_feature_set
+from touchbench.methods import MethodSpec
 from touchbench.protocols.schema import parse_protocol
 from touchbench.results.store import ResultsBusyError, ResultStore
 from touchbench.scenes.spec import load_spec
@@ -295,7 +297,7 @@ def test_bad_parquet_metadata_is_one_message(tmp_path, meta, text):
 @pytest.fixture
 def model_file(tmp_path):
     ds = random_dataset(subjects=("s1", "s2"), per_cell=3)
-    model = fit_model(ds, [("sd", {"preset": "haart"})], "zhou-lda")
+    model = fit_model(ds, MethodSpec("sd-lda", (("sd", {"preset": "haart"}),), "zhou-lda"))
     return model.save(tmp_path / "m.tbm"), ds
 
 
@@ -324,7 +326,7 @@ def test_a_damaged_model_file_is_refused_before_unpickling(model_file, edit, tex
 def test_a_model_with_its_class_list_reversed_is_refused(model_file):
     path, _ = model_file
     model = TrainedModel.load(path)
-    model.classes = model.classes[::-1]  # saved again through touchbench: the checksum is fresh
+    model.fitted.fitted.classes = model.classes[::-1]  # saved again through touchbench: the checksum is fresh
     model.manifest["classes"] = [str(c) for c in model.classes]
     model.save(path)
     with pytest.raises(DataError, match="its class list is not the sorted list of distinct class names the fit "
@@ -335,7 +337,7 @@ def test_a_model_with_its_class_list_reversed_is_refused(model_file):
 def test_a_model_whose_classes_disagree_with_its_estimator_is_refused(model_file):
     path, _ = model_file
     model = TrainedModel.load(path)
-    model.classes = np.array(list(model.classes) + ["zzz"], dtype=object)
+    model.fitted.fitted.classes = np.array(list(model.classes) + ["zzz"], dtype=object)
     model.manifest["classes"] = [str(c) for c in model.classes]
     model.save(path)
     with pytest.raises(DataError, match="the classifier knows 3 classes, the class list names 4"):

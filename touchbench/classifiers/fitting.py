@@ -25,10 +25,13 @@ from typing import Any
 import numpy as np
 from sklearn.ensemble._forest import ForestClassifier
 
+import time
+
 from ..core.introspect import accepts
+from ..features.base import make_feature_set, stack_features
 from .base import make_classifier
 
-__all__ = ["FittedEstimator", "fit_on_codes", "label_codes", "labels_are_argmax"]
+__all__ = ["FittedEstimator", "FittedMethod", "fit_on_codes", "fit_pipeline", "label_codes", "labels_are_argmax"]
 
 
 def label_codes(y: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -100,3 +103,51 @@ def fit_on_codes(name: str, params: dict[str, Any], seed: int | None, X: Any, y:
     fit_kw = {"groups": np.asarray(groups)} if groups is not None and accepts(est.fit, "groups") else {}
     est.fit(X, codes, **fit_kw)
     return FittedEstimator(classes, est)
+
+
+@dataclass
+class FittedMethod:
+    """A fitted method: its feature sets fitted on the training captures, its estimator on their
+    columns (:class:`FittedEstimator`). What a task fits, a model file holds
+    (:class:`touchbench.deploy.model.TrainedModel`), a :class:`touchbench.methods.FeaturePipeline`
+    wraps and ``nested-select`` refits. ``feature_seconds`` and ``fit_seconds`` are what fitting
+    took (NaN when the parts were fitted elsewhere)."""
+
+    sets: list[Any]
+    fitted: FittedEstimator
+    feature_seconds: float = float("nan")
+    fit_seconds: float = float("nan")
+
+    @property
+    def classes(self) -> np.ndarray:
+        return self.fitted.classes
+
+    @property
+    def estimator(self) -> Any | None:
+        return self.fitted.estimator
+
+    def transform(self, captures: Any) -> Any:
+        """The feature matrix of ``captures`` (the captures themselves without feature sets)."""
+        return stack_features(self.sets, captures)
+
+    def predict(self, captures: Any) -> np.ndarray:
+        return self.fitted.predict(self.transform(captures))
+
+    def predict_proba(self, captures: Any) -> dict[str, np.ndarray] | None:
+        return self.fitted.predict_proba(self.transform(captures))
+
+
+def fit_pipeline(feature_sets: Any, estimator: str, params: dict[str, Any], seed: int | None, captures: Any, y: Any,
+                 groups: Any = None, sensor: Any = None) -> FittedMethod:
+    """Fit the feature sets ``[(name, params)...]`` (built with ``sensor``) on ``captures``, then the
+    registered ``estimator`` on their columns through :func:`fit_on_codes`."""
+    t0 = time.perf_counter()
+    sets = []
+    for name, set_params in feature_sets:
+        fs = make_feature_set(name, dict(set_params), sensor)
+        fs.fit(captures, y)
+        sets.append(fs)
+    X = stack_features(sets, captures)
+    t1 = time.perf_counter()
+    fitted = fit_on_codes(estimator, params, seed, X, y, groups, sensor=sensor)
+    return FittedMethod(sets, fitted, t1 - t0, time.perf_counter() - t1)

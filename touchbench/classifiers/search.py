@@ -31,7 +31,8 @@ contiguous codes of the classes its inner training part holds.
 After ``fit``: ``chosen_`` (the label of the chosen candidate),
 ``cv_results_`` (label -> inner accuracies), ``selection_note_`` (one
 line the run engine adds to the task's notes) and the refitted
-candidate's ``sets_`` / ``estimator_``.
+candidate, ``method_`` (a :class:`touchbench.classifiers.fitting.FittedMethod`: its
+``sets_`` and ``estimator_``).
 
 A candidate that cannot serve the data's sensor (a window longer than the
 shortest training capture...) is left out of the search, and the note
@@ -53,7 +54,7 @@ from ..core.introspect import sensor_problem
 from ..features.base import FEATURES, feature_set_refusal, make_feature_set, stack_features
 from ._util import build, seed_int
 from .base import CLASSIFIERS, make_classifier
-from .fitting import FittedEstimator, fit_on_codes
+from .fitting import FittedEstimator, FittedMethod, fit_on_codes
 
 SOURCE = "touchbench: nested selection over candidate methods by inner cross-validation over training subjects"
 
@@ -239,13 +240,13 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
         self.sets_ = self._fit_sets(chosen, captures, y)
         X = (self._fixed_matrix(chosen, captures, y, cache) if self._learns_nothing(chosen)
              else stack_features(self.sets_, captures))
-        self.fitted_ = self._fit_estimator(chosen, X, y, groups)
-        self.estimator_, self.est_classes_ = self.fitted_.estimator, self.fitted_.classes
+        self.method_ = FittedMethod(self.sets_, self._fit_estimator(chosen, X, y, groups))
+        self.estimator_, self.est_classes_ = self.method_.estimator, self.method_.classes
         return self
 
     def predict(self, X):
         check_is_fitted(self)
-        return self.fitted_.predict(stack_features(self.sets_, list(X)))
+        return self.method_.predict(list(X))
 
     def predict_proba(self, X):
         """The chosen candidate's probabilities over ``classes_`` (zeros for a class it never saw)."""
@@ -256,7 +257,7 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
             out[:, np.searchsorted(self.classes_, self.est_classes_[0])] = 1.0
             return out
         if not hasattr(self.estimator_, "predict_proba"):
-            pred = self.fitted_.predict(Xs)
+            pred = self.method_.fitted.predict(Xs)
             out[np.arange(len(Xs)), np.searchsorted(self.classes_, pred)] = 1.0
             return out
         P = np.asarray(self.estimator_.predict_proba(Xs), dtype=np.float64)

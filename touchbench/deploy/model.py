@@ -5,7 +5,7 @@ predict`` / ``touchbench stream`` read. It holds
 
 - the feature sets of the chosen combination, fitted on the training
   captures (or on windows cut from them, see :mod:`.windows`), built the way
-  the run engine builds them (:func:`touchbench.engine.tasks.make_feature_set`,
+  the run engine builds them (:func:`touchbench.features.base.make_feature_set`,
   with the dataset's sensor);
 - the classifier, built by :func:`touchbench.classifiers.make_classifier`
   (with the dataset's sensor, as the run engine builds it)
@@ -54,8 +54,9 @@ from ..core.errors import DataError, TouchbenchError
 from ..core.threads import single_thread
 from ..core.versions import package_versions
 from ..datasets.model import FRAME_RATE_TOLERANCE, SensorSpec, TouchDataset, sensor_differences
-from ..features.base import make_feature_set, stack_features
-from ..methods.fitting import fit_estimator
+from ..classifiers.fitting import FittedEstimator, FittedMethod
+from ..methods import MethodSpec
+from ..methods.fitting import fit_method
 from .windows import cut_windows, seconds_to_frames
 
 __all__ = [
@@ -83,15 +84,27 @@ class SensorMismatchError(TouchbenchError):
 
 @dataclass
 class TrainedModel:
-    """Fitted feature sets + classifier + manifest (see the module docstring)."""
+    """A fitted method + its manifest (see the module docstring)."""
 
-    feature_sets: list[Any]
-    estimator: Any | None  # None when the training data held one class
-    classes: np.ndarray
+    fitted: FittedMethod
     manifest: dict[str, Any]
     _fast: Any = field(default=None, init=False, repr=False, compare=False)
 
     # ------------------------------------------------------------ accessors
+    @property
+    def feature_sets(self) -> list[Any]:
+        """The fitted feature sets (none: the estimator takes the captures)."""
+        return self.fitted.sets
+
+    @property
+    def estimator(self) -> Any | None:
+        """The fitted estimator (None when the training data held one class)."""
+        return self.fitted.estimator
+
+    @property
+    def classes(self) -> np.ndarray:
+        return self.fitted.classes
+
     @property
     def sensor(self) -> SensorSpec:
         return SensorSpec.from_dict(self.manifest["sensor"])
@@ -119,9 +132,7 @@ class TrainedModel:
     def transform(self, captures: Sequence[np.ndarray]) -> np.ndarray | list[np.ndarray]:
         """The feature matrix of ``captures`` (the combination's sets, concatenated); the captures
         themselves for a method whose estimator takes captures (no feature sets)."""
-        if not self.feature_sets:
-            return list(captures)
-        return stack_features(self.feature_sets, captures)
+        return self.fitted.transform(captures)
 
     def proba_from_features(self, X: np.ndarray, fast: bool = True) -> np.ndarray:
         """``(n, C)`` probabilities, columns in the order of :attr:`classes`.
@@ -193,12 +204,9 @@ class TrainedModel:
             raise DataError(f"not a readable touchbench model ({type(e).__name__}: {e})", path) from None
         if not isinstance(payload, dict) or not {"feature_sets", "estimator", "classes"} <= payload.keys():
             raise DataError("not a touchbench model (its parts are missing)", path)
-        model = cls(
-            feature_sets=list(payload["feature_sets"]),
-            estimator=payload["estimator"],
-            classes=np.array(payload["classes"], dtype=object),
-            manifest=header["manifest"],
-        )
+        classes = np.array(payload["classes"], dtype=object)
+        model = cls(FittedMethod(list(payload["feature_sets"]), FittedEstimator(classes, payload["estimator"])),
+                    header["manifest"])
         problems = model.consistency_problems()
         if problems:
             raise DataError("the model's parts disagree (" + "; ".join(problems) + "); train it again", path)
@@ -300,24 +308,23 @@ def manifest_path(model_path: str | Path) -> Path:
 
 def fit_model(
     dataset: TouchDataset,
-    sets: Sequence[tuple[str, dict[str, Any]]],
-    classifier: str,
-    classifier_params: dict[str, Any] | None = None,
+    spec: MethodSpec,
     *,
     seed: int = 0,
     target: str = "gesture",
     windows: Sequence[float] | None = None,
     train_hop: float | None = None,
     features_label: str | None = None,
-    classifier_label: str | None = None,
+    label: str | None = None,
     selection: str = "all captures",
     source: dict[str, Any] | None = None,
 ) -> TrainedModel:
-    """Fit ``sets`` + ``classifier`` on every capture of ``dataset``.
+    """Fit the method ``spec`` on every capture of ``dataset``.
 
     ``windows`` (seconds): train on windows of these lengths cut from the
     captures every ``train_hop`` seconds (default: half of each window),
     labelled with their capture's ``target``; None trains on whole captures.
+    ``features_label`` and ``label`` name the method as the results do.
     ``source`` is recorded in the manifest (protocol name and hash, dataset
     reference...).
     """
@@ -325,48 +332,62 @@ def fit_model(
         raise TouchbenchError(f"dataset {dataset.name!r}: no captures to train on")
     if target not in dataset.meta.columns:
         raise TouchbenchError(f"dataset {dataset.name!r} has no {target!r} column to train on")
-    classifier_params = dict(classifier_params or {})
-    sensor = dataset.sensor
-    y_caps = np.array([str(v) for v in dataset.meta[target].tolist()], dtype=object)
     samples, src, lengths, hops = _training_samples(dataset, windows, train_hop)
-    y = y_caps[src]
-    subjects = np.array([str(v) for v in dataset.meta["subject"].tolist()], dtype=object)
-    fit = _fit_pipeline(sets, classifier, classifier_params, seed, samples, y, subjects[src], sensor)
-    n = dataset.n_frames
+    y = dataset.meta[target].to_numpy()[src]
+    with single_thread():  # the run engine's own fit path: label codes, subjects as groups, one class
+        fitted = fit_method(spec, seed, samples, y, dataset.meta["subject"].to_numpy()[src], dataset.sensor)
     manifest = {
         "format": MODEL_FORMAT,
         "format_version": MODEL_VERSION,
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-        "dataset": {
-            "name": dataset.name,
-            "content_hash": dataset.content_hash,
-            "selection": selection,
-            "n_captures": int(len(dataset)),
-            "n_samples": int(len(samples)),
-            "by_class": {str(k): int(v) for k, v in zip(*np.unique(y_caps, return_counts=True))},
-            **(source or {}),
-        },
-        "sensor": sensor.to_dict(),
+        "dataset": _dataset_manifest(dataset, target, selection, len(samples), source),
+        "sensor": dataset.sensor.to_dict(),
         "target": target,
         "features": {
-            "label": features_label or "+".join(n for n, _ in sets),
-            "sets": [{"name": n, "params": dict(p)} for n, p in sets],
-            "n_columns": fit.n_columns,  # None: the estimator takes captures
+            "label": features_label or "+".join(spec.feature_names),
+            "sets": [{"name": n, "params": dict(p)} for n, p in spec.feature_sets],
+            "n_columns": _n_columns(fitted, samples[:1]),  # None: the estimator takes captures
         },
         "classifier": {
-            "label": classifier_label or classifier,
-            "name": classifier,
-            "params": classifier_params,
+            "label": label or spec.name,
+            "name": spec.estimator,
+            "params": dict(spec.estimator_params),
             "random_state": int(seed),
         },
-        "classes": [str(c) for c in fit.classes],
-        "windows": _windows_manifest(windows, lengths, hops, train_hop, sensor.frame_rate),
-        "capture_frames": {"min": int(n.min()), "median": float(np.median(n)), "max": int(n.max())},
+        "classes": [str(c) for c in fitted.classes],
+        "windows": _windows_manifest(windows, lengths, hops, train_hop, dataset.sensor.frame_rate),
+        "capture_frames": _frames_manifest(dataset),
         "capture_dtype": np.dtype(dataset.captures[0].dtype).str,
-        "timings": {"features_s": round(fit.feature_seconds, 3), "fit_s": round(fit.fit_seconds, 3)},
+        "timings": {"features_s": round(fitted.feature_seconds, 3), "fit_s": round(fitted.fit_seconds, 3)},
         "versions": package_versions(installed_only=True),
     }
-    return TrainedModel(fit.fitted, fit.estimator, fit.classes, manifest)
+    return TrainedModel(fitted, manifest)
+
+
+def _dataset_manifest(dataset: TouchDataset, target: str, selection: str, n_samples: int,
+                      source: dict[str, Any] | None) -> dict[str, Any]:
+    """What a model was trained on: the dataset, the selection, the counts per class."""
+    y = np.array([str(v) for v in dataset.meta[target].tolist()], dtype=object)
+    return {
+        "name": dataset.name,
+        "content_hash": dataset.content_hash,
+        "selection": selection,
+        "n_captures": int(len(dataset)),
+        "n_samples": int(n_samples),
+        "by_class": {str(k): int(v) for k, v in zip(*np.unique(y, return_counts=True))},
+        **(source or {}),
+    }
+
+
+def _frames_manifest(dataset: TouchDataset) -> dict[str, Any]:
+    n = dataset.n_frames
+    return {"min": int(n.min()), "median": float(np.median(n)), "max": int(n.max())}
+
+
+def _n_columns(fitted: FittedMethod, one: list[np.ndarray]) -> int | None:
+    """The number of feature columns, from one sample (None: the estimator takes the captures)."""
+    X = fitted.transform(one)
+    return int(X.shape[1]) if isinstance(X, np.ndarray) else None
 
 
 def _training_samples(dataset: TouchDataset, windows: Sequence[float] | None,
@@ -381,40 +402,6 @@ def _training_samples(dataset: TouchDataset, windows: Sequence[float] | None,
             else max(1, L // 2) for L in lengths]
     samples, src = cut_windows(dataset.captures, lengths, hops)
     return samples, src, lengths, hops
-
-
-@dataclass
-class _FittedPipeline:
-    """Feature sets and estimator fitted, with the number of feature columns (None: the estimator
-    takes captures) and the seconds each step took."""
-
-    fitted: list[Any]
-    estimator: Any
-    classes: Any
-    n_columns: int | None
-    feature_seconds: float
-    fit_seconds: float
-
-
-def _fit_pipeline(sets: Sequence[tuple[str, dict[str, Any]]], classifier: str, classifier_params: dict[str, Any],
-                  seed: int, samples: list[np.ndarray], y: np.ndarray, groups: np.ndarray,
-                  sensor: SensorSpec) -> _FittedPipeline:
-    """The feature sets fitted on ``samples``, then the classifier on their columns (the run engine's
-    own fit path), in one thread."""
-    t0 = time.perf_counter()
-    with single_thread():
-        fitted = []
-        for name, params in sets:
-            fs = make_feature_set(name, dict(params), sensor)
-            fs.fit(samples, y)
-            fitted.append(fs)
-        X = stack_features(fitted, samples)
-        feature_seconds = time.perf_counter() - t0
-        # the run engine's own fit path: label codes, subjects as groups, a one-class training set
-        fitted_est = fit_estimator(classifier, classifier_params, seed, X, y, groups, sensor=sensor)
-    fit_seconds = time.perf_counter() - t0 - feature_seconds
-    return _FittedPipeline(fitted, fitted_est.estimator, fitted_est.classes,
-                           int(X.shape[1]) if isinstance(X, np.ndarray) else None, feature_seconds, fit_seconds)
 
 
 def _windows_manifest(windows: Sequence[float] | None, lengths: list[int], hops: list[int],

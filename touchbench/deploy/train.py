@@ -163,9 +163,6 @@ def train_from_protocol(
                      "evaluation": proto.evaluation},
         "fold": fold, "where": where or {}, "exclude": exclude or {},
     }
-    return fit_model(
-        ds.subset(idx), m.spec.feature_sets, m.spec.estimator, m.spec.estimator_params,
-        seed=default_seed if seed is None else seed, target=proto.target,
-        windows=windows, train_hop=train_hop, features_label=m.features_label, classifier_label=m.label,
-        selection="; ".join(parts), source=source,
-    )
+    return fit_model(ds.subset(idx), m.spec, seed=default_seed if seed is None else seed, target=proto.target,
+                     windows=windows, train_hop=train_hop, features_label=m.features_label, label=m.label,
+                     selection="; ".join(parts), source=source)

@@ -34,8 +34,8 @@ import pandas as pd
 from ..core.threads import single_thread
 from ..datasets.model import TouchDataset
 from ..evaluation.metrics import metrics
-from ..features.base import make_feature_set, stack_features
-from ..methods import Method
+from ..features.base import make_feature_set
+from ..methods import FittedMethod, Method
 from ..methods.fitting import fit_estimator
 from ..protocols.schemes import Fold, fold_notes
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
@@ -190,15 +190,13 @@ def _latency_sets(task: Task, ctx: RunContext, fitted: list, y_train: np.ndarray
     return out
 
 
-def _measure_latency(sets: list, captures: list[np.ndarray], predict) -> float:
-    """Median milliseconds to label one capture (features + predict): ``captures`` in turn, one at a
-    time, after one warm-up call; at least ``LATENCY_MIN_CALLS`` calls and until ``LATENCY_BUDGET_S``
-    seconds were timed, at most ``LATENCY_MAX_CALLS``."""
+def _measure_latency(method: FittedMethod, captures: list[np.ndarray]) -> float:
+    """Median milliseconds for ``method`` to label one capture (features + predict): ``captures`` in
+    turn, one at a time, after one warm-up call; at least ``LATENCY_MIN_CALLS`` calls and until
+    ``LATENCY_BUDGET_S`` seconds were timed, at most ``LATENCY_MAX_CALLS``."""
 
     def once(capture):
-        x = stack_features(sets, [capture])
-        if predict is not None:
-            predict(x)
+        method.predict([capture])
 
     once(captures[0])
     times: list[float] = []
@@ -259,7 +257,7 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
                 lat_sets = _latency_sets(task, ctx, fitted, y_train)
                 caps = [ds.captures[int(i)][: task.crop_frames] if task.crop_frames is not None else ds.captures[int(i)]
                         for i in fold.test[:LATENCY_CAPTURES]]
-                row["latency_ms"] = _measure_latency(lat_sets, caps, None if est is None else est.predict)
+                row["latency_ms"] = _measure_latency(FittedMethod(lat_sets, fitted_est), caps)
         meta = ds.meta.iloc[fold.test]
         preds = pd.DataFrame({
             "task_id": task.task_id,

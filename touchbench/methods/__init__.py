@@ -14,8 +14,8 @@ the engine's tasks, ``touchbench train`` and the nested search all fit there.
 """
 
 from .base import CAPTURES, METHODS, Method, MethodSpec, expand_candidates, features_label, method_spec, resolve_entry
-from .fitting import FittedEstimator, fit_estimator
+from .fitting import FittedEstimator, FittedMethod, fit_estimator, fit_method
 from .pipeline import FeaturePipeline
 
-__all__ = ["CAPTURES", "METHODS", "FeaturePipeline", "FittedEstimator", "Method", "MethodSpec", "expand_candidates",
-           "features_label", "fit_estimator", "method_spec", "resolve_entry"]
+__all__ = ["CAPTURES", "METHODS", "FeaturePipeline", "FittedEstimator", "FittedMethod", "Method", "MethodSpec", "expand_candidates",
+           "features_label", "fit_estimator", "fit_method", "method_spec", "resolve_entry"]

@@ -4,7 +4,8 @@
 (label codes, subjects as ``groups``, one-class folds) with every label and
 subject read as a string, so the codes are those of the sorted class names
 whatever type the metadata column has. The engine's tasks and
-``touchbench train`` fit through it.
+``touchbench train`` fit through it; :func:`fit_method` fits a whole method
+(its feature sets, then its estimator) into a :class:`FittedMethod`.
 """
 
 from __future__ import annotations
@@ -13,9 +14,10 @@ from typing import Any
 
 import numpy as np
 
-from ..classifiers.fitting import FittedEstimator, fit_on_codes, label_codes
+from ..classifiers.fitting import FittedEstimator, FittedMethod, fit_on_codes, fit_pipeline, label_codes
+from .base import MethodSpec
 
-__all__ = ["FittedEstimator", "encode_labels", "fit_estimator"]
+__all__ = ["FittedEstimator", "FittedMethod", "encode_labels", "fit_estimator", "fit_method"]
 
 
 def _as_text(values: Any) -> np.ndarray:
@@ -33,3 +35,11 @@ def fit_estimator(name: str, params: dict[str, Any], seed: int | None, X: np.nda
     and ``build`` keywords such as the sensor) and fit it on ``X``, ``y`` (labels as text; the
     subjects ``groups`` as text to an estimator that takes them)."""
     return fit_on_codes(name, params, seed, X, _as_text(y), None if groups is None else _as_text(groups), **build)
+
+
+def fit_method(spec: MethodSpec, seed: int | None, captures: Any, y: Any, groups: Any = None,
+               sensor: Any = None) -> FittedMethod:
+    """Fit the method ``spec`` on ``captures`` (labels and subjects as text), its feature sets built
+    with ``sensor``."""
+    return fit_pipeline(spec.feature_sets, spec.estimator, spec.estimator_params, seed, captures, _as_text(y),
+                        None if groups is None else _as_text(groups), sensor)

@@ -1,9 +1,10 @@
 """A method as one scikit-learn-style estimator over captures.
 
-:class:`FeaturePipeline` fits its feature sets (built with the sensor of
-the data) on the training captures, concatenates their outputs and fits the
-estimator through :func:`touchbench.methods.fitting.fit_estimator`. It is
-what ``touchbench train`` saves and ``predict`` / ``stream`` apply; the run
+:class:`FeaturePipeline` fits its method (:func:`touchbench.methods.fitting.fit_method`:
+the feature sets, built with the sensor of the data, on the training
+captures, then the estimator on their columns) into a
+:class:`touchbench.classifiers.fitting.FittedMethod` (``method_``), the one
+object that holds a fitted method: model files hold it too, and the run
 engine fits the same two halves, taking fold-independent features from its
 cache instead of recomputing them.
 """
@@ -15,9 +16,8 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..datasets.model import SensorSpec
-from ..features.base import make_feature_set, stack_features
 from .base import MethodSpec
-from .fitting import FittedEstimator, fit_estimator
+from .fitting import FittedMethod, fit_method
 
 __all__ = ["FeaturePipeline"]
 
@@ -27,7 +27,8 @@ class FeaturePipeline:
 
     ``spec`` names the feature sets and the estimator; ``random_state`` is
     the estimator's seed; ``sensor`` is given to every feature set (and to
-    the estimator when it takes one).
+    the estimator when it takes one). After ``fit``: ``method_`` (the
+    fitted method), ``classes_``.
     """
 
     def __init__(self, spec: MethodSpec, random_state: int | None = None, sensor: SensorSpec | None = None):
@@ -36,31 +37,33 @@ class FeaturePipeline:
         self.sensor = sensor
 
     def fit(self, captures: Sequence[np.ndarray], y: Any, groups: Any = None) -> "FeaturePipeline":
-        y = np.asarray(y, dtype=object)
-        self.sets_ = []
-        for name, params in self.spec.feature_sets:
-            fs = make_feature_set(name, dict(params), self.sensor)
-            fs.fit(captures, y)
-            self.sets_.append(fs)
-        X = stack_features(self.sets_, captures)
-        self.fitted_ = fit_estimator(self.spec.estimator, self.spec.estimator_params, self.random_state, X, y, groups,
-                                     sensor=self.sensor)
-        self.classes_ = self.fitted_.classes
+        self.method_ = fit_method(self.spec, self.random_state, captures, y, groups, self.sensor)
+        self.classes_ = self.method_.classes
         return self
 
-    def transform(self, captures: Sequence[np.ndarray]) -> np.ndarray:
-        return stack_features(self.sets_, captures)
+    @property
+    def sets_(self) -> list:
+        """The fitted feature sets."""
+        return self.method_.sets
+
+    @property
+    def fitted_(self):
+        """The fitted estimator with the labels its codes stand for."""
+        return self.method_.fitted
+
+    def transform(self, captures: Sequence[np.ndarray]) -> np.ndarray | list[np.ndarray]:
+        return self.method_.transform(captures)
 
     def predict(self, captures: Sequence[np.ndarray]) -> np.ndarray:
-        return self.fitted_.predict(self.transform(captures))
+        return self.method_.predict(captures)
 
     def predict_proba(self, captures: Sequence[np.ndarray]) -> dict[str, np.ndarray] | None:
-        return self.fitted_.predict_proba(self.transform(captures))
+        return self.method_.predict_proba(captures)
 
     @classmethod
-    def from_parts(cls, spec: MethodSpec, sets: list, fitted: FittedEstimator, random_state: int | None = None,
-                   sensor: SensorSpec | None = None) -> "FeaturePipeline":
-        """A fitted pipeline from already fitted feature sets and estimator (the engine's halves)."""
+    def of(cls, spec: MethodSpec, method: FittedMethod, random_state: int | None = None,
+           sensor: SensorSpec | None = None) -> "FeaturePipeline":
+        """A fitted pipeline around an already fitted method (the engine's halves)."""
         out = cls(spec, random_state, sensor)
-        out.sets_, out.fitted_, out.classes_ = list(sets), fitted, fitted.classes
+        out.method_, out.classes_ = method, method.classes
         return out
