@@ -22,13 +22,9 @@ from touchbench.reports.leaderboard import (
     print_terminal,
     to_markdown,
 )
-from touchbench.reports.plots import (
-    SIZES,
-    plot_cd,
-    plot_cd_across,
-    plot_pareto,
-    plot_table,
-)
+from touchbench.reports.figures import SIZES, plot_table
+from touchbench.reports.figures.cd import plot_cd, plot_cd_across
+from touchbench.reports.figures.pareto import plot_pareto
 from touchbench.reports.results import load_results
 from touchbench.reports.testing import FakeMethod, write_fake_run
 

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import base64
 import json
+import pkgutil
 import re
+import subprocess
+import sys
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -13,15 +16,15 @@ from click.testing import CliRunner
 from helpers import fake_loso
 
 from touchbench.cli.main import cli
-from touchbench.cli.reports import parse_reference
+from touchbench.cli.reports import parse_reference, plot
+from touchbench.core.errors import UnknownNameError
+from touchbench.reports import figures
+from touchbench.reports.figures import FIGURES, plot_table
 from touchbench.reports.html import write_report
 from touchbench.reports.leaderboard import build_leaderboards
-from touchbench.reports.plots import (
-    confusion_matrix,
-    label_offsets,
-    plot_confusion,
-    plot_frames,
-)
+from touchbench.reports.figures.base import label_offsets
+from touchbench.reports.figures.confusion import confusion_matrix, plot_confusion
+from touchbench.reports.figures.frames import plot_frames
 from touchbench.reports.results import load_results
 from touchbench.reports.testing import FakeMethod, write_fake_run
 
@@ -188,3 +191,32 @@ def test_plot_name_gives_stable_file_names(runs, tmp_path):
     res = r.invoke(cli, ["plot", str(runs / "loso"), str(runs / "early"), "--out", str(tmp_path / "p2"),
                          "--name", "figure-b"])
     assert res.exit_code == 3 and "--name figure-b" in res.output and "tables" in res.output
+
+
+# ----------------------------------------------------------------- the figure kinds
+def test_every_figure_module_registers_one_kind_named_after_it():
+    modules = sorted(m.name for m in pkgutil.iter_modules(figures.__path__)
+                     if not m.name.startswith("_") and m.name != "base")
+    registered: dict[str, list[str]] = {}
+    for e in FIGURES.entries():
+        if e.plugin is None:
+            registered.setdefault(e.obj.__module__, []).append(e.name)
+            assert e.description and "\n" not in e.description, e.name
+    assert modules and registered == {f"touchbench.reports.figures.{m}": [m.replace("_", "-")] for m in modules}
+
+
+def test_plot_offers_exactly_the_registered_kinds(runs, tmp_path):
+    [kind] = [p for p in plot.params if p.name == "kinds"]
+    assert sorted(kind.type.choices) == FIGURES.names()
+    res = CliRunner().invoke(cli, ["plot", str(runs / "loso"), "--out", str(tmp_path), "--kind", "nope"])
+    assert res.exit_code == 2 and all(name in res.output for name in FIGURES.names())
+    rs = load_results([runs / "loso"])
+    [lb] = build_leaderboards(rs)
+    with pytest.raises(UnknownNameError, match="unknown figure kind 'paretto'; did you mean 'pareto'"):
+        plot_table(rs, lb, tmp_path, kinds=("paretto",))
+
+
+def test_the_report_commands_read_the_figure_kinds_only_when_plot_needs_them():
+    code = "import sys, touchbench.cli.reports\nprint([m for m in sys.modules if m.startswith('touchbench.reports.')])"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"

@@ -22,10 +22,12 @@ def registries() -> dict:
     from touchbench.features import FEATURES
     from touchbench.methods import METHODS
     from touchbench.protocols.schemes import SPLITTERS
+    from touchbench.reports.figures import FIGURES
     from touchbench.scenes import SCENES
 
     return {"classifiers": CLASSIFIERS, "datasets": DATASETS, "evaluation schemes": SPLITTERS,
-            "features": FEATURES, "file formats": FORMATS, "methods": METHODS, "scenes": SCENES}
+            "features": FEATURES, "figure kinds": FIGURES, "file formats": FORMATS, "methods": METHODS,
+            "scenes": SCENES}
 
 
 def builtin_names(reg) -> list[str]:

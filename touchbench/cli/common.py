@@ -1,12 +1,12 @@
 """What every command shares: ``--json`` output, examples in ``--help``, the ``--jobs`` option,
-and the ``touchbench`` loggers (``-v`` / ``-q``)."""
+choices read from a registry when first needed, and the ``touchbench`` loggers (``-v`` / ``-q``)."""
 
 from __future__ import annotations
 
 import json
 import logging
 import math
-from typing import Any
+from typing import Any, Callable, Iterable
 
 import click
 
@@ -23,6 +23,23 @@ def json_option(f):
     """``--json``: the command's output as one JSON document on stdout, nothing else there."""
     return click.option("--json", "as_json", is_flag=True,
                         help="Print the output as JSON (machine-readable; messages stay on stderr).")(f)
+
+
+class LazyChoice(click.Choice):
+    """A choice whose values (a registry's names) are read when first needed -- parsing the
+    option, showing the command's help -- not when the command is defined, so that importing
+    the command imports none of the registry's modules."""
+
+    def __init__(self, values: Callable[[], Iterable[str]]):
+        self._values = values
+        self._choices: tuple[str, ...] | None = None
+        self.case_sensitive = True
+
+    @property
+    def choices(self) -> tuple[str, ...]:  # type: ignore[override]
+        if self._choices is None:
+            self._choices = tuple(self._values())
+        return self._choices
 
 
 def _clean(value: Any) -> Any:

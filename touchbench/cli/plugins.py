@@ -11,10 +11,11 @@ from ..datasets import DATASETS
 from ..datasets.formats import FORMATS
 from ..features import FEATURES
 from ..protocols.schemes import SPLITTERS
+from ..reports.figures import FIGURES
 from .common import echo_json, example, json_option
 
 # Every registry a plugin may fill, as the listings name them.
-PLUGIN_REGISTRIES: tuple[Registry, ...] = (FEATURES, CLASSIFIERS, DATASETS, FORMATS, SPLITTERS)
+PLUGIN_REGISTRIES: tuple[Registry, ...] = (FEATURES, CLASSIFIERS, DATASETS, FORMATS, SPLITTERS, FIGURES)
 
 
 def plugin_note(e: Entry) -> str:
@@ -45,7 +46,8 @@ def plugin_entries() -> list[tuple[str, Entry]]:
 
 @click.group("plugins", epilog=example("touchbench plugins list"))
 def plugins() -> None:
-    """Installed plugins: packages that add feature sets, classifiers, datasets, file formats or schemes."""
+    """Installed plugins: packages that add feature sets, classifiers, datasets, file formats, schemes or
+    figure kinds."""
 
 
 @plugins.command("list", epilog=example("touchbench plugins list --json"))

@@ -17,7 +17,7 @@ import click
 
 from ..core.errors import TouchbenchError
 from . import exitcodes
-from .common import echo_json, example, jobs_option, json_option, log
+from .common import LazyChoice, echo_json, example, jobs_option, json_option, log
 
 _FORMATS = ("terminal", "md", "csv", "json")
 
@@ -162,6 +162,13 @@ def compare(results, a, b, as_json, dataset, scheme, alpha, pool_machines, machi
         click.echo("")
 
 
+def figure_kinds() -> list[str]:
+    """The registered figure kinds in the order their figures come: ``plot --kind``'s choices."""
+    from ..reports.figures.base import kinds_in_order
+
+    return [e.name for e in kinds_in_order()]
+
+
 def parse_reference(text: str) -> tuple[str, float]:
     """``"LABEL=PERCENT"`` -> (label, percent); a bad value is a ``click.BadParameter`` naming it."""
     label, sep, value = str(text).rpartition("=")
@@ -178,7 +185,7 @@ def parse_reference(text: str) -> tuple[str, float]:
 @click.command("plot", epilog=example("touchbench plot results/demo-haart --out figures --kind pareto --size column"))
 @click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
 @click.option("--out", "-o", required=True, type=click.Path(file_okay=False), help="Folder for the figure files.")
-@click.option("--kind", "kinds", multiple=True, type=click.Choice(["pareto", "frames", "confusion", "subjects", "cd"]),
+@click.option("--kind", "kinds", multiple=True, type=LazyChoice(figure_kinds),
               help="Plots to draw (repeatable) [default: all that apply]. cd: critical difference diagram per table, "
                    "and across the tables when there are several (needs aeon: touchbench[peers]).")
 @click.option("--size", type=click.Choice(["text", "column"]), default="text", show_default=True,
@@ -199,7 +206,8 @@ def plot(results, out, kinds, size, formats, methods, references, name, dataset,
     accuracy against frames and seconds seen (early scheme), confusion
     matrices (counts and row-normalised) and per-subject accuracy."""
     from ..reports.leaderboard import resolve_method
-    from ..reports.plots import FORMATS, KINDS, plot_cd_across, plot_table
+    from ..reports.figures import FORMATS, plot_table
+    from ..reports.figures.cd import plot_cd_across
 
     rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
     if name is not None and len(lbs) > 1:
@@ -208,7 +216,7 @@ def plot(results, out, kinds, size, formats, methods, references, name, dataset,
     formats = tuple(formats) or FORMATS
     for lb in lbs:
         ids = [resolve_method(lb.rows, m) for m in methods] if methods else None
-        made = plot_table(rs, lb, Path(out), tuple(kinds) or KINDS, ids, references, name=name, size=size,
+        made = plot_table(rs, lb, Path(out), tuple(kinds) or None, ids, references, name=name, size=size,
                           formats=formats, taken=taken)
         for kind, paths in made.items():
             click.echo(f"{lb.title}: {kind}: " + ", ".join(str(p) for p in paths))

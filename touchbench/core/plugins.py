@@ -4,7 +4,8 @@ A plugin is a distribution that declares entry points in the group
 ``touchbench.plugins``; each entry point names a module (``name =
 "package.module"``). Importing that module registers its entries with the
 ordinary decorators (``@FEATURES.register(...)``, ``@CLASSIFIERS.register``,
-``@DATASETS.register``, ``register_format``, ``@SPLITTERS.register``).
+``@DATASETS.register``, ``register_format``, ``@SPLITTERS.register``,
+``@FIGURES.register``).
 
 :func:`load_plugins` imports every plugin's module once per process. The
 registries that take plugins call it on first use, after their own

@@ -6,6 +6,7 @@ HTML report (the paper reproduction report is :mod:`touchbench.papers`).
 - :mod:`.stats`: intervals, paired tests (exact permutation / Wilcoxon), Holm;
 - :mod:`.pareto`: the accuracy / cost Pareto front;
 - :mod:`.leaderboard`: one table per dataset, target and scheme; compare;
-- :mod:`.plots`: Pareto, accuracy vs frames, confusion, per-subject (PNG + SVG);
+- :mod:`.figures`: the figure kinds, one module each (``FIGURES``): Pareto, accuracy vs
+  frames, confusion, per-subject, critical difference (PDF, SVG, PNG);
 - :mod:`.html`: one self-contained HTML page.
 """

@@ -67,14 +67,14 @@ def audit_markdown(table: pd.DataFrame, published: dict[str, dict[str, Any]] | N
 def plot_audit(table: pd.DataFrame, path_stem: Path, published: dict[str, dict[str, Any]] | None = None,
                title: str = "Leakage audit") -> list[Path]:
     """Grouped bars: each method's accuracy per variant (honest first); the published number dashed.
-    Drawn at text width with the figures' fonts (:mod:`touchbench.reports.plots`)."""
-    from .plots import _plt, _save, _width
+    Drawn at text width with the figures' fonts (:mod:`touchbench.reports.figures.base`)."""
+    from .figures.base import figure_width, pyplot, save
 
-    plt = _plt()
+    plt = pyplot()
     variants = list(dict.fromkeys(table["variant"]))
     methods = list(dict.fromkeys(table["method"]))
     h = 0.8 / len(variants)
-    fig, ax = plt.subplots(figsize=(_width("text"), 1.0 + 0.25 * len(methods) * len(variants)), layout="constrained")
+    fig, ax = plt.subplots(figsize=(figure_width("text"), 1.0 + 0.25 * len(methods) * len(variants)), layout="constrained")
     for j, v in enumerate(variants):
         accs = [100 * float(table[(table["method"] == m) & (table["variant"] == v)]["accuracy"].mean()) for m in methods]
         ax.barh([i + j * h for i in range(len(methods))], accs, height=h, label=v,
@@ -88,7 +88,7 @@ def plot_audit(table: pd.DataFrame, path_stem: Path, published: dict[str, dict[s
     ax.set_xlim(0, 100)
     ax.set_title(title)
     ax.legend(loc="lower left")
-    return _save(fig, path_stem, formats=("png", "svg"))
+    return save(fig, path_stem, formats=("png", "svg"))
 
 
 def write_audit(table: pd.DataFrame, out: Path, published: dict[str, dict[str, Any]] | None = None,

@@ -45,7 +45,7 @@ import numpy as np
 from ..core.atomic import atomic_write_bytes
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
 from .leaderboard import Leaderboard, method_labels
-from .plots import slug, unique_stem
+from .figures import slug, unique_stem
 from .results import ResultSet
 
 __all__ = ["export_tsml"]

@@ -13,7 +13,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from .leaderboard import Leaderboard, display_rows, legend, write_outputs, write_text
-from .plots import KINDS, plot_table
+from .figures import plot_table
 from .results import ResultSet
 
 __all__ = ["render_html", "write_report"]
@@ -81,9 +81,9 @@ def render_html(rs: ResultSet, lbs: list[Leaderboard], plots: dict[str, dict[str
 
 
 def write_report(rs: ResultSet, lbs: list[Leaderboard], out: str | Path, title: str = "touchbench report",
-                 kinds: tuple[str, ...] = KINDS) -> Path:
-    """``out/report.html`` (self-contained), ``out/plots/*.{png,svg}`` (text width, 300 dpi),
-    ``out/leaderboard.{md,csv,json}``."""
+                 kinds: tuple[str, ...] | None = None) -> Path:
+    """``out/report.html`` (self-contained), ``out/plots/*.{png,svg}`` (text width, 300 dpi; ``kinds``:
+    the figure kinds, by default every one), ``out/leaderboard.{md,csv,json}``."""
     out = Path(out)
     taken: set[str] = set()  # file names unique over the tables
     plots = {lb.key: plot_table(rs, lb, out / "plots", kinds, taken=taken, formats=("svg", "png")) for lb in lbs}
