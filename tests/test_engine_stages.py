@@ -154,3 +154,18 @@ def test_every_report_names_a_named_method_and_its_own_feature_sets(tmp_path):
         assert str(mid) not in text
     preds = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
     assert set(preds["features"]) == {"touch-rhythm", "captures"}
+
+
+def test_an_expected_result_finds_its_method_by_the_combination_as_written(tmp_path):
+    data = tmp_path / "d.parquet"
+    random_dataset(subjects=("s1", "s2"), per_cell=2, frames=(24, 24)).to_parquet(data)
+    p = _protocol(tmp_path, f"dataset: {data}\nscheme: loso\n"
+                            "features: [[{name: raw-window, params: {frames: 24}}]]\n"
+                            "classifiers: [{name: minirocket, params: {n_kernels: 84}}]\n"
+                            "expected:\n  results:\n    - {features: [raw-window], classifier: minirocket, value: 50}\n")
+    proto = parse_protocol(p.read_text(), p)
+    assert proto.features_label_of(["raw-window"]) == "captures(frames=24)"
+    res = run_protocol(p, out=tmp_path / "out", progress=False)
+    (row,) = res.expected
+    assert row["n_folds"] == 2  # both subjects' folds were found under the method's own name
+    assert row["observed"] == pytest.approx(100 * float(res.scores["accuracy"].mean()))

@@ -208,8 +208,8 @@ def run_audit(protocol: Protocol, out: str | Path, *, jobs: int = 1, k: int = 10
     if protocol.expected is not None:
         for r in protocol.expected.results:
             tol = r.tolerance if r.tolerance is not None else protocol.expected.tolerance
-            published[f"{'+'.join(r.features)} / {r.classifier}"] = {"value": r.value, "tolerance": tol,
-                                                                     "source": r.source or protocol.expected.source}
+            key = f"{protocol.features_label_of(list(r.features))} / {r.classifier}"  # as the results name it
+            published[key] = {"value": r.value, "tolerance": tol, "source": r.source or protocol.expected.source}
     table = pd.DataFrame(rows)
     if published and len(table):
         pub = table["method"].map(lambda m: published.get(m, {}).get("value", math.nan))
