@@ -97,8 +97,8 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
     folder). Finished tasks are skipped, so an interrupted run resumes where it stopped. Every run
     that scores a test set is recorded in the ledger of the results root (ledger.jsonl), which the
     leaderboard reads. Exits with status 1 when a task failed."""
-    from ..engine.planning import method_labels, plan_run
-    from ..engine.runner import results_dirs
+    from ..engine.planning import method_labels
+    from ..engine.runner import plan_protocol
     from ..protocols.schema import load_protocol
 
     if force_final and not final:
@@ -106,15 +106,12 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
     if final and methods:
         raise click.UsageError("--final reports every method of the protocol: run it without --method")
     proto = load_protocol(find_protocol(protocol))
-    pairs = results_dirs(proto, out)
-    if evaluations:
-        known = [sub.evaluation for sub, _ in pairs]
-        unknown = [e for e in evaluations if e not in known]
-        if unknown:
-            raise click.BadParameter(f"{unknown[0]!r} is not an evaluation of {proto.name} "
-                                     f"({', '.join(known) or 'it has none'})", param_hint="--evaluation")
-        pairs = [(sub, d) for sub, d in pairs if sub.evaluation in evaluations]
-    plans = [(plan_run(sub), d) for sub, d in pairs]  # every evaluation checked before any runs
+    known = [sub.evaluation for sub in proto.evaluation_protocols()]
+    unknown = [e for e in evaluations if e not in known]
+    if unknown:
+        raise click.BadParameter(f"{unknown[0]!r} is not an evaluation of {proto.name} "
+                                 f"({', '.join(k for k in known if k) or 'it has none'})", param_hint="--evaluation")
+    plans = plan_protocol(proto, out, evaluations=evaluations)  # every evaluation checked before any runs
     if methods:
         labels = {m for plan, _ in plans for m in method_labels(plan)}
         unknown = [m for m in methods if m not in labels]

@@ -56,7 +56,8 @@ from .cache import FeatureCache, crop_captures
 from .planning import Plan, check_methods, method_labels, plan_methods, plan_run, plan_test_set
 from .tasks import RunContext, Task, execute_task, make_feature_set
 
-__all__ = ["RunResult", "default_ledger", "default_results_dir", "results_dirs", "run_plan", "run_protocol"]
+__all__ = ["RunResult", "default_ledger", "default_results_dir", "plan_protocol", "results_dirs", "run_plan",
+           "run_protocol"]
 
 
 def default_results_dir(protocol: Protocol) -> Path:
@@ -418,6 +419,16 @@ def results_dirs(protocol: Protocol, out: str | Path | None = None) -> list[tupl
     return [(sub, root / sub.evaluation if sub.evaluation else root) for sub in protocol.evaluation_protocols()]
 
 
+def plan_protocol(protocol: Protocol, out: str | Path | None = None, *, cache_root: str | Path | None = None,
+                  dataset: TouchDataset | None = None, evaluations: Sequence[str] | None = None
+                  ) -> list[tuple[Plan, Path]]:
+    """Every evaluation of ``protocol`` (only those named in ``evaluations``) planned, each with its
+    results folder: every check of every evaluation is done before any task runs."""
+    pairs = [(sub, folder) for sub, folder in results_dirs(protocol, out)
+             if not evaluations or sub.evaluation in evaluations]
+    return [(plan_run(sub, cache_root=cache_root, dataset=dataset), folder) for sub, folder in pairs]
+
+
 def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None, *, jobs: int = 1,
                  force: bool = False, retry_failed: bool = False, progress: bool | None = None,
                  cache_root: str | Path | None = None, dataset: TouchDataset | None = None,
@@ -425,13 +436,12 @@ def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None,
                  force_final: bool = False, ledger: str | Path | None = None,
                  methods: Sequence[str] | None = None) -> RunResult | list[RunResult]:
     """Validate, plan and run a protocol (a :class:`Protocol` or a file path): its result, or one
-    result per evaluation (in order) for a protocol with ``evaluations``. ``methods``: run only
-    these methods' tasks (:func:`run_plan`)."""
+    result per evaluation (in order) for a protocol with ``evaluations``. Every evaluation is planned
+    before any runs. ``methods``: run only these methods' tasks (:func:`run_plan`)."""
     if not isinstance(protocol, Protocol):
         protocol = load_protocol(protocol)
     out_list = []
-    for sub, folder in results_dirs(protocol, out):
-        plan = plan_run(sub, cache_root=cache_root, dataset=dataset)
+    for plan, folder in plan_protocol(protocol, out, cache_root=cache_root, dataset=dataset):
         labels = set(method_labels(plan))
         present = [m for m in methods or () if m in labels]
         out_list.append(run_plan(plan, folder, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
