@@ -168,4 +168,5 @@ def test_an_expected_result_finds_its_method_by_the_combination_as_written(tmp_p
     res = run_protocol(p, out=tmp_path / "out", progress=False)
     (row,) = res.expected
     assert row["n_folds"] == 2  # both subjects' folds were found under the method's own name
+    assert row["features"] == "captures(frames=24)"  # and the comparison names it so
     assert row["observed"] == pytest.approx(100 * float(res.scores["accuracy"].mean()))

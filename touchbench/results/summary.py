@@ -84,7 +84,8 @@ def check_expected(expected, scores: pd.DataFrame, predictions: pd.DataFrame | N
         metric = r.metric or expected.metric
         tol = r.tolerance if r.tolerance is not None else expected.tolerance
         key = "+".join(r.features)
-        keys = {key, features_label_of(list(r.features))} if features_label_of is not None else {key}
+        named = features_label_of(list(r.features)) if features_label_of is not None else key
+        keys = {key, named}
         sel = ok[ok["feature_sets"].isin(keys) | ok["features"].isin(keys)] if not ok.empty else ok
         if not sel.empty:
             by_label = sel[sel["classifier"] == r.classifier]
@@ -98,7 +99,7 @@ def check_expected(expected, scores: pd.DataFrame, predictions: pd.DataFrame | N
             else:
                 observed = 100.0 * float(sel[metric].mean())
         out.append({
-            "features": key,
+            "features": named,  # as the results name the method's input
             "classifier": r.classifier,
             "group": r.group,
             "metric": metric,
