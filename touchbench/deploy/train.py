@@ -140,7 +140,7 @@ def train_from_protocol(
     if m not in served.evaluated_methods():
         raise TouchbenchError(f"method {m.label!r} cannot serve this evaluation: {'; '.join(left_out)}")
     ds = prepared.dataset
-    parts = [f"protocol {proto.name} filters" if (proto.dataset.filters or proto.dataset.exclude) else "all captures"]
+    parts = [f"protocol {proto.name} filters"] if (proto.dataset.filters or proto.dataset.exclude) else []
     if fold is not None:
         chosen = _fold(proto, prepared, fold)
         fold, idx, default_seed = chosen.name, np.asarray(chosen.train), fold_seed(prepared, m, chosen)
@@ -150,6 +150,8 @@ def train_from_protocol(
         default_seed = derive_seed(proto.seed, "train", m.method_id)
         if len(idx) < len(ds):
             parts.append(f"the training side of {proto.scheme.name} ({len(ds) - len(idx)} test captures left out)")
+        elif not parts:
+            parts.append("all captures")
     if where or exclude:
         idx = idx[select(ds.meta.iloc[idx].reset_index(drop=True), where or {}, exclude or {})]
         parts += [f"where {k}={','.join(v)}" for k, v in (where or {}).items()]
