@@ -158,7 +158,7 @@ def _write(path: Path, text: str) -> Path:
 
 def test_quick_profile_caps_defaults_grids_schemes_and_scenes(tmp_path):
     quick = PROFILES["quick"]
-    proto, changes = apply_profile(PAPERS / "gaus-table5-haart.yaml", quick)
+    proto, changes = apply_profile(load_protocol(PAPERS / "gaus-table5-haart.yaml"), quick)
     rf = next(c for c in proto.classifier_entries() if c.name == "gaus-rf")
     assert rf.params["n_estimators"] == 100  # the protocol gives none: the default 1000 is capped
     assert "gaus-rf: n_estimators 1000 -> 100" in changes
@@ -172,19 +172,19 @@ classifiers:
   - {name: gaus-rf, params: {n_estimators: {grid: [50, 100, 500, 1000]}}}
   - {name: gaus-rf, params: {n_estimators: 20}, label: small}
 """)
-    proto, changes = apply_profile(p, quick)
+    proto, changes = apply_profile(load_protocol(p), quick)
     labels = [c.label for c in proto.classifier_entries()]
     # grid capped at 100 and repeats dropped; 20 is under the cap and stays
     assert labels == ["gaus-rf(n_estimators=50)", "gaus-rf(n_estimators=100)", "small"]
     assert proto.scheme.params["k"] == 10
     assert proto.dataset.options == {"repetitions": 10}
-    full, none = apply_profile(p, PROFILES["full"])
+    full, none = apply_profile(load_protocol(p), PROFILES["full"])
     assert none == [] and full.scheme.params["k"] == 100
 
 
 def test_profile_never_touches_expected_or_features(tmp_path):
     prof = Profile("x", "test", classifier_caps={"gaus-rf": {"n_estimators": 1}})
-    proto, _ = apply_profile(PAPERS / "gaus-table5-haart.yaml", prof)
+    proto, _ = apply_profile(load_protocol(PAPERS / "gaus-table5-haart.yaml"), prof)
     orig = load_protocol(PAPERS / "gaus-table5-haart.yaml", deep=False)
     assert [r.model_dump() for r in proto.expected.results] == [r.model_dump() for r in orig.expected.results]
     assert [c.label for c in proto.combinations()] == [c.label for c in orig.combinations()]

@@ -255,19 +255,20 @@ def papers() -> None:
 def papers_list(profile: str, as_json: bool) -> None:
     """The paper protocols and what the profile changes in each."""
     from ..papers.reproduce import PROFILES, apply_profile, paper_protocols
+    from ..protocols.schema import load_protocol
 
     if profile not in PROFILES:
         raise TouchbenchError(f"unknown profile {profile!r} (known: {', '.join(PROFILES)})")
     if as_json:
         rows = []
         for f in paper_protocols():
-            proto, changes = apply_profile(f, PROFILES[profile])
+            proto, changes = apply_profile(load_protocol(f), PROFILES[profile])
             rows.append({"name": f.stem, "description": proto.description, "changes": changes})
         echo_json({"profile": profile, "description": PROFILES[profile].description, "protocols": rows})
         return
     click.echo(f"profile {profile}: {PROFILES[profile].description}")
     for f in paper_protocols():
-        proto, changes = apply_profile(f, PROFILES[profile])
+        proto, changes = apply_profile(load_protocol(f), PROFILES[profile])
         click.echo(f"{f.stem:38s} {proto.description}")
         for c in changes:
             click.echo(f"{'':40s}{c}")

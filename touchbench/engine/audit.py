@@ -38,14 +38,13 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-import yaml
 
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError
-from ..core.yamlsafe import safe_load
 from ..methods import METHODS
 from ..methods.base import takes_captures
-from ..protocols.schema import CAPTURES, Protocol, parse_protocol
+from ..protocols.derive import derive, protocol_data
+from ..protocols.schema import CAPTURES, Protocol
 from .planning import prepare_evaluation
 from .runner import run_protocol
 
@@ -65,11 +64,11 @@ class Audit:
 
 
 def _base_data(protocol: Protocol) -> dict[str, Any]:
-    data = safe_load(protocol.text) if protocol.text else protocol.model_dump(mode="json")
-    data = copy.deepcopy(data or {})
-    for k in ("expected", "evaluations", "design", "repetitions", "audit"):
+    """The protocol's data for its variants: one evaluation, without what the variants decide
+    (expected numbers, design data, repetitions, the audit block)."""
+    data = protocol_data(protocol)
+    for k in ("expected", "evaluations", "evaluation", "design", "repetitions", "audit"):
         data.pop(k, None)
-    data["dataset"] = protocol.dataset.model_dump(mode="json", exclude_defaults=True)
     data["target"] = protocol.target
     return data
 
@@ -164,8 +163,7 @@ def audit_protocols(protocol: Protocol, *, k: int = 10, window_seconds: float = 
     protos = {}
     for variant, data in out.items():
         data["name"] = f"{name}-{variant}"
-        text = yaml.safe_dump(data, sort_keys=False)
-        protos[variant] = parse_protocol(text, protocol.path)
+        protos[variant] = derive(protocol, data)
     return protos, notes
 
 

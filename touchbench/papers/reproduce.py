@@ -45,7 +45,6 @@ from typing import Any, Callable
 
 import numpy as np
 import pandas as pd
-import yaml
 from joblib.externals.loky import get_reusable_executor
 
 from ..core.version import __version__
@@ -53,16 +52,16 @@ from ..catalog import load_dataset, parse_dataset_ref
 from ..classifiers import CLASSIFIERS
 from ..core.errors import TouchbenchError
 from ..core.paths import REPO_ROOT
-from ..core.yamlsafe import safe_load
 from ..engine.audit import run_audit
 from ..engine.runner import run_protocol
+from ..protocols.derive import derive, protocol_data
 from ..protocols.library import PAPERS_DIR
 from ..protocols.schema import (
     ExpectedBest,
     ExpectedConfusion,
     ExpectedDeviation,
+    Protocol,
     load_protocol,
-    parse_protocol,
     resolve_dataset_ref,
 )
 from ..reports.audit import audit_markdown, write_audit
@@ -151,61 +150,57 @@ def _cap_param(value: Any, cap: float) -> Any:
     return _cap(value, cap)
 
 
-def apply_profile(path: Path, profile: Profile) -> tuple[Any, list[str]]:
-    """The protocol at ``path`` with ``profile``'s overrides, and the list of changes.
+def apply_profile(original: Protocol, profile: Profile) -> tuple[Protocol, list[str]]:
+    """``original`` under ``profile``'s overrides (a protocol made from the protocol,
+    :func:`touchbench.protocols.derive.derive`), and the list of changes."""
+    data = protocol_data(original)
+    changes = (_cap_classifiers(data, profile) + _cap_scheme(data, profile) + _dataset_overrides(data, profile))
+    if not changes:
+        return original, []
+    name = original.path.name if original.path is not None else original.name
+    head = (f"# {name} under the '{profile.name}' profile of touchbench papers reproduce:\n"
+            + "".join(f"#   {c}\n" for c in changes))
+    return derive(original, data, head), changes
 
-    The original file is validated first (errors name its lines); the
-    changed protocol is re-validated from its YAML text.
-    """
-    original = load_protocol(path)
-    data = safe_load(original.text)
-    changes: list[str] = []
-    # classifiers
-    clfs = data.get("classifiers") or []
-    for i, c in enumerate(clfs):
-        spec = {"name": c} if isinstance(c, str) else dict(c)
+
+def _cap_classifiers(data: dict[str, Any], profile: Profile) -> list[str]:
+    """Each classifier's parameters capped as the profile says (in ``data``); the changes."""
+    changes = []
+    for spec in data.get("classifiers") or []:
         caps = profile.classifier_caps.get(spec["name"], {})
-        if not caps:
-            continue
         params = dict(spec.get("params") or {})
         defaults = CLASSIFIERS.entry(spec["name"]).tags.get("defaults") or {}
         for p, cap in caps.items():
             current = params.get(p, defaults.get(p))
-            if current is None:
-                continue
-            new = _cap_param(current, cap)
-            if new != current:
+            new = None if current is None else _cap_param(current, cap)
+            if new is not None and new != current:
                 params[p] = new
                 changes.append(f"{spec.get('label') or spec['name']}: {p} {_show(current)} -> {_show(new)}")
-        if params != (spec.get("params") or {}):
+        if params:
             spec["params"] = params
-            clfs[i] = spec
-    # scheme
-    scheme = data.get("scheme")
-    sch = {"name": scheme} if isinstance(scheme, str) else dict(scheme or {})
-    for p, cap in profile.scheme_caps.get(sch.get("name"), {}).items():
+    return changes
+
+
+def _cap_scheme(data: dict[str, Any], profile: Profile) -> list[str]:
+    """The scheme's parameters capped as the profile says (in ``data``); the changes."""
+    sch, changes = data["scheme"], []
+    for p, cap in profile.scheme_caps.get(sch["name"], {}).items():
         if p in sch:
             new = _cap(sch[p], cap)
             if new != sch[p]:
                 changes.append(f"scheme {sch['name']}: {p} {sch[p]} -> {new}")
                 sch[p] = new
-    if sch != ({"name": scheme} if isinstance(scheme, str) else scheme):
-        data["scheme"] = sch
-    # dataset options
-    ds = data.get("dataset")
-    dspec = {"name": ds} if isinstance(ds, str) else dict(ds)
+    return changes
+
+
+def _dataset_overrides(data: dict[str, Any], profile: Profile) -> list[str]:
+    """The dataset options the profile sets (in ``data``); the changes."""
+    dspec = data["dataset"]
     opts = profile.dataset_options.get(dspec["name"])
-    if opts:
-        merged = {**(dspec.get("options") or {}), **opts}
-        changes.append(f"dataset {dspec['name']}: " + ", ".join(f"{k}={v}" for k, v in opts.items()))
-        dspec["options"] = merged
-        data["dataset"] = dspec
-    if not changes:
-        return original, []
-    head = (f"# {path.name} under the '{profile.name}' profile of touchbench papers reproduce:\n"
-            + "".join(f"#   {c}\n" for c in changes))
-    text = head + yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
-    return parse_protocol(text, path), changes
+    if not opts:
+        return []
+    dspec["options"] = {**(dspec.get("options") or {}), **opts}
+    return [f"dataset {dspec['name']}: " + ", ".join(f"{k}={v}" for k, v in opts.items())]
 
 
 def _show(v: Any) -> str:
@@ -281,7 +276,7 @@ def _planned_protocols(protocols_dir: Path | None, only: list[str] | None, prof)
             raise TouchbenchError(f"no paper protocol matches {only}")
     planned = []
     for f in files:
-        proto, changes = apply_profile(f, prof)
+        proto, changes = apply_profile(load_protocol(f), prof)
         planned.append((proto, changes, f))
     planned.sort(key=lambda t: (_dataset_key(t[0]), t[2].name))  # one dataset in memory at a time
     return planned
@@ -560,7 +555,7 @@ def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
     """The report section of one protocol: the comparison with the paper."""
     sec = _Section([], [])
     try:
-        proto, _ = apply_profile(r.path, profile)
+        proto, _ = apply_profile(load_protocol(r.path), profile)
     except TouchbenchError as e:
         sec.status = "invalid"
         sec.lines = [f"### {r.name}", "", f"**Invalid protocol:** {e}", ""]
