@@ -115,3 +115,21 @@ def test_bad_input_is_refused():
         MethodSpec("empty", (), "touch-extra-trees")
     with pytest.raises(TouchbenchError, match="random_state is derived"):
         method_spec("touch-et", random_state=3)
+
+
+def test_a_pipeline_with_memory_computes_the_features_of_its_training_captures_once(tmp_path, monkeypatch):
+    """As scikit-learn's Pipeline(memory=...): a second fit on the same captures reads the features
+    back (the feature set is not called again) and labels the captures as a pipeline without memory."""
+    from touchbench.features.touch import TouchRhythm
+
+    caps, y = _captures(n_per_class=4)
+    want = FeaturePipeline(method_spec("touch-et-fast", n_estimators=10), random_state=3,
+                           sensor=SENSOR_4X4).fit(list(caps), y).predict(list(caps))
+    calls = []
+    original = TouchRhythm.transform
+    monkeypatch.setattr(TouchRhythm, "transform", lambda self, c: calls.append(len(c)) or original(self, c))
+    for _ in range(2):
+        piped = FeaturePipeline(method_spec("touch-et-fast", n_estimators=10), random_state=3, sensor=SENSOR_4X4,
+                                memory=tmp_path / "memory").fit(list(caps), y)
+    assert calls == [len(caps)]  # computed by the first fit only; the second read it back
+    np.testing.assert_array_equal(piped.predict(list(caps)), want)

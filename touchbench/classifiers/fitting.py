@@ -25,10 +25,11 @@ from typing import Any
 import numpy as np
 from sklearn.ensemble._forest import ForestClassifier
 
+import os
 import time
 
 from ..core.introspect import accepts
-from ..features.base import make_feature_set, stack_features
+from ..features.base import FEATURES, make_feature_set, stack_features
 from .base import make_classifier
 
 __all__ = ["FittedEstimator", "FittedMethod", "fit_on_codes", "fit_pipeline", "label_codes", "labels_are_argmax"]
@@ -137,17 +138,32 @@ class FittedMethod:
         return self.fitted.predict_proba(self.transform(captures))
 
 
+def _fitted_set(name: str, params: dict[str, Any], sensor: Any, captures: Any, y: Any) -> tuple[Any, np.ndarray]:
+    """A feature set fitted on ``captures`` and its output for them (what ``memory`` caches)."""
+    fs = make_feature_set(name, dict(params), sensor)
+    return fs, np.asarray(fs.fit(captures, y).transform(captures), dtype=np.float64)
+
+
 def fit_pipeline(feature_sets: Any, estimator: str, params: dict[str, Any], seed: int | None, captures: Any, y: Any,
-                 groups: Any = None, sensor: Any = None) -> FittedMethod:
+                 groups: Any = None, sensor: Any = None, memory: Any = None) -> FittedMethod:
     """Fit the feature sets ``[(name, params)...]`` (built with ``sensor``) on ``captures``, then the
-    registered ``estimator`` on their columns through :func:`fit_on_codes`."""
+    registered ``estimator`` on their columns through :func:`fit_on_codes`.
+
+    ``memory`` (a folder or a :class:`joblib.Memory`, as scikit-learn's ``Pipeline(memory=...)``)
+    caches what a feature set that learns nothing (``fold_dependent = False``) computes from its
+    captures: fitting again on the same captures reads its matrix back instead of computing it.
+    """
+    from sklearn.utils.validation import check_memory
+
+    cached = check_memory(os.fspath(memory) if isinstance(memory, os.PathLike) else memory).cache(_fitted_set)
     t0 = time.perf_counter()
-    sets = []
+    sets, blocks = [], []
     for name, set_params in feature_sets:
-        fs = make_feature_set(name, dict(set_params), sensor)
-        fs.fit(captures, y)
+        learns = getattr(FEATURES.get(name), "fold_dependent", True)
+        fs, X_s = (_fitted_set if learns else cached)(name, set_params, sensor, captures, None if not learns else y)
         sets.append(fs)
-    X = stack_features(sets, captures)
+        blocks.append(X_s)
+    X = np.hstack(blocks) if blocks else list(captures)
     t1 = time.perf_counter()
     fitted = fit_on_codes(estimator, params, seed, X, y, groups, sensor=sensor)
     return FittedMethod(sets, fitted, t1 - t0, time.perf_counter() - t1)

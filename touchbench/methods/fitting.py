@@ -38,8 +38,9 @@ def fit_estimator(name: str, params: dict[str, Any], seed: int | None, X: np.nda
 
 
 def fit_method(spec: MethodSpec, seed: int | None, captures: Any, y: Any, groups: Any = None,
-               sensor: Any = None) -> FittedMethod:
+               sensor: Any = None, memory: Any = None) -> FittedMethod:
     """Fit the method ``spec`` on ``captures`` (labels and subjects as text), its feature sets built
-    with ``sensor``."""
+    with ``sensor``; ``memory`` caches the feature sets that learn nothing
+    (:func:`touchbench.classifiers.fitting.fit_pipeline`)."""
     return fit_pipeline(spec.feature_sets, spec.estimator, spec.estimator_params, seed, captures, _as_text(y),
-                        None if groups is None else _as_text(groups), sensor)
+                        None if groups is None else _as_text(groups), sensor, memory)

@@ -27,17 +27,23 @@ class FeaturePipeline:
 
     ``spec`` names the feature sets and the estimator; ``random_state`` is
     the estimator's seed; ``sensor`` is given to every feature set (and to
-    the estimator when it takes one). After ``fit``: ``method_`` (the
+    the estimator when it takes one). ``memory`` (a folder or a
+    :class:`joblib.Memory`), as scikit-learn's ``Pipeline(memory=...)``:
+    what a feature set that learns nothing computes from the training
+    captures is cached, so fitting again on the same captures (another
+    estimator, another seed) reads it back. After ``fit``: ``method_`` (the
     fitted method), ``classes_``.
     """
 
-    def __init__(self, spec: MethodSpec, random_state: int | None = None, sensor: SensorSpec | None = None):
+    def __init__(self, spec: MethodSpec, random_state: int | None = None, sensor: SensorSpec | None = None,
+                 memory: Any = None):
         self.spec = spec
         self.random_state = random_state
         self.sensor = sensor
+        self.memory = memory
 
     def fit(self, captures: Sequence[np.ndarray], y: Any, groups: Any = None) -> "FeaturePipeline":
-        self.method_ = fit_method(self.spec, self.random_state, captures, y, groups, self.sensor)
+        self.method_ = fit_method(self.spec, self.random_state, captures, y, groups, self.sensor, self.memory)
         self.classes_ = self.method_.classes
         return self
 
