@@ -119,3 +119,14 @@ def test_run_json_shows_the_protocol_metrics(tmp_path):
     preds = pd.read_parquet(tmp_path / "out" / "predictions.parquet")
     by_hand = [f1_score(g["true_label"], g["predicted_label"], average="weighted") for _, g in preds.groupby("task_id")]
     assert method["f1_weighted_mean"] == pytest.approx(np.mean(by_hand))
+
+
+def test_a_scores_row_is_defined_once():
+    from touchbench.results.store import MEASURED, PLAN_COLUMNS, SCORE_COLUMNS, task_row
+
+    # every column of the table is the run's stamp, planned or measured, and nothing else
+    assert set(SCORE_COLUMNS) == {"run_id", "protocol_hash"} | set(PLAN_COLUMNS) | set(MEASURED)
+    row = task_row({c: c for c in PLAN_COLUMNS})
+    assert list(row) == [*PLAN_COLUMNS, *MEASURED] and row["status"] == "ok" and row["notes"] == ""
+    with pytest.raises(ValueError, match="extra \\['colour'\\], missing \\['task_id'\\]"):
+        task_row({**{c: c for c in PLAN_COLUMNS if c != "task_id"}, "colour": 1})

@@ -50,6 +50,7 @@ from ..protocols.seeding import derive_seed
 from ..protocols.schemes import Fold, SplitError
 from ..results.ledger import test_set_hash
 from ..results.manifest import LEFT_OUT
+from ..results.store import task_row
 from .cache import FeatureCache
 from .evaluation_data import apply_filters, evaluation_dataset, load_spec
 from .identity import MAX_MODULES, Identity, classifier_identity, feature_set_identity
@@ -375,9 +376,9 @@ def _task_identity(place: _FoldPlace, m: Method, comps: _Components) -> dict[str
 
 
 def _base_row(place: _FoldPlace, m: Method, task_id: str, seed: int) -> dict[str, Any]:
-    """The columns every results row of the task starts with."""
+    """The task's scores row as planned (:func:`touchbench.results.store.task_row`)."""
     fold, protocol, crop = place.fold, place.protocol, place.crop_frames
-    return {
+    return task_row({
         "task_id": task_id, "protocol": protocol.name, "dataset": protocol.dataset.name,
         "dataset_hash": place.dataset.content_hash, "target": protocol.target, "scheme": protocol.scheme.name,
         "repetition": place.repetition, "fold": fold.name, "fold_group": fold.group,
@@ -389,7 +390,7 @@ def _base_row(place: _FoldPlace, m: Method, task_id: str, seed: int) -> dict[str
         "n_train": int(len(fold.train)), "n_test": int(len(fold.test)),
         "leakage": "; ".join(x for x in [place.scheme_leak, *m.leakage] if x),
         "selection": m.tuned_on_test,
-    }
+    })
 
 
 def _task_seed(place: _FoldPlace, m: Method) -> int:

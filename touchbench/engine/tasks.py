@@ -219,10 +219,7 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
     """Run one task; a feature or classifier error becomes a ``failed`` row."""
 
     ctx.ensure_setup()
-    row = dict(task.base_row)
-    row.update(status="ok", error="", accuracy=np.nan, balanced_accuracy=np.nan, macro_f1=np.nan,
-               feature_seconds_per_capture=np.nan, feature_fit_seconds=np.nan, fit_seconds=np.nan,
-               predict_seconds=np.nan, latency_ms=np.nan, n_classes_train=0)
+    row = dict(task.base_row)  # the planned row, every measurement still empty
     ds = ctx.dataset
     y = ctx.labels()
     fold = task.fold

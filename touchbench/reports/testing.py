@@ -24,7 +24,7 @@ import yaml
 
 from ..core.hashing import canonical_json
 from ..evaluation.metrics import metrics
-from ..results.store import PREDICTED, SCHEMA_VERSION, TRUE, confusion_table, write_results_table
+from ..results.store import PREDICTED, SCHEMA_VERSION, TRUE, confusion_table, task_row, write_results_table
 
 __all__ = ["FakeMethod", "write_fake_run"]
 
@@ -82,8 +82,8 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
             ids = list(ids)
             task_id = f"{run_id}-t{m_i}-{f_i}-{m['features']}-{m['classifier']}"
             fold_name = fold if m["early_frames"] is None else f"first{m['early_frames']}f/{fold}"
-            base = {
-                "run_id": run_id, "task_id": task_id, "protocol": protocol, "protocol_hash": "p" * 64,
+            base = task_row({
+                "task_id": task_id, "protocol": protocol,
                 "dataset": dataset, "dataset_hash": dataset_hash, "target": target,
                 "scheme": scheme if isinstance(scheme, str) else scheme["name"], "repetition": 0,
                 "fold": fold_name, "fold_group": fold,
@@ -91,9 +91,10 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
                 "features": m["features"], "feature_sets": "+".join(n for n, _ in m["feature_params"]),
                 "feature_params": canonical_json(m["feature_params"]), "classifier": m["classifier"],
                 "classifier_name": m["classifier_name"], "classifier_params": canonical_json(m["classifier_params"]),
-                "seed": zlib.crc32(f"{m['features']}|{m['classifier']}|{fold_name}".encode()), "n_train": len(caps) - len(ids), "n_test": len(ids), "n_classes_train": len(classes),
-                "finished_at": finished_at, "notes": "", "leakage": "", "selection": "",
-            }
+                "seed": zlib.crc32(f"{m['features']}|{m['classifier']}|{fold_name}".encode()),
+                "n_train": len(caps) - len(ids), "n_test": len(ids), "leakage": "", "selection": "",
+            })
+            base.update(run_id=run_id, protocol_hash="p" * 64, n_classes_train=len(classes), finished_at=finished_at)
             if fold in m["failed_folds"]:
                 base.update(status="failed", error="ValueError: fake", accuracy=np.nan, balanced_accuracy=np.nan,
                             macro_f1=np.nan, feature_seconds_per_capture=np.nan, feature_fit_seconds=np.nan,

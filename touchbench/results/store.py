@@ -76,7 +76,19 @@ def _sha256(path: Path) -> str:
             h.update(block)
     return h.hexdigest()
 
-# Columns of the scores table, in order (the engine fills them).
+#: what the plan says of a task: the first columns of its scores row (:func:`task_row`)
+PLAN_COLUMNS = (
+    "task_id", "protocol", "dataset", "dataset_hash", "target", "scheme", "repetition", "fold", "fold_group",
+    "early_frames", "features", "feature_sets", "feature_params", "classifier", "classifier_name",
+    "classifier_params", "seed", "n_train", "n_test", "leakage", "selection",
+)
+#: what running a task measures, each with its value before (or without) a measurement
+MEASURED = {
+    "status": "ok", "error": "", "accuracy": np.nan, "balanced_accuracy": np.nan, "macro_f1": np.nan,
+    "feature_seconds_per_capture": np.nan, "feature_fit_seconds": np.nan, "fit_seconds": np.nan,
+    "predict_seconds": np.nan, "latency_ms": np.nan, "n_classes_train": 0, "notes": "", "finished_at": "",
+}
+# Columns of the scores table, in order: the run's stamp, the plan's, the measured ones.
 SCORE_COLUMNS = [
     "run_id", "task_id", "protocol", "protocol_hash", "dataset", "dataset_hash", "target", "scheme",
     "repetition", "fold", "fold_group", "early_frames", "features", "feature_sets", "feature_params", "classifier",
@@ -85,6 +97,18 @@ SCORE_COLUMNS = [
     "feature_seconds_per_capture", "feature_fit_seconds", "fit_seconds", "predict_seconds", "latency_ms",
     "status", "error", "notes", "finished_at", "leakage", "selection",
 ]
+
+
+def task_row(planned: dict[str, Any]) -> dict[str, Any]:
+    """A task's scores row before it runs: the plan's columns (exactly :data:`PLAN_COLUMNS`), then
+    every measured column at its value without a measurement (:data:`MEASURED`). The one place a
+    scores row is defined: the planner, the task and the fake runs of the tests all start here."""
+    if set(planned) != set(PLAN_COLUMNS):
+        extra, missing = sorted(set(planned) - set(PLAN_COLUMNS)), sorted(set(PLAN_COLUMNS) - set(planned))
+        raise ValueError(f"a task's planned columns are {', '.join(PLAN_COLUMNS)}; extra {extra}, missing {missing}")
+    return {**{k: planned[k] for k in PLAN_COLUMNS}, **MEASURED}
+
+
 #: the label columns of predictions and confusion tables (``true`` is a keyword in SQL engines)
 TRUE, PREDICTED = "true_label", "predicted_label"
 PREDICTION_COLUMNS = [
