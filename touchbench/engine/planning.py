@@ -56,7 +56,7 @@ from .evaluation_data import apply_filters, evaluation_dataset, load_spec
 from .identity import MAX_MODULES, Identity, classifier_identity, feature_set_identity
 from .tasks import SetSpec, Task, make_feature_set
 
-__all__ = ["Plan", "Prepared", "default_cache_root", "fold_seed", "method_labels", "plan_methods", "plan_run", "plan_tasks", "plan_test_set",
+__all__ = ["Components", "Plan", "Prepared", "default_cache_root", "fold_seed", "method_labels", "plan_methods", "plan_run", "plan_tasks", "plan_test_set",
            "prepare_evaluation", "sensor_refusals", "serving_protocol", "training_side"]
 
 
@@ -277,7 +277,7 @@ def _label(kind: str, name: str, params: dict[str, Any]) -> str:
 
 
 @dataclass
-class _Components:
+class Components:
     """The code identity of every feature set and estimator the methods use."""
 
     identities: dict[str, Identity] = field(default_factory=dict)
@@ -285,7 +285,7 @@ class _Components:
     estimators: dict[tuple, str] = field(default_factory=dict)  # (name, params) -> digest
 
     @classmethod
-    def of(cls, methods: list[Method]) -> "_Components":
+    def of(cls, methods: list[Method]) -> "Components":
         out = cls()
         for m in methods:
             for name, params in m.spec.feature_sets:
@@ -321,7 +321,7 @@ def _input_notes(methods: list[Method], ds: TouchDataset) -> list[str]:
             for m in methods if m.input_frames is not None and (lo != m.input_frames or hi != m.input_frames)]
 
 
-def _set_specs(m: Method, comps: _Components, ds_hash: str, crop_frames: int | None) -> tuple[SetSpec, ...]:
+def _set_specs(m: Method, comps: Components, ds_hash: str, crop_frames: int | None) -> tuple[SetSpec, ...]:
     """The method's feature sets with their cache keys (fold-independent ones)."""
     out = []
     for name, params in m.spec.feature_sets:
@@ -356,7 +356,7 @@ class _FoldPlace:
                                               self.scheme_json]).encode()).hexdigest()[:16]
 
 
-def _task_identity(place: _FoldPlace, m: Method, comps: _Components) -> dict[str, Any]:
+def _task_identity(place: _FoldPlace, m: Method, comps: Components) -> dict[str, Any]:
     """Everything a task's result depends on (hashed into its id)."""
     fold, ds = place.fold, place.dataset
     idx_hash = hashlib.sha256(fold.train.tobytes() + b"|" + fold.test.tobytes()).hexdigest()[:16]
@@ -407,7 +407,7 @@ def fold_seed(prepared: Prepared, m: Method, fold: Fold, repetition: int = 0) ->
     return _task_seed(_FoldPlace(protocol, prepared.dataset, scheme_json, "", repetition, fold), m)
 
 
-def _task(place: _FoldPlace, m: Method, comps: _Components, measure_latency: bool) -> Task:
+def _task(place: _FoldPlace, m: Method, comps: Components, measure_latency: bool) -> Task:
     task_id = hashlib.sha256(canonical_json(_task_identity(place, m, comps)).encode()).hexdigest()[:20]
     seed = _task_seed(place, m)
     return Task(task_id=task_id, repetition=place.repetition, fold=place.fold, method=m,
@@ -416,7 +416,7 @@ def _task(place: _FoldPlace, m: Method, comps: _Components, measure_latency: boo
                 base_row=_base_row(place, m, task_id, seed))
 
 
-def plan_tasks(prepared: Prepared, protocol: Protocol, methods: list[Method], comps: _Components) -> list[Task]:
+def plan_tasks(prepared: Prepared, protocol: Protocol, methods: list[Method], comps: Components) -> list[Task]:
     """Every (repetition x fold x method) task, in that order; the first task of each method (and
     crop) in plan order measures its latency."""
     for m in methods:
@@ -447,7 +447,7 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
     prepared = prepare_evaluation(protocol, dataset)
     served, left_out = serving_protocol(prepared)
     methods = served.evaluated_methods()
-    comps = _Components.of(methods)
+    comps = Components.of(methods)
     ds = prepared.dataset
     tasks = plan_tasks(prepared, served, methods, comps)
     notes = left_out + prepared.notes + _input_notes(methods, ds) + comps.notes()
