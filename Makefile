@@ -1,7 +1,8 @@
 # touchbench: the two commands of the README, and the paper reproduction.
 #   make demo              set up .venv with touchbench alone (no extras) and run the main job
 #   make test              set up .venv (with the dev, deep, dist, peers and xgboost-cpu extras and the
-#                          example plugin) and run the tests
+#                          example plugin) and run the tests, spread over TEST_WORKERS processes
+#                          (pytest-xdist; TEST_WORKERS=1: one process)
 #   make lint              check every function of touchbench/: at most 80 lines, cyclomatic
 #                          complexity at most 15 (flake8, configured in pyproject.toml)
 #   make api-docs          build the API reference (pdoc) into build/api; any warning fails
@@ -21,6 +22,11 @@ EXTRAS ?= dev,deep,dist,peers,xgboost-cpu
 # pins for the development and CI environments only (users get pyproject.toml's ranges)
 CONSTRAINTS := constraints.txt
 PROFILE ?= quick
+# Test processes (pytest-xdist -n): one per CPU this process may run on (its affinity, so a container
+# or `taskset` limit counts; xdist's `-n auto` counts the machine's physical cores), at most 8: every
+# worker holds about 1 GB (torch, aeon) and many tests start two processes of their own. TEST_WORKERS=1:
+# the tests run in pytest's own process (-n 0), no worker started.
+TEST_WORKERS ?= $(shell $(PYTHON) -c "import os; n = len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else os.cpu_count(); print(min(8, n or 1))")
 JOBS ?= 2
 RUNS ?= results/runs
 TB := $(BIN)/touchbench
@@ -52,7 +58,7 @@ demo: $(VENV)/.installed-core
 	$(BIN)/touchbench demo --jobs $(JOBS)
 
 test: setup
-	$(BIN)/python -m pytest -q -p no:cacheprovider
+	$(BIN)/python -m pytest -q -p no:cacheprovider -n $(if $(filter 1,$(TEST_WORKERS)),0,$(TEST_WORKERS)) --dist loadgroup
 
 lint: setup
 	$(BIN)/flake8 touchbench

@@ -56,8 +56,14 @@ def real_haart_dir():
 
 @pytest.fixture(scope="session")
 def tb_cache(tmp_path_factory):
-    """A cache directory shared by the session's tests (not the user's)."""
-    d = tmp_path_factory.mktemp("tbcache")
+    """A cache directory shared by the session's tests (not the user's). Under pytest-xdist every
+    worker of the run shares it (the run's temporary folder, above the workers' own), so a real
+    dataset is converted once per run, not once per worker; two workers converting the same one at
+    the same moment both write a whole file under a name of their own and rename it into place
+    (tests/test_datasets_haart.py runs that race)."""
+    base = tmp_path_factory.getbasetemp()
+    d = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "tbcache"
+    d.mkdir(exist_ok=True)
     os.environ["TOUCHBENCH_CACHE_DIR"] = str(d)
     return d
 

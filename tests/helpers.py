@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import gzip
 import re
+import time
 from pathlib import Path
+from typing import Callable, TypeVar
 
 import numpy as np
 import pandas as pd
@@ -14,6 +16,8 @@ from hypothesis.extra.numpy import arrays
 from touchbench.datasets.haart import HAART_SENSOR
 from touchbench.datasets.model import SensorSpec, TouchDataset
 from touchbench.features.base import make_feature_set
+
+T = TypeVar("T")
 
 #: parameters a feature set needs stated (it has no default): raw-window's window, HAART's
 STATED = {"raw-window": {"frames": 432, "shorter": "pad"}}
@@ -116,3 +120,25 @@ def slow_fast_rows(n_per_class=12, frames=40, seed=0):
             X.append((cap + rng.normal(0, 0.5, cap.shape)).reshape(-1))
             y.append(label)
     return np.array(X), np.array(y)
+
+
+def wait_for(probe: Callable[[], T | None], what: str, timeout: float = 60.0, interval: float = 0.05) -> T:
+    """Call ``probe`` until it returns a true value and return that; fail the test,
+    naming ``what``, when ``timeout`` seconds pass first. For tests that wait on another process
+    (a file it writes, a state it reaches): a loaded machine (parallel tests) only makes them wait longer."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = probe()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"waited {timeout:g} s for {what}")
+        time.sleep(interval)
+
+
+def read_int(path: Path) -> int | None:
+    """The integer ``path`` holds, or ``None`` while it is missing or does not hold one yet."""
+    try:
+        return int(path.read_text())
+    except (FileNotFoundError, ValueError):
+        return None

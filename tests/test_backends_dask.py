@@ -15,6 +15,10 @@ from click.testing import CliRunner
 
 distributed = pytest.importorskip("distributed")
 
+# one worker of pytest-xdist runs the Dask and the Ray tests, one after the other: the Dask cluster is
+# started once, and the two never run their own worker processes at the same time
+pytestmark = pytest.mark.xdist_group("clusters")
+
 from touchbench.cli.main import cli  # noqa: E402
 from touchbench.engine import run_protocol  # noqa: E402
 from touchbench.engine.backends import supports_generator, use_backend  # noqa: E402

@@ -12,6 +12,10 @@ import pytest
 
 ray = pytest.importorskip("ray")
 
+# one worker of pytest-xdist runs the Dask and the Ray tests, one after the other: the Dask cluster is
+# started once, and the two never run their own worker processes at the same time
+pytestmark = pytest.mark.xdist_group("clusters")
+
 from touchbench.engine import run_protocol  # noqa: E402
 from touchbench.engine.backends import supports_generator, use_backend  # noqa: E402
 from touchbench.engine.testing import components_for_tests, register_test_components  # noqa: E402

@@ -7,6 +7,7 @@ Python (gzip + str.split), not by the reader under test.
 from __future__ import annotations
 
 import gzip
+import multiprocessing as mp
 from pathlib import Path
 
 import numpy as np
@@ -190,6 +191,34 @@ def test_cache_is_used_and_keyed_by_content(tmp_path, monkeypatch):
     write_recording(d / "raw" / "140729-1" / "140729-1nonenonepat.csv", random_recording(6))
     with pytest.raises(AssertionError, match="rebuilt"):
         load_dataset("haart", data_dir=d, cache_dir=cache)
+
+
+def _load_at_once(data_dir: str, cache: str, barrier, out) -> None:
+    barrier.wait(60)
+    out.put(load_dataset("haart", data_dir=data_dir, cache_dir=cache).content_hash)
+
+
+def test_two_processes_filling_one_cache_at_once_both_get_the_whole_dataset(tmp_path):
+    """Two runs (or two test workers) converting the same dataset into one cache folder at the same
+    moment: both build it, each writes a whole file under a name of its own and renames it into place."""
+    files = {f"140729-{p}nonenone{g}.csv": random_recording(p * 10 + i)
+             for p in (1, 2) for i, g in enumerate(("pat", "rub", "stroke"))}
+    d = _folder(tmp_path, files)
+    cache = tmp_path / "cache"
+    ctx = mp.get_context("fork")
+    barrier, out = ctx.Barrier(2), ctx.Queue()
+    procs = [ctx.Process(target=_load_at_once, args=(str(d), str(cache), barrier, out)) for _ in range(2)]
+    for p in procs:
+        p.start()
+    hashes = [out.get(timeout=120) for _ in procs]
+    for p in procs:
+        p.join(60)
+        assert p.exitcode == 0
+    expected = load_dataset("haart", data_dir=d, cache_dir=tmp_path / "fresh").content_hash
+    assert hashes == [expected, expected]
+    assert len(list((cache / "datasets").glob("*.parquet"))) == 1
+    assert not list((cache / "datasets").glob(".*.tmp"))  # no temporary file left behind
+    assert load_dataset("haart", data_dir=d, cache_dir=cache).content_hash == expected
 
 
 def test_recording_names_are_parsed(tmp_path):

@@ -26,6 +26,9 @@ from touchbench.datasets.socialtouch import build_recorded, build_resampled
 
 RATE = 12.0
 
+# one worker of pytest-xdist runs them all: the module's fixtures read every raw file once
+pytestmark = pytest.mark.xdist_group("socialtouch")
+
 
 @pytest.fixture(scope="module")
 def frames_table(real_socialtouch_dir) -> pd.DataFrame:

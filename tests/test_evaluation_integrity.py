@@ -11,13 +11,14 @@ import json
 import multiprocessing as mp
 import os
 import signal
-import time
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 from click.testing import CliRunner
+
+from helpers import wait_for
 
 from touchbench.cli.main import cli as main
 from touchbench.core.errors import TouchbenchError
@@ -320,8 +321,9 @@ def test_the_ledger_survives_a_writer_killed_mid_line(tmp_path):
     started = ctx.Event()
     proc = ctx.Process(target=_append_forever, args=(str(path), started))
     proc.start()
-    started.wait(10)
-    time.sleep(0.3)
+    assert started.wait(60)
+    # killed once it has written some lines, at no chosen moment: most often in the middle of one
+    wait_for(lambda: path.is_file() and path.stat().st_size > 20000, "the writer's first lines")
     os.kill(proc.pid, signal.SIGKILL)
     proc.join()
     n = len(read_ledger(path))

@@ -34,6 +34,8 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from helpers import read_int, wait_for
+
 from touchbench.cli.main import cli
 from touchbench.core import atomic
 from touchbench.core.errors import DataError, TouchbenchError, WriteError
@@ -170,7 +172,7 @@ def test_a_second_run_waits_for_the_first(env):
 
     t = threading.Thread(target=hold)
     t.start()
-    held.wait(5)
+    assert held.wait(60)
     res = run(wait=30)  # blocks until the holder lets go, then finds everything finished
     t.join()
     assert res.noop
@@ -199,7 +201,11 @@ from joblib import delayed
 from touchbench.engine.backends import parallel
 
 def work(i, folder):
-    open(os.path.join(folder, f"w{i}"), "w").write(str(os.getpid()))
+    # written whole or not at all: a temporary name, then a rename
+    tmp = os.path.join(folder, f".w{i}.tmp")
+    with open(tmp, "w") as f:
+        f.write(str(os.getpid()))
+    os.replace(tmp, os.path.join(folder, f"w{i}"))
     time.sleep(300)
 
 for _ in parallel(2)(delayed(work)(i, sys.argv[1]) for i in range(2)):
@@ -222,18 +228,12 @@ def test_worker_processes_end_with_their_parent(tmp_path, sig):
     script.write_text(WORKERS)
     p = subprocess.Popen([sys.executable, str(script), str(tmp_path)])
     try:
-        deadline = time.monotonic() + 60
-        while not all((tmp_path / f"w{i}").is_file() for i in range(2)) and time.monotonic() < deadline:
-            time.sleep(0.1)
-        pids = [int((tmp_path / f"w{i}").read_text()) for i in range(2)]
+        pids = [wait_for(lambda: read_int(tmp_path / f"w{i}"), f"worker {i}'s pid", timeout=120) for i in range(2)]
         assert all(_alive(w) for w in pids)
     finally:
         p.send_signal(sig)
-        p.wait()
-    deadline = time.monotonic() + 15
-    while any(_alive(w) for w in pids) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    assert not [w for w in pids if _alive(w)]
+        p.wait(timeout=60)
+    wait_for(lambda: not any(_alive(w) for w in pids), "the workers to end", timeout=60)
 
 
 def test_a_worker_whose_parent_is_already_gone_exits_at_once():
