@@ -19,17 +19,16 @@ Threads are the caller's business (:func:`touchbench.core.threads.single_thread`
 
 from __future__ import annotations
 
+import os
+import time
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from sklearn.ensemble._forest import ForestClassifier
-
-import os
-import time
+from sklearn.utils.validation import check_memory
 
 from ..core.introspect import accepts
-from ..features.base import FEATURES, make_feature_set, stack_features
+from ..features.base import learns_from_data, make_feature_set, stack_features
 from .base import make_classifier
 
 __all__ = ["FittedEstimator", "FittedMethod", "fit_on_codes", "fit_pipeline", "label_codes", "labels_are_argmax"]
@@ -87,6 +86,8 @@ def labels_are_argmax(est: Any) -> bool:
     """Whether ``est.predict`` is ``classes_`` at the argmax of ``est.predict_proba``, computed the
     same way: scikit-learn's forests (their own ``predict``, one output) and an estimator that
     declares it (class attribute ``labels_are_argmax_proba``)."""
+    from sklearn.ensemble._forest import ForestClassifier  # scikit-learn's private base of its forests
+
     if getattr(type(est), "labels_are_argmax_proba", False):
         return True
     return type(est).predict is ForestClassifier.predict and getattr(est, "n_outputs_", 1) == 1
@@ -153,14 +154,14 @@ def fit_pipeline(feature_sets: Any, estimator: str, params: dict[str, Any], seed
     caches what a feature set that learns nothing (``fold_dependent = False``) computes from its
     captures: fitting again on the same captures reads its matrix back instead of computing it.
     """
-    from sklearn.utils.validation import check_memory
-
     cached = check_memory(os.fspath(memory) if isinstance(memory, os.PathLike) else memory).cache(_fitted_set)
     t0 = time.perf_counter()
     sets, blocks = [], []
     for name, set_params in feature_sets:
-        learns = getattr(FEATURES.get(name), "fold_dependent", True)
-        fs, X_s = (_fitted_set if learns else cached)(name, set_params, sensor, captures, None if not learns else y)
+        if learns_from_data(name):
+            fs, X_s = _fitted_set(name, set_params, sensor, captures, y)
+        else:  # nothing learnt from the labels: cached by the captures alone
+            fs, X_s = cached(name, set_params, sensor, captures, None)
         sets.append(fs)
         blocks.append(X_s)
     X = np.hstack(blocks) if blocks else list(captures)

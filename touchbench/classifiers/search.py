@@ -51,7 +51,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..core.errors import TouchbenchError
 from ..core.introspect import sensor_problem
-from ..features.base import FEATURES, feature_set_refusal, make_feature_set, stack_features
+from ..features.base import feature_set_refusal, learns_from_data, make_feature_set, stack_features
 from ._util import build, seed_int
 from .base import CLASSIFIERS, make_classifier
 from .fitting import FittedEstimator, FittedMethod, fit_on_codes
@@ -166,7 +166,7 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
     @staticmethod
     def _learns_nothing(cand) -> bool:
         """Whether every feature set of ``cand`` is computed without fitting (``fold_dependent = False``)."""
-        return all(not getattr(FEATURES.get(n), "fold_dependent", True) for n, _ in cand["features"])
+        return not any(learns_from_data(n) for n, _ in cand["features"])
 
     def _fixed_matrix(self, cand, captures, y, cache: dict) -> np.ndarray | list:
         """The candidate's features over all ``captures`` (sets that learn nothing), each set computed once per fit."""

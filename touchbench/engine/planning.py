@@ -42,8 +42,7 @@ from ..core.introspect import sensor_problem
 from ..core.paths import cache_dir
 from ..core.suggest import did_you_mean
 from ..datasets.model import SensorSpec, TouchDataset
-from ..features import FEATURES
-from ..features.base import feature_set_refusal
+from ..features.base import feature_set_refusal, learns_from_data
 from ..methods import METHODS, Method, expand_candidates, method_spec
 from ..protocols.schema import Protocol, expand_grid, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
@@ -292,7 +291,7 @@ class Components:
                 k = (name, canonical_json(params))
                 if k not in out.sets:
                     ident = out.identities[_label("feature set", name, params)] = feature_set_identity(name, params)
-                    out.sets[k] = (bool(getattr(FEATURES.get(name), "fold_dependent", True)), ident.digest)
+                    out.sets[k] = (learns_from_data(name), ident.digest)
             est, est_params = m.spec.estimator, m.spec.estimator_params
             k = (est, canonical_json(est_params))
             if k not in out.estimators:

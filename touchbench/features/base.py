@@ -233,6 +233,12 @@ def cell_names(grid: tuple[int, int]) -> list[str]:
     return [f"r{i}_c{j}" for i in range(h) for j in range(w)]
 
 
+def learns_from_data(name: str) -> bool:
+    """Whether the registered feature set ``name`` learns from its training captures (its class's
+    ``fold_dependent``): one that does not may be computed once per capture and cached."""
+    return bool(getattr(FEATURES.get(name), "fold_dependent", True))
+
+
 def stack_features(sets: Sequence[Any], captures: Sequence[np.ndarray]) -> np.ndarray | list[np.ndarray]:
     """The fitted feature sets' outputs for ``captures``, concatenated as float64; the captures
     themselves when there are no sets (an estimator that takes captures)."""
