@@ -70,6 +70,7 @@ def test_train_writes_model_and_manifest(setup, tmp_path):
     m = TrainedModel.load(out)
     assert m.manifest == manifest and m.method == "msd/rf15"
     assert len(m.estimator.estimators_) == 15
+    assert manifest["features"]["n_columns"] == m.transform(ds.captures[:2]).shape[1] == m.estimator.n_features_in_
 
 
 def test_fold_model_predicts_like_the_engine(setup, tmp_path):

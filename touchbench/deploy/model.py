@@ -346,7 +346,7 @@ def fit_model(
         "features": {
             "label": features_label or "+".join(spec.feature_names),
             "sets": [{"name": n, "params": dict(p)} for n, p in spec.feature_sets],
-            "n_columns": _n_columns(fitted, samples[:1]),  # None: the estimator takes captures
+            "n_columns": _n_columns(fitted),  # None: the estimator takes captures
         },
         "classifier": {
             "label": label or spec.name,
@@ -384,10 +384,9 @@ def _frames_manifest(dataset: TouchDataset) -> dict[str, Any]:
     return {"min": int(n.min()), "median": float(np.median(n)), "max": int(n.max())}
 
 
-def _n_columns(fitted: FittedMethod, one: list[np.ndarray]) -> int | None:
-    """The number of feature columns, from one sample (None: the estimator takes the captures)."""
-    X = fitted.transform(one)
-    return int(X.shape[1]) if isinstance(X, np.ndarray) else None
+def _n_columns(fitted: FittedMethod) -> int | None:
+    """The number of feature columns, as the fitted sets say (None: the estimator takes the captures)."""
+    return int(sum(fs.n_features_out_ for fs in fitted.sets)) if fitted.sets else None
 
 
 def _training_samples(dataset: TouchDataset, windows: Sequence[float] | None,
