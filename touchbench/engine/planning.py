@@ -140,16 +140,18 @@ def sensor_refusals(protocol: Protocol, sensor: SensorSpec, min_frames: int) -> 
     Every feature set and classifier (with each of its parameter settings)
     is built with the sensor and asked (:func:`touchbench.core.introspect.sensor_problem`);
     ``min_frames`` is the shortest capture a task will see. One pair per
-    entry (feature combination, classifier or method), its first reason.
+    entry (feature combination, classifier or method), its first reason. A
+    feature set that rejects its parameters with this sensor is refused at
+    its field (:class:`touchbench.protocols.schema.ProtocolError`).
     """
     out: list[tuple[tuple, str]] = []
     for i, combo in enumerate(protocol.features):
-        problem = _sets_refusal(combo, ("features", i), sensor, min_frames)
+        problem = _sets_refusal(protocol, combo, ("features", i), sensor, min_frames)
         if problem:
             out.append(problem)
     refused_methods = set()
     for j, m in enumerate(protocol.methods):
-        problem = _sets_refusal(m.features or [], ("methods", j, "features"), sensor, min_frames)
+        problem = _sets_refusal(protocol, m.features or [], ("methods", j, "features"), sensor, min_frames)
         if problem:
             out.append(problem)
             refused_methods.add(j)
@@ -163,15 +165,23 @@ def sensor_refusals(protocol: Protocol, sensor: SensorSpec, min_frames: int) -> 
     return out
 
 
-def _sets_refusal(refs: Sequence[Any], field: tuple, sensor: SensorSpec, min_frames: int) -> tuple[tuple, str] | None:
+def _sets_refusal(protocol: Protocol, refs: Sequence[Any], field: tuple, sensor: SensorSpec,
+                  min_frames: int) -> tuple[tuple, str] | None:
     """The first feature set of ``refs`` (any of its parameter settings) that cannot serve ``sensor``:
-    its protocol field (``field`` + its index) and the message, or None."""
+    its protocol field (``field`` + its index) and the message, or None. Every set is built first: one
+    that rejects its parameters with this sensor is refused at its field, whatever else is refused."""
+    first = None
     for k, ref in enumerate(refs):
         for p in expand_grid(ref.params):
-            problem = sensor_problem(make_feature_set(ref.name, p, sensor), sensor, min_frames)
+            try:
+                fs = make_feature_set(ref.name, p, sensor)
+            except Exception as e:
+                raise protocol.error_at((*field, k), f"feature set {ref.name!r} rejects {p}: "
+                                                     f"{type(e).__name__}: {e}") from None
+            problem = None if first else sensor_problem(fs, sensor, min_frames)
             if problem:
-                return (*field, k), f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {problem}"
-    return None
+                first = (*field, k), f"feature set {ref.name!r} cannot serve sensor {sensor.describe()}: {problem}"
+    return first
 
 
 def _classifier_refusal(name: str, params: dict, sensor: SensorSpec, min_frames: int) -> str | None:
@@ -205,18 +215,6 @@ def _without(protocol: Protocol, refusals: list[tuple[tuple, str]]) -> Protocol:
     return protocol.model_copy(update=update)
 
 
-def _check_feature_params(protocol: Protocol, sensor: SensorSpec) -> None:
-    """Every feature set of the combinations builds with its parameters and the dataset's sensor."""
-    for i, combo in enumerate(protocol.features):
-        for j, ref in enumerate(combo):
-            for p in expand_grid(ref.params):
-                try:
-                    make_feature_set(ref.name, p, sensor)
-                except Exception as e:
-                    raise protocol.error_at(("features", i, j),
-                                            f"feature set {ref.name!r} rejects {p}: {type(e).__name__}: {e}") from None
-
-
 def serving_protocol(prepared: Prepared) -> tuple[Protocol, list[str]]:
     """The protocol with what cannot serve the evaluation's sensor removed, and a note for each.
 
@@ -224,7 +222,6 @@ def serving_protocol(prepared: Prepared) -> tuple[Protocol, list[str]]:
     protocol of one evaluation (or one left with nothing) is refused at the
     first such field."""
     protocol, sensor = prepared.protocol, prepared.dataset.sensor
-    _check_feature_params(protocol, sensor)
     refusals = sensor_refusals(protocol, sensor, prepared.min_frames)
     if not refusals:
         return protocol, []
@@ -333,6 +330,11 @@ def _set_specs(m: Method, comps: Components, ds_hash: str, crop_frames: int | No
     return tuple(out)
 
 
+def _scheme_json(protocol: Protocol) -> str:
+    """The scheme with its parameters, as it enters task identities and seeds."""
+    return canonical_json({"name": protocol.scheme.name, **protocol.scheme.params})
+
+
 @dataclass(frozen=True)
 class _FoldPlace:
     """Where a task sits: the evaluation's content, the repetition and the fold."""
@@ -402,8 +404,7 @@ def _task_seed(place: _FoldPlace, m: Method) -> int:
 def fold_seed(prepared: Prepared, m: Method, fold: Fold, repetition: int = 0) -> int:
     """The seed the run engine gives ``m``'s estimator on ``fold`` (``touchbench train --fold``)."""
     protocol = prepared.protocol
-    scheme_json = canonical_json({"name": protocol.scheme.name, **protocol.scheme.params})
-    return _task_seed(_FoldPlace(protocol, prepared.dataset, scheme_json, "", repetition, fold), m)
+    return _task_seed(_FoldPlace(protocol, prepared.dataset, _scheme_json(protocol), "", repetition, fold), m)
 
 
 def _task(place: _FoldPlace, m: Method, comps: Components, measure_latency: bool) -> Task:
@@ -422,7 +423,7 @@ def plan_tasks(prepared: Prepared, protocol: Protocol, methods: list[Method], co
         if m.subject_id_feature and not m.spec.feature_sets:
             raise protocol.error_at(("methods",), f"{m.label!r}: subject_id_feature needs a feature matrix; "
                                                   f"{m.spec.estimator!r} takes the captures themselves")
-    scheme_json = canonical_json({"name": protocol.scheme.name, **protocol.scheme.params})
+    scheme_json = _scheme_json(protocol)
     leak = protocol.splitter(0).leakage()
     tasks: list[Task] = []
     timed: set[tuple] = set()
