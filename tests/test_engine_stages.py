@@ -170,3 +170,24 @@ def test_an_expected_result_finds_its_method_by_the_combination_as_written(tmp_p
     assert row["n_folds"] == 2  # both subjects' folds were found under the method's own name
     assert row["features"] == "captures(frames=24)"  # and the comparison names it so
     assert row["observed"] == pytest.approx(100 * float(res.scores["accuracy"].mean()))
+
+
+def test_a_feature_set_that_rejects_its_parameters_with_the_sensor_is_refused_at_its_field(tmp_path, monkeypatch):
+    from touchbench.engine import planning
+    from touchbench.protocols.schema import ProtocolError
+
+    data = tmp_path / "d.parquet"
+    random_dataset(subjects=("s1", "s2"), per_cell=1).to_parquet(data)
+    p = _protocol(tmp_path, f"dataset: {data}\nscheme: loso\nfeatures: [[test-mean, test-centered]]\n"
+                            "classifiers: [test-logreg]\n")
+    original = planning.make_feature_set
+
+    def build(name, params, sensor):
+        if name == "test-centered":
+            raise ValueError("no such setting for this sensor")
+        return original(name, params, sensor)
+
+    monkeypatch.setattr(planning, "make_feature_set", build)
+    with pytest.raises(ProtocolError, match=r"features\[0\]\[1\]: feature set 'test-centered' rejects \{\}: "
+                                            r"ValueError: no such setting for this sensor"):
+        plan_run(parse_protocol(p.read_text(), p))
