@@ -97,6 +97,20 @@ def test_run_method_counts_only_the_selected_methods_tasks(tmp_path):
     assert len(pd.read_parquet(out / "scores.parquet")) == 6  # the tables hold both methods
 
 
+def test_run_method_counts_only_the_selected_methods_failures(tmp_path):
+    data = tmp_path / "d.parquet"
+    random_dataset(subjects=("s1", "s2", "s3"), per_cell=1).to_parquet(data)
+    p = _protocol(tmp_path, f"dataset: {data}\nscheme: loso\nfeatures: [[test-mean]]\n"
+                            "classifiers: [test-logreg, test-fail]\n")
+    out = tmp_path / "out"
+    r = CliRunner().invoke(main, ["run", str(p), "--out", str(out), "--method", "test-fail"])
+    assert r.exit_code == 1  # its 3 tasks failed
+    for _ in range(2):  # the other method's run, then its rerun with nothing to do: no failure of theirs
+        fine = _run_json(p, out, "--method", "test-logreg")
+        assert fine["tasks"]["failed"] == 0 and fine["tasks"]["total"] == 3
+    assert (pd.read_parquet(out / "scores.parquet")["status"] == "failed").sum() == 3  # still in the tables
+
+
 def _forest(tmp_path: Path, label: str, name: str) -> Path:
     data = tmp_path / "d.parquet"
     if not data.exists():

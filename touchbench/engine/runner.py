@@ -271,15 +271,17 @@ def _selected(plan: Plan, methods: set[str] | None) -> list[Task]:
     return [t for t in plan.tasks if methods is None or t.method.label in methods]
 
 
-def _noop_result(plan: Plan, store: ResultStore, n_selected: int, notes: list[str], t_start: float) -> RunResult:
-    """The result of a run with nothing to do: the merged tables as they are."""
+def _noop_result(plan: Plan, store: ResultStore, selected: list[str], notes: list[str], t_start: float) -> RunResult:
+    """The result of a run with nothing to do: the merged tables as they are (counts: the tasks of
+    the ``selected`` ids)."""
     protocol = plan.protocol
     scores = read_results_table(store.scores_path)
     preds = None
     if protocol.expected is not None:
         preds = read_results_table(store.predictions_path, columns=["task_id", TRUE, PREDICTED])
-    return RunResult(out=store.root, run_id=plan.run_id, n_tasks=n_selected, n_ran=0, n_skipped=n_selected,
-                     n_failed=int((scores["status"] == "failed").sum()), noop=True,
+    failed = scores["task_id"].isin(selected) & (scores["status"] == "failed")
+    return RunResult(out=store.root, run_id=plan.run_id, n_tasks=len(selected), n_ran=0, n_skipped=len(selected),
+                     n_failed=int(failed.sum()), noop=True,
                      seconds=time.perf_counter() - t_start, scores=scores,
                      summary=summarize(scores, metrics=protocol.metrics),
                      expected=check_expected(protocol.expected, scores, preds, protocol.features_label_of),
@@ -342,7 +344,7 @@ class _Session:
     t_start: float
     jobs: int
     force: bool
-    n_selected: int
+    selected: list[str]  # the ids of the tasks this run is about
     n_pending: int
     status: dict[str, str] = field(default_factory=dict)  # task id -> ok / failed, of every finished task
     n_ran: int = 0
@@ -351,7 +353,7 @@ class _Session:
 
     def block(self) -> dict[str, Any]:
         return {"started_at": self.started_at, "finished_at": now_iso(), "jobs": self.jobs, "ran": self.n_ran,
-                "skipped": self.n_selected - self.n_pending, "force": self.force,
+                "skipped": len(self.selected) - self.n_pending, "force": self.force,
                 "seconds": round(time.perf_counter() - self.t_start, 3)}
 
 
@@ -376,8 +378,9 @@ def _merge_and_record(plan: Plan, store: ResultStore, session: _Session, ledger:
     manifest["ledger"] = {"path": os.path.relpath(ledger, out), "test_set": test_set, "final": final}
     manifest["protocol"]["design_captures"] = design_captures
     store.write_manifest(manifest)
-    return RunResult(out=out, run_id=plan.run_id, n_tasks=session.n_selected, n_ran=session.n_ran,
-                     n_skipped=session.n_selected - session.n_pending, n_failed=n_failed, noop=False,
+    return RunResult(out=out, run_id=plan.run_id, n_tasks=len(session.selected), n_ran=session.n_ran,
+                     n_skipped=len(session.selected) - session.n_pending,
+                     n_failed=sum(1 for t in session.selected if session.status.get(t) == "failed"), noop=False,
                      seconds=time.perf_counter() - session.t_start, scores=scores,
                      summary=summarize(scores, metrics=protocol.metrics), expected=expected, notes=session.notes,
                      stopped_early=session.stopped)
@@ -399,10 +402,10 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
                if t.task_id not in finished or (retry_failed and finished[t.task_id] == "failed")]
     design_captures = _design_captures(plan)  # a design naming an unknown column is refused before any task
     if not pending and not final and _reports_current(store, plan, notes):
-        return _noop_result(plan, store, len(selected), notes, t_start)
+        return _noop_result(plan, store, [t.task_id for t in selected], notes, t_start)
 
     test_set, final_notes = _record_look(plan, ledger, final, force_final, len(pending))  # before any task
-    session = _Session(started_at, t_start, jobs, force, len(selected), len(pending), dict(finished),
+    session = _Session(started_at, t_start, jobs, force, [t.task_id for t in selected], len(pending), dict(finished),
                        notes=notes + final_notes)
     with _Progress(sys.stderr.isatty() if progress is None else progress) as prog:
         if pending:
