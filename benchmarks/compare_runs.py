@@ -1,9 +1,9 @@
 """Same predictions before and after: every shipped protocol run with two versions of touchbench, compared.
 
     python benchmarks/compare_runs.py --base f2fe39c                  # head: this checkout
-    python benchmarks/compare_runs.py --base f2fe39c --head /work/wt-bench
+    python benchmarks/compare_runs.py --base f2fe39c --head ../touchbench-other-checkout
     python benchmarks/compare_runs.py --base f2fe39c --head main --protocol tiny --protocol demo-haart
-    python benchmarks/compare_runs.py --base f2fe39c --max-seconds 300 --out /tmp/compare
+    python benchmarks/compare_runs.py --base f2fe39c --max-seconds 300 --out results/compare
 
 What is measured. The protocols are the ``touchbench/protocols/*.yaml`` of
 either side (not ``papers/``), and ``touch-haart`` restricted to ``--method

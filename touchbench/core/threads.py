@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import sys
 from typing import Iterator
@@ -24,15 +25,12 @@ def available_cpus() -> int:
     return os.cpu_count() or 1
 
 
-_CONTROLLER: list = [None, -1]  # the thread pools found, and how many modules were imported then
-
-
-def _thread_pools() -> ThreadpoolController:
+@functools.lru_cache(maxsize=1)
+def _thread_pools(n_modules: int) -> ThreadpoolController:
     """The native thread pools of the process: found once (a scan of the loaded libraries), again
-    when a module was imported since (it may have loaded a library with a pool of its own)."""
-    if _CONTROLLER[0] is None or _CONTROLLER[1] != len(sys.modules):
-        _CONTROLLER[:] = [ThreadpoolController(), len(sys.modules)]
-    return _CONTROLLER[0]
+    when the number of imported modules ``n_modules`` changed (an import may have loaded a library
+    with a pool of its own)."""
+    return ThreadpoolController()
 
 
 @contextlib.contextmanager
@@ -40,7 +38,7 @@ def single_thread() -> Iterator[None]:
     """BLAS/OpenMP and torch (when already imported) limited to one thread."""
     torch = sys.modules.get("torch")
     prev = torch.get_num_threads() if torch is not None else None
-    with _thread_pools().limit(limits=1):
+    with _thread_pools(len(sys.modules)).limit(limits=1):
         if torch is not None:
             torch.set_num_threads(1)
         try:
