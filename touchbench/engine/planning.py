@@ -55,7 +55,7 @@ from .evaluation_data import apply_filters, evaluation_dataset, load_spec
 from .identity import MAX_MODULES, Identity, classifier_identity, feature_set_identity
 from .tasks import SetSpec, Task, make_feature_set
 
-__all__ = ["Components", "Plan", "Prepared", "default_cache_root", "fold_seed", "method_labels", "plan_methods", "plan_run", "plan_tasks", "plan_test_set",
+__all__ = ["Components", "Plan", "Prepared", "check_methods", "default_cache_root", "fold_seed", "method_labels", "plan_methods", "plan_run", "plan_tasks", "plan_test_set",
            "prepare_evaluation", "sensor_refusals", "serving_protocol", "training_side"]
 
 
