@@ -10,11 +10,17 @@ settings each entry declares as ``cheap_params`` in the registry; the code
 paths are the same. Checks that do not apply
 are listed in ``NOT_APPLICABLE`` with the reason, and run as expected
 failures (strict: if one starts passing, the test says so).
+
+A registry entry whose class is scikit-learn's own (a nearest centroid, a
+decision tree...) is checked by scikit-learn's suite already; what the
+registry can break there is only its parameters, so those entries run the
+checks that fit with them (``PARAMETER_CHECKS``) instead of the whole suite.
 """
 
 from __future__ import annotations
 
 import pytest
+from sklearn.utils import estimator_checks
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from touchbench.classifiers import CLASSIFIERS, make_classifier
@@ -56,9 +62,41 @@ def _build(name):
     return est
 
 
-@parametrize_with_checks([_build(n) for n in NAMES], expected_failed_checks=_expected, xfail_strict=True)
+#: the checks that fit a classifier with the registry's parameters: whether it learns, keeps its
+#: classes, refits to the same model, survives one class, one sample or one feature, pickles, and
+#: round-trips its parameters
+PARAMETER_CHECKS = ("check_classifiers_train", "check_classifiers_classes", "check_fit_idempotent",
+                    "check_classifiers_one_label", "check_fit2d_1sample", "check_fit2d_1feature",
+                    "check_supervised_y_2d", "check_estimators_pickle", "check_get_params_invariance",
+                    "check_set_params")
+
+
+def _library_class(name: str) -> bool:
+    """Whether the registry builds one of scikit-learn's own classes for ``name``."""
+    return not type(_build(name)).__module__.startswith("touchbench.")
+
+
+OWN = [n for n in NAMES if not _library_class(n)]
+LIBRARY = [n for n in NAMES if _library_class(n)]
+
+
+@parametrize_with_checks([_build(n) for n in OWN], expected_failed_checks=_expected, xfail_strict=True)
 def test_sklearn_estimator_checks(estimator, check):
     check(estimator)
+
+
+@pytest.mark.parametrize("check", PARAMETER_CHECKS)
+@pytest.mark.parametrize("name", LIBRARY)
+def test_library_classes_fit_with_the_registry_parameters(name, check):
+    est = _build(name)
+    if check in _expected(est):
+        pytest.xfail(_expected(est)[check])
+    getattr(estimator_checks, check)(name, est)
+
+
+def test_the_library_classes_are_the_ones_scikit_learn_checks_itself():
+    assert {"zhou-lda", "zhou-tree", "jung-naive-bayes"} <= set(LIBRARY)
+    assert "touch-extra-trees" in OWN and "gaus-rf" in OWN
 
 
 def test_every_not_applicable_entry_names_a_registered_classifier():
