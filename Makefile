@@ -31,7 +31,7 @@ JOBS ?= 2
 RUNS ?= results/runs
 TB := $(BIN)/touchbench
 
-.PHONY: setup demo test lint api-docs snapshots reproduce-papers examples touch-all touch-all-figures clean
+.PHONY: setup demo test lint api-docs snapshots reproduce-papers examples reference-results touch-all touch-all-figures clean
 
 PLUGIN := examples/touchbench-plugin-example
 
@@ -90,6 +90,16 @@ examples: setup
 	    --reference "best 2015 entry=70.9" --reference "Gaus 2015=66.5" --reference "2023 transformer*=72.8"
 
 TOUCH_ALL := $(RUNS)/touch-all
+# the shipped reference results (`touchbench reference list`; `leaderboard --reference NAME`):
+# each protocol run afresh, then saved into the package under its own name
+REFERENCES ?= tiny demo-haart haart-loso-msd-rf
+reference-results: setup
+	@for p in $(REFERENCES); do \
+	    rm -rf $(RUNS)/reference/$$p && \
+	    $(TB) run $$p --out $(RUNS)/reference/$$p --jobs $(JOBS) --no-progress && \
+	    $(TB) reference save $(RUNS)/reference/$$p --name $$p || exit 1; \
+	done
+
 touch-all: setup
 	$(TB) run touch-all --out $(TOUCH_ALL) --jobs $(JOBS) --no-progress $(METHODS)
 	$(MAKE) touch-all-figures

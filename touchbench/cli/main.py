@@ -32,6 +32,7 @@ _COMMANDS: dict[str, tuple[str, str, str]] = {
     "plugins": ("touchbench.cli.plugins", "plugins", "Installed plugins: packages that add components."),
     "predict": ("touchbench.cli.deploy", "predict", "Label the captures of DATA with MODEL."),
     "protocols": ("touchbench.cli.protocols", "protocols", "Protocol files: validate them, list the shipped ones."),
+    "reference": ("touchbench.cli.reference", "reference", "Reference results: save a finished run, list the saved ones."),
     "report": ("touchbench.cli.reports", "report", "One self-contained HTML page with every leaderboard and plot."),
     "run": ("touchbench.cli.run", "run", "Evaluate a protocol: every method under its scheme, resumable."),
     "scenes": ("touchbench.cli.scenes", "scenes", "Synthetic scenes: sensors, gestures and people described in YAML."),

@@ -54,10 +54,16 @@ def _with_table_options(f):
     return f
 
 
-def _boards(results, dataset, scheme, alpha, pool_machines, machine, predictions=True):
+def _boards(results, dataset, scheme, alpha, pool_machines, machine, predictions=True, reference=None):
     from ..reports.leaderboard import build_leaderboards
 
     rs = _load(results, predictions=predictions)
+    if reference:
+        from ..reports.reference import add_reference
+
+        rs, lines = add_reference(rs, reference)
+        for line in lines:
+            click.echo(line, err=True)
     lbs = build_leaderboards(rs, alpha=alpha, pool_machines=pool_machines, machine=machine)
     return rs, _filter(lbs, dataset, scheme)
 
@@ -70,8 +76,11 @@ def _boards(results, dataset, scheme, alpha, pool_machines, machine, predictions
               show_default=True, help="Output format (repeatable). md/csv/json go to stdout, or to files with --out.")
 @click.option("--out", "-o", type=click.Path(file_okay=False), default=None,
               help="Write leaderboard.md/.csv/.json into this folder (the --format choices, all three by default).")
+@click.option("--reference", default=None, metavar="NAME",
+              help="Place the reference results NAME beside these (`touchbench reference list`); refused unless "
+                   "a test set has the same content.")
 @_with_table_options
-def leaderboard(results, as_json, formats, out, dataset, scheme, alpha, pool_machines, machine) -> None:
+def leaderboard(results, as_json, formats, out, reference, dataset, scheme, alpha, pool_machines, machine) -> None:
     """One table per dataset and scheme: rank, features, classifier, accuracy
     (mean over folds, sd, 95 % interval), macro F1, latency per capture, fit
     time, feature time, the paired test against the best method (exact
@@ -85,7 +94,7 @@ def leaderboard(results, as_json, formats, out, dataset, scheme, alpha, pool_mac
         write_outputs,
     )
 
-    _, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
+    _, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine, reference=reference)
     if as_json:  # the same document as --format json, alone on stdout
         formats = tuple(f for f in formats if f != "terminal") or ("json",)
         if set(formats) != {"json"}:

@@ -55,7 +55,7 @@ from ..results.ledger import Looks, looks
 from ..results.manifest import LEFT_OUT
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE, ResultStore, check_schema, read_results_table
 
-__all__ = ["ResultSet", "load_results", "machine_id", "method_id", "scheme_label"]
+__all__ = ["ResultSet", "find_result_dirs", "load_results", "machine_id", "method_id", "scheme_label"]
 
 PREDICTION_COLUMNS = ["task_id", "fold", "capture_id", "subject", TRUE, PREDICTED, "correct"]
 
@@ -139,7 +139,7 @@ class ResultSet:
         return s.drop_duplicates(["table_key", "method_id", "fold_key", "seed"], keep="last")
 
 
-def _find_dirs(path: Path) -> list[Path]:
+def find_result_dirs(path: Path) -> list[Path]:
     if path.is_file():
         if path.name == "scores.parquet":
             return [path.parent]
@@ -198,7 +198,7 @@ def _result_dirs(paths: Iterable[str | Path]) -> list[Path]:
     """The results directories found under ``paths``, each once, in the order met."""
     dirs: list[Path] = []
     for p in paths:
-        for d in _find_dirs(Path(p)):
+        for d in find_result_dirs(Path(p)):
             if d.resolve() not in [x.resolve() for x in dirs]:
                 dirs.append(d)
     if not dirs:

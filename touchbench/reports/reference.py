@@ -1,0 +1,201 @@
+"""Reference results: a shipped protocol's per-fold results, to compare a new method against
+without rerunning the shipped methods.
+
+A reference is a finished run's results, saved under a name by
+``touchbench reference save RESULTS --name NAME`` (``make reference-results``
+runs the shipped protocols and saves each): per evaluation, its
+``scores.parquet`` (one row per fold and method), ``predictions.parquet``
+(one row per test capture and method, so that a comparison on one test set
+can pair the captures) and ``manifest.json`` (the touchbench version, the
+machine, the package versions and the test set's content hash), and a
+``reference.json`` that lists them. The shipped ones live in the package
+(``touchbench/data/reference/<name>/``); ``TOUCHBENCH_REFERENCE_DIR``, when
+set, is searched first.
+
+``touchbench leaderboard RESULTS --reference NAME`` places the reference's
+methods beside the user's, as other methods ("<label> (reference NAME)"),
+only for the evaluations whose test set has the same content (the SHA-256 of
+its captures' frames and labels that the ledger records): the same captures,
+whatever the protocol or the reader called them. It refuses when no
+evaluation of the results matches, and says which matched. The folds are
+paired as for any two runs: by the test captures of each fold.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterable
+
+import pandas as pd
+
+from ..core.atomic import atomic_write_bytes
+from ..core.errors import TouchbenchError
+from ..core.suggest import did_you_mean
+from .results import ResultSet, find_result_dirs, load_results
+
+__all__ = ["Reference", "ReferenceError", "add_reference", "find_reference", "reference_names", "save_reference"]
+
+SHIPPED = Path(__file__).resolve().parent.parent / "data" / "reference"
+INDEX = "reference.json"
+FILES = ("scores.parquet", "predictions.parquet")
+
+
+class ReferenceError(TouchbenchError):
+    """A reference that does not exist, or whose test sets are not the user's."""
+
+
+@dataclass(frozen=True)
+class Reference:
+    """A saved reference: its name, folder and index (protocol, version, machine, evaluations)."""
+
+    name: str
+    path: Path
+    index: dict[str, Any]
+
+    def evaluations(self) -> dict[str, str]:
+        """Test-set content hash -> the evaluation's folder (relative to the reference)."""
+        return {e["test_set"]: e["folder"] for e in self.index.get("evaluations", [])}
+
+    def describe(self) -> str:
+        i = self.index
+        return (f"reference {self.name}: protocol {i.get('protocol')}, touchbench {i.get('touchbench_version')} "
+                f"on {i.get('machine')}, {i.get('created')}")
+
+
+def _search_path() -> list[Path]:
+    extra = os.environ.get("TOUCHBENCH_REFERENCE_DIR")
+    return ([Path(extra)] if extra else []) + [SHIPPED]
+
+
+def reference_names() -> list[str]:
+    """The names of every reference found (``TOUCHBENCH_REFERENCE_DIR`` first, then the shipped ones)."""
+    names: dict[str, None] = {}
+    for root in _search_path():
+        if root.is_dir():
+            names.update(dict.fromkeys(sorted(p.parent.name for p in root.glob(f"*/{INDEX}"))))
+    return list(names)
+
+
+def find_reference(name: str) -> Reference:
+    """The reference ``name``; a name that is not saved is refused with the names that are."""
+    for root in _search_path():
+        index = root / name / INDEX
+        if index.is_file():
+            return Reference(name, index.parent, json.loads(index.read_text(encoding="utf-8")))
+    known = reference_names()
+    raise ReferenceError(f"no reference results named {name!r}{did_you_mean(name, known)}; "
+                         f"saved: {', '.join(known) or 'none'}")
+
+
+def _manifest(folder: Path) -> dict[str, Any]:
+    try:
+        return json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+
+
+def _test_set(manifest: dict[str, Any]) -> str | None:
+    return (manifest.get("ledger") or {}).get("test_set")
+
+
+def _machine(manifest: dict[str, Any]) -> str:
+    p = manifest.get("platform") or {}
+    cpu = p.get("cpu_model") or p.get("processor") or p.get("machine") or "?"
+    return f"{cpu}, {p.get('cpu_count', '?')} CPUs, {p.get('platform', '?')}"
+
+
+def _evaluation_entry(folder: Path, root: Path) -> dict[str, Any]:
+    m = _manifest(folder)
+    if not _test_set(m) or not (folder / "scores.parquet").is_file():
+        raise ReferenceError(f"{folder}: not a finished results folder with a recorded test set "
+                             "(scores.parquet and the manifest's test-set hash are needed)")
+    if m.get("finished_at") is None:
+        raise ReferenceError(f"{folder}: the run is not finished; finish it before saving it as a reference")
+    rel = folder.relative_to(root).as_posix() if folder != root else (m.get("protocol") or {}).get("name", "run")
+    return {"folder": rel, "source": folder, "test_set": _test_set(m),
+            "dataset": (m.get("dataset") or {}).get("name"), "manifest": m}
+
+
+def _portable(manifest: dict[str, Any]) -> dict[str, Any]:
+    """The manifest without the paths of the machine that ran it (the protocol file's name is kept)."""
+    m = json.loads(json.dumps(manifest))
+    if (m.get("protocol") or {}).get("path"):
+        m["protocol"]["path"] = Path(m["protocol"]["path"]).name
+    (m.get("run") or {}).pop("results_dir", None)
+    return m
+
+
+def save_reference(results: str | Path, name: str, dest: str | Path | None = None) -> Path:
+    """Save the finished run in ``results`` (a results folder, or one holding an evaluation per
+    subfolder) as the reference ``name`` under ``dest`` (default: the shipped references'
+    folder); returns the reference's folder. An existing reference of that name is replaced whole."""
+    root = Path(results)
+    entries = [_evaluation_entry(d, root) for d in find_result_dirs(root)]
+    if not entries:
+        raise ReferenceError(f"{root}: no results folder found")
+    first = entries[0]["manifest"]
+    out = Path(dest or SHIPPED) / name
+    tmp = out.with_name(f".{name}.tmp")
+    shutil.rmtree(tmp, ignore_errors=True)
+    for e in entries:
+        (tmp / e["folder"]).mkdir(parents=True, exist_ok=True)
+        for f in FILES:
+            if (e["source"] / f).is_file():
+                shutil.copyfile(e["source"] / f, tmp / e["folder"] / f)
+        manifest = json.dumps(_portable(e["manifest"]), indent=2) + "\n"
+        atomic_write_bytes(tmp / e["folder"] / "manifest.json", manifest.encode())
+    index = {"name": name, "protocol": (first.get("protocol") or {}).get("name"),
+             "touchbench_version": first.get("touchbench_version"), "machine": _machine(first),
+             "created": first.get("finished_at"),
+             "evaluations": [{k: e[k] for k in ("folder", "test_set", "dataset")} for e in entries]}
+    atomic_write_bytes(tmp / INDEX, (json.dumps(index, indent=2) + "\n").encode())
+    shutil.rmtree(out, ignore_errors=True)
+    tmp.rename(out)
+    return out
+
+
+def _user_test_sets(rs: ResultSet) -> set[str]:
+    return {t for t in (_test_set(_manifest(Path(s["path"]))) for s in rs.sources) if t}
+
+
+def _as_reference(rs: ResultSet, name: str) -> ResultSet:
+    """The reference's rows as methods of their own: another method id, the label marked."""
+    tag = f" (reference {name})"
+    scores = rs.scores.copy()
+    scores["method_id"] = "ref-" + scores["method_id"].astype(str)
+    scores["classifier"] = scores["classifier"].astype(str) + tag
+    preds = rs.predictions
+    if preds is not None:
+        preds = preds.copy()
+        preds["method_id"] = "ref-" + preds["method_id"].astype(str)
+    return ResultSet(scores=scores, predictions=preds, sources=rs.sources)
+
+
+def add_reference(rs: ResultSet, name: str) -> tuple[ResultSet, list[str]]:
+    """``rs`` with the reference ``name``'s methods added where a test set matches, and the lines
+    that say what was added; refused when no evaluation of ``rs`` has a test set of the reference."""
+    ref = find_reference(name)
+    mine = _user_test_sets(rs)
+    matched = {t: f for t, f in ref.evaluations().items() if t in mine}
+    if not matched:
+        raise ReferenceError(
+            f"{ref.describe()}: none of its {len(ref.evaluations())} test set(s) has the content of the "
+            "results given (other captures, labels or frames), so their accuracies are not comparable; "
+            "run the reference's protocol on the same data")
+    extra = _as_reference(load_results([ref.path / f for f in matched.values()]), name)
+    combined = ResultSet(
+        scores=pd.concat([rs.scores, extra.scores], ignore_index=True, sort=False),
+        predictions=_concat_optional([rs.predictions, extra.predictions]),
+        sources=rs.sources + extra.sources)
+    lines = [f"beside {ref.describe()}: the test set of {', '.join(sorted(matched.values()))} has the same "
+             f"content as these results' ({len(matched)} of {len(ref.evaluations())} evaluation(s))"]
+    return combined, lines
+
+
+def _concat_optional(frames: Iterable[pd.DataFrame | None]) -> pd.DataFrame | None:
+    present = [f for f in frames if f is not None]
+    return pd.concat(present, ignore_index=True, sort=False) if present else None
