@@ -233,8 +233,9 @@ def parse_reference(text: str) -> tuple[str, float]:
 @click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
 @click.option("--out", "-o", required=True, type=click.Path(file_okay=False), help="Folder for the figure files.")
 @click.option("--kind", "kinds", multiple=True, type=LazyChoice(figure_kinds),
-              help="Plots to draw (repeatable) [default: all that apply]. cd: critical difference diagram per table, "
-                   "and across the tables when there are several (needs aeon: touchbench[peers]).")
+              help="Plots to draw (repeatable) [default: all that apply]. cd: critical difference diagram across the "
+                   "tables (each table one data set; drawn when they are enough to separate methods at --alpha; "
+                   "needs aeon: touchbench[peers]).")
 @click.option("--size", type=click.Choice(["text", "column"]), default="text", show_default=True,
               help="Print width: text (7 in) or column (3.5 in); fonts are at least 7 pt at that size.")
 @click.option("--format", "formats", multiple=True, type=click.Choice(["pdf", "svg", "png"]),
@@ -267,7 +268,7 @@ def plot(results, out, kinds, size, formats, methods, references, name, dataset,
                           formats=formats, taken=taken)
         for kind, paths in made.items():
             click.echo(f"{lb.title}: {kind}: " + ", ".join(str(p) for p in paths))
-    if "cd" in kinds and len(lbs) > 1:
+    if (not kinds or "cd" in kinds) and len(lbs) > 1:
         try:
             paths = plot_cd_across(lbs, Path(out) / "across-tables-cd", size, formats)
             click.echo("across tables: cd: " + ", ".join(str(p) for p in paths))

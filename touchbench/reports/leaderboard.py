@@ -21,7 +21,9 @@ Across tables (several datasets or schemes): :func:`mean_ranks` ranks the
 methods present in every table within each table (by mean accuracy, ties
 averaged) and averages the ranks, as MOABB and aeon rank pipelines across
 datasets; :func:`across_tables` gives the accuracies the critical difference
-diagram across tables uses. Titles carry the dataset, scheme and target
+diagram across tables uses, :func:`across_friedman` the Friedman test and
+Nemenyi critical difference over the tables (each table one data set, never
+its folds; :mod:`touchbench.reports.stats`). Titles carry the dataset, scheme and target
 (two tables of different data with one name are told apart as ``data 2``,
 ``data 3``...); failed methods are shown as failed with their error; rows
 that would read the same show their feature (then classifier) parameters.
@@ -52,9 +54,11 @@ from .pareto import pareto_front
 from .results import ResultSet, load_results
 from .stats import (
     TEST_SHORT,
+    Friedman,
     PairedTest,
     corrected_resampled_t,
     fold_interval,
+    friedman,
     holm,
     mcnemar_exact,
     no_test,
@@ -64,6 +68,8 @@ from .stats import (
 
 __all__ = [
     "Leaderboard",
+    "across_friedman",
+    "across_note",
     "across_tables",
     "build_leaderboards",
     "compare_methods",
@@ -545,6 +551,28 @@ def across_tables(lbs: list[Leaderboard]) -> pd.DataFrame:
     return acc.dropna(axis=1)
 
 
+def across_friedman(lbs: list[Leaderboard]) -> Friedman | None:
+    """The Friedman test and Nemenyi critical difference over the tables (each table one data set, at
+    the tables' alpha) of the methods present in every table; None with fewer than two of either."""
+    acc = across_tables(lbs)
+    if acc.shape[0] < 2 or acc.shape[1] < 2:
+        return None
+    return friedman(acc.to_numpy(np.float64), lbs[0].alpha)
+
+
+def across_note(f: Friedman) -> str:
+    """What the Friedman test and the critical difference say across the tables, in one paragraph."""
+    test = (f"Friedman test over N = {f.n_datasets} tables of {f.k} methods: chi2 = {f.statistic:.2f}, "
+            f"p = {_p(f.pvalue)}" if np.isfinite(f.pvalue) else
+            f"no Friedman test: it needs three methods (here {f.k}) and two tables (here {f.n_datasets})")
+    cd = f"Nemenyi critical difference at α={f.alpha:g}: {f.cd:.2f} mean ranks"
+    if f.can_separate:
+        return f"{test}. {cd}."
+    return (f"{test}. {cd}: with {f.n_datasets} tables even the largest possible difference ({f.k - 1}) is below it, "
+            f"so no two methods can be told apart and no diagram is drawn; {f.k} methods need at least "
+            f"{f.datasets_needed} tables (datasets or evaluations).")
+
+
 def mean_ranks(lbs: list[Leaderboard]) -> pd.DataFrame:
     """Methods present in every table, ranked within each table (1 = best accuracy; ties get the
     average of their ranks) and the ranks averaged over the tables: columns ``method``,
@@ -813,6 +841,8 @@ def to_markdown(lbs: list[Leaderboard], title: str | None = "Leaderboard") -> st
                 "| method | mean rank | mean accuracy % |", "|---|---|---|"]
         out += [f"| {_md_escape(r.method)} | {r.mean_rank:.2f} | {_pct(r.mean_accuracy)} |" for r in ranks.itertuples()]
         out += ["", RANK_LEGEND, ""]
+        f = across_friedman(lbs)
+        out += [across_note(f), ""] if f is not None else []
     return "\n".join(out)
 
 
@@ -886,6 +916,9 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
             t.add_row(escape(r.method), f"{r.mean_rank:.2f}", _pct(r.mean_accuracy))
         console.print(t)
         console.print(RANK_LEGEND, style="dim")
+        f = across_friedman(lbs)
+        if f is not None:
+            console.print(escape(across_note(f)), style="dim")
 
 
 def write_text(path: Path, text: str) -> Path:
