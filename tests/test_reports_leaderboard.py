@@ -306,3 +306,28 @@ def test_single_fold_with_several_seeds_reports_their_spread(tmp_path):
     assert x["accuracy_sd"] == pytest.approx((3 / 36) / math.sqrt(2))  # sample sd of two values: |a - b| / sqrt(2)
     assert x["n_seeds"] == 2 and x["n_folds"] == 1
     assert "± 5.9 (2 seeds)" in to_markdown([lb])
+
+
+def test_compare_across_evaluations_combines_them_by_stouffer(tmp_path):
+    from click.testing import CliRunner
+
+    from touchbench.cli.main import cli
+
+    _run1(tmp_path)
+    write_fake_run(tmp_path / "run2", CAPS, FOLDS, [
+        FakeMethod("msd", "rf", classifier_name="gaus-rf", wrong=_wrong([0, 0, 1, 0, 0, 0])),
+        FakeMethod("bmh", "rf", classifier_name="gaus-rf", wrong=_wrong([1, 0, 1, 2, 0, 1])),
+    ], dataset="other", dataset_hash="e" * 64, scheme={"name": "loso"}, run_id="run2")
+    # fold differences msd - bmh in sixths: 2, 0, 3, 1, 0, 1 (mean 7/6, squared deviations 246/36) and
+    # 1, 0, 0, 2, 0, 1 (mean 4/6, squared deviations 120/36); corrected t with 1/6 + 6/30, 5 df
+    t1 = (7 / 36) / math.sqrt((1 / 6 + 6 / 30) * 246 / 36 / 5 / 36)
+    t2 = (4 / 36) / math.sqrt((1 / 6 + 6 / 30) * 120 / 36 / 5 / 36)
+    z = (math.sqrt(6) * stats.norm.isf(stats.t.sf(t1, 5)) + math.sqrt(6) * stats.norm.isf(stats.t.sf(t2, 5))) / math.sqrt(12)
+    res = CliRunner().invoke(cli, ["compare", str(tmp_path), "--a", "msd/rf", "--b", "bmh/rf"])
+    assert res.exit_code == 0, res.output
+    assert "across 2 evaluations" in res.output
+    assert f"combined: z = {z:+.2f} (positive: A better), two-sided p = {2 * stats.norm.sf(z):.4g}" in res.output
+    res = CliRunner().invoke(cli, ["compare", str(tmp_path), "--a", "msd/rf", "--b", "bmh/rf", "--json"])
+    doc = json.loads(res.stdout)
+    assert len(doc["comparisons"]) == 2 and doc["meta_analysis"]["z"] == pytest.approx(z)
+    assert doc["meta_analysis"]["n"] == [6, 6]
