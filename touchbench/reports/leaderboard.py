@@ -145,6 +145,7 @@ def fold_values(ok: pd.DataFrame) -> pd.DataFrame:
     """Per method and fold: metrics averaged over duplicate seeds (replicates of a fold)."""
     agg = {m: "mean" for m in METRICS}
     agg.update(n_test="first", n_train="first", fold="first", fold_group="first")
+    ok = ok if "n_train" in ok else ok.assign(n_train=np.nan)  # results that did not record it: no t-test
     out = ok.groupby(["table_key", "method_id", "fold_key"], sort=False).agg(agg).reset_index()
     return out
 
@@ -497,7 +498,8 @@ def _add_closing_notes(df: pd.DataFrame, notes: list[str]) -> None:
     """The note on methods left untested, then each leaky evaluation's warning first of all."""
     untested = [str(r.method_id) for r in df.itertuples() if r.test == "none"]
     if untested and len(df) > 1:
-        notes.append(f"{len(untested)} method(s) share fewer than two folds or subjects with the best: not tested")
+        notes.append(f"{len(untested)} method(s) share neither two folds nor the predictions of one test set "
+                     "with the best: not tested")
     leaks = sorted(set(df["leakage"]) - {""})
     for reason in leaks:
         notes.insert(0, f"LEAKY: {reason}. Its accuracy overstates accuracy on new people; never compare it "
