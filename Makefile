@@ -83,7 +83,7 @@ examples: setup
 	$(TB) leaderboard $(RUNS)/touch-haart --out results/touch-haart \
 	    --format md --format csv
 	$(TB) plot $(RUNS)/example-haart-loso --out docs/figures --name example-haart-loso --format png --format svg \
-	    --kind pareto --kind confusion --kind cd --reference "Gaus 2015 challenge=66.5"
+	    --kind pareto --kind confusion --reference "Gaus 2015 challenge=66.5"
 	$(TB) plot $(RUNS)/touch-haart/loso --out docs/figures --kind pareto --name touch-haart-loso --format png --format svg \
 	    --reference "Al-mashhadani 2021 CNN=83.2"
 	$(TB) plot $(RUNS)/touch-haart/challenge --out docs/figures --kind pareto --name touch-haart-challenge --format png --format svg \

@@ -23,7 +23,8 @@ from touchbench.reports.leaderboard import (
     to_markdown,
 )
 from touchbench.reports.figures import SIZES, plot_table
-from touchbench.reports.figures.cd import plot_cd, plot_cd_across
+from touchbench.reports.figures.cd import NoDiagram, plot_cd_across
+from touchbench.reports.html import write_report
 from touchbench.reports.figures.pareto import plot_pareto
 from touchbench.reports.results import load_results
 from touchbench.reports.testing import FakeMethod, write_fake_run
@@ -70,7 +71,7 @@ def test_file_names_are_unique_readable_and_hash_free_for_a_parquet_dataset(runs
     files = [p for paths in made.values() for p in paths]
     assert len(files) == len({p.name for p in files}) == 3 * len(made)  # pdf, svg, png each, none overwritten
     stems = sorted({p.name.rsplit(".", 1)[0] for p in files})
-    assert stems == ["my-recordings-loso-cd", "my-recordings-loso-confusion-msd-rf",
+    assert stems == ["my-recordings-loso-confusion-msd-rf",
                      "my-recordings-loso-confusion-sd-rf", "my-recordings-loso-pareto", "my-recordings-loso-subjects"]
     assert lb.title == "my-recordings.parquet — loso" and "dddd" not in lb.title
     taken = set()
@@ -112,15 +113,57 @@ def test_png_is_300_dpi(runs, tmp_path):
 
 
 # ----------------------------------------------------------------- critical difference diagrams
-def test_critical_difference_diagram_per_table_and_across_tables(runs, tmp_path):
+@pytest.fixture(scope="module")
+def third(tmp_path_factory):
+    """A third table of the three methods (ranks msd 1, sd 3, bmh 2)."""
+    d = tmp_path_factory.mktemp("third")
+    return write_fake_run(d, CAPS, FOLDS, [
+        FakeMethod("msd", "rf", wrong=_wrong([0, 0, 0, 0, 0])),
+        FakeMethod("sd", "rf", wrong=_wrong([3, 3, 3, 3, 3])),
+        FakeMethod("bmh", "lda", wrong=_wrong([1, 1, 1, 1, 1])),
+    ], dataset="third", dataset_hash="c" * 64, scheme={"name": "loso"}, run_id="c")
+
+
+def test_critical_difference_diagram_across_tables_not_per_table(runs, third, tmp_path):
     lbs = build_leaderboards(load_results([runs / "a", runs / "b"]))
-    for lb in lbs:
-        pdf, svg, png = plot_cd(lb, tmp_path / lb.dataset)
-        assert pdf.stat().st_size > 1000
-        text = svg.read_text()
-        assert all(label in text for label in ("msd / rf", "sd / rf", "bmh / lda"))
-    pdf, svg, png = plot_cd_across(lbs, tmp_path / "across")
-    assert "mean rank over 2 tables" in svg.read_text()
+    # a table's folds are not data sets: the cd kind draws nothing for one table
+    rs = load_results([runs / "a"])
+    assert plot_table(rs, build_leaderboards(rs)[0], tmp_path, kinds=("cd",)) == {}
+    # 3 methods over 2 tables: CD = 2.343 * sqrt(3 * 4 / (6 * 2)) = 2.34 > the largest rank difference 2;
+    # 2.343**2 * 12 / (6 * 4) = 2.74: 3 tables are needed (Demsar 2006, Table 5)
+    with pytest.raises(NoDiagram, match=r"critical difference at α=0.05: 2.34 .*at least 3 tables"):
+        plot_cd_across(lbs, tmp_path / "across")
+    lbs3 = build_leaderboards(load_results([runs / "a", runs / "b", third]))
+    pdf, svg, png = plot_cd_across(lbs3, tmp_path / "across")  # CD = 2.343 * sqrt(12 / 18) = 1.91 <= 2
+    text = svg.read_text()
+    assert "mean rank over 3 tables" in text and all(lab in text for lab in ("msd / rf", "sd / rf", "bmh / lda"))
+
+
+def test_friedman_across_tables_against_scipy(runs, third):
+    from scipy.stats import friedmanchisquare
+
+    from touchbench.reports.leaderboard import across_friedman
+
+    lbs = build_leaderboards(load_results([runs / "a", runs / "b", third]))
+    f = across_friedman(lbs)
+    # mean accuracies per table (rows) of msd, sd, bmh: worked out from the wrong counts above
+    acc = np.array([[14 / 15, 20 / 30, 17 / 30], [25 / 30, 29 / 30, 20 / 30], [1.0, 15 / 30, 25 / 30]])
+    ref = friedmanchisquare(*acc.T)
+    assert (f.n_datasets, f.k) == (3, 3)
+    assert f.statistic == pytest.approx(ref.statistic) and f.pvalue == pytest.approx(ref.pvalue)
+    assert "Friedman test over N = 3 tables of 3 methods" in to_markdown(lbs)
+
+
+def test_report_without_aeon_is_written_with_a_note(runs, third, tmp_path, monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "aeon.visualisation", None)  # import aeon.visualisation: ImportError
+    monkeypatch.setitem(sys.modules, "aeon", None)
+    rs = load_results([runs / "a", runs / "b", third])
+    page = write_report(rs, build_leaderboards(rs), tmp_path / "rep")
+    text = page.read_text()
+    assert "Across 3 tables" in text and "pip install &#x27;touchbench[peers]&#x27;" in text
+    assert (tmp_path / "rep" / "leaderboard.md").exists() and not list((tmp_path / "rep").rglob("*cd*"))
 
 
 # ----------------------------------------------------------------- leaderboard

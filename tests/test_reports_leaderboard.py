@@ -67,19 +67,24 @@ def test_accuracy_interval_and_tests_by_hand(tmp_path):
     assert 34 / 36 + half > 1  # the t interval runs past 100 %: an accuracy cannot, so it is clipped
     assert a["ci_low"] == pytest.approx(34 / 36 - half) and a["ci_high"] == 1.0
     assert b["accuracy"] == pytest.approx(28 / 36) and c["accuracy"] == pytest.approx(27 / 36)
-    # B vs A: six differences of -1/6: only the two all-equal-sign flips are as extreme -> 2/64
-    assert b["test"] == "exact-permutation" and b["n_pairs"] == 6
-    assert b["p_value"] == pytest.approx(2 / 64)
+    # over folds: Nadeau & Bengio's corrected resampled t-test; each fold tests 6 captures and trains on 30
+    # B vs A: six differences of -1/6, no spread: t is -infinite, p = 0
+    assert b["test"] == "corrected-t" and b["n_pairs"] == 6 and b["paired_by"] == "fold"
+    assert b["p_value"] == 0.0
     assert b["diff_vs_best"] == pytest.approx(-1 / 6)
-    # C vs A: differences 2, 0, 3, 1, 0, 1 sixths; only the 4 nonzero ones all of one sign reach |sum| = 7,
-    # and the two zeros' signs are free: 2 * 4 = 8 of 64 flips
-    assert c["p_value"] == pytest.approx(8 / 64)
-    ref = stats.permutation_test((np.array([-2, 0, -3, -1, 0, -1]) / 6,), np.mean, permutation_type="samples",
-                                 n_resamples=np.inf)
-    assert c["p_value"] == pytest.approx(ref.pvalue)
-    # Holm over the family {2/64, 8/64}: 2 * 2/64 = 4/64, max(4/64, 1 * 8/64) = 8/64
-    assert b["p_holm"] == pytest.approx(4 / 64) and c["p_holm"] == pytest.approx(8 / 64)
-    assert not b["differs"] and not c["differs"]
+    # each fold tests one subject (leave-one-subject-out): the interval resamples subjects, and every
+    # subject's difference is -1 of 6 captures, so every resample's difference is -1/6
+    assert b["diff_ci_method"] == "subject-bootstrap" and b["n_subjects"] == 6
+    assert (b["diff_ci_low"], b["diff_ci_high"]) == (pytest.approx(-1 / 6), pytest.approx(-1 / 6))
+    # C vs A: differences -2, 0, -3, -1, 0, -1 sixths: mean -7/36; sum of squared deviations from the
+    # mean -7/6 (in sixths) 246/36, so var = 246 / 36 / 5 / 36; variance factor 1/6 + 6/30
+    t = (-7 / 36) / math.sqrt((1 / 6 + 6 / 30) * 246 / 36 / 5 / 36)
+    assert c["test"] == "corrected-t"
+    assert c["p_value"] == pytest.approx(2 * stats.t.sf(abs(t), 5))
+    assert 0.05 < c["p_value"] < 0.2
+    # Holm over the family {0, p_C}: 2 * 0 = 0, max(0, 1 * p_C) = p_C
+    assert b["p_holm"] == 0.0 and c["p_holm"] == pytest.approx(c["p_value"])
+    assert b["differs"] and not c["differs"]
     assert math.isnan(a["p_value"]) and a["test"] == "best"
     # Pareto on accuracy vs latency: A (best), B (fastest) on it; C (slower and worse than B) not
     assert bool(a["pareto"]) and bool(b["pareto"]) and not bool(c["pareto"])
@@ -167,9 +172,40 @@ def test_single_fold_wilson_and_subject_pairing(tmp_path):
     lo, hi = wilson_interval(33, 36)
     assert (x["ci_low"], x["ci_high"]) == (pytest.approx(lo), pytest.approx(hi))
     assert x["ci_method"] == "wilson" and math.isnan(x["accuracy_sd"])
-    # per-subject accuracy, y - x: s1 0, s2 -1/6, s3 -2/6, others 0: flips of (1, 2) with |sum| >= 3: 2 of 4
-    assert y["paired_by"] == "subject" and y["n_pairs"] == 6
-    assert y["p_value"] == pytest.approx(0.5)
+    # one test set: McNemar's exact test on the 36 paired captures; x is right and y wrong on 3 (s2's
+    # second capture, s3's first two), never the reverse: p = 2 * (1/2)**3 = 0.25
+    assert y["test"] == "mcnemar-exact" and y["paired_by"] == "capture" and y["n_pairs"] == 36
+    assert y["p_value"] == pytest.approx(stats.binomtest(0, 3, 0.5).pvalue) == pytest.approx(0.25)
+    assert y["diff_vs_best"] == pytest.approx(-3 / 36)
+    # the interval of the difference resamples the 6 subjects (per subject y - x: 0, -1, -2, 0, 0, 0 of 6):
+    # a resample of none of s2, s3 (probability (4/6)**6 = 0.088 > 2.5 %) differs by 0; none by less than -2/6
+    assert y["diff_ci_method"] == "subject-bootstrap" and y["n_subjects"] == 6
+    assert y["diff_ci_high"] == 0.0 and -2 / 6 <= y["diff_ci_low"] < -3 / 36
+
+
+def _one_test_set(n_right_only_a: int, n_captures: int = 251):
+    """Captures of 5 subjects for one test set; method a right on all, b wrong on the first ``n_right_only_a``."""
+    subjects = [f"s{i % 5}" for i in range(n_captures)]
+    caps = pd.DataFrame({"capture_id": [f"c{i:03d}" for i in range(n_captures)], "subject": subjects,
+                         "gesture": [GESTURES[i % 3] for i in range(n_captures)]})
+    fold = {"challenge": caps["capture_id"].tolist()}
+    return caps, fold, caps["capture_id"].tolist()[:n_right_only_a]
+
+
+def test_one_test_set_of_251_captures_tells_40_discordant_captures_apart(tmp_path):
+    caps, fold, wrong = _one_test_set(40)
+    d = write_fake_run(tmp_path / "ch", caps, fold, [FakeMethod("all", "right"),
+                                                     FakeMethod("all", "wrong", wrong={"challenge": wrong})],
+                       scheme={"name": "challenge"})
+    [lb] = build_leaderboards(load_results([d]))
+    worse = _row(lb, "all", "wrong")
+    # b = 0 captures only the worse method gets right, c = 40 the reverse: p = 2 * (1/2)**40
+    assert worse["test"] == "mcnemar-exact" and worse["n_pairs"] == 251
+    assert worse["p_value"] == pytest.approx(stats.binomtest(0, 40, 0.5).pvalue, rel=1e-12)
+    assert worse["p_value"] == pytest.approx(2 * 0.5 ** 40, rel=1e-12)
+    assert worse["differs"] and worse["diff_vs_best"] == pytest.approx(-40 / 251)
+    # the interval resamples the 5 subjects (8 wrong captures each of about 50): it excludes 0
+    assert worse["diff_ci_high"] < 0 and worse["n_subjects"] == 5
 
 
 def test_failed_folds_are_counted_not_scored(tmp_path):
@@ -186,7 +222,8 @@ def test_compare_per_fold_and_per_class(tmp_path):
     rs = load_results([d])
     [lb] = build_leaderboards(rs)
     cmp = compare_methods(rs, lb, "msd/rf", "sd/rf")
-    assert cmp.test.n == 6 and cmp.test.pvalue == pytest.approx(2 / 64)
+    # six fold differences of +1/6, no spread: the corrected t is infinite, p = 0
+    assert cmp.test.test == "corrected-t" and cmp.test.n == 6 and cmp.test.pvalue == 0.0
     np.testing.assert_allclose(cmp.pairs["diff"].to_numpy(), np.full(6, 1 / 6))
     pc = cmp.per_class.set_index("class")
     # A misses 2 captures (first of folds s2 and s4: both 'pat'); B misses 8: in each fold 'pat' first,
@@ -269,3 +306,28 @@ def test_single_fold_with_several_seeds_reports_their_spread(tmp_path):
     assert x["accuracy_sd"] == pytest.approx((3 / 36) / math.sqrt(2))  # sample sd of two values: |a - b| / sqrt(2)
     assert x["n_seeds"] == 2 and x["n_folds"] == 1
     assert "± 5.9 (2 seeds)" in to_markdown([lb])
+
+
+def test_compare_across_evaluations_combines_them_by_stouffer(tmp_path):
+    from click.testing import CliRunner
+
+    from touchbench.cli.main import cli
+
+    _run1(tmp_path)
+    write_fake_run(tmp_path / "run2", CAPS, FOLDS, [
+        FakeMethod("msd", "rf", classifier_name="gaus-rf", wrong=_wrong([0, 0, 1, 0, 0, 0])),
+        FakeMethod("bmh", "rf", classifier_name="gaus-rf", wrong=_wrong([1, 0, 1, 2, 0, 1])),
+    ], dataset="other", dataset_hash="e" * 64, scheme={"name": "loso"}, run_id="run2")
+    # fold differences msd - bmh in sixths: 2, 0, 3, 1, 0, 1 (mean 7/6, squared deviations 246/36) and
+    # 1, 0, 0, 2, 0, 1 (mean 4/6, squared deviations 120/36); corrected t with 1/6 + 6/30, 5 df
+    t1 = (7 / 36) / math.sqrt((1 / 6 + 6 / 30) * 246 / 36 / 5 / 36)
+    t2 = (4 / 36) / math.sqrt((1 / 6 + 6 / 30) * 120 / 36 / 5 / 36)
+    z = (math.sqrt(6) * stats.norm.isf(stats.t.sf(t1, 5)) + math.sqrt(6) * stats.norm.isf(stats.t.sf(t2, 5))) / math.sqrt(12)
+    res = CliRunner().invoke(cli, ["compare", str(tmp_path), "--a", "msd/rf", "--b", "bmh/rf"])
+    assert res.exit_code == 0, res.output
+    assert "across 2 evaluations" in res.output
+    assert f"combined: z = {z:+.2f} (positive: A better), two-sided p = {2 * stats.norm.sf(z):.4g}" in res.output
+    res = CliRunner().invoke(cli, ["compare", str(tmp_path), "--a", "msd/rf", "--b", "bmh/rf", "--json"])
+    doc = json.loads(res.stdout)
+    assert len(doc["comparisons"]) == 2 and doc["meta_analysis"]["z"] == pytest.approx(z)
+    assert doc["meta_analysis"]["n"] == [6, 6]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import base64
 import json
+import math
 import pkgutil
 import re
 import subprocess
@@ -13,6 +14,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from scipy import stats
 from helpers import fake_loso
 
 from touchbench.cli.main import cli
@@ -110,8 +112,10 @@ def test_cli_leaderboard_compare_plot(runs, tmp_path):
     assert res.exit_code == 0 and "Pareto" in res.output
     res = r.invoke(cli, ["compare", str(runs / "loso"), "--a", "msd/rf", "--b", "sd/rf"])
     assert res.exit_code == 0, res.output
-    # per-fold differences (sixths): 2, 1, 1, 1 -> all positive: exact p = 2/16
-    assert "exact sign-flip permutation test, two-sided p = 0.125" in res.output
+    # per-fold differences (sixths): 2, 1, 1, 1: mean 5/24, sample variance 0.25 / 36; each fold tests 6
+    # captures and trains on 18: corrected t = (5/24) / sqrt((1/4 + 6/18) * 0.25 / 36), 3 df
+    t = (5 / 24) / math.sqrt((1 / 4 + 6 / 18) * 0.25 / 36)
+    assert f"corrected resampled t-test, two-sided p = {2 * stats.t.sf(t, 3):.4g}" in res.output
     assert "subject=s1" in res.output and "pat" in res.output
     res = r.invoke(cli, ["compare", str(runs / "loso"), "--a", "msd/rf", "--b", "nope"])
     assert res.exit_code == 3 and "no method 'nope'" in res.output

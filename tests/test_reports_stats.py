@@ -10,10 +10,16 @@ from scipy import stats
 
 from touchbench.reports.pareto import pareto_front
 from touchbench.reports.stats import (
-    exact_sign_flip_pvalue,
+    corrected_resampled_t,
+    datasets_needed,
     fold_interval,
+    friedman,
     holm,
-    paired_test,
+    mcnemar_exact,
+    meta_analysis,
+    nemenyi_cd,
+    no_test,
+    subject_bootstrap,
     wilson_interval,
 )
 
@@ -49,58 +55,96 @@ def test_wilson_interval_known_value():
     assert hi == pytest.approx(0.9433, abs=1e-4)
 
 
-def test_exact_sign_flip_by_hand():
-    # d = 1, 2, 3: the 8 signed sums are 6, 4, 2, 0, 0, -2, -4, -6; |sum| >= 6 twice -> p = 2/8
-    assert exact_sign_flip_pvalue([1.0, 2.0, 3.0]) == pytest.approx(0.25)
-    # one negative: sums of +-1 +-2 +-3 with observed 1 + 2 - 3 = 0 -> every flip is as extreme
-    assert exact_sign_flip_pvalue([1.0, 2.0, -3.0]) == pytest.approx(1.0)
-
-
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_exact_sign_flip_matches_scipy_permutation_test(seed):
-    rng = np.random.default_rng(seed)
-    d = rng.normal(0.03, 0.05, size=8)
-    ref = stats.permutation_test((d,), np.mean, permutation_type="samples", n_resamples=np.inf,
-                                 alternative="two-sided")
-    assert exact_sign_flip_pvalue(d) == pytest.approx(ref.pvalue, rel=1e-12)
-
-
-def test_exact_sign_flip_with_tied_accuracies_matches_scipy():
-    # fold accuracies are ratios of small integers: ties in |d| are common
-    d = np.array([1, 1, 2, -1, 0, 1, 1, 2, 3, -1]) / 58.0
-    ref = stats.permutation_test((d,), np.mean, permutation_type="samples", n_resamples=np.inf,
-                                 alternative="two-sided")
-    assert exact_sign_flip_pvalue(d) == pytest.approx(ref.pvalue, rel=1e-9)
-
-
-def test_paired_test_uses_exact_permutation_for_few_folds():
-    a = np.array([0.80, 0.75, 0.90, 0.85, 0.70, 0.82, 0.79, 0.88, 0.91, 0.77])
-    b = a - np.array([0.05, 0.02, 0.03, -0.01, 0.04, 0.02, 0.06, 0.01, 0.03, 0.02])
-    t = paired_test(a, b)
-    assert t.test == "exact-permutation" and t.n == 10
-    ref = stats.permutation_test((a - b,), np.mean, permutation_type="samples", n_resamples=np.inf)
-    assert t.pvalue == pytest.approx(ref.pvalue, rel=1e-9)
-    assert t.mean_difference == pytest.approx(0.027)
-
-
-def test_paired_test_uses_wilcoxon_for_many_folds():
-    rng = np.random.default_rng(5)
-    a = rng.uniform(0.6, 0.9, size=40)
-    b = a - rng.normal(0.01, 0.03, size=40)
-    t = paired_test(a, b)
-    ref = stats.wilcoxon(a - b, zero_method="wilcox", alternative="two-sided")
-    assert t.test == "wilcoxon" and t.n == 40
-    assert t.pvalue == pytest.approx(ref.pvalue, rel=1e-12)
-    assert t.statistic == pytest.approx(ref.statistic)
-
-
-def test_paired_test_identical_and_too_few():
-    same = paired_test([0.5, 0.6, 0.7], [0.5, 0.6, 0.7])
+def test_mcnemar_exact_by_hand_and_against_scipy():
+    # a right and b wrong on 5 captures, never the reverse: p = 2 * (1/2)**5
+    a = np.array([1, 1, 1, 1, 1, 1, 0, 1], dtype=bool)
+    b = np.array([0, 0, 0, 0, 0, 1, 0, 1], dtype=bool)
+    t = mcnemar_exact(a, b)
+    assert (t.test, t.paired_by, t.n, t.statistic) == ("mcnemar-exact", "capture", 8, 5.0)
+    assert t.pvalue == pytest.approx(2 / 32)
+    assert t.p_greater == pytest.approx(1 / 32) and t.p_less == pytest.approx(1.0)
+    assert t.mean_difference == pytest.approx(5 / 8)
+    rng = np.random.default_rng(3)
+    a, b = rng.random(300) < 0.7, rng.random(300) < 0.6
+    n10, n01 = int(np.sum(a & ~b)), int(np.sum(~a & b))
+    t = mcnemar_exact(a, b)
+    assert t.pvalue == pytest.approx(stats.binomtest(n10, n10 + n01, 0.5).pvalue, rel=1e-12)
+    assert t.mean_difference == pytest.approx(a.mean() - b.mean())
+    # no discordant capture: nothing against the null
+    same = mcnemar_exact(a, a)
     assert same.pvalue == 1.0 and same.mean_difference == 0.0
-    one = paired_test([0.5], [0.4])
-    assert one.test == "none" and math.isnan(one.pvalue)
     with pytest.raises(ValueError):
-        paired_test([0.1, 0.2], [0.1])
+        mcnemar_exact([True], [True, False])
+
+
+def test_corrected_resampled_t_by_hand():
+    # d: mean 0.03, sample variance (1 + 4 + 4 + 1 + 0)e-4 / 4 = 2.5e-4; n_test / n_train = 1/4:
+    # se = sqrt((1/5 + 1/4) * 2.5e-4) = sqrt(1.125e-4), t = 0.03 / se = 2 sqrt(2), 4 df
+    d = [0.02, 0.05, 0.01, 0.04, 0.03]
+    t = corrected_resampled_t(d, 0.25)
+    se = math.sqrt(1.125e-4)
+    assert t.test == "corrected-t" and t.n == 5 and t.paired_by == "fold"
+    assert t.statistic == pytest.approx(2 * math.sqrt(2))
+    assert t.pvalue == pytest.approx(2 * stats.t.sf(2 * math.sqrt(2), 4))
+    # the uncorrected paired t (scipy) is larger: the correction inflates the variance
+    assert stats.ttest_1samp(d, 0.0).statistic == pytest.approx(0.03 / math.sqrt(2.5e-4 / 5))
+    assert t.pvalue > stats.ttest_1samp(d, 0.0).pvalue
+    half = stats.t.ppf(0.975, 4) * se
+    assert (t.ci_low, t.ci_high) == (pytest.approx(0.03 - half), pytest.approx(0.03 + half))
+    assert t.effect_size == pytest.approx(0.03 / math.sqrt(2.5e-4))
+    assert t.p_greater == pytest.approx(stats.t.sf(2 * math.sqrt(2), 4))
+    assert corrected_resampled_t([0.1], 0.25).test == "none"
+    assert corrected_resampled_t([0.0, 0.0, 0.0], 0.25).pvalue == 1.0
+
+
+def test_subject_bootstrap_by_hand():
+    # two subjects of 10 captures, differences 0 and 2 of 10: a resample is {1, 1} (0), {1, 2} or
+    # {2, 1} (0.1) or {2, 2} (0.2), each pair with probability 1/4: 2.5 % and 97.5 % quantiles 0 and 0.2
+    lo, hi = subject_bootstrap([8, 9], [8, 7], [10, 10])
+    assert (lo, hi) == (pytest.approx(0.0), pytest.approx(0.2))
+    assert subject_bootstrap([8, 9], [8, 7], [10, 10]) == (lo, hi)  # seeded
+    assert all(math.isnan(v) for v in subject_bootstrap([8], [7], [10]))
+
+
+def test_friedman_by_hand_and_against_scipy():
+    # ranks per table (1 = best): [1,2,3], [1,2,3], [1,3,2], [1,2,3]: rank sums 4, 9, 11; chi2 =
+    # 12 / (N k (k+1)) * sum R^2 - 3 N (k+1) = 12 / 48 * 218 - 48 = 6.5; 2 df: p = exp(-6.5 / 2)
+    acc = np.array([[0.9, 0.8, 0.7], [0.95, 0.7, 0.6], [0.8, 0.5, 0.6], [0.7, 0.65, 0.6]])
+    f = friedman(acc, 0.05)
+    assert f.statistic == pytest.approx(6.5) and f.pvalue == pytest.approx(math.exp(-3.25))
+    assert f.pvalue == pytest.approx(stats.friedmanchisquare(*acc.T).pvalue)
+    assert (f.n_datasets, f.k) == (4, 3)
+    # Nemenyi CD, Demsar (2006) Table 5: q_0.05 = 2.343 for 3 methods
+    assert f.cd == pytest.approx(2.343 * math.sqrt(3 * 4 / (6 * 4)), abs=1e-3)
+    two = friedman(acc[:, :2], 0.05)
+    assert math.isnan(two.pvalue) and two.k == 2
+
+
+def test_nemenyi_critical_difference_and_datasets_needed():
+    # Demsar (2006) Table 5(a): q_0.05 = 1.960 (2 methods), 3.031 (8); q_0.10 = 2.780 (8)
+    assert nemenyi_cd(8, 5, 0.05) == pytest.approx(3.031 * math.sqrt(8 * 9 / 30), abs=1e-3)
+    assert nemenyi_cd(8, 5, 0.10) == pytest.approx(2.780 * math.sqrt(8 * 9 / 30), abs=1e-3)
+    # 2 methods: 1.960 * sqrt(1 / N) <= 1 from N = 3.84, so 4 tables; 8 methods: 3.031**2 * 72 / (6 * 49) = 2.25
+    assert datasets_needed(2, 0.05) == 4 and datasets_needed(8, 0.05) == 3
+    f = friedman(np.array([[0.9, 0.8], [0.7, 0.6], [0.5, 0.4]]), 0.05)
+    assert not f.can_separate and f.datasets_needed == 4
+
+
+def test_meta_analysis_against_scipy_stouffer():
+    t1 = corrected_resampled_t([0.02, 0.05, 0.01, 0.04, 0.03], 0.25)
+    t2 = mcnemar_exact([True] * 12 + [False] * 4 + [True] * 20, [False] * 12 + [True] * 4 + [True] * 20)
+    m = meta_analysis([t1, t2, no_test("fold", [0.1])])
+    assert m.n == [5, 36]
+    z = (math.sqrt(5) * stats.norm.isf(t1.p_greater) + 6 * stats.norm.isf(t2.p_greater)) / math.sqrt(5 + 36)
+    assert m.z == pytest.approx(z)
+    ref = stats.combine_pvalues([t1.p_greater, t2.p_greater], method="stouffer", weights=[math.sqrt(5), 6])
+    assert m.p_greater_combined == pytest.approx(ref.pvalue)
+    assert m.pvalue == pytest.approx(2 * stats.norm.sf(z))
+    # effect sizes: d_z of each table's paired units (captures: +1 on 12, -1 on 4, 0 on 20)
+    d = np.array([1] * 12 + [-1] * 4 + [0] * 20, dtype=float)
+    assert m.effect_sizes == pytest.approx([0.03 / math.sqrt(2.5e-4), d.mean() / d.std(ddof=1)])
+    with pytest.raises(ValueError):
+        meta_analysis([no_test("fold", [])])
 
 
 def test_holm_by_hand():

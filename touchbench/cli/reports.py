@@ -119,10 +119,12 @@ def leaderboard(results, as_json, formats, out, reference, dataset, scheme, alph
 @json_option
 @_with_table_options
 def compare(results, a, b, as_json, dataset, scheme, alpha, pool_machines, machine) -> None:
-    """The paired test of method A against B (by fold, or by subject when
-    they share one fold), the per-fold differences and the per-class
-    recall and F1 differences, in every table holding both methods."""
-    from ..reports.leaderboard import compare_methods, method_label
+    """The paired test of method A against B (the corrected resampled t-test
+    over folds, McNemar's exact test on the test captures when they share
+    one fold), the per-fold differences and the per-class recall and F1
+    differences, in every table holding both methods; across several such
+    tables, a meta-analysis (effect size per table, Stouffer's combined p)."""
+    from ..reports.leaderboard import compare_methods
 
     rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
     done, errors = [], []
@@ -133,42 +135,87 @@ def compare(results, a, b, as_json, dataset, scheme, alpha, pool_machines, machi
             errors.append(f"{lb.title}: {e}")
     if not done:
         raise TouchbenchError("no table holds both methods:\n" + "\n".join(errors))
+    meta = _meta(done)
     if as_json:
-        def clean(v):
-            return None if isinstance(v, float) and not math.isfinite(v) else v
-
-        payload = [{
-            "table": {"dataset": c.leaderboard.dataset, "scheme": c.leaderboard.scheme},
-            "a": {k: clean(c.a[k]) for k in ("method_id", "features", "classifier", "accuracy", "macro_f1")},
-            "b": {k: clean(c.b[k]) for k in ("method_id", "features", "classifier", "accuracy", "macro_f1")},
-            "test": {k: clean(v) for k, v in c.test.as_dict().items()},
-            "pairs": c.pairs.to_dict(orient="records"),
-            "per_class": c.per_class.to_dict(orient="records"),
-        } for c in done]
-        click.echo(json.dumps(payload, indent=2, default=str))
+        _compare_json(done, meta)
         return
     for c in done:
-        t = c.test
-        click.echo(f"== {c.leaderboard.title}")
-        click.echo(f"A = {c.a['method_id']}  {method_label(c.a)}: accuracy {100 * c.a['accuracy']:.2f} %")
-        click.echo(f"B = {c.b['method_id']}  {method_label(c.b)}: accuracy {100 * c.b['accuracy']:.2f} %")
-        if t.test == "none":
-            click.echo(f"paired test: not possible ({t.n} shared {t.paired_by or 'fold'}s)")
-        else:
-            name = "exact sign-flip permutation test" if t.test == "exact-permutation" else "Wilcoxon signed-rank test"
-            click.echo(f"paired by {t.paired_by} (n={t.n}): mean difference A-B {100 * t.mean_difference:+.2f} points, "
-                       f"{name}, two-sided p = {t.pvalue:.4g}")
-        click.echo("")
+        _echo_comparison(c)
+    if meta is not None:
+        _echo_meta(done, meta)
+
+
+def _meta(done):
+    """The meta-analysis of the comparison across the tables holding both methods (None: fewer than two tested)."""
+    from ..reports.stats import meta_analysis
+
+    tested = [c.test for c in done if c.test.test != "none"]
+    return meta_analysis(tested) if len(tested) >= 2 else None
+
+
+def _compare_json(done, meta) -> None:
+    """``compare --json``: each table's comparison, and the meta-analysis across them (null for one;
+    NaN and infinity as null)."""
+    payload = [{
+        "table": {"dataset": c.leaderboard.dataset, "scheme": c.leaderboard.scheme},
+        "a": {k: c.a[k] for k in ("method_id", "features", "classifier", "accuracy", "macro_f1")},
+        "b": {k: c.b[k] for k in ("method_id", "features", "classifier", "accuracy", "macro_f1")},
+        "test": c.test.as_dict(),
+        "pairs": c.pairs.to_dict(orient="records"),
+        "per_class": c.per_class.to_dict(orient="records"),
+    } for c in done]
+    echo_json({"comparisons": payload, "meta_analysis": None if meta is None else meta.as_dict()})
+
+
+def _echo_test(t) -> None:
+    """The test's line: its name, unit and count, the difference with its interval, the p-value."""
+    from ..reports.stats import TEST_NAMES
+
+    if t.test == "none":
+        click.echo(f"paired test: not possible ({t.n} shared {t.paired_by or 'fold'}s)")
+        return
+    ci = (f" (95 % interval {100 * t.ci_low:+.2f} to {100 * t.ci_high:+.2f}, "
+          f"{'bootstrap over ' + str(t.n_subjects) + ' subjects' if t.ci_method == 'subject-bootstrap' else 'corrected t'})"
+          if math.isfinite(t.ci_low) else "")
+    click.echo(f"paired by {t.paired_by} (n={t.n}): mean difference A-B {100 * t.mean_difference:+.2f} points{ci}, "
+               f"{TEST_NAMES[t.test]}, two-sided p = {t.pvalue:.4g}")
+
+
+def _echo_comparison(c) -> None:
+    """One table's comparison: the methods, the test, the paired units (or McNemar's counts) and the classes."""
+    from ..reports.leaderboard import method_label
+
+    t = c.test
+    click.echo(f"== {c.leaderboard.title}")
+    click.echo(f"A = {c.a['method_id']}  {method_label(c.a)}: accuracy {100 * c.a['accuracy']:.2f} %")
+    click.echo(f"B = {c.b['method_id']}  {method_label(c.b)}: accuracy {100 * c.b['accuracy']:.2f} %")
+    _echo_test(t)
+    click.echo("")
+    if t.paired_by == "capture":
+        a, b = c.pairs["a"] >= 0.5, c.pairs["b"] >= 0.5
+        click.echo(f"test captures: {int((a & b).sum())} both right, {int((a & ~b).sum())} only A, "
+                   f"{int((~a & b).sum())} only B, {int((~a & ~b).sum())} both wrong")
+    else:
         click.echo(f"{t.paired_by or 'unit':28s} {'A %':>7s} {'B %':>7s} {'A-B':>7s}")
         for r in c.pairs.itertuples():
             click.echo(f"{str(r.unit)[:28]:28s} {100 * r.a:7.1f} {100 * r.b:7.1f} {100 * r.diff:+7.1f}")
-        if len(c.per_class):
-            click.echo("")
-            click.echo(f"{'class':16s} {'n':>5s} {'recall A':>9s} {'recall B':>9s} {'A-B':>7s} {'F1 A':>6s} {'F1 B':>6s} {'A-B':>7s}")
-            for r in c.per_class.itertuples():
-                click.echo(f"{str(r._1)[:16]:16s} {r.support:5d} {100 * r.recall_a:9.1f} {100 * r.recall_b:9.1f} "
-                           f"{100 * r.recall_diff:+7.1f} {100 * r.f1_a:6.1f} {100 * r.f1_b:6.1f} {100 * r.f1_diff:+7.1f}")
+    if len(c.per_class):
         click.echo("")
+        click.echo(f"{'class':16s} {'n':>5s} {'recall A':>9s} {'recall B':>9s} {'A-B':>7s} {'F1 A':>6s} {'F1 B':>6s} {'A-B':>7s}")
+        for r in c.per_class.itertuples():
+            click.echo(f"{str(r._1)[:16]:16s} {r.support:5d} {100 * r.recall_a:9.1f} {100 * r.recall_b:9.1f} "
+                       f"{100 * r.recall_diff:+7.1f} {100 * r.f1_a:6.1f} {100 * r.f1_b:6.1f} {100 * r.f1_diff:+7.1f}")
+    click.echo("")
+
+
+def _echo_meta(done, meta) -> None:
+    """The meta-analysis across the tables: effect size per table, Stouffer's combined z and p."""
+    click.echo(f"== across {len(meta.n)} evaluations (meta-analysis: Stouffer's method, weights sqrt(n))")
+    tested = [c for c in done if c.test.test != "none"]
+    for c, es, n, p in zip(tested, meta.effect_sizes, meta.n, meta.p_greater):
+        click.echo(f"{c.leaderboard.title[:48]:48s} d_z {es:+6.2f}  n={n:<4d} one-sided p (A better) {p:.4g}")
+    click.echo(f"combined: z = {meta.z:+.2f} (positive: A better), two-sided p = {meta.pvalue:.4g}")
+    click.echo("")
 
 
 def figure_kinds() -> list[str]:
@@ -195,8 +242,9 @@ def parse_reference(text: str) -> tuple[str, float]:
 @click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
 @click.option("--out", "-o", required=True, type=click.Path(file_okay=False), help="Folder for the figure files.")
 @click.option("--kind", "kinds", multiple=True, type=LazyChoice(figure_kinds),
-              help="Plots to draw (repeatable) [default: all that apply]. cd: critical difference diagram per table, "
-                   "and across the tables when there are several (needs aeon: touchbench[peers]).")
+              help="Plots to draw (repeatable) [default: all that apply]. cd: critical difference diagram across the "
+                   "tables (each table one data set; drawn when they are enough to separate methods at --alpha; "
+                   "needs aeon: touchbench[peers]).")
 @click.option("--size", type=click.Choice(["text", "column"]), default="text", show_default=True,
               help="Print width: text (7 in) or column (3.5 in); fonts are at least 7 pt at that size.")
 @click.option("--format", "formats", multiple=True, type=click.Choice(["pdf", "svg", "png"]),
@@ -229,7 +277,7 @@ def plot(results, out, kinds, size, formats, methods, references, name, dataset,
                           formats=formats, taken=taken)
         for kind, paths in made.items():
             click.echo(f"{lb.title}: {kind}: " + ", ".join(str(p) for p in paths))
-    if "cd" in kinds and len(lbs) > 1:
+    if (not kinds or "cd" in kinds) and len(lbs) > 1:
         try:
             paths = plot_cd_across(lbs, Path(out) / "across-tables-cd", size, formats)
             click.echo("across tables: cd: " + ", ".join(str(p) for p in paths))

@@ -12,8 +12,19 @@ import html
 from datetime import datetime, timezone
 from pathlib import Path
 
-from .leaderboard import Leaderboard, display_rows, legend, write_outputs, write_text
+from .leaderboard import (
+    RANK_LEGEND,
+    Leaderboard,
+    across_friedman,
+    across_note,
+    display_rows,
+    legend,
+    mean_ranks,
+    write_outputs,
+    write_text,
+)
 from .figures import plot_table
+from .figures.cd import NoDiagram, plot_cd_across
 from .results import ResultSet
 
 __all__ = ["render_html", "write_report"]
@@ -51,8 +62,30 @@ def _table_html(lb: Leaderboard) -> str:
     return "\n".join(out)
 
 
+def _across_html(lbs: list[Leaderboard], cd: list[Path], cd_note: str) -> str:
+    """The section across the tables: mean ranks, the Friedman test and critical difference, and the
+    diagram or the note saying why there is none ("" for one table)."""
+    ranks = mean_ranks(lbs) if len(lbs) > 1 else None
+    if ranks is None or ranks.empty:
+        return ""
+    out = [f"<h2>Across {int(ranks['tables'].iloc[0])} tables</h2><table><thead><tr><th>method</th>"
+           "<th>mean rank</th><th>mean accuracy %</th></tr></thead><tbody>"]
+    out += [f"<tr><td>{html.escape(r.method)}</td><td class='num'>{r.mean_rank:.2f}</td>"
+            f"<td class='num'>{100 * r.mean_accuracy:.1f}</td></tr>" for r in ranks.itertuples()]
+    out.append(f"</tbody></table><p class='legend'>{html.escape(RANK_LEGEND)}</p>")
+    f = across_friedman(lbs)
+    if f is not None:
+        out.append(f"<p class='legend'>{html.escape(across_note(f))}</p>")
+    png = [p for p in cd if p.suffix == ".png"]
+    if png:
+        out.append(f"<h3>critical difference</h3>{_img(png[0])}")
+    elif cd_note and (f is None or f.can_separate):  # a diagram the tables allow, not drawn: why
+        out.append(f"<p class='note'>Note: no critical difference diagram: {html.escape(cd_note)}</p>")
+    return "\n".join(out)
+
+
 def render_html(rs: ResultSet, lbs: list[Leaderboard], plots: dict[str, dict[str, list[Path]]],
-                title: str = "touchbench report") -> str:
+                title: str = "touchbench report", across: str = "") -> str:
     now = datetime.now(timezone.utc).isoformat(timespec="seconds")
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>",
              f"<style>{_CSS}</style></head><body>", f"<h1>{html.escape(title)}</h1>",
@@ -76,6 +109,7 @@ def render_html(rs: ResultSet, lbs: list[Leaderboard], plots: dict[str, dict[str
             png = [p for p in paths if p.suffix == ".png"]
             if png:
                 parts.append(f"<h3>{html.escape(name.split('-')[0])}</h3>{_img(png[0])}")
+    parts.append(across)
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"
 
@@ -83,10 +117,24 @@ def render_html(rs: ResultSet, lbs: list[Leaderboard], plots: dict[str, dict[str
 def write_report(rs: ResultSet, lbs: list[Leaderboard], out: str | Path, title: str = "touchbench report",
                  kinds: tuple[str, ...] | None = None) -> Path:
     """``out/report.html`` (self-contained), ``out/plots/*.{png,svg}`` (text width, 300 dpi; ``kinds``:
-    the figure kinds, by default every one), ``out/leaderboard.{md,csv,json}``."""
+    the figure kinds, by default every one), ``out/leaderboard.{md,csv,json}``. Several tables add a
+    section across them (mean ranks, Friedman test, the critical difference diagram where the tables
+    can separate methods); a figure an optional extra draws is left out with a note naming it."""
     out = Path(out)
     taken: set[str] = set()  # file names unique over the tables
     plots = {lb.key: plot_table(rs, lb, out / "plots", kinds, taken=taken, formats=("svg", "png")) for lb in lbs}
+    cd, cd_note = _cd_across(lbs, out / "plots", kinds)
     write_outputs(lbs, out, ("md", "csv", "json"))
     page = out / "report.html"
-    return write_text(page, render_html(rs, lbs, plots, title))
+    return write_text(page, render_html(rs, lbs, plots, title, _across_html(lbs, cd, cd_note)))
+
+
+def _cd_across(lbs: list[Leaderboard], folder: Path, kinds: tuple[str, ...] | None) -> tuple[list[Path], str]:
+    """The critical difference diagram across the tables, or why there is none (a missing extra
+    included: the report is written without it)."""
+    if len(lbs) < 2 or (kinds is not None and "cd" not in kinds):
+        return [], ""
+    try:
+        return plot_cd_across(lbs, folder / "across-tables-cd", formats=("svg", "png")), ""
+    except NoDiagram as e:
+        return [], str(e)

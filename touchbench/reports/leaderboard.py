@@ -21,7 +21,9 @@ Across tables (several datasets or schemes): :func:`mean_ranks` ranks the
 methods present in every table within each table (by mean accuracy, ties
 averaged) and averages the ranks, as MOABB and aeon rank pipelines across
 datasets; :func:`across_tables` gives the accuracies the critical difference
-diagram across tables uses. Titles carry the dataset, scheme and target
+diagram across tables uses, :func:`across_friedman` the Friedman test and
+Nemenyi critical difference over the tables (each table one data set, never
+its folds; :mod:`touchbench.reports.stats`). Titles carry the dataset, scheme and target
 (two tables of different data with one name are told apart as ``data 2``,
 ``data 3``...); failed methods are shown as failed with their error; rows
 that would read the same show their feature (then classifier) parameters.
@@ -32,7 +34,7 @@ from __future__ import annotations
 import json
 import math
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -50,10 +52,24 @@ from ..results.ledger import Looks
 from ..results.store import NOT_RECORDED, PREDICTED, TRUE
 from .pareto import pareto_front
 from .results import ResultSet, load_results
-from .stats import PairedTest, fold_interval, holm, paired_test, wilson_interval
+from .stats import (
+    TEST_SHORT,
+    Friedman,
+    PairedTest,
+    corrected_resampled_t,
+    fold_interval,
+    friedman,
+    holm,
+    mcnemar_exact,
+    no_test,
+    subject_bootstrap,
+    wilson_interval,
+)
 
 __all__ = [
     "Leaderboard",
+    "across_friedman",
+    "across_note",
     "across_tables",
     "build_leaderboards",
     "compare_methods",
@@ -128,7 +144,8 @@ def _first_error(g: pd.DataFrame) -> str:
 def fold_values(ok: pd.DataFrame) -> pd.DataFrame:
     """Per method and fold: metrics averaged over duplicate seeds (replicates of a fold)."""
     agg = {m: "mean" for m in METRICS}
-    agg.update(n_test="first", fold="first", fold_group="first")
+    agg.update(n_test="first", n_train="first", fold="first", fold_group="first")
+    ok = ok if "n_train" in ok else ok.assign(n_train=np.nan)  # results that did not record it: no t-test
     out = ok.groupby(["table_key", "method_id", "fold_key"], sort=False).agg(agg).reset_index()
     return out
 
@@ -150,24 +167,77 @@ def _latest(p: pd.DataFrame) -> pd.DataFrame:
     return p.sort_values("finished_at", kind="stable").drop_duplicates(["fold_key", "seed", "capture_id"], keep="last")
 
 
-def _pair(folds: pd.DataFrame, preds: pd.DataFrame | None, a: str, b: str) -> tuple[str, pd.DataFrame]:
-    """Paired accuracies of methods ``a`` and ``b``: by fold, else by subject.
+def paired_captures(preds: pd.DataFrame | None, a: str, b: str, fold_keys: Iterable[str]) -> pd.DataFrame:
+    """The test captures both ``a`` and ``b`` predicted in ``fold_keys``: columns ``fold_key``,
+    ``capture_id``, ``subject``, ``a``, ``b`` (each method's correctness, the mean over its seeds)."""
+    cols = ["fold_key", "capture_id", "subject", "a", "b"]
+    if preds is None or preds.empty:
+        return pd.DataFrame(columns=cols)
+    keys = ["fold_key", "capture_id", "subject"]
+    sides = []
+    for mid in (a, b):
+        p = preds[(preds["method_id"] == mid) & preds["fold_key"].isin(set(fold_keys))]
+        sides.append(_latest(p).astype({"correct": np.float64}).groupby(keys, observed=True)["correct"].mean())
+    both = pd.concat(sides, axis=1, keys=["a", "b"], join="inner").reset_index()
+    return both[cols]
 
-    Returns ``(paired_by, frame)`` with columns ``unit``, ``a``, ``b``.
+
+def _pair(folds: pd.DataFrame, preds: pd.DataFrame | None, a: str, b: str) -> tuple[str, pd.DataFrame]:
+    """Paired results of methods ``a`` and ``b``: by fold when they share two or more folds (columns
+    ``unit``, ``a``, ``b`` the fold accuracies, ``n_test``, ``n_train``), else by test capture of
+    their one shared fold (``unit`` the capture, ``a``, ``b`` its correctness, ``subject``).
+
+    Returns ``(paired_by, frame)``: ``"fold"``, ``"capture"`` or ``""`` (nothing shared).
     """
-    fa = folds[folds["method_id"] == a].set_index("fold_key")["accuracy"]
-    fb = folds[folds["method_id"] == b].set_index("fold_key")["accuracy"]
+    fa = folds[folds["method_id"] == a].set_index("fold_key")
+    fb = folds[folds["method_id"] == b].set_index("fold_key")
     common = fa.index.intersection(fb.index)
     if len(common) >= 2:
-        names = folds[folds["method_id"] == a].set_index("fold_key")["fold"]
-        return "fold", pd.DataFrame({"unit": [str(names[k]) for k in common], "a": fa[common].to_numpy(),
-                                     "b": fb[common].to_numpy()})
-    sa = subject_values(preds, a, common)
-    sb = subject_values(preds, b, common)
-    subj = sa.index.intersection(sb.index)
-    if len(common) and len(subj):
-        return "subject", pd.DataFrame({"unit": list(subj), "a": sa[subj].to_numpy(), "b": sb[subj].to_numpy()})
+        return "fold", pd.DataFrame({"unit": [str(fa.loc[k, "fold"]) for k in common],
+                                     "a": fa.loc[common, "accuracy"].to_numpy(np.float64),
+                                     "b": fb.loc[common, "accuracy"].to_numpy(np.float64),
+                                     "n_test": fa.loc[common, "n_test"].to_numpy(np.float64),
+                                     "n_train": fa.loc[common, "n_train"].to_numpy(np.float64)})
+    caps = paired_captures(preds, a, b, common)
+    if len(caps):
+        return "capture", caps.rename(columns={"capture_id": "unit"})[["unit", "a", "b", "subject", "fold_key"]]
     return "", pd.DataFrame({"unit": [], "a": [], "b": []})
+
+
+def _subjects_are_units(caps: pd.DataFrame, by: str) -> bool:
+    """Whether subjects are the unit of the design: one test set (its captures clustered in its
+    subjects), or folds that each test a single subject (leave-one-subject-out)."""
+    if caps.empty:
+        return False
+    return by == "capture" or bool((caps.groupby("fold_key")["subject"].nunique() == 1).all())
+
+
+def paired_test(by: str, pairs: pd.DataFrame, caps: pd.DataFrame) -> PairedTest:
+    """The test that fits the pairing (:mod:`touchbench.reports.stats`: McNemar's exact test on the
+    captures of one test set, the corrected resampled t-test over folds), with the interval of the
+    difference: by bootstrap over subjects where subjects are the unit (``caps``: the paired
+    captures, :func:`paired_captures`), else the corrected t interval."""
+    if by == "fold":
+        ratio = float(np.mean(pairs["n_test"] / pairs["n_train"])) if (pairs["n_train"] > 0).all() else math.nan
+        test = corrected_resampled_t(pairs["a"] - pairs["b"], ratio)
+    elif by == "capture":
+        test = mcnemar_exact(pairs["a"] >= 0.5, pairs["b"] >= 0.5)
+    else:
+        return no_test("", [])
+    n_subjects = int(caps["subject"].nunique()) if len(caps) else 0
+    if test.test != "none" and n_subjects >= 2 and _subjects_are_units(caps, by):
+        per = caps.groupby("subject", observed=True).agg(a=("a", "sum"), b=("b", "sum"), n=("a", "size"))
+        lo, hi = subject_bootstrap(per["a"], per["b"], per["n"])
+        return replace(test, ci_low=lo, ci_high=hi, ci_method="subject-bootstrap", n_subjects=n_subjects)
+    return replace(test, n_subjects=n_subjects)
+
+
+def _compare(folds: pd.DataFrame, preds: pd.DataFrame | None, a: str, b: str) -> tuple[PairedTest, pd.DataFrame]:
+    """The paired test of ``a`` against ``b`` and the pairs it was computed on."""
+    by, pairs = _pair(folds, preds, a, b)
+    shared = set(folds[folds["method_id"] == a]["fold_key"]) & set(folds[folds["method_id"] == b]["fold_key"])
+    caps = pairs if by == "capture" else paired_captures(preds, a, b, shared)
+    return paired_test(by, pairs, caps), pairs
 
 
 def _held_out(preds: pd.DataFrame | None, mid: str, design: set[str]) -> tuple[float, int, bool]:
@@ -217,7 +287,8 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
     s_all = rs.scores[rs.scores["table_key"] == key]
     ok = ok_all[ok_all["table_key"] == key]
     first = s_all.iloc[0]
-    folds = fold_values(ok) if len(ok) else pd.DataFrame(columns=["table_key", "method_id", "fold_key", *METRICS, "n_test", "fold", "fold_group"])
+    folds = fold_values(ok) if len(ok) else pd.DataFrame(columns=["table_key", "method_id", "fold_key", *METRICS, "n_test",
+                                                                  "n_train", "fold", "fold_group"])
     preds = rs.predictions[rs.predictions["table_key"] == key] if rs.predictions is not None else None
     machines = dict(zip(s_all["machine"], s_all["machine_desc"]))
     sources = [rs.source(p) for p in dict.fromkeys(s_all["source"])] if "source" in s_all else []
@@ -396,21 +467,20 @@ def _ranked(df: pd.DataFrame) -> pd.DataFrame:
 
 
 def _add_tests_against_best(df: pd.DataFrame, folds: pd.DataFrame, preds: pd.DataFrame | None, alpha: float) -> None:
-    """Each method's paired test against the best (the first row), Holm-adjusted over the table."""
+    """Each method's paired test against the best (the first row), Holm-adjusted over the table:
+    the test's name, its unit and number of units, the difference with its interval."""
     best = df["method_id"].iloc[0]
-    tests: list[PairedTest | None] = []
-    for mid in df["method_id"]:
-        if mid == best:
-            tests.append(None)
-            continue
-        by, pairs = _pair(folds, preds, mid, best)
-        tests.append(paired_test(pairs["a"].to_numpy(), pairs["b"].to_numpy(), paired_by=by))
+    tests = [None if mid == best else _compare(folds, preds, mid, best)[0] for mid in df["method_id"]]
     pvals = [t.pvalue if t is not None else math.nan for t in tests]
     adj = holm(pvals)
     df["test"] = [t.test if t is not None else "best" for t in tests]
     df["paired_by"] = [t.paired_by if t is not None else "" for t in tests]
     df["n_pairs"] = [t.n if t is not None else 0 for t in tests]
+    df["n_subjects"] = [t.n_subjects if t is not None else 0 for t in tests]
     df["diff_vs_best"] = [t.mean_difference if t is not None else 0.0 for t in tests]
+    df["diff_ci_low"] = [t.ci_low if t is not None else math.nan for t in tests]
+    df["diff_ci_high"] = [t.ci_high if t is not None else math.nan for t in tests]
+    df["diff_ci_method"] = [t.ci_method if t is not None else "" for t in tests]
     df["p_value"] = pvals
     df["p_holm"] = adj
     df["differs"] = [bool(np.isfinite(p) and p < alpha) for p in adj]
@@ -428,7 +498,8 @@ def _add_closing_notes(df: pd.DataFrame, notes: list[str]) -> None:
     """The note on methods left untested, then each leaky evaluation's warning first of all."""
     untested = [str(r.method_id) for r in df.itertuples() if r.test == "none"]
     if untested and len(df) > 1:
-        notes.append(f"{len(untested)} method(s) share fewer than two folds or subjects with the best: not tested")
+        notes.append(f"{len(untested)} method(s) share neither two folds nor the predictions of one test set "
+                     "with the best: not tested")
     leaks = sorted(set(df["leakage"]) - {""})
     for reason in leaks:
         notes.insert(0, f"LEAKY: {reason}. Its accuracy overstates accuracy on new people; never compare it "
@@ -480,6 +551,28 @@ def across_tables(lbs: list[Leaderboard]) -> pd.DataFrame:
         cols[lb.title] = pd.Series(r["accuracy"].to_numpy(float), index=[labels[m] for m in r["method_id"]])
     acc = pd.DataFrame(cols).T
     return acc.dropna(axis=1)
+
+
+def across_friedman(lbs: list[Leaderboard]) -> Friedman | None:
+    """The Friedman test and Nemenyi critical difference over the tables (each table one data set, at
+    the tables' alpha) of the methods present in every table; None with fewer than two of either."""
+    acc = across_tables(lbs)
+    if acc.shape[0] < 2 or acc.shape[1] < 2:
+        return None
+    return friedman(acc.to_numpy(np.float64), lbs[0].alpha)
+
+
+def across_note(f: Friedman) -> str:
+    """What the Friedman test and the critical difference say across the tables, in one paragraph."""
+    test = (f"Friedman test over N = {f.n_datasets} tables of {f.k} methods: chi2 = {f.statistic:.2f}, "
+            f"p = {_p(f.pvalue)}" if np.isfinite(f.pvalue) else
+            f"no Friedman test: it needs three methods (here {f.k}) and two tables (here {f.n_datasets})")
+    cd = f"Nemenyi critical difference at α={f.alpha:g}: {f.cd:.2f} mean ranks"
+    if f.can_separate:
+        return f"{test}. {cd}."
+    return (f"{test}. {cd}: with {f.n_datasets} tables even the largest possible difference ({f.k - 1}) is below it, "
+            f"so no two methods can be told apart and no diagram is drawn; {f.k} methods need at least "
+            f"{f.datasets_needed} tables (datasets or evaluations).")
 
 
 def mean_ranks(lbs: list[Leaderboard]) -> pd.DataFrame:
@@ -558,8 +651,7 @@ def compare_methods(rs: ResultSet, lb: Leaderboard, a: str, b: str) -> Compariso
     if ida == idb:
         raise TouchbenchError(f"{a!r} and {b!r} are the same method ({ida})")
     preds = rs.predictions[rs.predictions["table_key"] == lb.key] if rs.predictions is not None else None
-    by, pairs = _pair(lb.folds, preds, ida, idb)
-    test = paired_test(pairs["a"].to_numpy(), pairs["b"].to_numpy(), paired_by=by)
+    test, pairs = _compare(lb.folds, preds, ida, idb)
     pairs = pairs.assign(diff=pairs["a"] - pairs["b"])
     fa = set(lb.folds[lb.folds["method_id"] == ida]["fold_key"])
     fb = set(lb.folds[lb.folds["method_id"] == idb]["fold_key"])
@@ -708,7 +800,7 @@ def _versus_best_cell(r: pd.Series, failed_all: bool) -> str:
         return f"{100 * r['diff_vs_best']:+.1f}, not tested (n={r['n_pairs']})" if np.isfinite(r["diff_vs_best"]) else "not tested"
     star = " *" if r["differs"] else ""
     return (f"{100 * r['diff_vs_best']:+.1f}, p={_p(r['p_holm'])}{star} "
-            f"({'perm' if r['test'] == 'exact-permutation' else 'Wilcoxon'}, n={r['n_pairs']} {r['paired_by']}s)")
+            f"({TEST_SHORT.get(r['test'], r['test'])}, n={r['n_pairs']} {r['paired_by']}s)")
 
 
 def legend(lb: Leaderboard) -> str:
@@ -716,8 +808,8 @@ def legend(lb: Leaderboard) -> str:
             f"the seeds); interval: Student t over folds (Wilson over captures for a "
             f"single fold). Latency: median over folds of the time to compute the features of one capture and "
             f"predict it; fit: median seconds per fold; features: median ms per capture. Δ: mean paired difference "
-            f"to the best method in percentage points; p: exact sign-flip permutation test (≤15 pairs) or Wilcoxon "
-            f"signed-rank test, Holm-adjusted over the table; * = differs at α={lb.alpha:g}. ★ = on the accuracy / "
+            f"to the best method in percentage points; p: McNemar's exact test on the test captures (one test set) "
+            f"or the corrected resampled t-test over folds, Holm-adjusted over the table; * = differs at α={lb.alpha:g}. ★ = on the accuracy / "
             f"latency Pareto front."
             + (" † = the method was designed on part of this data (see the note); held out: accuracy on the "
                "test captures outside the design data (mean over folds)." if lb.has_design else "")
@@ -751,6 +843,8 @@ def to_markdown(lbs: list[Leaderboard], title: str | None = "Leaderboard") -> st
                 "| method | mean rank | mean accuracy % |", "|---|---|---|"]
         out += [f"| {_md_escape(r.method)} | {r.mean_rank:.2f} | {_pct(r.mean_accuracy)} |" for r in ranks.itertuples()]
         out += ["", RANK_LEGEND, ""]
+        f = across_friedman(lbs)
+        out += [across_note(f), ""] if f is not None else []
     return "\n".join(out)
 
 
@@ -824,6 +918,9 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
             t.add_row(escape(r.method), f"{r.mean_rank:.2f}", _pct(r.mean_accuracy))
         console.print(t)
         console.print(RANK_LEGEND, style="dim")
+        f = across_friedman(lbs)
+        if f is not None:
+            console.print(escape(across_note(f)), style="dim")
 
 
 def write_text(path: Path, text: str) -> Path:

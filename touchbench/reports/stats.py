@@ -1,6 +1,7 @@
-"""Statistics of the leaderboard: fold summaries, intervals, paired tests, Holm.
+"""Statistics of the leaderboard: fold summaries, intervals, the paired test that fits the design,
+Holm, and the comparisons across evaluations.
 
-Choices (stated once, used everywhere):
+Which test is used when (stated once, used everywhere):
 
 - **Spread and interval over folds.** A method's accuracy is the mean of its
   per-fold accuracies (as Gaus et al. 2015, Sec. 4.1, and Al-mashhadani et
@@ -13,26 +14,58 @@ Choices (stated once, used everywhere):
 - **One fold** (the challenge split): no spread; the interval is the Wilson
   score interval of the accuracy as a binomial proportion over the test
   captures.
-- **Paired test against the best method.** Differences are paired by fold
-  (same test captures) or, when the methods share fewer than two folds, by
-  test subject. With at most :data:`EXACT_MAX_PAIRS` pairs the test is the
-  exact permutation test of the mean difference: all ``2**n`` sign flips of
-  the differences are enumerated, and the two-sided p-value is the share of
-  flips whose ``|mean|`` is at least the observed one (the same value as
-  ``scipy.stats.permutation_test(..., permutation_type="samples",
-  n_resamples=inf)``). With more pairs it is the Wilcoxon signed-rank test
-  (``scipy.stats.wilcoxon``, zero differences dropped, two-sided, scipy's
-  choice of exact or normal distribution). Few pairs cannot reach a small
-  p-value: with ``n`` pairs the smallest exact p is ``2 / 2**n`` (0.25 for 3
-  subjects, 0.0625 for 5 folds); the leaderboard shows ``n`` beside ``p``.
+- **Two methods on one test set** (they share a single fold): McNemar's
+  exact test on the paired test captures (Dietterich 1998, Sec. 3.1; the
+  exact binomial form, since the discordant counts are often small): ``b``
+  captures the first method gets right and the second wrong, ``c`` the
+  reverse, ``p = binomtest(b, b + c, 1/2)`` two-sided (:func:`mcnemar_exact`).
+  A capture evaluated with several seeds counts as right for a method when
+  it is right for at least half of that method's seeds. The unit is the
+  capture: ``n`` is the number of paired test captures.
+- **Two methods over folds** (k-fold, leave-one-subject-out, repeated
+  splits: at least two shared folds): the corrected resampled t-test of
+  Nadeau & Bengio (2003, Sec. 4, the "corrected resampled t"): over the
+  ``J`` paired fold differences ``d``, ``t = mean(d) / sqrt((1/J +
+  n_test/n_train) * var(d))`` with ``J - 1`` degrees of freedom, where
+  ``n_test/n_train`` is the mean ratio over the folds; the variance is
+  inflated because training sets overlap (:func:`corrected_resampled_t`). The
+  unit is the fold: ``n`` is the number of paired folds. Differences all
+  equal and nonzero give ``t`` infinite and ``p = 0``; all zero, ``p = 1``.
+- **Interval of a difference.** Where subjects are the unit (a single test
+  set holding two or more subjects, or folds that each test one subject, as
+  leave-one-subject-out), a percentile bootstrap over the test subjects
+  (:func:`subject_bootstrap`: subjects resampled with replacement, the
+  difference of the pooled accuracies, :data:`BOOTSTRAP_RESAMPLES`
+  resamples, seeded: :data:`BOOTSTRAP_SEED`); it resamples subjects, never
+  captures, since captures of one person are not independent. Otherwise, the
+  corrected t interval ``mean(d) +- t(0.975, J-1) * sqrt((1/J +
+  n_test/n_train) * var(d))``. The decision is the test's; the interval
+  describes the difference.
 - **Multiple comparisons.** The p-values of one table (every method against
   the best) are adjusted with Holm's step-down method; a method "differs"
   when its adjusted p is below ``alpha`` (0.05).
+- **Across evaluations** (datasets, or schemes of one dataset: each table
+  is one data set in Demsar's sense, never its folds): the methods' ranks
+  within each table, averaged (Demsar 2006, Sec. 3.2.2); the Friedman test
+  over the tables (``scipy.stats.friedmanchisquare``: at least three methods
+  and two tables; :func:`friedman`); the Nemenyi critical difference
+  ``CD = q_alpha * sqrt(k (k + 1) / (6 N))`` with ``q_alpha`` the
+  studentized range quantile over ``sqrt(2)`` (Demsar 2006, Sec. 3.2.2,
+  Table 5; :func:`nemenyi_cd`). When even the largest possible rank
+  difference ``k - 1`` is below ``CD``, no diagram can separate two methods:
+  none is drawn, and :func:`datasets_needed` says how many tables would
+  be. One ``alpha`` serves the table tests, Friedman and the diagram.
+- **Two methods across evaluations**: a meta-analysis as MOABB's
+  (Jayaram & Barachant 2018; ``moabb.analysis.meta_analysis``): per table the
+  standardized mean difference of the paired units of its test (Cohen's
+  ``d_z = mean(d) / sd(d)``), the one-sided p of "the first is better" from
+  the table's test, combined by Stouffer's method weighted by ``sqrt(n)``
+  (``scipy.stats.combine_pvalues(method="stouffer")``); the combined
+  two-sided p is twice the smaller one-sided one (:func:`meta_analysis`).
 """
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import asdict, dataclass
 from typing import Sequence
@@ -41,17 +74,35 @@ import numpy as np
 from scipy import stats
 
 __all__ = [
-    "EXACT_MAX_PAIRS",
+    "BOOTSTRAP_RESAMPLES",
+    "BOOTSTRAP_SEED",
+    "Friedman",
+    "MetaAnalysis",
     "PairedTest",
-    "exact_sign_flip_pvalue",
+    "TEST_NAMES",
+    "TEST_SHORT",
+    "corrected_resampled_t",
+    "datasets_needed",
     "fold_interval",
+    "friedman",
     "holm",
-    "paired_test",
+    "mcnemar_exact",
+    "meta_analysis",
+    "nemenyi_cd",
+    "no_test",
+    "subject_bootstrap",
     "wilson_interval",
 ]
 
-#: Up to this many pairs the exact permutation test is used (2**15 = 32768 sign flips).
-EXACT_MAX_PAIRS = 15
+#: Resamples of the bootstrap over subjects.
+BOOTSTRAP_RESAMPLES = 10000
+#: Seed of the bootstrap over subjects (the same interval on every run).
+BOOTSTRAP_SEED = 0
+#: The tests' names as reports write them.
+TEST_NAMES = {"mcnemar-exact": "McNemar's exact test", "corrected-t": "corrected resampled t-test",
+              "none": "no test"}
+#: The tests' short names, for a table cell.
+TEST_SHORT = {"mcnemar-exact": "McNemar", "corrected-t": "corrected t"}
 
 
 def fold_interval(values: Sequence[float], level: float = 0.95) -> tuple[float, float, float, float]:
@@ -88,68 +139,113 @@ def wilson_interval(successes: int, n: int, level: float = 0.95) -> tuple[float,
     return (max(0.0, centre - half), min(1.0, centre + half))
 
 
-def exact_sign_flip_pvalue(d: Sequence[float]) -> float:
-    """Two-sided exact permutation p-value of the mean of paired differences ``d``.
-
-    Under the null hypothesis each difference is equally likely to have
-    either sign; every one of the ``2**n`` sign assignments is enumerated.
-    p = #{flips: |mean(s * d)| >= |mean(d)|} / 2**n, with a relative
-    tolerance of 1e-9 so that ties in floating point count as ties.
-    """
-    x = np.asarray(d, dtype=np.float64)
-    n = len(x)
-    if n == 0:
-        return math.nan
-    if n > 20:
-        raise ValueError(f"exact enumeration of 2**{n} sign flips is too large; use the Wilcoxon test")
-    signs = np.array(list(itertools.product((1.0, -1.0), repeat=n)), dtype=np.float64)
-    null = np.abs(signs @ x) / n
-    obs = abs(float(np.mean(x)))
-    tol = 1e-9 * max(1.0, obs)
-    return float(np.count_nonzero(null >= obs - tol) / len(null))
-
-
 @dataclass(frozen=True)
 class PairedTest:
-    """The result of a paired comparison of ``a`` against ``b`` (``a - b``)."""
+    """A paired comparison of ``a`` against ``b`` (differences ``a - b``).
 
-    test: str  # "exact-permutation", "wilcoxon" or "none"
-    paired_by: str  # "fold", "subject" or ""
+    ``test``: a key of :data:`TEST_NAMES`; ``paired_by``: the unit (``"capture"`` or ``"fold"``,
+    ``""`` when nothing is paired); ``n``: paired units; ``statistic``: McNemar's ``b`` (captures
+    only ``a`` gets right) or the corrected t; ``p_greater`` / ``p_less``: one-sided p-values of
+    ``a`` better / worse (1/2 each when the pairs say nothing); ``effect_size``: Cohen's ``d_z`` of
+    the paired differences; ``ci_low`` / ``ci_high``: 95 % interval of the difference, by
+    ``ci_method`` (``"subject-bootstrap"`` or ``"corrected-t"``) over ``n_subjects`` subjects.
+    """
+
+    test: str
+    paired_by: str
     n: int
     mean_difference: float
     statistic: float
     pvalue: float
+    p_greater: float = math.nan
+    p_less: float = math.nan
+    effect_size: float = math.nan
+    ci_low: float = math.nan
+    ci_high: float = math.nan
+    ci_method: str = ""
+    n_subjects: int = 0
 
     def as_dict(self) -> dict:
         return asdict(self)
 
 
-def paired_test(a: Sequence[float], b: Sequence[float], paired_by: str = "fold",
-                exact_max: int = EXACT_MAX_PAIRS) -> PairedTest:
-    """Paired two-sided test of ``a`` against ``b`` (see the module docstring).
+def no_test(paired_by: str, d: Sequence[float]) -> PairedTest:
+    """No test (fewer than two folds, or no paired capture): the mean difference where there is one."""
+    x = np.asarray(d, dtype=np.float64)
+    return PairedTest("none", paired_by, len(x), float(np.mean(x)) if len(x) else math.nan, math.nan, math.nan)
 
-    Fewer than two pairs: no test (``pvalue`` NaN). All differences zero:
-    p = 1 (the methods agree on every pair).
-    """
 
-    x = np.asarray(a, dtype=np.float64)
-    y = np.asarray(b, dtype=np.float64)
+def _sd(d: np.ndarray) -> float:
+    """The sample sd of paired differences, 0 where it is rounding error (fold accuracies that differ
+    by one same fraction differ in their last bits)."""
+    sd = float(np.std(d, ddof=1)) if len(d) > 1 else 0.0
+    return sd if sd > 1e-12 * max(1.0, float(np.max(np.abs(d)))) else 0.0
+
+
+def _d_z(d: np.ndarray) -> float:
+    """Cohen's ``d_z``: the mean of paired differences over their sample sd (NaN when it is 0)."""
+    sd = _sd(d)
+    return float(np.mean(d)) / sd if sd > 0 else math.nan
+
+
+def mcnemar_exact(a_correct: Sequence[bool], b_correct: Sequence[bool]) -> PairedTest:
+    """McNemar's exact test of two methods' correctness on the same test captures (see the module
+    docstring): ``b`` = captures only ``a`` gets right, ``c`` = only ``b``; ``p =
+    binomtest(b, b + c, 1/2)``, two-sided; p = 1 without a discordant capture."""
+    x = np.asarray(a_correct, dtype=bool)
+    y = np.asarray(b_correct, dtype=bool)
     if x.shape != y.shape:
-        raise ValueError(f"paired samples differ in length: {x.shape} vs {y.shape}")
-    d = x - y
-    keep = np.isfinite(d)
-    d = d[keep]
-    n = len(d)
-    mean_d = float(np.mean(d)) if n else math.nan
-    if n < 2:
-        return PairedTest("none", paired_by, n, mean_d, math.nan, math.nan)
-    if np.all(d == 0):
-        test = "exact-permutation" if n <= exact_max else "wilcoxon"
-        return PairedTest(test, paired_by, n, 0.0, 0.0, 1.0)
-    if n <= exact_max:
-        return PairedTest("exact-permutation", paired_by, n, mean_d, mean_d, exact_sign_flip_pvalue(d))
-    res = stats.wilcoxon(d, zero_method="wilcox", alternative="two-sided")
-    return PairedTest("wilcoxon", paired_by, n, mean_d, float(res.statistic), float(res.pvalue))
+        raise ValueError(f"paired captures differ in number: {x.shape} vs {y.shape}")
+    n = len(x)
+    if n == 0:
+        return no_test("capture", [])
+    b, c = int(np.sum(x & ~y)), int(np.sum(~x & y))
+    d = x.astype(np.float64) - y.astype(np.float64)
+    if b + c == 0:
+        return PairedTest("mcnemar-exact", "capture", n, 0.0, 0.0, 1.0, 0.5, 0.5, math.nan)
+    p = float(stats.binomtest(b, b + c, 0.5).pvalue)
+    greater = float(stats.binomtest(b, b + c, 0.5, alternative="greater").pvalue)
+    less = float(stats.binomtest(b, b + c, 0.5, alternative="less").pvalue)
+    return PairedTest("mcnemar-exact", "capture", n, (b - c) / n, float(b), p, greater, less, _d_z(d))
+
+
+def corrected_resampled_t(d: Sequence[float], test_train_ratio: float, level: float = 0.95) -> PairedTest:
+    """Nadeau & Bengio's corrected resampled t-test of paired fold differences ``d`` (see the
+    module docstring), with its interval ``ci_low`` / ``ci_high``; ``test_train_ratio``: the folds'
+    mean ``n_test / n_train``."""
+    x = np.asarray(d, dtype=np.float64)
+    j = len(x)
+    if j < 2 or not np.isfinite(test_train_ratio):
+        return no_test("fold", x)
+    mean = float(np.mean(x))
+    se = math.sqrt(1.0 / j + test_train_ratio) * _sd(x)
+    if se == 0.0:
+        t = math.copysign(math.inf, mean) if mean else 0.0
+        return PairedTest("corrected-t", "fold", j, mean, t, 0.0 if mean else 1.0,
+                          float(t > 0) if mean else 0.5, float(t < 0) if mean else 0.5, math.nan,
+                          mean, mean, "corrected-t")
+    t = mean / se
+    half = float(stats.t.ppf(0.5 + level / 2.0, j - 1)) * se
+    return PairedTest("corrected-t", "fold", j, mean, t, float(2 * stats.t.sf(abs(t), j - 1)),
+                      float(stats.t.sf(t, j - 1)), float(stats.t.cdf(t, j - 1)), _d_z(x),
+                      mean - half, mean + half, "corrected-t")
+
+
+def subject_bootstrap(right_a: Sequence[float], right_b: Sequence[float], n: Sequence[float], *,
+                      level: float = 0.95, resamples: int = BOOTSTRAP_RESAMPLES,
+                      seed: int = BOOTSTRAP_SEED) -> tuple[float, float]:
+    """Percentile bootstrap interval of the accuracy difference over subjects: per subject the
+    captures ``a`` and ``b`` got right and the captures tested; each resample draws the subjects
+    with replacement and takes ``(sum right_a - sum right_b) / sum n``. NaN for fewer than two
+    subjects."""
+    ra, rb, m = (np.asarray(v, dtype=np.float64) for v in (right_a, right_b, n))
+    if len(m) < 2:
+        return (math.nan, math.nan)
+    idx = np.random.default_rng(seed).integers(0, len(m), size=(resamples, len(m)))
+    diff = (ra[idx].sum(axis=1) - rb[idx].sum(axis=1)) / m[idx].sum(axis=1)
+    tail = 100.0 * (1.0 - level) / 2.0
+    lo, hi = np.percentile(diff, [tail, 100.0 - tail])
+    return (float(lo), float(hi))
 
 
 def holm(pvalues: Sequence[float]) -> np.ndarray:
@@ -171,3 +267,88 @@ def holm(pvalues: Sequence[float]) -> np.ndarray:
         running = max(running, min(1.0, (m - rank) * p[i]))
         out[i] = running
     return out
+
+
+@dataclass(frozen=True)
+class Friedman:
+    """The Friedman test over ``n_datasets`` tables of ``k`` methods, and the Nemenyi critical
+    difference at ``alpha`` (NaN statistic and p when there are fewer than three methods or two
+    tables)."""
+
+    statistic: float
+    pvalue: float
+    n_datasets: int
+    k: int
+    alpha: float
+    cd: float
+
+    @property
+    def can_separate(self) -> bool:
+        """Whether the largest possible mean rank difference (``k - 1``) reaches the critical difference."""
+        return self.k >= 2 and self.n_datasets >= 2 and self.k - 1 >= self.cd
+
+    @property
+    def datasets_needed(self) -> int:
+        return datasets_needed(self.k, self.alpha)
+
+
+def _q_alpha(k: int, alpha: float) -> float:
+    """Demsar's ``q_alpha``: the studentized range quantile of ``k`` means (infinite df) over sqrt(2)."""
+    return float(stats.studentized_range.ppf(1.0 - alpha, k, np.inf)) / math.sqrt(2.0)
+
+
+def nemenyi_cd(k: int, n_datasets: int, alpha: float) -> float:
+    """Nemenyi's critical difference of mean ranks: ``q_alpha * sqrt(k (k + 1) / (6 N))``."""
+    return _q_alpha(k, alpha) * math.sqrt(k * (k + 1) / (6.0 * n_datasets))
+
+
+def datasets_needed(k: int, alpha: float) -> int:
+    """The fewest tables at which ``k`` methods can be separated: the smallest ``N`` with
+    ``k - 1 >= CD``, i.e. ``N >= q_alpha**2 k (k + 1) / (6 (k - 1)**2)`` (at least 2)."""
+    return max(2, math.ceil(_q_alpha(k, alpha) ** 2 * k * (k + 1) / (6.0 * (k - 1) ** 2) - 1e-12))
+
+
+def friedman(scores: np.ndarray, alpha: float) -> Friedman:
+    """The Friedman test of ``scores`` (rows: tables, columns: methods; higher is better)."""
+    x = np.asarray(scores, dtype=np.float64)
+    n, k = x.shape
+    cd = nemenyi_cd(k, n, alpha) if k >= 2 and n >= 1 else math.nan
+    if k < 3 or n < 2:
+        return Friedman(math.nan, math.nan, n, k, alpha, cd)
+    res = stats.friedmanchisquare(*x.T)
+    return Friedman(float(res.statistic), float(res.pvalue), n, k, alpha, cd)
+
+
+@dataclass(frozen=True)
+class MetaAnalysis:
+    """Two methods across tables: per table the effect size (``d_z``), units and one-sided p-values;
+    Stouffer's combined ``z`` (positive: ``a`` better) and the two-sided combined p."""
+
+    effect_sizes: list[float]
+    n: list[int]
+    p_greater: list[float]
+    z: float
+    pvalue: float
+    p_greater_combined: float
+    p_less_combined: float
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def meta_analysis(tests: Sequence[PairedTest]) -> MetaAnalysis:
+    """MOABB's meta-analysis of one comparison across tables (see the module docstring); tables
+    without a test are left out."""
+    done = [t for t in tests if t.test != "none" and np.isfinite(t.p_greater)]
+    if not done:
+        raise ValueError("no table has a test of the two methods to combine")
+    w = np.sqrt(np.array([t.n for t in done], dtype=np.float64))
+    # a one-sided p of exactly 0 or 1 (differences all of one sign) is an infinite z: kept finite
+    tiny = np.finfo(np.float64).tiny
+    greater = np.clip([t.p_greater for t in done], tiny, 1.0)
+    less = np.clip([t.p_less for t in done], tiny, 1.0)
+    g = stats.combine_pvalues(greater, method="stouffer", weights=w)
+    lo = stats.combine_pvalues(less, method="stouffer", weights=w)
+    return MetaAnalysis([t.effect_size for t in done], [t.n for t in done], [t.p_greater for t in done],
+                        float(g.statistic), float(min(1.0, 2 * min(g.pvalue, lo.pvalue))), float(g.pvalue),
+                        float(lo.pvalue))
