@@ -87,6 +87,8 @@ def test_a_run_records_cpu_time_load_and_cpus_and_says_when_the_machine_was_busy
     platform_block = json.loads((busy_run / "manifest.json").read_text())["platform"]
     assert platform_block["cpu_model"] == manifest.cpu_model() and platform_block["usable_cpus"] == 2
     lb = build_leaderboards(load_results([busy_run]))[0]
+    model = manifest.cpu_model()  # the machine is described by its CPU model where the system names it
+    assert model is None or f", {model}, " in next(iter(lb.machines.values()))
     assert any("busier than its CPUs (load average 10.5 on 2 usable CPUs)" in n for n in lb.notes)
     assert lb.rows["latency_cpu_ms"].iloc[0] == pytest.approx(timed["latency_cpu_ms"].iloc[0])
 

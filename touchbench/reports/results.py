@@ -88,7 +88,9 @@ def machine_id(platform: dict[str, Any] | None) -> tuple[str, str]:
     if not platform:
         return "unknown", "unknown machine (no manifest)"
     key = {k: platform.get(k) for k in ("platform", "machine", "processor", "cpu_count")}
-    desc = f"{platform.get('platform') or '?'}, {platform.get('cpu_count') or '?'} CPUs"
+    # the CPU model names the machine; the id leaves it out, so results written before it was recorded keep theirs
+    model = f"{platform['cpu_model']}, " if platform.get("cpu_model") else ""
+    desc = f"{platform.get('platform') or '?'}, {model}{platform.get('cpu_count') or '?'} CPUs"
     return "m-" + _short_hash(key, 6), desc
 
 
