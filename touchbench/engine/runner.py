@@ -47,7 +47,8 @@ from rich.progress import (
 from ..core.errors import TouchbenchError
 from ..datasets.model import TouchDataset
 from ..protocols.schema import Protocol, load_protocol
-from ..results.ledger import LEDGER_NAME, check_final, record_look
+from ..core.paths import results_root
+from ..results.ledger import LEDGER_NAME, check_final, end_look, merge_ledgers, old_ledgers, record_look, start_look
 from ..results.manifest import now_iso, update_manifest
 from ..results.store import PREDICTED, SCHEMA_VERSION, TRUE, ResultStore, check_schema, read_results_table
 from ..results.summary import check_expected, summarize
@@ -190,8 +191,12 @@ def _damaged_notes(plan: Plan, problems: dict[str, str]) -> list[str]:
 
 
 def default_ledger(protocol: Protocol, out: str | Path) -> Path:
-    """The ledger of the results root: the parent of the protocol's results folder (which holds one
-    folder per evaluation when the protocol has several)."""
+    """The ledger of the results root (:func:`touchbench.core.paths.results_root`: the nearest
+    ``results`` folder above ``out``); outside one, of the parent of the protocol's results folder
+    (which holds one folder per evaluation when the protocol has several)."""
+    root = results_root(out)
+    if root is not None:
+        return root / LEDGER_NAME
     folder = Path(out).parent if protocol.evaluation else Path(out)
     return folder.parent / LEDGER_NAME
 
@@ -243,15 +248,23 @@ def _design_captures(plan: Plan) -> list[str] | None:
     return meta["capture_id"].astype(str)[keep].tolist()
 
 
-def _record_look(plan: Plan, ledger: Path, final: bool, force_final: bool, n_pending: int) -> tuple[str, list[str]]:
-    """The plan's test-set hash; the look recorded in the ledger (when the run scores the test set)."""
+def _record_look(plan: Plan, store: ResultStore, ledger: Path, final: bool, force_final: bool, n_pending: int,
+                 only: set[str] | None) -> tuple[str, list[str]]:
+    """The plan's test-set hash; the look recorded in the ledger (when the run scores the test set:
+    the session that resumes an interrupted run records that run's look id again)."""
+    root = results_root(store.root)
+    if root is not None and ledger == root / LEDGER_NAME:  # the ledgers of earlier versions, deeper in the root
+        merge_ledgers(ledger, old_ledgers(root))
     test_set = plan_test_set(plan)
     methods = plan_methods(plan)
     notes = check_final(ledger, test_set, methods, force_final) if final else []
     if n_pending or final:
+        look, resumed = start_look(store.root, {"run_id": plan.run_id, "final": final,
+                                                "methods": sorted(only) if only is not None else None})
         record_look(ledger, {"time": now_iso(), "protocol": plan.protocol.name, "evaluation": plan.protocol.evaluation,
                              "test_set": test_set, "run_id": plan.run_id, "methods": methods, "tasks": n_pending,
-                             "final": final, "forced": bool(notes)})
+                             "final": final, "forced": bool(notes), "look": look, "resumed": resumed,
+                             "results": str(store.root)})
     return test_set, notes
 
 
@@ -404,7 +417,7 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
     if not pending and not final and _reports_current(store, plan, notes):
         return _noop_result(plan, store, [t.task_id for t in selected], notes, t_start)
 
-    test_set, final_notes = _record_look(plan, ledger, final, force_final, len(pending))  # before any task
+    test_set, final_notes = _record_look(plan, store, ledger, final, force_final, len(pending), methods)  # before any task
     session = _Session(started_at, t_start, jobs, force, [t.task_id for t in selected], len(pending), dict(finished),
                        notes=notes + final_notes)
     with _Progress(sys.stderr.isatty() if progress is None else progress) as prog:
@@ -412,7 +425,10 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
             session.notes += _fill_cache(plan, pending, jobs, prog, worker_setup)
             session.n_ran, session.stopped = _execute(plan, store, pending, jobs, prog, worker_setup, fail_fast,
                                                       session.status)
-    return _merge_and_record(plan, store, session, ledger, test_set, final, design_captures)
+    result = _merge_and_record(plan, store, session, ledger, test_set, final, design_captures)
+    if not session.stopped:  # the run ended: the next one is another look
+        end_look(store.root)
+    return result
 
 
 def results_dirs(protocol: Protocol, out: str | Path | None = None) -> list[tuple[Protocol, Path]]:

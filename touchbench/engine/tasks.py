@@ -31,13 +31,14 @@ from typing import Any, Callable
 import numpy as np
 import pandas as pd
 
-from ..core.threads import single_thread
+from ..core.threads import available_cpus, single_thread
 from ..datasets.model import TouchDataset
 from ..evaluation.metrics import metrics
 from ..features.base import make_feature_set
 from ..methods import FittedMethod, Method
 from ..methods.fitting import fit_estimator
 from ..protocols.schemes import Fold, fold_notes
+from ..results.manifest import load_average
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
 from .backends import run_setup
 from .cache import FeatureCache, crop_captures
@@ -190,21 +191,21 @@ def _latency_sets(task: Task, ctx: RunContext, fitted: list, y_train: np.ndarray
     return out
 
 
-def _measure_latency(method: FittedMethod, captures: list[np.ndarray]) -> float:
-    """Median milliseconds for ``method`` to label one capture (features + predict): ``captures`` in
-    turn, one at a time, after one warm-up call; at least ``LATENCY_MIN_CALLS`` calls and until
-    ``LATENCY_BUDGET_S`` seconds were timed, at most ``LATENCY_MAX_CALLS``."""
-
-    def once(capture):
+def _measure_latency(method: FittedMethod, captures: list[np.ndarray]) -> tuple[float, float]:
+    """Median milliseconds for ``method`` to label one capture (features + predict), wall-clock and
+    CPU time of the labelling thread (which other processes' load changes far less): ``captures``
+    in turn, one at a time, after one warm-up call; at least ``LATENCY_MIN_CALLS`` calls and until
+    ``LATENCY_BUDGET_S`` wall-clock seconds were timed, at most ``LATENCY_MAX_CALLS``."""
+    method.predict([captures[0]])
+    wall: list[float] = []
+    cpu: list[float] = []
+    while len(wall) < LATENCY_MAX_CALLS and (len(wall) < LATENCY_MIN_CALLS or sum(wall) < LATENCY_BUDGET_S):
+        capture = captures[len(wall) % len(captures)]
+        t0, c0 = time.perf_counter(), time.thread_time_ns()
         method.predict([capture])
-
-    once(captures[0])
-    times: list[float] = []
-    while len(times) < LATENCY_MAX_CALLS and (len(times) < LATENCY_MIN_CALLS or sum(times) < LATENCY_BUDGET_S):
-        t0 = time.perf_counter()
-        once(captures[len(times) % len(captures)])
-        times.append(time.perf_counter() - t0)
-    return 1000.0 * float(np.median(times))
+        cpu.append((time.thread_time_ns() - c0) / 1e9)
+        wall.append(time.perf_counter() - t0)
+    return 1000.0 * float(np.median(wall)), 1000.0 * float(np.median(cpu))
 
 
 def _with_subject_id(ds: TouchDataset, fold: Fold, X_tr: np.ndarray, X_te: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -254,7 +255,7 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
                 lat_sets = _latency_sets(task, ctx, fitted, y_train)
                 caps = [ds.captures[int(i)][: task.crop_frames] if task.crop_frames is not None else ds.captures[int(i)]
                         for i in fold.test[:LATENCY_CAPTURES]]
-                row["latency_ms"] = _measure_latency(FittedMethod(lat_sets, fitted_est), caps)
+                row["latency_ms"], row["latency_cpu_ms"] = _measure_latency(FittedMethod(lat_sets, fitted_est), caps)
         meta = ds.meta.iloc[fold.test]
         preds = pd.DataFrame({
             "task_id": task.task_id,
@@ -280,6 +281,7 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
         row["error"] = f"{type(e).__name__}: {e}\n{tb}"
         preds = None
     row["notes"] = "; ".join(dict.fromkeys(notes))
+    row["load_avg"], row["usable_cpus"] = load_average(), available_cpus()  # how busy the machine was
     row["finished_at"] = pd.Timestamp.now(tz="UTC").isoformat()
     return row, preds
 

@@ -50,7 +50,7 @@ from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError
 from ..results.ledger import Looks
 from ..results.store import NOT_RECORDED, PREDICTED, TRUE
-from .pareto import pareto_front
+from .pareto import pareto_cost, pareto_front
 from .results import ResultSet, load_results
 from .stats import (
     TEST_SHORT,
@@ -275,6 +275,7 @@ def _tuned_on_test(df: pd.DataFrame) -> pd.DataFrame:
 def _timings(s: pd.DataFrame) -> dict[str, float]:
     return {
         "latency_ms": float(s["latency_ms"].median()) if s["latency_ms"].notna().any() else math.nan,
+        "latency_cpu_ms": float(s["latency_cpu_ms"].median()) if s["latency_cpu_ms"].notna().any() else math.nan,
         "fit_seconds": float(s["fit_seconds"].median()) if s["fit_seconds"].notna().any() else math.nan,
         "feature_ms": 1000.0 * float(s["feature_seconds_per_capture"].median())
         if s["feature_seconds_per_capture"].notna().any() else math.nan,
@@ -295,14 +296,14 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
     design = _Design.of(sources)
     notes, looks_here = _source_notes(sources)
     ref = _reference_machine(ok, machines, machine, first)
-    notes += _machines_notes(machines, ref, pool_machines)
+    notes += _machines_notes(machines, ref, pool_machines) + _busy_notes(ok)
     rows = [_method_row(mid, g_all, ok[ok["method_id"] == mid], folds[folds["method_id"] == mid], preds,
                         ref, pool_machines, design)
             for mid, g_all in s_all.groupby("method_id", sort=False)]
     notes += design.row_notes(rows)
     df = _ranked(_tuned_on_test(pd.DataFrame(rows)))
     _add_tests_against_best(df, folds, preds, alpha)
-    _mark_pareto_fronts(df)
+    notes += _mark_pareto_fronts(df)
     _add_closing_notes(df, notes)
     fr = s_all["frame_rate"].dropna()
     return Leaderboard(
@@ -396,6 +397,20 @@ def _machines_notes(machines: dict[str, str], ref: str | None, pool_machines: bo
     return []
 
 
+def _busy_notes(ok: pd.DataFrame) -> list[str]:
+    """A note per results folder whose latencies were measured on a machine busier than its CPUs (its
+    1-minute load average above the number of CPUs the run could use)."""
+    timed = ok[ok["latency_ms"].notna() & ok["load_avg"].notna() & ok["usable_cpus"].notna()]
+    notes = []
+    for source, g in timed.groupby("source", sort=False):
+        busiest = g.loc[(g["load_avg"] / g["usable_cpus"]).idxmax()]
+        if busiest["load_avg"] > busiest["usable_cpus"]:
+            notes.append(f"{source} was measured on a machine busier than its CPUs (load average "
+                         f"{busiest['load_avg']:.1f} on {int(busiest['usable_cpus'])} usable CPUs): its wall-clock "
+                         "timings are slower than on an idle machine; CPU times much less so")
+    return notes
+
+
 def _method_row(mid: str, g_all: pd.DataFrame, g: pd.DataFrame, f: pd.DataFrame, preds: pd.DataFrame | None,
                 ref: str | None, pool_machines: bool, design: _Design) -> dict[str, Any]:
     """A method's row: its description, accuracy over its folds ``f``, timings and design."""
@@ -419,7 +434,7 @@ def _method_row(mid: str, g_all: pd.DataFrame, g: pd.DataFrame, f: pd.DataFrame,
     tm = _timing_machine(g, ref, pool_machines)
     gt = g if pool_machines else g[g["machine"] == tm]
     row["timing_machine"] = tm
-    row.update(_timings(gt) if len(gt) else {"latency_ms": math.nan, "fit_seconds": math.nan, "feature_ms": math.nan})
+    row.update(_timings(gt))
     row.update(design.row_fields(preds, mid, row))
     return row
 
@@ -486,12 +501,20 @@ def _add_tests_against_best(df: pd.DataFrame, folds: pd.DataFrame, preds: pd.Dat
     df["differs"] = [bool(np.isfinite(p) and p < alpha) for p in adj]
 
 
-def _mark_pareto_fronts(df: pd.DataFrame) -> None:
-    """The accuracy / latency Pareto front, per timing machine."""
+def _mark_pareto_fronts(df: pd.DataFrame) -> list[str]:
+    """The accuracy / CPU-time Pareto front, per timing machine; a note for a machine whose front
+    falls back to wall-clock latency."""
     df["pareto"] = False
+    notes = []
     for tm, g in df.groupby("timing_machine"):
-        mask = pareto_front(g["accuracy"].to_numpy(), g["latency_ms"].to_numpy())
+        cost = pareto_cost(g)
+        if cost == "latency_ms" and g["latency_ms"].notna().any():
+            notes.append(f"the Pareto front{' of ' + str(tm) if df['timing_machine'].nunique() > 1 else ''} is on "
+                         "wall-clock latency, which the machine's load changes: some results have no CPU time "
+                         "(written before touchbench measured it)")
+        mask = pareto_front(g["accuracy"].to_numpy(), g[cost].to_numpy())
         df.loc[g.index[mask], "pareto"] = True
+    return notes
 
 
 def _add_closing_notes(df: pd.DataFrame, notes: list[str]) -> None:
@@ -810,7 +833,8 @@ def legend(lb: Leaderboard) -> str:
             f"predict it; fit: median seconds per fold; features: median ms per capture. Δ: mean paired difference "
             f"to the best method in percentage points; p: McNemar's exact test on the test captures (one test set) "
             f"or the corrected resampled t-test over folds, Holm-adjusted over the table; * = differs at α={lb.alpha:g}. ★ = on the accuracy / "
-            f"latency Pareto front."
+            f"latency Pareto front (latency as the CPU time of labelling one capture, which the machine's load "
+            f"changes far less than the wall-clock latency shown)."
             + (" † = the method was designed on part of this data (see the note); held out: accuracy on the "
                "test captures outside the design data (mean over folds)." if lb.has_design else "")
             + (" LEAKY rows: the evaluation let test data inform training (see the notes)."

@@ -48,10 +48,11 @@ import pandas as pd
 import yaml
 
 from ..core.errors import TouchbenchError
+from ..core.paths import results_root
 from ..core.yamlsafe import safe_load
 from ..methods.base import SUBJECT_ID_LEAK
 from ..protocols.schemes.base import scheme_class
-from ..results.ledger import Looks, looks
+from ..results.ledger import LEDGER_NAME, Looks, looks, old_ledgers
 from ..results.manifest import LEFT_OUT
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE, ResultStore, check_schema, read_results_table
 
@@ -87,7 +88,9 @@ def machine_id(platform: dict[str, Any] | None) -> tuple[str, str]:
     if not platform:
         return "unknown", "unknown machine (no manifest)"
     key = {k: platform.get(k) for k in ("platform", "machine", "processor", "cpu_count")}
-    desc = f"{platform.get('platform') or '?'}, {platform.get('cpu_count') or '?'} CPUs"
+    # the CPU model names the machine; the id leaves it out, so results written before it was recorded keep theirs
+    model = f"{platform['cpu_model']}, " if platform.get("cpu_model") else ""
+    desc = f"{platform.get('platform') or '?'}, {model}{platform.get('cpu_count') or '?'} CPUs"
     return "m-" + _short_hash(key, 6), desc
 
 
@@ -290,12 +293,15 @@ def _source_record(d: Path, m: dict[str, Any], s: pd.DataFrame, mid: str, mdesc:
 
 
 def _looks(manifest: dict[str, Any], folder: Path) -> Looks | None:
-    """How often the run's test set was scored, from the ledger its manifest names (relative to the
-    results folder; None: no ledger)."""
+    """How often the run's test set was scored: the ledger its manifest names (relative to the
+    results folder), the ledger of its results root and those earlier versions kept below it, not
+    yet merged into it (None: the manifest names no ledger)."""
     info = manifest.get("ledger") or {}
     if not info.get("path") or not info.get("test_set"):
         return None
-    return looks(folder / info["path"], info["test_set"])
+    root = results_root(folder)
+    ledgers = [folder / info["path"]] + ([root / LEDGER_NAME, *old_ledgers(root)] if root is not None else [])
+    return looks(ledgers, info["test_set"])
 
 
 def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> ResultSet:

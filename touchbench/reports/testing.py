@@ -37,12 +37,15 @@ class FakeMethod(dict):
 
     ``wrong``: fold name -> capture ids predicted wrongly (predicted as the
     next class in sorted order); ``predicted``: capture id -> label, for any
-    confusion (overrides ``wrong``); timings per fold (constant or a list).
+    confusion (overrides ``wrong``); timings per fold (constant or a list):
+    ``latency_cpu_ms`` as ``latency_ms`` unless given; ``load_avg``: the
+    machine's load average while it ran (on the platform's ``cpu_count`` CPUs).
     """
 
     def __init__(self, features: str, classifier: str, *, classifier_name: str | None = None,
                  classifier_params: dict[str, Any] | None = None, feature_params: list | None = None,
                  wrong: dict[str, Sequence[str]] | None = None, latency_ms: float | Sequence[float] = 1.0,
+                 latency_cpu_ms: float | Sequence[float] | None = None, load_avg: float = 0.0,
                  fit_seconds: float | Sequence[float] = 0.5, feature_seconds_per_capture: float | Sequence[float] = 1e-3,
                  early_frames: int | None = None, failed_folds: Sequence[str] = (),
                  predicted: dict[str, str] | None = None):
@@ -50,7 +53,9 @@ class FakeMethod(dict):
             features=features, classifier=classifier, classifier_name=classifier_name or classifier,
             classifier_params=classifier_params or {},
             feature_params=feature_params if feature_params is not None else [[f, {}] for f in features.split("+")],
-            wrong={k: list(v) for k, v in (wrong or {}).items()}, latency_ms=latency_ms, fit_seconds=fit_seconds,
+            wrong={k: list(v) for k, v in (wrong or {}).items()}, latency_ms=latency_ms,
+            latency_cpu_ms=latency_ms if latency_cpu_ms is None else latency_cpu_ms, load_avg=load_avg,
+            fit_seconds=fit_seconds,
             feature_seconds_per_capture=feature_seconds_per_capture, early_frames=early_frames,
             failed_folds=list(failed_folds), predicted=dict(predicted or {}),
         )
@@ -108,7 +113,8 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
             base.update(status="ok", error="", **metrics(true, pred),
                         feature_seconds_per_capture=_per_fold(m["feature_seconds_per_capture"], f_i),
                         feature_fit_seconds=0.0, fit_seconds=_per_fold(m["fit_seconds"], f_i), predict_seconds=0.01,
-                        latency_ms=_per_fold(m["latency_ms"], f_i))
+                        latency_ms=_per_fold(m["latency_ms"], f_i), latency_cpu_ms=_per_fold(m["latency_cpu_ms"], f_i),
+                        load_avg=m["load_avg"], usable_cpus=(platform or DEFAULT_PLATFORM).get("cpu_count"))
             score_rows.append(base)
             pred_frames.append(pd.DataFrame({
                 "run_id": run_id, "task_id": task_id, "repetition": 0, "fold": fold_name, "fold_group": fold,

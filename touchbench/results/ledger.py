@@ -14,6 +14,14 @@ A line is appended, under an exclusive ``flock``, and synced to disk
 look. A line cut short by a crash is skipped when read (and the next append
 starts on a new line). :func:`check_final` refuses a second final run on a
 test set with other methods than the first final run's, unless forced.
+
+A run is counted once, however many sessions it took: its ``look`` id is
+written into its results folder (:data:`RUN_FILE`) when it starts and kept
+until it ends, so the session that resumes an interrupted run records the
+same id (``resumed``). One ledger serves every results folder of a results
+root; ledgers that earlier versions kept deeper in the root (one per folder
+of results folders) are merged into it (:func:`merge_ledgers`, each kept as
+``ledger.jsonl.merged``) and read until then (:func:`old_ledgers`).
 """
 
 from __future__ import annotations
@@ -22,12 +30,14 @@ import contextlib
 import hashlib
 import json
 import os
+import uuid
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Sequence
 
 import numpy as np
 
+from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError, WriteError
 
 try:  # POSIX
@@ -35,10 +45,16 @@ try:  # POSIX
 except ImportError:  # pragma: no cover - Windows
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["LEDGER_NAME", "FinalRunError", "Looks", "check_final", "looks", "read_ledger", "record_look",
-           "test_set_hash"]
+__all__ = ["LEDGER_NAME", "RUN_FILE", "FinalRunError", "Looks", "check_final", "end_look", "looks", "merge_ledgers",
+           "old_ledgers", "read_ledger", "read_ledgers", "record_look", "start_look", "test_set_hash"]
 
 LEDGER_NAME = "ledger.jsonl"
+#: in a results folder, while a run is under way (and after it was interrupted): its look id
+RUN_FILE = ".touchbench-run.json"
+#: what a ledger merged into its results root's is renamed to (``ledger.jsonl.merged``)
+MERGED_SUFFIX = ".merged"
+#: how deep below a results root earlier versions kept ledgers (``papers/<profile>/<protocol>-audit/``)
+_OLD_LEDGER_DEPTH = 3
 
 
 class FinalRunError(TouchbenchError):
@@ -85,21 +101,100 @@ def read_ledger(path: str | Path) -> list[dict[str, Any]]:
     return out
 
 
+def _key(entry: dict[str, Any]) -> str:
+    return json.dumps(entry, sort_keys=True, default=str)
+
+
+def read_ledgers(paths: Iterable[str | Path]) -> list[dict[str, Any]]:
+    """The entries of several ledgers, each entry once (a ledger merged into another but still
+    read beside it adds nothing), in the order met."""
+    seen: dict[str, dict[str, Any]] = {}
+    for p in dict.fromkeys(Path(x) for x in paths):
+        for e in read_ledger(p):
+            seen.setdefault(_key(e), e)
+    return list(seen.values())
+
+
+def old_ledgers(root: str | Path) -> list[Path]:
+    """The ledgers earlier versions kept below results root ``root`` (in a folder of results
+    folders), not yet merged into the root's; results folders themselves are not searched."""
+    root = Path(root)
+    found = []
+    for folder, dirs, files in os.walk(root):
+        depth = len(Path(folder).relative_to(root).parts)
+        if "manifest.json" in files or depth >= _OLD_LEDGER_DEPTH:
+            dirs[:] = []
+        dirs[:] = [d for d in dirs if not d.startswith(".") and d != "fragments"]
+        if depth and LEDGER_NAME in files:
+            found.append(Path(folder) / LEDGER_NAME)
+    return sorted(found)
+
+
+def _append(fd: int, p: Path, lines: list[str]) -> None:
+    """Append ``lines`` to the locked ledger ``fd`` (of ``p``) in one write, synced to disk."""
+    text = "".join(line + "\n" for line in lines)
+    try:
+        size = os.fstat(fd).st_size
+        if size:  # a line cut short by a crash: start on a new line
+            os.lseek(fd, size - 1, os.SEEK_SET)
+            if os.read(fd, 1) != b"\n":
+                text = "\n" + text
+        os.write(fd, text.encode())
+        os.fsync(fd)
+    except OSError as e:
+        raise WriteError(f"{p}: cannot write the ledger of test-set looks: {e.strerror or e}") from None
+
+
 def record_look(path: str | Path, entry: dict[str, Any]) -> None:
     """Append ``entry`` as one line, synced to disk before returning."""
     p = Path(path)
-    line = json.dumps(entry, sort_keys=True, default=str)
     with _locked(p) as fd:
-        try:
-            size = os.fstat(fd).st_size
-            if size:  # a line cut short by a crash: start on a new line
-                os.lseek(fd, size - 1, os.SEEK_SET)
-                if os.read(fd, 1) != b"\n":
-                    line = "\n" + line
-            os.write(fd, (line + "\n").encode())
-            os.fsync(fd)
-        except OSError as e:
-            raise WriteError(f"{p}: cannot write the ledger of test-set looks: {e.strerror or e}") from None
+        _append(fd, p, [_key(entry)])
+
+
+def merge_ledgers(path: str | Path, others: Sequence[str | Path]) -> int:
+    """Move the entries of the ledgers ``others`` into ledger ``path`` (those it lacks, appended
+    under its lock and synced), then rename each of ``others`` to ``NAME.merged``: every entry is
+    in one of the files at every moment. The number of entries added."""
+    p = Path(path)
+    with _locked(p) as fd:
+        others = [Path(o) for o in others if Path(o).is_file() and Path(o).resolve() != p.resolve()]
+        if not others:
+            return 0
+        have = {_key(e) for e in read_ledger(p)}
+        new = [k for k in dict.fromkeys(_key(e) for e in read_ledgers(others)) if k not in have]
+        if new:
+            _append(fd, p, new)
+        for o in others:
+            try:
+                os.replace(o, o.with_name(o.name + MERGED_SUFFIX))
+            except OSError as e:
+                raise WriteError(f"{o}: cannot rename the ledger merged into {p}: {e.strerror or e}") from None
+        return len(new)
+
+
+def start_look(folder: str | Path, run: dict[str, Any]) -> tuple[str, bool]:
+    """The look id of the run ``run`` (what identifies it: plan, methods) starting in results
+    folder ``folder``: the id of the same run left unfinished there (resumed: True), else a new
+    one, written into the folder before any task runs (call it under the folder's lock)."""
+    p = Path(folder) / RUN_FILE
+    try:
+        left = json.loads(p.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        left = None
+    if isinstance(left, dict) and left.get("run") == run and left.get("look"):
+        return str(left["look"]), True
+    look = uuid.uuid4().hex
+    atomic_write_bytes(p, json.dumps({"look": look, "run": run}, sort_keys=True).encode())
+    return look, False
+
+
+def end_look(folder: str | Path) -> None:
+    """The run under way in ``folder`` ended: the next one is another look."""
+    try:
+        (Path(folder) / RUN_FILE).unlink(missing_ok=True)
+    except OSError as e:
+        raise WriteError(Path(folder) / RUN_FILE, e) from None
 
 
 @dataclass(frozen=True)
@@ -115,11 +210,19 @@ class Looks:
                 + (f", {self.finals} final run(s)" if self.finals else ""))
 
 
-def looks(path: str | Path, test_set: str) -> Looks:
-    """The looks at ``test_set`` the ledger holds."""
-    entries = [e for e in read_ledger(path) if e.get("test_set") == test_set]
+def _run(entry: dict[str, Any]) -> str:
+    """The run an entry is a session of: its look id (an entry written before runs had one: itself)."""
+    return str(entry.get("look") or _key(entry))
+
+
+def looks(path: str | Path | Sequence[str | Path], test_set: str) -> Looks:
+    """The looks at ``test_set`` the ledger (or ledgers) holds: each run once, however many
+    sessions it took."""
+    paths = [path] if isinstance(path, (str, Path)) else list(path)
+    entries = [e for e in read_ledgers(paths) if e.get("test_set") == test_set]
     methods = {m for e in entries for m in e.get("methods", [])}
-    return Looks(runs=len(entries), methods=len(methods), finals=sum(bool(e.get("final")) for e in entries))
+    return Looks(runs=len({_run(e) for e in entries}), methods=len(methods),
+                 finals=len({_run(e) for e in entries if e.get("final")}))
 
 
 def check_final(path: str | Path, test_set: str, methods: Sequence[str], force: bool = False) -> list[str]:

@@ -2,8 +2,8 @@
 
 touchbench version, git revision (and whether the working tree had
 uncommitted changes), versions of the packages results depend on, platform,
-CPU count, the protocol's text and hashes, the dataset's reference and hash,
-the identity of the run's components (``identity``: every package version
+CPU model and count (and how many the run could use), the protocol's text
+and hashes, the dataset's reference and hash, the identity of the run's components (``identity``: every package version
 that entered a task id, and the modules whose source did, per component),
 and the start and end of every session that worked on the run (a resumed
 run has several sessions; ``started_at`` is the first one's start and
@@ -12,6 +12,7 @@ run has several sessions; ``started_at`` is the first one's start and
 
 from __future__ import annotations
 
+import math
 import os
 import platform
 import subprocess
@@ -21,10 +22,12 @@ from typing import Any
 
 from ..core.version import __version__
 from ..core.paths import REPO_ROOT
+from ..core.threads import available_cpus
 from ..core.versions import package_versions
 from .store import SCHEMA_VERSION
 
-__all__ = ["git_revision", "now_iso", "package_versions", "platform_info", "update_manifest"]
+__all__ = ["cpu_model", "git_revision", "load_average", "now_iso", "package_versions", "platform_info",
+           "update_manifest"]
 
 def now_iso() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
@@ -47,13 +50,37 @@ def git_revision() -> dict[str, Any]:
         return {"revision": None, "dirty": None}
 
 
+def cpu_model(cpuinfo: str = "/proc/cpuinfo") -> str | None:
+    """The CPU's model name: the first ``model name`` of ``cpuinfo`` (Linux's), else the
+    platform's processor name (None when neither says)."""
+    try:
+        with open(cpuinfo, encoding="utf-8", errors="replace") as f:
+            for line in f:
+                key, _, value = line.partition(":")
+                if key.strip() == "model name" and value.strip():
+                    return value.strip()
+    except OSError:
+        pass
+    return platform.processor() or None
+
+
+def load_average() -> float:
+    """The machine's 1-minute load average (NaN where the system keeps none)."""
+    try:
+        return float(os.getloadavg()[0])
+    except (OSError, AttributeError):
+        return math.nan
+
+
 def platform_info() -> dict[str, Any]:
     return {
         "platform": platform.platform(),
         "machine": platform.machine(),
         "processor": platform.processor() or None,
+        "cpu_model": cpu_model(),
         "python": sys.version.split()[0],
         "cpu_count": os.cpu_count(),
+        "usable_cpus": available_cpus(),
     }
 
 
