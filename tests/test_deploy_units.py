@@ -206,3 +206,19 @@ def test_sensor_differences_ignore_the_name_only():
     assert sensor_differences(SENSOR, faster) == ["frame_rate: model 10.0, data 20.0"]
     with pytest.raises(SensorMismatchError, match="frame_rate"):
         stub_model().check_sensor(faster)
+
+
+# ----------------------------------------------------------------- the user docs
+def test_readme_and_changelog_name_only_registered_file_formats():
+    import re
+    from pathlib import Path
+
+    from touchbench.datasets.formats import FORMATS
+
+    root = Path(__file__).resolve().parents[1]
+    for doc in ("README.md", "CHANGELOG.md"):
+        text = (root / doc).read_text()
+        for fmt in re.findall(r"touchbench (?:predict|stream|data \w+) [^\n]*--format[ =]([\w-]+)", text):
+            assert fmt == "auto" or fmt in FORMATS, (doc, fmt)
+        # the format that became `table` is not described as a reader any more
+        assert not re.search(r"\blong\s+(CSV\s+)?format\b|`long`\s+format", text), doc
