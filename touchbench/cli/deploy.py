@@ -12,7 +12,7 @@ import click
 
 from ..core.atomic import atomic_write_bytes
 from ..deploy.model import TrainedModel
-from ..deploy.predict import predict_dataset, read_data, write_table
+from ..deploy.predict import accuracy_text, predict_dataset, read_data, write_table
 from ..deploy.stream import (
     SlidingRecognizer,
     load_replay,
@@ -93,11 +93,9 @@ def predict(model_path, data, fmt, out, whole, **options) -> None:
     else:
         cols = [c for c in ("capture_id", TRUE, PREDICTED, "probability") if c in table.columns]
         click.echo(table[cols].to_csv(index=False, float_format="%.4f"), nl=False)
-    if TRUE in table.columns:
-        known = table[TRUE].isin([str(c) for c in model.classes])
-        if known.any():
-            acc = float((table[TRUE] == table[PREDICTED])[known].mean())
-            click.echo(f"accuracy {100 * acc:.1f}% on {int(known.sum())} captures of known classes", err=True)
+    note = accuracy_text(model, table)
+    if note:
+        click.echo(note, err=True)
 
 
 @click.command("stream", epilog=example("touchbench stream msd.joblib recording.csv --window 1 --hop 0.5"))
