@@ -163,9 +163,17 @@ def test_stream_from_stdin_and_from_a_replayed_file(setup, tmp_path):
     assert res2.exit_code == 0, res2.output
     again = [json.loads(x) for x in res2.stdout.splitlines()][:3]
     assert [(d["label"], d["probability"]) for d in again] == [(d["label"], d["probability"]) for d in decisions]
-    # a malformed line stops with its line number
-    bad = CliRunner().invoke(cli, ["stream", str(tmp_path / "m.joblib"), "-"], input="1,2,3\n")
-    assert bad.exit_code == 3 and "<stdin>:1:" in bad.output
+    # a malformed line is reported with its line number and skipped: the stream goes on
+    glitch = lines.splitlines()
+    glitch[2] = glitch[2].rsplit(",", 1)[0]  # a frame cut short
+    glitch[5] = glitch[5].replace(",", ",1_0,", 1).rsplit(",", 1)[0]  # 1_0 is no number here
+    res3 = invoke("stream", tmp_path / "m.joblib", "-", "--hop", "0.5", "--threshold", "0", "--jsonl",
+                  input="\n".join(glitch) + "\n")
+    assert res3.exit_code == 0, res3.output
+    assert "skipped: <stdin>:3: a frame has 15 values" in res3.stderr and "skipped: <stdin>:6: not a number: '1_0'" in res3.stderr
+    assert "2 malformed lines skipped" in res3.stderr
+    # 18 frames received: decisions at frames 10 and 15 (counted as received, the skipped lines are no frames)
+    assert [json.loads(x)["frame"] for x in res3.stdout.splitlines()] == [10, 15]
 
 
 def test_predict_scores_unseen_captures_and_counts_the_seen_apart(setup, tmp_path):
@@ -223,3 +231,31 @@ def test_an_edited_manifest_is_refused_and_an_older_file_still_loads(setup, tmp_
     assert "warning:" in res.stderr and "checksum does not cover its manifest" in res.stderr
     assert "on 27 captures of known classes" in res.stderr and "cannot be separated" in res.stderr
     assert "trained_on" not in pd.read_csv(__import__("io").StringIO(res.stdout)).columns
+
+
+def test_stream_replays_a_table_without_frame_rate_at_the_models(setup, tmp_path):
+    ds, data, proto = setup
+    assert invoke("train", proto, "-m", "msd/rf15", "-o", tmp_path / "m.joblib", "--window", "1").exit_code == 0
+    csv = _table_csv(ds.subset([0]), tmp_path / "t.csv")
+    args = ["--hop", "0.5", "--threshold", "0", "--jsonl", "--no-realtime"]
+    res = invoke("stream", tmp_path / "m.joblib", csv, "--format", "table", *args)
+    assert res.exit_code == 0, res.output
+    assert "does not say its frame rate: the model's, 10 Hz" in res.stderr
+    auto = invoke("stream", tmp_path / "m.joblib", csv, *args)
+    key = [(d["frame"], d["t"], d["label"], d["probability"]) for d in map(json.loads, res.stdout.splitlines())]
+    assert key == [(d["frame"], d["t"], d["label"], d["probability"]) for d in map(json.loads, auto.stdout.splitlines())]
+    assert [k[:2] for k in key] == [(10, 1.0), (15, 1.5), (20, 2.0)]  # 1-s windows of 10 frames at 10 Hz, hop 5
+    # a frame rate given is the recording's: 20 Hz is not the model's sensor
+    fast = invoke("stream", tmp_path / "m.joblib", csv, "--format", "table", "--frame-rate", "20", *args)
+    assert fast.exit_code == 3 and "frame_rate: model 10.0, data 20.0" in fast.output
+
+
+def test_help_and_model_description_say_what_the_options_do(setup, tmp_path):
+    ds, data, proto = setup
+    res = invoke("train", proto, "-m", "msd/rf15", "-o", tmp_path / "m.joblib", "--window", "0.5,1")
+    assert res.exit_code == 0, res.output
+    # at 10 Hz: 0.5 s = 5 frames, hop half of it rounded down, 2 frames = 0.2 s; 1 s = 10 frames, hop 5 = 0.5 s
+    assert "windows       0.5 s (hop 0.2 s), 1 s (hop 0.5 s)" in res.stdout
+    text = " ".join(invoke("stream", "--help").output.split())
+    assert "format haart-raw: Frames per second (default 54, the HAART sensor's); format table: Frames per second (default: estimated from the time column" in text
+    assert "frame (the number of frames received when the decision was made, counting from 1)" in text

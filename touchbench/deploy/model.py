@@ -292,12 +292,20 @@ class TrainedModel:
             f"trained on    {ds['name']} ({ds['selection']}): {ds['n_captures']} captures, "
             f"{ds['n_samples']} training samples, hash {ds['content_hash'][:16]}",
             f"sensor        {s.name}: {s.grid[0]} x {s.grid[1]} at {s.frame_rate:g} Hz, range {list(s.value_range)}",
-            "windows       " + (", ".join(f"{v:g} s" for v in w) + f" (hop {m['windows']['train_hop_s']:g} s)" if w
+            "windows       " + (self._windows_text() if w
                                else f"whole captures ({m['capture_frames']['median']:g} frames median)"),
             f"seed          {m['classifier']['random_state']}",
             "versions      " + ", ".join(f"{k} {v}" for k, v in m["versions"].items()),
         ]
         return "\n".join(lines)
+
+
+    def _windows_text(self) -> str:
+        """The training windows with each one's own hop: ``0.5 s (hop 0.2 s), 1 s (hop 0.5 s)``."""
+        w = self.manifest["windows"]
+        rate = self.sensor.frame_rate
+        return ", ".join(f"{length:g} s (hop {hop / rate:g} s)"
+                         for length, hop in zip(w["lengths_s"], w["train_hop_frames"]))
 
 
 def _read_model_file(path: Path) -> tuple[dict[str, Any], bytes]:
