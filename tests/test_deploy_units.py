@@ -89,6 +89,34 @@ def test_compiled_forest_nan_falls_back_and_others_unsupported():
     assert compile_forest(LogisticRegression().fit(X, y)) is None
 
 
+@pytest.mark.parametrize("wrapped", ["selected", "tuned"])
+def test_compiled_forest_sees_through_touchbench_extra_trees(wrapped):
+    from touchbench.classifiers.touch import NestedTunedExtraTrees, SelectedExtraTrees
+
+    rng = np.random.default_rng(2)
+    X = rng.normal(size=(120, 9))
+    y = (X[:, 4] > 0).astype(int) + (X[:, 6] > 0.5)
+    groups = np.repeat(np.arange(4), 30)
+    if wrapped == "selected":  # 4 of 9 columns kept by importance: the forest reads a subset
+        est = SelectedExtraTrees(n_estimators=25, keep=4, random_state=1).fit(X, y)
+        forest, columns = est.model_, est.columns_
+        assert len(columns) == 4
+    else:
+        est = NestedTunedExtraTrees(n_estimators=15, grid_keep=(None, 3), random_state=1).fit(X, y, groups=groups)
+        forest, columns = est.model_.model_, est.model_.columns_
+    fast = compile_forest(est)
+    assert fast is not None
+    Xt = rng.normal(size=(7, 9)) * 2
+    sk = forest.predict_proba(Xt[:, columns])  # scikit-learn's own walk of the wrapped forest
+    np.testing.assert_allclose(fast.predict_proba(Xt), sk, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(fast.predict_proba(Xt[:1]), sk[:1], rtol=0, atol=1e-12)
+    # a model file's fast path uses it (not the wrapper's predict_proba)
+    model = TrainedModel(FittedMethod([], FittedEstimator(np.array(["a", "b", "c"], dtype=object), est)),
+                         {"sensor": SENSOR.to_dict()})
+    np.testing.assert_allclose(model.proba_from_features(Xt), sk, rtol=0, atol=1e-12)
+    assert isinstance(model._fast, type(fast))
+
+
 # ----------------------------------------------------------------- a hand-made model
 class _MeanLevel:
     """Feature: the mean of every value of a window (one column)."""
