@@ -178,3 +178,29 @@ def test_listing_does_not_import_torch():
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
     assert proc.stdout.strip() == "False", proc.stderr
+
+
+def test_a_renamed_classifier_says_what_it_became():
+    # the extra-trees entries were called sota-et, sota-et-fast and sota-et-tuned before they got their names
+    for old, new in (("sota-et", "touch-extra-trees"), ("sota-et-fast", "touch-extra-trees-fast"),
+                     ("sota-et-tuned", "touch-extra-trees-tuned")):
+        assert old not in CLASSIFIERS and new in CLASSIFIERS
+        with pytest.raises(UnknownNameError, match=f"classifier '{old}' was renamed '{new}'"):
+            make_classifier(old)
+        assert f"renamed '{new}'" in CLASSIFIERS.suggest(old)
+
+
+def test_the_former_names_table_maps_only_to_registered_names():
+    from touchbench.core.registry import RENAMED
+    from touchbench.datasets.formats import FORMATS
+
+    registries = {"classifier": CLASSIFIERS, "file format": FORMATS}
+    assert set(RENAMED) <= set(registries)
+    for kind, table in RENAMED.items():
+        for old, new in table.items():
+            assert old not in registries[kind] and new in registries[kind], (kind, old, new)
+    # the file format that became `table`, on the command line (a protocol or a reader gets the same words)
+    from touchbench.cli.main import cli
+
+    res = CliRunner().invoke(cli, ["predict", "m.joblib", "x.csv", "--format", "long"])
+    assert res.exit_code == 2 and "file format 'long' was renamed 'table'" in res.output

@@ -61,3 +61,11 @@ def test_stream_labels_an_unseen_subjects_capture(real_haart, tmp_path):
     counts = Counter(d["label"] for d in decisions)
     assert counts.most_common(1)[0][0] == "constant", counts
     assert all(np.isfinite(d["latency_ms"]) for d in decisions)
+
+    # every HAART capture: only s01's are scored, the ones the model was trained on are counted apart
+    n_s01 = int((real_haart.meta["subject"] == "s01").sum())
+    res = CliRunner().invoke(cli, ["predict", str(model), "haart", "--out", str(tmp_path / "p.csv")],
+                             catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    assert (f"on {n_s01} unseen captures; {len(real_haart) - n_s01} captures the model was trained on are not scored"
+            in res.stderr)

@@ -92,6 +92,17 @@ def test_fold_model_predicts_like_the_engine(setup, tmp_path):
         np.testing.assert_allclose(ours.loc[theirs.index, f"proba_{c}"], theirs[f"proba_{c}"], rtol=0, atol=1e-12)
 
 
+def _table_csv(ds, path):
+    """The dataset's captures in the table format, one row per frame (values as written, read back as float64)."""
+    rows = []
+    for cid, subj, g, cap in zip(ds.meta["capture_id"], ds.meta["subject"], ds.meta["gesture"], ds.captures):
+        for t, frame in enumerate(cap):
+            rows.append({"capture_id": cid, "frame": t + 1, "subject": subj, "gesture": g,
+                         **{f"cell{i + 1}": int(v) for i, v in enumerate(frame.reshape(-1))}})
+    pd.DataFrame(rows).to_csv(path, index=False)
+    return path
+
+
 def test_predict_refuses_another_sensor_and_reads_the_table_format(setup, tmp_path):
     ds, data, proto = setup
     assert invoke("train", proto, "-m", "msd/rf15", "-o", tmp_path / "m.joblib").exit_code == 0
@@ -101,12 +112,7 @@ def test_predict_refuses_another_sensor_and_reads_the_table_format(setup, tmp_pa
     assert res.exit_code == 3
     assert "does not match the model's sensor" in res.output and "frame_rate: model 10.0, data 20.0" in res.output
     # the same captures in the table format, one row per frame, read with the model's grid; the frame rate is the recording's
-    rows = []
-    for cid, subj, g, cap in zip(ds.meta["capture_id"], ds.meta["subject"], ds.meta["gesture"], ds.captures):
-        for t, frame in enumerate(cap):
-            rows.append({"capture_id": cid, "frame": t + 1, "subject": subj, "gesture": g,
-                         **{f"cell{i + 1}": int(v) for i, v in enumerate(frame.reshape(-1))}})
-    pd.DataFrame(rows).to_csv(tmp_path / "long.csv", index=False)
+    _table_csv(ds, tmp_path / "long.csv")
     unsaid = invoke("predict", tmp_path / "m.joblib", tmp_path / "long.csv", "--format", "table")
     assert unsaid.exit_code == 3 and "give --frame-rate" in unsaid.output and "trained at 10" in unsaid.output
     fast = invoke("predict", tmp_path / "m.joblib", tmp_path / "long.csv", "--format", "table", "--frame-rate", "20")
@@ -118,7 +124,7 @@ def test_predict_refuses_another_sensor_and_reads_the_table_format(setup, tmp_pa
     assert a.exit_code == 0 and b.exit_code == 0
     # table CSV values come back as float64, the Parquet as uint8: same features, same labels
     assert a.stdout == b.stdout
-    assert "accuracy" in b.stderr
+    assert "no unseen captures of the model's classes to score; 27 captures the model was trained on" in b.stderr
 
 
 def test_method_choice_and_bad_model_file(setup, tmp_path):
@@ -157,6 +163,99 @@ def test_stream_from_stdin_and_from_a_replayed_file(setup, tmp_path):
     assert res2.exit_code == 0, res2.output
     again = [json.loads(x) for x in res2.stdout.splitlines()][:3]
     assert [(d["label"], d["probability"]) for d in again] == [(d["label"], d["probability"]) for d in decisions]
-    # a malformed line stops with its line number
-    bad = CliRunner().invoke(cli, ["stream", str(tmp_path / "m.joblib"), "-"], input="1,2,3\n")
-    assert bad.exit_code == 3 and "<stdin>:1:" in bad.output
+    # a malformed line is reported with its line number and skipped: the stream goes on
+    glitch = lines.splitlines()
+    glitch[2] = glitch[2].rsplit(",", 1)[0]  # a frame cut short
+    glitch[5] = glitch[5].replace(",", ",1_0,", 1).rsplit(",", 1)[0]  # 1_0 is no number here
+    res3 = invoke("stream", tmp_path / "m.joblib", "-", "--hop", "0.5", "--threshold", "0", "--jsonl",
+                  input="\n".join(glitch) + "\n")
+    assert res3.exit_code == 0, res3.output
+    assert "skipped: <stdin>:3: a frame has 15 values" in res3.stderr and "skipped: <stdin>:6: not a number: '1_0'" in res3.stderr
+    assert "2 malformed lines skipped" in res3.stderr
+    # 18 frames received: decisions at frames 10 and 15 (counted as received, the skipped lines are no frames)
+    assert [json.loads(x)["frame"] for x in res3.stdout.splitlines()] == [10, 15]
+
+
+def test_predict_scores_unseen_captures_and_counts_the_seen_apart(setup, tmp_path):
+    ds, data, proto = setup
+    assert invoke("train", proto, "-m", "msd/rf15", "--exclude", "subject=s3", "-o", tmp_path / "m.joblib").exit_code == 0
+    res = invoke("predict", tmp_path / "m.joblib", data, "--out", tmp_path / "p.csv")
+    assert res.exit_code == 0, res.output
+    table = pd.read_csv(tmp_path / "p.csv")
+    unseen = (table["subject"] == "s3").to_numpy()  # 9 captures of s3; the 18 others were trained on
+    assert table["trained_on"].tolist() == (~unseen).tolist()
+    acc = 100 * np.mean(table["true_label"].to_numpy()[unseen] == table["predicted_label"].to_numpy()[unseen])
+    assert f"accuracy {acc:.1f} % on 9 unseen captures; 18 captures the model was trained on are not scored" in res.stderr
+    # the same recordings through another reader (float64 values from a CSV) are recognised as seen
+    csv = _table_csv(ds, tmp_path / "t.csv")
+    res = invoke("predict", tmp_path / "m.joblib", csv, "--format", "table", "--frame-rate", "10", "--out", tmp_path / "q.csv")
+    assert res.exit_code == 0 and "on 9 unseen captures; 18 captures the model" in res.stderr
+    # only captures it was trained on: nothing to score, said so
+    seen_only = ds.subset(np.flatnonzero(ds.meta["subject"].to_numpy() != "s3"))
+    seen_only.to_parquet(tmp_path / "seen.parquet")
+    res = invoke("predict", tmp_path / "m.joblib", tmp_path / "seen.parquet")
+    assert "no unseen captures of the model's classes to score; 18 captures the model was trained on" in res.stderr
+    assert "accuracy" not in res.stderr
+
+
+def _rewrite(path, edit_header):
+    """The model file at ``path`` with its JSON header line changed by ``edit_header`` (the pickle kept)."""
+    raw = path.read_bytes()
+    first = raw.index(b"\n") + 1
+    end = raw.index(b"\n", first)
+    header = json.loads(raw[first:end])
+    edit_header(header)
+    path.write_bytes(raw[:first] + json.dumps(header).encode() + raw[end:])
+
+
+def test_an_edited_manifest_is_refused_and_an_older_file_still_loads(setup, tmp_path):
+    import hashlib
+
+    ds, data, proto = setup
+    assert invoke("train", proto, "-m", "msd/rf15", "-o", tmp_path / "m.joblib").exit_code == 0
+    _rewrite(tmp_path / "m.joblib", lambda h: h["manifest"]["classifier"].update(random_state=99))
+    res = CliRunner().invoke(cli, ["predict", str(tmp_path / "m.joblib"), str(data)])
+    assert res.exit_code == 3 and "does not match the checksum" in res.output and "nothing was loaded" in res.output
+    # a file of the previous format: checksum of the pickle only, no training capture checksums
+    assert invoke("train", proto, "-m", "msd/rf15", "-o", tmp_path / "old.joblib").exit_code == 0
+    body = (tmp_path / "old.joblib").read_bytes()
+    body = body[body.index(b"\n", body.index(b"\n") + 1) + 1:]
+
+    def as_older(h):
+        h.update(version=2, sha256=hashlib.sha256(body).hexdigest())
+        del h["manifest"]["dataset"]["capture_checksums"]
+
+    _rewrite(tmp_path / "old.joblib", as_older)
+    res = invoke("predict", tmp_path / "old.joblib", data)
+    assert res.exit_code == 0, res.output
+    assert "warning:" in res.stderr and "checksum does not cover its manifest" in res.stderr
+    assert "on 27 captures of known classes" in res.stderr and "cannot be separated" in res.stderr
+    assert "trained_on" not in pd.read_csv(__import__("io").StringIO(res.stdout)).columns
+
+
+def test_stream_replays_a_table_without_frame_rate_at_the_models(setup, tmp_path):
+    ds, data, proto = setup
+    assert invoke("train", proto, "-m", "msd/rf15", "-o", tmp_path / "m.joblib", "--window", "1").exit_code == 0
+    csv = _table_csv(ds.subset([0]), tmp_path / "t.csv")
+    args = ["--hop", "0.5", "--threshold", "0", "--jsonl", "--no-realtime"]
+    res = invoke("stream", tmp_path / "m.joblib", csv, "--format", "table", *args)
+    assert res.exit_code == 0, res.output
+    assert "does not say its frame rate: the model's, 10 Hz" in res.stderr
+    auto = invoke("stream", tmp_path / "m.joblib", csv, *args)
+    key = [(d["frame"], d["t"], d["label"], d["probability"]) for d in map(json.loads, res.stdout.splitlines())]
+    assert key == [(d["frame"], d["t"], d["label"], d["probability"]) for d in map(json.loads, auto.stdout.splitlines())]
+    assert [k[:2] for k in key] == [(10, 1.0), (15, 1.5), (20, 2.0)]  # 1-s windows of 10 frames at 10 Hz, hop 5
+    # a frame rate given is the recording's: 20 Hz is not the model's sensor
+    fast = invoke("stream", tmp_path / "m.joblib", csv, "--format", "table", "--frame-rate", "20", *args)
+    assert fast.exit_code == 3 and "frame_rate: model 10.0, data 20.0" in fast.output
+
+
+def test_help_and_model_description_say_what_the_options_do(setup, tmp_path):
+    ds, data, proto = setup
+    res = invoke("train", proto, "-m", "msd/rf15", "-o", tmp_path / "m.joblib", "--window", "0.5,1")
+    assert res.exit_code == 0, res.output
+    # at 10 Hz: 0.5 s = 5 frames, hop half of it rounded down, 2 frames = 0.2 s; 1 s = 10 frames, hop 5 = 0.5 s
+    assert "windows       0.5 s (hop 0.2 s), 1 s (hop 0.5 s)" in res.stdout
+    text = " ".join(invoke("stream", "--help").output.split())
+    assert "format haart-raw: Frames per second (default 54, the HAART sensor's); format table: Frames per second (default: estimated from the time column" in text
+    assert "frame (the number of frames received when the decision was made, counting from 1)" in text

@@ -89,6 +89,34 @@ def test_compiled_forest_nan_falls_back_and_others_unsupported():
     assert compile_forest(LogisticRegression().fit(X, y)) is None
 
 
+@pytest.mark.parametrize("wrapped", ["selected", "tuned"])
+def test_compiled_forest_sees_through_touchbench_extra_trees(wrapped):
+    from touchbench.classifiers.touch import NestedTunedExtraTrees, SelectedExtraTrees
+
+    rng = np.random.default_rng(2)
+    X = rng.normal(size=(120, 9))
+    y = (X[:, 4] > 0).astype(int) + (X[:, 6] > 0.5)
+    groups = np.repeat(np.arange(4), 30)
+    if wrapped == "selected":  # 4 of 9 columns kept by importance: the forest reads a subset
+        est = SelectedExtraTrees(n_estimators=25, keep=4, random_state=1).fit(X, y)
+        forest, columns = est.model_, est.columns_
+        assert len(columns) == 4
+    else:
+        est = NestedTunedExtraTrees(n_estimators=15, grid_keep=(None, 3), random_state=1).fit(X, y, groups=groups)
+        forest, columns = est.model_.model_, est.model_.columns_
+    fast = compile_forest(est)
+    assert fast is not None
+    Xt = rng.normal(size=(7, 9)) * 2
+    sk = forest.predict_proba(Xt[:, columns])  # scikit-learn's own walk of the wrapped forest
+    np.testing.assert_allclose(fast.predict_proba(Xt), sk, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(fast.predict_proba(Xt[:1]), sk[:1], rtol=0, atol=1e-12)
+    # a model file's fast path uses it (not the wrapper's predict_proba)
+    model = TrainedModel(FittedMethod([], FittedEstimator(np.array(["a", "b", "c"], dtype=object), est)),
+                         {"sensor": SENSOR.to_dict()})
+    np.testing.assert_allclose(model.proba_from_features(Xt), sk, rtol=0, atol=1e-12)
+    assert isinstance(model._fast, type(fast))
+
+
 # ----------------------------------------------------------------- a hand-made model
 class _MeanLevel:
     """Feature: the mean of every value of a window (one column)."""
@@ -192,6 +220,8 @@ def test_text_frames_parses_and_refuses_bad_lines():
         ("1,2,3,400\n", 1, "outside"),
         ("1,2,3,4.5\n", 1, "whole number"),
         ("1,2,nan,4\n", 1, "NaN"),
+        ("1,2,3,1_0\n", 1, "not a number: '1_0'"),  # Python's float() would read 10
+        ("1,2,3,0x1f\n", 1, "not a number: '0x1f'"),
     ]
     for text, line, msg in cases:
         with pytest.raises(DataError, match=msg) as e:
@@ -206,3 +236,42 @@ def test_sensor_differences_ignore_the_name_only():
     assert sensor_differences(SENSOR, faster) == ["frame_rate: model 10.0, data 20.0"]
     with pytest.raises(SensorMismatchError, match="frame_rate"):
         stub_model().check_sensor(faster)
+
+
+def test_a_live_stream_reports_a_malformed_line_and_goes_on():
+    m = stub_model(dtype="<u2")
+    errors = []
+    got = list(text_frames(io.StringIO("1,2,3,4\n1,2,3\n\n5,6,7,1_0\n5,6,7,8\n"), m, on_error=errors.append))
+    assert [f.tolist() for f, _ in got] == [[[1, 2], [3, 4]], [[5, 6], [7, 8]]]
+    assert [(e.line, "3 values" in str(e) or "'1_0'" in str(e)) for e in errors] == [(2, True), (4, True)]
+
+
+def test_a_window_whose_frames_would_not_fit_is_refused_up_front():
+    import touchbench.deploy.stream as stream
+
+    # an 8 x 8 sensor of 2-byte values at 54 Hz: a window of 100000 s is 5 400 000 frames; the recogniser
+    # keeps twice that, 10 800 000 x 128 bytes = 1318 MiB, over 512 MiB; the longest allowed is
+    # 512 MiB / (2 x 128 bytes) / 54 Hz = 38836 s (at most: less when a quarter of the free memory is less)
+    m = stub_model(dtype="<u2")
+    m.manifest["sensor"] = SensorSpec("big", grid=(8, 8), frame_rate=54.0, value_range=(0.0, 1023.0)).to_dict()
+    with pytest.raises(TouchbenchError, match=r"--window 100000 s is too long.*1318 MiB.*longest window allowed is") as e:
+        SlidingRecognizer(m, windows_s=[100000])
+    allowed = float(str(e.value).rsplit("allowed is ", 1)[1].split(" s")[0])
+    assert allowed <= 38836 and allowed == round(stream.buffer_limit() / 256 / 54)
+    SlidingRecognizer(m, windows_s=[allowed - 1])  # under the limit: built
+
+
+# ----------------------------------------------------------------- the user docs
+def test_readme_and_changelog_name_only_registered_file_formats():
+    import re
+    from pathlib import Path
+
+    from touchbench.datasets.formats import FORMATS
+
+    root = Path(__file__).resolve().parents[1]
+    for doc in ("README.md", "CHANGELOG.md"):
+        text = (root / doc).read_text()
+        for fmt in re.findall(r"touchbench (?:predict|stream|data \w+) [^\n]*--format[ =]([\w-]+)", text):
+            assert fmt == "auto" or fmt in FORMATS, (doc, fmt)
+        # the format that became `table` is not described as a reader any more
+        assert not re.search(r"\blong\s+(CSV\s+)?format\b|`long`\s+format", text), doc

@@ -19,9 +19,13 @@ compares with ``predict_proba`` exactly. Inputs with NaN (which scikit-learn
 routes by the learned missing-value direction) fall back to scikit-learn.
 
 Supported: a ``ForestClassifier`` (random forest, extra trees and their
-subclasses that do not override ``predict_proba``) with one output.
-:func:`compile_forest` returns None for anything else and callers use the
-estimator's own ``predict_proba``.
+subclasses that do not override ``predict_proba``) with one output, and an
+estimator that wraps one: it declares ``forest_and_columns()``, the fitted
+forest whose probabilities are its own and the input columns that forest
+reads (None: all), as touchbench's extra-trees do
+(:mod:`touchbench.classifiers.touch`, which keep an importance-ranked
+subset of the columns). :func:`compile_forest` returns None for anything
+else and callers use the estimator's own ``predict_proba``.
 """
 
 from __future__ import annotations
@@ -36,13 +40,16 @@ __all__ = ["CompiledForest", "compile_forest"]
 class CompiledForest:
     """Flat node arrays of every tree of a fitted forest (see module docstring)."""
 
-    def __init__(self, forest: Any):
+    def __init__(self, forest: Any, columns: Any = None, n_features: int | None = None):
+        """``columns``: the input columns the forest reads (None: all); ``n_features``: the width of
+        the input (the wrapping estimator's; default the forest's)."""
         from sklearn.tree._tree import TREE_LEAF
 
         self.forest = forest
+        self.columns = None if columns is None else np.asarray(columns, dtype=np.int64)
         trees = [e.tree_ for e in forest.estimators_]
         self.n_trees = len(trees)
-        self.n_features = int(forest.n_features_in_)
+        self.n_features = int(forest.n_features_in_ if n_features is None else n_features)
         sizes = np.array([t.node_count for t in trees], dtype=np.int64)
         offsets = np.concatenate([[0], np.cumsum(sizes)[:-1]])
         left, right, feature, threshold, value = [], [], [], [], []
@@ -67,10 +74,12 @@ class CompiledForest:
         self.classes_ = forest.classes_
 
     def predict_proba(self, X: np.ndarray) -> np.ndarray:
-        """Same as ``forest.predict_proba(X)``, for a 2-D ``X`` of a few rows."""
+        """Same as ``forest.predict_proba(X[:, columns])``, for a 2-D ``X`` of a few rows."""
         X = np.asarray(X)
         if X.ndim != 2 or X.shape[1] != self.n_features:
             raise ValueError(f"expected {self.n_features} features per row, got shape {X.shape}")
+        if self.columns is not None:
+            X = X[:, self.columns]
         x32 = X.astype(np.float32)
         if not np.isfinite(x32).all():
             return self.forest.predict_proba(X)
@@ -87,19 +96,29 @@ class CompiledForest:
 
 
 def compile_forest(estimator: Any) -> CompiledForest | None:
-    """A :class:`CompiledForest` for a supported fitted forest, else None."""
+    """A :class:`CompiledForest` for a supported fitted forest, or an estimator wrapping one
+    (``forest_and_columns()``), else None."""
+    parts = getattr(estimator, "forest_and_columns", None)
+    if callable(parts):
+        forest, columns = parts()
+        if not _supported(forest):
+            return None
+        return CompiledForest(forest, columns, n_features=getattr(estimator, "n_features_in_", None))
+    return CompiledForest(estimator) if _supported(estimator) else None
+
+
+def _supported(estimator: Any) -> bool:
+    """Whether ``estimator`` is a fitted one-output scikit-learn forest whose probabilities are its trees' mean."""
     try:
         from sklearn.ensemble._forest import ForestClassifier
         from sklearn.tree import DecisionTreeClassifier
     except ImportError:  # pragma: no cover
-        return None
+        return False
     if not isinstance(estimator, ForestClassifier):
-        return None
+        return False
     if type(estimator).predict_proba is not ForestClassifier.predict_proba:
-        return None
+        return False
     ests = getattr(estimator, "estimators_", None)
     if not ests or getattr(estimator, "n_outputs_", 1) != 1:
-        return None
-    if not all(type(e).predict_proba is DecisionTreeClassifier.predict_proba for e in ests):
-        return None
-    return CompiledForest(estimator)
+        return False
+    return all(type(e).predict_proba is DecisionTreeClassifier.predict_proba for e in ests)

@@ -80,9 +80,15 @@ class SelectedExtraTrees(ClassifierMixin, BaseEstimator):
         self.classes_ = self.model_.classes_
         return self
 
+    def forest_and_columns(self):
+        """The fitted forest behind ``predict_proba`` and the input columns it reads
+        (:func:`touchbench.classifiers.fastforest.compile_forest` walks it without this wrapper)."""
+        check_is_fitted(self)
+        return self.model_, self.columns_
+
     def predict_proba(self, X):
         """Class probabilities; a few rows (<= ``FEW_ROWS``) go through the compiled forest
-        (:mod:`touchbench.deploy.fastforest`, bit-identical to scikit-learn's, one
+        (:mod:`touchbench.classifiers.fastforest`, bit-identical to scikit-learn's, one
         vectorised walk over all trees instead of one Python call per tree)."""
         check_is_fitted(self)
         X = validate_data(self, X, dtype=np.float64, reset=False)[:, self.columns_]
@@ -162,6 +168,11 @@ class NestedTunedExtraTrees(ClassifierMixin, BaseEstimator):
         self.model_ = clone(base).set_params(**self.best_params_).fit(X, y)
         self.classes_ = self.model_.classes_
         return self
+
+    def forest_and_columns(self):
+        """The refitted model's forest and the columns it reads (:meth:`SelectedExtraTrees.forest_and_columns`)."""
+        check_is_fitted(self)
+        return self.model_.forest_and_columns()
 
     def predict_proba(self, X):
         check_is_fitted(self)

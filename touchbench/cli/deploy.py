@@ -12,7 +12,7 @@ import click
 
 from ..core.atomic import atomic_write_bytes
 from ..deploy.model import TrainedModel
-from ..deploy.predict import predict_dataset, read_data, write_table
+from ..deploy.predict import accuracy_text, predict_dataset, read_data, write_table
 from ..deploy.stream import (
     SlidingRecognizer,
     load_replay,
@@ -93,11 +93,9 @@ def predict(model_path, data, fmt, out, whole, **options) -> None:
     else:
         cols = [c for c in ("capture_id", TRUE, PREDICTED, "probability") if c in table.columns]
         click.echo(table[cols].to_csv(index=False, float_format="%.4f"), nl=False)
-    if TRUE in table.columns:
-        known = table[TRUE].isin([str(c) for c in model.classes])
-        if known.any():
-            acc = float((table[TRUE] == table[PREDICTED])[known].mean())
-            click.echo(f"accuracy {100 * acc:.1f}% on {int(known.sum())} captures of known classes", err=True)
+    note = accuracy_text(model, table)
+    if note:
+        click.echo(note, err=True)
 
 
 @click.command("stream", epilog=example("touchbench stream msd.joblib recording.csv --window 1 --hop 0.5"))
@@ -118,14 +116,20 @@ def predict(model_path, data, fmt, out, whole, **options) -> None:
 @click.option("--speed", type=float, default=1.0, show_default=True, help="Replay speed (2: twice the frame rate).")
 @click.option("--realtime/--no-realtime", default=True, show_default=True,
               help="Replay files at their frame rate, or as fast as possible.")
-@click.option("--jsonl", is_flag=True, help="One JSON object per decision instead of text.")
+@click.option("--jsonl", is_flag=True,
+              help="One JSON object per decision instead of text: frame (the number of frames received when the "
+                   "decision was made, counting from 1), t (frame / frame rate, seconds), label (the best class or "
+                   "the none label), probability, best, window_s (the deciding window; null for --combine mean), "
+                   "latency_ms, windows (each window's length, best class and probability).")
 @click.option("--summary-json", type=click.Path(dir_okay=False), default=None, help="Write the summary (latencies) here.")
 @format_options
 def stream(model_path, source, windows, hop, threshold, combine, none_label, fmt, capture, speed, realtime, jsonl,
            summary_json, **options) -> None:
     """Label a stream of frames with MODEL: SOURCE is a CSV/Parquet file replayed at
     its frame rate, or - for standard input (one frame per line: H*W comma-separated
-    values, row-major). Prints one decision per hop, then latency p50/p99."""
+    values, row-major). Prints one decision per hop, then latency p50/p99. A file that does not say
+    its frame rate is replayed at the model's. A malformed line of standard input is reported (with its
+    line number) and skipped; a malformed file is refused before its replay."""
     if source == "-" and fmt != "auto":
         raise click.UsageError("standard input is read as one frame per line; --format is for files")
     model = _load_model(model_path)
@@ -133,9 +137,14 @@ def stream(model_path, source, windows, hop, threshold, combine, none_label, fmt
                             combine=combine, none_label=none_label)
     for note in rec.notes():
         click.echo(f"note: {note}", err=True)
-    late = [0]
+    late, skipped = [0], [0]
+
+    def skip(error):
+        skipped[0] += 1
+        click.echo(f"skipped: {error}", err=True)
+
     if source == "-":
-        frames = text_frames(sys.stdin, model)
+        frames = text_frames(sys.stdin, model, on_error=skip)
         what = "standard input"
     else:
         arr, rate, what = load_replay(source, model, capture, fmt,
@@ -149,6 +158,7 @@ def stream(model_path, source, windows, hop, threshold, combine, none_label, fmt
         sys.stdout.flush()
 
     summary = run_stream(rec, frames, emit, late=late)
+    summary.skipped_lines = skipped[0]
     click.echo(summary.to_text(), err=True)
     if summary_json:
         atomic_write_bytes(Path(summary_json), json.dumps(asdict(summary), indent=2).encode())

@@ -47,14 +47,22 @@ class _OptionValue(click.ParamType):
 
 def format_options(f: Callable[..., Any]) -> Callable[..., Any]:
     """Add a ``--NAME`` option (default None) for every option a registered format takes."""
-    takers: dict[str, tuple[FormatOption, list[str]]] = {}
+    takers: dict[str, tuple[FormatOption, dict[str, list[str]]]] = {}
     for e in FORMATS.entries():
         for o in e.obj.options:
-            takers.setdefault(o.name, (o, []))[1].append(e.name)
-    for o, names in reversed(list(takers.values())):
+            takers.setdefault(o.name, (o, {}))[1].setdefault(o.help, []).append(e.name)
+    for o, helps in reversed(list(takers.values())):
         f = click.option(o.flag, o.name, type=_OptionValue(o), default=None, metavar=o.metavar,
-                         help=f"{o.help} (format {', '.join(names)}).")(f)
+                         help=_option_help(helps))(f)
     return f
+
+
+def _option_help(helps: dict[str, list[str]]) -> str:
+    """One option's help over the formats that take it: each format's own words (its default is its own)."""
+    if len(helps) == 1:
+        (text, names), = helps.items()
+        return f"{text} (format {', '.join(names)})."
+    return "; ".join(f"format {', '.join(names)}: {text}" for text, names in helps.items()) + "."
 
 
 FORMATS_HELP = "`touchbench data formats` describes them"

@@ -11,6 +11,10 @@ the entries of installed plugins: on first use it imports its own package's
 modules, then every plugin's module. An entry a plugin adds carries the
 plugin (a :class:`touchbench.core.plugins.PluginInfo`) in its ``plugin``
 tag; :attr:`Entry.plugin` reads it.
+
+A name that was renamed stays known as a former name (:data:`RENAMED`): looking
+it up is refused with the name it became, never silently mapped (a protocol
+that names it should be updated, its results identity follows the names).
 """
 
 from __future__ import annotations
@@ -26,6 +30,17 @@ from .plugins import PluginInfo, current_plugin, importing, load_plugins
 from .suggest import did_you_mean
 
 T = TypeVar("T")
+
+#: Former names of registered components, per registry kind: former name -> current name.
+#: Every lookup of an unknown name reads it (:meth:`Registry.entry`, ``suggest``).
+RENAMED: dict[str, dict[str, str]] = {
+    "classifier": {
+        "sota-et": "touch-extra-trees",
+        "sota-et-fast": "touch-extra-trees-fast",
+        "sota-et-tuned": "touch-extra-trees-tuned",
+    },
+    "file format": {"long": "table"},
+}
 
 
 def import_submodules(package: str) -> list[str]:
@@ -139,6 +154,9 @@ class Registry(Generic[T]):
             raise UnknownNameError(self._unknown_message(name)) from None
 
     def _unknown_message(self, name: str) -> str:
+        current = RENAMED.get(self.kind, {}).get(str(name))
+        if current is not None and current in self._entries:
+            return f"{self.kind} {name!r} was renamed {current!r}: use {current!r} instead"
         hint = did_you_mean(name, self._entries)
         known = ", ".join(sorted(self._entries))
         return f"unknown {self.kind} {name!r}{hint} (known: {known})"

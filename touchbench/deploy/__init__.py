@@ -5,7 +5,7 @@
 - :mod:`.predict`: labels for the captures of any supported reader;
 - :mod:`.stream`: sliding windows over a stream of frames, thresholded decisions, latency;
 - :mod:`.windows`: the windowing shared by training and streaming (Flagg 2012, section 4.5);
-- :mod:`.fastforest`: scikit-learn forests' probabilities for a few rows, fast and identical.
+- :mod:`touchbench.classifiers.fastforest`: forests' probabilities for a few rows (also inside a wrapping estimator), fast and identical.
 """
 
 from .model import SensorMismatchError, TrainedModel, fit_model

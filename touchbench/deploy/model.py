@@ -13,17 +13,23 @@ predict`` / ``touchbench stream`` read. It holds
   class names (XGBoost needs contiguous codes), with everything limited to
   one thread;
 - the manifest: what the model was trained on (dataset name, reference and
-  content hash of the training captures, the selection), the sensor spec,
+  content hash of the training captures, the selection, and one checksum per
+  training capture, :data:`CHECKSUM_CHARS` hexadecimal characters of
+  :func:`touchbench.datasets.model.frames_checksum`, so that ``predict`` can
+  tell captures the model was trained on), the sensor spec,
   the feature sets and classifier with their parameters and seed, the
   window lengths, the class names and the package versions.
 
 The file (``MODEL_FORMAT``, ``MODEL_VERSION``), written atomically, is a
 first line ``touchbench-model``, a second line of JSON (the format version,
-the SHA-256 and size of what follows, and the manifest), then a joblib
-pickle of the fitted parts. The manifest is also written beside it as
-``<file>.json`` for reading without Python. Loading checks, before anything
-is unpickled, that the pickle is the one touchbench wrote (checksum and
-size: a damaged, truncated or edited file is refused), then that the parts
+the size of the pickle, one SHA-256 over the manifest (its canonical JSON)
+and the pickle, and the manifest), then a joblib pickle of the fitted
+parts. The manifest is also written beside it as ``<file>.json`` for
+reading without Python. Loading checks, before anything is unpickled, that
+the manifest and the pickle are the ones touchbench wrote (checksum and
+size: a damaged, truncated or edited file, manifest included, is refused).
+A file of format version 2 (whose checksum covered the pickle only) still
+loads, with a note that its manifest is not covered. Then loading checks that the parts
 agree with the manifest: the class list as the fit encoded it (sorted,
 unique, one per class the estimator knows) and the feature sets' sensor.
 The checksum catches damage and edits, not a file crafted to harm: like
@@ -51,28 +57,34 @@ import numpy as np
 from ..classifiers.fastforest import compile_forest
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import DataError, TouchbenchError
+from ..core.hashing import canonical_json
 from ..core.threads import single_thread
 from ..core.versions import package_versions
-from ..datasets.model import FRAME_RATE_TOLERANCE, SensorSpec, TouchDataset, sensor_differences
+from ..datasets.model import FRAME_RATE_TOLERANCE, SensorSpec, TouchDataset, frames_checksum, sensor_differences
 from ..classifiers.fitting import FittedEstimator, FittedMethod
 from ..methods import MethodSpec
 from ..methods.fitting import fit_method
 from .windows import cut_windows, seconds_to_frames
 
 __all__ = [
+    "CHECKSUM_CHARS",
     "MODEL_FORMAT",
     "MODEL_VERSION",
     "SensorMismatchError",
     "TrainedModel",
+    "capture_checksum",
     "fit_model",
     "package_versions",
     "sensor_differences",
 ]
 
 MODEL_FORMAT = "touchbench-model"
-MODEL_VERSION = 2
+MODEL_VERSION = 3
+_OLDER_VERSION = 2  # the checksum covered the pickle only: read, with a note
 _MAGIC = (MODEL_FORMAT + "\n").encode()
-_MAX_HEADER = 1 << 20  # bytes of the JSON line: a manifest, never more
+_MAX_HEADER = 1 << 26  # bytes of the JSON line: a manifest (with one checksum per training capture), never more
+#: hexadecimal characters kept of each training capture's checksum (64 bits)
+CHECKSUM_CHARS = 16
 _VERSIONED = ("numpy", "scipy", "scikit-learn", "joblib", "pandas", "PyWavelets", "xgboost", "xgboost-cpu", "torch")
 # A pickle is only guaranteed to load with the versions that wrote it; these matter most.
 _CHECKED = ("scikit-learn", "numpy", "xgboost", "xgboost-cpu", "torch")
@@ -89,6 +101,8 @@ class TrainedModel:
     fitted: FittedMethod
     manifest: dict[str, Any]
     _fast: Any = field(default=None, init=False, repr=False, compare=False)
+    #: what loading the file found worth saying (an older format...)
+    file_notes: list[str] = field(default_factory=list, init=False, repr=False, compare=False)
 
     # ------------------------------------------------------------ accessors
     @property
@@ -114,6 +128,19 @@ class TrainedModel:
         """Training window lengths in seconds, or None (trained on whole captures)."""
         w = self.manifest.get("windows")
         return None if not w else [float(v) for v in w["lengths_s"]]
+
+    @property
+    def training_checksums(self) -> set[str] | None:
+        """The checksums of the captures the model was trained on (None: the file does not record them)."""
+        sums = self.manifest.get("dataset", {}).get("capture_checksums")
+        return None if sums is None else set(sums)
+
+    def seen_in_training(self, captures: Sequence[np.ndarray]) -> np.ndarray | None:
+        """Per capture, whether the model was trained on it (same frames); None when the file does not say."""
+        known = self.training_checksums
+        if known is None:
+            return None
+        return np.array([capture_checksum(c) in known for c in captures], dtype=bool)
 
     @property
     def method(self) -> str:
@@ -182,9 +209,10 @@ class TrainedModel:
         buf = io.BytesIO()
         joblib.dump(payload, buf, compress=3)
         body = buf.getvalue()
-        header = {"version": MODEL_VERSION, "sha256": hashlib.sha256(body).hexdigest(), "size": len(body),
-                  "manifest": self.manifest}
-        line = json.dumps(header, sort_keys=True, default=str).encode() + b"\n"
+        manifest = json.loads(json.dumps(self.manifest, default=str))  # as the file holds it
+        header = {"version": MODEL_VERSION, "sha256": _checksum(manifest, body), "size": len(body),
+                  "manifest": manifest}
+        line = json.dumps(header, sort_keys=True).encode() + b"\n"
         atomic_write_bytes(path, _MAGIC + line + body)
         text = json.dumps(self.manifest, indent=2, sort_keys=True, default=str) + "\n"
         atomic_write_bytes(manifest_path(path), text.encode())
@@ -210,6 +238,9 @@ class TrainedModel:
         problems = model.consistency_problems()
         if problems:
             raise DataError("the model's parts disagree (" + "; ".join(problems) + "); train it again", path)
+        if header["version"] == _OLDER_VERSION:
+            model.file_notes.append(f"{path}: an older model file, whose checksum does not cover its manifest "
+                                    "(an edited manifest would go unnoticed); train it again to cover it")
         return model
 
     def consistency_problems(self) -> list[str]:
@@ -245,10 +276,10 @@ class TrainedModel:
         """Packages whose installed version differs from the one the model was saved with."""
         saved = self.manifest.get("versions", {})
         now = package_versions(installed_only=True)
-        return [
+        return [*self.file_notes, *(
             f"model saved with {k} {saved[k]}, running {now.get(k, 'none')}"
             for k in _CHECKED if k in saved and saved[k] != now.get(k)
-        ]
+        )]
 
     def describe(self) -> str:
         m = self.manifest
@@ -261,12 +292,20 @@ class TrainedModel:
             f"trained on    {ds['name']} ({ds['selection']}): {ds['n_captures']} captures, "
             f"{ds['n_samples']} training samples, hash {ds['content_hash'][:16]}",
             f"sensor        {s.name}: {s.grid[0]} x {s.grid[1]} at {s.frame_rate:g} Hz, range {list(s.value_range)}",
-            "windows       " + (", ".join(f"{v:g} s" for v in w) + f" (hop {m['windows']['train_hop_s']:g} s)" if w
+            "windows       " + (self._windows_text() if w
                                else f"whole captures ({m['capture_frames']['median']:g} frames median)"),
             f"seed          {m['classifier']['random_state']}",
             "versions      " + ", ".join(f"{k} {v}" for k, v in m["versions"].items()),
         ]
         return "\n".join(lines)
+
+
+    def _windows_text(self) -> str:
+        """The training windows with each one's own hop: ``0.5 s (hop 0.2 s), 1 s (hop 0.5 s)``."""
+        w = self.manifest["windows"]
+        rate = self.sensor.frame_rate
+        return ", ".join(f"{length:g} s (hop {hop / rate:g} s)"
+                         for length, hop in zip(w["lengths_s"], w["train_hop_frames"]))
 
 
 def _read_model_file(path: Path) -> tuple[dict[str, Any], bytes]:
@@ -288,17 +327,29 @@ def _read_model_file(path: Path) -> tuple[dict[str, Any], bytes]:
         header["manifest"]["sensor"]  # noqa: B018 - must be there
     except (ValueError, KeyError, TypeError) as e:
         raise DataError(f"the model file's header is damaged ({type(e).__name__}); train it again", path) from None
-    if version != MODEL_VERSION:
+    if version not in (MODEL_VERSION, _OLDER_VERSION):
         raise DataError(f"written by another touchbench model format (version {version}, this version reads "
-                        f"{MODEL_VERSION}); train it again", path)
+                        f"{_OLDER_VERSION} and {MODEL_VERSION}); train it again", path)
     body = data[end + 1:]
     if len(body) != size:
         raise DataError(f"the model file is {len(body) - size:+d} bytes off the size touchbench wrote "
                         "(truncated or edited); nothing was loaded", path)
-    if hashlib.sha256(body).hexdigest() != digest:
-        raise DataError("the model file does not match the checksum touchbench wrote with it (damaged or "
-                        "edited); nothing was loaded", path)
+    expected = _checksum(header["manifest"], body) if version == MODEL_VERSION else hashlib.sha256(body).hexdigest()
+    if expected != digest:
+        raise DataError("the model file (manifest or fitted parts) does not match the checksum touchbench wrote "
+                        "with it (damaged or edited); nothing was loaded", path)
     return header, body
+
+
+def _checksum(manifest: dict[str, Any], body: bytes) -> str:
+    """The SHA-256 a model file carries: the manifest's canonical JSON, a newline, the pickle."""
+    return hashlib.sha256(canonical_json(manifest).encode() + b"\n" + body).hexdigest()
+
+
+def capture_checksum(capture: np.ndarray) -> str:
+    """The checksum a model file records per training capture (:data:`CHECKSUM_CHARS` characters of
+    :func:`touchbench.datasets.model.frames_checksum`: the same recording from any reader matches)."""
+    return frames_checksum(capture)[:CHECKSUM_CHARS]
 
 
 def manifest_path(model_path: str | Path) -> Path:
@@ -375,6 +426,7 @@ def _dataset_manifest(dataset: TouchDataset, target: str, selection: str, n_samp
         "n_captures": int(len(dataset)),
         "n_samples": int(n_samples),
         "by_class": {str(k): int(v) for k, v in zip(*np.unique(y, return_counts=True))},
+        "capture_checksums": [capture_checksum(c) for c in dataset.captures],
         **(source or {}),
     }
 

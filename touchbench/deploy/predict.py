@@ -13,6 +13,13 @@ probabilities; a capture shorter than every window is labelled whole
 (``whole=True`` labels every capture whole). Otherwise the label is the
 classifier's own prediction and the probabilities are its
 ``predict_proba``.
+
+A model file records a checksum of every capture it was trained on: the
+``trained_on`` column says which captures of the data the model has seen
+(the same frames, whichever reader read them), and :func:`accuracy_text`
+scores the unseen ones only, counting the seen ones apart. A model file
+without those checksums (an older one) gets no ``trained_on`` column, and
+its accuracy says it cannot be separated.
 """
 
 from __future__ import annotations
@@ -31,7 +38,10 @@ from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
 from .model import TrainedModel
 from .windows import cut_windows
 
-__all__ = ["predict_dataset", "read_data", "write_table"]
+__all__ = ["TRAINED_ON", "accuracy_text", "predict_dataset", "read_data", "write_table"]
+
+#: the column that says whether the model was trained on a capture
+TRAINED_ON = "trained_on"
 
 
 def read_data(source: str, fmt: str = "auto", model: TrainedModel | None = None, **options) -> TouchDataset:
@@ -74,9 +84,34 @@ def predict_dataset(model: TrainedModel, ds: TouchDataset, *, whole: bool = Fals
     col = {c: i for i, c in enumerate(classes)}
     out["probability"] = P[np.arange(len(ds)), [col[p] for p in out[PREDICTED]]]
     out["n_windows"] = n_windows
+    seen = model.seen_in_training(ds.captures)
+    if seen is not None:
+        out[TRAINED_ON] = seen
     for i, c in enumerate(classes):
         out[f"{PROBA_PREFIX}{c}"] = P[:, i]
     return out
+
+
+def accuracy_text(model: TrainedModel, table: pd.DataFrame) -> str | None:
+    """The accuracy line of ``predict``: on the captures of the model's classes it was not trained
+    on, the seen ones counted apart; None when the data has no true labels of the model's classes."""
+    if TRUE not in table.columns:
+        return None
+    known = table[TRUE].isin([str(c) for c in model.classes]).to_numpy()
+    correct = (table[TRUE] == table[PREDICTED]).to_numpy()
+    if TRAINED_ON not in table.columns:
+        if not known.any():
+            return None
+        return (f"accuracy {100 * correct[known].mean():.1f} % on {int(known.sum())} captures of known classes "
+                "(this model file does not record the captures it was trained on: accuracy on unseen captures "
+                "cannot be separated)")
+    seen = table[TRAINED_ON].to_numpy(dtype=bool)
+    scored = known & ~seen
+    apart = f"{int(seen.sum())} captures the model was trained on are not scored" if seen.any() else ""
+    if not scored.any():
+        return "no unseen captures of the model's classes to score" + (f"; {apart}" if apart else "")
+    text = f"accuracy {100 * correct[scored].mean():.1f} % on {int(scored.sum())} unseen captures"
+    return text + (f"; {apart}" if apart else "")
 
 
 def write_table(df: pd.DataFrame, path: str | Path) -> Path:

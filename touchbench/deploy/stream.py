@@ -8,8 +8,18 @@ model is not forced to classify everything it sees in terms of its known
 gesture types". Here:
 
 - frames arrive one at a time (:func:`replay` of a recorded file at its
-  frame rate, or :func:`text_frames` from standard input, one frame per line
-  of ``H*W`` comma-separated values, row-major);
+  frame rate, or the model's when the file does not say it, or
+  :func:`text_frames` from standard input, one frame per line of ``H*W``
+  comma-separated decimal numbers, row-major; ``1_0`` is no number here);
+- a malformed line of a live stream (standard input) is reported with its
+  line number and skipped, and the stream goes on (a sensor's glitch
+  should not end a session); the summary counts the skipped lines. A
+  recorded file is read whole before its replay and refused at its first
+  malformed line (nothing is replayed);
+- the recogniser keeps twice its longest window of frames: a window whose
+  frames would take more than :func:`buffer_limit` bytes (512 MiB, or a
+  quarter of the available memory when that is less) is refused up front,
+  naming ``--window`` and the longest window allowed;
 - :class:`SlidingRecognizer` keeps the last frames; once the shortest
   window is full, and then every ``hop`` frames, it classifies the last
   ``L`` frames for every window length ``L`` already full, in one batch,
@@ -34,6 +44,8 @@ from __future__ import annotations
 import gzip
 import json
 import math
+import os
+import re
 import time
 import zlib
 from dataclasses import asdict, dataclass, field
@@ -56,6 +68,7 @@ __all__ = [
     "Decision",
     "SlidingRecognizer",
     "StreamSummary",
+    "buffer_limit",
     "load_replay",
     "replay",
     "replay_dataset",
@@ -64,9 +77,15 @@ __all__ = [
 ]
 
 
+#: the most bytes of frames a recogniser keeps, whatever the memory
+MAX_BUFFER_BYTES = 512 * 2 ** 20
+#: a decimal number as a frame line writes it (no ``_`` digit groups, no hexadecimal): float() accepts more
+_NUMBER = re.compile(r"\s*[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?\s*|\s*[+-]?(nan|inf|infinity)\s*", re.IGNORECASE)
+
+
 @dataclass
 class Decision:
-    frame: int  # frames seen when the decision was made (1-based count)
+    frame: int  # frames received when the decision was made (1-based count: the 10th frame is 10)
     t: float  # stream time of that frame, seconds (frame / frame rate)
     label: str  # the best class, or the none label
     probability: float  # the best class's probability (also when under the threshold)
@@ -89,6 +108,7 @@ class StreamSummary:
     decisions: int = 0
     none: int = 0
     late_frames: int = 0
+    skipped_lines: int = 0  # malformed lines of a live stream, reported and skipped
     labels: dict[str, int] = field(default_factory=dict)
     latency_ms_p50: float = math.nan
     latency_ms_p99: float = math.nan
@@ -100,7 +120,8 @@ class StreamSummary:
         lab = ", ".join(f"{k}: {v}" for k, v in sorted(self.labels.items(), key=lambda kv: -kv[1]))
         return (f"{self.frames} frames, {self.decisions} decisions ({self.none} none); {lab}\n"
                 f"latency per decision: p50 {self.latency_ms_p50:.2f} ms, p99 {self.latency_ms_p99:.2f} ms, "
-                f"max {self.latency_ms_max:.2f} ms" + (f"; {self.late_frames} frames late" if self.late_frames else ""))
+                f"max {self.latency_ms_max:.2f} ms" + (f"; {self.late_frames} frames late" if self.late_frames else "")
+                + (f"; {self.skipped_lines} malformed lines skipped" if self.skipped_lines else ""))
 
 
 class SlidingRecognizer:
@@ -134,6 +155,7 @@ class SlidingRecognizer:
         self.dtype = np.dtype(model.manifest.get("capture_dtype", "<f8"))
         self.grid = sensor.grid
         self._cap = 2 * max(self.lengths)
+        _check_buffer(self._cap, self.grid, self.dtype, self.frame_rate)
         self._buf = np.zeros((self._cap, *self.grid), dtype=self.dtype)
         self._n = 0  # frames in the buffer
         self.seen = 0  # frames seen in total
@@ -186,6 +208,29 @@ class SlidingRecognizer:
                         latency_ms=latency, windows=per)
 
 
+def buffer_limit() -> int:
+    """The most bytes of frames a recogniser may keep: :data:`MAX_BUFFER_BYTES`, or a quarter of the
+    available memory when that is less."""
+    try:
+        available = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):  # not every system says
+        return MAX_BUFFER_BYTES
+    return int(min(MAX_BUFFER_BYTES, available // 4))
+
+
+def _check_buffer(n_frames: int, grid: tuple[int, int], dtype: np.dtype, frame_rate: float) -> None:
+    """Refuse windows whose frames (``n_frames``: twice the longest window) would not fit :func:`buffer_limit`."""
+    frame_bytes = int(np.prod(grid)) * np.dtype(dtype).itemsize
+    limit = buffer_limit()
+    if n_frames * frame_bytes > limit:
+        longest = limit // (2 * frame_bytes) / frame_rate
+        raise TouchbenchError(
+            f"--window {n_frames / 2 / frame_rate:g} s is too long: the recogniser keeps twice the longest window, "
+            f"{n_frames} frames of {grid[0]} x {grid[1]} values ({n_frames * frame_bytes / 2 ** 20:.0f} MiB), over "
+            f"its limit of {limit / 2 ** 20:.0f} MiB (512 MiB or a quarter of the available memory); "
+            f"the longest window allowed is {longest:.0f} s")
+
+
 # ----------------------------------------------------------------- sources
 def _check_values(values: np.ndarray, model: TrainedModel, where: str, line: int | None) -> None:
     lo, hi = model.sensor.value_range
@@ -199,30 +244,41 @@ def _check_values(values: np.ndarray, model: TrainedModel, where: str, line: int
         raise DataError(f"value {bad!r} is not a whole number (the model was trained on integer frames)", where, line)
 
 
-def text_frames(fh: IO[str], model: TrainedModel, where: str = "<stdin>") -> Iterator[tuple[np.ndarray, float]]:
-    """Frames from lines of ``H*W`` comma-separated values; blank lines are skipped.
+def text_frames(fh: IO[str], model: TrainedModel, where: str = "<stdin>",
+                on_error: Callable[[DataError], None] | None = None) -> Iterator[tuple[np.ndarray, float]]:
+    """Frames from lines of ``H*W`` comma-separated decimal numbers; blank lines are skipped.
 
     Yields ``(frame, arrival time)`` as each line arrives (a live pipe is
-    read line by line). A malformed line stops with its line number.
+    read line by line). A malformed line is a :class:`DataError` with its
+    line number: raised, or, with ``on_error``, handed to it and the line
+    skipped (the stream goes on).
     """
-    h, w = model.sensor.grid
-    n = h * w
-    dtype = np.dtype(model.manifest.get("capture_dtype", "<f8"))
     for lineno, line in enumerate(_lines(fh, where), start=1):
         arrived = time.perf_counter()
-        s = line.strip()
-        if not s:
+        if not line.strip():
             continue
-        parts = s.split(",")
-        if len(parts) != n:
-            raise DataError(f"a frame has {len(parts)} values, the model's {h} x {w} sensor needs {n}", where, lineno)
         try:
-            values = np.array([float(v) for v in parts], dtype=np.float64)
-        except ValueError:
-            bad = next(v for v in parts if not _is_number(v))
-            raise DataError(f"not a number: {bad.strip()!r}", where, lineno) from None
-        _check_values(values, model, where, lineno)
-        yield values.reshape(h, w).astype(dtype), arrived
+            frame = _parse_frame(line, model, where, lineno)
+        except DataError as e:
+            if on_error is None:
+                raise
+            on_error(e)
+            continue
+        yield frame, arrived
+
+
+def _parse_frame(line: str, model: TrainedModel, where: str, lineno: int) -> np.ndarray:
+    """One frame of the model's grid and dtype from one text line, or the :class:`DataError` it gets."""
+    h, w = model.sensor.grid
+    parts = line.strip().split(",")
+    if len(parts) != h * w:
+        raise DataError(f"a frame has {len(parts)} values, the model's {h} x {w} sensor needs {h * w}", where, lineno)
+    bad = next((v for v in parts if not _is_number(v)), None)
+    if bad is not None:
+        raise DataError(f"not a number: {bad.strip()!r}", where, lineno)
+    values = np.array([float(v) for v in parts], dtype=np.float64)
+    _check_values(values, model, where, lineno)
+    return values.reshape(h, w).astype(np.dtype(model.manifest.get("capture_dtype", "<f8")))
 
 
 def _lines(fh: IO[str], where: str) -> Iterator[str]:
@@ -243,11 +299,9 @@ def _lines(fh: IO[str], where: str) -> Iterator[str]:
 
 
 def _is_number(v: str) -> bool:
-    try:
-        float(v)
-        return True
-    except ValueError:
-        return False
+    """A decimal number (``1``, ``-2.5``, ``3e2``; ``nan`` and ``inf`` too, refused later by value);
+    not ``1_0`` or ``0x1f``, which Python's ``float`` and ``int`` would read."""
+    return _NUMBER.fullmatch(v) is not None
 
 
 def load_replay(path: str | Path, model: TrainedModel, capture: str | None = None,
@@ -256,8 +310,10 @@ def load_replay(path: str | Path, model: TrainedModel, capture: str | None = Non
 
     ``fmt`` is a registered file format (:mod:`touchbench.datasets.formats`),
     whose dataset is replayed like a touchbench dataset below (what the file
-    does not say, such as the ``long`` format's grid, is the model's sensor's),
-    or ``auto``:
+    does not say, such as the ``table`` format's grid, is the model's sensor's;
+    a file that does not say its frame rate, by ``--frame-rate`` or a time
+    column, is replayed at the model's, as ``auto`` replays a table), or
+    ``auto``:
 
     - a touchbench dataset (Parquet): the capture ``capture`` (by
       ``capture_id``), or every capture one after another; its sensor must
@@ -270,10 +326,7 @@ def load_replay(path: str | Path, model: TrainedModel, capture: str | None = Non
     """
     path = Path(path)
     if fmt != "auto":
-        form = FORMATS.get(fmt)
-        if not form.replay:
-            raise TouchbenchError(f"the {fmt} format cannot be replayed frame by frame")
-        return replay_dataset(form.read(path, like=model.sensor, **options), model, capture, path)
+        return _replay_format(path, model, capture, fmt, options)
     if not path.is_file():
         raise DataError("no such file", path)
     if path.suffix == ".parquet":
@@ -306,6 +359,25 @@ def load_replay(path: str | Path, model: TrainedModel, capture: str | None = Non
     lo, hi = model.sensor.value_range
     values = numeric(df, cols, path, lo=lo, hi=hi, integer=dtype.kind in "iu")
     return values.reshape(len(df), h, w).astype(dtype), model.sensor.frame_rate, f"{path.name}: {len(df)} frames"
+
+
+def _replay_format(path: Path, model: TrainedModel, capture: str | None, fmt: str,
+                   options: dict[str, Any]) -> tuple[np.ndarray, float, str]:
+    """:func:`load_replay` of a file in the registered format ``fmt``."""
+    form = FORMATS.get(fmt)
+    if not form.replay:
+        raise TouchbenchError(f"the {fmt} format cannot be replayed frame by frame")
+    takes_rate = any(o.name == "frame_rate" for o in form.options)
+    try:
+        ds = form.read(path, like=model.sensor, **options)
+    except TouchbenchError as e:
+        if not takes_rate or options.get("frame_rate") is not None or "give --frame-rate" not in str(e):
+            raise
+        rate = model.sensor.frame_rate
+        ds = form.read(path, like=model.sensor, **{**options, "frame_rate": rate})
+        frames, rate, what = replay_dataset(ds, model, capture, path)
+        return frames, rate, f"{what} (the file does not say its frame rate: the model's, {rate:g} Hz)"
+    return replay_dataset(ds, model, capture, path)
 
 
 def replay_dataset(ds: TouchDataset, model: TrainedModel, capture: str | None, path: Path) -> tuple[np.ndarray, float, str]:
