@@ -52,7 +52,7 @@ from ..methods.base import METHODS
 from ..results.ledger import Looks
 from ..results.store import NOT_RECORDED, PREDICTED, TRUE
 from .pareto import pareto_front
-from .results import ResultSet, load_results
+from .results import ResultSet, load_results, scheme_label
 from .stats import PairedTest, fold_interval, holm, paired_test, wilson_interval
 
 __all__ = [
@@ -98,10 +98,12 @@ class Leaderboard:
     looks: Looks | None = None
     #: the table declares design data: rows carry ``held_out_accuracy`` and ``designed``
     has_design: bool = False
+    #: how the title names the evaluation (:func:`table_heading`); ``scheme`` when empty
+    heading: str = ""
 
     @property
     def title(self) -> str:
-        t = f"{self.dataset}" + (f" ({self.variant})" if self.variant else "") + f" — {self.scheme}"
+        t = f"{self.dataset}" + (f" ({self.variant})" if self.variant else "") + f" — {self.heading or self.scheme}"
         t = t if self.target == "gesture" else f"{t} — target {self.target}"
         return t + (" — LEAKY evaluation" if self.is_leaky else "")
 
@@ -241,8 +243,24 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
         key=key, dataset=str(first["dataset"]), dataset_hash=str(first["dataset_hash"]), target=str(first["target"]),
         scheme=str(first["scheme_label"]), rows=df, folds=folds, machines=machines, reference_machine=ref,
         pooled_machines=pool_machines, alpha=alpha, frame_rate=float(fr.iloc[0]) if len(fr) else math.nan, notes=notes,
-        looks=looks_here, has_design=design.captures is not None,
+        looks=looks_here, has_design=design.captures is not None, heading=table_heading(sources, str(first["scheme_label"])),
     )
+
+
+#: in a title, a scheme's parameter value longer than this (a file-name pattern...) is written "…"
+TITLE_VALUE_CHARS = 24
+
+
+def table_heading(sources: list[dict], scheme: str) -> str:
+    """How a table's title names its evaluation: the evaluation's name (one of several of a protocol)
+    and the scheme, its long values (a file-name pattern, a test dataset's filters) written ``…``
+    (:data:`TITLE_VALUE_CHARS`) and then the protocol named; ``scheme`` (the full label) otherwise."""
+    entries = [s["scheme"] for s in sources if s.get("scheme") is not None]
+    short = scheme_label(entries[0], scheme, limit=TITLE_VALUE_CHARS) if entries else scheme
+    names = sorted({str(s["evaluation"]) for s in sources if s.get("evaluation")})
+    if not names and short != scheme:
+        names = sorted({str(s["protocol"]) for s in sources if s.get("protocol")})
+    return f"{', '.join(names)}: {short}" if names else short
 
 
 @dataclass
