@@ -273,3 +273,33 @@ def test_pareto_labels_never_overlap_in_a_crowded_panel(monkeypatch, tmp_path, s
         for i, (ta, a) in enumerate(boxes):
             for tb, b in boxes[i + 1:]:
                 assert not _boxes_overlap(a, b), (ta, tb)
+
+
+def _audit_figure(monkeypatch, tmp_path, published):
+    import pandas as pd
+
+    from touchbench.reports import audit
+    from touchbench.reports.figures import base
+
+    # two methods x two variants: four bars, all long (the leaky ones nearly 100 %)
+    table = pd.DataFrame({"method": ["sd / gaus-rf"] * 2 + ["msd / gaus-rf"] * 2,
+                          "variant": ["honest", "capture-kfold"] * 2, "accuracy": [0.62, 0.97, 0.55, 0.99]})
+    return _drawn_figure(monkeypatch, base, lambda: audit.plot_audit(table, tmp_path / "audit", published))
+
+
+@pytest.mark.parametrize("published", [None, {"sd / gaus-rf": {"value": 83.2, "tolerance": 5.0}}])
+def test_the_audit_legend_covers_no_bar_and_the_axis_names_only_lines_drawn(monkeypatch, tmp_path, published):
+    fig = _audit_figure(monkeypatch, tmp_path, published)
+    [ax] = fig.axes
+    renderer = fig.canvas.get_renderer()
+    legend = ax.get_legend().get_window_extent(renderer)
+    bars = [p for p in ax.patches if p.get_width() > 0]
+    assert len(bars) == 4
+    for bar in bars:
+        assert not _boxes_overlap(legend, bar.get_window_extent(renderer))
+    dashed = [line for line in ax.get_lines() if line.get_linestyle() == "--"]
+    assert len(dashed) == (1 if published else 0)
+    assert ("published" in ax.get_xlabel()) is bool(published)
+    if published:  # the dashed line at the published 83.2 %, named in the legend
+        assert list(dashed[0].get_xdata()) == [83.2, 83.2]
+        assert "published" in [t.get_text() for t in ax.get_legend().get_texts()]
