@@ -88,6 +88,32 @@ def test_two_datasets_of_one_name_are_told_apart_in_titles(runs, tmp_path):
     assert sorted(lb.title for lb in lbs) == ["other (data 1) — loso", "other (data 2) — loso"]
 
 
+def test_a_title_names_the_evaluation_and_never_carries_a_whole_file_name_pattern(tmp_path):
+    import json
+
+    pattern = r"(?P<study>\d+)-(?P<participant>\d+)(?P<substrate>curve|foam|none)(?P<gesture>[a-z]+)"
+    scheme = {"name": "cross-dataset", "test": {"name": "other-study/", "format": "haart-raw",
+                                                "options": {"pattern": pattern}}}
+    write_fake_run(tmp_path / "a", CAPS, FOLDS, METHODS[:2], dataset="haart", scheme=scheme,
+                   protocol="to-other-study", run_id="a")
+    [lb] = build_leaderboards(load_results([tmp_path / "a"]))
+    assert pattern not in lb.title and "(?P<" not in lb.title
+    assert lb.title == ("haart — to-other-study: cross-dataset(test={format=haart-raw,name=other-study/,"
+                        "options={pattern=…}})")
+    assert pattern in lb.scheme  # the table's identity (--scheme, JSON) keeps the whole entry
+    console = Console(record=True, width=300)
+    print_terminal([lb], console)
+    assert "(?P<" not in console.export_text() and "(?P<" not in to_markdown([lb])
+    # one evaluation of several: its name leads the title, the scheme as written
+    write_fake_run(tmp_path / "b", CAPS, FOLDS, METHODS[:2], dataset="haart", scheme={"name": "challenge",
+                   "column": "substrate", "train": ["foam", "none"], "test": ["curve"]}, run_id="b")
+    manifest = json.loads((tmp_path / "b" / "manifest.json").read_text())
+    manifest["protocol"]["evaluation"] = "to-curve"
+    (tmp_path / "b" / "manifest.json").write_text(json.dumps(manifest))
+    [lb] = build_leaderboards(load_results([tmp_path / "b"]))
+    assert lb.title == "haart — to-curve: challenge(column=substrate,test=[curve],train=[foam,none])"
+
+
 # ----------------------------------------------------------------- print sizes and fonts
 @pytest.mark.parametrize("size", ["text", "column"])
 def test_figures_are_at_print_width_with_fonts_of_at_least_7_pt(runs, tmp_path, size):

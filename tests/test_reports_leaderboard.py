@@ -257,7 +257,8 @@ def test_outputs_markdown_csv_json(tmp_path):
     md = to_markdown(lbs)
     assert "| # | method |" in md and "94.4" in md and "★" in md
     csv = pd.read_csv(__import__("io").StringIO(to_csv(lbs)))
-    assert len(csv) == 3 and {"accuracy", "p_holm", "pareto", "method_id", "scheme"} <= set(csv.columns)
+    assert len(csv) == 3 and {"accuracy", "p_holm", "pareto", "method", "scheme"} <= set(csv.columns)
+    assert "method_id" not in csv.columns and set(csv["method"]) == {"msd / rf", "sd / rf", "bmh / rf"}
     js = json.loads(to_json(lbs))
     assert js["tables"][0]["scheme"] == "loso" and len(js["tables"][0]["rows"]) == 3
     assert js["tables"][0]["rows"][0]["p_value"] is None
@@ -331,3 +332,74 @@ def test_compare_across_evaluations_combines_them_by_stouffer(tmp_path):
     doc = json.loads(res.stdout)
     assert len(doc["comparisons"]) == 2 and doc["meta_analysis"]["z"] == pytest.approx(z)
     assert doc["meta_analysis"]["n"] == [6, 6]
+
+
+# ----------------------------------------------------------------- terminal width
+def test_fitting_columns_adds_columns_in_priority_order_while_they_fit():
+    from touchbench.reports.leaderboard import fitting_columns
+
+    widths = {"#": 1, "method": 10, "accuracy": 5, "macro": 4, "latency": 6, "fit": 2}
+    essential = ("#", "method", "accuracy")
+    # a rich table: 1 for its left edge, then 3 per column around its width
+    base = 1 + (1 + 3) + (10 + 3) + (5 + 3)  # 26
+    assert fitting_columns(widths, 20, essential) == ["#", "method", "accuracy"]  # never fewer
+    assert fitting_columns(widths, base, essential) == ["#", "method", "accuracy"]
+    assert fitting_columns(widths, base + 7, essential) == ["#", "method", "accuracy", "macro"]
+    # latency (9) does not fit in 8 more: fit (5) is not taken past it, the order holds
+    assert fitting_columns(widths, base + 7 + 8, essential) == ["#", "method", "accuracy", "macro"]
+    assert fitting_columns(widths, base + 7 + 9 + 5, essential) == list(widths)
+
+
+def test_an_80_column_terminal_shows_every_method_by_name_with_its_accuracy(tmp_path, monkeypatch):
+    import re
+
+    from click.testing import CliRunner
+    from rich.cells import cell_len
+
+    from touchbench.cli.main import cli
+
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    out = tmp_path / "out"
+    r = CliRunner().invoke(cli, ["run", "tiny", "--out", str(out), "--jobs", "1", "--no-progress"])
+    assert r.exit_code == 0, r.output
+    r = CliRunner().invoke(cli, ["leaderboard", str(out)], env={"COLUMNS": "80"})
+    assert r.exit_code == 0, r.output
+    lines = r.output.splitlines()
+    assert max(cell_len(line) for line in lines) <= 80
+    # tiny: features sd, msd, sd+msd x classifiers gaus-rf, zhou-lda; accuracy: mean over the 4 folds
+    scores = pd.read_parquet(out / "scores.parquet")
+    acc = scores.groupby(["features", "classifier"])["accuracy"].mean()
+    assert len(acc) == 6
+    for (feats, clf), a in acc.items():
+        name = f"{feats} / {clf}"
+        row = [line for line in lines if re.search(rf"│ {re.escape(name)} +│", line)]
+        assert len(row) == 1, (name, r.output)
+        assert f"│ {100 * a:.1f} ± " in row[0]
+    header = "\n".join(lines[:6])
+    assert "accuracy" in header and "interval" in header and "vs best" in header
+    # method ids: in the JSON document only
+    ids = [row["method_id"] for row in json.loads(to_json(build_leaderboards(load_results([out]))))["tables"][0]["rows"]]
+    for fmt in ("terminal", "md", "csv"):
+        text = CliRunner().invoke(cli, ["leaderboard", str(out), "-f", fmt], env={"COLUMNS": "80"}).output
+        assert not any(mid in text for mid in ids), fmt
+
+
+def test_a_single_fold_table_keeps_names_and_wilson_intervals_whole_at_80_columns(tmp_path):
+    from rich.console import Console
+
+    from touchbench.reports.leaderboard import print_terminal
+
+    one = {"challenge": CAPS["capture_id"].tolist()}  # 36 test captures
+    write_fake_run(tmp_path / "r", CAPS, one, [
+        FakeMethod("sd+bmh+msd", "gaus-rf", wrong={"challenge": CAPS["capture_id"].tolist()[:6]}),
+        FakeMethod("bmh", "gaus-rf", wrong={"challenge": CAPS["capture_id"].tolist()[:12]}),
+    ], scheme={"name": "challenge"})
+    console = Console(record=True, width=80)
+    print_terminal(build_leaderboards(load_results([tmp_path / "r"])), console)
+    text = console.export_text()
+    assert max(len(line) for line in text.splitlines()) <= 80
+    # 30/36 and 24/36 right; Wilson intervals by scipy's binomtest
+    for name, k in (("sd+bmh+msd / gaus-rf", 30), ("bmh / gaus-rf", 24)):
+        ci = stats.binomtest(k, 36).proportion_ci(method="wilson")
+        line = next(x for x in text.splitlines() if f"│ {name} " in x)
+        assert f"{100 * k / 36:.1f}" in line and f"{100 * ci.low:.1f}–{100 * ci.high:.1f}" in line

@@ -146,27 +146,29 @@ def test_parse_reference_keeps_equals_signs_in_the_label():
 
 
 def test_label_offsets_move_colliding_labels_apart():
-    # three labels at the same point: each takes the next free offset; a far one keeps the first
+    # three labels 40 pt wide, 8.5 pt high at one point: the first right of it at (4, 3), each next one
+    # 1 pt below the one before (3 - 8.5 - 1 = -6.5, then -16); a far one keeps (4, 3)
     offs = label_offsets(np.array([[100.0, 100.0], [100.0, 100.0], [100.0, 100.0], [400.0, 300.0]]),
                          np.array([40.0, 40.0, 40.0, 40.0]))
-    assert offs[0] == (4, 3) and offs[3] == (4, 3)
-    assert len(set(offs[:3])) == 3
-    boxes = [(100 + dx, 100 + dy, 140 + dx, 100 + dy + 8.5) for dx, dy in offs[:3]]
-    for i in range(3):
-        for j in range(i + 1, 3):
-            a, b = boxes[i], boxes[j]
-            assert min(a[3], b[3]) <= max(a[1], b[1])  # no vertical overlap
+    assert offs == [(4, 3), (4, -6.5), (4, -16.0), (4, 3)]
+    # a label below another but not under it (its box starts right of the first's end) stays in place
+    offs = label_offsets(np.array([[100.0, 100.0], [150.0, 98.0]]), np.array([40.0, 40.0]))
+    assert offs == [(4, 3), (4, 3)]
 
 
 def test_label_offsets_avoid_drawn_text_and_the_panel_edge():
-    # a label 40 pt wide at (100, 100); the box right of it at the first offset, (104..144, 103..111.5),
-    # is taken by other text: the next offset (4, -9) is free
+    # a label 40 pt wide at (100, 100); the box right of it, (104..144, 103..111.5), is taken by other
+    # text: it moves below that text, its bottom at 103 - 8.5 - 1 = 93.5 (offset -6.5)
     offs = label_offsets(np.array([[100.0, 100.0]]), np.array([40.0]), taken=[(104.0, 103.0, 144.0, 111.5)])
-    assert offs == [(4, -9)]
+    assert offs == [(4, -6.5)]
     # a point 10 pt from the panel's right edge (x1 = 110): no box right of it fits, so the label goes
-    # left of the point at the first height: x from 100 - 40 - 4 = 56 to 96
+    # left of the point: x from 100 - 40 - 4 = 56 to 96
     offs = label_offsets(np.array([[100.0, 100.0]]), np.array([40.0]), bounds=(0.0, 0.0, 110.0, 200.0))
     assert offs == [(-44, 3)]
+    # heights as measured: a 12 pt high label moves 12 + 1 below the one before
+    offs = label_offsets(np.array([[100.0, 100.0], [100.0, 100.0]]), np.array([40.0, 40.0]),
+                         heights_pt=np.array([12.0, 12.0]))
+    assert offs == [(4, 3), (4, -10.0)]
 
 
 def test_pareto_leaves_out_a_cost_a_method_does_not_have(tmp_path):
@@ -224,3 +226,84 @@ def test_the_report_commands_read_the_figure_kinds_only_when_plot_needs_them():
     code = "import sys, touchbench.cli.reports\nprint([m for m in sys.modules if m.startswith('touchbench.reports.')])"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+def _crowded_board(n: int):
+    """A table of ``n`` methods all on the Pareto front within a few percent of latency and accuracy."""
+    import pandas as pd
+
+    from touchbench.reports.leaderboard import Leaderboard
+
+    acc = 0.60 + 0.004 * np.arange(n)
+    rows = pd.DataFrame({
+        "features": [f"feature-set-{i}" for i in range(n)], "classifier": ["gaus-rf"] * n,
+        "timing_machine": ["m-1"] * n, "latency_ms": 1.0 * 1.01 ** np.arange(n),
+        "fit_seconds": np.full(n, 2.0), "feature_ms": 0.5 + 0.001 * np.arange(n),
+        "accuracy": acc, "ci_low": acc - 0.05, "ci_high": acc + 0.05, "pareto": [True] * n, "leakage": [""] * n,
+    })
+    return Leaderboard(key="k", dataset="crowd", dataset_hash="0" * 64, target="gesture", scheme="loso", rows=rows,
+                       folds=pd.DataFrame(), machines={"m-1": "test"}, reference_machine="m-1", pooled_machines=False,
+                       alpha=0.05, frame_rate=54.0)
+
+
+def _drawn_figure(monkeypatch, module, draw):
+    """The figure ``draw()`` would save through ``module.save`` (kept open and drawn instead)."""
+    kept = []
+    monkeypatch.setattr(module, "save", lambda fig, *a, **k: kept.append(fig) or [])
+    draw()
+    [fig] = kept
+    fig.canvas.draw()
+    return fig
+
+
+def _boxes_overlap(a, b) -> bool:
+    return a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1
+
+
+@pytest.mark.parametrize("size", ["text", "column"])
+def test_pareto_labels_never_overlap_in_a_crowded_panel(monkeypatch, tmp_path, size):
+    from matplotlib.text import Text
+
+    from touchbench.reports.figures import pareto
+
+    lb = _crowded_board(10)
+    fig = _drawn_figure(monkeypatch, pareto, lambda: pareto.plot_pareto(lb, tmp_path / "p", [("paper", 62.0)], size=size))
+    renderer = fig.canvas.get_renderer()
+    for ax in fig.axes:
+        # the text's own box (an annotation's extent would take in its leader line)
+        boxes = [(t.get_text(), Text.get_window_extent(t, renderer)) for t in ax.texts if t.get_text()]
+        labels = [t for t, _ in boxes]
+        assert sum(lab.startswith("feature-set-") for lab in labels) == 10  # every method labelled
+        for i, (ta, a) in enumerate(boxes):
+            for tb, b in boxes[i + 1:]:
+                assert not _boxes_overlap(a, b), (ta, tb)
+
+
+def _audit_figure(monkeypatch, tmp_path, published):
+    import pandas as pd
+
+    from touchbench.reports import audit
+    from touchbench.reports.figures import base
+
+    # two methods x two variants: four bars, all long (the leaky ones nearly 100 %)
+    table = pd.DataFrame({"method": ["sd / gaus-rf"] * 2 + ["msd / gaus-rf"] * 2,
+                          "variant": ["honest", "capture-kfold"] * 2, "accuracy": [0.62, 0.97, 0.55, 0.99]})
+    return _drawn_figure(monkeypatch, base, lambda: audit.plot_audit(table, tmp_path / "audit", published))
+
+
+@pytest.mark.parametrize("published", [None, {"sd / gaus-rf": {"value": 83.2, "tolerance": 5.0}}])
+def test_the_audit_legend_covers_no_bar_and_the_axis_names_only_lines_drawn(monkeypatch, tmp_path, published):
+    fig = _audit_figure(monkeypatch, tmp_path, published)
+    [ax] = fig.axes
+    renderer = fig.canvas.get_renderer()
+    legend = ax.get_legend().get_window_extent(renderer)
+    bars = [p for p in ax.patches if p.get_width() > 0]
+    assert len(bars) == 4
+    for bar in bars:
+        assert not _boxes_overlap(legend, bar.get_window_extent(renderer))
+    dashed = [line for line in ax.get_lines() if line.get_linestyle() == "--"]
+    assert len(dashed) == (1 if published else 0)
+    assert ("published" in ax.get_xlabel()) is bool(published)
+    if published:  # the dashed line at the published 83.2 %, named in the legend
+        assert list(dashed[0].get_xdata()) == [83.2, 83.2]
+        assert "published" in [t.get_text() for t in ax.get_legend().get_texts()]

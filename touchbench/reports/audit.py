@@ -66,7 +66,8 @@ def audit_markdown(table: pd.DataFrame, published: dict[str, dict[str, Any]] | N
 
 def plot_audit(table: pd.DataFrame, path_stem: Path, published: dict[str, dict[str, Any]] | None = None,
                title: str = "Leakage audit") -> list[Path]:
-    """Grouped bars: each method's accuracy per variant (honest first); the published number dashed.
+    """Grouped bars: each method's accuracy per variant (honest first); the published number dashed
+    where there is one (the axis says so only then); the legend right of the panel.
     Drawn at text width with the figures' fonts (:mod:`touchbench.reports.figures.base`)."""
     from .figures.base import figure_width, pyplot, save
 
@@ -79,15 +80,18 @@ def plot_audit(table: pd.DataFrame, path_stem: Path, published: dict[str, dict[s
         accs = [100 * float(table[(table["method"] == m) & (table["variant"] == v)]["accuracy"].mean()) for m in methods]
         ax.barh([i + j * h for i in range(len(methods))], accs, height=h, label=v,
                 hatch=None if v == "honest" else "//", alpha=1.0 if v == "honest" else 0.7)
+    drawn = 0
     for i, m in enumerate(methods):
         pub = (published or {}).get(m)
         if pub:
-            ax.plot([pub["value"]] * 2, [i - h / 2, i + 0.8 - h / 2], "k--", lw=1)
+            ax.plot([pub["value"]] * 2, [i - h / 2, i + 0.8 - h / 2], "k--", lw=1, label=None if drawn else "published")
+            drawn += 1
     ax.set_yticks([i + 0.4 - h / 2 for i in range(len(methods))], methods)
-    ax.set_xlabel("accuracy % (dashed: published)")
+    ax.set_xlabel("accuracy %" + (" (dashed: published)" if drawn else ""))
     ax.set_xlim(0, 100)
     ax.set_title(title)
-    ax.legend(loc="lower left")
+    # beside the panel, never over a bar (the constrained layout narrows the panel to make room)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     return save(fig, path_stem, formats=("png", "svg"))
 
 

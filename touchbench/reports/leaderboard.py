@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import sys
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -40,6 +41,7 @@ from typing import Any, Iterable
 
 import numpy as np
 import pandas as pd
+from rich.cells import cell_len
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
@@ -48,10 +50,11 @@ from sklearn.metrics import precision_recall_fscore_support
 
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError
+from ..methods.base import METHODS
 from ..results.ledger import Looks
 from ..results.store import NOT_RECORDED, PREDICTED, TRUE
 from .pareto import pareto_cost, pareto_front
-from .results import ResultSet, load_results
+from .results import ResultSet, load_results, scheme_label
 from .stats import (
     TEST_SHORT,
     Friedman,
@@ -111,10 +114,12 @@ class Leaderboard:
     looks: Looks | None = None
     #: the table declares design data: rows carry ``held_out_accuracy`` and ``designed``
     has_design: bool = False
+    #: how the title names the evaluation (:func:`table_heading`); ``scheme`` when empty
+    heading: str = ""
 
     @property
     def title(self) -> str:
-        t = f"{self.dataset}" + (f" ({self.variant})" if self.variant else "") + f" — {self.scheme}"
+        t = f"{self.dataset}" + (f" ({self.variant})" if self.variant else "") + f" — {self.heading or self.scheme}"
         t = t if self.target == "gesture" else f"{t} — target {self.target}"
         return t + (" — LEAKY evaluation" if self.is_leaky else "")
 
@@ -310,8 +315,24 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
         key=key, dataset=str(first["dataset"]), dataset_hash=str(first["dataset_hash"]), target=str(first["target"]),
         scheme=str(first["scheme_label"]), rows=df, folds=folds, machines=machines, reference_machine=ref,
         pooled_machines=pool_machines, alpha=alpha, frame_rate=float(fr.iloc[0]) if len(fr) else math.nan, notes=notes,
-        looks=looks_here, has_design=design.captures is not None,
+        looks=looks_here, has_design=design.captures is not None, heading=table_heading(sources, str(first["scheme_label"])),
     )
+
+
+#: in a title, a scheme's parameter value longer than this (a file-name pattern...) is written "…"
+TITLE_VALUE_CHARS = 24
+
+
+def table_heading(sources: list[dict], scheme: str) -> str:
+    """How a table's title names its evaluation: the evaluation's name (one of several of a protocol)
+    and the scheme, its long values (a file-name pattern, a test dataset's filters) written ``…``
+    (:data:`TITLE_VALUE_CHARS`) and then the protocol named; ``scheme`` (the full label) otherwise."""
+    entries = [s["scheme"] for s in sources if s.get("scheme") is not None]
+    short = scheme_label(entries[0], scheme, limit=TITLE_VALUE_CHARS) if entries else scheme
+    names = sorted({str(s["evaluation"]) for s in sources if s.get("evaluation")})
+    if not names and short != scheme:
+        names = sorted({str(s["protocol"]) for s in sources if s.get("protocol")})
+    return f"{', '.join(names)}: {short}" if names else short
 
 
 @dataclass
@@ -769,14 +790,13 @@ def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
     cells = []
     parts = _label_parts(lb.rows)
     for _, r in lb.rows.iterrows():
-        feat_extra, method_extra, suffix = parts[r["method_id"]]
-        feats = _features_cell(r, feat_extra, lb.frame_rate)
+        feats = _features_cell(r, parts[r["method_id"]][0], lb.frame_rate)
         acc, ci = _accuracy_cells(r)
         failed_all = r["n_folds"] == 0 and r["n_failed"] > 0
         if failed_all:
             acc, ci = "failed", "—"
         vs = _versus_best_cell(r, failed_all)
-        row = [str(r["rank"]), str(r["classifier"]) + method_extra + suffix, feats, str(r["classifier_name"]),
+        row = [str(r["rank"]), _name_cell(r, parts[r["method_id"]]), feats, str(r["classifier_name"]),
                f"{r['n_folds']}" + (f" (+{r['n_failed']} failed)" if r["n_failed"] else ""), acc, ci,
                _pct(r["macro_f1"]), _num(r["latency_ms"]), _num(r["fit_seconds"]), _num(r["feature_ms"]), vs,
                "★" if r["pareto"] else ""]
@@ -790,6 +810,19 @@ def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
             row.insert(2, f"LEAKY: {r['leakage']}" if r["leakage"] else "honest")
         cells.append(row)
     return header, cells
+
+
+def _name_cell(r: pd.Series, parts: list[str]) -> str:
+    """A row's readable name: its label for a method that brings its own input (a registered method,
+    an estimator on the captures), else ``features / label``; with the parameters that tell colliding
+    rows apart and its early cut, so that the name alone tells the rows apart."""
+    feat_extra, method_extra, suffix = parts
+    name = str(r["classifier"]) + method_extra + suffix
+    if str(r["classifier_name"]) not in METHODS.names() and not str(r["features"]).startswith("captures"):
+        name = f"{r['features']}{feat_extra} / {name}"
+    if np.isfinite(r["early_frames"]):
+        name += f" @ {int(r['early_frames'])} frames"
+    return name
 
 
 def _features_cell(r: pd.Series, extra: str, frame_rate: float) -> str:
@@ -904,31 +937,89 @@ def to_json(lbs: list[Leaderboard]) -> str:
     return json.dumps({"tables": tables}, indent=2) + "\n"
 
 
+def method_names(rows: pd.DataFrame) -> dict[str, str]:
+    """A table's readable name per method id, as its rows show it (:func:`display_rows`)."""
+    parts = _label_parts(rows)
+    return {r["method_id"]: _name_cell(r, parts[r["method_id"]]) for _, r in rows.iterrows()}
+
+
 def to_csv(lbs: list[Leaderboard]) -> str:
+    """Every table's rows, a method named by its readable name (its id, and the data's hash, only in
+    the JSON document)."""
     frames = []
     for lb in lbs:
         d = lb.rows.copy()
+        d.insert(1, "method", d["method_id"].map(method_names(lb.rows)))
+        d = d.drop(columns="method_id")
         d.insert(0, "scheme", lb.scheme)
         d.insert(0, "target", lb.target)
-        d.insert(0, "dataset_hash", lb.dataset_hash)
+        d.insert(0, "variant", lb.variant)
         d.insert(0, "dataset", lb.dataset)
         frames.append(d)
     return pd.concat(frames, ignore_index=True).to_csv(index=False)
 
 
-def print_terminal(lbs: list[Leaderboard], console=None) -> None:
+#: the columns a terminal always shows (the name, the accuracy and its interval, the test's verdict;
+#: which rows are leaky), then the others in the order a wider terminal adds them
+TERMINAL_ESSENTIAL = ("#", "method", "evaluation", "accuracy % (±sd)", "95 % interval", "vs best: Δ pp, p (Holm)")
+TERMINAL_PRIORITY = ("held out %", "features", "estimator", "macro F1 %", "latency ms", "Pareto", "folds",
+                     "timing machine", "fit s", "features ms")
+#: headers broken over two lines in a terminal, so that a header is no wider than its numbers
+_TERMINAL_HEADERS = {"accuracy % (±sd)": "accuracy %\n(±sd)", "95 % interval": "95 %\ninterval",
+                     "vs best: Δ pp, p (Holm)": "vs best: Δ pp,\np (Holm)", "macro F1 %": "macro\nF1 %",
+                     "latency ms": "latency\nms", "features ms": "features\nms", "held out %": "held out\n%",
+                     "timing machine": "timing\nmachine"}
+#: columns a narrow terminal may wrap (at spaces) when even the essential ones do not fit
+_TERMINAL_WRAPPING = {"evaluation", "accuracy % (±sd)", "95 % interval", "vs best: Δ pp, p (Holm)"}
 
-    # a pipe or a file gets the whole width the table needs, a terminal its own width
-    console = console or Console(width=None if sys.stdout.isatty() else 250)
+
+def fitting_columns(widths: dict[str, int], available: int, essential: Iterable[str]) -> list[str]:
+    """The columns a terminal table of ``available`` characters shows, in ``widths``' order (its
+    priority): every essential one, then the others while the table still fits with every column at
+    its own width (``widths``: the widest cell or header line). A rich table takes 3 characters per
+    column (padding and a border) and 1 for its left edge."""
+    essential = set(essential)
+    shown = [h for h in widths if h in essential]
+    used = 1 + sum(widths[h] + 3 for h in shown)
+    for h in (h for h in widths if h not in essential):
+        if used + widths[h] + 3 > available:
+            break
+        shown.append(h)
+        used += widths[h] + 3
+    return shown
+
+
+def _terminal_table(lb: Leaderboard, width: int) -> Table:
+    """The table of ``lb`` as a terminal of ``width`` characters shows it (:func:`fitting_columns`)."""
+    header, cells = display_rows(lb)
+    heads = [_TERMINAL_HEADERS.get(h, h) for h in header]
+    widths = {h: max([cell_len(x) for x in head.split("\n")] + [cell_len(c[i]) for c in cells])
+              for i, (h, head) in enumerate(zip(header, heads))}
+    order = [h for h in (*TERMINAL_ESSENTIAL, *TERMINAL_PRIORITY) if h in widths]
+    order += [h for h in header if h not in order]
+    shown = set(fitting_columns({h: widths[h] for h in order}, width, TERMINAL_ESSENTIAL))
+    keep = [i for i, h in enumerate(header) if h in shown]
+    t = Table(title=escape(lb.title), show_lines=False)  # a name like "[b5830b]" is text, not markup
+    for i in keep:
+        wrap = header[i] in _TERMINAL_WRAPPING
+        t.add_column(escape(heads[i]), overflow="fold", no_wrap=not wrap, min_width=None if wrap else widths[header[i]])
+    for c in cells:
+        t.add_row(*(escape(c[i]) for i in keep))
+    return t
+
+
+def _terminal_width() -> int | None:
+    """The console width: ``COLUMNS`` or the terminal's own (None lets rich read them), 250 for a
+    pipe or a file (the whole table)."""
+    return None if sys.stdout.isatty() or os.environ.get("COLUMNS", "").isdigit() else 250
+
+
+def print_terminal(lbs: list[Leaderboard], console=None) -> None:
+    """The leaderboards in a terminal: on a narrow one the rank, name, accuracy, interval and test
+    verdict of every method; a wider one adds columns (``TERMINAL_PRIORITY``)."""
+    console = console or Console(width=_terminal_width())
     for lb in lbs:
-        header, cells = display_rows(lb)
-        t = Table(title=escape(lb.title), show_lines=False)  # a name like "[b5830b]" is text, not markup
-        for h in header:
-            wrap = h in ("method", "features", "vs best: Δ pp, p (Holm)")
-            t.add_column(escape(h), overflow="fold", no_wrap=not wrap)
-        for c in cells:
-            t.add_row(*(escape(x) for x in c))
-        console.print(t)
+        console.print(_terminal_table(lb, console.width))
         console.print(escape(legend(lb)), style="dim")
         for n in lb.notes:
             console.print(escape(f"Note: {n}"), style="yellow")

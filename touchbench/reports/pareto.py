@@ -41,6 +41,8 @@ def pareto_cost(rows: pd.DataFrame) -> str:
     """The time a Pareto front of ``rows`` (one machine's) is computed on: the CPU time of labelling
     one capture (``latency_cpu_ms``), which other processes' load changes far less than the
     wall-clock latency; the wall-clock ``latency_ms`` when a timed method has no CPU time (results
-    written before touchbench measured it)."""
+    written before touchbench measured it, or rows without the column)."""
+    if "latency_cpu_ms" not in rows:
+        return "latency_ms"
     timed = rows[rows["latency_ms"].notna()]
     return "latency_cpu_ms" if len(timed) and timed["latency_cpu_ms"].notna().all() else "latency_ms"

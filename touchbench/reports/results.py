@@ -94,32 +94,35 @@ def machine_id(platform: dict[str, Any] | None) -> tuple[str, str]:
     return "m-" + _short_hash(key, 6), desc
 
 
-def _fmt(v: Any) -> str:
+def _fmt(v: Any, limit: int | None = None) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, dict):
-        return "{" + ",".join(f"{k}={_fmt(v[k])}" for k in sorted(v)) + "}"
+        return "{" + ",".join(f"{k}={_fmt(v[k], limit)}" for k in sorted(v)) + "}"
     if isinstance(v, list):
-        return "[" + ",".join(_fmt(x) for x in v) + "]"
-    return str(v)
+        return "[" + ",".join(_fmt(x, limit) for x in v) + "]"
+    return "…" if limit is not None and len(str(v)) > limit else str(v)
 
 
-def scheme_label(scheme: Any, fallback: str = "?") -> str:
-    """``name(param=value,...)`` of a protocol's ``scheme`` entry (string or mapping)."""
+def scheme_label(scheme: Any, fallback: str = "?", limit: int | None = None) -> str:
+    """``name(param=value,...)`` of a protocol's ``scheme`` entry (string or mapping); with ``limit``,
+    a value (a parameter's, or one inside a list or mapping) longer than ``limit`` characters, such as
+    a file-name pattern, is written ``…``."""
     if isinstance(scheme, str):
         return scheme
     if not isinstance(scheme, dict) or "name" not in scheme:
         return fallback
     params = {k: v for k, v in scheme.items() if k != "name"}
     cls = scheme_class(str(scheme["name"]))
+    written = {k: _fmt(v, limit) for k, v in params.items()}
     if cls is not None:
         for k in cls.swept_params:
-            params.pop(k, None)
+            written.pop(k, None)
         if cls.base_param is not None and isinstance(params.get(cls.base_param), dict):
-            params[cls.base_param] = scheme_label(params[cls.base_param])
-    if not params:
+            written[cls.base_param] = scheme_label(params[cls.base_param], limit=limit)
+    if not written:
         return str(scheme["name"])
-    return f"{scheme['name']}(" + ",".join(f"{k}={_fmt(params[k])}" for k in sorted(params)) + ")"
+    return f"{scheme['name']}(" + ",".join(f"{k}={written[k]}" for k in sorted(written)) + ")"
 
 
 @dataclass
@@ -279,6 +282,7 @@ def _source_record(d: Path, m: dict[str, Any], s: pd.DataFrame, mid: str, mdesc:
     return {
         "path": str(d), "run_id": (m.get("run") or {}).get("run_id") or str(s["run_id"].iloc[0]),
         "protocol": (m.get("protocol") or {}).get("name") or str(s["protocol"].iloc[0]),
+        "evaluation": (m.get("protocol") or {}).get("evaluation") or "", "scheme": _protocol_scheme(m),
         "protocol_path": (m.get("protocol") or {}).get("path"),
         "machine": mid, "machine_desc": mdesc, "dataset": str(s["dataset"].iloc[0]),
         "started_at": m.get("started_at"), "finished_at": m.get("finished_at"),

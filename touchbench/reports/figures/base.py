@@ -152,40 +152,50 @@ def short_label(r: Any, width: int = 28, with_features: bool = True) -> str:
 
 #: a label's height and its width per character at fontsize 7, in points (a generous estimate)
 LABEL_H, LABEL_CHAR_W = 8.5, 4.3
-#: offsets (points) tried in turn for a label, right of its point
-LABEL_OFFSETS = ((4, 3), (4, -9), (4, 11), (4, -17), (4, 19), (4, -25), (4, 27), (4, -33), (4, 35), (4, -41), (4, 43))
+#: where a label goes (points from its point) when nothing is in its way, right of its point
+LABEL_OFFSET = (4, 3)
 
 
 def label_offsets(points_pt: np.ndarray, widths_pt: np.ndarray, taken: Sequence[tuple[float, float, float, float]] = (),
-                  bounds: tuple[float, float, float, float] | None = None) -> list[tuple[int, int]]:
-    """Offsets (points) for labels at ``points_pt`` (N, 2 display points) so that their boxes do not overlap.
+                  bounds: tuple[float, float, float, float] | None = None,
+                  heights_pt: np.ndarray | None = None) -> list[tuple[float, float]]:
+    """Offsets (points) for labels at ``points_pt`` (N, 2 display points, top to bottom) so that their
+    boxes never overlap one another nor a box of ``taken`` (other text already drawn, in the same points).
 
-    Greedy, in the given order: each label takes the first offset of
-    ``LABEL_OFFSETS`` (right of its point), then of the same heights to
-    the left of its point, whose box (``widths_pt`` wide, ``LABEL_H``
-    high) overlaps no box placed before it nor a box of ``taken`` (other
-    text already drawn, in the same points) and stays inside ``bounds``
-    (x0, y0, x1, y1: the panel, when given); when every offset collides,
-    the one with the least overlap and area outside the panel.
+    Each label goes at ``LABEL_OFFSET``, right of its point, or as far left of it when its box
+    (``widths_pt`` wide, ``heights_pt`` high, ``LABEL_H`` when not given) would pass the right edge of
+    ``bounds`` (x0, y0, x1, y1: the panel, when given); a label whose box would overlap a box already
+    placed moves down below it, 1 point apart (:func:`free_height`). Labels given top to bottom keep
+    that order wherever they meet, so the lines to moved labels do not cross.
     """
     placed: list[tuple[float, float, float, float]] = [tuple(map(float, b)) for b in taken]
+    heights = np.full(len(widths_pt), LABEL_H) if heights_pt is None else np.asarray(heights_pt, dtype=float)
     out = []
-    for (x, y), w in zip(np.asarray(points_pt, dtype=float), np.asarray(widths_pt, dtype=float)):
-        candidates = list(LABEL_OFFSETS) + [(-int(math.ceil(w)) - dx, dy) for dx, dy in LABEL_OFFSETS]
-        best, best_cost = candidates[0], np.inf
-        for dx, dy in candidates:
-            box = (x + dx, y + dy, x + dx + w, y + dy + LABEL_H)
-            cost = sum(overlap(box, b) for b in placed)
-            if bounds is not None:
-                cost += w * LABEL_H - overlap(box, bounds)
-            if cost < best_cost:
-                best, best_cost = (dx, dy), cost
-            if cost == 0:
-                break
-        dx, dy = best
-        placed.append((x + dx, y + dy, x + dx + w, y + dy + LABEL_H))
-        out.append(best)
+    for (x, y), w, h in zip(np.asarray(points_pt, dtype=float), np.asarray(widths_pt, dtype=float), heights):
+        dx, dy = LABEL_OFFSET
+        if bounds is not None and x + dx + w > bounds[2]:
+            dx = -int(math.ceil(w)) - dx
+        bottom = free_height(x + dx, w, h, y + dy, placed)
+        placed.append((x + dx, bottom, x + dx + w, bottom + h))
+        out.append((dx, dy) if bottom == y + dy else (dx, bottom - y))
     return out
+
+
+def free_height(x0: float, w: float, h: float, y: float, placed: Sequence[tuple[float, float, float, float]],
+                gap: float = 1.0) -> float:
+    """The highest bottom, at most ``y``, of a box from ``x0`` to ``x0 + w`` and ``h`` high that overlaps
+    none of ``placed``: ``y`` itself, or ``gap`` below a placed box in its columns."""
+    cols = [b for b in placed if b[0] < x0 + w and x0 < b[2]]
+    tries = sorted({y} | {b[1] - h - gap for b in cols if b[1] - h - gap < y}, reverse=True)
+    return next(c for c in tries if not any(c < b[3] and b[1] < c + h for b in cols))
+
+
+def text_size(fig, text: str, fontsize: float = MIN_FONT_PT) -> tuple[float, float]:
+    """Width and height (points) of ``text`` as ``fig``'s renderer draws it."""
+    t = fig.text(0, 0, text, fontsize=fontsize)
+    box = t.get_window_extent(fig.canvas.get_renderer())
+    t.remove()
+    return box.width * 72.0 / fig.dpi, box.height * 72.0 / fig.dpi
 
 
 def overlap(a: Sequence[float], b: Sequence[float]) -> float:

@@ -16,17 +16,17 @@ from ..results import ResultSet
 from .base import (
     FIGURES,
     FORMATS,
-    LABEL_CHAR_W,
-    LABEL_H,
-    LABEL_OFFSETS,
+    LABEL_OFFSET,
     MIN_FONT_PT,
     FigureOptions,
     figure_width,
+    free_height,
     label_offsets,
     overlap,
     pyplot,
     save,
     short_label,
+    text_size,
     wrap,
 )
 
@@ -53,15 +53,18 @@ def _reference_labels(ax, fig, references: list[tuple[str, float]]) -> list[tupl
     boxes: list[tuple[float, float, float, float]] = []
     for label, value in sorted(references, key=lambda r: -r[1]):
         text = f"{label} {value:g} %"
-        w = len(text) * LABEL_CHAR_W
+        w, h = text_size(fig, text)
         y = ax.transData.transform((1.0, value))[1] * 72.0 / fig.dpi
         for dy in (-9, 2, -18, 11):
-            box = (x0, y + dy, x0 + w, y + dy + LABEL_H)
+            box = (x0, y + dy, x0 + w, y + dy + h)
             if not any(overlap(box, b) for b in boxes):
                 break
+        else:
+            dy = free_height(x0, w, h, y - 9, boxes) - y
+            box = (x0, y + dy, x0 + w, y + dy + h)
         boxes.append(box)
         ax.annotate(text, (0.01, value), xycoords=("axes fraction", "data"), textcoords="offset points",
-                    xytext=(0, dy), fontsize=MIN_FONT_PT, color="0.35").set_in_layout(False)
+                    xytext=(0, dy), fontsize=MIN_FONT_PT, color="0.35", va="bottom").set_in_layout(False)
     return boxes
 
 
@@ -157,11 +160,11 @@ def _label_points(ax, fig, labelled: list, label_all: bool, with_features: bool,
     order = np.argsort([-p[1] for p in pts], kind="stable")  # top to bottom
     bbox = ax.get_window_extent()
     bounds = tuple(v * 72.0 / fig.dpi for v in (bbox.x0, bbox.y0, bbox.x1, bbox.y1))
-    offs = label_offsets(np.array(pts)[order], np.array([len(texts[i][0]) * LABEL_CHAR_W for i in order]),
-                         taken=taken, bounds=bounds)
+    sizes = np.array([text_size(fig, texts[i][0]) for i in order])
+    offs = label_offsets(np.array(pts)[order], sizes[:, 0], taken=taken, bounds=bounds, heights_pt=sizes[:, 1])
     for i, off in zip(order, offs):
         lab, xi, yi = texts[i]
-        leader = None if off == LABEL_OFFSETS[0] else {"arrowstyle": "-", "color": "0.6", "lw": 0.5,
+        leader = None if off == LABEL_OFFSET else {"arrowstyle": "-", "color": "0.6", "lw": 0.5,
                                                         "shrinkA": 0, "shrinkB": 0}
         ax.annotate(lab, (xi, yi), textcoords="offset points", xytext=off, fontsize=MIN_FONT_PT,
                     va="bottom", arrowprops=leader).set_in_layout(False)  # labels may run over: panels keep their width
