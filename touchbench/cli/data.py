@@ -45,7 +45,8 @@ def format_info(info: dict) -> str:
         f"captures      {info['captures']}",
         f"subjects      {info['subjects']}",
         f"gestures      {info['gestures']}",
-        f"sensor        {s['name']}: {s['grid'][0]} x {s['grid'][1]} at {s['frame_rate']:g} Hz, range {s['value_range']}",
+        f"sensor        {s['name']}: {s['grid'][0]} x {s['grid'][1]} at {s['frame_rate']:g} Hz, range "
+        f"{s['value_range'][0]:g}..{s['value_range'][1]:g}",
         f"frames        {fpc['min']}..{fpc['max']} per capture (median {fpc['median']:g})",
         f"values        {info['value_range'][0]:g}..{info['value_range'][1]:g} ({info['dtype']})",
     ]
@@ -61,15 +62,36 @@ def format_info(info: dict) -> str:
     ]
     if "by_split" in info:
         lines.append("by split      " + ", ".join(f"{k}: {v}" for k, v in info["by_split"].items()))
-    prov = info.get("provenance", {})
+    return "\n".join(lines + provenance_lines(info.get("provenance", {})))
+
+
+SHOWN = 20  # list entries of the provenance shown by `data info` (--json gives them all)
+
+
+def provenance_lines(prov: dict) -> list[str]:
+    """A dataset's provenance as ``data info`` prints it: one line a field, a list or mapping one
+    indented line an entry (the first :data:`SHOWN`)."""
+    lines = []
     ph = prov.get("placeholders")
     if ph is not None:
-        lines.append(f"placeholders  {len(ph)} byte-identical copies found:")
-        lines += [f"  {p['file']} = {p['copy_of']} ({p['reason']})" for p in ph]
+        if ph:
+            lines.append(f"placeholders  {len(ph)} byte-identical copies found, left out:")
+            lines += [f"  {p['file']} = {p['copy_of']} ({p['reason']})" for p in ph]
+        else:
+            lines.append("placeholders  none (no byte-identical copies)")
     for k, v in prov.items():
-        if k != "placeholders":
+        if k == "placeholders":
+            continue
+        if isinstance(v, dict):
+            v = [f"{a}: {b}" for a, b in v.items()]
+        if not isinstance(v, list):
             lines.append(f"{k:13s} {v}")
-    return "\n".join(lines)
+            continue
+        lines.append(f"{k:13s} ({len(v)})")
+        lines += [f"  {', '.join(f'{a}: {b}' for a, b in e.items()) if isinstance(e, dict) else e}" for e in v[:SHOWN]]
+        if len(v) > SHOWN:
+            lines.append(f"  ... and {len(v) - SHOWN} more (--json lists every one)")
+    return lines
 
 
 @data.command(epilog=example("touchbench data info haart", "touchbench data info my-recordings.parquet --json"))
