@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 
 from ..catalog import load_dataset, parse_dataset_ref
@@ -120,20 +122,20 @@ def export(name: str, out_dir: str, fmt: str, cache_dir, data_dir) -> None:
         click.echo(str(p))
 
 
-@data.command(epilog=example("touchbench data convert frames.csv mine.parquet --format long --grid 6x6 --frame-rate 50"))
+@data.command(epilog=example("touchbench data convert frames.csv mine.parquet --format table --grid 6x6 --frame-rate 50"))
 @click.argument("source", type=click.Path(exists=True))
 @click.argument("out", type=click.Path(dir_okay=False))
 @click.option("--format", "fmt", type=FormatChoice("read"), required=True,
               help=f"Format of SOURCE ({FORMATS_HELP}).")
 @format_options
-@click.option("--name", default=None, help="Dataset name (default: from the file).")
+@click.option("--name", default=None, help="Dataset name (default: OUT's file name without .parquet).")
 def convert(source: str, out: str, fmt: str, name, **options) -> None:
     """Read SOURCE in a supported format and save it as a touchbench Parquet dataset OUT."""
     form = FORMATS.get(fmt)
     missing = form.missing(options)
     if missing:
         raise click.UsageError(f"--format {fmt} needs {' and '.join(o.usage for o in missing)}")
-    ds = form.read(source, name=name, **options)
+    ds = form.read(source, name=name or Path(out).name.removesuffix(".parquet"), **options)
     ds.to_parquet(out)
     click.echo(f"{out}: {len(ds)} captures, hash {ds.content_hash}")
 
