@@ -80,3 +80,25 @@ def test_info_prints_provenance_lists_one_entry_a_line(tmp_path):
     assert "placeholders  none (no byte-identical copies)" in lines
     assert lines[lines.index("cut           (2)") + 1:][:3] == ["  a.csv: 12 s", "  b.csv: 30 s", "note          as recorded"]
     assert "range 0..255" in r.output and not any(ln.endswith(":") for ln in lines)
+
+
+def test_the_demo_without_the_data_says_it_ran_the_synthetic_scene(tmp_path, monkeypatch):
+    """The run and the leaderboard are stubs here (the demo's own run is tested from a wheel in
+    test_packaging.py): what is checked is what the demo says around them."""
+    import click
+
+    import touchbench.cli.reports as reports
+    import touchbench.cli.run as run
+
+    ran = []
+    monkeypatch.setattr(run, "run", click.Command("run", callback=lambda **kw: ran.append(kw["protocol"])))
+    monkeypatch.setattr(reports, "leaderboard", click.Command("leaderboard", callback=lambda **kw: click.echo("BOARD")))
+    monkeypatch.setenv("TOUCHBENCH_DATA_DIR", str(tmp_path / "nowhere"))
+    r = CliRunner().invoke(cli, ["demo", "--jobs", "1"])
+    assert r.exit_code == 0, r.output
+    assert ran == ["tiny"]
+    before, after = r.output.split("BOARD")
+    assert "real HAART data not found: running the built-in tiny scene (synthetic data) instead" in before
+    assert f"looked for the haart data in {tmp_path / 'nowhere' / 'haart'}" in before
+    assert "These results are of the synthetic scene 'tiny', not of real data" in after
+    assert "Set TOUCHBENCH_DATA_DIR to the folder that holds haart/" in after

@@ -258,3 +258,26 @@ def test_a_damaged_or_cut_cache_entry_is_rebuilt_from_the_raw_files(tmp_path, ca
         caplog.clear()
         assert load_dataset("haart", data_dir=d, cache_dir=cache).content_hash == first.content_hash
         assert "damaged" not in caplog.text  # the rebuilt entry is whole again
+
+
+def test_missing_data_names_where_touchbench_looked_never_the_install_location(tmp_path, monkeypatch):
+    """As from an installed wheel: the package inside a virtual environment's site-packages, run from a
+    folder without the data; the message names the folders searched and how to point touchbench at the data."""
+    import touchbench.core.paths as paths
+
+    site = tmp_path / "venv" / "lib" / "python3.11" / "site-packages"
+    (site / "touchbench").mkdir(parents=True)
+    monkeypatch.setattr(paths, "REPO_ROOT", site)
+    monkeypatch.delenv("TOUCHBENCH_DATA_DIR", raising=False)
+    (tmp_path / "work").mkdir()
+    monkeypatch.chdir(tmp_path / "work")
+    with pytest.raises(DataError) as e:
+        load_dataset("haart", cache_dir=tmp_path / "c")
+    msg = str(e.value)
+    assert "venv" not in msg  # nothing computed from where the package is installed
+    assert f"looked for the haart data in {tmp_path / 'shared' / 'data' / 'haart'}, " in msg
+    assert str(tmp_path / "work" / "shared" / "data" / "haart") in msg
+    assert "(TOUCHBENCH_DATA_DIR is not set); set TOUCHBENCH_DATA_DIR to the folder that holds haart/" in msg
+    monkeypatch.setenv("TOUCHBENCH_DATA_DIR", str(tmp_path / "nowhere"))
+    with pytest.raises(DataError, match=r"looked for the haart data in .*nowhere/haart \(TOUCHBENCH_DATA_DIR="):
+        load_dataset("haart", cache_dir=tmp_path / "c")

@@ -99,7 +99,8 @@ def provenance_lines(prov: dict) -> list[str]:
 @data.command(epilog=example("touchbench data info haart", "touchbench data info my-recordings.parquet --json"))
 @click.argument("name")
 @click.option("--cache-dir", type=click.Path(file_okay=False), default=None, help="Cache folder (default: user cache).")
-@click.option("--data-dir", type=click.Path(file_okay=False), default=None, help="Raw data folder (default: ../shared/data).")
+@click.option("--data-dir", type=click.Path(file_okay=False), default=None, help="The dataset's own folder (default: in $TOUCHBENCH_DATA_DIR, else in shared/data beside the working "
+              "directory).")
 @click.option("--refresh", is_flag=True, help="Rebuild the cache entry.")
 @json_option
 def info(name: str, cache_dir, data_dir, refresh: bool, as_json: bool) -> None:

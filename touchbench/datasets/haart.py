@@ -40,7 +40,7 @@ import numpy as np
 import pandas as pd
 
 from ..core.errors import DataError
-from ..core.paths import data_dir as default_data_dir
+from ..core.paths import data_dir as default_data_dir, data_dir_help
 from .cache import cached_dataset
 from .model import SensorSpec, TouchDataset
 from .registry import DATASETS
@@ -102,7 +102,8 @@ def _raw_dir(data_dir: str | Path | None) -> Path:
     base = Path(data_dir) if data_dir is not None else default_data_dir() / "haart"
     raw = base / "raw" if (base / "raw").is_dir() else base
     if not raw.is_dir():
-        raise DataError("HAART raw folder not found (set TOUCHBENCH_DATA_DIR or pass data_dir)", raw)
+        where = data_dir_help("haart") if data_dir is None else "the data_dir given holds no HAART recordings"
+        raise DataError(f"HAART raw folder not found: {where}", raw)
     return raw
 
 
