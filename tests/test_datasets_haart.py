@@ -225,3 +225,59 @@ def test_recording_names_are_parsed(tmp_path):
     d = _folder(tmp_path, {"140729-10curvefurconstant.csv": random_recording(1)}, gz=True)
     (r,) = find_recordings(d / "raw")
     assert (r.participant, r.substrate, r.cover, r.gesture, r.subject) == (10, "curve", "fur", "constant", "s10")
+
+
+def _damage_frames(path: Path) -> None:
+    """Change one value of the cached frames, keeping the file readable and its saved hash."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    t = pq.read_table(path)
+    frames = t.column("frames").combine_chunks()
+    values = frames.to_pylist()
+    values[0] = bytes([255 - values[0][0]]) + values[0][1:]
+    t = t.set_column(t.column_names.index("frames"), "frames", pa.array(values, type=frames.type))
+    pq.write_table(t.replace_schema_metadata(t.schema.metadata), path)
+
+
+def test_a_damaged_or_cut_cache_entry_is_rebuilt_from_the_raw_files(tmp_path, caplog):
+    import warnings
+
+    d = _folder(tmp_path, {"140729-1nonenonepat.csv": random_recording(5)})
+    cache = tmp_path / "cache"
+    first = load_dataset("haart", data_dir=d, cache_dir=cache)
+    (entry,) = (cache / "datasets").glob("haart-*.parquet")
+    for damage in (_damage_frames, lambda p: p.write_bytes(p.read_bytes()[: len(p.read_bytes()) // 2])):
+        damage(entry)
+        caplog.clear()
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # not "new data"
+            again = load_dataset("haart", data_dir=d, cache_dir=cache)
+        assert again.content_hash == first.content_hash
+        assert "the cached copy of haart is damaged" in caplog.text and "rebuilt from its source files" in caplog.text
+        caplog.clear()
+        assert load_dataset("haart", data_dir=d, cache_dir=cache).content_hash == first.content_hash
+        assert "damaged" not in caplog.text  # the rebuilt entry is whole again
+
+
+def test_missing_data_names_where_touchbench_looked_never_the_install_location(tmp_path, monkeypatch):
+    """As from an installed wheel: the package inside a virtual environment's site-packages, run from a
+    folder without the data; the message names the folders searched and how to point touchbench at the data."""
+    import touchbench.core.paths as paths
+
+    site = tmp_path / "venv" / "lib" / "python3.11" / "site-packages"
+    (site / "touchbench").mkdir(parents=True)
+    monkeypatch.setattr(paths, "REPO_ROOT", site)
+    monkeypatch.delenv("TOUCHBENCH_DATA_DIR", raising=False)
+    (tmp_path / "work").mkdir()
+    monkeypatch.chdir(tmp_path / "work")
+    with pytest.raises(DataError) as e:
+        load_dataset("haart", cache_dir=tmp_path / "c")
+    msg = str(e.value)
+    assert "venv" not in msg  # nothing computed from where the package is installed
+    assert f"looked for the haart data in {tmp_path / 'shared' / 'data' / 'haart'}, " in msg
+    assert str(tmp_path / "work" / "shared" / "data" / "haart") in msg
+    assert "(TOUCHBENCH_DATA_DIR is not set); set TOUCHBENCH_DATA_DIR to the folder that holds haart/" in msg
+    monkeypatch.setenv("TOUCHBENCH_DATA_DIR", str(tmp_path / "nowhere"))
+    with pytest.raises(DataError, match=r"looked for the haart data in .*nowhere/haart \(TOUCHBENCH_DATA_DIR="):
+        load_dataset("haart", cache_dir=tmp_path / "c")

@@ -86,7 +86,8 @@ def test_windows(study, real_haart_challenge, tmp_path):
     mid = fmt.read(study, recording_window="middle:2")  # 108 frames in the middle of 540: 216..323 (0-based)
     np.testing.assert_array_equal(mid.captures[0], whole.captures[0][216:324])
     assert "frames 217..324 (1-based)" in mid.provenance["window"]
-    with pytest.raises(TouchbenchError, match="asks for 648 frames of a 10-s recording of 540"):
+    with pytest.raises(TouchbenchError, match=r"a 10-s recording \(540 frames\) is shorter than the 12-s window "
+                                              r"\(--recording-window middle:12 asks for 648 frames\)"):
         fmt.read(study, recording_window="middle:12")
     with pytest.raises(TouchbenchError, match="10-s recordings at 54 Hz only"):
         fmt.read(study, recording_window="challenge", recording_seconds=12.0)
@@ -145,3 +146,91 @@ def test_names_patterns_and_placeholders(tmp_path):
     assert r.exit_code == 3 and "--pattern needs the named group(s) (?P<participant>...)" in r.output
     r = convert(tmp_path / "o" / "P04_stroke_s1.csv", tmp_path / "o.parquet", "--format", "haart-raw")
     assert r.exit_code == 3 and "the haart-raw format reads a folder of recordings" in r.output
+
+
+def _inner(line: int) -> int:
+    """Pressure of the inner cell (row 1, column 1) of the frame starting at 0-based ``line``, for
+    ``_recording(..., value=lambda k: k % 1024)``: value k = 10 * line + column."""
+    return 1023 - ((10 * (line + 1) + 1) % 1024)
+
+
+def _lengths_folder(tmp_path):
+    """Recordings of 10, 20 and 40 s at 54 Hz (540, 1080 and 2160 frames of ten lines)."""
+    folder = tmp_path / "long"
+    for gesture, frames in (("pat", 540), ("rub", 1080), ("tickle", 2160)):
+        _recording(folder / f"8-1nonenone{gesture}.csv", 10 * frames, value=lambda k: k % 1024)
+    return folder
+
+
+def test_middle_seconds_is_the_middle_of_each_recording_whatever_its_length(tmp_path):
+    folder = _lengths_folder(tmp_path)
+    (folder / "8-1nonenonepat.csv").unlink()  # 20 and 40 s
+    ds = FORMATS.get("haart-raw").read(folder, recording_window="middle:12")
+    # 12 s = 648 frames: of 1080 the first is (1080 - 648) // 2 = 216, of 2160 it is (2160 - 648) // 2 = 756
+    assert [c.shape for c in ds.captures] == [(648, 8, 8)] * 2
+    assert ds.captures[0][0, 0, 0] == _inner(216 * 10) and ds.captures[1][0, 0, 0] == _inner(756 * 10)
+    assert ds.captures[1][-1, 0, 0] == _inner((756 + 647) * 10)
+    assert ds.provenance["cut"] == "none"
+
+
+def test_recording_seconds_reads_a_folder_of_mixed_lengths_and_says_what_it_did(tmp_path):
+    folder = _lengths_folder(tmp_path)
+    r = convert(folder, tmp_path / "l.parquet", "--format", "haart-raw", "--recording-seconds", "20")
+    assert r.exit_code == 0, r.output
+    assert "1 of 3 recordings cut to their first 20 s (median length 40 s)" in r.output
+    assert "1 of 3 recordings shorter than 20 s, used whole (median length 10 s)" in r.output
+    ds = TouchDataset.from_parquet(tmp_path / "l.parquet")
+    # the middle 8 s (432 frames): of 540 from frame 54, of 1080 (the 40-s one cut to 20 s too) from 324
+    assert [c.shape for c in ds.captures] == [(432, 8, 8)] * 3
+    assert [int(c[0, 0, 0]) for c in ds.captures] == [_inner(540), _inner(3240), _inner(3240)]
+    # by default (HAART's protocol) the two long ones are cut to 10 s, and the conversion says so
+    r = convert(folder, tmp_path / "d.parquet", "--format", "haart-raw")
+    assert r.exit_code == 0 and "2 of 3 recordings cut to their first 10 s (median length 30 s)" in r.output
+    info = CliRunner().invoke(cli, ["data", "info", str(tmp_path / "d.parquet")])
+    assert info.exit_code == 0, info.output
+    assert "recordings    3 read: 2 of 3 recordings cut to their first 10 s" in info.output
+    assert "  8-1nonenonerub.csv: 10800 lines, the first 5400 used" in info.output
+    assert "['" not in info.output and "placeholders  none" in info.output
+
+
+def test_the_challenge_study_keeps_the_registered_haart_ids(tmp_path):
+    folder = tmp_path / "ids"
+    _recording(folder / "140729-4nonenonepat.csv", 5400)
+    _recording(folder / "150301-4nonenonepat.csv", 5400, value=lambda k: 7)
+    ds = FORMATS.get("haart-raw").read(folder)
+    assert list(ds.meta["subject"]) == ["s04", "150301-s04"]  # the challenge's participant 4 as haart names them
+    assert list(ds.meta["capture_id"]) == ["s04-none-none-pat", "150301-s04-none-none-pat"]
+
+
+def test_haart_files_as_named_give_the_haart_subjects_and_captures(real_haart_dir, real_haart, tmp_path):
+    src = real_haart_dir / "raw" / "140729-4"
+    for f in sorted(src.glob("140729-4foam*"))[:2]:
+        shutil.copy(f, tmp_path / f.name)
+    ds = FORMATS.get("haart-raw").read(tmp_path)
+    ref = dict(zip(real_haart.meta["capture_id"], real_haart.captures))
+    subjects = dict(zip(real_haart.meta["capture_id"], real_haart.meta["subject"]))
+    assert len(ds) == 2
+    for cid, subject, cap in zip(ds.meta["capture_id"], ds.meta["subject"], ds.captures):
+        assert subject == subjects[cid] == "s04"
+        np.testing.assert_array_equal(cap, ref[cid])
+
+
+def test_an_empty_recording_is_called_empty(tmp_path):
+    import warnings
+
+    (tmp_path / "e").mkdir()
+    (tmp_path / "e" / "7-1nonenonepat.csv").write_text("\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(DataError, match=r"7-1nonenonepat.csv: empty recording"):
+            FORMATS.get("haart-raw").read(tmp_path / "e")
+
+
+def test_a_frame_rate_of_zero_is_refused_not_ignored(tmp_path):
+    _recording(tmp_path / "z" / "7-1nonenonepat.csv", 5400)
+    r = convert(tmp_path / "z", tmp_path / "z.parquet", "--format", "haart-raw", "--frame-rate", "0")
+    assert r.exit_code == 2 and "--frame-rate must be a finite number of frames per second above 0" in r.output
+    for rate in (0.0, float("nan"), float("inf")):
+        with pytest.raises(TouchbenchError, match="--frame-rate must be"):
+            FORMATS.get("haart-raw").read(tmp_path / "z", frame_rate=rate)
+    assert not (tmp_path / "z.parquet").exists()

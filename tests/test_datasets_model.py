@@ -136,3 +136,10 @@ def test_info_counts():
     assert inf["captures"] == 12 and inf["subjects"] == 2 and inf["gestures"] == 3
     assert inf["frames_per_capture"] == {"min": 7, "median": 7.0, "max": 7}
     assert inf["by_gesture"] == {"a": 4, "b": 4, "c": 4}
+
+
+@pytest.mark.parametrize("rate, value_range", [(float("inf"), (0, 255)), (float("nan"), (0, 255)), (0.0, (0, 255)),
+                                               (10.0, (0.0, float("inf"))), (10.0, (float("-inf"), 1.0))])
+def test_a_sensor_needs_a_finite_frame_rate_and_value_range(rate, value_range):
+    with pytest.raises(ValueError, match="must be positive|must have low < high"):
+        SensorSpec("s", (2, 2), rate, value_range)

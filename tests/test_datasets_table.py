@@ -254,3 +254,79 @@ def test_a_real_socialtouch_file_through_the_table_format(real_socialtouch_dir, 
         np.testing.assert_array_equal(ds.captures[i], ref.captures[j])
         np.testing.assert_array_equal(ds.meta["time_ms"][i], ref.meta["time_ms"][j])
     assert ds.captures[0].dtype == np.uint8
+
+
+# ---------------------------------------------------------------- small tables written by hand
+HEADER = "capture_id,subject,gesture,frame,c0,c1,c2,c3"
+
+
+def _table(tmp_path, *rows, name="t.csv"):
+    """A 2 x 2 table written line by line (the header is line 1, ``rows[i]`` is line ``i + 2``)."""
+    path = tmp_path / name
+    path.write_text("\n".join([HEADER, *rows]) + "\n")
+    return path
+
+
+def _read(path, **kw):
+    return FORMATS.get("table").read(path, grid=(2, 2), frame_rate=kw.pop("frame_rate", 10.0),
+                                     value_range=kw.pop("value_range", (0, 255)), **kw)
+
+
+def test_ids_are_text_as_written(tmp_path):
+    # subjects 007 and 7 are two people; captures 01 and 1 two captures of one frame each
+    ds = _read(_table(tmp_path, "01,007,pat,1,1,2,3,4", "1,7,pat,1,5,6,7,8"))
+    assert dict(zip(ds.meta["capture_id"], ds.meta["subject"])) == {"01": "007", "1": "7"}
+    assert ds.meta["subject"].nunique() == 2
+    np.testing.assert_array_equal(_by_id(ds)["1"], [[[5, 6], [7, 8]]])
+
+
+BAD_LINES = [
+    # (the rows of the table, the words of the one error, the line it names)
+    (["a,s1,pat,1,1,2,3,4", "a,s1,pat,2,1_0,2,3,4"], "column 'c0': missing, non-numeric", 3),
+    (["a,s1,pat,1,1,2,3,4", "b,,pat,1,1,2,3,4"], "empty subject (column 'subject')", 3),
+    (["a,s1,pat,1,1,2,3,4", "b,s1, ,1,1,2,3,4"], "empty gesture (column 'gesture')", 3),
+    (["a,s1,pat,1,1,2,3,4", HEADER, "b,s1,pat,1,1,2,3,4"], "repeats the header row", 3),
+]
+
+
+@pytest.mark.parametrize("rows, words, line", BAD_LINES)
+def test_bad_cells_and_labels_are_refused_at_their_line(tmp_path, rows, words, line):
+    path = _table(tmp_path, *rows)
+    with pytest.raises(DataError) as e:
+        _read(path)
+    assert words in str(e.value) and f"t.csv:{line}:" in str(e.value)
+
+
+def test_a_text_time_stamp_is_named_at_its_line(tmp_path):
+    path = tmp_path / "t.csv"
+    path.write_text("capture_id,subject,gesture,time_ms,c0,c1,c2,c3\n"
+                    "a,s1,pat,0,1,2,3,4\na,s1,pat,10,1,2,3,4\na,s1,pat,ten,1,2,3,4\n")
+    with pytest.raises(DataError, match=r"t.csv:4: column 'time_ms': not a number \('ten'\)"):
+        _read(path)
+    # a long table: the line of the cell row that holds the stamp, not of the frame's position among frames
+    path.write_text("capture_id,subject,gesture,time_ms,cell,value\n"
+                    + "".join(f"a,s1,pat,0,{k},1\n" for k in range(4))
+                    + "".join(f"a,s1,pat,x,{k},1\n" for k in range(4)))
+    with pytest.raises(DataError, match=r"t.csv:6: column 'time_ms': not a number \('x'\)"):
+        _read(path)
+
+
+@pytest.mark.parametrize("option, value", [("--frame-rate", "inf"), ("--frame-rate", "0"), ("--frame-rate", "-5"),
+                                           ("--frame-rate", "nan"), ("--value-range", "0..1e400"),
+                                           ("--value-range", "nan..1")])
+def test_frame_rate_and_value_range_must_be_finite_and_positive(tmp_path, option, value):
+    path = _table(tmp_path, "a,s1,pat,1,1,2,3,4")
+    args = {"--frame-rate": "10", "--value-range": "0..255", option: value}
+    r = convert(path, tmp_path / "o.parquet", "--format", "table", "--grid", "2x2", *[x for kv in args.items() for x in kv])
+    assert r.exit_code == 2 and f"{option} must be" in r.output, r.output
+    assert not (tmp_path / "o.parquet").exists()
+
+
+def test_frame_rate_and_value_range_from_python_are_checked_alike(tmp_path):
+    path = _table(tmp_path, "a,s1,pat,1,1,2,3,4")
+    with pytest.raises(TouchbenchError, match="--frame-rate must be a finite number of frames per second above 0"):
+        _read(path, frame_rate=float("inf"))
+    with pytest.raises(TouchbenchError, match="--value-range must be two finite numbers"):
+        _read(path, value_range=(0.0, float("inf")))
+    with pytest.raises(TouchbenchError, match="--value-range: the range's low end must be below its high end"):
+        _read(path, value_range=(5.0, 5.0))

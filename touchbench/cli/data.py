@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 
 from ..catalog import load_dataset, parse_dataset_ref
@@ -45,7 +47,8 @@ def format_info(info: dict) -> str:
         f"captures      {info['captures']}",
         f"subjects      {info['subjects']}",
         f"gestures      {info['gestures']}",
-        f"sensor        {s['name']}: {s['grid'][0]} x {s['grid'][1]} at {s['frame_rate']:g} Hz, range {s['value_range']}",
+        f"sensor        {s['name']}: {s['grid'][0]} x {s['grid'][1]} at {s['frame_rate']:g} Hz, range "
+        f"{s['value_range'][0]:g}..{s['value_range'][1]:g}",
         f"frames        {fpc['min']}..{fpc['max']} per capture (median {fpc['median']:g})",
         f"values        {info['value_range'][0]:g}..{info['value_range'][1]:g} ({info['dtype']})",
     ]
@@ -61,21 +64,43 @@ def format_info(info: dict) -> str:
     ]
     if "by_split" in info:
         lines.append("by split      " + ", ".join(f"{k}: {v}" for k, v in info["by_split"].items()))
-    prov = info.get("provenance", {})
+    return "\n".join(lines + provenance_lines(info.get("provenance", {})))
+
+
+SHOWN = 20  # list entries of the provenance shown by `data info` (--json gives them all)
+
+
+def provenance_lines(prov: dict) -> list[str]:
+    """A dataset's provenance as ``data info`` prints it: one line a field, a list or mapping one
+    indented line an entry (the first :data:`SHOWN`)."""
+    lines = []
     ph = prov.get("placeholders")
     if ph is not None:
-        lines.append(f"placeholders  {len(ph)} byte-identical copies found:")
-        lines += [f"  {p['file']} = {p['copy_of']} ({p['reason']})" for p in ph]
+        if ph:
+            lines.append(f"placeholders  {len(ph)} byte-identical copies found, left out:")
+            lines += [f"  {p['file']} = {p['copy_of']} ({p['reason']})" for p in ph]
+        else:
+            lines.append("placeholders  none (no byte-identical copies)")
     for k, v in prov.items():
-        if k != "placeholders":
+        if k == "placeholders":
+            continue
+        if isinstance(v, dict):
+            v = [f"{a}: {b}" for a, b in v.items()]
+        if not isinstance(v, list):
             lines.append(f"{k:13s} {v}")
-    return "\n".join(lines)
+            continue
+        lines.append(f"{k:13s} ({len(v)})")
+        lines += [f"  {', '.join(f'{a}: {b}' for a, b in e.items()) if isinstance(e, dict) else e}" for e in v[:SHOWN]]
+        if len(v) > SHOWN:
+            lines.append(f"  ... and {len(v) - SHOWN} more (--json lists every one)")
+    return lines
 
 
 @data.command(epilog=example("touchbench data info haart", "touchbench data info my-recordings.parquet --json"))
 @click.argument("name")
 @click.option("--cache-dir", type=click.Path(file_okay=False), default=None, help="Cache folder (default: user cache).")
-@click.option("--data-dir", type=click.Path(file_okay=False), default=None, help="Raw data folder (default: ../shared/data).")
+@click.option("--data-dir", type=click.Path(file_okay=False), default=None, help="The dataset's own folder (default: in $TOUCHBENCH_DATA_DIR, else in shared/data beside the working "
+              "directory).")
 @click.option("--refresh", is_flag=True, help="Rebuild the cache entry.")
 @json_option
 def info(name: str, cache_dir, data_dir, refresh: bool, as_json: bool) -> None:
@@ -98,20 +123,20 @@ def export(name: str, out_dir: str, fmt: str, cache_dir, data_dir) -> None:
         click.echo(str(p))
 
 
-@data.command(epilog=example("touchbench data convert frames.csv mine.parquet --format long --grid 6x6 --frame-rate 50"))
+@data.command(epilog=example("touchbench data convert frames.csv mine.parquet --format table --grid 6x6 --frame-rate 50"))
 @click.argument("source", type=click.Path(exists=True))
 @click.argument("out", type=click.Path(dir_okay=False))
 @click.option("--format", "fmt", type=FormatChoice("read"), required=True,
               help=f"Format of SOURCE ({FORMATS_HELP}).")
 @format_options
-@click.option("--name", default=None, help="Dataset name (default: from the file).")
+@click.option("--name", default=None, help="Dataset name (default: OUT's file name without .parquet).")
 def convert(source: str, out: str, fmt: str, name, **options) -> None:
     """Read SOURCE in a supported format and save it as a touchbench Parquet dataset OUT."""
     form = FORMATS.get(fmt)
     missing = form.missing(options)
     if missing:
         raise click.UsageError(f"--format {fmt} needs {' and '.join(o.usage for o in missing)}")
-    ds = form.read(source, name=name, **options)
+    ds = form.read(source, name=name or Path(out).name.removesuffix(".parquet"), **options)
     ds.to_parquet(out)
     click.echo(f"{out}: {len(ds)} captures, hash {ds.content_hash}")
 

@@ -1,8 +1,9 @@
 """``touchbench demo``: the README's first command.
 
 Runs the shipped protocol ``demo-haart`` (the challenge split on the real HAART
-recordings) when ../shared/data is present, otherwise ``tiny``
-(the built-in synthetic ``tiny`` scene, no data needed), then prints the
+recordings) when the HAART data is found (``core.paths``), otherwise ``tiny``
+(the built-in synthetic ``tiny`` scene, no data needed), saying so before the
+run (with where it looked) and after the leaderboard, then prints the
 leaderboard of the run.
 """
 
@@ -28,10 +29,14 @@ def demo(ctx: click.Context, jobs: int) -> None:
 
     try:
         _raw_dir(None)
-        name = "demo-haart"
+        name, missing = "demo-haart", None
     except DataError as e:
-        click.echo(f"(real HAART not available: {e}; running the built-in tiny scene)", err=True)
-        name = "tiny"
+        name, missing = "tiny", str(e)
+        click.echo(f"real HAART data not found: running the built-in tiny scene (synthetic data) instead. {missing}",
+                   err=True)
     ctx.invoke(run, protocol=name, jobs=jobs)  # click fills the other options' defaults
     out = default_results_dir(load_protocol(find_protocol(name)))
     ctx.invoke(leaderboard, results=(str(out),))
+    if missing is not None:
+        click.echo("\nThese results are of the synthetic scene 'tiny', not of real data: the HAART data was not "
+                   "found. Set TOUCHBENCH_DATA_DIR to the folder that holds haart/ to run the real demo.", err=True)

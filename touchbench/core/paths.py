@@ -1,8 +1,9 @@
 """Where touchbench finds the shared data and keeps its caches.
 
 - Shared data (real HAART): ``$TOUCHBENCH_DATA_DIR`` if set, else the first
-  ``shared/data`` found beside the repository or the working directory
-  (``../shared/data`` from a checkout, as in CI).
+  ``shared/data`` found beside the repository of a source checkout
+  (``../shared/data``, as in CI) or beside the working directory. An
+  installed package never looks beside its install location.
 - Cache: ``$TOUCHBENCH_CACHE_DIR`` if set, else the user's cache directory
   (``~/.cache/touchbench`` on Linux).
 - Results: ``results/`` under the current directory (:data:`RESULTS_DIR`) holds
@@ -23,15 +24,33 @@ REPO_ROOT = Path(__file__).resolve().parent.parent.parent
 RESULTS_DIR = "results"
 
 
+def data_dir_candidates() -> list[Path]:
+    """The folders touchbench looks in for the shared data when ``$TOUCHBENCH_DATA_DIR`` is not set, in
+    order: ``shared/data`` beside the repository of a source checkout, then beside the working directory."""
+    bases = [REPO_ROOT] if (REPO_ROOT / "pyproject.toml").is_file() else []  # a checkout, not an installed package
+    if Path.cwd() not in bases:
+        bases.append(Path.cwd())
+    return [cand for base in bases for cand in (base.parent / "shared" / "data", base / "shared" / "data")]
+
+
 def data_dir() -> Path:
     env = os.environ.get("TOUCHBENCH_DATA_DIR")
     if env:
         return Path(env)
-    for base in (REPO_ROOT, Path.cwd()):
-        for cand in (base.parent / "shared" / "data", base / "shared" / "data"):
-            if cand.is_dir():
-                return cand
-    return REPO_ROOT.parent / "shared" / "data"
+    candidates = data_dir_candidates()
+    return next((c for c in candidates if c.is_dir()), candidates[0])
+
+
+def data_dir_help(dataset: str) -> str:
+    """Where touchbench looked for the folder ``dataset`` of the shared data, and how to point it there."""
+    env = os.environ.get("TOUCHBENCH_DATA_DIR")
+    if env:
+        looked = f"in {Path(env) / dataset} (TOUCHBENCH_DATA_DIR={env})"
+    else:
+        looked = ("in " + ", ".join(str(c / dataset) for c in data_dir_candidates())
+                  + " (TOUCHBENCH_DATA_DIR is not set)")
+    return (f"touchbench looked for the {dataset} data {looked}; set TOUCHBENCH_DATA_DIR to the folder that "
+            f"holds {dataset}/, or give the {dataset} folder itself (data_dir, --data-dir)")
 
 
 def cache_dir() -> Path:

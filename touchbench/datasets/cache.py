@@ -3,17 +3,24 @@ the reader's version and the SHA-256 of every source file, so a second load
 reads one Parquet file and an edited source file is noticed.
 
 Writes are atomic (``TouchDataset.to_parquet`` writes a temporary file and
-renames it); a build that fails leaves no cache entry behind.
+renames it); a build that fails leaves no cache entry behind. A cache entry
+that is damaged (unreadable, cut short, or no longer matching the hash it
+was written with) is rebuilt from the source files, with a warning that
+says so: the cache is a copy, never new data.
 """
 
 from __future__ import annotations
 
 import hashlib
+import logging
 from pathlib import Path
 from typing import Callable, Sequence
 
+from ..core.errors import DataError
 from ..core.paths import cache_dir as default_cache_dir
 from .model import FORMAT_VERSION, TouchDataset
+
+log = logging.getLogger("touchbench.datasets")
 
 
 def source_key(reader_version: str, files: Sequence[Path]) -> str:
@@ -37,7 +44,11 @@ def cached_dataset(
     root = Path(cache_dir) if cache_dir is not None else default_cache_dir()
     path = root / "datasets" / f"{name}-{source_key(reader_version, files)}.parquet"
     if path.is_file() and not refresh:
-        return TouchDataset.from_parquet(path)
+        try:
+            return TouchDataset.from_parquet(path, verify=True)
+        except DataError as e:
+            log.warning("%s: the cached copy of %s is damaged (%s); rebuilt from its source files", path, name,
+                        str(e).removeprefix(f"{path}: "))
     ds = build()
     ds.to_parquet(path)
     return ds

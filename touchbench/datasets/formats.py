@@ -10,6 +10,7 @@ lists them. Adding a format is adding a module that registers it.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
@@ -18,7 +19,8 @@ from ..core.errors import TouchbenchError
 from ..core.introspect import accepts
 from ..core.registry import Registry
 
-__all__ = ["FORMATS", "FileFormat", "FormatOption", "parse_frame_rate", "parse_grid", "register_format"]
+__all__ = ["FORMATS", "FileFormat", "FormatOption", "OptionValueError", "check_frame_rate", "check_value_range", "parse_frame_rate",
+           "parse_grid", "parse_value_range", "register_format"]
 
 # Filled by every module of touchbench.datasets (imported on first use of the registry).
 FORMATS: Registry = Registry("file format", package="touchbench.datasets")
@@ -121,9 +123,51 @@ def parse_grid(text: str) -> tuple[int, int]:
     return h, w
 
 
-def parse_frame_rate(text: str) -> float:
-    """Frames per second, a number."""
+class OptionValueError(TouchbenchError, ValueError):
+    """A reader option's value that cannot be used, naming the option: a user-facing error from
+    Python, and the ``ValueError`` a command-line option's ``parse`` raises."""
+
+
+def check_frame_rate(rate: Any, option: str = "--frame-rate") -> float:
+    """``rate`` as frames per second: a finite number above 0, or an error naming ``option``. The one
+    check of a frame rate that every reader's option goes through (given as text or from Python)."""
     try:
-        return float(text)
+        value = float(rate)
+    except (TypeError, ValueError):
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise OptionValueError(f"{option} must be a finite number of frames per second above 0, got {rate!r}")
+    return value
+
+
+def check_value_range(lo: Any, hi: Any, option: str = "--value-range") -> tuple[float, float]:
+    """``(lo, hi)`` as floats: both finite and ``lo < hi``, or an error naming ``option``. The one check
+    of a value range that every reader's option goes through."""
+    try:
+        pair = (float(lo), float(hi))
+    except (TypeError, ValueError):
+        pair = (math.nan, math.nan)
+    if not all(math.isfinite(v) for v in pair):
+        raise OptionValueError(f"{option} must be two finite numbers LO..HI, got {lo!r}..{hi!r}")
+    if not pair[0] < pair[1]:
+        raise OptionValueError(f"{option}: the range's low end must be below its high end, got {lo!r}..{hi!r}")
+    return pair
+
+
+def parse_frame_rate(text: str) -> float:
+    """Frames per second: a finite number above 0."""
+    try:
+        float(text)
     except ValueError:
         raise ValueError(f"expected frames per second, got {text!r}") from None
+    return check_frame_rate(text)
+
+
+def parse_value_range(text: str) -> tuple[float, float]:
+    """``"LO..HI"`` (or ``LO,HI``) -> ``(lo, hi)``: finite, ``lo < hi``."""
+    parts = str(text).replace(",", "..").split("..")
+    try:
+        lo, hi = (float(x) for x in parts)
+    except ValueError:
+        raise ValueError(f"expected LO..HI such as 0..4095, got {text!r}") from None
+    return check_value_range(lo, hi)

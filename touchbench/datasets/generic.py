@@ -70,7 +70,9 @@ import numpy as np
 import pandas as pd
 
 from ..core.errors import DataError, TouchbenchError
-from .formats import FormatOption, parse_frame_rate, parse_grid, register_format
+from .formats import (
+    FormatOption, check_frame_rate, check_value_range, parse_frame_rate, parse_grid, parse_value_range, register_format,
+)
 from .model import TIME_COLUMN, SensorSpec, TouchDataset, time_step_summary
 from .tables import find_column, numeric, read_table
 
@@ -191,13 +193,18 @@ class _Frames:
     time_ms: np.ndarray | None  # (n,) ms, or None without a time column
 
 
-def _time_ms(df: pd.DataFrame, col: str, unit: str | None, path: Path) -> np.ndarray:
+def _time_ms(df: pd.DataFrame, col: str, unit: str | None, path: Path, lines: np.ndarray) -> np.ndarray:
+    """The time column in ms (row ``i`` is file line ``lines[i]``): numbers in a unit, or date-times."""
     s = df[col]
     if not pd.api.types.is_numeric_dtype(s):
-        parsed = pd.to_datetime(s, errors="coerce", utc=True)
+        as_numbers = pd.to_numeric(s, errors="coerce")
+        if as_numbers.notna().any():  # numbers with a cell that is not one: that cell is at fault
+            i = int(np.flatnonzero(as_numbers.isna().to_numpy())[0])
+            raise DataError(f"column {col!r}: not a number ({s.iloc[i]!r}) among numbers", path, int(lines[i]))
+        parsed = pd.to_datetime(s, errors="coerce", utc=True, format="mixed")
         if parsed.isna().any():
             i = int(np.flatnonzero(parsed.isna().to_numpy())[0])
-            raise DataError(f"column {col!r}: neither a number nor a date-time ({s.iloc[i]!r})", path, i + 2)
+            raise DataError(f"column {col!r}: neither a number nor a date-time ({s.iloc[i]!r})", path, int(lines[i]))
         return (parsed - parsed.min()).dt.total_seconds().to_numpy() * 1000.0
     if unit is None:
         m = re.search(r"_(ms|s|us)$", col.lower())
@@ -205,7 +212,16 @@ def _time_ms(df: pd.DataFrame, col: str, unit: str | None, path: Path) -> np.nda
             raise DataError(f"the time column {col!r} does not say its unit: give --time-unit "
                             f"{' or '.join(TIME_UNITS)} (its values run {s.min():g}..{s.max():g})", path, 1)
         unit = m.group(1)
-    return numeric(df, [col], path)[:, 0] * TIME_UNITS[unit]
+    return numeric(df, [col], path, lines=lines)[:, 0] * TIME_UNITS[unit]
+
+
+def _refuse_empty_labels(df: pd.DataFrame, columns: dict[str, str], path: Path) -> None:
+    """A row with an empty capture, subject or gesture (``columns``: column -> what it names) is refused
+    at its line: a capture of nobody or of no gesture cannot be evaluated."""
+    for col, what in columns.items():
+        empty = df[col].isna().to_numpy() | (df[col].astype(str).str.strip() == "").to_numpy()
+        if empty.any():
+            raise DataError(f"empty {what} (column {col!r})", path, int(np.flatnonzero(empty)[0]) + 2)
 
 
 def _optional_column(df: pd.DataFrame, given: str | None, names: Sequence[str], path: Path, what: str) -> str | None:
@@ -225,10 +241,11 @@ def _capture_key(df: pd.DataFrame, cols: Sequence[str]) -> np.ndarray:
 
 def _read_file(path: Path, lay: TableLayout, grid: tuple[int, int] | None, value_range, allow_empty: bool):
     """One file's frames and the grid its columns give (or ``grid``)."""
-    df = read_table(path, allow_empty=allow_empty)
+    df = read_table(path, allow_empty=allow_empty, text_columns=(*lay.capture, lay.subject, lay.gesture))
     cap = [find_column(df, (c,), path, "capture") for c in lay.capture]
     subj = find_column(df, (lay.subject,), path, "subject")
     gest = find_column(df, (lay.gesture,), path, "gesture")
+    _refuse_empty_labels(df, {**{c: "capture" for c in cap}, subj: "subject", gest: "gesture"}, path)
     frame = _optional_column(df, lay.frame, FRAME_NAMES, path, "frame")
     time = _optional_column(df, lay.time, TIME_NAMES, path, "time")
     value = _optional_column(df, lay.value, ("value",), path, "value")
@@ -256,13 +273,13 @@ def _read_file(path: Path, lay: TableLayout, grid: tuple[int, int] | None, value
         taken |= {value, *(lay.cells.split(",") if lay.cells else ()), "row", "col", "cell"}
     meta_cols = [c for c in df.columns if c not in taken or c in (subj, gest)]
     if frame is not None:
-        order = numeric(df, [frame], path, integer=True)[:, 0]
+        order = numeric(df, [frame], path, integer=True, lines=lines)[:, 0]
     elif time is not None:
         order = None
     else:
         raise DataError("no frame counter or time column to order the frames by (name one with --frame-column "
                         "or --time-column)", path, 1)
-    t_ms = _time_ms(df, time, lay.time_unit, path) if time is not None else None
+    t_ms = _time_ms(df, time, lay.time_unit, path, lines) if time is not None else None
     fr = _Frames(_capture_key(df, cap), order if order is not None else t_ms, values, lines,
                  df[meta_cols].rename(columns={subj: "subject", gest: "gesture"}).reset_index(drop=True), t_ms)
     return fr, grid, frame, time
@@ -359,18 +376,6 @@ def _captures(fr: _Frames, path: Path, frame_col: str | None, time_col: str | No
                             int(fr.lines[j]))
         out.append((uniq[sc[a]], rows))
     return out
-
-
-def parse_value_range(text: str) -> tuple[float, float]:
-    """``"LO..HI"`` (or ``LO,HI``) -> ``(lo, hi)``, ``lo < hi``."""
-    parts = str(text).replace(",", "..").split("..")
-    try:
-        lo, hi = (float(x) for x in parts)
-    except ValueError:
-        raise ValueError(f"expected LO..HI such as 0..4095, got {text!r}") from None
-    if not lo < hi:
-        raise ValueError(f"the range's low end must be below its high end, got {text!r}")
-    return lo, hi
 
 
 def infer_value_range(lo: float, hi: float, whole: bool) -> tuple[tuple[float, float], str]:
@@ -478,6 +483,8 @@ def read_table_dataset(
 ) -> TouchDataset:
     """Read a table file or a folder of them (module docstring) into a dataset."""
     path = Path(path)
+    frame_rate = None if frame_rate is None else check_frame_rate(frame_rate)
+    value_range = None if value_range is None else check_value_range(*value_range)
     per_file, found_grid = _read_files(_files(path), columns, grid, value_range)
     caps, meta_rows, times, whole = _gather_captures(path, per_file)
     if not caps:

@@ -40,7 +40,7 @@ import numpy as np
 import pandas as pd
 
 from ..core.errors import DataError
-from ..core.paths import data_dir as default_data_dir
+from ..core.paths import data_dir as default_data_dir, data_dir_help
 from .cache import cached_dataset
 from .model import SensorSpec, TouchDataset
 from .registry import DATASETS
@@ -54,9 +54,10 @@ LINES_USED = 5400  # 540 frames of 10 lines; longer files: the first 5400 lines
 N_FRAMES = 432  # 8 s at 54 Hz
 CORRECTED_FIRST_FRAME = 54  # 0-based: frames 55..486 (1-based) are the middle 8 s
 CHALLENGE_FIRST_LINE = 54  # 0-based line of the trimmed stream where the organisers' window starts
+STUDY = "140729"  # the study id that opens every HAART file name
 
 _NAME_RE = re.compile(
-    r"^140729-(?P<participant>\d+)(?P<substrate>curve|foam|none)(?P<cover>fur|long|none|short)"
+    r"^" + STUDY + r"-(?P<participant>\d+)(?P<substrate>curve|foam|none)(?P<cover>fur|long|none|short)"
     r"(?P<gesture>" + "|".join(GESTURES) + r")(?:\.csv)?(?:\.gz)?$"
 )
 
@@ -101,7 +102,8 @@ def _raw_dir(data_dir: str | Path | None) -> Path:
     base = Path(data_dir) if data_dir is not None else default_data_dir() / "haart"
     raw = base / "raw" if (base / "raw").is_dir() else base
     if not raw.is_dir():
-        raise DataError("HAART raw folder not found (set TOUCHBENCH_DATA_DIR or pass data_dir)", raw)
+        where = data_dir_help("haart") if data_dir is None else "the data_dir given holds no HAART recordings"
+        raise DataError(f"HAART raw folder not found: {where}", raw)
     return raw
 
 
@@ -116,7 +118,7 @@ def find_recordings(raw: Path) -> list[Recording]:
             continue
         recs.append(Recording(p, int(m["participant"]), m["substrate"], m["cover"], m["gesture"]))
     if not recs:
-        raise DataError("no HAART recordings (140729-N<substrate><cover><gesture>[.csv][.gz]) found", raw)
+        raise DataError(f"no HAART recordings ({STUDY}-N<substrate><cover><gesture>[.csv][.gz]) found", raw)
     seen: dict[tuple, Path] = {}
     for r in recs:
         if r.key in seen:
@@ -139,12 +141,14 @@ def read_bytes(path: Path) -> bytes:
 def parse_recording(data: bytes, path: Path, min_lines: int = LINES_USED) -> np.ndarray:
     """Parse a recording into a ``(lines, 10)`` int array, checking every line.
 
-    Refuses, naming the file and line: a non-numeric or non-integer value, a
+    Refuses, naming the file and line: an empty recording, a non-numeric or non-integer value, a
     line without exactly ten values, a negative value or one above 1023, and
     a recording shorter than ``min_lines`` lines (truncated; HAART's 5400:
     540 frames of 10 lines).
     """
     text = data.decode("ascii", errors="replace")
+    if not text.strip():
+        raise DataError("empty recording (no lines of values)", path)
     try:
         arr = np.loadtxt(io.StringIO(text), delimiter=",", dtype=np.int64, ndmin=2)
         ok = arr.shape[1] == RAW_SIDE

@@ -21,33 +21,50 @@ naming, ``<study>-<participant><substrate><cover><gesture>`` as in
 Every group is a metadata column. The subject is ``s<participant>`` (two
 digits for a number), prefixed by ``<study>-`` when the pattern has a
 ``study`` group, so that participant 1 of two studies are two people; the
-capture id is the subject followed by the other groups' values. The folder
+challenge's own study (``140729``) keeps the registered ``haart``'s ids
+(``s04``, not ``140729-s04``), so that one participant is one subject in
+both datasets. The capture id is the subject followed by the other groups'
+values. The folder
 is searched recursively; ``note.txt``, ``README*``, ``SHA256SUMS`` and
 hidden files are not recordings, and any other file the pattern does not
 match is refused (a recording left out without a word would bias a
 benchmark). Two files giving one capture are refused.
 
-**Windows** (``recording_window``), on the first ``recording_seconds`` (10 s, HAART's
-protocol) of each recording:
+**Windows** (``recording_window``):
 
-``middle`` or ``middle:SECONDS``
-    the middle 8 s (or SECONDS) of the recording: for HAART, frames 55..486
-    (1-based) of 540, the ``haart`` dataset's corrected window.
+``middle``
+    HAART's protocol: the middle 8 s of the first 10 s of each recording
+    (``recording_seconds``, default 10): for HAART, frames 55..486
+    (1-based) of 540, the ``haart`` dataset's corrected window. A longer
+    recording is cut to its first 10 s, as the organisers cut HAART's three
+    long files; a shorter one is refused as truncated, naming the file and
+    line.
+``middle:SECONDS``
+    the middle SECONDS of each recording, whatever its length (of its first
+    ``recording_seconds`` when that is given). A recording shorter than
+    SECONDS is refused, naming the file and its length: choose a shorter
+    window (no recording is left out for being short).
 ``challenge``
     the organisers' window with its bug (README, "window bug"), exactly as
-    ``haart-challenge``; at 54 Hz over 10 s only.
+    ``haart-challenge``; at 54 Hz over 10-s recordings only (longer ones cut
+    to 10 s, shorter ones refused).
 ``whole``
-    every frame of the recording, whatever its length (a last frame of
-    fewer than ten lines is refused).
+    every frame of each recording, whatever its length (of its first
+    ``recording_seconds`` when that is given; a last frame of fewer than ten
+    lines is refused).
 
-A recording longer than ``recording_seconds`` is cut to its first
-``recording_seconds``, as the organisers cut HAART's three long files (the
-provenance lists each file cut); a shorter one is refused as truncated,
-naming the file and line, except with ``whole``. Every frame is cropped to
+``recording_seconds`` given: each recording is cut to its first SECONDS, and
+a shorter one is used whole (so a folder of recordings of different lengths
+is read, not refused at its first short file). Every cut and every
+recording used whole for being short is counted in a warning at conversion
+(with the median length) and in the provenance (``recordings``; ``cut``
+lists the files).
+
+Every frame is cropped to
 the inner 8 x 8 (grid rows and columns 2..9, the organisers' crop) and
 turned into pressure (1023 - raw). Byte-identical recordings are
-placeholders as in HAART: the copies are left out, with a warning, and
-listed in the provenance.
+placeholders as in HAART: the copies are left out, counted in the same
+warning, and listed in the provenance.
 """
 
 from __future__ import annotations
@@ -55,15 +72,17 @@ from __future__ import annotations
 import hashlib
 import logging
 import re
+import statistics
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import pandas as pd
 
 from ..core.errors import DataError, TouchbenchError
-from .formats import FormatOption, parse_frame_rate, register_format
+from .formats import FormatOption, OptionValueError, check_frame_rate, parse_frame_rate, register_format
 from .haart import (
-    GESTURES, HAART_SENSOR, RAW_SIDE, challenge_window, find_placeholders, frame_window, parse_recording, read_bytes,
+    GESTURES, HAART_SENSOR, RAW_SIDE, STUDY, challenge_window, find_placeholders, frame_window, parse_recording,
+    read_bytes,
 )
 from .model import TouchDataset
 
@@ -100,7 +119,8 @@ class RawRecording:
     def subject(self) -> str:
         p = self.participant
         s = f"s{int(p):02d}" if p.isdigit() else f"s{p}"
-        return f"{self.fields['study']}-{s}" if "study" in self.fields else s
+        study = self.fields.get("study")
+        return f"{study}-{s}" if study is not None and study != STUDY else s
 
     @property
     def stem(self) -> str:
@@ -159,6 +179,7 @@ class Window:
 
     kind: str  # middle, challenge or whole
     seconds: float | None = None
+    explicit: bool = False  # middle:SECONDS given, not HAART's default middle 8 s
 
     @classmethod
     def parse(cls, text: str) -> "Window":
@@ -170,25 +191,95 @@ class Window:
                 s = float(secs) if secs else 8.0
             except ValueError:
                 s = -1.0
-            if s > 0:
-                return cls(kind, s)
+            if 0 < s < float("inf"):
+                return cls(kind, s, bool(secs))
         raise ValueError(f"expected middle, middle:SECONDS, challenge or whole, got {text!r}")
 
-    def describe(self, rate: float, recording_s: float) -> str:
+    @property
+    def haart_protocol(self) -> bool:
+        """Whether recordings are HAART's 10 s unless told otherwise (``middle``, ``challenge``)."""
+        return self.kind == "challenge" or (self.kind == "middle" and not self.explicit)
+
+    def describe(self, rate: float, recording_s: float | None, frames: set[int]) -> str:
+        """The window in words; ``frames``: the number of frames of the recordings it was taken from."""
+        of = f"the first {recording_s:g} s of each recording" if recording_s else "each recording"
         if self.kind == "whole":
-            return "whole: every frame of each recording"
+            return f"whole: every frame of {of}"
         if self.kind == "challenge":
             return "the organisers' window (bug included): frame i = lines 8i+55..8i+62 of the row-trimmed stream"
-        first, n = self.frames(rate, recording_s)
-        return f"middle {self.seconds:g} s of the first {recording_s:g} s: frames {first + 1}..{first + n} (1-based)"
+        text = f"middle {self.seconds:g} s of {of}"
+        if len(frames) == 1:
+            first, n = self.frames(next(iter(frames)), rate)
+            text += f": frames {first + 1}..{first + n} (1-based)"
+        return text
 
-    def frames(self, rate: float, recording_s: float) -> tuple[int, int]:
-        total = round(recording_s * rate)
+    def frames(self, total: int, rate: float) -> tuple[int, int]:
+        """The first frame (0-based) and number of frames of the middle window of ``total`` frames
+        (``n > total`` when the recording is shorter than the window)."""
         n = round(self.seconds * rate)
-        if not 1 <= n <= total:
-            raise TouchbenchError(f"--recording-window middle:{self.seconds:g} asks for {n} frames of a {recording_s:g}-s "
-                                  f"recording of {total} frames")
-        return (total - n) // 2, n
+        return max(total - n, 0) // 2, n
+
+
+@dataclass
+class _Trims:
+    """What a conversion did to the recordings' lengths: (file, seconds, lines) of each one cut or used whole."""
+
+    seconds: float | None
+    cut: list[tuple[str, float, int]]
+    short: list[tuple[str, float, int]]
+
+    def report(self, n: int, placeholders: list[dict]) -> str:
+        """The counts in words (``""`` when every recording was used as it is)."""
+        def median(items: list[tuple[str, float, int]]) -> str:
+            return f"median length {statistics.median(s for _, s, _ in items):.3g} s"
+        parts = []
+        if self.cut:
+            parts.append(f"{len(self.cut)} of {n} recordings cut to their first {self.seconds:g} s ({median(self.cut)})")
+        if self.short:
+            parts.append(f"{len(self.short)} of {n} recordings shorter than {self.seconds:g} s, used whole "
+                         f"({median(self.short)})")
+        if placeholders:
+            files = ", ".join(p["file"] for p in placeholders[:5]) + (", ..." if len(placeholders) > 5 else "")
+            parts.append(f"{len(placeholders)} dropped as byte-identical copies of another recording: {files}")
+        return "; ".join(parts)
+
+
+def _read_arrays(folder: Path, recs: list[RawRecording], win: Window, rate: float, rec_s: float | None,
+                 strict: bool) -> tuple[dict, dict, _Trims]:
+    """Every recording parsed and cut to its first ``rec_s`` seconds; ``strict``: one shorter is
+    refused as truncated (HAART's protocol), else used whole."""
+    lines_used = round(rec_s * rate) * RAW_SIDE if rec_s else None
+    arrays, digests, trims = {}, {}, _Trims(rec_s, [], [])
+    for r in recs:
+        data = read_bytes(r.path)
+        digests[r.key] = hashlib.sha256(data).hexdigest()
+        arr = parse_recording(data, r.path, min_lines=lines_used if strict else RAW_SIDE)
+        rel, length_s = str(r.path.relative_to(folder)), len(arr) / RAW_SIDE / rate
+        if lines_used is not None and len(arr) > lines_used:
+            trims.cut.append((rel, length_s, len(arr)))
+            arr = arr[:lines_used]
+        elif lines_used is not None and len(arr) < lines_used:
+            trims.short.append((rel, length_s, len(arr)))
+        if win.kind == "whole" and len(arr) % RAW_SIDE:
+            raise DataError(f"{len(arr)} lines is not a whole number of {RAW_SIDE}-line frames (the last frame "
+                            "is cut short)", r.path, len(arr) - len(arr) % RAW_SIDE + 1)
+        arrays[r.key] = arr
+    return arrays, digests, trims
+
+
+def _capture(arr, win: Window, rate: float, path: Path):
+    """The window of one parsed recording."""
+    total = len(arr) // RAW_SIDE
+    if win.kind == "whole":
+        return frame_window(arr, 0, total)
+    if win.kind == "challenge":
+        return challenge_window(arr)
+    first, n = win.frames(total, rate)
+    if n > total:
+        raise DataError(f"a {total / rate:g}-s recording ({total} frames) is shorter than the {win.seconds:g}-s "
+                        f"window (--recording-window middle:{win.seconds:g} asks for {n} frames): choose a shorter "
+                        "window", path)
+    return frame_window(arr, first, n)
 
 
 def read_haart_raw(
@@ -205,37 +296,24 @@ def read_haart_raw(
     folder = Path(path)
     rx = compile_pattern(pattern or DEFAULT_PATTERN)
     win = recording_window if isinstance(recording_window, Window) else Window.parse(recording_window)
-    rate = float(frame_rate or HAART_SENSOR.frame_rate)
-    rec_s = float(recording_seconds or RECORDING_SECONDS)
+    rate = HAART_SENSOR.frame_rate if frame_rate is None else check_frame_rate(frame_rate)
+    rec_s = None if recording_seconds is None else parse_seconds(recording_seconds)
+    if rec_s is None and win.haart_protocol:
+        rec_s = RECORDING_SECONDS
     if win.kind == "challenge" and (rate != HAART_SENSOR.frame_rate or rec_s != RECORDING_SECONDS):
         raise TouchbenchError("--recording-window challenge is the organisers' window of 10-s recordings at 54 Hz only")
-    lines_used = round(rec_s * rate) * RAW_SIDE
     recs = find_raw_recordings(folder, rx)
-    arrays, digests, cut = {}, {}, []
-    for r in recs:
-        data = read_bytes(r.path)
-        digests[r.key] = hashlib.sha256(data).hexdigest()
-        arr = parse_recording(data, r.path, min_lines=RAW_SIDE if win.kind == "whole" else lines_used)
-        if win.kind == "whole":
-            if len(arr) % RAW_SIDE:
-                raise DataError(f"{len(arr)} lines is not a whole number of {RAW_SIDE}-line frames (the last frame "
-                                "is cut short)", r.path, len(arr) - len(arr) % RAW_SIDE + 1)
-        elif len(arr) > lines_used:
-            cut.append(f"{r.path.relative_to(folder)}: {len(arr)} lines, the first {lines_used} used")
-            arr = arr[:lines_used]
-        arrays[r.key] = arr
+    strict = win.kind == "challenge" or (recording_seconds is None and win.haart_protocol)
+    arrays, digests, trims = _read_arrays(folder, recs, win, rate, rec_s, strict)
     placeholders = find_placeholders(folder, recs, digests)
     dropped = {p["capture_id"] for p in placeholders}
-    for p in placeholders:
-        log.warning("%s: left out, %s of %s (%s)", p["file"], p["capture_id"], p["copy_of"], p["reason"])
     kept = [r for r in recs if r.capture_id not in dropped]
-    if win.kind == "whole":
-        captures = [frame_window(arrays[r.key], 0, len(arrays[r.key]) // RAW_SIDE) for r in kept]
-    elif win.kind == "challenge":
-        captures = [challenge_window(arrays[r.key]) for r in kept]
-    else:
-        first, n = win.frames(rate, rec_s)
-        captures = [frame_window(arrays[r.key], first, n) for r in kept]
+    captures = [_capture(arrays[r.key], win, rate, r.path) for r in kept]
+    report = trims.report(len(recs), placeholders)
+    if report:
+        more = (" (--recording-seconds SECONDS, --recording-window middle:SECONDS or whole use more of each recording)"
+                if trims.cut else "")
+        log.warning("%s: %s%s", folder, report, more)
     columns = [k for k, _ in kept[0].groups] if kept else []
     meta = pd.DataFrame({
         "capture_id": [r.capture_id for r in kept],
@@ -247,22 +325,23 @@ def read_haart_raw(
     ds = TouchDataset(name or folder.name, captures, meta, replace(HAART_SENSOR, frame_rate=rate))
     ds.provenance = {
         "pattern": rx.pattern,
-        "window": win.describe(rate, rec_s),
+        "window": win.describe(rate, rec_s, {len(arrays[r.key]) // RAW_SIDE for r in kept}),
         "crop": "inner 8 x 8 of the 10 x 10 grid (rows and columns 2..9), pressure = 1023 - raw",
-        "cut": cut or "none",
+        "recordings": f"{len(recs)} read" + (f": {report}" if report else ", each used as it is"),
+        "cut": [f"{f}: {n} lines, the first {round(rec_s * rate) * RAW_SIDE} used" for f, _, n in trims.cut] or "none",
         "placeholders": placeholders,
     }
     return ds
 
 
-def parse_seconds(text: str) -> float:
-    """A positive number of seconds."""
+def parse_seconds(text: str | float) -> float:
+    """A finite number of seconds above 0 (``--recording-seconds``)."""
     try:
         v = float(text)
-    except ValueError:
+    except (TypeError, ValueError):
         v = -1.0
-    if not v > 0:
-        raise ValueError(f"expected a positive number of seconds, got {text!r}")
+    if not 0 < v < float("inf"):
+        raise OptionValueError(f"--recording-seconds must be a finite number of seconds above 0, got {text!r}")
     return v
 
 
@@ -275,10 +354,12 @@ register_format(
         FormatOption("pattern", "Regular expression for the file names, with (?P<participant>...) and "
                      "(?P<gesture>...) (default: the organisers' <study>-<participant><substrate><cover><gesture>)",
                      metavar="REGEX"),
-        FormatOption("recording_window", "middle, middle:SECONDS (default middle: the middle 8 s), challenge or whole",
+        FormatOption("recording_window", "middle (HAART's: the middle 8 s of the first 10 s), middle:SECONDS (the "
+                     "middle SECONDS of each recording, whatever its length), challenge or whole",
                      Window.parse, metavar="WINDOW"),
-        FormatOption("recording_seconds", "Length of a recording in seconds; longer ones are cut to it "
-                     "(default 10, HAART's)", parse_seconds, metavar="SECONDS"),
+        FormatOption("recording_seconds", "Use the first SECONDS of each recording (a shorter one is used whole); "
+                     "default: 10 s, HAART's, for middle and challenge, every frame for middle:SECONDS and whole",
+                     parse_seconds, metavar="SECONDS"),
         FormatOption("frame_rate", "Frames per second (default 54, the HAART sensor's)", parse_frame_rate),
     ),
 )

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import warnings
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -68,11 +69,11 @@ class SensorSpec:
         h, w = self.grid
         if h < 1 or w < 1:
             raise ValueError(f"sensor {self.name!r}: grid must be at least 1 x 1, got {self.grid}")
-        if not self.frame_rate > 0:
-            raise ValueError(f"sensor {self.name!r}: frame_rate must be positive")
+        if not 0 < self.frame_rate < math.inf:
+            raise ValueError(f"sensor {self.name!r}: frame_rate must be positive (and finite), got {self.frame_rate!r}")
         lo, hi = self.value_range
-        if not lo < hi:
-            raise ValueError(f"sensor {self.name!r}: value_range must have low < high")
+        if not (lo < hi and math.isfinite(lo) and math.isfinite(hi)):
+            raise ValueError(f"sensor {self.name!r}: value_range must have low < high (both finite), got {lo!r}..{hi!r}")
         if self.channels is not None and (h != 1 or w != len(self.channels)):
             raise ValueError(f"sensor {self.name!r}: a channel sensor has grid (1, n_channels)")
 

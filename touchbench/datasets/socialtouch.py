@@ -67,7 +67,7 @@ import numpy as np
 import pandas as pd
 
 from ..core.errors import DataError
-from ..core.paths import data_dir as default_data_dir
+from ..core.paths import data_dir as default_data_dir, data_dir_help
 from .cache import cached_dataset
 from .model import RECORDED_TIME_COLUMN, SensorSpec, TouchDataset, time_step_summary
 from .registry import DATASETS
@@ -117,7 +117,8 @@ def _base_dir(data_dir: str | Path | None) -> Path:
     if (base / "socialtouch" / "raw").is_dir():  # the shared data folder itself was given
         base = base / "socialtouch"
     if not (base / "raw").is_dir():
-        raise DataError("SocialTouch raw folder not found (set TOUCHBENCH_DATA_DIR or pass data_dir)", base / "raw")
+        where = data_dir_help("socialtouch") if data_dir is None else "the data_dir given has no raw folder"
+        raise DataError(f"SocialTouch raw folder not found: {where}", base / "raw")
     return base
 
 

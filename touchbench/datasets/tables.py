@@ -26,11 +26,34 @@ def clean_name(name: object) -> str:
     return str(name).strip().strip("\"'").strip()
 
 
-def read_table(path: str | Path, allow_empty: bool = False) -> pd.DataFrame:
+def _text_dtypes(path: Path, text_columns: Sequence[str]) -> dict[str, type]:
+    """The CSV header's columns among ``text_columns`` (matched as :func:`find_column` does), read as text."""
+    if not text_columns:
+        return {}
+    header = pd.read_csv(path, skipinitialspace=True, nrows=0).columns
+    wanted = {c.lower() for c in text_columns}
+    return {c: str for c in header if clean_name(c).lower() in wanted}
+
+
+def _refuse_repeated_header(df: pd.DataFrame, path: Path) -> None:
+    """A data row that repeats the header (two files joined together) is refused at its line."""
+    if df.empty or pd.api.types.is_numeric_dtype(df.iloc[:, 0]):
+        return
+    first = df.iloc[:, 0].astype(str).str.strip().str.strip("\"'")
+    for i in np.flatnonzero((first == df.columns[0]).to_numpy()):
+        row = [clean_name(v) for v in df.iloc[i].tolist()]
+        if row == list(df.columns):
+            raise DataError("this line repeats the header row (two files joined into one?)", path, int(i) + 2)
+
+
+def read_table(path: str | Path, allow_empty: bool = False, text_columns: Sequence[str] = ()) -> pd.DataFrame:
     """Read a CSV (plain or gzipped) or Parquet file; header names cleaned.
 
-    A CSV row with more fields than the header is refused with its line; a
-    file with a header and no rows is refused unless ``allow_empty``.
+    A CSV row with more fields than the header is refused with its line, and
+    so is a row that repeats the header; a file with a header and no rows is
+    refused unless ``allow_empty``. The columns named in ``text_columns``
+    (identifiers: any case) are read as text, as written (``007`` stays
+    ``007``).
     """
     path = Path(path)
     if not path.is_file():
@@ -40,7 +63,8 @@ def read_table(path: str | Path, allow_empty: bool = False) -> pd.DataFrame:
             df = pd.read_parquet(path)
         else:
             # blank lines are kept as empty rows, so that row i is line i + 2 of the file
-            df = pd.read_csv(path, skipinitialspace=True, low_memory=False, skip_blank_lines=False)
+            df = pd.read_csv(path, skipinitialspace=True, low_memory=False, skip_blank_lines=False,
+                             dtype=_text_dtypes(path, text_columns))
             filled = np.flatnonzero(df.notna().any(axis=1).to_numpy())
             df = df.iloc[: filled[-1] + 1 if len(filled) else 0]  # blank lines at the end are no rows
     except pd.errors.ParserError as e:
@@ -53,6 +77,7 @@ def read_table(path: str | Path, allow_empty: bool = False) -> pd.DataFrame:
     df.columns = [clean_name(c) for c in df.columns]
     if df.empty and not allow_empty:
         raise DataError("no data rows", path)
+    _refuse_repeated_header(df, path)
     return df
 
 
@@ -73,18 +98,20 @@ def numeric(
     lo: float | None = None,
     hi: float | None = None,
     integer: bool = False,
+    lines: np.ndarray | None = None,
 ) -> np.ndarray:
-    """The columns as a float64 array; refuses the first bad cell by line.
+    """The columns as a float64 array; refuses the first bad cell by line (row ``i`` is line
+    ``lines[i]``, by default ``i + 2``).
 
-    Bad: empty (a row with fewer values than the header), non-numeric, NaN
-    or infinite, outside ``[lo, hi]``, or not a whole number when
-    ``integer``.
+    Bad: empty (a row with fewer values than the header), non-numeric (text
+    that is not a plain number, such as ``1_0``), NaN or infinite, outside
+    ``[lo, hi]``, or not a whole number when ``integer``.
     """
     sub = df[list(cols)]
     raw = None
-    try:
+    if all(pd.api.types.is_numeric_dtype(t) for t in sub.dtypes):
         arr = sub.to_numpy(dtype=np.float64)
-    except (ValueError, TypeError):  # a non-numeric cell: find it
+    else:  # text cells: read as numbers by pandas' parser, never Python's float() (which takes 1_0 as 10)
         raw = sub.astype(str).to_numpy()
         arr = pd.DataFrame(raw).apply(pd.to_numeric, errors="coerce").to_numpy(dtype=np.float64)
     bad = ~np.isfinite(arr)
@@ -98,7 +125,8 @@ def numeric(
     if bad.any():
         r, c = np.argwhere(bad)[0]
         shown = raw[r, c] if raw is not None else arr[r, c]
-        raise DataError(f"column {cols[c]!r}: {problem} ({shown!r})", path, int(r) + 2)
+        raise DataError(f"column {cols[c]!r}: {problem} ({shown!r})", path,
+                        int(lines[r]) if lines is not None else int(r) + 2)
     return arr
 
 
