@@ -42,7 +42,7 @@ from touchbench.core.errors import DataError, TouchbenchError, WriteError
 from touchbench.datasets.challenge_csv import read_challenge_csv
 from touchbench.datasets.generic import read_table_dataset
 from touchbench.datasets.model import FORMAT_VERSION, SensorSpec, TouchDataset
-from touchbench.deploy.model import TrainedModel, fit_model
+from touchbench.deploy.model import MODEL_VERSION, TrainedModel, fit_model
 from touchbench.deploy.stream import SlidingRecognizer, load_replay
 from touchbench.engine import runner
 from touchbench.engine.testing import SENSOR, random_dataset
@@ -311,7 +311,8 @@ def test_a_model_file_loads_as_saved(model_file):
 @pytest.mark.parametrize("edit, text", [
     (lambda b: b[:-10], "bytes off the size touchbench wrote (truncated or edited); nothing was loaded"),
     (lambda b: b[:-10] + bytes(10), "does not match the checksum touchbench wrote with it (damaged or edited)"),
-    (lambda b: b.replace(b'"version": 2', b'"version": 9', 1), "written by another touchbench model format (version 9"),
+    (lambda b: b.replace(b'"version": %d' % MODEL_VERSION, b'"version": 9', 1),
+     "written by another touchbench model format (version 9"),
     (lambda b: b.replace(b'"sha256"', b'"sha2xx"', 1), "the model file's header is damaged (KeyError); train it again"),
     (lambda b: b[len(b"touchbench-model\n"):], "not a touchbench model file, or one written by an older touchbench"),
 ])
