@@ -45,6 +45,7 @@ from ..methods import METHODS
 from ..methods.base import takes_captures
 from ..protocols.derive import derive, protocol_data
 from ..protocols.schema import CAPTURES, Protocol
+from ..results.store import make_results_dir
 from .planning import Plan, method_labels, prepare_evaluation
 from .runner import plan_protocol, run_plan
 
@@ -238,7 +239,7 @@ def run_audit(protocol: Protocol, out: str | Path, *, jobs: int = 1, k: int = 10
     accs: dict[str, dict[str, float]] = {}
     folders = {}
     for variant, (plan, folder) in planned.plans.items():
-        folder.mkdir(parents=True, exist_ok=True)
+        make_results_dir(folder)
         atomic_write_bytes(folder / "protocol.yaml", protos[variant].text.encode())
         res = run_plan(plan, folder, jobs=jobs, progress=progress)
         accs[variant] = _accuracies(res.scores)
