@@ -387,10 +387,10 @@ def test_audit_says_how_many_tasks_each_variant_runs_before_it_starts(tmp_path):
     assert r.exit_code == 0, r.output
     # 4 subjects: honest = LOSO, 4 folds x 1 method; capture-kfold 3 folds x 1; tuned-on-test 4 folds x 2 values of C
     line = next(l for l in r.stderr.splitlines() if l.startswith("audit of aud:"))
-    assert ("3 variants, 15 tasks in all: honest 4 (4 folds x 1 methods), capture-kfold 3 (3 folds x 1 methods), "
+    assert ("3 variants, 15 tasks in all: honest 4 (4 folds x 1 method), capture-kfold 3 (3 folds x 1 method), "
             "tuned-on-test 8 (4 folds x 2 methods)") in line
     assert r.stderr.index(line) < r.stderr.index("audit: ")  # before the audit ran (its files listed last)
-    help_text = CliRunner().invoke(main, ["audit", "--help"]).output
+    help_text = " ".join(CliRunner().invoke(main, ["audit", "--help"]).output.split())
     assert "up to five runs of the protocol's methods" in help_text and "printed before any runs" in help_text
 
 

@@ -214,9 +214,13 @@ class AuditPlan:
 
     def describe(self) -> str:
         """One line: the variants and their tasks (folds x methods), e.g. for a message before the audit starts."""
-        parts = [f"{v} {len(plan.tasks)} ({plan.n_folds} folds x {len(method_labels(plan))} methods)"
+        parts = [f"{v} {len(plan.tasks)} ({_count(plan.n_folds, 'fold')} x {_count(len(method_labels(plan)), 'method')})"
                  for v, (plan, _) in self.plans.items()]
         return f"{len(self.plans)} variants, {self.n_tasks} tasks in all: " + ", ".join(parts)
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" + ("" if n == 1 else "s")
 
 
 def plan_audit(protocol: Protocol, out: str | Path, *, k: int = 10, window_seconds: float = 2.0,
