@@ -86,3 +86,33 @@ def test_dask_workers_see_installed_plugins(cluster, env, example_plugin):
         dist = run_protocol(proto, env / "dask", jobs=info.n_jobs, force=True)
     assert local.n_tasks == dist.n_tasks == dist.n_ran == 3 * 2
     assert_same_results(env / "local", env / "dask")
+
+
+class _SlowToExit(distributed.diagnostics.plugin.WorkerPlugin):
+    """Keeps a worker's shutdown busy past its nanny's 4 s, as a loaded machine does."""
+
+    def teardown(self, worker):
+        import time
+
+        time.sleep(6)
+
+
+def test_a_successful_run_closes_its_local_cluster_without_messages(env):
+    import logging
+
+    class Collect(logging.Handler):
+        def emit(self, record):
+            said.append(record.getMessage())
+
+    said: list[str] = []
+    handler = Collect()
+    logging.getLogger("distributed.nanny").addHandler(handler)  # what it prints on stderr
+    try:
+        write_protocol(env)
+        with use_backend("dask", None, cache_root=env / "cache") as info:
+            distributed.default_client().register_plugin(_SlowToExit())
+            res = run_protocol(env / "p.yaml", env / "dask", jobs=info.n_jobs)
+    finally:
+        logging.getLogger("distributed.nanny").removeHandler(handler)
+    assert res.n_failed == 0 and res.n_ran == res.n_tasks > 0
+    assert not [m for m in said if "still alive" in m], said

@@ -162,3 +162,28 @@ def test_help_and_version_import_no_command_module():
     loaded = eval(out.strip().splitlines()[-1])
     assert loaded == ["touchbench.cli.common", "touchbench.cli.exitcodes", "touchbench.cli.main"]
     assert set(_COMMANDS) == set(cli.list_commands(None))
+
+
+_OPTIONAL = ("torch", "aeon", "dask", "distributed", "ray", "xgboost")
+_NUMERIC = ("numpy", "pandas", "pyarrow", "scipy", "sklearn", "pydantic")
+
+
+def _imported_by(args: list[str]) -> set[str]:
+    """The top-level packages a fresh process has imported once ``touchbench ARGS`` ran."""
+    code = ("import json, sys\nfrom touchbench.cli.main import cli\n"
+            f"try:\n    cli({args!r})\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
+            "print(json.dumps(sorted({m.split('.')[0] for m in sys.modules})), file=sys.stderr)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    return set(json.loads(r.stderr.strip().splitlines()[-1]))
+
+
+@pytest.mark.parametrize("args", [["data", "list"], ["features", "list"], ["classifiers", "list"],
+                                  ["protocols", "list"], ["plugins", "list"]], ids=" ".join)
+def test_listing_imports_no_optional_extra(args):
+    assert not _imported_by(args) & set(_OPTIONAL)
+
+
+def test_listing_protocols_imports_no_numeric_package():
+    # the names and descriptions are read from the files: no schema, no scheme, no registry
+    assert not _imported_by(["protocols", "list"]) & set(_OPTIONAL + _NUMERIC)

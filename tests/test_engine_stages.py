@@ -205,3 +205,34 @@ def test_a_feature_set_that_rejects_its_parameters_with_the_sensor_is_refused_at
     with pytest.raises(ProtocolError, match=r"features\[0\]\[1\]: feature set 'test-centered' rejects \{\}: "
                                             r"ValueError: no such setting for this sensor"):
         plan_run(parse_protocol(p.read_text(), p))
+
+
+# ------------------------------------------------------- classes a fold never trains on
+def _rows(cells):
+    return [{"subject": s, "gesture": g} for s, g, n in cells for _ in range(n)]
+
+
+def _notes(tmp_path, rows, scheme):
+    data = tmp_path / "data.parquet"
+    random_dataset(rows=rows).to_parquet(data)
+    p = _protocol(tmp_path, f"dataset: {data}\nscheme: {scheme}\nfeatures: [[test-mean]]\nclassifiers: [test-logreg]\n")
+    return prepare_evaluation(parse_protocol(p.read_text(), p)).notes
+
+
+@pytest.mark.parametrize("scheme", ["loso", "{name: kfold, k: 3}", "{name: kfold, k: 3, grouped: true}"])
+def test_a_class_with_one_capture_gets_a_note_under_every_scheme(tmp_path, scheme):
+    # 3 subjects x (pat, rub) x 2 captures, and one capture of 'lonely' (s1): 13 captures, each tested once;
+    # the fold that tests 'lonely' trains without it, whatever the scheme
+    rows = _rows([(s, g, 2) for s in ("s1", "s2", "s3") for g in ("pat", "rub")] + [("s1", "lonely", 1)])
+    notes = [n for n in _notes(tmp_path, rows, scheme) if n.startswith("class(es)")]
+    assert notes == ["class(es) 'lonely' (1 capture) tested in a fold that trains on none of their captures: "
+                     "those 1 of 13 test captures cannot be labelled right"]
+
+
+@pytest.mark.parametrize("scheme", ["loso", "{name: kfold, k: 2}"])
+def test_classes_that_all_have_one_capture_are_said_to_score_zero(tmp_path, scheme):
+    rows = _rows([("s1", "pat", 1), ("s2", "rub", 1), ("s3", "stroke", 1), ("s4", "tickle", 1)])
+    notes = [n for n in _notes(tmp_path, rows, scheme) if n.startswith("class(es)")]
+    assert notes == ["class(es) 'pat' (1 capture), 'rub' (1 capture), 'stroke' (1 capture), 'tickle' (1 capture) "
+                     "tested in a fold that trains on none of their captures: those 4 of 4 test captures cannot be "
+                     "labelled right; that is every test capture: accuracy is 0 % by construction"]

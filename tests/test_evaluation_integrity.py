@@ -370,6 +370,55 @@ expected:
     assert "capture-kfold % (Δ pp)" in (tmp_path / "audit" / "audit.md").read_text()
 
 
+def _small_audit_protocol(tmp_path):
+    data = _data(tmp_path, frames=(12, 12))
+    return _protocol(tmp_path, f"""dataset: {data}
+scheme: loso
+features: [[test-mean]]
+classifiers: [{{name: test-logreg, params: {{C: 1.0}}}}]
+""", name="aud")
+
+
+def test_audit_says_how_many_tasks_each_variant_runs_before_it_starts(tmp_path):
+    p = _small_audit_protocol(tmp_path)
+    r = CliRunner().invoke(main, ["audit", str(p), "--variant", "honest", "--variant", "capture-kfold",
+                                  "--variant", "tuned-on-test", "--k", "3", "--tune", "C=0.1,1.0",
+                                  "--out", str(tmp_path / "audit")])
+    assert r.exit_code == 0, r.output
+    # 4 subjects: honest = LOSO, 4 folds x 1 method; capture-kfold 3 folds x 1; tuned-on-test 4 folds x 2 values of C
+    line = next(l for l in r.stderr.splitlines() if l.startswith("audit of aud:"))
+    assert ("3 variants, 15 tasks in all: honest 4 (4 folds x 1 method), capture-kfold 3 (3 folds x 1 method), "
+            "tuned-on-test 8 (4 folds x 2 methods)") in line
+    assert r.stderr.index(line) < r.stderr.index("audit: ")  # before the audit ran (its files listed last)
+    help_text = " ".join(CliRunner().invoke(main, ["audit", "--help"]).output.split())
+    assert "up to five runs of the protocol's methods" in help_text and "printed before any runs" in help_text
+
+
+@pytest.mark.parametrize("value", ["nonsense=1,2", "c=1,2"])
+def test_audit_refuses_a_tuned_parameter_no_entry_states(tmp_path, value):
+    p = _small_audit_protocol(tmp_path)
+    r = CliRunner().invoke(main, ["audit", str(p), "--tune", value, "--out", str(tmp_path / "audit")])
+    assert r.exit_code == 2, r.output
+    name = value.split("=")[0]
+    assert f"'{name}' is no parameter of the protocol's classifier or method entries" in r.output
+    assert "the parameters it can tune: C" in r.output and "--tune" in r.output
+    assert not (tmp_path / "audit").exists()  # refused before anything is written
+    with pytest.raises(TouchbenchError, match=f"tune: '{name}' is no parameter.*parameters it can tune: C"):
+        from touchbench.engine.audit import audit_protocols
+        from touchbench.protocols.schema import load_protocol
+        audit_protocols(load_protocol(p), tune={name: [1, 2]})
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "-inf", "0", "-2"])
+def test_audit_refuses_a_window_length_that_is_not_a_finite_positive_number(tmp_path, value):
+    p = _small_audit_protocol(tmp_path)
+    r = CliRunner().invoke(main, ["audit", str(p), "--window-seconds", value, "--out", str(tmp_path / "audit")])
+    assert r.exit_code == 2, r.output
+    assert "--window-seconds" in r.output and "a finite number above 0" in r.output
+    assert r.exception is None or isinstance(r.exception, SystemExit)
+    assert not (tmp_path / "audit").exists()
+
+
 def test_a_component_a_sensor_refuses_is_left_out_of_that_evaluation_only_and_said(tmp_path):
     if os.environ.get("CI", "").lower() != "true":  # CI installs the deep extra: there a missing torch fails
         pytest.importorskip("torch")

@@ -146,8 +146,9 @@ def test_entries_registered_while_a_plugin_is_imported_carry_it():
     reg.register("own", description="touchbench's")(int)
     with importing(info):
         reg.register("theirs", description="a plugin's")(float)
-        with pytest.raises(RegistrationError, match=r"thing 'own' is registered twice: by module builtins and by "
-                                                    r"plugin touchbench-plugin-test 2.0 \(entry point 't' = 'tp'"):
+        with pytest.raises(RegistrationError, match=r"thing 'own' is registered twice: by module builtins \(kept\) and by "
+                                                    r"plugin touchbench-plugin-test 2.0 \(entry point 't' = 'tp'.*"
+                                                    r"\(left out, with everything touchbench-plugin-test 2.0 registers\)"):
             reg.register("own", description="again")(str)
         with pytest.raises(RegistrationError, match="the scene registry does not take plugins"):
             Registry("scene").register("x", description="x")(str)
@@ -196,28 +197,42 @@ def _touchbench(site: Path, tmp_path: Path, *args: str) -> subprocess.CompletedP
                           env=env, cwd=tmp_path, capture_output=True, text=True, timeout=300)
 
 
+def _where(package: str, module: str) -> str:
+    return f"plugin {package} 1.0 (entry point 'main' = '{module}' in group 'touchbench.plugins')"
+
+
 @pytest.mark.slow
-def test_a_plugin_that_fails_to_import_stops_the_registries_naming_it(tmp_path):
+@pytest.mark.parametrize("source, why", [
+    ("import a_module_nobody_has\n", "ModuleNotFoundError: No module named 'a_module_nobody_has'"),
+    ("from touchbench.features.base import FEATURES, FeatureSet\n"
+     "@FEATURES.register('half-way', description='registered before the exit')\n"
+     "class Mine(FeatureSet):\n    pass\n"
+     "import sys\nsys.exit(3)\n", "it called sys.exit(3) while being imported"),
+], ids=["import-error", "sys-exit"])
+def test_a_plugin_that_fails_to_load_is_reported_and_left_out(tmp_path, source, why):
     site = tmp_path / "site"
     site.mkdir()
-    _fake_plugin(site, "broken-plugin", "broken_plugin_mod", "import a_module_nobody_has\n")
-    where = "plugin broken-plugin 1.0 (entry point 'main' = 'broken_plugin_mod' in group 'touchbench.plugins')"
+    _fake_plugin(site, "broken-plugin", "broken_plugin_mod", source)
+    where = _where("broken-plugin", "broken_plugin_mod")
     for args in (["features", "list"], ["classifiers", "list"], ["data", "list"], ["data", "formats"]):
         r = _touchbench(site, tmp_path, *args)
-        assert r.returncode == 3, (args, r.stdout, r.stderr)
-        assert f"{where} failed to load: ModuleNotFoundError: No module named 'a_module_nobody_has'" in r.stderr, args
+        assert r.returncode == 0, (args, r.stdout, r.stderr)  # the command goes on without the plugin
+        assert f"{where} failed to load and is left out: {why}" in r.stderr, args
         assert "Traceback" not in r.stderr
+    r = _touchbench(site, tmp_path, "features", "list", "--json")
+    names = [row["name"] for row in json.loads(r.stdout)]
+    assert "sd" in names and "half-way" not in names  # what it registered before it failed is removed
     # help, and the command that says what is installed, still work
     r = _touchbench(site, tmp_path, "--help")
     assert r.returncode == 0 and "plugins" in r.stdout, r.stderr
     r = _touchbench(site, tmp_path, "plugins", "list")
     assert r.returncode == 3
     assert "broken-plugin 1.0  (entry point main = broken_plugin_mod)" in r.stdout
-    assert "failed to load: ModuleNotFoundError" in r.stdout and where in r.stderr
+    assert f"failed to load: {why}" in r.stdout and where in r.stderr
 
 
 @pytest.mark.slow
-def test_a_plugin_that_registers_an_existing_name_is_refused(tmp_path):
+def test_a_plugin_that_registers_an_existing_name_is_left_out(tmp_path):
     site = tmp_path / "site"
     site.mkdir()
     _fake_plugin(site, "clashing-plugin", "clashing_plugin_mod",
@@ -226,10 +241,32 @@ def test_a_plugin_that_registers_an_existing_name_is_refused(tmp_path):
                  "class Mine(FeatureSet):\n    pass\n")
     # the data registry loads the plugins here: touchbench's own feature sets still come first
     r = _touchbench(site, tmp_path, "data", "list")
-    assert r.returncode == 3, r.stdout + r.stderr
-    assert ("plugin clashing-plugin 1.0 (entry point 'main' = 'clashing_plugin_mod' in group 'touchbench.plugins') "
-            "failed to load: feature set 'sd' is registered twice: by module touchbench.features.gaus_sd and by "
-            "plugin clashing-plugin 1.0") in r.stderr
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert (f"{_where('clashing-plugin', 'clashing_plugin_mod')} failed to load and is left out: feature set 'sd' "
+            "is registered twice: by module touchbench.features.gaus_sd (kept) and by "
+            f"{_where('clashing-plugin', 'clashing_plugin_mod')} (left out, with everything clashing-plugin 1.0 "
+            "registers)") in r.stderr
+
+
+@pytest.mark.slow
+def test_a_name_two_plugins_register_names_both_and_keeps_the_first(tmp_path):
+    site = tmp_path / "site"
+    site.mkdir()
+    for package, module in (("alpha-plugin", "alpha_mod"), ("beta-plugin", "beta_mod")):
+        _fake_plugin(site, package, module,
+                     "from touchbench.features.base import FEATURES, FeatureSet\n"
+                     f"@FEATURES.register('shared-name', description='by {package}')\n"
+                     "class Mine(FeatureSet):\n    pass\n"
+                     f"@FEATURES.register('only-{package}', description='by {package}')\n"
+                     "class Other(FeatureSet):\n    pass\n")
+    r = _touchbench(site, tmp_path, "features", "list", "--json")
+    assert r.returncode == 0, r.stdout + r.stderr
+    alpha, beta = _where("alpha-plugin", "alpha_mod"), _where("beta-plugin", "beta_mod")
+    assert (f"{beta} failed to load and is left out: feature set 'shared-name' is registered twice: by {alpha} (kept) "
+            f"and by {beta} (left out, with everything beta-plugin 1.0 registers)") in r.stderr
+    listed = {row["name"]: row for row in json.loads(r.stdout)}
+    assert listed["shared-name"]["description"] == "by alpha-plugin" and "only-alpha-plugin" in listed
+    assert "only-beta-plugin" not in listed  # left out whole
 
 
 def test_a_plugins_source_enters_the_identity_of_its_components(example_plugin, tmp_path, monkeypatch):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import click
 import pandas as pd
 import pytest
 from click.testing import CliRunner
@@ -77,3 +78,71 @@ def test_tiny_protocol_runs_and_reruns_as_noop(tmp_path, monkeypatch):
     assert len(scores) == 24 and (scores["status"] == "ok").all()
     r = invoke("run", "tiny", "--out", str(tmp_path / "out"))
     assert r.exit_code == 0 and "nothing to do" in r.output
+
+
+# -- the commands a shipped protocol's comment gives work from the repository root --------------------------
+
+_COMMENT_PATH_ROOTS = ("touchbench/", "docs/", "protocols/", "examples/", "benchmarks/", "../shared/")
+
+
+def _comment_text(path):
+    """A protocol file's comment lines, as they read (the ``#`` and its indent removed)."""
+    return [line[1:].strip() for line in path.read_text().splitlines() if line.startswith("#")]
+
+
+def _comment_commands(path):
+    """Every ``touchbench ...`` command a protocol's comment gives: the indented command lines (each
+    ``&&`` part, a trailing ``# ...`` or ``(or: ...)`` left out) and the ones quoted in backticks."""
+    import re
+    import shlex
+
+    lines = _comment_text(path)
+    found = []
+    for line in lines:
+        if line.startswith("touchbench "):
+            line = re.split(r"\s#\s|\(or:", line)[0]
+            found += [part.strip() for part in line.split("&&")]
+    found += re.findall(r"`(touchbench [^`]+)`", " ".join(lines))
+    return [shlex.split(c)[1:] for c in found]
+
+
+def _parse(args):
+    """The click context of ``touchbench ARGS`` (parsed, not run): a wrong option or a missing argument raises."""
+    ctx = cli.make_context("touchbench", list(args), resilient_parsing=False)
+    while isinstance(ctx.command, click.Group):
+        name, cmd, rest = ctx.command.resolve_command(ctx, [*ctx._protected_args, *ctx.args])
+        ctx = cmd.make_context(name, rest, parent=ctx)
+    return ctx
+
+
+@pytest.mark.parametrize("path", [p for p in SHIPPED if _comment_commands(p)], ids=lambda p: p.name)
+def test_comment_commands_of_shipped_protocols_work_from_the_repository_root(path, tmp_path, monkeypatch):
+    from touchbench.protocols.library import find_protocol
+
+    monkeypatch.chdir(REPO_ROOT)
+    written = set()  # the results folders the comment's run commands write
+    for args in _comment_commands(path):
+        if args[0] == "leaderboard":  # reads what a run of the same comment writes
+            folders = [a for a in args[1:] if not a.startswith("-")]
+            assert folders and set(folders) <= written, f"{path.name}: {args} reads no folder its run writes"
+            monkeypatch.chdir(tmp_path)
+            for f in folders:
+                (tmp_path / f).mkdir(parents=True, exist_ok=True)
+            _parse(args)
+            monkeypatch.chdir(REPO_ROOT)
+            continue
+        ctx = _parse(args)
+        protocol = ctx.params.get("protocol")
+        if protocol is not None:
+            assert find_protocol(protocol).resolve().parent in (SHIPPED_DIR, PAPERS_DIR), f"{path.name}: {args}"
+            written.add(ctx.params.get("out") or f"results/{load_protocol(find_protocol(protocol)).name}")
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.name)
+def test_paths_named_in_shipped_protocol_comments_exist_from_the_repository_root(path):
+    import re
+
+    text = " ".join(_comment_text(path))
+    named = [m for m in re.findall(r"[\w./-]+", text) if m.startswith(_COMMENT_PATH_ROOTS)]
+    missing = [m.rstrip(".,;:)") for m in named if not (REPO_ROOT / m.rstrip(".,;:)")).exists()]
+    assert not missing, f"{path.name} names paths that do not exist from the repository root: {missing}"

@@ -170,3 +170,35 @@ def test_several_mistakes_are_all_listed():
     lines = msg.splitlines()
     assert len(lines) == 2
     assert lines[0].startswith("protocols/x.yaml:3: scheme.name") or lines[1].startswith("protocols/x.yaml:3: scheme.name")
+
+
+# ------------------------------------------------------------- repeated sets, YAML booleans
+def test_a_feature_set_listed_twice_in_a_combination_is_refused_at_its_second_place():
+    msg = error(BASE.replace("  - [test-mean]", "  - [test-mean, test-mean]"))
+    assert msg == ("protocols/x.yaml:5: features[0][1]: feature set 'test-mean' is listed twice in this combination "
+                   "(also at features[0][0]): list each feature set once")
+    msg = error("name: t\ndataset: data.parquet\nscheme: loso\nmethods:\n"
+                "  - {features: [test-mean, {name: test-mean}], estimator: test-logreg}\n")
+    assert msg.startswith("protocols/x.yaml:5: methods[0].features[1]: feature set 'test-mean' is listed twice")
+
+
+@pytest.mark.parametrize("written, where, line, value", [
+    ("no", "classifiers:\n  - no\n", "7: classifiers[0]", "False"),
+    ("off", "classifiers:\n  - {name: off}\n", "7: classifiers[0].name", "False"),
+    ("yes", "classifiers:\n  - test-logreg\ntarget: yes\n", "8: target", "True"),
+])
+def test_a_yaml_boolean_where_a_name_is_expected_is_shown_as_written(written, where, line, value):
+    msg = error(BASE.replace("classifiers:\n  - test-logreg\n", where))
+    assert msg.startswith(f"protocols/x.yaml:{line}: ")
+    assert msg.endswith(f"({written!r} was read as a YAML boolean, {value}: quote it, \"{written}\", "
+                        "where a name or text is meant)")
+
+
+def test_a_yaml_boolean_in_a_filter_is_shown_as_written(tmp_path):
+    from touchbench.engine.planning import prepare_evaluation
+
+    p = parse_protocol(BASE.replace("dataset: data.parquet", "dataset: {name: data.parquet, filters: {gesture: [no]}}"),
+                       "protocols/x.yaml")
+    with pytest.raises(ProtocolError, match=r"^protocols/x.yaml:2: dataset.filters.gesture\[0\]: gesture 'False' is "
+                                            r"not in the dataset .*\('no' was read as a YAML boolean, False"):
+        prepare_evaluation(p)

@@ -34,3 +34,15 @@ def test_python_api_section_runs_as_written(tmp_path, monkeypatch, capsys):
     assert list(board.rows["features"]) == list(mean.index)
     assert board.rows["accuracy"].tolist() == mean.tolist()
     assert board.title in capsys.readouterr().out
+
+
+def test_readme_says_that_ci_run_deletes_the_virtual_environment():
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    script = (root / ".ci" / "run").read_text()
+    assert re.search(r"^rm -rf \.venv\b", script, re.M)  # what the README must warn about
+    paragraphs = (root / "README.md").read_text().split("\n\n")
+    said = [p for p in paragraphs if "`.ci/run`" in p and re.search(r"deletes[^.]*`\.venv/?`", p)]
+    assert said, "the README's paragraph on .ci/run must say that it deletes .venv"

@@ -491,3 +491,59 @@ def test_random_challenge_files_are_a_dataset_or_one_data_error(tmp_path, body):
         read_challenge_csv(path)
     except DataError as e:
         assert str(e).startswith(str(path))
+
+
+# ----------------------------------------------------------------- the results folder itself
+def _read_only(monkeypatch, root: Path) -> None:
+    """Opening a file under ``root`` to write, or writing any file, fails as on a read-only file system."""
+    real_open = os.open
+    root = root.resolve()
+
+    def ro_open(path, flags, *a, **k):
+        if flags & (os.O_WRONLY | os.O_RDWR | os.O_CREAT) and Path(path).resolve().is_relative_to(root):
+            raise OSError(errno.EROFS, os.strerror(errno.EROFS), str(path))
+        return real_open(path, flags, *a, **k)
+
+    def fail(*a, **k):
+        raise OSError(errno.EROFS, os.strerror(errno.EROFS))
+
+    monkeypatch.setattr(os, "open", ro_open)
+    monkeypatch.setattr(atomic, "new_temp_file", fail)
+
+
+@pytest.mark.parametrize("lock_file", [True, False], ids=["with-lock-file", "without-lock-file"])
+def test_a_finished_run_in_a_read_only_folder_has_nothing_to_do(env, monkeypatch, lock_file):
+    Path("p.yaml").write_text(TEXT)
+    r = invoke("run", "p.yaml", "--out", "out", "--no-progress")
+    assert r.exit_code == 0, r.output
+    if not lock_file:  # a copy of the results without it
+        (Path("out") / ".touchbench.lock").unlink()
+    before = {p: p.read_bytes() for p in Path("out").rglob("*") if p.is_file()}
+    _read_only(monkeypatch, Path("out"))
+    r = invoke("run", "p.yaml", "--out", "out", "--no-progress")
+    assert r.exit_code == 0, r.output
+    assert "nothing to do: all 4 tasks finished" in r.output  # the tiny scene: 4 people (LOSO folds), one method
+    assert {p: p.read_bytes() for p in Path("out").rglob("*") if p.is_file()} == before
+
+
+def test_a_run_into_a_folder_of_another_protocol_is_refused_and_changes_nothing(env):
+    Path("p.yaml").write_text(TEXT)
+    Path("q.yaml").write_text(TEXT.replace("name: small", "name: other").replace("zhou-lda", "zhou-tree"))
+    assert invoke("run", "p.yaml", "--out", "out", "--no-progress").exit_code == 0
+    before = {p: p.read_bytes() for p in Path("out").iterdir() if p.is_file() and p.name != ".touchbench.lock"}
+    r = invoke("run", "q.yaml", "--out", "out", "--no-progress")
+    one_line_error(r, "out: holds the results of protocol 'small', not of 'other': a run here would replace its "
+                      "merged tables; choose another results folder with --out")
+    assert r.exit_code == 3
+    assert {p: p.read_bytes() for p in before} == before
+    assert invoke("run", "q.yaml", "--out", "out-other", "--no-progress").exit_code == 0
+
+
+@pytest.mark.parametrize("out", ["link", "link/sub"])
+def test_a_results_folder_at_a_dangling_symbolic_link_names_the_link_and_its_target(env, out):
+    Path("p.yaml").write_text(TEXT)
+    os.symlink("gone/away", "link")
+    r = invoke("run", "p.yaml", "--out", out, "--no-progress")
+    one_line_error(r, f"{out}: link is a dangling symbolic link (to gone/away, which does not exist): create its "
+                      "target, or choose another results folder with --out")
+    assert r.exit_code == 3 and not Path("gone").exists()

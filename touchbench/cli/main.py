@@ -13,7 +13,6 @@ import click
 
 from ..core.version import __version__
 from ..core.errors import TouchbenchError
-from ..core.plugins import PluginError
 from . import exitcodes
 from .common import example, setup_logging
 
@@ -41,19 +40,6 @@ _COMMANDS: dict[str, tuple[str, str, str]] = {
 }
 
 
-def _unavailable(name: str, error: PluginError) -> click.Command:
-    """Stands in for a command whose options come from the registries (``--format``) when a plugin
-    failed to load: ``--help`` and the other commands still work; this one reports the plugin."""
-
-    @click.command(name, context_settings={"ignore_unknown_options": True, "allow_extra_args": True,
-                                           "help_option_names": []},
-                   help="Unavailable: a plugin failed to load (`touchbench plugins list`).")
-    def command() -> None:
-        raise PluginError(str(error))
-
-    return command
-
-
 def _terminate(signum, frame) -> None:  # SIGTERM: the same path as Ctrl-C (finished work is kept)
     raise KeyboardInterrupt
 
@@ -69,10 +55,7 @@ class _Group(click.Group):
         if name not in _COMMANDS:
             return None
         module, attr, _ = _COMMANDS[name]
-        try:
-            return getattr(importlib.import_module(module), attr)
-        except PluginError as error:
-            return _unavailable(name, error)
+        return getattr(importlib.import_module(module), attr)
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
         rows = [(name, _COMMANDS[name][2]) for name in self.list_commands(ctx)]

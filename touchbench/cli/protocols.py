@@ -8,7 +8,6 @@ import click
 
 from ..core.yamlsafe import load_bounded
 from ..protocols.library import find_protocol, listed_protocols, protocol_dirs
-from ..protocols.schema import load_protocol
 from .common import echo_json, example, json_option
 
 
@@ -35,6 +34,8 @@ def protocols() -> None:
 def validate(file: str, schema_only: bool, as_json: bool) -> None:
     """Validate FILE: schema, names, parameters, and (unless --schema-only)
     the dataset filters and the folds of the scheme. Nothing is computed."""
+    from ..protocols.schema import load_protocol  # here: listing protocols reads no schema
+
     path = find_protocol(file)
     proto = load_protocol(path)
     combos = proto.combinations()

@@ -14,27 +14,28 @@ and Ray workers) finds the plugins of its environment by itself. While a
 plugin's module is imported, :func:`current_plugin` says which one: the
 registry records it in the ``plugin`` tag of every entry the plugin adds.
 
-A plugin that fails to import, or registers a name that exists already, is
-never skipped: :func:`load_plugins` raises one :class:`PluginError` naming
-the distribution and the entry point of every plugin that failed, and
-raises it again on every later call, so each registry that takes plugins
-refuses to answer until the plugin is fixed or uninstalled. A plugin is one
-module that may fill any registry, so a plugin that failed halfway leaves
-unknown which names it would have added or replaced: no registry can be
-trusted to mean what it meant with the plugin working.
+A plugin that fails to import (any exception, ``SystemExit`` included; only
+``KeyboardInterrupt`` goes through), or registers a name that exists
+already, is left out: :func:`load_plugins` logs one warning naming the
+distribution, the entry point and why, removes the entries it registered
+before it failed, and the registries answer without it. A name registered
+by two plugins is kept by the first (plugins load in the order of their
+distribution names) and the message names both. ``touchbench plugins
+list`` lists each failure (and exits with status 3).
 """
 
 from __future__ import annotations
 
 import contextlib
+import logging
 from dataclasses import dataclass
 from importlib import metadata
-from typing import Iterator
+from typing import Callable, Iterator
 
 from .errors import TouchbenchError
 
 __all__ = ["GROUP", "PluginError", "PluginInfo", "current_plugin", "importing", "installed_plugins", "load_plugins",
-           "plugin_status"]
+           "plugin_status", "on_left_out"]
 
 GROUP = "touchbench.plugins"
 
@@ -78,8 +79,15 @@ def installed_plugins() -> list[tuple[PluginInfo, metadata.EntryPoint]]:
     return sorted(out, key=lambda p: (p[0].package.lower(), p[0].entry_point))
 
 
-_state: dict = {"loaded": False, "loading": False, "status": [], "error": None}
+_state: dict = {"loaded": False, "loading": False, "status": []}
 _current: list[PluginInfo | None] = []
+_undo: dict[PluginInfo, list[Callable[[], None]]] = {}  # what to remove if the plugin is left out
+log = logging.getLogger("touchbench")
+
+
+def on_left_out(info: PluginInfo, undo: Callable[[], None]) -> None:
+    """Call ``undo`` (removing something the plugin ``info`` registered) if the plugin fails to load."""
+    _undo.setdefault(info, []).append(undo)
 
 
 def current_plugin() -> PluginInfo | None:
@@ -100,45 +108,46 @@ def importing(info: PluginInfo | None) -> Iterator[None]:
 def _describe(exc: BaseException) -> str:
     if isinstance(exc, TouchbenchError):
         return str(exc)
+    if isinstance(exc, SystemExit):
+        return f"it called sys.exit({exc.code!r}) while being imported"
     return f"{type(exc).__name__}: {exc}"
 
 
+def _load_one(info: PluginInfo, ep: metadata.EntryPoint) -> str | None:
+    """Import one plugin's module; why it failed (its entries removed again), or None."""
+    try:
+        with importing(info):
+            ep.load()
+    except KeyboardInterrupt:
+        raise
+    except BaseException as e:  # any failure of the plugin's code, sys.exit included: reported, left out
+        for undo in reversed(_undo.pop(info, [])):
+            undo()
+        why = _describe(e)
+        log.warning(f"{info.where} failed to load and is left out: {why}")
+        return why
+    _undo.pop(info, None)
+    return None
+
+
 def load_plugins() -> None:
-    """Import every plugin's module (once per process); raise :class:`PluginError` if any failed.
+    """Import every plugin's module (once per process); a plugin that fails is left out with a warning
+    (:func:`plugin_status` says which and why).
 
     Re-entrant: a registry used while a plugin is being imported does not
-    start a second round. After a failure, every call raises the same error.
+    start a second round.
     """
-    if _state["loading"]:
+    if _state["loading"] or _state["loaded"]:
         return
-    if not _state["loaded"]:
-        _state["loading"] = True
-        try:
-            status = []
-            for info, ep in installed_plugins():
-                try:
-                    with importing(info):
-                        ep.load()
-                except Exception as e:  # any failure of the plugin's code: reported, never skipped
-                    status.append((info, _describe(e)))
-                else:
-                    status.append((info, None))
-            _state["status"] = status
-            failed = [(i, why) for i, why in status if why is not None]
-            if failed:
-                lines = [f"{i.where} failed to load: {why}" for i, why in failed]
-                names = " ".join(sorted({i.package for i, _ in failed}))
-                _state["error"] = ("\n".join(lines) + f"\nFix the plugin or uninstall it (`pip uninstall {names}`); "
-                                   "`touchbench plugins list` shows the installed plugins.")
-        finally:
-            _state["loading"] = False
-            _state["loaded"] = True
-    if _state["error"] is not None:
-        raise PluginError(_state["error"])
+    _state["loading"] = True
+    try:
+        _state["status"] = [(info, _load_one(info, ep)) for info, ep in installed_plugins()]
+    finally:
+        _state["loading"] = False
+        _state["loaded"] = True
 
 
 def plugin_status() -> list[tuple[PluginInfo, str | None]]:
-    """Each plugin entry point with why it failed to load (None: loaded). Loads them first; never raises."""
-    with contextlib.suppress(PluginError):
-        load_plugins()
+    """Each plugin entry point with why it failed to load (None: loaded). Loads them first."""
+    load_plugins()
     return list(_state["status"])

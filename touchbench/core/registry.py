@@ -26,7 +26,7 @@ from functools import partial
 from typing import Any, Callable, Generic, Iterator, TypeVar
 
 from .errors import RegistrationError, UnknownNameError
-from .plugins import PluginInfo, current_plugin, importing, load_plugins
+from .plugins import PluginInfo, current_plugin, importing, load_plugins, on_left_out
 from .suggest import did_you_mean
 
 T = TypeVar("T")
@@ -132,8 +132,9 @@ class Registry(Generic[T]):
             declared = self._tags_of(obj) if self._tags_of is not None else {}
             if name in self._entries:
                 new = Entry(name, obj, description, {"plugin": plugin} if plugin else {})
-                raise RegistrationError(f"{self.kind} {name!r} is registered twice: by {self._entries[name].origin} "
-                                        f"and by {new.origin}")
+                kept = (" (kept)", f" (left out, with everything {plugin.label} registers)") if plugin else ("", "")
+                raise RegistrationError(f"{self.kind} {name!r} is registered twice: by {self._entries[name].origin}"
+                                        f"{kept[0]} and by {new.origin}{kept[1]}")
             clash = sorted(set(declared) & set(tags))
             if clash:
                 raise RegistrationError(f"{self.kind} {name!r}: {', '.join(clash)} declared twice "
@@ -142,6 +143,8 @@ class Registry(Generic[T]):
                 raise RegistrationError(f"{self.kind} {name!r}: the tag 'plugin' is touchbench's (it names the plugin)")
             extra = {"plugin": plugin} if plugin is not None else {}
             self._entries[name] = Entry(name, obj, description, {**declared, **tags, **extra})
+            if plugin is not None:
+                on_left_out(plugin, partial(self._entries.pop, name, None))
             return obj
 
         return deco

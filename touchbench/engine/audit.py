@@ -45,10 +45,11 @@ from ..methods import METHODS
 from ..methods.base import takes_captures
 from ..protocols.derive import derive, protocol_data
 from ..protocols.schema import CAPTURES, Protocol
-from .planning import prepare_evaluation
-from .runner import run_protocol
+from ..results.store import make_results_dir
+from .planning import Plan, method_labels, prepare_evaluation
+from .runner import plan_protocol, run_plan
 
-__all__ = ["VARIANTS", "Audit", "audit_protocols", "run_audit"]
+__all__ = ["VARIANTS", "Audit", "AuditPlan", "audit_protocols", "plan_audit", "run_audit", "tunable_params"]
 
 VARIANTS = ("honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test")
 
@@ -106,12 +107,30 @@ def _subject_id_entries(protocol: Protocol) -> list[dict[str, Any]]:
     return out
 
 
+def _entry_specs(data: dict[str, Any]) -> list[dict[str, Any]]:
+    return [s for s in [*(data.get("classifiers") or []), *(data.get("methods") or [])] if isinstance(s, dict)]
+
+
+def tunable_params(protocol: Protocol) -> list[str]:
+    """The parameters the tuned-on-test variant can choose a value of: those the protocol's classifier
+    and method entries state."""
+    return sorted({k for spec in _entry_specs(_base_data(protocol)) for k in spec.get("params") or {}})
+
+
+def _check_tune(protocol: Protocol, tune: dict[str, list[Any]]) -> None:
+    known = tunable_params(protocol)
+    unknown = [k for k in tune if k not in known]
+    if unknown:
+        valid = (f"parameters it can tune: {', '.join(known)}" if known
+                 else "it states no parameter in its classifier or method entries")
+        raise TouchbenchError(f"tune: {unknown[0]!r} is no parameter of {protocol.name}'s classifier or method "
+                              f"entries ({valid})")
+
+
 def _tuned_entries(data: dict[str, Any], tune: dict[str, list[Any]]) -> dict[str, Any] | None:
     """The entries whose estimator takes a tuned parameter, given the grid and ``tuned_on_test``."""
     hit = False
-    for spec in [*(data.get("classifiers") or []), *(data.get("methods") or [])]:
-        if not isinstance(spec, dict):
-            continue
+    for spec in _entry_specs(data):
         params = spec.setdefault("params", {})
         for k, values in tune.items():
             if k in params:
@@ -124,7 +143,9 @@ def _tuned_entries(data: dict[str, Any], tune: dict[str, list[Any]]) -> dict[str
 def audit_protocols(protocol: Protocol, *, k: int = 10, window_seconds: float = 2.0,
                     tune: dict[str, list[Any]] | None = None, variants: tuple[str, ...] = VARIANTS
                     ) -> tuple[dict[str, Protocol], list[str]]:
-    """The protocol of each applicable variant, and notes on the ones left out (and why)."""
+    """The protocol of each applicable variant, and notes on the ones left out (and why). A ``tune``
+    parameter that no entry of the protocol states is refused, naming the ones it states."""
+    _check_tune(protocol, tune or {})
     notes: list[str] = []
     own = protocol.splitter(0)
     honest_scheme: dict[str, Any] = ({"name": protocol.scheme.name, **protocol.scheme.params}
@@ -179,21 +200,52 @@ def _accuracies(scores: pd.DataFrame) -> dict[str, float]:
     return out
 
 
-def run_audit(protocol: Protocol, out: str | Path, *, jobs: int = 1, k: int = 10, window_seconds: float = 2.0,
-              tune: dict[str, list[Any]] | None = None, variants: tuple[str, ...] = VARIANTS,
-              progress: bool | None = None) -> Audit:
-    """Run every variant (finished tasks are reused) and tabulate accuracy and inflation per method."""
-    out = Path(out)
+@dataclass
+class AuditPlan:
+    """Every variant's protocol and plan, made before any task runs (so the audit's size is known)."""
+
+    protocols: dict[str, Protocol]
+    plans: dict[str, tuple[Plan, Path]]
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def n_tasks(self) -> int:
+        return sum(len(plan.tasks) for plan, _ in self.plans.values())
+
+    def describe(self) -> str:
+        """One line: the variants and their tasks (folds x methods), e.g. for a message before the audit starts."""
+        parts = [f"{v} {len(plan.tasks)} ({_count(plan.n_folds, 'fold')} x {_count(len(method_labels(plan)), 'method')})"
+                 for v, (plan, _) in self.plans.items()]
+        return f"{len(self.plans)} variants, {self.n_tasks} tasks in all: " + ", ".join(parts)
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" + ("" if n == 1 else "s")
+
+
+def plan_audit(protocol: Protocol, out: str | Path, *, k: int = 10, window_seconds: float = 2.0,
+               tune: dict[str, list[Any]] | None = None, variants: tuple[str, ...] = VARIANTS) -> AuditPlan:
+    """Every applicable variant planned into ``<out>/<variant>/`` (nothing runs)."""
     protos, notes = audit_protocols(protocol, k=k, window_seconds=window_seconds, tune=tune, variants=variants)
     if "honest" not in protos:
         raise TouchbenchError("the audit needs the honest variant to measure inflation against")
+    plans = {variant: plan_protocol(proto, Path(out) / variant)[0] for variant, proto in protos.items()}
+    return AuditPlan(protocols=protos, plans=plans, notes=notes)
+
+
+def run_audit(protocol: Protocol, out: str | Path, *, jobs: int = 1, k: int = 10, window_seconds: float = 2.0,
+              tune: dict[str, list[Any]] | None = None, variants: tuple[str, ...] = VARIANTS,
+              progress: bool | None = None, planned: AuditPlan | None = None) -> Audit:
+    """Run every variant (finished tasks are reused) and tabulate accuracy and inflation per method.
+    ``planned``: the :func:`plan_audit` of the same arguments, when the caller made it already."""
+    planned = planned or plan_audit(protocol, out, k=k, window_seconds=window_seconds, tune=tune, variants=variants)
+    protos, notes = planned.protocols, planned.notes
     accs: dict[str, dict[str, float]] = {}
     folders = {}
-    for variant, proto in protos.items():
-        folder = out / variant
-        folder.mkdir(parents=True, exist_ok=True)
-        atomic_write_bytes(folder / "protocol.yaml", proto.text.encode())
-        res = run_protocol(proto, folder, jobs=jobs, progress=progress)
+    for variant, (plan, folder) in planned.plans.items():
+        make_results_dir(folder)
+        atomic_write_bytes(folder / "protocol.yaml", protos[variant].text.encode())
+        res = run_plan(plan, folder, jobs=jobs, progress=progress)
         accs[variant] = _accuracies(res.scores)
         folders[variant] = folder
     rows = []

@@ -32,6 +32,7 @@ worker. :func:`check_dask_workers` verifies both before any work.
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import threading
 import time
@@ -226,6 +227,7 @@ def _use_dask(address: str | None, cache_root: str | Path | None, timeout: float
               local_workers: int) -> Iterator[BackendInfo]:
     """:func:`use_backend` on Dask: the workers checked, the client (and a cluster started here) closed on exit."""
     client, cluster = _dask_client(address, timeout, local_workers)
+    done = False
     try:
         client.wait_for_workers(1, timeout=timeout)
         if cache_root is not None:
@@ -233,10 +235,32 @@ def _use_dask(address: str | None, cache_root: str | Path | None, timeout: float
         n = sum(client.nthreads().values())
         with parallel_config(backend="dask"):
             yield BackendInfo("dask", client.scheduler.address, n)
+        done = True
     finally:
         client.close()
         if cluster is not None:
-            cluster.close()
+            with _quiet_worker_kills(done):
+                cluster.close()
+
+
+class _WorkerKillFilter(logging.Filter):
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not record.getMessage().startswith("Worker process still alive after")
+
+
+@contextlib.contextmanager
+def _quiet_worker_kills(active: bool) -> Iterator[None]:
+    """After a run that ended well, the local cluster's shutdown does not report the worker processes its
+    nannies end when they take more than their 4 s to exit (a loaded machine): the work is done and saved.
+    After a failure, every message is kept."""
+    nanny = logging.getLogger("distributed.nanny")
+    quiet = _WorkerKillFilter()
+    if active:
+        nanny.addFilter(quiet)
+    try:
+        yield
+    finally:
+        nanny.removeFilter(quiet)
 
 
 @contextlib.contextmanager

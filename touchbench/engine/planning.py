@@ -122,7 +122,31 @@ def _folds(protocol: Protocol, ds: TouchDataset, repetition: int, notes: list[st
         raise protocol.error_at(("scheme",), str(e)) from None
     prefix = f"repetition {repetition}: " if protocol.repetitions > 1 else ""
     notes += [prefix + n for n in splitter.notes_]
+    unseen = _unseen_class_note(ds.meta[protocol.target].astype(str).to_numpy(), folds)
+    if unseen:
+        notes.append(prefix + unseen)
     return folds
+
+
+def _unseen_class_note(y: np.ndarray, folds: Sequence[Fold]) -> str:
+    """A note naming the classes some fold tests without training on any of their captures (a class with
+    a single capture always is, under every scheme): those test captures cannot be labelled right. When
+    every test capture is such, it says the accuracy is 0 % by construction. Empty when there is none."""
+    unseen: set[str] = set()
+    n_unseen = n_test = 0
+    for fold in folds:
+        test = y[np.asarray(fold.test, dtype=np.int64)]
+        missing = ~np.isin(test, y[np.asarray(fold.train, dtype=np.int64)])
+        unseen.update(test[missing].tolist())
+        n_unseen, n_test = n_unseen + int(missing.sum()), n_test + len(test)
+    if not unseen:
+        return ""
+    values, counts = np.unique(y, return_counts=True)
+    count = dict(zip(values.tolist(), counts.tolist()))
+    names = ", ".join(f"{c!r} ({count[c]} capture{'s' if count[c] > 1 else ''})" for c in sorted(unseen))
+    note = (f"class(es) {names} tested in a fold that trains on none of their captures: those {n_unseen} of "
+            f"{n_test} test captures cannot be labelled right")
+    return note + ("; that is every test capture: accuracy is 0 % by construction" if n_unseen == n_test else "")
 
 
 def training_side(prepared: Prepared) -> np.ndarray:

@@ -229,6 +229,7 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
     ledger = Path(ledger) if ledger is not None else default_ledger(plan.protocol, out)
     only = check_methods(plan, methods)
     with store.lock(wait=wait, command=f"touchbench run {plan.protocol.name}"):
+        store.check_owner(plan.protocol.name, plan.protocol.evaluation)
         return _run_locked(plan, store, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
                            worker_setup=worker_setup, fail_fast=fail_fast, final=final, force_final=force_final,
                            ledger=ledger, methods=only)

@@ -17,8 +17,6 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from .schema import ProtocolError
-
 __all__ = ["PAPERS_DIR", "SHIPPED_DIR", "add_protocol_dir", "find_protocol", "listed_protocols", "protocol_dirs",
            "shipped_protocols"]
 
@@ -32,6 +30,8 @@ def add_protocol_dir(path: str | Path) -> None:
     """Search ``path`` (a user's folder of protocols) before the shipped ones."""
     p = Path(path).resolve()
     if not p.is_dir():
+        from .schema import ProtocolError  # here: finding and listing protocols imports no schema
+
         raise ProtocolError(f"{path}: no such protocol folder")
     if p not in _EXTRA:
         _EXTRA.append(p)
@@ -63,6 +63,8 @@ def find_protocol(ref: str) -> Path:
             for cand in (sub / ref, sub / f"{ref}.yaml", sub / f"{ref}.yml"):
                 if cand.is_file():
                     return cand
+    from .schema import ProtocolError
+
     searched = ", ".join(str(d) for d in protocol_dirs())
     raise ProtocolError(f"{ref}: no such protocol file (nor a protocol of that name in {searched})")
 

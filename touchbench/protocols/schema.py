@@ -72,7 +72,7 @@ import math
 import re
 import typing
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Iterator, Literal
 
 import yaml
 from pydantic import (
@@ -172,31 +172,41 @@ def _label(name: str, params: dict[str, Any], keys: list[str] | None = None) -> 
 
 
 # ----------------------------------------------------------------- YAML with lines
-def _line_map(root: yaml.Node | None) -> dict[tuple, int]:
-    """Path (tuple of keys / indices) -> 1-based line of every node of a composed YAML document.
-
-    The document comes from the bounded loader (``core.yamlsafe``): its
-    aliases, once expanded, stand for a bounded number of nodes, and none is
-    recursive, so this walk is bounded too.
-    """
-    out: dict[tuple, int] = {}
-
-    def walk(node: yaml.Node, path: tuple) -> None:
-        out.setdefault(path, node.start_mark.line + 1)
+def _nodes(root: yaml.Node | None) -> Iterator[tuple[tuple, yaml.Node, int]]:
+    """(path, node, 1-based line) of every node of a composed YAML document, a mapping's keys by their
+    key's line. The document comes from the bounded loader (``core.yamlsafe``): its aliases, once
+    expanded, stand for a bounded number of nodes, and none is recursive, so this walk is bounded too."""
+    stack = [((), root, root.start_mark.line + 1)] if root is not None else []
+    while stack:
+        path, node, line = stack.pop()
+        yield path, node, line
         if isinstance(node, yaml.MappingNode):
-            for k, v in node.value:
-                p = path + (str(k.value),)
-                out[p] = k.start_mark.line + 1
-                walk(v, p)
+            stack += [(path + (str(k.value),), v, k.start_mark.line + 1) for k, v in reversed(node.value)]
         elif isinstance(node, yaml.SequenceNode):
-            for i, v in enumerate(node.value):
-                p = path + (i,)
-                out[p] = v.start_mark.line + 1
-                walk(v, p)
+            stack += [(path + (i,), v, v.start_mark.line + 1) for i, v in reversed(list(enumerate(node.value)))]
 
-    if root is not None:
-        walk(root, ())
-    return out
+
+def _line_map(root: yaml.Node | None) -> dict[tuple, int]:
+    """Path (tuple of keys / indices) -> 1-based line of every node of a composed YAML document."""
+    return {path: line for path, _, line in _nodes(root)}
+
+
+def _boolean_map(root: yaml.Node | None) -> dict[tuple, str]:
+    """Path -> what was written, for every value YAML read as a boolean (``no``, ``on``, ``yes``...)."""
+    return {path: node.value for path, node, _ in _nodes(root)
+            if isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:bool"}
+
+
+def _boolean_hint(loc: tuple, booleans: dict[tuple, str]) -> str:
+    """For an issue at ``loc`` on (or just above) a value YAML read as a boolean: what was written, quoted."""
+    for at, text in booleans.items():
+        if at == loc or (loc and at[:-1] == loc):
+            return (f" ({text!r} was read as a YAML boolean, {text.lower() in _TRUE}: quote it, \"{text}\", "
+                    "where a name or text is meant)")
+    return ""
+
+
+_TRUE = {"y", "yes", "true", "on"}
 
 
 def _loc_str(loc: tuple) -> str:
@@ -609,6 +619,7 @@ class Protocol(_Model):
     _path: Path | None = PrivateAttr(default=None)
     _text: str = PrivateAttr(default="")
     _lines: dict[tuple, int] = PrivateAttr(default_factory=dict)
+    _booleans: dict[tuple, str] = PrivateAttr(default_factory=dict)  # what YAML read as booleans, as written
     _subs: list["Protocol"] | None = PrivateAttr(default=None)
 
     @field_validator("metrics")
@@ -732,8 +743,9 @@ class Protocol(_Model):
                 sub = Protocol.model_validate(data)
                 sub._path, sub._text = self._path, self._text
                 at = ("evaluations", i)
-                sub._lines = {**self._lines, **{k[2:]: v for k, v in self._lines.items()
-                                                if k[:2] == at and k[2:3] and k[2] in EVALUATION_FIELDS}}
+                sub._lines, sub._booleans = ({**m, **{k[2:]: v for k, v in m.items()
+                                                      if k[:2] == at and k[2:3] and k[2] in EVALUATION_FIELDS}}
+                                             for m in (self._lines, self._booleans))
                 subs.append(sub)
             self._subs = subs
         return self._subs
@@ -744,7 +756,7 @@ class Protocol(_Model):
 
     def error_at(self, loc: tuple, message: str) -> ProtocolError:
         """A :class:`ProtocolError` at field ``loc`` (for checks that need the data)."""
-        return _make_error(self._path, self._lines, [(loc, message)])
+        return _make_error(self._path, self._lines, [(loc, message)], self._booleans)
 
     def combinations(self) -> list[FeatureCombination]:
         """Feature combinations with parameter grids expanded."""
@@ -873,10 +885,12 @@ def _best_line(lines: dict[tuple, int], loc: tuple) -> int | None:
     return best
 
 
-def _make_error(path: Path | None, lines: dict[tuple, int], issues: list[tuple[tuple, str]]) -> ProtocolError:
+def _make_error(path: Path | None, lines: dict[tuple, int], issues: list[tuple[tuple, str]],
+                booleans: dict[tuple, str] | None = None) -> ProtocolError:
     where = str(path) if path is not None else "<protocol>"
     rows, out = [], []
     for loc, msg in issues:
+        msg += _boolean_hint(loc, booleans or {})
         line = _best_line(lines, loc) if loc else None
         loc_s = _loc_str(loc)
         rows.append((where, line, loc_s, msg))
@@ -1024,6 +1038,23 @@ def _shape_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
     for i, combo in enumerate(protocol.features):
         if not combo:
             issues.append((("features", i), "this feature combination is empty: list at least one feature set"))
+    combos = [(("features", i), combo) for i, combo in enumerate(protocol.features)]
+    combos += [(("methods", i, "features"), m.features) for i, m in enumerate(protocol.methods) if m.features]
+    for at, refs in combos:
+        issues += _repeated_set_issues(at, refs)
+    return issues
+
+
+def _repeated_set_issues(at: tuple, refs: list[FeatureRef]) -> list[tuple[tuple, str]]:
+    """A feature set listed twice with the same parameters in one combination, at its second place."""
+    issues = []
+    seen: dict[str, int] = {}
+    for j, ref in enumerate(refs):
+        key = canonical_json([ref.name, ref.params])
+        if key in seen:
+            issues.append((at + (j,), f"feature set {ref.name!r} is listed twice in this combination (also at "
+                                      f"{_loc_str(at + (seen[key],))}): list each feature set once"))
+        seen.setdefault(key, j)
     return issues
 
 
@@ -1277,27 +1308,27 @@ def parse_protocol(text: str, path: str | Path | None = None, *, deep: bool = Tr
     """
     p = Path(path) if path is not None else None
     data, root = _load_mapping(text, str(p) if p is not None else "<protocol>")
-    lines = _line_map(root)
+    lines, booleans = _line_map(root), _boolean_map(root)
     data = copy.deepcopy(data)
     if "name" not in data and p is not None:
         data["name"] = p.stem.replace(".yaml", "")
     try:
         proto = Protocol.model_validate(data)
     except ValidationError as e:
-        raise _make_error(p, lines, _pydantic_issues(e, Protocol)) from None
+        raise _make_error(p, lines, _pydantic_issues(e, Protocol), booleans) from None
     proto._path = p
     proto._text = text
-    proto._lines = lines
+    proto._lines, proto._booleans = lines, booleans
     issues = _size_issues(proto)  # before anything expands the grids
     if issues:
-        raise _make_error(p, lines, issues)
+        raise _make_error(p, lines, issues, booleans)
     names = [ev.name for ev in proto.evaluations]
     issues = [(("evaluations", i, "name"), f"evaluation {n!r} is named twice") for i, n in enumerate(names)
               if n in names[:i]]
     try:
         subs = proto.evaluation_protocols()
     except ValidationError as e:
-        raise _make_error(p, lines, _pydantic_issues(e, Protocol)) from None
+        raise _make_error(p, lines, _pydantic_issues(e, Protocol), booleans) from None
     issues += _shape_issues(proto)
     issues += _feature_issues(proto)
     if deep:
@@ -1306,7 +1337,7 @@ def parse_protocol(text: str, path: str | Path | None = None, *, deep: bool = Tr
     if not issues:
         issues += _expected_issues(proto)
     if issues:
-        raise _make_error(p, lines, list(dict.fromkeys(issues)))
+        raise _make_error(p, lines, list(dict.fromkeys(issues)), booleans)
     return proto
 
 

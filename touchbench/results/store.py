@@ -36,6 +36,7 @@ waits for it or says who holds it (:class:`ResultsBusyError`).
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import json
 import os
@@ -57,7 +58,7 @@ try:  # POSIX
 except ImportError:  # pragma: no cover - Windows
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["PREDICTED", "PROBA_PREFIX", "SCHEMA_VERSION", "TRUE", "ResultStore", "ResultsBusyError", "atomic_write_bytes",
+__all__ = ["PREDICTED", "PROBA_PREFIX", "SCHEMA_VERSION", "TRUE", "OtherResultsError", "ResultStore", "ResultsBusyError", "make_results_dir", "atomic_write_bytes",
            "atomic_write_parquet", "check_schema", "confusion_table", "read_results_table", "task_metrics",
            "upgrade", "write_results_table"]
 
@@ -67,6 +68,10 @@ LOCK_POLL_SECONDS = 0.5
 
 class ResultsBusyError(TouchbenchError):
     """Another run holds the results folder."""
+
+
+class OtherResultsError(TouchbenchError):
+    """A results folder that holds another protocol's (or evaluation's) results."""
 
 
 def _sha256(path: Path) -> str:
@@ -335,11 +340,10 @@ class ResultStore:
         killed with SIGKILL, so there is never a stale lock to clear by hand.
         """
         path = self.root / LOCK_NAME
-        try:
-            self.root.mkdir(parents=True, exist_ok=True)
-            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
-        except OSError as e:
-            raise WriteError(path, e) from None
+        fd, writable = _open_lock(path)
+        if fd is None:  # a folder this process may only read, without a lock file: nothing can write here
+            yield
+            return
         try:
             deadline = time.monotonic() + max(0.0, wait)
             while not _try_lock(fd):
@@ -347,16 +351,32 @@ class ResultStore:
                     raise ResultsBusyError(f"{self.root}: in use by another run ({_holder(path)}); "
                                            "wait for it to end (run with --wait SECONDS) or choose another --out")
                 time.sleep(LOCK_POLL_SECONDS)
-            holder = {"pid": os.getpid(), "host": socket.gethostname(),
-                      "since": time.strftime("%Y-%m-%d %H:%M:%S"), "command": command}
-            os.ftruncate(fd, 0)
-            os.pwrite(fd, (json.dumps(holder) + "\n").encode(), 0)
+            if writable:
+                holder = {"pid": os.getpid(), "host": socket.gethostname(),
+                          "since": time.strftime("%Y-%m-%d %H:%M:%S"), "command": command}
+                os.ftruncate(fd, 0)
+                os.pwrite(fd, (json.dumps(holder) + "\n").encode(), 0)
             try:
                 yield
             finally:
-                os.ftruncate(fd, 0)
+                if writable:
+                    os.ftruncate(fd, 0)
         finally:
             os.close(fd)  # closing the descriptor releases the lock
+
+    def check_owner(self, name: str, evaluation: str | None = None) -> None:
+        """Refuse a folder whose merged tables are another protocol's (or another evaluation's): a run of
+        ``name`` there would replace them."""
+        m = self.read_manifest() or {}
+        held = m.get("protocol") if isinstance(m.get("protocol"), dict) else {}
+        other, other_ev = held.get("name"), held.get("evaluation")
+        if other is None or (other, other_ev) == (name, evaluation):
+            return
+        what = f"{other!r}" + (f" (evaluation {other_ev!r})" if other_ev else "")
+        mine = f"{name!r}" + (f" (evaluation {evaluation!r})" if evaluation else "")
+        raise OtherResultsError(f"{self.root}: holds the results of protocol {what}, not of {mine}: a run here would "
+                                "replace its merged tables; choose another results folder with --out (by default "
+                                "results/<protocol name>), or remove this one first")
 
     def clean_stale_temporaries(self, older_than: float = 3600.0) -> int:
         """Remove temporary files an interrupted run left (older than ``older_than`` s)."""
@@ -499,6 +519,43 @@ class ResultStore:
     def write_manifest(self, manifest: dict[str, Any]) -> None:
         atomic_write_bytes(self.manifest_path, (json.dumps(manifest, indent=2, default=str) + "\n").encode())
 
+
+
+def _dangling_link(path: Path) -> Path | None:
+    """``path`` or the first of its parents that is a symbolic link to nothing, else None."""
+    for p in (path, *path.parents):
+        if p.is_symlink() and not p.exists():
+            return p
+    return None
+
+
+def make_results_dir(root: Path) -> None:
+    """Create the results folder ``root`` (and its parents); a dangling symbolic link on the way is
+    named with its target."""
+    link = _dangling_link(root)
+    if link is not None:
+        raise TouchbenchError(f"{root}: {link} is a dangling symbolic link (to {os.readlink(link)}, which "
+                              "does not exist): create its target, or choose another results folder with --out")
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise WriteError(root, e) from None
+
+
+def _open_lock(path: Path) -> tuple[int | None, bool]:
+    """The lock file's descriptor and whether it is writable. In a folder this process may only read,
+    the lock file is opened to read (``flock`` still works) or, where there is none, not at all (None):
+    a run that finds nothing to do writes nothing, and one that has work fails at its first write."""
+    make_results_dir(path.parent)
+    try:
+        return os.open(path, os.O_RDWR | os.O_CREAT, 0o666), True
+    except OSError as e:
+        if e.errno not in (errno.EACCES, errno.EPERM, errno.EROFS) or not path.parent.is_dir():
+            raise WriteError(path, e) from None
+    try:
+        return os.open(path, os.O_RDONLY), False
+    except OSError:
+        return None, False
 
 
 def _try_lock(fd: int) -> bool:
