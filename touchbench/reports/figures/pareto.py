@@ -81,7 +81,7 @@ def plot_pareto(lb: Leaderboard, base: Path, references: list[tuple[str, float]]
     rows = lb.rows
     latency = pareto_cost(rows)  # CPU time; wall-clock where results have none (a note says so)
     costs = [(latency, "CPU time per capture (ms)" if latency == "latency_cpu_ms"
-              else "latency per capture (ms, wall clock: no CPU time recorded)"),
+              else "wall-clock latency per capture (ms)"),
              ("fit_seconds", "fit time per fold (s)"), ("feature_ms", "feature extraction per capture (ms)")]
     w = figure_width(size)
     if size == "column":  # three panels stacked
