@@ -146,3 +146,17 @@ def test_paths_named_in_shipped_protocol_comments_exist_from_the_repository_root
     named = [m for m in re.findall(r"[\w./-]+", text) if m.startswith(_COMMENT_PATH_ROOTS)]
     missing = [m.rstrip(".,;:)") for m in named if not (REPO_ROOT / m.rstrip(".,;:)")).exists()]
     assert not missing, f"{path.name} names paths that do not exist from the repository root: {missing}"
+
+
+def test_run_audit_and_train_refuse_an_unknown_evaluation_with_one_message(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    proto = load_protocol(SHIPPED_DIR / "touch-all.yaml")
+    assert [p.evaluation for p in proto.evaluations_named(["to-fur", "loso"])] == ["loso", "to-fur"]
+    text = "'los' is not an evaluation of protocol 'touch-all'; did you mean 'loso'?"
+    for args, code in ((["run", "touch-all", "--evaluation", "los"], 2),
+                       (["audit", "touch-all", "--evaluation", "los"], 2),
+                       (["train", "touch-all", "--method", "touch-et", "--evaluation", "los", "--out", "m.tbm"], 3)):
+        r = invoke(*args)
+        assert r.exit_code == code and text in " ".join(r.output.split()), (args, r.output)
+    r = invoke("run", "tiny", "--evaluation", "loso")
+    assert r.exit_code == 2 and "it has none: leave out --evaluation" in " ".join(r.output.split())

@@ -69,16 +69,14 @@ def audit(protocol: str, evaluation: str | None, variants: tuple[str, ...], k: i
     variants x 10 folds = 40 tasks) took 11 minutes on two cores."""
     from ..engine.audit import VARIANTS, plan_audit, run_audit, tunable_params
     from ..engine.planning import default_cache_root
-    from ..protocols.schema import load_protocol
+    from ..protocols.schema import UnknownEvaluation, load_protocol
     from ..reports.audit import audit_rows, write_audit
 
     proto = load_protocol(find_protocol(protocol))
-    subs = proto.evaluation_protocols()
-    if evaluation is not None:
-        subs = [s for s in subs if s.evaluation == evaluation]
-        if not subs:
-            raise click.BadParameter(f"{evaluation!r} is not an evaluation of {proto.name}", param_hint="--evaluation")
-    sub = subs[0]
+    try:
+        sub = proto.evaluations_named([evaluation] if evaluation is not None else [])[0]
+    except UnknownEvaluation as e:
+        raise click.BadParameter(str(e), param_hint="--evaluation") from None
     grid = _tune(tune, tunable_params(sub))
     folder = Path(out) if out else Path("results") / "audit" / (proto.name + (f"-{sub.evaluation}" if sub.evaluation else ""))
     options = dict(k=k, window_seconds=window_seconds, tune=grid, variants=variants or VARIANTS)

@@ -99,18 +99,17 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
     leaderboard reads. Exits with status 1 when a task failed."""
     from ..engine.planning import method_labels
     from ..engine.runner import plan_protocol
-    from ..protocols.schema import load_protocol
+    from ..protocols.schema import UnknownEvaluation, load_protocol
 
     if force_final and not final:
         raise click.UsageError("--force-final goes with --final")
     if final and methods:
         raise click.UsageError("--final reports every method of the protocol: run it without --method")
     proto = load_protocol(find_protocol(protocol))
-    known = [sub.evaluation for sub in proto.evaluation_protocols()]
-    unknown = [e for e in evaluations if e not in known]
-    if unknown:
-        raise click.BadParameter(f"{unknown[0]!r} is not an evaluation of {proto.name} "
-                                 f"({', '.join(k for k in known if k) or 'it has none'})", param_hint="--evaluation")
+    try:
+        proto.evaluations_named(evaluations)
+    except UnknownEvaluation as e:
+        raise click.BadParameter(str(e), param_hint="--evaluation") from None
     plans = plan_protocol(proto, out, evaluations=evaluations)  # every evaluation checked before any runs
     if methods:
         labels = {m for plan, _ in plans for m in method_labels(plan)}

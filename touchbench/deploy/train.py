@@ -91,19 +91,11 @@ def _choose(proto: Protocol, method: str | None) -> Method:
 
 def _evaluation(proto: Protocol, name: str | None) -> Protocol:
     """The evaluation ``name`` of a protocol (the protocol itself when it has none)."""
-    subs = proto.evaluation_protocols()
-    if not proto.evaluations:
-        if name is not None:
-            raise TouchbenchError(f"protocol {proto.name!r} has no evaluations; leave out --evaluation")
-        return proto
-    known = [s.evaluation for s in subs]
-    if name is None and len(subs) > 1:
+    subs = proto.evaluations_named([name] if name is not None else [])
+    if len(subs) > 1:
         raise TouchbenchError(f"protocol {proto.name!r} has {len(subs)} evaluations; choose one with --evaluation "
-                              f"({', '.join(known)})")
-    if name is not None and name not in known:
-        raise TouchbenchError(f"protocol {proto.name!r} has no evaluation {name!r}{did_you_mean(name, known)} "
-                              f"(evaluations: {', '.join(known)})")
-    return subs[known.index(name) if name is not None else 0]
+                              f"({', '.join(s.evaluation for s in subs)})")
+    return subs[0]
 
 
 def _fold(proto: Protocol, prepared: Prepared, fold: str) -> Fold:

@@ -107,6 +107,7 @@ __all__ = [
     "FeatureCombination",
     "Protocol",
     "ProtocolError",
+    "UnknownEvaluation",
     "canonical_json",
     "expand_grid",
     "load_protocol",
@@ -119,6 +120,10 @@ METRICS = ("accuracy", "balanced_accuracy", "macro_f1")
 MAX_REPETITIONS = 1000
 MAX_ENTRIES = 10_000  # feature combinations x classifier entries + methods, grids expanded
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
+
+
+class UnknownEvaluation(TouchbenchError):
+    """An evaluation name the protocol does not have (``--evaluation``)."""
 
 
 class ProtocolError(TouchbenchError):
@@ -749,6 +754,18 @@ class Protocol(_Model):
                 subs.append(sub)
             self._subs = subs
         return self._subs
+
+    def evaluations_named(self, names: "typing.Sequence[str]") -> list["Protocol"]:
+        """The evaluations ``names`` (every one when empty), in the protocol's order; a name the
+        protocol does not have is an :class:`UnknownEvaluation` naming the ones it has."""
+        subs = self.evaluation_protocols()
+        known = [s.evaluation for s in subs if s.evaluation]
+        for name in names:
+            if name not in known:
+                where = f"(evaluations: {', '.join(known)})" if known else "(it has none: leave out --evaluation)"
+                raise UnknownEvaluation(f"{name!r} is not an evaluation of protocol {self.name!r}"
+                                        f"{did_you_mean(name, known)} {where}")
+        return [s for s in subs if not names or s.evaluation in names]
 
     @property
     def content_hash(self) -> str:
