@@ -49,11 +49,33 @@ def installed(tmp_path_factory) -> Path:
     site = subprocess.run([str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
                           check=True, capture_output=True, text=True).stdout.strip()
     Path(site, "_test_dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    # with TB_TEST_CORE_ONLY set, the extras' packages cannot be imported: touchbench installed alone
+    Path(site, "_tb_core_only.py").write_text(CORE_ONLY_FINDER.format(names=EXTRA_PACKAGES))
+    Path(site, "_tb_core_only.pth").write_text("import _tb_core_only\n")
     return bin_dir
 
 
-def tb(installed: Path, cwd: Path, *args: str) -> subprocess.CompletedProcess:
+#: the packages of the extras (peers, deep, dist, xgboost), which a core install lacks
+EXTRA_PACKAGES = ("aeon", "torch", "xgboost", "dask", "distributed", "ray", "tsml_eval")
+#: an import hook that finds none of them (as if not installed) when TB_TEST_CORE_ONLY is set
+CORE_ONLY_FINDER = """import os, sys
+
+
+class _NotInstalled:
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in {names!r}:
+            raise ModuleNotFoundError(f"No module named {{name!r}}", name=name)
+        return None
+
+
+if os.environ.get("TB_TEST_CORE_ONLY"):
+    sys.meta_path.insert(0, _NotInstalled())
+"""
+
+
+def tb(installed: Path, cwd: Path, *args: str, core_only: bool = False) -> subprocess.CompletedProcess:
     env = {k: v for k, v in os.environ.items() if not k.startswith(("TOUCHBENCH_", "PYTHON"))}
+    env.update({"TB_TEST_CORE_ONLY": "1"} if core_only else {})
     env["TOUCHBENCH_CACHE_DIR"] = str(cwd / "cache")
     env["TOUCHBENCH_DATA_DIR"] = str(cwd / "no-data-here")
     return subprocess.run([str(installed / "touchbench"), *args], cwd=cwd, env=env, capture_output=True,
@@ -110,3 +132,18 @@ def test_run_tiny_and_demo_from_an_empty_folder(installed, empty):
     assert r.returncode == 0, r.stdout + r.stderr
     assert "running the built-in tiny scene" in r.stderr
     assert "zhou-lda" in r.stdout  # the leaderboard of the tiny run
+
+
+def test_report_and_the_shipped_references_with_touchbench_alone(installed, empty):
+    blocked = subprocess.run([str(installed / "python"), "-c", "import aeon"], cwd=empty, capture_output=True,
+                             text=True, env={**os.environ, "TB_TEST_CORE_ONLY": "1"})
+    assert blocked.returncode != 0 and "ModuleNotFoundError" in blocked.stderr  # the extras are out of reach
+    assert tb(installed, empty, "run", "tiny", "--no-progress", core_only=True).returncode == 0
+    r = tb(installed, empty, "report", "results/tiny", "--out", "report", core_only=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert (empty / "report" / "report.html").is_file()
+    r = tb(installed, empty, "reference", "list", core_only=True)
+    assert r.returncode == 0 and {"tiny", "demo-haart", "haart-loso-msd-rf"} <= {
+        line.split()[0] for line in r.stdout.splitlines()}, r.stdout + r.stderr
+    r = tb(installed, empty, "leaderboard", "results/tiny", "--reference", "tiny", "--json", core_only=True)
+    assert r.returncode == 0 and "beside reference tiny" in r.stderr, r.stdout + r.stderr
