@@ -5,8 +5,8 @@ A reference is a finished run's results, saved under a name by
 ``touchbench reference save RESULTS --name NAME`` (``make reference-results``
 runs the shipped protocols and saves each): per evaluation, its
 ``scores.parquet`` (one row per fold and method), ``predictions.parquet``
-(one row per test capture and method, so that a comparison on one test set
-can pair the captures) and ``manifest.json`` (the touchbench version, the
+(one row per test capture and method, without the class probabilities, so
+that a comparison on one test set can pair the captures) and ``manifest.json`` (the touchbench version, the
 machine, the package versions and the test set's content hash), and a
 ``reference.json`` that lists them. The shipped ones live in the package
 (``touchbench/data/reference/<name>/``); ``TOUCHBENCH_REFERENCE_DIR``, when
@@ -41,7 +41,6 @@ __all__ = ["Reference", "ReferenceError", "add_reference", "find_reference", "re
 
 SHIPPED = Path(__file__).resolve().parent.parent / "data" / "reference"
 INDEX = "reference.json"
-FILES = ("scores.parquet", "predictions.parquet")
 
 
 class ReferenceError(TouchbenchError):
@@ -120,6 +119,13 @@ def _evaluation_entry(folder: Path, root: Path) -> dict[str, Any]:
             "dataset": (m.get("dataset") or {}).get("name"), "manifest": m}
 
 
+def _write_predictions(src: Path, dest: Path) -> None:
+    """The predictions without their class probabilities (the comparisons read the labels only):
+    a reference stays small whatever the number of classes."""
+    preds = pd.read_parquet(src)
+    preds.drop(columns=[c for c in preds.columns if c.startswith("proba_")]).to_parquet(dest, index=False)
+
+
 def _portable(manifest: dict[str, Any]) -> dict[str, Any]:
     """The manifest without the paths of the machine that ran it (the protocol file's name is kept)."""
     m = json.loads(json.dumps(manifest))
@@ -143,9 +149,9 @@ def save_reference(results: str | Path, name: str, dest: str | Path | None = Non
     shutil.rmtree(tmp, ignore_errors=True)
     for e in entries:
         (tmp / e["folder"]).mkdir(parents=True, exist_ok=True)
-        for f in FILES:
-            if (e["source"] / f).is_file():
-                shutil.copyfile(e["source"] / f, tmp / e["folder"] / f)
+        shutil.copyfile(e["source"] / "scores.parquet", tmp / e["folder"] / "scores.parquet")
+        if (e["source"] / "predictions.parquet").is_file():
+            _write_predictions(e["source"] / "predictions.parquet", tmp / e["folder"] / "predictions.parquet")
         manifest = json.dumps(_portable(e["manifest"]), indent=2) + "\n"
         atomic_write_bytes(tmp / e["folder"] / "manifest.json", manifest.encode())
     index = {"name": name, "protocol": (first.get("protocol") or {}).get("name"),
