@@ -102,7 +102,7 @@ def test_refusals_name_the_reason():
         make_feature_set(NAME, {"min_noise": 0}, SMALL).fit_transform([cap])
     fur = SensorSpec("fur", (1, 4), 50.0, (0, 1023), channels=("x", "y", "pressure", "fur"))
     problem = make_feature_set(NAME, {}, fur).check_sensor(fur)
-    assert "channel sensor (channels x, y, pressure, fur)" in problem
+    assert "is a channel sensor (x, y, pressure, fur)" in problem and "not cells of a pressure surface" in problem
     assert make_feature_set(NAME, {}, HAART_LIKE).check_sensor(HAART_LIKE) is None
     given_range = make_feature_set(NAME, {"value_range": (0, 100), "min_noise": 0.01}, None)
     assert given_range.fit_transform([cap]).shape == (1, 19)

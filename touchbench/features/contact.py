@@ -138,8 +138,9 @@ class ContactEvidence(FeatureSet):
         sensor = self.sensor
         if sensor is not None and getattr(sensor, "channels", None) is not None:
             raise FeatureInputError(
-                f"contact-evidence: sensor {sensor.name!r} is a channel sensor (channels {', '.join(sensor.channels)}): "
-                "its readings are separate signals, not pressure of cells on one full scale")
+                f"contact-evidence: sensor {sensor.describe()} is a channel sensor ({', '.join(sensor.channels)}): its "
+                "channels are not cells of a pressure surface, so a level on one full scale and quiet cells have no "
+                "meaning there")
         self._range()
 
     def feature_names(self, grid: tuple[int, int]) -> list[str]:
