@@ -219,3 +219,28 @@ def test_no_touch_of_another_session_is_recognised():
     a = session(1, white=True, gain=1.0, offset_hi=3.0)
     b = session(2, white=False, gain=0.6, offset_hi=5.0)
     assert _notouch_recall([NAME], a, b) >= 14 / 15
+
+
+# ------------------------------------------------------------ the design proxies of touch-all
+@pytest.mark.parametrize("name,column", [("design-substrate-out", "substrate"), ("design-cover-out", "cover")])
+def test_the_design_proxies_leave_one_condition_out_inside_the_challenge_training_subjects(name, column, real_haart):
+    """Every capture of the challenge's training subjects (HAART's ``split`` column says ``train``
+    for s03-s08 and s10) and none of its test subjects; each value of the column tested once."""
+    from touchbench.engine.planning import prepare_evaluation
+    from touchbench.protocols.library import find_protocol
+    from touchbench.protocols.schema import load_protocol
+
+    (protocol,) = [p for p in load_protocol(find_protocol("touch-all")).evaluation_protocols() if p.evaluation == name]
+    prepared = prepare_evaluation(protocol, real_haart)
+    meta = real_haart.meta
+    test_subjects = set(meta.loc[meta["split"] == "test", "subject"])
+    assert test_subjects == {"s01", "s02", "s09"}
+    training = meta[meta["subject"].isin({"s03", "s04", "s05", "s06", "s07", "s08", "s10"})]
+    used = prepared.dataset.meta
+    assert sorted(used["capture_id"]) == sorted(training["capture_id"]) and not set(used["subject"]) & test_subjects
+    (folds,) = prepared.folds
+    tested = [sorted(set(used[column].iloc[f.test])) for f in folds]
+    assert sorted(v for t in tested for v in t) == sorted(set(training[column])) and all(len(t) == 1 for t in tested)
+    for f in folds:
+        assert not set(used[column].iloc[f.train]) & set(used[column].iloc[f.test])
+        assert len(f.train) + len(f.test) == len(used)
