@@ -150,6 +150,17 @@ def test_levels_scale_with_gain_and_the_rest_does_not(seed, t, power):
     np.testing.assert_allclose(b[6:], a[6:], rtol=1e-12)
 
 
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), t=st.integers(2, 30), offset=st.integers(1, 500))
+def test_an_offset_moves_the_levels_only(seed, t, offset):
+    """Integer readings and offsets: every sum is exact; the levels move by offset / full scale."""
+    cap = np.rint(_noisy_batch(seed, 1, t, (4, 4))[0])
+    fs = make_feature_set(NAME, {"value_range": (0, 1000), "min_noise": 1e-9}, None)
+    a, b = fs.fit_transform([cap])[0], fs.transform([cap + offset])[0]
+    np.testing.assert_allclose(b[:6], a[:6] + offset / 1000, rtol=1e-12)
+    np.testing.assert_allclose(b[6:], a[6:], rtol=1e-12)
+
+
 # ------------------------------------------------------------ two recording sessions
 FRAMES = 108  # 2 s at 54 frames/s
 GESTURES = ("constant", "pat", "stroke", "notouch")
