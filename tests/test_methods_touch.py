@@ -133,3 +133,23 @@ def test_a_pipeline_with_memory_computes_the_features_of_its_training_captures_o
                                 memory=tmp_path / "memory").fit(list(caps), y)
     assert calls == [len(caps)]  # computed by the first fit only; the second read it back
     np.testing.assert_array_equal(piped.predict(list(caps)), want)
+
+
+def test_touch_et_contact_is_touch_et_plus_contact_evidence():
+    """The four sets in this order, fitted through the registry by hand, give the method's
+    probabilities; the contact columns come last, after touch-et's."""
+    caps, y = _captures()
+    test, _ = _captures(n_per_class=3, seed=1)
+    sets = (*OWN, "contact-evidence")
+    est = FeaturePipeline(method_spec("touch-et-contact", n_estimators=20), random_state=5, sensor=SENSOR_4X4)
+    est.fit(list(caps), y)
+    assert est.spec.feature_names == list(sets)
+
+    def by_hand(c):
+        return np.hstack([_registry_features(c), FEATURES.create("contact-evidence", sensor=SENSOR_4X4).fit(caps[:1]).transform(c)])
+
+    X = by_hand(caps)
+    assert X.shape[1] == est.fitted_.estimator.model_.n_features_in_
+    assert X.shape[1] == _registry_features(caps).shape[1] + 19  # contact-evidence's 19 columns
+    ref = ExtraTreesClassifier(n_estimators=20, max_features=0.3, n_jobs=1, random_state=5).fit(X, y)
+    assert np.array_equal(_proba(est, test), ref.predict_proba(by_hand(test)))

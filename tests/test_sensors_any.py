@@ -87,6 +87,7 @@ def expected_size(name: str, sensor: SensorSpec, frames: int) -> int:
         "raw-window": frames * cells,
         **own,
         "touch-windows": 2 * sum(own.values()),
+        "contact-evidence": 6 + 3 * 3 + 4,  # 6 levels, 3 counts at each of 3 noise units, 4 ratios
         "example-pressure-stats": 4,  # the example plugin: mean, sd, min, max of the per-frame mean pressure
     }
     assert name in sizes, f"feature set {name!r}: add its size for any grid to this test"
@@ -95,7 +96,8 @@ def expected_size(name: str, sensor: SensorSpec, frames: int) -> int:
 
 #: (component, sensor) -> what the refusal must say
 REFUSED: dict[tuple[str, str], str] = {
-    **{(n, "1x16"): r"is a channel sensor \(c0, .*not cells of a pressure surface" for n in ("sd", "bmh", "smmhh")},
+    **{(n, "1x16"): r"is a channel sensor \(c0, .*not cells of a pressure surface"
+       for n in ("sd", "bmh", "smmhh", "contact-evidence", "touch-et-contact")},
     ("touch-windows", "19x24"): r"2-s windows \(24 frames at 12 Hz\) are longer than the shortest capture \(3 frames\)",
     ("touch-et-win", "19x24"): r"2-s windows \(24 frames at 12 Hz\) are longer than the shortest capture \(3 frames\)",
     ("cnn", "19x24"): r"L=30 windows need captures of at least 30 frames.*the shortest has 3",

@@ -13,6 +13,8 @@ estimator sees the same matrix a user's own pipeline would.
 - ``touch-xgb``: the same sets -> XGBoost;
 - ``touch-et-win``: the three sets plus touch-windows (their mean and sd over four 2-s windows) -> extra-trees;
 - ``touch-et-fast``: touch-rhythm alone -> extra-trees of 100 trees (the latency-bound entry);
+- ``touch-et-contact``: touch-et plus contact-evidence (level as a fraction of full scale and contact above
+  the capture's noise floor, :mod:`touchbench.features.contact`: what the level-free sets remove) -> extra-trees;
 - ``touch-select``: the design itself as a method: touch-et, touch-xgb, touch-et-win and touch-et-fast
   scored by leaving one training subject out at a time, inside every outer fold, the best refitted
   (``nested-select``, :mod:`touchbench.classifiers.search`); a candidate the sensor refuses is left out.
@@ -38,6 +40,8 @@ _TOUCH = {
                      (*THREE, "touch-windows"), "touch-extra-trees", {}),
     "touch-et-fast": ("touchbench, latency-bound: touch-rhythm -> extra-trees 100",
                       ("touch-rhythm",), "touch-extra-trees", {"n_estimators": 100}),
+    "touch-et-contact": ("touchbench: touch-et plus contact-evidence (level and contact above the noise floor)",
+                         (*THREE, "contact-evidence"), "touch-extra-trees", {}),
 }
 
 for _name, (_desc, _sets, _est, _params) in _TOUCH.items():
