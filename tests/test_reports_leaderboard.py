@@ -403,3 +403,16 @@ def test_a_single_fold_table_keeps_names_and_wilson_intervals_whole_at_80_column
         ci = stats.binomtest(k, 36).proportion_ci(method="wilson")
         line = next(x for x in text.splitlines() if f"│ {name} " in x)
         assert f"{100 * k / 36:.1f}" in line and f"{100 * ci.low:.1f}–{100 * ci.high:.1f}" in line
+
+
+def test_a_method_that_brings_its_own_input_is_named_by_its_label_everywhere():
+    from touchbench.reports.figures.base import short_label
+    from touchbench.reports.leaderboard import method_label
+
+    registered = {"features": "touch-rhythm+cell-rhythm+contact-motion", "classifier": "touch-et",
+                  "classifier_name": "touch-et", "early_frames": math.nan}
+    on_captures = {"features": "captures(frames=64)", "classifier": "minirocket", "classifier_name": "minirocket",
+                   "early_frames": math.nan}
+    pair = {"features": "msd", "classifier": "rf100", "classifier_name": "gaus-rf", "early_frames": math.nan}
+    assert [method_label(r) for r in (registered, on_captures, pair)] == ["touch-et", "minirocket", "msd / rf100"]
+    assert [short_label(r) for r in (registered, on_captures, pair)] == ["touch-et", "minirocket", "msd/rf100"]

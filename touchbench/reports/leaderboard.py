@@ -81,6 +81,7 @@ __all__ = [
     "mean_ranks",
     "method_label",
     "method_labels",
+    "owns_input",
     "resolve_method",
     "subject_values",
     "to_csv",
@@ -724,8 +725,16 @@ def _p(v: float) -> str:
     return "<0.001" if v < 0.001 else f"{v:.3f}"
 
 
+def owns_input(r: Any) -> bool:
+    """Whether a row's method brings its own input (a registered method, an estimator on the
+    captures): its label names it alone, where a feature combination's row is ``features / label``."""
+    return str(r.get("classifier_name", "")) in METHODS.names() or str(r["features"]).startswith("captures")
+
+
 def method_label(r: Any) -> str:
-    lab = f"{r['features']} / {r['classifier']}"
+    """A row's name: its label for a method that brings its own input, else ``features / label``;
+    with the frames an early cut saw."""
+    lab = str(r["classifier"]) if owns_input(r) else f"{r['features']} / {r['classifier']}"
     if np.isfinite(r.get("early_frames", math.nan)):
         lab += f" @ {int(r['early_frames'])} frames"
     return lab
@@ -818,7 +827,7 @@ def _name_cell(r: pd.Series, parts: list[str]) -> str:
     rows apart and its early cut, so that the name alone tells the rows apart."""
     feat_extra, method_extra, suffix = parts
     name = str(r["classifier"]) + method_extra + suffix
-    if str(r["classifier_name"]) not in METHODS.names() and not str(r["features"]).startswith("captures"):
+    if not owns_input(r):
         name = f"{r['features']}{feat_extra} / {name}"
     if np.isfinite(r["early_frames"]):
         name += f" @ {int(r['early_frames'])} frames"

@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 
 from ...core.registry import Entry, Registry
+from ..leaderboard import owns_input
 
 if TYPE_CHECKING:
     from ..leaderboard import Leaderboard
@@ -145,8 +146,9 @@ def save(fig, base: Path, formats: tuple[str, ...] = FORMATS, tight: bool = Fals
 
 
 def short_label(r: Any, width: int = 28, with_features: bool = True) -> str:
-    """A leaderboard row as ``features/classifier`` (or the classifier alone), cut to ``width`` characters."""
-    lab = f"{r['features']}/{r['classifier']}" if with_features else str(r["classifier"])
+    """A leaderboard row as ``features/classifier`` (or the classifier alone: asked for, or a method
+    that brings its own input), cut to ``width`` characters."""
+    lab = f"{r['features']}/{r['classifier']}" if with_features and not owns_input(r) else str(r["classifier"])
     return lab if len(lab) <= width else lab[: width - 1] + "…"
 
 
