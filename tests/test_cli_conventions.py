@@ -4,6 +4,7 @@ default, an example in every ``--help``, and a start-up that imports no command 
 from __future__ import annotations
 
 import json
+import os
 import re
 import subprocess
 import sys
@@ -168,22 +169,48 @@ _OPTIONAL = ("torch", "aeon", "dask", "distributed", "ray", "xgboost")
 _NUMERIC = ("numpy", "pandas", "pyarrow", "scipy", "sklearn", "pydantic")
 
 
-def _imported_by(args: list[str]) -> set[str]:
-    """The top-level packages a fresh process has imported once ``touchbench ARGS`` ran."""
+def _imported_by(args: list[str], cache) -> set[str]:
+    """The top-level packages a fresh process has imported once ``touchbench ARGS`` ran (its cache in
+    folder ``cache``)."""
     code = ("import json, sys\nfrom touchbench.cli.main import cli\n"
             f"try:\n    cli({args!r})\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
             "print(json.dumps(sorted({m.split('.')[0] for m in sys.modules})), file=sys.stderr)")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+                       env={**os.environ, "TOUCHBENCH_CACHE_DIR": str(cache)})
     assert r.returncode == 0, r.stderr
     return set(json.loads(r.stderr.strip().splitlines()[-1]))
 
 
 @pytest.mark.parametrize("args", [["data", "list"], ["features", "list"], ["classifiers", "list"],
                                   ["protocols", "list"], ["plugins", "list"]], ids=" ".join)
-def test_listing_imports_no_optional_extra(args):
-    assert not _imported_by(args) & set(_OPTIONAL)
+def test_listing_imports_no_optional_extra(args, tmp_path):
+    assert not _imported_by(args, tmp_path) & set(_OPTIONAL)
 
 
-def test_listing_protocols_imports_no_numeric_package():
+def test_listing_protocols_imports_no_numeric_package(tmp_path):
     # the names and descriptions are read from the files: no schema, no scheme, no registry
-    assert not _imported_by(["protocols", "list"]) & set(_OPTIONAL + _NUMERIC)
+    assert not _imported_by(["protocols", "list"], tmp_path) & set(_OPTIONAL + _NUMERIC)
+
+
+def _listings(commands: list[list[str]], cache) -> dict:
+    """The exit status and output of each of ``commands`` run one after the other in one fresh process
+    (its cache in folder ``cache``), and the top-level packages that process had imported at the end."""
+    code = ("import json, sys\nfrom click.testing import CliRunner\nfrom touchbench.cli.main import cli\n"
+            f"runs = [CliRunner().invoke(cli, args, env={{'COLUMNS': '200'}}) for args in {commands!r}]\n"
+            "print(json.dumps({'outputs': [[r.exit_code, r.stdout] for r in runs], "
+            "'modules': sorted({m.split('.')[0] for m in sys.modules})}))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+                       env={**os.environ, "TOUCHBENCH_CACHE_DIR": str(cache)})
+    assert r.returncode == 0, r.stderr
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.parametrize("command", ["data", "features", "classifiers", "plugins"])
+def test_a_listing_from_the_registry_index_is_the_same_and_imports_no_numeric_package(command, tmp_path):
+    commands = [[command, "list"], [command, "list", "--json"]]
+    built = _listings(commands, tmp_path)  # no index yet: the registries imported, the index written
+    assert all(code == 0 and out.strip() for code, out in built["outputs"]), built["outputs"]
+    read = _listings(commands, tmp_path)  # the same commands in a new process: from the index
+    assert read["outputs"] == built["outputs"]
+    assert sorted(set(read["modules"]) & set(_OPTIONAL + _NUMERIC)) == []
+    assert "sklearn" in built["modules"] and list((tmp_path / "registry-index").glob("*.json"))

@@ -292,3 +292,36 @@ def test_a_plugins_source_enters_the_identity_of_its_components(example_plugin, 
     monkeypatch.setattr(ident, "_file_info", edited)
     after = ident.feature_set_identity("example-pressure-stats")
     assert after.digest != before.digest
+
+
+@pytest.mark.slow
+def test_a_plugin_installed_or_broken_after_the_listings_were_indexed_is_listed(tmp_path):
+    # the listings are kept in the registry index (touchbench.core.listing); installing a plugin, or
+    # editing it into one that fails, changes what they show at once
+    site = tmp_path / "site"
+    site.mkdir()
+    for args in (["features", "list", "--json"], ["plugins", "list", "--json"]):
+        assert _touchbench(site, tmp_path, *args).returncode == 0
+    indexed = _touchbench(site, tmp_path, "features", "list", "--json")
+    assert indexed.returncode == 0 and "late-set" not in indexed.stdout
+    folder_time = site.stat().st_mtime_ns
+    _fake_plugin(site, "late-plugin", "late_mod",
+                 "from touchbench.features.base import FEATURES, FeatureSet\n"
+                 "@FEATURES.register('late-set', description='installed after the index')\n"
+                 "class Late(FeatureSet):\n    pass\n")
+    os.utime(site, ns=(folder_time, folder_time))  # only the entry point and its module tell
+    r = _touchbench(site, tmp_path, "features", "list", "--json")
+    assert {"name": "late-set", "package": "late-plugin 1.0"}.items() <= next(
+        row for row in json.loads(r.stdout) if row["name"] == "late-set").items()
+    r = _touchbench(site, tmp_path, "plugins", "list")
+    assert r.returncode == 0 and "late-plugin 1.0  (entry point main = late_mod)" in r.stdout
+    assert any(ln.split()[:3] == ["feature", "set", "late-set"] for ln in r.stdout.splitlines())
+
+    (site / "late_mod.py").write_text("import a_module_nobody_has\n")
+    why = "ModuleNotFoundError: No module named 'a_module_nobody_has'"
+    for _ in range(2):  # a failure is never kept in the index: reported, and tried again, every time
+        r = _touchbench(site, tmp_path, "plugins", "list")
+        assert r.returncode == 3 and f"failed to load: {why}" in r.stdout, r.stdout + r.stderr
+    r = _touchbench(site, tmp_path, "features", "list", "--json")
+    assert r.returncode == 0 and "late-set" not in r.stdout
+    assert f"{_where('late-plugin', 'late_mod')} failed to load and is left out: {why}" in r.stderr

@@ -3,6 +3,7 @@ choices read from a registry when first needed, and the ``touchbench`` loggers (
 
 from __future__ import annotations
 
+import importlib
 import json
 import logging
 import math
@@ -40,6 +41,25 @@ class LazyChoice(click.Choice):
         if self._choices is None:
             self._choices = tuple(self._values())
         return self._choices
+
+
+class LazyGroup(click.Group):
+    """A group whose subcommands named in ``lazy`` (name -> ``"module:attribute"``) are imported when
+    first needed -- run, or listed by the group's help -- so that its other commands (a listing)
+    import none of what they need."""
+
+    def __init__(self, *args: Any, lazy: dict[str, str] | None = None, **kwargs: Any):
+        super().__init__(*args, **kwargs)
+        self.lazy = dict(lazy or {})
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted({*super().list_commands(ctx), *self.lazy})
+
+    def get_command(self, ctx: click.Context, name: str) -> click.Command | None:
+        if name not in self.commands and name in self.lazy:
+            module, attr = self.lazy[name].split(":")
+            self.add_command(getattr(importlib.import_module(module), attr), name)
+        return super().get_command(ctx, name)
 
 
 def _clean(value: Any) -> Any:

@@ -1,38 +1,54 @@
-"""``touchbench data``: list, inspect, export and convert datasets; the file formats."""
+"""``touchbench data``: list, inspect, export and convert datasets; the file formats.
+
+``list`` reads the registry index (:mod:`touchbench.core.listing`): the datasets' modules, and the
+commands that read and write files (:mod:`.data_files`, their options taken from the file-format
+registry), are imported by the commands that need them."""
 
 from __future__ import annotations
 
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
-from ..catalog import load_dataset, parse_dataset_ref
-from ..datasets import DATASETS
-from ..datasets.formats import FORMATS
-from ..datasets.model import TouchDataset
-from .common import echo_json, example, json_option
-from .formats import FORMATS_HELP, FormatChoice, format_options
+from ..core.listing import cached_rows
+from .common import LazyGroup, echo_json, example, json_option
 from .plugins import package_of, plugin_note
 
+if TYPE_CHECKING:
+    from ..datasets.model import TouchDataset
 
-@click.group(epilog=example("touchbench data list", "touchbench data info haart"))
+
+@click.group(cls=LazyGroup, lazy={"export": "touchbench.cli.data_files:export",
+                                  "convert": "touchbench.cli.data_files:convert"},
+             epilog=example("touchbench data list", "touchbench data info haart"))
 def data() -> None:
     """Datasets: real readers, the cache, exports."""
+
+
+def dataset_table() -> list[dict]:
+    """One row per registered dataset: name, description, package (touchbench or the plugin's
+    distribution and version) and the note a line listing ends with."""
+    from ..datasets import DATASETS
+
+    return [{"name": e.name, "description": e.description, "package": package_of(e), "note": plugin_note(e)}
+            for e in DATASETS.entries()]
 
 
 @data.command("list", epilog=example("touchbench data list --json"))
 @json_option
 def list_(as_json: bool) -> None:
     """Registered datasets (scenes: `touchbench scenes list`)."""
+    rows = cached_rows("datasets", dataset_table, ("touchbench.datasets",))
     if as_json:
-        echo_json([{"name": e.name, "description": e.description, "package": package_of(e)}
-                   for e in DATASETS.entries()])
+        echo_json([{k: r[k] for k in ("name", "description", "package")} for r in rows])
         return
-    for e in DATASETS.entries():
-        click.echo(f"{e.name:18s} {e.description}{plugin_note(e)}")
+    for r in rows:
+        click.echo(f"{r['name']:18s} {r['description']}{r['note']}")
 
 
 def _load(name: str, cache_dir: str | None, data_dir: str | None, refresh: bool = False) -> TouchDataset:
+    from ..catalog import load_dataset, parse_dataset_ref
+
     kw = {}
     if parse_dataset_ref(name).kind == "registered":
         kw = {"cache_dir": cache_dir, "data_dir": data_dir, "refresh": refresh}
@@ -109,42 +125,12 @@ def info(name: str, cache_dir, data_dir, refresh: bool, as_json: bool) -> None:
     echo_json(inf) if as_json else click.echo(format_info(inf))
 
 
-@data.command(epilog=example("touchbench data export haart-challenge out/challenge --format challenge-csv"))
-@click.argument("name")
-@click.argument("out_dir", type=click.Path(file_okay=False))
-@click.option("--format", "fmt", type=FormatChoice("write", lambda f: f.writer is not None), default="challenge-csv",
-              show_default=True, help=f"Format to write ({FORMATS_HELP}).")
-@click.option("--cache-dir", type=click.Path(file_okay=False), default=None)
-@click.option("--data-dir", type=click.Path(file_okay=False), default=None)
-def export(name: str, out_dir: str, fmt: str, cache_dir, data_dir) -> None:
-    """Write dataset NAME to OUT_DIR (the challenge's training.csv and testWITHLABELS.csv, or Parquet)."""
-    ds = _load(name, cache_dir, data_dir)
-    for p in FORMATS.get(fmt).write(ds, out_dir):
-        click.echo(str(p))
-
-
-@data.command(epilog=example("touchbench data convert frames.csv mine.parquet --format table --grid 6x6 --frame-rate 50"))
-@click.argument("source", type=click.Path(exists=True))
-@click.argument("out", type=click.Path(dir_okay=False))
-@click.option("--format", "fmt", type=FormatChoice("read"), required=True,
-              help=f"Format of SOURCE ({FORMATS_HELP}).")
-@format_options
-@click.option("--name", default=None, help="Dataset name (default: OUT's file name without .parquet).")
-def convert(source: str, out: str, fmt: str, name, **options) -> None:
-    """Read SOURCE in a supported format and save it as a touchbench Parquet dataset OUT."""
-    form = FORMATS.get(fmt)
-    missing = form.missing(options)
-    if missing:
-        raise click.UsageError(f"--format {fmt} needs {' and '.join(o.usage for o in missing)}")
-    ds = form.read(source, name=name or Path(out).name.removesuffix(".parquet"), **options)
-    ds.to_parquet(out)
-    click.echo(f"{out}: {len(ds)} captures, hash {ds.content_hash}")
-
-
 @data.command("formats", epilog=example("touchbench data formats"))
 @json_option
 def formats(as_json: bool) -> None:
     """File formats: what reads and writes them, and the options they take."""
+    from ..datasets.formats import FORMATS
+
     if as_json:
         echo_json([{"name": e.name, "description": e.description, "reads": e.obj.reads,
                     "writes": e.obj.writer is not None, "replays": bool(e.obj.replay),

@@ -1,20 +1,26 @@
-"""``touchbench features``: the registered feature sets."""
+"""``touchbench features``: the registered feature sets.
+
+``list`` without a sensor reads the registry index (:mod:`touchbench.core.listing`); the feature
+sets' modules are imported by the commands that need them (sizes for a sensor, ``show``)."""
 
 from __future__ import annotations
 
 import inspect
+from typing import TYPE_CHECKING
 
 import click
 
-from ..datasets.formats import parse_grid
-from ..datasets.model import SensorSpec
-from ..features import FEATURES
-from ..features.base import make_feature_set
+from ..core.listing import cached_rows
 from .common import echo_json, example, json_option
 from .plugins import package_of
 
+if TYPE_CHECKING:
+    from ..datasets.model import SensorSpec
+
 
 def _grid(value: str) -> tuple[int, int]:
+    from ..datasets.formats import parse_grid
+
     try:
         return parse_grid(value)
     except ValueError as e:
@@ -26,6 +32,8 @@ def _size(name: str, sensor: SensorSpec | None) -> int | None:
     the set needs parameters stated (raw-window's frames) or refuses the sensor."""
     if sensor is None:
         return None
+    from ..features.base import make_feature_set
+
     fs = make_feature_set(name, {}, sensor)
     if fs.check_sensor(sensor) is not None:
         return None
@@ -36,6 +44,8 @@ def feature_table(sensor: SensorSpec | None = None) -> list[dict]:
     """One row per registered set: name, paper, output size on ``sensor`` (default parameters;
     None without a sensor or where the set cannot say), cost, description, package
     (touchbench or the plugin's distribution and version)."""
+    from ..features import FEATURES
+
     rows = []
     for e in FEATURES.entries():
         cls = e.obj
@@ -74,13 +84,15 @@ def list_(as_json: bool, grid: str | None, rate: float | None, value_range: tupl
     if grid is not None or rate is not None or value_range is not None:
         if grid is None or rate is None or value_range is None:
             raise click.UsageError("give --grid, --rate and --range together (the sensor the sizes are computed for)")
+        from ..datasets.model import SensorSpec
+
         try:
             sensor = SensorSpec("--grid", _grid(grid), rate, value_range)
         except ValueError as e:
             raise click.BadParameter(str(e)) from None
     title = ("feature sets (output size for " + sensor.describe().replace("'--grid' ", "") + ", default parameters)"
              if sensor is not None else "feature sets (output sizes: give --grid, --rate and --range)")
-    rows = feature_table(sensor)
+    rows = feature_table(sensor) if sensor is not None else cached_rows("features", feature_table, ("touchbench.features",))
     if as_json:
         echo_json(rows)
         return
@@ -99,6 +111,8 @@ def list_(as_json: bool, grid: str | None, rate: float | None, value_range: tupl
 @click.argument("name")
 def show(name: str) -> None:
     """A feature set's documentation: paper section, interpretations, parameters."""
+    from ..features import FEATURES
+
     cls = FEATURES.get(name)  # an unknown name raises UnknownNameError (exit 2, nearest names)
     click.echo(f"{name}  ({cls.paper}; cost {cls.cost}; fold-dependent: {'yes' if cls.fold_dependent else 'no'})")
     click.echo(f"parameters: {inspect.signature(cls.__init__)}".replace("(self, ", "("))

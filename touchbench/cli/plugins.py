@@ -4,18 +4,27 @@ from __future__ import annotations
 
 import click
 
-from ..classifiers import CLASSIFIERS
-from ..core.plugins import GROUP, PluginError, plugin_status
+from ..core.listing import cached_rows
+from ..core.plugins import GROUP, PluginError, PluginInfo, plugin_status
 from ..core.registry import Entry, Registry
-from ..datasets import DATASETS
-from ..datasets.formats import FORMATS
-from ..features import FEATURES
-from ..protocols.schemes import SPLITTERS
-from ..reports.figures import FIGURES
 from .common import echo_json, example, json_option
 
-# Every registry a plugin may fill, as the listings name them.
-PLUGIN_REGISTRIES: tuple[Registry, ...] = (FEATURES, CLASSIFIERS, DATASETS, FORMATS, SPLITTERS, FIGURES)
+#: The packages of the registries a plugin may fill: a listing read from the registry index
+#: (:mod:`touchbench.core.listing`) imports none of them.
+REGISTRY_PACKAGES = ("touchbench.features", "touchbench.classifiers", "touchbench.datasets",
+                     "touchbench.protocols.schemes", "touchbench.reports.figures")
+
+
+def plugin_registries() -> tuple[Registry, ...]:
+    """Every registry a plugin may fill, as the listings name them (importing their packages)."""
+    from ..classifiers import CLASSIFIERS
+    from ..datasets import DATASETS
+    from ..datasets.formats import FORMATS
+    from ..features import FEATURES
+    from ..protocols.schemes import SPLITTERS
+    from ..reports.figures import FIGURES
+
+    return FEATURES, CLASSIFIERS, DATASETS, FORMATS, SPLITTERS, FIGURES
 
 
 def plugin_note(e: Entry) -> str:
@@ -33,7 +42,19 @@ def plugin_entries() -> list[tuple[str, Entry]]:
 
     Loads the plugins (a plugin that failed to load is left out: it added nothing).
     """
-    return [(reg.kind, e) for reg in PLUGIN_REGISTRIES for e in reg.entries() if e.plugin is not None]
+    return [(reg.kind, e) for reg in plugin_registries() for e in reg.entries() if e.plugin is not None]
+
+
+def plugin_table() -> list[dict]:
+    """One row per plugin entry point: package, version, entry point, module, why it failed to load
+    (None: loaded) and what it registered (registry, name, description)."""
+    plugin_registries()  # imported before any plugin is: what their modules register is touchbench's
+    status = plugin_status()
+    added = plugin_entries() if status else []
+    return [{"package": info.package, "version": info.version, "entry_point": info.entry_point,
+             "module": info.module, "error": None if error is None else str(error),
+             "registered": [{"registry": kind, "name": e.name, "description": e.description}
+                            for kind, e in added if e.plugin == info]} for info, error in status]
 
 
 @click.group("plugins", epilog=example("touchbench plugins list"))
@@ -46,30 +67,30 @@ def plugins() -> None:
 @json_option
 def list_(as_json: bool) -> None:
     """Every installed plugin with its version, its entry point and what it registered."""
-    status = plugin_status()
+    rows = cached_rows("plugins", plugin_table, REGISTRY_PACKAGES)
+    failed = [r for r in rows if r["error"] is not None]
     if as_json:
-        added = plugin_entries()
-        echo_json([{"package": info.package, "version": info.version, "entry_point": info.entry_point,
-                    "module": info.module, "error": None if error is None else str(error),
-                    "registered": [{"registry": kind, "name": e.name, "description": e.description}
-                                   for kind, e in added if e.plugin == info]} for info, error in status])
-        if any(error is not None for _, error in status):
+        echo_json(rows)
+        if failed:
             raise PluginError("a plugin failed to load (see \"error\" in the output)")
         return
-    if not status:
+    if not rows:
         click.echo(f"no plugins installed (a plugin declares an entry point in the group {GROUP!r}; "
                    "see the README, section Plugins)")
         return
-    added = plugin_entries()
-    for info, error in status:
-        click.echo(f"{info.package} {info.version}  (entry point {info.entry_point} = {info.module})")
-        if error is not None:
-            click.echo(f"    failed to load: {error}")
-        mine = [(kind, e) for kind, e in added if e.plugin == info]
-        for kind, e in mine:
-            click.echo(f"    {kind:19s} {e.name:26s} {e.description}")
-        if error is None and not mine:
+    for r in rows:
+        click.echo(f"{r['package']} {r['version']}  (entry point {r['entry_point']} = {r['module']})")
+        if r["error"] is not None:
+            click.echo(f"    failed to load: {r['error']}")
+        for e in r["registered"]:
+            click.echo(f"    {e['registry']:19s} {e['name']:26s} {e['description']}")
+        if r["error"] is None and not r["registered"]:
             click.echo("    (registered nothing)")
-    failed = [info for info, error in status if error is not None]
     if failed:
-        raise PluginError(f"{len(failed)} plugin(s) failed to load: " + ", ".join(i.where for i in failed))
+        raise PluginError(f"{len(failed)} plugin(s) failed to load: "
+                          + ", ".join(_where(r) for r in failed))
+
+
+def _where(row: dict) -> str:
+    """A plugin row's distribution and entry point, as :attr:`PluginInfo.where` writes them."""
+    return PluginInfo(row["package"], row["version"], row["entry_point"], row["module"]).where
