@@ -8,7 +8,7 @@ runs the shipped protocols and saves each): per evaluation, its
 (one row per test capture and method, without the class probabilities, so
 that a comparison on one test set can pair the captures) and ``manifest.json`` (the touchbench version, the
 machine, the package versions and the test set's content hash), and a
-``reference.json`` that lists them. The shipped ones live in the package
+``reference.json`` that lists them (each evaluation's folder, dataset, test-set hash and methods). The shipped ones live in the package
 (``touchbench/data/reference/<name>/``); ``TOUCHBENCH_REFERENCE_DIR``, when
 set, is searched first.
 
@@ -115,8 +115,9 @@ def _evaluation_entry(folder: Path, root: Path) -> dict[str, Any]:
     if m.get("finished_at") is None:
         raise ReferenceError(f"{folder}: the run is not finished; finish it before saving it as a reference")
     rel = folder.relative_to(root).as_posix() if folder != root else (m.get("protocol") or {}).get("name", "run")
+    methods = sorted(set(pd.read_parquet(folder / "scores.parquet", columns=["classifier"])["classifier"].astype(str)))
     return {"folder": rel, "source": folder, "test_set": _test_set(m),
-            "dataset": (m.get("dataset") or {}).get("name"), "manifest": m}
+            "dataset": (m.get("dataset") or {}).get("ref"), "methods": methods, "manifest": m}
 
 
 def _write_predictions(src: Path, dest: Path) -> None:
@@ -155,9 +156,10 @@ def save_reference(results: str | Path, name: str, dest: str | Path | None = Non
         manifest = json.dumps(_portable(e["manifest"]), indent=2) + "\n"
         atomic_write_bytes(tmp / e["folder"] / "manifest.json", manifest.encode())
     index = {"name": name, "protocol": (first.get("protocol") or {}).get("name"),
-             "touchbench_version": first.get("touchbench_version"), "machine": _machine(first),
+             "touchbench_version": first.get("touchbench_version"),
+             "git_revision": (first.get("git") or {}).get("revision"), "machine": _machine(first),
              "created": first.get("finished_at"),
-             "evaluations": [{k: e[k] for k in ("folder", "test_set", "dataset")} for e in entries]}
+             "evaluations": [{k: e[k] for k in ("folder", "test_set", "dataset", "methods")} for e in entries]}
     atomic_write_bytes(tmp / INDEX, (json.dumps(index, indent=2) + "\n").encode())
     shutil.rmtree(out, ignore_errors=True)
     tmp.rename(out)
