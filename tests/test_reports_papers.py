@@ -347,3 +347,27 @@ def test_report_gives_each_paper_number_its_cause(tmp_path):
                       changes=[])
     text = write_report([run], PROFILES["full"], tmp_path / "S.md").read_text()
     assert text.count("| synthetic data (scene tiny) |") == 3
+
+
+@pytest.mark.parametrize("path", paper_protocols(), ids=lambda p: p.stem)
+def test_every_measured_cause_reruns_a_protocol_of_the_repository(path):
+    expected = load_protocol(path, deep=False).expected
+    for r in expected.results if expected else []:
+        if r.measured_by is None:
+            continue
+        words = r.measured_by.split()
+        assert words[:2] == ["touchbench", "run"], r.measured_by
+        measured = load_protocol(REPO_ROOT / words[2], deep=False)  # the reading's file exists and is valid
+        assert measured.name.startswith(path.stem.split("-")[0]), (path.name, words[2])
+        notes = re.findall(r"docs/research/[\w./-]+\.md", r.cause)
+        assert notes and all((REPO_ROOT / n).is_file() for n in notes), f"{path.name}: {r.cause}"
+
+
+@pytest.mark.parametrize("path", sorted((REPO_ROOT / "docs" / "research" / "gaus-readings").glob("*.yaml")),
+                         ids=lambda p: p.stem)
+def test_each_gaus_reading_is_a_valid_protocol_on_the_training_subjects_only(path):
+    proto = load_protocol(path, deep=False)
+    assert proto.dataset.filters == {"split": ["train"]}  # never the challenge's test captures
+    rel = path.relative_to(REPO_ROOT).as_posix()
+    assert f"touchbench run {rel} --out results/research/" in path.read_text()  # the command the note gives
+    assert rel in (REPO_ROOT / "docs" / "research" / "gaus-table5.md").read_text()
