@@ -202,3 +202,33 @@ def test_a_yaml_boolean_in_a_filter_is_shown_as_written(tmp_path):
     with pytest.raises(ProtocolError, match=r"^protocols/x.yaml:2: dataset.filters.gesture\[0\]: gesture 'False' is "
                                             r"not in the dataset .*\('no' was read as a YAML boolean, False"):
         prepare_evaluation(p)
+
+
+# ------------------------------------------------- a paper number's measured cause
+# lines 8-12 after BASE: expected, results, features, classifier, value; 13 and 14 the lines under test
+RESULT = "expected:\n  results:\n    - features: [test-mean]\n      classifier: test-logreg\n      value: 50\n"
+
+
+@pytest.mark.parametrize("extra,expected", [
+    ("      cause: folds share subjects\n",
+     "protocols/x.yaml:13: expected.results[0].cause: a cause needs measured_by: the touchbench command"),
+    ("      measured_by: touchbench run p.yaml\n",
+     "protocols/x.yaml:13: expected.results[0].measured_by: measured_by needs a cause"),
+    ("      cause: folds share subjects\n      measured_by: python x.py\n",
+     "protocols/x.yaml:14: expected.results[0].measured_by: measured_by is a touchbench command (starting "
+     "'touchbench '), got 'python x.py'"),
+    ("      cause: ''\n      measured_by: touchbench run p.yaml\n",
+     "protocols/x.yaml:13: expected.results[0].cause: String should have at least 1 character"),
+])
+def test_a_cause_comes_with_the_command_that_measured_it(extra, expected):
+    msg = error(BASE + RESULT + extra)
+    assert msg.startswith(expected), msg
+    assert "\n" not in msg
+
+
+def test_a_measured_cause_is_kept():
+    p = parse_protocol(BASE + RESULT + "      cause: folds share subjects\n      measured_by: touchbench run p.yaml\n",
+                       "protocols/x.yaml")
+    r = p.expected.results[0]
+    assert (r.cause, r.measured_by) == ("folds share subjects", "touchbench run p.yaml")
+    assert parse_protocol(BASE + RESULT, "protocols/x.yaml").expected.results[0].cause is None

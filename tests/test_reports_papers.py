@@ -307,3 +307,67 @@ def test_report_shows_the_cnn_leakage_audit_and_which_variant_reaches_the_paper(
     assert "| raw-window / cnn | 42.0 | 50.0 (+8.0) | 81.0 (+39.0) | 83.2 ± 5 | window-kfold |" in text
     assert ("**raw-window / cnn: the paper's 83.2 % (tolerance 5) is reproduced by `window-kfold`; the honest "
             "figure is 42.0 %.**") in text
+
+
+def _cause_protocol(tmp_path: Path, dataset: str) -> Path:
+    return _write(tmp_path / "gaus-causes.yaml", f"""
+name: gaus-causes
+dataset: {dataset}
+scheme: {{name: kfold, k: 2}}
+features: [[sd], [bmh], [msd]]
+classifiers: [gaus-rf]
+expected:
+  tolerance: 5
+  results:
+    - {{features: [sd], classifier: gaus-rf, value: 100, source: "T5 SD"}}
+    - {{features: [bmh], classifier: gaus-rf, value: 100, source: "T5 BMH",
+       cause: "folds | subjects", measured_by: "touchbench run readings.yaml"}}
+    - {{features: [msd], classifier: gaus-rf, value: 100, source: "T5 MSD"}}
+""")
+
+
+def test_report_gives_each_paper_number_its_cause(tmp_path):
+    caps = pd.DataFrame({"capture_id": ["a", "b", "c", "d"], "subject": ["s1", "s1", "s2", "s2"],
+                         "gesture": ["pat", "rub", "pat", "rub"]})
+    folds = {"f1": ["a", "b"], "f2": ["c", "d"]}
+    half = {"f1": ["a"], "f2": ["c"]}  # 1 of 2 wrong in each fold: 50 %
+    methods = [FakeMethod("sd", "gaus-rf"), FakeMethod("bmh", "gaus-rf", wrong=half),
+               FakeMethod("msd", "gaus-rf", wrong=half)]
+    real = write_fake_run(tmp_path / "real", caps, folds, methods, dataset="haart-challenge")
+    run = ProtocolRun(path=_cause_protocol(tmp_path, "haart-challenge"), name="gaus-causes", out=real, changes=[])
+    text = write_report([run], PROFILES["full"], tmp_path / "R.md").read_text()
+    assert "| tolerance | within | cause |" in text
+    assert "| T5 SD | sd | gaus-rf | 100.00 | 100.00 | +0.00 | 5 | yes | reproduced |" in text
+    assert ("| T5 BMH | bmh | gaus-rf | 100.00 | 50.00 | -50.00 | 5 | **NO** | folds \\| subjects "
+            "(measured by `touchbench run readings.yaml`) |") in text
+    assert "| T5 MSD | msd | gaus-rf | 100.00 | 50.00 | -50.00 | 5 | **NO** | not explained |" in text
+    (tmp_path / "scene").mkdir()
+    scene = write_fake_run(tmp_path / "scene" / "res", caps, folds, methods, dataset="scene:tiny")
+    run = ProtocolRun(path=_cause_protocol(tmp_path / "scene", "scene:tiny"), name="gaus-causes", out=scene,
+                      changes=[])
+    text = write_report([run], PROFILES["full"], tmp_path / "S.md").read_text()
+    assert text.count("| synthetic data (scene tiny) |") == 3
+
+
+@pytest.mark.parametrize("path", paper_protocols(), ids=lambda p: p.stem)
+def test_every_measured_cause_reruns_a_protocol_of_the_repository(path):
+    expected = load_protocol(path, deep=False).expected
+    for r in expected.results if expected else []:
+        if r.measured_by is None:
+            continue
+        words = r.measured_by.split()
+        assert words[:2] == ["touchbench", "run"], r.measured_by
+        measured = load_protocol(REPO_ROOT / words[2], deep=False)  # the reading's file exists and is valid
+        assert measured.name.startswith(path.stem.split("-")[0]), (path.name, words[2])
+        notes = re.findall(r"docs/research/[\w./-]+\.md", r.cause)
+        assert notes and all((REPO_ROOT / n).is_file() for n in notes), f"{path.name}: {r.cause}"
+
+
+@pytest.mark.parametrize("path", sorted((REPO_ROOT / "docs" / "research" / "gaus-readings").glob("*.yaml")),
+                         ids=lambda p: p.stem)
+def test_each_gaus_reading_is_a_valid_protocol_on_the_training_subjects_only(path):
+    proto = load_protocol(path, deep=False)
+    assert proto.dataset.filters == {"split": ["train"]}  # never the challenge's test captures
+    rel = path.relative_to(REPO_ROOT).as_posix()
+    assert f"touchbench run {rel} --out results/research/" in path.read_text()  # the command the note gives
+    assert rel in (REPO_ROOT / "docs" / "research" / "gaus-table5.md").read_text()

@@ -506,7 +506,23 @@ def _expected_rows(proto, scores: pd.DataFrame, preds: pd.DataFrame | None) -> l
     rows = check_expected(proto.expected, scores, preds, proto.features_label_of)
     for r, e in zip(rows, proto.expected.results):
         r["cell"] = e.source or ""
+        r["cause"] = _cause(r, e, proto.dataset.name)
     return rows
+
+
+def _cause(row: dict[str, Any], result, ref: str) -> str:
+    """The report's cause of one paper number: reproduced, synthetic data, or the measured cause
+    the protocol gives (with the command that measured it)."""
+    parsed = parse_dataset_ref(ref)
+    if parsed.kind == "scene":
+        return f"synthetic data (scene {parsed.value})"
+    if row["within"] is None:
+        return "not run"
+    if row["within"]:
+        return "reproduced"
+    if result.cause is None:
+        return "not explained"
+    return f"{result.cause} (measured by `{result.measured_by}`)".replace("|", "\\|")
 
 
 @dataclass
@@ -594,13 +610,13 @@ def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
     if rows:
         agg = proto.expected.aggregate
         body += [f"Accuracy in % ({'mean over folds' if agg == 'mean' else 'pooled over the folds'}):", "",
-                 "| table cell | features | classifier | paper | ours | difference | tolerance | within |",
-                 "|---|---|---|---|---|---|---|---|"]
+                 "| table cell | features | classifier | paper | ours | difference | tolerance | within | cause |",
+                 "|---|---|---|---|---|---|---|---|---|"]
         for e in rows:
             within = {True: "yes", False: "**NO**", None: "not run"}[e["within"]]
             diff = "—" if e["difference"] is None else f"{e['difference']:+.2f}"
             body.append(f"| {e['cell']} | {e['features']} | {e['classifier']} | {e['expected']:.2f} | "
-                        f"{_fmt(e['observed'], 2)} | {diff} | {e['tolerance']:g} | {within} |")
+                        f"{_fmt(e['observed'], 2)} | {diff} | {e['tolerance']:g} | {within} | {e['cause']} |")
             if e["within"] is not None:
                 sec.compared += 1
                 sec.within += bool(e["within"])

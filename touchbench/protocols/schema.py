@@ -331,7 +331,12 @@ class SchemeSpec(BaseModel):
 
 
 class ExpectedResult(_Model):
-    """One number from a paper: a feature combination x classifier, in percent."""
+    """One number from a paper: a feature combination x classifier, in percent.
+
+    ``cause`` says why ours differs from the paper's number, as measured, and
+    ``measured_by`` the ``touchbench`` command that measured it: the two come
+    together (a cause nobody can rerun is not a measured one).
+    """
 
     features: list[str] = Field(min_length=1)
     classifier: str
@@ -340,6 +345,8 @@ class ExpectedResult(_Model):
     tolerance: float | None = Field(default=None, ge=0)
     group: str | None = None
     source: str | None = None
+    cause: str | None = Field(default=None, min_length=1)
+    measured_by: str | None = Field(default=None, min_length=1)
 
     @field_validator("features", mode="before")
     @classmethod
@@ -347,6 +354,17 @@ class ExpectedResult(_Model):
         if isinstance(v, str):
             return v.split("+")
         return v
+
+    @model_validator(mode="after")
+    def _measured(self) -> "ExpectedResult":
+        if self.cause is not None and self.measured_by is None:
+            raise _ErrorAt(("cause",), "a cause needs measured_by: the touchbench command that measured it")
+        if self.measured_by is not None and self.cause is None:
+            raise _ErrorAt(("measured_by",), "measured_by needs a cause: what the command measured")
+        if self.measured_by is not None and not self.measured_by.startswith("touchbench "):
+            raise _ErrorAt(("measured_by",), f"measured_by is a touchbench command (starting 'touchbench '), "
+                                             f"got {self.measured_by!r}")
+        return self
 
 
 def _count(n: int, noun: str) -> str:
