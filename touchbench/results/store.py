@@ -253,6 +253,9 @@ class ResultStore:
     def __init__(self, root: str | Path):
         self.root = Path(root)
         self.fragments = self.root / "fragments"
+        #: task id -> (scores, predictions) as this object wrote them: the merge takes these from
+        #: memory and reads from disk only the tasks of earlier sessions
+        self._written: dict[str, tuple[pd.DataFrame, pd.DataFrame | None]] = {}
 
     # ----------------------------------------------------------- paths
     def scores_fragment(self, task_id: str) -> Path:
@@ -397,28 +400,42 @@ class ResultStore:
     def forget(self, task_ids: Iterable[str]) -> None:
         """Delete the fragments of ``task_ids`` (``--force``)."""
         for tid in task_ids:
+            self._written.pop(tid, None)
             self.scores_fragment(tid).unlink(missing_ok=True)
             self.predictions_fragment(tid).unlink(missing_ok=True)
 
     # ----------------------------------------------------------- writing
     def write_task(self, task_id: str, score: dict[str, Any], predictions: pd.DataFrame | None) -> None:
-        """Predictions first, scores last: the scores fragment marks the task finished."""
-        if predictions is not None and len(predictions):
-            write_results_table(self.predictions_fragment(task_id), predictions)
+        """Predictions first, scores last: the scores fragment marks the task finished. Both tables
+        are kept for this object's merge (:meth:`read_scores`, :meth:`read_predictions`)."""
+        self._written.pop(task_id, None)
+        kept = predictions if predictions is not None and len(predictions) else None
+        if kept is not None:
+            write_results_table(self.predictions_fragment(task_id), kept)
         else:
             self.predictions_fragment(task_id).unlink(missing_ok=True)
-        write_results_table(self.scores_fragment(task_id), pd.DataFrame([score]))
+        scores = pd.DataFrame([score])
+        write_results_table(self.scores_fragment(task_id), scores)
+        self._written[task_id] = (scores, kept)
 
     # ----------------------------------------------------------- reading (merge on read)
     def read_scores(self, task_ids: Iterable[str] | None = None) -> pd.DataFrame:
+        """The scores rows of ``task_ids`` (default: every fragment), in that order."""
         ids = self._ids(task_ids, ".scores.parquet")
-        frames = [read_results_table(self.scores_fragment(t)) for t in ids if self.scores_fragment(t).is_file()]
-        return _concat(frames, SCORE_COLUMNS)
+        return _concat([f for f in (self._fragment(t, 0) for t in ids) if f is not None], SCORE_COLUMNS)
 
     def read_predictions(self, task_ids: Iterable[str] | None = None) -> pd.DataFrame:
+        """The predictions of ``task_ids`` (default: every fragment), in that order."""
         ids = self._ids(task_ids, ".predictions.parquet")
-        frames = [read_results_table(self.predictions_fragment(t)) for t in ids if self.predictions_fragment(t).is_file()]
-        return _concat(frames, PREDICTION_COLUMNS)
+        return _concat([f for f in (self._fragment(t, 1) for t in ids) if f is not None], PREDICTION_COLUMNS)
+
+    def _fragment(self, task_id: str, which: int) -> pd.DataFrame | None:
+        """A task's scores (``which`` 0) or predictions (1): as this object wrote them, else read
+        from its fragment (None when there is none)."""
+        if task_id in self._written:
+            return self._written[task_id][which]
+        path = (self.scores_fragment, self.predictions_fragment)[which](task_id)
+        return read_results_table(path) if path.is_file() else None
 
     def _ids(self, task_ids: Iterable[str] | None, suffix: str) -> list[str]:
         if task_ids is not None:
