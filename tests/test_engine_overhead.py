@@ -5,16 +5,30 @@ cache is hashed once, at conversion, and trusted only while its file is the one 
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import make_dataset
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from sklearn.metrics import accuracy_score, balanced_accuracy_score, f1_score
 
+from touchbench.datasets import model as model_module
+from touchbench.datasets.model import TouchDataset
+from touchbench.datasets import cache as cache_module
+from touchbench.datasets.cache import cached_dataset
+from touchbench.engine import run_protocol
+from touchbench.engine.testing import random_dataset
 from touchbench.evaluation import metrics as metrics_module
 from touchbench.evaluation.metrics import metrics
+from touchbench.results import store as store_module
+from touchbench.results import ledger
+from touchbench.results.store import read_results_table
 
 LABELS = st.sampled_from(["a", "b", "c", "d", "e"])
 
@@ -62,3 +76,128 @@ def test_the_task_scores_do_not_go_through_scikit_learns_scorers(monkeypatch):
     import sklearn.metrics
     monkeypatch.setattr(sklearn.metrics, "get_scorer", refuse)
     assert metrics(np.array(["a", "b"]), np.array(["a", "a"]))["accuracy"] == 0.5
+
+
+# ----------------------------------------------------------------- the merge
+def _protocol(tmp_path: Path) -> Path:
+    data = tmp_path / "data.parquet"
+    random_dataset(subjects=("s1", "s2", "s3"), per_cell=2).to_parquet(data)
+    p = tmp_path / "p.yaml"
+    p.write_text(f"name: p\ndataset: {data}\nscheme: loso\nfeatures: [[test-mean]]\n"
+                 "classifiers: [test-logreg, test-forest, test-fail]\n")
+    return p
+
+
+def _count_fragment_reads(monkeypatch) -> list[str]:
+    seen: list[str] = []
+    real = store_module.read_results_table
+
+    def spy(path, *args, **kwargs):
+        if Path(path).parent.name == "fragments":
+            seen.append(Path(path).name)
+        return real(path, *args, **kwargs)
+    monkeypatch.setattr(store_module, "read_results_table", spy)
+    return seen
+
+
+def test_the_merge_reads_only_the_fragments_of_earlier_sessions(engine_env, tmp_path, monkeypatch):
+    p = _protocol(tmp_path)
+    reads = _count_fragment_reads(monkeypatch)
+    first = run_protocol(p, out=tmp_path / "out", progress=False, methods=["test-logreg"], jobs=1)
+    assert first.n_ran == 3 and reads == []  # every task of this session merged from memory
+    merged_first = read_results_table(tmp_path / "out" / "predictions.parquet")
+    second = run_protocol(p, out=tmp_path / "out", progress=False, jobs=1)
+    assert second.n_ran == 6 and second.n_failed == 3
+    logreg = set(merged_first["task_id"])
+    # the earlier session's three tasks, scores and predictions: read from their fragments
+    assert sorted(reads) == sorted([f"{t}.scores.parquet" for t in logreg] + [f"{t}.predictions.parquet" for t in logreg])
+
+
+def test_reports_merged_from_memory_are_those_merged_from_the_fragments(engine_env, tmp_path):
+    p = _protocol(tmp_path)
+    out = tmp_path / "out"
+    run_protocol(p, out=out, progress=False, jobs=1)  # one session: every task merged from memory
+    names = ["scores.parquet", "predictions.parquet", "confusion.parquet", "confusion_pooled.parquet"]
+    from_memory = {n: (out / n).read_bytes() for n in names}
+    for n in names:
+        (out / n).unlink()
+    again = run_protocol(p, out=out, progress=False, jobs=1)  # nothing to run: merged from the fragments
+    assert again.n_ran == 0 and (again.scores["status"] == "failed").sum() == 3
+    for n in names:
+        assert (out / n).read_bytes() == from_memory[n], n
+
+
+# ----------------------------------------------------------------- the dataset cache
+def _cached(tmp_path: Path, build=None):
+    src = tmp_path / "source.csv"
+    if not src.exists():
+        src.write_text("one source file\n")
+    return cached_dataset("toy", "1", [src], build or (lambda: make_dataset(seed=3)), tmp_path / "cache")
+
+
+def _by_hand(ds, column: str) -> list[str]:
+    """Each capture's shape, label and float64 frames, hashed as the ledger's test-set items."""
+    return [hashlib.sha256(f"{c.shape}|{y}".encode() + c.astype(np.float64).tobytes()).hexdigest()
+            for c, y in zip(ds.captures, ds.meta[column].astype(str))]
+
+
+def test_a_cached_dataset_is_hashed_at_conversion_and_not_again(tmp_path, monkeypatch):
+    expected = make_dataset(seed=3).content_hash
+    assert _cached(tmp_path).content_hash == expected
+
+    def refuse(*args):
+        raise AssertionError("the content was hashed again")
+    monkeypatch.setattr(model_module, "_hash_meta", refuse)
+    again = _cached(tmp_path, build=lambda: pytest.fail("rebuilt"))
+    assert again.content_hash == expected
+
+
+def test_a_cache_entry_that_is_not_the_file_its_record_hashed_is_hashed_again(tmp_path, monkeypatch):
+    first = _cached(tmp_path)
+    (entry,) = (tmp_path / "cache" / "datasets").glob("toy-*.parquet")
+    record = json.loads(cache_module.record_path(entry).read_text())
+    assert record["file"]["size"] == entry.stat().st_size
+    record["file"]["sha256"] = "0" * 64  # same size and time, other bytes
+    cache_module.record_path(entry).write_text(json.dumps(record))
+    calls = []
+    real = model_module._hash_meta
+    monkeypatch.setattr(model_module, "_hash_meta", lambda *a: calls.append(1) or real(*a))
+    assert _cached(tmp_path, build=lambda: pytest.fail("rebuilt")).content_hash == first.content_hash
+    assert calls == [1]  # hashed again, and the record made anew
+    assert json.loads(cache_module.record_path(entry).read_text())["file"]["sha256"] == hashlib.sha256(entry.read_bytes()).hexdigest()
+
+
+def _flat(value: int) -> TouchDataset:
+    """A dataset of zero frames but one value: two of them differ in one value, not in file size."""
+    base = make_dataset(seed=3)
+    captures = [np.zeros_like(c) for c in base.captures]
+    captures[0][0, 0, 0] = value
+    return TouchDataset("toy", captures, base.meta, base.sensor)
+
+
+def test_a_cache_entry_replaced_with_its_size_and_time_kept_is_hashed_again(tmp_path):
+    _cached(tmp_path, build=lambda: _flat(5))
+    (entry,) = (tmp_path / "cache" / "datasets").glob("toy-*.parquet")
+    st = entry.stat()
+    other = _flat(6).to_parquet(tmp_path / "other.parquet")
+    assert other.stat().st_size == st.st_size  # the same size: only the bytes tell them apart
+    entry.write_bytes(other.read_bytes())
+    os.utime(entry, ns=(st.st_atime_ns, st.st_mtime_ns))
+    again = _cached(tmp_path, build=lambda: pytest.fail("rebuilt"))  # a whole dataset file: not damaged
+    assert again.content_hash == _flat(6).content_hash != _flat(5).content_hash
+    assert int(again.captures[0][0, 0, 0]) == 6
+
+
+def test_the_test_set_checksums_are_kept_with_the_cache_entry(tmp_path, monkeypatch):
+    first = _cached(tmp_path)
+    assert first.labelled_checksums("gesture") == _by_hand(first, "gesture")
+    labels = first.meta["gesture"].astype(str)
+    assert ledger.test_set_hash_of(_by_hand(first, "gesture")) == ledger.test_set_hash(first.captures, labels)
+
+    def refuse(*args):
+        raise AssertionError("a capture was hashed again")
+    monkeypatch.setattr(model_module, "labelled_checksum", refuse)
+    again = _cached(tmp_path)
+    assert again.labelled_checksums("gesture") == _by_hand(first, "gesture")
+    with pytest.raises(AssertionError, match="hashed again"):
+        again.labelled_checksums("subject")  # a column no run asked for yet
