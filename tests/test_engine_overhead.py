@@ -201,3 +201,39 @@ def test_the_test_set_checksums_are_kept_with_the_cache_entry(tmp_path, monkeypa
     assert again.labelled_checksums("gesture") == _by_hand(first, "gesture")
     with pytest.raises(AssertionError, match="hashed again"):
         again.labelled_checksums("subject")  # a column no run asked for yet
+
+
+def test_a_source_file_not_written_since_it_was_hashed_is_not_read_again(tmp_path, monkeypatch):
+    monkeypatch.setattr(cache_module, "RECENT_SECONDS", 0.0)  # the files below were just written
+    files = [tmp_path / "a.csv", tmp_path / "b.csv"]
+    for f, text in zip(files, ("1,2,3\n", "4,5,6\n")):
+        f.write_text(text)
+    by_hand = hashlib.sha256(b"v1\0format2")  # the reader version, then each file's name and digest
+    for f in files:
+        by_hand.update(f"\0{f.parent.name}/{f.name}\0".encode() + hashlib.sha256(f.read_bytes()).digest())
+    known = tmp_path / "sources.json"
+    assert model_module.FORMAT_VERSION == 2
+    assert cache_module.source_key("v1", files, known) == by_hand.hexdigest()[:24]
+    monkeypatch.setattr(Path, "read_bytes", lambda self: pytest.fail(f"{self} read again"))
+    assert cache_module.source_key("v1", files, known) == by_hand.hexdigest()[:24]
+
+
+def test_a_source_file_edited_with_its_size_and_time_kept_is_hashed_again(tmp_path, monkeypatch):
+    monkeypatch.setattr(cache_module, "RECENT_SECONDS", 0.0)
+    f = tmp_path / "a.csv"
+    f.write_text("1,2,3\n")
+    known = tmp_path / "sources.json"
+    first = cache_module.source_key("v1", [f], known)
+    st = f.stat()
+    f.write_text("1,2,4\n")  # same size
+    os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns))  # and the modification time set back
+    assert cache_module.source_key("v1", [f], known) != first
+    assert cache_module.source_key("v1", [f]) == cache_module.source_key("v1", [f], known)  # without the record
+
+
+def test_a_source_file_changed_just_now_is_not_kept(tmp_path):
+    f = tmp_path / "a.csv"
+    f.write_text("1,2,3\n")  # its change time is now: another write within the same tick could keep it
+    known = tmp_path / "sources.json"
+    cache_module.source_key("v1", [f], known)
+    assert not known.exists()  # nothing kept, so nothing written
