@@ -8,6 +8,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import threading
 import warnings
 from pathlib import Path
 
@@ -20,6 +21,7 @@ from sklearn.metrics import accuracy_score, balanced_accuracy_score, f1_score
 
 from touchbench.datasets import model as model_module
 from touchbench.datasets.model import TouchDataset
+from touchbench.core.errors import WriteError
 from touchbench.datasets import cache as cache_module
 from touchbench.datasets.cache import cached_dataset
 from touchbench.engine import run_protocol
@@ -237,3 +239,49 @@ def test_a_source_file_changed_just_now_is_not_kept(tmp_path):
     known = tmp_path / "sources.json"
     cache_module.source_key("v1", [f], known)
     assert not known.exists()  # nothing kept, so nothing written
+
+
+# ----------------------------------------------------------------- fragments written beside the run
+def test_fragments_are_written_in_a_thread_of_their_own_in_order(tmp_path, monkeypatch):
+    store = store_module.ResultStore(tmp_path / "out")
+    order, threads = [], set()
+    real = store_module.ResultStore.write_task
+
+    def spy(self, task_id, score, predictions):
+        threads.add(threading.get_ident())
+        order.append(task_id)
+        return real(self, task_id, score, predictions)
+    monkeypatch.setattr(store_module.ResultStore, "write_task", spy)
+    with store_module.TaskWriter(store) as writer:
+        for i in range(5):
+            writer.write(f"t{i}", {"task_id": f"t{i}", "status": "failed", "n_test": 3}, None)
+    assert order == [f"t{i}" for i in range(5)] and threading.get_ident() not in threads
+    assert sorted(store.finished()) == [f"t{i}" for i in range(5)]  # every write done when the block ends
+
+
+def test_a_failed_fragment_write_stops_the_run_at_the_next_task_and_keeps_the_others(tmp_path, monkeypatch):
+    store = store_module.ResultStore(tmp_path / "out")
+    real = store_module.ResultStore.write_task
+
+    def full_disk(self, task_id, score, predictions):
+        if task_id == "t1":
+            raise WriteError(self.scores_fragment(task_id), OSError(28, "No space left on device"))
+        return real(self, task_id, score, predictions)
+    monkeypatch.setattr(store_module.ResultStore, "write_task", full_disk)
+    written = []
+    with pytest.raises(WriteError, match="t1.scores.parquet"):
+        with store_module.TaskWriter(store) as writer:
+            for i in range(4):
+                writer.write(f"t{i}", {"task_id": f"t{i}", "status": "failed", "n_test": 3}, None)
+                written.append(i)
+    assert written == [0, 1]  # the write after the failed one raised its error
+    assert sorted(store.finished()) == ["t0"]
+
+
+def test_an_interrupted_run_keeps_the_fragments_of_its_finished_tasks(tmp_path):
+    store = store_module.ResultStore(tmp_path / "out")
+    with pytest.raises(KeyboardInterrupt):
+        with store_module.TaskWriter(store) as writer:
+            writer.write("t0", {"task_id": "t0", "status": "failed", "n_test": 3}, None)
+            raise KeyboardInterrupt
+    assert store.finished() == {"t0": "failed"}

@@ -42,6 +42,7 @@ import json
 import os
 import socket
 import time
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Sequence
 
@@ -58,7 +59,7 @@ try:  # POSIX
 except ImportError:  # pragma: no cover - Windows
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["PREDICTED", "PROBA_PREFIX", "SCHEMA_VERSION", "TRUE", "OtherResultsError", "ResultStore", "ResultsBusyError", "make_results_dir", "atomic_write_bytes",
+__all__ = ["PREDICTED", "PROBA_PREFIX", "SCHEMA_VERSION", "TRUE", "OtherResultsError", "ResultStore", "ResultsBusyError", "TaskWriter", "make_results_dir", "atomic_write_bytes",
            "atomic_write_parquet", "check_schema", "confusion_table", "read_results_table", "task_metrics",
            "upgrade", "write_results_table"]
 
@@ -245,6 +246,38 @@ def task_metrics(predictions: pd.DataFrame, names: Sequence[str], notes: list[st
         notes += [f"metric {name}: not computed for {len(why)} of {len(rows)} tasks ({why[0]})"
                   for name, why in missed.items()]
     return pd.DataFrame.from_dict(rows, orient="index", columns=list(names))
+
+
+class TaskWriter:
+    """Writes tasks' fragments (:meth:`ResultStore.write_task`) in a thread of its own, in the order
+    given, so that a task's fragments are written while the next task computes.
+
+    Each write is the store's (atomic, predictions before scores). :meth:`write` first waits for the
+    write before it and raises its error (:class:`touchbench.core.errors.WriteError`); leaving the
+    ``with`` block waits for every write, also when the run is interrupted (the finished tasks are
+    kept), and raises the last write's error."""
+
+    def __init__(self, store: "ResultStore"):
+        self.store = store
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="touchbench-fragments")
+        self._last: Future | None = None
+
+    def write(self, task_id: str, score: dict[str, Any], predictions: pd.DataFrame | None) -> None:
+        self._wait()
+        self._last = self._pool.submit(self.store.write_task, task_id, score, predictions)
+
+    def _wait(self) -> None:
+        last, self._last = self._last, None
+        if last is not None:
+            last.result()
+
+    def __enter__(self) -> "TaskWriter":
+        return self
+
+    def __exit__(self, exc_type, *exc) -> None:
+        self._pool.shutdown(wait=True)
+        if exc_type is None:
+            self._wait()
 
 
 class ResultStore:
