@@ -9,7 +9,9 @@ import hashlib
 import json
 import os
 import threading
+import time
 import warnings
+from importlib import metadata
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +26,7 @@ from touchbench.datasets.model import TouchDataset
 from touchbench.core.errors import WriteError
 from touchbench.datasets import cache as cache_module
 from touchbench.datasets.cache import cached_dataset
-from touchbench.engine import run_protocol
+from touchbench.engine import identity, run_protocol
 from touchbench.engine.testing import random_dataset
 from touchbench.evaluation import metrics as metrics_module
 from touchbench.evaluation.metrics import metrics
@@ -285,3 +287,38 @@ def test_an_interrupted_run_keeps_the_fragments_of_its_finished_tasks(tmp_path):
             writer.write("t0", {"task_id": "t0", "status": "failed", "n_test": 3}, None)
             raise KeyboardInterrupt
     assert store.finished() == {"t0": "failed"}
+
+
+# ----------------------------------------------------------------- package versions in task identities
+def test_the_versions_behind_import_names_are_read_once_per_environment(tmp_path, monkeypatch):
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(identity, "_environment_state", lambda: [["/site", 1]])  # installed long ago
+    identity._versions_of.cache_clear()
+    tops = ("numpy", "sklearn")
+    got = identity._versions_of(tops)
+    assert got["scikit-learn"] == metadata.version("scikit-learn") and got["numpy"] == metadata.version("numpy")
+    assert got["scipy"] == metadata.version("scipy")  # scikit-learn requires it
+    identity._versions_of.cache_clear()  # as a new process
+    monkeypatch.setattr(identity, "package_versions", lambda **k: pytest.fail("read again"))
+    assert identity._versions_of(tops) == got
+    identity._versions_of.cache_clear()
+
+
+def test_an_environment_changed_since_is_read_again(tmp_path, monkeypatch):
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    state = [["/site", 1]]
+    monkeypatch.setattr(identity, "_environment_state", lambda: state)
+    identity._versions_of.cache_clear()
+    identity._versions_of(("numpy",))
+    state[0][1] = 2  # a distribution installed or removed in /site
+    identity._versions_of.cache_clear()
+    calls = []
+    monkeypatch.setattr(identity, "package_versions", lambda **k: calls.append(k) or {"numpy": "0.0-new"})
+    assert identity._versions_of(("numpy",)) == {"numpy": "0.0-new"} and len(calls) == 1
+    state[0][1] = time.time_ns()  # changed just now: may change again within the same tick, not kept
+    identity._versions_of.cache_clear()
+    identity._versions_of(("numpy",))
+    identity._versions_of.cache_clear()
+    identity._versions_of(("numpy",))
+    assert len(calls) == 3
+    identity._versions_of.cache_clear()

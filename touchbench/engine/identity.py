@@ -37,10 +37,12 @@ import functools
 import hashlib
 import importlib.util
 import inspect
+import json
 import os
 import site
 import sys
 import sysconfig
+import time
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -48,7 +50,10 @@ from types import ModuleType
 from typing import Any, Iterable
 
 from ..classifiers import CLASSIFIERS
+from ..core.atomic import atomic_write_bytes
+from ..core.errors import WriteError
 from ..core.hashing import canonical_json
+from ..core.paths import cache_dir
 from ..core.plugins import installed_plugins
 from ..core.versions import package_versions
 from ..features import FEATURES
@@ -350,12 +355,59 @@ def _fileless(objects: Iterable[Any]) -> dict[str, str]:
     return out
 
 
+#: the versions of the distributions behind sets of import names, kept in the cache folder with the
+#: state of the environment they were read in (``identity/packages.json``)
+PACKAGES_RECORD = "packages.json"
+#: an installation folder changed less than this many seconds ago may change again within the same
+#: timestamp tick: versions read then are not kept
+RECENT_SECONDS = 2.0
+
+
+def _environment_state() -> list[list[Any]]:
+    """What changes when a distribution is installed, upgraded or removed: each folder on the import
+    path with its modification time (a distribution's metadata folder is created or removed in it)."""
+    out = []
+    for entry in sys.path:
+        try:
+            st = os.stat(entry or ".")
+        except OSError:
+            continue
+        out.append([os.path.abspath(entry or "."), st.st_mtime_ns])
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def _versions_of(tops: tuple[str, ...]) -> dict[str, str | None]:
+    """:func:`touchbench.core.versions.package_versions` of the import names ``tops``, kept on disk
+    while the environment is as it was when they were read (:func:`_environment_state`); reading
+    every installed distribution's file list to map import names to distributions costs a new
+    process a third of a second."""
+    state = _environment_state()
+    path = cache_dir() / "identity" / PACKAGES_RECORD
+    key = canonical_json({"state": state, "tops": list(tops), "python": sys.version})
+    try:
+        kept = json.loads(path.read_text())
+    except (OSError, ValueError):
+        kept = {}
+    if isinstance(kept, dict) and isinstance(kept.get(key), dict):
+        return dict(kept[key])
+    versions = dict(package_versions(modules=list(tops)))
+    if all(time.time_ns() - mtime > RECENT_SECONDS * 1e9 for _, mtime in state):
+        kept = {k: v for k, v in kept.items() if json.loads(k).get("state") == state} if isinstance(kept, dict) else {}
+        kept[key] = versions
+        try:
+            atomic_write_bytes(path, json.dumps(kept).encode())
+        except WriteError:  # a cache folder that cannot take it: read again next time
+            pass
+    return versions
+
+
 def _identity(objects: Iterable[Any], params: Any, seen: frozenset[tuple[str, str]]) -> Identity:
     objects = list(objects)
     roots = [m for o in objects for m in _defining_modules(o)]
     own, tops, incomplete = _walk(roots)
     modules = {**own, **_fileless(objects)}
-    packages = dict(package_versions(modules=sorted(tops)))
+    packages = dict(_versions_of(tuple(sorted(tops))))
     for kind, name in _named_components(params):
         if (kind, name) in seen:
             continue
