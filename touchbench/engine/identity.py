@@ -358,21 +358,26 @@ def _fileless(objects: Iterable[Any]) -> dict[str, str]:
 #: the versions of the distributions behind sets of import names, kept in the cache folder with the
 #: state of the environment they were read in (``identity/packages.json``)
 PACKAGES_RECORD = "packages.json"
-#: an installation folder changed less than this many seconds ago may change again within the same
+#: a distribution's metadata changed less than this many seconds ago may change again within the same
 #: timestamp tick: versions read then are not kept
 RECENT_SECONDS = 2.0
 
 
 def _environment_state() -> list[list[Any]]:
-    """What changes when a distribution is installed, upgraded or removed: each folder on the import
-    path with its modification time (a distribution's metadata folder is created or removed in it)."""
+    """What changes when a distribution is installed, upgraded or removed: the metadata folders
+    (``*.dist-info``, ``*.egg-info``) in each folder of the import path, with their modification times."""
     out = []
     for entry in sys.path:
+        folder = os.path.abspath(entry or ".")
         try:
-            st = os.stat(entry or ".")
+            names = sorted(n for n in os.listdir(folder) if n.endswith((".dist-info", ".egg-info")))
         except OSError:
             continue
-        out.append([os.path.abspath(entry or "."), st.st_mtime_ns])
+        for name in names:
+            try:
+                out.append([os.path.join(folder, name), os.stat(os.path.join(folder, name)).st_mtime_ns])
+            except OSError:
+                continue
     return out
 
 
