@@ -322,3 +322,13 @@ def test_an_environment_changed_since_is_read_again(tmp_path, monkeypatch):
     identity._versions_of(("numpy",))
     assert len(calls) == 3
     identity._versions_of.cache_clear()
+
+
+def test_a_dataset_from_the_cache_is_picklable_and_keeps_its_checksums(tmp_path):
+    import pickle
+
+    ds = _cached(tmp_path)
+    ds.labelled_checksums("gesture")
+    copy = pickle.loads(pickle.dumps(ds))
+    assert copy.content_hash == make_dataset(seed=3).content_hash
+    assert copy.labelled_checksums("gesture") == _by_hand(copy, "gesture")

@@ -244,6 +244,10 @@ class TouchDataset:
             self._hash = h.hexdigest()
         return self._hash
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without the cache's callback (a closure): a copy elsewhere keeps nothing."""
+        return {**self.__dict__, "_on_labelled": None}
+
     def labelled_checksums(self, column: str) -> list[str]:
         """:func:`labelled_checksum` of every capture, its label the metadata ``column`` as text
         (computed once per column and dataset)."""
