@@ -332,3 +332,37 @@ def test_a_dataset_from_the_cache_is_picklable_and_keeps_its_checksums(tmp_path)
     copy = pickle.loads(pickle.dumps(ds))
     assert copy.content_hash == make_dataset(seed=3).content_hash
     assert copy.labelled_checksums("gesture") == _by_hand(copy, "gesture")
+
+
+def _new_process() -> None:
+    """Forget what this process parsed, as a new process would."""
+    identity._parse.cache_clear()
+    identity._parsed.update(path=None, files={}, changed=False)
+
+
+def test_a_new_process_parses_only_the_source_files_written_since(tmp_path, monkeypatch):
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(identity, "RECENT_SECONDS", 0.0)
+    _new_process()
+    first = identity.feature_set_identity("msd")
+    _new_process()
+    monkeypatch.setattr(identity, "_parse", lambda *a: pytest.fail(f"{a[0]} parsed again"))
+    assert identity.feature_set_identity("msd") == first
+    identity._parsed.update(path=None, files={}, changed=False)
+
+
+def test_a_source_file_edited_with_its_size_and_time_kept_is_parsed_again(tmp_path, monkeypatch):
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(identity, "RECENT_SECONDS", 0.0)
+    f = tmp_path / "helper.py"
+    f.write_text("import abc\n")
+    _new_process()
+    digest, imports = identity._file_info(str(f))
+    assert digest == hashlib.sha256(b"import abc\n").hexdigest()[:16] and imports == (("abc", (), 0),)
+    identity._save_parses()
+    st = f.stat()
+    f.write_text("import sys\n")  # same size
+    os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns))  # and the modification time set back
+    _new_process()
+    assert identity._file_info(str(f)) == (hashlib.sha256(b"import sys\n").hexdigest()[:16], (("sys", (), 0),))
+    _new_process()

@@ -180,9 +180,58 @@ def _parse(path: str, signature: tuple[int, int, int, int]) -> tuple[str, tuple[
     return digest, tuple(imports)
 
 
+#: the versions of the distributions behind sets of import names, kept in the cache folder with the
+#: state of the environment they were read in (``identity/packages.json``)
+PACKAGES_RECORD = "packages.json"
+#: a file or distribution changed less than this many seconds ago may change again within the same
+#: timestamp tick: what was read from it then is not kept
+RECENT_SECONDS = 2.0
+
+
+#: each source file's content hash and imports with the file's state when it was parsed
+#: (``identity/sources.json`` in the cache folder), so a new process parses only files written since
+SOURCES_RECORD = "sources.json"
+_parsed: dict[str, Any] = {"path": None, "files": {}, "changed": False}
+
+
+def _kept_parses() -> dict[str, Any]:
+    """The parses kept in the cache folder (read once per process and cache folder)."""
+    path = cache_dir() / "identity" / SOURCES_RECORD
+    if _parsed["path"] != path:
+        try:
+            files = json.loads(path.read_text())
+        except (OSError, ValueError):
+            files = {}
+        _parsed.update(path=path, files=files if isinstance(files, dict) else {}, changed=False)
+    return _parsed["files"]
+
+
+def _save_parses() -> None:
+    """Write the kept parses when this process added some (a folder that cannot take them: parsed
+    again next time)."""
+    if _parsed["changed"] and _parsed["path"] is not None:
+        try:
+            atomic_write_bytes(_parsed["path"], json.dumps(_parsed["files"]).encode())
+        except WriteError:
+            pass
+        _parsed["changed"] = False
+
+
 def _file_info(path: str) -> tuple[str, tuple[tuple[str, tuple[str, ...], int], ...]]:
+    """:func:`_parse` of ``path``, kept across processes while the file's state (modification and
+    change times, size, inode) is the one it was parsed in; a file changed in the last
+    ``RECENT_SECONDS`` is not kept (it could change again within the same timestamp tick)."""
     st = os.stat(path)
-    return _parse(path, (st.st_mtime_ns, st.st_ctime_ns, st.st_size, st.st_ino))
+    signature = (st.st_mtime_ns, st.st_ctime_ns, st.st_size, st.st_ino)
+    kept = _kept_parses()
+    entry = kept.get(path)
+    if isinstance(entry, list) and len(entry) == 3 and entry[0] == list(signature):
+        return entry[1], tuple((m, tuple(n), lvl) for m, n, lvl in entry[2])
+    digest, imports = _parse(path, signature)
+    if time.time_ns() - st.st_ctime_ns > RECENT_SECONDS * 1e9:
+        kept[path] = [list(signature), digest, [[m, list(n), lvl] for m, n, lvl in imports]]
+        _parsed["changed"] = True
+    return digest, imports
 
 
 def _imported_modules(name: str, is_package: bool, imports) -> list[tuple[str, bool]]:
@@ -355,14 +404,6 @@ def _fileless(objects: Iterable[Any]) -> dict[str, str]:
     return out
 
 
-#: the versions of the distributions behind sets of import names, kept in the cache folder with the
-#: state of the environment they were read in (``identity/packages.json``)
-PACKAGES_RECORD = "packages.json"
-#: a distribution's metadata changed less than this many seconds ago may change again within the same
-#: timestamp tick: versions read then are not kept
-RECENT_SECONDS = 2.0
-
-
 def _environment_state() -> list[list[Any]]:
     """What changes when a distribution is installed, upgraded or removed: the metadata folders
     (``*.dist-info``, ``*.egg-info``) in each folder of the import path, with their modification times."""
@@ -411,6 +452,7 @@ def _identity(objects: Iterable[Any], params: Any, seen: frozenset[tuple[str, st
     objects = list(objects)
     roots = [m for o in objects for m in _defining_modules(o)]
     own, tops, incomplete = _walk(roots)
+    _save_parses()
     modules = {**own, **_fileless(objects)}
     packages = dict(_versions_of(tuple(sorted(tops))))
     for kind, name in _named_components(params):
