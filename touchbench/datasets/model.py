@@ -161,6 +161,13 @@ def frames_checksum(capture: np.ndarray) -> str:
     return hashlib.sha256(f"{a.shape}".encode() + a.tobytes()).hexdigest()
 
 
+def labelled_checksum(capture: np.ndarray, label: Any) -> str:
+    """SHA-256 of a capture's shape, label (as text) and frames as float64 values: one item of a
+    test set's hash (:func:`touchbench.results.ledger.test_set_hash`)."""
+    a = np.ascontiguousarray(capture, dtype=np.float64)
+    return hashlib.sha256(f"{np.shape(capture)}|{label}".encode() + a.tobytes()).hexdigest()
+
+
 @dataclass
 class TouchDataset:
     """Ragged captures + a metadata table + a sensor spec + a content hash.
@@ -180,6 +187,11 @@ class TouchDataset:
     #: where the data came from and what the reader did (placeholders found,
     #: window used...); saved with the dataset, not part of the content hash.
     provenance: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+    #: metadata column -> :func:`labelled_checksum` of every capture with that column as its label
+    #: (computed once per column; the dataset cache keeps them with its entry)
+    _labelled: dict[str, list[str]] = field(default_factory=dict, repr=False, compare=False)
+    #: called with (column, checksums) when a column's checksums are computed (the dataset cache's store)
+    _on_labelled: Any = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         self.meta = self.meta.reset_index(drop=True)
@@ -232,6 +244,20 @@ class TouchDataset:
             self._hash = h.hexdigest()
         return self._hash
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without the cache's callback (a closure): a copy elsewhere keeps nothing."""
+        return {**self.__dict__, "_on_labelled": None}
+
+    def labelled_checksums(self, column: str) -> list[str]:
+        """:func:`labelled_checksum` of every capture, its label the metadata ``column`` as text
+        (computed once per column and dataset)."""
+        if column not in self._labelled:
+            labels = self.meta[column].astype(str).to_numpy()
+            self._labelled[column] = [labelled_checksum(c, y) for c, y in zip(self.captures, labels)]
+            if self._on_labelled is not None:
+                self._on_labelled(column, self._labelled[column])
+        return self._labelled[column]
+
     def subset(self, index: Iterable[int] | np.ndarray, name: str | None = None) -> "TouchDataset":
         """The captures at ``index`` (positions), in that order (the provenance kept)."""
         idx = np.asarray(list(index) if not isinstance(index, np.ndarray) else index)
@@ -246,7 +272,7 @@ class TouchDataset:
         )
 
     def with_name(self, name: str) -> "TouchDataset":
-        return TouchDataset(name, self.captures, self.meta, self.sensor, self._hash, self.provenance)
+        return TouchDataset(name, self.captures, self.meta, self.sensor, self._hash, self.provenance, self._labelled)
 
     # ------------------------------------------------------------- parquet io
     def to_parquet(self, path: str | Path) -> Path:
@@ -293,48 +319,27 @@ class TouchDataset:
             table = pq.read_table(path)
         except Exception as e:  # pyarrow raises several types for a bad file
             raise DataError(f"not a readable Parquet file ({e})", path) from None
-        raw = (table.schema.metadata or {}).get(b"touchbench")
-        if raw is None or "frames" not in table.column_names:
-            raise DataError("not a touchbench dataset (no touchbench metadata or frames column)", path)
-        try:
-            info = json.loads(raw)
-            version = info.get("format_version")
-        except (ValueError, AttributeError) as e:  # not JSON, or not an object
-            raise DataError(f"its touchbench metadata is damaged ({type(e).__name__}); convert the data again",
-                            path) from None
-        if version != FORMAT_VERSION:
-            raise DataError(
-                f"written by another touchbench storage format (version {version}, "
-                f"this version reads {FORMAT_VERSION}); convert it again", path)
-        try:
-            sensor = SensorSpec.from_dict(info["sensor"])
-            dtype = np.dtype(info["dtype"])
-            frames = table.column("frames").combine_chunks()
-            n = table.column("n_frames").to_numpy()
-            h, w = sensor.grid
-            captures = []
-            if len(frames):
-                _, offsets_buf, data_buf = frames.buffers()
-                offsets = np.frombuffer(offsets_buf, dtype=np.int64)[frames.offset:frames.offset + len(frames) + 1]
-                values = np.frombuffer(data_buf, dtype=np.uint8)
-                captures = [
-                    values[offsets[i]:offsets[i + 1]].view(dtype).reshape(int(n[i]), h, w) for i in range(len(n))
-                ]
-            meta = table.drop_columns(["frames", "n_frames"]).to_pandas()
-            ds = cls(name=info["name"], captures=captures, meta=meta, sensor=sensor,
-                     provenance=info.get("provenance", {}))
-        except TouchbenchError as e:
-            raise DataError(str(e), path) from None
-        except (KeyError, TypeError, ValueError) as e:  # metadata that does not describe the frames
-            raise DataError(f"its touchbench metadata does not describe its frames ({type(e).__name__}: {e}); "
-                            "convert the data again", path) from None
+        return cls.from_table(table, path, verify=verify)
+
+    @classmethod
+    def from_table(cls, table: pa.Table, path: str | Path, verify: bool = False,
+                   content_hash: str | None = None) -> "TouchDataset":
+        """The dataset of a table :meth:`to_parquet` wrote, read from ``path`` (see
+        :meth:`from_parquet`). ``content_hash``: the hash this table's content was found to have
+        (the dataset cache's, for a file it checked is the one it hashed), used instead of hashing
+        the content again."""
+        path = Path(path)
+        info = _table_info(table, path)
+        ds = _dataset_of(cls, table, info, path)
+        if content_hash is not None and content_hash == info.get("content_hash"):
+            ds._hash = content_hash
         if ds.content_hash != info.get("content_hash"):
             if verify:
                 raise DataError("content does not match the hash it was saved with (file corrupted or edited)", path)
             warnings.warn(DatasetChangedWarning(
                 f"{path}: the content changed since touchbench wrote this file (it no longer matches the hash "
                 "saved with it); it is treated as new data: results and cached features of the old content are not reused"),
-                stacklevel=2)
+                stacklevel=3)
         return ds
 
     # ----------------------------------------------------------------- summary
@@ -375,6 +380,50 @@ def time_step_summary(times: Iterable[Sequence[float]]) -> dict[str, float]:
         return {}
     return {"median": float(np.median(steps)), "p95": float(np.percentile(steps, 95)),
             "min": float(steps.min()), "max": float(steps.max())}
+
+
+def _table_info(table: pa.Table, path: Path) -> dict[str, Any]:
+    """The touchbench metadata of a dataset table (refused: none, damaged, another format version)."""
+    raw = (table.schema.metadata or {}).get(b"touchbench")
+    if raw is None or "frames" not in table.column_names:
+        raise DataError("not a touchbench dataset (no touchbench metadata or frames column)", path)
+    try:
+        info = json.loads(raw)
+        version = info.get("format_version")
+    except (ValueError, AttributeError) as e:  # not JSON, or not an object
+        raise DataError(f"its touchbench metadata is damaged ({type(e).__name__}); convert the data again",
+                        path) from None
+    if version != FORMAT_VERSION:
+        raise DataError(
+            f"written by another touchbench storage format (version {version}, "
+            f"this version reads {FORMAT_VERSION}); convert it again", path)
+    return info
+
+
+def _dataset_of(cls: type, table: pa.Table, info: dict[str, Any], path: Path) -> TouchDataset:
+    """The captures, metadata and sensor a dataset table holds (its content not yet hashed)."""
+    try:
+        sensor = SensorSpec.from_dict(info["sensor"])
+        dtype = np.dtype(info["dtype"])
+        frames = table.column("frames").combine_chunks()
+        n = table.column("n_frames").to_numpy()
+        h, w = sensor.grid
+        captures = []
+        if len(frames):
+            _, offsets_buf, data_buf = frames.buffers()
+            offsets = np.frombuffer(offsets_buf, dtype=np.int64)[frames.offset:frames.offset + len(frames) + 1]
+            values = np.frombuffer(data_buf, dtype=np.uint8)
+            captures = [
+                values[offsets[i]:offsets[i + 1]].view(dtype).reshape(int(n[i]), h, w) for i in range(len(n))
+            ]
+        meta = table.drop_columns(["frames", "n_frames"]).to_pandas()
+        return cls(name=info["name"], captures=captures, meta=meta, sensor=sensor,
+                   provenance=info.get("provenance", {}))
+    except TouchbenchError as e:
+        raise DataError(str(e), path) from None
+    except (KeyError, TypeError, ValueError) as e:  # metadata that does not describe the frames
+        raise DataError(f"its touchbench metadata does not describe its frames ({type(e).__name__}: {e}); "
+                        "convert the data again", path) from None
 
 
 def concat(datasets: Sequence[TouchDataset], name: str) -> TouchDataset:

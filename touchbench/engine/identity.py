@@ -37,10 +37,12 @@ import functools
 import hashlib
 import importlib.util
 import inspect
+import json
 import os
 import site
 import sys
 import sysconfig
+import time
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -48,7 +50,10 @@ from types import ModuleType
 from typing import Any, Iterable
 
 from ..classifiers import CLASSIFIERS
+from ..core.atomic import atomic_write_bytes
+from ..core.errors import WriteError
 from ..core.hashing import canonical_json
+from ..core.paths import cache_dir
 from ..core.plugins import installed_plugins
 from ..core.versions import package_versions
 from ..features import FEATURES
@@ -175,9 +180,58 @@ def _parse(path: str, signature: tuple[int, int, int, int]) -> tuple[str, tuple[
     return digest, tuple(imports)
 
 
+#: the versions of the distributions behind sets of import names, kept in the cache folder with the
+#: state of the environment they were read in (``identity/packages.json``)
+PACKAGES_RECORD = "packages.json"
+#: a file or distribution changed less than this many seconds ago may change again within the same
+#: timestamp tick: what was read from it then is not kept
+RECENT_SECONDS = 2.0
+
+
+#: each source file's content hash and imports with the file's state when it was parsed
+#: (``identity/sources.json`` in the cache folder), so a new process parses only files written since
+SOURCES_RECORD = "sources.json"
+_parsed: dict[str, Any] = {"path": None, "files": {}, "changed": False}
+
+
+def _kept_parses() -> dict[str, Any]:
+    """The parses kept in the cache folder (read once per process and cache folder)."""
+    path = cache_dir() / "identity" / SOURCES_RECORD
+    if _parsed["path"] != path:
+        try:
+            files = json.loads(path.read_text())
+        except (OSError, ValueError):
+            files = {}
+        _parsed.update(path=path, files=files if isinstance(files, dict) else {}, changed=False)
+    return _parsed["files"]
+
+
+def _save_parses() -> None:
+    """Write the kept parses when this process added some (a folder that cannot take them: parsed
+    again next time)."""
+    if _parsed["changed"] and _parsed["path"] is not None:
+        try:
+            atomic_write_bytes(_parsed["path"], json.dumps(_parsed["files"]).encode())
+        except WriteError:
+            pass
+        _parsed["changed"] = False
+
+
 def _file_info(path: str) -> tuple[str, tuple[tuple[str, tuple[str, ...], int], ...]]:
+    """:func:`_parse` of ``path``, kept across processes while the file's state (modification and
+    change times, size, inode) is the one it was parsed in; a file changed in the last
+    ``RECENT_SECONDS`` is not kept (it could change again within the same timestamp tick)."""
     st = os.stat(path)
-    return _parse(path, (st.st_mtime_ns, st.st_ctime_ns, st.st_size, st.st_ino))
+    signature = (st.st_mtime_ns, st.st_ctime_ns, st.st_size, st.st_ino)
+    kept = _kept_parses()
+    entry = kept.get(path)
+    if isinstance(entry, list) and len(entry) == 3 and entry[0] == list(signature):
+        return entry[1], tuple((m, tuple(n), lvl) for m, n, lvl in entry[2])
+    digest, imports = _parse(path, signature)
+    if time.time_ns() - st.st_ctime_ns > RECENT_SECONDS * 1e9:
+        kept[path] = [list(signature), digest, [[m, list(n), lvl] for m, n, lvl in imports]]
+        _parsed["changed"] = True
+    return digest, imports
 
 
 def _imported_modules(name: str, is_package: bool, imports) -> list[tuple[str, bool]]:
@@ -350,12 +404,57 @@ def _fileless(objects: Iterable[Any]) -> dict[str, str]:
     return out
 
 
+def _environment_state() -> list[list[Any]]:
+    """What changes when a distribution is installed, upgraded or removed: the metadata folders
+    (``*.dist-info``, ``*.egg-info``) in each folder of the import path, with their modification times."""
+    out = []
+    for entry in sys.path:
+        folder = os.path.abspath(entry or ".")
+        try:
+            names = sorted(n for n in os.listdir(folder) if n.endswith((".dist-info", ".egg-info")))
+        except OSError:
+            continue
+        for name in names:
+            try:
+                out.append([os.path.join(folder, name), os.stat(os.path.join(folder, name)).st_mtime_ns])
+            except OSError:
+                continue
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def _versions_of(tops: tuple[str, ...]) -> dict[str, str | None]:
+    """:func:`touchbench.core.versions.package_versions` of the import names ``tops``, kept on disk
+    while the environment is as it was when they were read (:func:`_environment_state`); reading
+    every installed distribution's file list to map import names to distributions costs a new
+    process a third of a second."""
+    state = _environment_state()
+    path = cache_dir() / "identity" / PACKAGES_RECORD
+    key = canonical_json({"state": state, "tops": list(tops), "python": sys.version})
+    try:
+        kept = json.loads(path.read_text())
+    except (OSError, ValueError):
+        kept = {}
+    if isinstance(kept, dict) and isinstance(kept.get(key), dict):
+        return dict(kept[key])
+    versions = dict(package_versions(modules=list(tops)))
+    if all(time.time_ns() - mtime > RECENT_SECONDS * 1e9 for _, mtime in state):
+        kept = {k: v for k, v in kept.items() if json.loads(k).get("state") == state} if isinstance(kept, dict) else {}
+        kept[key] = versions
+        try:
+            atomic_write_bytes(path, json.dumps(kept).encode())
+        except WriteError:  # a cache folder that cannot take it: read again next time
+            pass
+    return versions
+
+
 def _identity(objects: Iterable[Any], params: Any, seen: frozenset[tuple[str, str]]) -> Identity:
     objects = list(objects)
     roots = [m for o in objects for m in _defining_modules(o)]
     own, tops, incomplete = _walk(roots)
+    _save_parses()
     modules = {**own, **_fileless(objects)}
-    packages = dict(package_versions(modules=sorted(tops)))
+    packages = dict(_versions_of(tuple(sorted(tops))))
     for kind, name in _named_components(params):
         if (kind, name) in seen:
             continue

@@ -47,7 +47,7 @@ from ..methods import METHODS, Method, expand_candidates, method_spec
 from ..protocols.schema import Protocol, expand_grid, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
 from ..protocols.schemes import Fold, SplitError
-from ..results.ledger import test_set_hash
+from ..results.ledger import test_set_hash_of
 from ..results.manifest import LEFT_OUT
 from ..results.store import task_row
 from .cache import FeatureCache
@@ -490,9 +490,8 @@ def plan_run(protocol: Protocol, cache_root: str | Path | None = None, dataset: 
 # ----------------------------------------------------------------- reading a plan
 def plan_test_set(plan: Plan) -> str:
     """The hash of every capture some task of the plan tests (:func:`touchbench.results.ledger.test_set_hash`)."""
-    idx = sorted({int(i) for t in plan.tasks for i in t.fold.test})
-    ds = plan.dataset
-    return test_set_hash([ds.captures[i] for i in idx], ds.meta[plan.protocol.target].astype(str).to_numpy()[idx])
+    checksums = plan.dataset.labelled_checksums(plan.protocol.target)
+    return test_set_hash_of(checksums[i] for i in sorted({int(i) for t in plan.tasks for i in t.fold.test}))
 
 
 def plan_methods(plan: Plan) -> list[str]:

@@ -50,7 +50,8 @@ from ..protocols.schema import Protocol, load_protocol
 from ..core.paths import results_root
 from ..results.ledger import LEDGER_NAME, check_final, end_look, merge_ledgers, old_ledgers, record_look, start_look
 from ..results.manifest import now_iso, update_manifest
-from ..results.store import PREDICTED, SCHEMA_VERSION, TRUE, ResultStore, check_schema, read_results_table
+from ..results.store import (PREDICTED, SCHEMA_VERSION, TRUE, ResultStore, TaskWriter, check_schema,
+                              read_results_table)
 from ..results.summary import check_expected, summarize
 from .backends import check_jobs, is_local_backend, local_jobs, parallel
 from .cache import FeatureCache, crop_captures
@@ -314,19 +315,20 @@ def _execute(plan: Plan, store: ResultStore, pending: list[Task], jobs: int, pro
     else:  # never more workers than tasks
         results = parallel(min(jobs, len(pending)), ordered=False)(delayed(execute_task)(t, ctx) for t in pending)
     n_ran, stopped = 0, False
-    for row, preds in results:
-        if preds is not None:
-            preds.insert(0, "run_id", plan.run_id)
-        row["run_id"] = plan.run_id
-        store.write_task(row["task_id"], row, preds)
-        status[row["task_id"]] = row["status"]
-        n_ran += 1
-        prog.advance(tid)
-        if fail_fast and row.get("status") == "failed":
-            stopped = True
-            break
-    if hasattr(results, "close"):
-        results.close()  # a generator left early: joblib cancels what it has not started
+    with TaskWriter(store) as writer:  # each task's fragments written while the next one computes
+        for row, preds in results:
+            if preds is not None:
+                preds.insert(0, "run_id", plan.run_id)
+            row["run_id"] = plan.run_id
+            writer.write(row["task_id"], row, preds)
+            status[row["task_id"]] = row["status"]
+            n_ran += 1
+            prog.advance(tid)
+            if fail_fast and row.get("status") == "failed":
+                stopped = True
+                break
+        if hasattr(results, "close"):
+            results.close()  # a generator left early: joblib cancels what it has not started
     return n_ran, stopped
 
 

@@ -98,6 +98,7 @@ class RunContext:
         self.cache_root = Path(cache_root)
         self.setup = setup
         self._dataset: TouchDataset | None = dataset
+        self._labels: np.ndarray | None = None
         RunContext._loaded = {self.dataset_hash: dataset}  # keep one dataset per process
 
     def ensure_setup(self) -> None:
@@ -107,6 +108,7 @@ class RunContext:
     def __getstate__(self) -> dict[str, Any]:
         d = dict(self.__dict__)
         d["_dataset"] = None
+        d["_labels"] = None
         return d
 
     @property
@@ -127,7 +129,10 @@ class RunContext:
         return FeatureCache(self.cache_root)
 
     def labels(self) -> np.ndarray:
-        return np.array([str(v) for v in self.dataset.meta[self.target].tolist()], dtype=object)
+        """The target of every capture, as text (computed once per context and process)."""
+        if self._labels is None:
+            self._labels = np.array([str(v) for v in self.dataset.meta[self.target].tolist()], dtype=object)
+        return self._labels
 
 
 # ----------------------------------------------------------------- metrics
@@ -215,6 +220,32 @@ def _with_subject_id(ds: TouchDataset, fold: Fold, X_tr: np.ndarray, X_te: np.nd
     return np.hstack([X_tr, onehot[fold.train]]), np.hstack([X_te, onehot[fold.test]])
 
 
+def _predictions(task: Task, ds: TouchDataset, y_test: np.ndarray, y_pred: np.ndarray,
+                 proba: dict[str, np.ndarray] | None) -> pd.DataFrame:
+    """The task's predictions table: one row per test capture, ``proba_<class>`` columns last (classes
+    sorted), built in one go."""
+    fold = task.fold
+    meta = ds.meta.iloc[fold.test]
+    columns: dict[str, Any] = {
+        "task_id": task.task_id,
+        "repetition": task.repetition,
+        "fold": fold.name,
+        "fold_group": fold.group,
+        "early_frames": np.float64(task.crop_frames) if task.crop_frames is not None else np.nan,
+        "features": task.method.features_label,
+        "classifier": task.method.label,
+        "capture_id": meta["capture_id"].astype(str).to_numpy(),
+        "subject": meta["subject"].astype(str).to_numpy(),
+        "gesture": meta["gesture"].astype(str).to_numpy(),
+        TRUE: y_test.astype(str),
+        PREDICTED: y_pred.astype(str),
+        "correct": (y_test.astype(str) == y_pred.astype(str)),
+    }
+    for label in sorted(proba or {}):
+        columns[f"{PROBA_PREFIX}{label}"] = proba[label]
+    return pd.DataFrame(columns)
+
+
 # ----------------------------------------------------------------- the task
 def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFrame | None]:
     """Run one task; a feature or classifier error becomes a ``failed`` row."""
@@ -256,25 +287,7 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
                 caps = [ds.captures[int(i)][: task.crop_frames] if task.crop_frames is not None else ds.captures[int(i)]
                         for i in fold.test[:LATENCY_CAPTURES]]
                 row["latency_ms"], row["latency_cpu_ms"] = _measure_latency(FittedMethod(lat_sets, fitted_est), caps)
-        meta = ds.meta.iloc[fold.test]
-        preds = pd.DataFrame({
-            "task_id": task.task_id,
-            "repetition": task.repetition,
-            "fold": fold.name,
-            "fold_group": fold.group,
-            "early_frames": np.float64(task.crop_frames) if task.crop_frames is not None else np.nan,
-            "features": task.method.features_label,
-            "classifier": task.method.label,
-            "capture_id": meta["capture_id"].astype(str).to_numpy(),
-            "subject": meta["subject"].astype(str).to_numpy(),
-            "gesture": meta["gesture"].astype(str).to_numpy(),
-            TRUE: y_test.astype(str),
-            PREDICTED: y_pred.astype(str),
-            "correct": (y_test.astype(str) == y_pred.astype(str)),
-        })
-        if proba is not None:
-            for label in sorted(proba):
-                preds[f"{PROBA_PREFIX}{label}"] = proba[label]
+        preds = _predictions(task, ds, y_test, y_pred, proba)
     except Exception as e:  # the task fails, the run goes on
         tb = traceback.format_exc(limit=-3)
         row["status"] = "failed"

@@ -39,6 +39,7 @@ import numpy as np
 
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError, WriteError
+from ..datasets.model import labelled_checksum
 
 try:  # POSIX
     import fcntl
@@ -46,7 +47,8 @@ except ImportError:  # pragma: no cover - Windows
     fcntl = None  # type: ignore[assignment]
 
 __all__ = ["LEDGER_NAME", "RUN_FILE", "FinalRunError", "Looks", "check_final", "end_look", "looks", "merge_ledgers",
-           "old_ledgers", "read_ledger", "read_ledgers", "record_look", "start_look", "test_set_hash"]
+           "old_ledgers", "read_ledger", "read_ledgers", "record_look", "start_look", "test_set_hash",
+           "test_set_hash_of"]
 
 LEDGER_NAME = "ledger.jsonl"
 #: in a results folder, while a run is under way (and after it was interrupted): its look id
@@ -64,9 +66,14 @@ class FinalRunError(TouchbenchError):
 def test_set_hash(captures: Sequence[np.ndarray], labels: Iterable[Any]) -> str:
     """SHA-256 of a test set: each capture's frames (float64, with their shape) and label, in a
     sorted order, so neither the order nor the capture ids nor the reader change it."""
-    items = sorted(hashlib.sha256(f"{np.shape(c)}|{y}".encode() + np.ascontiguousarray(c, dtype=np.float64).tobytes())
-                   .hexdigest() for c, y in zip(captures, labels))
-    return hashlib.sha256("\n".join(items).encode()).hexdigest()
+    return test_set_hash_of(labelled_checksum(c, y) for c, y in zip(captures, labels))
+
+
+def test_set_hash_of(checksums: Iterable[str]) -> str:
+    """:func:`test_set_hash` from each test capture's
+    :func:`touchbench.datasets.model.labelled_checksum` (a dataset keeps them:
+    :meth:`touchbench.datasets.model.TouchDataset.labelled_checksums`)."""
+    return hashlib.sha256("\n".join(sorted(checksums)).encode()).hexdigest()
 
 
 @contextlib.contextmanager

@@ -42,6 +42,7 @@ import json
 import os
 import socket
 import time
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Sequence
 
@@ -58,7 +59,7 @@ try:  # POSIX
 except ImportError:  # pragma: no cover - Windows
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["PREDICTED", "PROBA_PREFIX", "SCHEMA_VERSION", "TRUE", "OtherResultsError", "ResultStore", "ResultsBusyError", "make_results_dir", "atomic_write_bytes",
+__all__ = ["PREDICTED", "PROBA_PREFIX", "SCHEMA_VERSION", "TRUE", "OtherResultsError", "ResultStore", "ResultsBusyError", "TaskWriter", "make_results_dir", "atomic_write_bytes",
            "atomic_write_parquet", "check_schema", "confusion_table", "read_results_table", "task_metrics",
            "upgrade", "write_results_table"]
 
@@ -247,12 +248,47 @@ def task_metrics(predictions: pd.DataFrame, names: Sequence[str], notes: list[st
     return pd.DataFrame.from_dict(rows, orient="index", columns=list(names))
 
 
+class TaskWriter:
+    """Writes tasks' fragments (:meth:`ResultStore.write_task`) in a thread of its own, in the order
+    given, so that a task's fragments are written while the next task computes.
+
+    Each write is the store's (atomic, predictions before scores). :meth:`write` first waits for the
+    write before it and raises its error (:class:`touchbench.core.errors.WriteError`); leaving the
+    ``with`` block waits for every write, also when the run is interrupted (the finished tasks are
+    kept), and raises the last write's error."""
+
+    def __init__(self, store: "ResultStore"):
+        self.store = store
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="touchbench-fragments")
+        self._last: Future | None = None
+
+    def write(self, task_id: str, score: dict[str, Any], predictions: pd.DataFrame | None) -> None:
+        self._wait()
+        self._last = self._pool.submit(self.store.write_task, task_id, score, predictions)
+
+    def _wait(self) -> None:
+        last, self._last = self._last, None
+        if last is not None:
+            last.result()
+
+    def __enter__(self) -> "TaskWriter":
+        return self
+
+    def __exit__(self, exc_type, *exc) -> None:
+        self._pool.shutdown(wait=True)
+        if exc_type is None:
+            self._wait()
+
+
 class ResultStore:
     """Fragments and merged reports of one results directory."""
 
     def __init__(self, root: str | Path):
         self.root = Path(root)
         self.fragments = self.root / "fragments"
+        #: task id -> (scores, predictions) as this object wrote them: the merge takes these from
+        #: memory and reads from disk only the tasks of earlier sessions
+        self._written: dict[str, tuple[pd.DataFrame, pd.DataFrame | None]] = {}
 
     # ----------------------------------------------------------- paths
     def scores_fragment(self, task_id: str) -> Path:
@@ -397,28 +433,42 @@ class ResultStore:
     def forget(self, task_ids: Iterable[str]) -> None:
         """Delete the fragments of ``task_ids`` (``--force``)."""
         for tid in task_ids:
+            self._written.pop(tid, None)
             self.scores_fragment(tid).unlink(missing_ok=True)
             self.predictions_fragment(tid).unlink(missing_ok=True)
 
     # ----------------------------------------------------------- writing
     def write_task(self, task_id: str, score: dict[str, Any], predictions: pd.DataFrame | None) -> None:
-        """Predictions first, scores last: the scores fragment marks the task finished."""
-        if predictions is not None and len(predictions):
-            write_results_table(self.predictions_fragment(task_id), predictions)
+        """Predictions first, scores last: the scores fragment marks the task finished. Both tables
+        are kept for this object's merge (:meth:`read_scores`, :meth:`read_predictions`)."""
+        self._written.pop(task_id, None)
+        kept = predictions if predictions is not None and len(predictions) else None
+        if kept is not None:
+            write_results_table(self.predictions_fragment(task_id), kept)
         else:
             self.predictions_fragment(task_id).unlink(missing_ok=True)
-        write_results_table(self.scores_fragment(task_id), pd.DataFrame([score]))
+        scores = pd.DataFrame([score])
+        write_results_table(self.scores_fragment(task_id), scores)
+        self._written[task_id] = (scores, kept)
 
     # ----------------------------------------------------------- reading (merge on read)
     def read_scores(self, task_ids: Iterable[str] | None = None) -> pd.DataFrame:
+        """The scores rows of ``task_ids`` (default: every fragment), in that order."""
         ids = self._ids(task_ids, ".scores.parquet")
-        frames = [read_results_table(self.scores_fragment(t)) for t in ids if self.scores_fragment(t).is_file()]
-        return _concat(frames, SCORE_COLUMNS)
+        return _concat([f for f in (self._fragment(t, 0) for t in ids) if f is not None], SCORE_COLUMNS)
 
     def read_predictions(self, task_ids: Iterable[str] | None = None) -> pd.DataFrame:
+        """The predictions of ``task_ids`` (default: every fragment), in that order."""
         ids = self._ids(task_ids, ".predictions.parquet")
-        frames = [read_results_table(self.predictions_fragment(t)) for t in ids if self.predictions_fragment(t).is_file()]
-        return _concat(frames, PREDICTION_COLUMNS)
+        return _concat([f for f in (self._fragment(t, 1) for t in ids) if f is not None], PREDICTION_COLUMNS)
+
+    def _fragment(self, task_id: str, which: int) -> pd.DataFrame | None:
+        """A task's scores (``which`` 0) or predictions (1): as this object wrote them, else read
+        from its fragment (None when there is none)."""
+        if task_id in self._written:
+            return self._written[task_id][which]
+        path = (self.scores_fragment, self.predictions_fragment)[which](task_id)
+        return read_results_table(path) if path.is_file() else None
 
     def _ids(self, task_ids: Iterable[str] | None, suffix: str) -> list[str]:
         if task_ids is not None:
