@@ -488,7 +488,7 @@ def test_window_variant_of_a_cnn_is_its_first_L_windows_dealt_by_stratified_kfol
     w = protos["window-kfold"]
     assert w.scheme.params == {"k": 10, "frames": 2, "per_capture": 5}
     [m] = w.evaluated_methods()
-    assert m.params["L"] == 1
+    assert m.params["L"] == 1 and m.params["validation_by"] == "rows"  # early stopping on windows too
     assert any("windows of 2 frames (floor(12 / L=5), the first 5 of each capture)" in n for n in notes)
     plan = plan_run(w)
     meta = plan.dataset.meta
