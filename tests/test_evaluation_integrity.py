@@ -528,3 +528,19 @@ def test_window_kfold_keeps_the_first_windows_and_runs_the_first_folds():
     assert len(folds) == 3 and not s.tests_each_capture_once()
     with pytest.raises(ValueError, match="folds: 5 runs the first of k=4 folds"):
         make_splitter("window-kfold", k=4, frames=3, folds=5)
+
+
+def test_the_window_variant_of_a_cnn_is_reported_as_the_same_method(tmp_path):
+    from touchbench.engine.audit import run_audit
+    from touchbench.protocols.schema import load_protocol
+
+    p = _cnn_audit_protocol(tmp_path)
+    text = p.read_text().replace("params: {L: 5}", "params: {L: 5, max_epochs: 1, channels: [4, 8, 8], hidden_units: 16}")
+    p.write_text(text)
+    a = run_audit(load_protocol(p), tmp_path / "audit", k=10, variants=("honest", "window-kfold"), window_folds=2)
+    # raw-window's frames differ (12 -> 2), yet the window variant's row is the honest method's
+    assert a.table["method"].tolist() == ["captures(frames=12) / cnn"] * 2
+    windows = pd.read_parquet(tmp_path / "audit" / "window-kfold" / "scores.parquet")
+    assert len(windows) == 2 and (windows["n_test"] == 30).all()  # 300 windows, 2 of 10 folds
+    row = a.table[a.table["variant"] == "window-kfold"].iloc[0]
+    assert row["accuracy"] == pytest.approx(windows["accuracy"].mean())
