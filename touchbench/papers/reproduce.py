@@ -546,9 +546,9 @@ def _best_distinguishable(ok: pd.DataFrame, best: str, paper_best: str, order: l
     if paper_best in others:
         i = others.index(paper_best)
         verdict = "distinguishable" if adjusted[i] < alpha else "not distinguishable"
-        lines.append(f"**Best {best} (ours) vs the paper's {paper_best}: {verdict} on {tests[i].n} folds "
+        lines += ["", f"**Best {best} (ours) vs the paper's {paper_best}: {verdict} on {tests[i].n} folds "
                      f"(p = {tests[i].pvalue:.3f}, Holm-adjusted {adjusted[i]:.3f}; difference "
-                     f"{100 * tests[i].mean_difference:+.1f} points).**")
+                     f"{100 * tests[i].mean_difference:+.1f} points).**"]
     return lines
 
 
