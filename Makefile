@@ -70,7 +70,7 @@ snapshots: setup
 	$(BIN)/python tests/snapshots/registries.py
 
 reproduce-papers: setup
-	$(BIN)/touchbench papers reproduce --profile $(PROFILE) --jobs $(JOBS)
+	$(BIN)/touchbench papers reproduce --profile $(PROFILE) --jobs $(JOBS) --audit
 
 examples: setup
 	$(TB) run example-haart-loso --out $(RUNS)/example-haart-loso --jobs $(JOBS) --no-progress

@@ -120,6 +120,12 @@ def test_early_stopping_holds_out_training_groups_only():
     assert strat.validation_groups_ is None and strat.validation_size_ == 12  # 20% of 20 per class
     none = make_classifier("cnn", random_state=0, validation_fraction=0.0, **SMALL).fit(X, y)
     assert none.validation_size_ == 0 and none.n_epochs_ == SMALL["max_epochs"]
+    # validation_by rows: the groups given are ignored, the split is drawn per class as without them
+    rows = make_classifier("cnn", random_state=0, validation_fraction=0.2, validation_by="rows", **SMALL)
+    rows.fit(X, y, groups=g)
+    assert rows.validation_groups_ is None and rows.validation_size_ == 12
+    with pytest.raises(ValueError, match="validation_by must be 'groups' or 'rows'"):
+        make_classifier("cnn", random_state=0, validation_by="subjects", **SMALL).fit(X, y)
 
 
 def test_bad_shapes_and_parameters_are_refused():

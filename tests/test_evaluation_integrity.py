@@ -465,3 +465,82 @@ classifiers: [test-logreg, {{name: test-forest, params: {{n_estimators: 3}}}}]
     assert r.exit_code != 0 and "'nope' is not a method of some" in r.output and "test-logreg" in r.output
     r = CliRunner().invoke(main, ["run", str(p), "--out", str(out), "--method", "test-logreg", "--final"])
     assert r.exit_code != 0 and "--final reports every method" in r.output
+
+
+def _cnn_audit_protocol(tmp_path, frames=12, L=5):
+    data = _data(tmp_path, frames=(frames, frames), subjects=("s1", "s2", "s3", "s4"), per_cell=5)
+    return _protocol(tmp_path, f"""dataset: {data}
+scheme: loso
+features: [[{{name: raw-window, params: {{frames: {frames}, shorter: pad}}}}]]
+classifiers: [{{name: cnn, params: {{L: {L}}}}}]
+seed: 0
+""", name="cnnaud")
+
+
+def test_window_variant_of_a_cnn_is_its_first_L_windows_dealt_by_stratified_kfold(tmp_path):
+    from touchbench.engine.audit import audit_protocols
+    from touchbench.protocols.schema import load_protocol
+
+    # 4 subjects x 3 gestures x 5 = 60 captures of 12 frames; L = 5: windows of floor(12 / 5) = 2 frames, of
+    # which a capture has 6; the first 5 are kept: 300 windows, 100 per gesture
+    protos, notes = audit_protocols(load_protocol(_cnn_audit_protocol(tmp_path)), k=10,
+                                    variants=("honest", "window-kfold"))
+    w = protos["window-kfold"]
+    assert w.scheme.params == {"k": 10, "frames": 2, "per_capture": 5}
+    [m] = w.evaluated_methods()
+    assert m.params["L"] == 1 and m.params["validation_by"] == "rows"  # early stopping on windows too
+    assert any("windows of 2 frames (floor(12 / L=5), the first 5 of each capture)" in n for n in notes)
+    plan = plan_run(w)
+    meta = plan.dataset.meta
+    assert len(meta) == 300 and sorted(set(meta["window"])) == [0, 1, 2, 3, 4]
+    assert (meta.groupby("source_capture").size() == 5).all()
+    assert len(plan.tasks) == 10
+    src, gesture = meta["source_capture"].to_numpy(), meta["gesture"].to_numpy()
+    tested = np.concatenate([t.fold.test for t in plan.tasks])
+    assert sorted(tested) == list(range(300))  # every window tested once
+    for t in plan.tasks:
+        # stratified: 100 windows per gesture over 10 folds -> 10 of each gesture tested, 90 trained on
+        assert pd.Series(gesture[t.fold.test]).value_counts().tolist() == [10, 10, 10]
+        assert len(t.fold.train) == 270
+    # windows of one capture on both sides: a capture's 5 windows cannot all fall in one of 10 folds of 30
+    assert all(set(src[t.fold.train]) & set(src[t.fold.test]) for t in plan.tasks)
+    # the cheaper run: the same split, its first 2 folds
+    cheap, cheap_notes = audit_protocols(load_protocol(_cnn_audit_protocol(tmp_path)), k=10,
+                                         variants=("honest", "window-kfold"), window_folds=2)
+    cplan = plan_run(cheap["window-kfold"])
+    assert [t.fold.name for t in cplan.tasks] == [t.fold.name for t in plan.tasks[:2]]
+    for a, b in zip(cplan.tasks, plan.tasks):
+        np.testing.assert_array_equal(a.fold.test, b.fold.test)
+    assert any("its first 2 folds run" in n for n in cheap_notes)
+
+
+def test_window_kfold_keeps_the_first_windows_and_runs_the_first_folds():
+    ds = random_dataset(subjects=("s1",), gestures=("pat", "rub"), per_cell=2, frames=(10, 10))
+    s = make_splitter("window-kfold", k=4, frames=3, per_capture=2, folds=3)
+    from touchbench.protocols.schemes.base import DataContext
+    notes: list[str] = []
+    w = s.prepare(ds, DataContext("d", notes, None, None))
+    # 10 frames: windows at 0, 3, 6 (3 of them); the first 2 kept: 4 captures x 2 = 8 windows
+    assert len(w) == 8 and w.meta["window"].tolist() == [0, 1] * 4
+    assert notes == ["the samples are windows of 3 frames every 3, the first 2 of each capture (from 4 captures: "
+                     "8 windows)"]
+    folds = s.folds(w.meta)
+    assert len(folds) == 3 and not s.tests_each_capture_once()
+    with pytest.raises(ValueError, match="folds: 5 runs the first of k=4 folds"):
+        make_splitter("window-kfold", k=4, frames=3, folds=5)
+
+
+def test_the_window_variant_of_a_cnn_is_reported_as_the_same_method(tmp_path):
+    from touchbench.engine.audit import run_audit
+    from touchbench.protocols.schema import load_protocol
+
+    p = _cnn_audit_protocol(tmp_path)
+    text = p.read_text().replace("params: {L: 5}", "params: {L: 5, max_epochs: 1, channels: [4, 8, 8], hidden_units: 16}")
+    p.write_text(text)
+    a = run_audit(load_protocol(p), tmp_path / "audit", k=10, variants=("honest", "window-kfold"), window_folds=2)
+    # raw-window's frames differ (12 -> 2), yet the window variant's row is the honest method's
+    assert a.table["method"].tolist() == ["captures(frames=12) / cnn"] * 2
+    windows = pd.read_parquet(tmp_path / "audit" / "window-kfold" / "scores.parquet")
+    assert len(windows) == 2 and (windows["n_test"] == 30).all()  # 300 windows, 2 of 10 folds
+    row = a.table[a.table["variant"] == "window-kfold"].iloc[0]
+    assert row["accuracy"] == pytest.approx(windows["accuracy"].mean())

@@ -371,3 +371,108 @@ def test_each_gaus_reading_is_a_valid_protocol_on_the_training_subjects_only(pat
     rel = path.relative_to(REPO_ROOT).as_posix()
     assert f"touchbench run {rel} --out results/research/" in path.read_text()  # the command the note gives
     assert rel in (REPO_ROOT / "docs" / "research" / "gaus-table5.md").read_text()
+
+
+def _table3_run(out: Path, exact: bool) -> Path:
+    """A fake CNN run whose pooled predictions reproduce Al-mashhadani's Table 3 exactly (``exact``) or
+    are all correct."""
+    t3 = np.array(next(c for c in PAPER_CHECKS["cnn-table2-loso-haart"] if c["kind"] == "confusion")["matrix"]).T  # rows true, columns predicted
+    rows, pred = [], {}
+    for i, true in enumerate(HAART):
+        for j, p in enumerate(HAART):
+            for _ in range(int(t3[i, j])):
+                cid = f"c{len(rows):04d}"
+                rows.append((cid, f"s{len(rows) % 2}", true))
+                pred[cid] = p
+    caps = pd.DataFrame(rows, columns=["capture_id", "subject", "gesture"])
+    return write_fake_run(out, caps, {"f0": caps["capture_id"].tolist()},
+                          [FakeMethod("raw-window", "cnn", predicted=pred if exact else None)],
+                          dataset="haart", scheme={"name": "kfold", "k": 2}, protocol="cnn-table2-loso-haart")
+
+
+def test_report_says_which_audit_variant_matches_the_cnn_confusion(tmp_path):
+    from touchbench.reports.audit import write_audit
+
+    out = _table3_run(tmp_path / "cnn-table2-loso-haart", exact=False)
+    audit = tmp_path / "cnn-table2-loso-haart-audit"
+    _table3_run(audit / "honest", exact=False)
+    _table3_run(audit / "window-kfold", exact=True)
+    table = pd.DataFrame({"method": ["raw-window / cnn"] * 3, "variant": ["honest", "capture-kfold", "window-kfold"],
+                          "accuracy": [0.42, 0.50, 0.802], "inflation_pp": [0.0, 8.0, 38.2],
+                          "leaky": [False, True, True]})
+    write_audit(table, audit, {"raw-window / cnn": {"value": 83.2, "tolerance": 5.0, "source": "Table 2"}})
+    run = ProtocolRun(path=PAPERS / "cnn-table2-loso-haart.yaml", name="cnn-table2-loso-haart", out=out, changes=[])
+    text = write_report([run], PROFILES["full"], tmp_path / "R.md").read_text()
+    assert "reproduced by `window-kfold`; the honest figure is 42.0 %" in text
+    sec = text[text.index("per-class recall within 10 points, by variant:"):]
+    # all correct against Table 3's recalls (true columns of 36): constant 35/36 = 97.2 (+2.8), notouch 100
+    # (+0.0), pat 29/36 = 80.6 (+19.4), rub 30/36 = 83.3 (+16.7), scratch 26/36 = 72.2 (+27.8), stroke
+    # 33/36 = 91.7 (+8.3), tickle 13/36 = 36.1 (+63.9): 4 of 7 beyond 10 points
+    assert ("- `honest`: 4 of 7 classes outside: pat (+19.4), rub (+16.7), scratch (+27.8), tickle (+63.9)"
+            in sec)
+    assert "- `capture-kfold`: no predictions" in sec
+    assert "- `window-kfold`: all 7 classes within" in sec
+    assert "Table 3 (252 captures, 36 per gesture; diagonal = 80.2 %) is matched by `window-kfold`.**" in sec
+
+
+def test_report_tests_whether_the_sweeps_best_is_distinguishable(tmp_path):
+    from scipy import stats
+
+    caps = pd.DataFrame({"capture_id": [f"c{i:02d}" for i in range(40)],
+                         "subject": [f"s{i // 10}" for i in range(40)],
+                         "gesture": [HAART[i % 7] for i in range(40)]})
+    folds = {f"subject=s{f}": caps["capture_id"][10 * f:10 * f + 10].tolist() for f in range(4)}
+
+    def wrong(counts):
+        return {name: ids[:n] for (name, ids), n in zip(folds.items(), counts)}
+
+    out = write_fake_run(tmp_path / "cnn-fig5-frame-sweep-haart", caps, folds, [
+        FakeMethod("raw-window", "cnn(L=5)", classifier_name="cnn", wrong=wrong([5, 5, 5, 5])),
+        FakeMethod("raw-window", "cnn(L=20)", classifier_name="cnn", wrong=wrong([0, 1, 0, 1])),
+        FakeMethod("raw-window", "cnn(L=30)", classifier_name="cnn", wrong=wrong([1, 1, 2, 1])),
+    ], dataset="haart", scheme={"name": "loso"}, protocol="cnn-fig5-frame-sweep-haart")
+    run = ProtocolRun(path=PAPERS / "cnn-fig5-frame-sweep-haart.yaml", name="cnn-fig5-frame-sweep-haart",
+                      out=out, changes=[])
+    text = write_report([run], PROFILES["full"], tmp_path / "R.md").read_text()
+    # L=20 - L=30 per fold: 0.1, 0, 0.2, 0 (mean 0.075, sd sqrt(0.0275 / 3)); 10 tested of 30 trained on:
+    # se = sqrt(1/4 + 1/3) sd; t = 1.0256 on 3 df
+    sd = np.sqrt(0.0275 / 3)
+    t30 = 0.075 / (np.sqrt(1 / 4 + 1 / 3) * sd)
+    p30 = 2 * stats.t.sf(t30, 3)
+    # L=20 - L=5: 0.5, 0.4, 0.5, 0.4 (mean 0.45, sd sqrt(0.01 / 3)): p far below 0.05, first in Holm's order
+    t5 = 0.45 / (np.sqrt(1 / 4 + 1 / 3) * np.sqrt(0.01 / 3))
+    p5 = 2 * stats.t.sf(t5, 3)
+    assert p5 * 2 < 0.05 < p30
+    assert "Paper: best cnn(L=30); ours: best cnn(L=20) (100.0 %" not in text  # 95 %, not 100
+    assert "Distinguishable from cnn(L=5)." in text
+    assert (f"**Best cnn(L=20) (ours) vs the paper's cnn(L=30): not distinguishable on 4 folds "
+            f"(p = {p30:.3f}, Holm-adjusted {max(p30, 2 * p5):.3f}; difference +7.5 points).**") in text
+
+
+def test_quick_profile_audits_with_its_cheaper_window_folds_and_make_asks_for_the_audit(tmp_path):
+    from touchbench.papers.reproduce import reproduce
+
+    assert PROFILES["quick"].audit_options == {"window_folds": 2}
+    assert PROFILES["full"].audit_options == {}
+    assert "2 of its 10 folds" in PROFILES["quick"].description
+    recipe = (REPO_ROOT / "Makefile").read_text().split("\nreproduce-papers:")[1].split("\n\n")[0]
+    assert "papers reproduce" in recipe and "--audit" in recipe
+    d = tmp_path / "papers"
+    d.mkdir()
+    _write(d / "cnn-tiny.yaml", """name: cnn-tiny
+dataset: scene:tiny
+scheme: loso
+features: [[msd]]
+classifiers: [{name: gaus-rf, params: {n_estimators: 5}}]
+seed: 0
+audit:
+  variants: [honest, window-kfold]
+  k: 3
+  window_seconds: 0.2
+""")
+    path = reproduce("quick", tmp_path / "res", protocols_dir=d, echo=lambda s: None, audit=True)
+    window = (tmp_path / "res" / "quick" / "cnn-tiny-audit" / "window-kfold" / "protocol.yaml").read_text()
+    assert "folds: 2" in window and "k: 3" in window
+    scores = pd.read_parquet(tmp_path / "res" / "quick" / "cnn-tiny-audit" / "window-kfold" / "scores.parquet")
+    assert sorted(scores["fold"]) == ["f0", "f1"]  # 2 of the 3 folds
+    assert "its first 2 folds run" in path.read_text()

@@ -175,6 +175,10 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
     patience : epochs without a lower validation loss before stopping.
     validation_fraction : share of the training captures (or of the
         training ``groups``) held out for early stopping; 0 disables it.
+    validation_by : ``"groups"`` (hold out whole ``groups`` when ``fit`` is
+        given them) or ``"rows"`` (ignore them: rows drawn stratified by
+        label; the leakage audit's window variant, where the rows are windows
+        and the paper says nothing of a validation split).
     scaling : ``"standard"`` (one mean / std over training cells) or ``"none"``.
     channels, hidden_units : Table 1's (32, 64, 128) and 256.
     random_state : seed of everything random in ``fit``.
@@ -186,7 +190,7 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
     def __init__(self, sensor=None, grid=None, length=None, L=30, train_windows="first", test_windows="first", vote="soft",
                  max_epochs=100, batch_size=32, learning_rate=1e-3, weight_decay=0.0, patience=10,
                  validation_fraction=0.1, scaling="standard", channels=(32, 64, 128), hidden_units=256,
-                 random_state=None, device="cpu", n_jobs=1, verbose=0):
+                 random_state=None, device="cpu", n_jobs=1, verbose=0, validation_by="groups"):
         self.sensor = sensor
         self.grid = grid
         self.length = length
@@ -207,6 +211,7 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
         self.device = device
         self.n_jobs = n_jobs
         self.verbose = verbose
+        self.validation_by = validation_by
 
     # -- shapes ---------------------------------------------------------------
     def _check_params(self):
@@ -264,7 +269,10 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
         rs = check_random_state(self.random_state)
         seed = int(rs.randint(MAX_SEED))
         rng = np.random.default_rng(seed)
-        fit_rows, val_rows, self.validation_groups_ = validation_split(yi, groups, rng, self.validation_fraction)
+        if self.validation_by not in ("groups", "rows"):
+            raise ValueError(f"validation_by must be 'groups' or 'rows', not {self.validation_by!r}")
+        by = groups if self.validation_by == "groups" else None
+        fit_rows, val_rows, self.validation_groups_ = validation_split(yi, by, rng, self.validation_fraction)
         self.validation_size_ = len(val_rows)
 
         Wtr = self._windows(X[fit_rows], train_idx)  # (n, w, F, H, W)
@@ -347,7 +355,7 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
 DEFAULTS = {
     "length": None, "L": 30, "train_windows": "first", "test_windows": "first", "vote": "soft",
     "max_epochs": 100, "batch_size": 32, "learning_rate": 1e-3, "weight_decay": 0.0, "patience": 10,
-    "validation_fraction": 0.1, "scaling": "standard", "channels": (32, 64, 128), "hidden_units": 256,
+    "validation_fraction": 0.1, "validation_by": "groups", "scaling": "standard", "channels": (32, 64, 128), "hidden_units": 256,
     "device": "cpu", "n_jobs": 1,
 }
 

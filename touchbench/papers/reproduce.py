@@ -23,6 +23,11 @@ report. A profile changes three things, nothing else:
   the protocol's ``dataset.options``: smaller synthetic scenes (fewer
   repetitions per person and gesture). Real data is never reduced.
 
+and, for ``--audit``, ``audit_options``: keyword arguments of
+:func:`touchbench.engine.audit.run_audit` (the quick profile's
+``window_folds``: the window variant runs 2 of its 10 folds; the audit's
+variants also get the classifier caps, being made from the profiled protocol).
+
 A profile never changes features, feature parameters, classifiers'
 other parameters, filters or seeds, and never touches the expected numbers:
 a method is never adjusted to a number. The quick and full profiles write
@@ -66,6 +71,7 @@ from ..protocols.schema import (
 )
 from ..reports.audit import audit_markdown, write_audit
 from ..reports.leaderboard import write_text
+from ..reports.stats import corrected_resampled_t, holm
 from ..results.manifest import git_revision
 from ..results.store import PREDICTED, TRUE, read_results_table
 from ..results.summary import check_expected
@@ -80,6 +86,7 @@ class Profile:
     classifier_caps: dict[str, dict[str, float]] = field(default_factory=dict)
     scheme_caps: dict[str, dict[str, int]] = field(default_factory=dict)
     dataset_options: dict[str, dict[str, Any]] = field(default_factory=dict)
+    audit_options: dict[str, Any] = field(default_factory=dict)
 
 
 PROFILES: dict[str, Profile] = {
@@ -91,7 +98,8 @@ PROFILES: dict[str, Profile] = {
     "quick": Profile(
         "quick",
         "fewer trees and epochs and smaller synthetic scenes, so that every protocol runs on two cores in "
-        "under 20 minutes; real HAART data is used whole",
+        "under 20 minutes; real HAART data is used whole; with --audit, the CNN's window variant (24,900 "
+        "windows) runs the first 2 of its 10 folds",
         classifier_caps={
             "gaus-rf": {"n_estimators": 100},
             "gaus-boost": {"n_trees": 100, "n_estimators": 10},
@@ -107,6 +115,7 @@ PROFILES: dict[str, Profile] = {
             "scene:tpm-like": {"repetitions": 4},
             "scene:fur-like": {"repetitions": 10},
         },
+        audit_options={"window_folds": 2},
     ),
 }
 
@@ -251,9 +260,10 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
     runs: list[ProtocolRun] = []
     t_all = time.perf_counter()
     loaded = _LoadedDataset()
+    audit_options = dict(prof.audit_options) if audit else None
     for proto, changes, f in planned:
         r = ProtocolRun(path=f, name=proto.name, out=out / profile / proto.name, changes=changes)
-        _run_guarded(proto, r, loaded, echo=echo, jobs=jobs, progress=progress, failed=failed, audit=audit)
+        _run_guarded(proto, r, loaded, echo=echo, jobs=jobs, progress=progress, failed=failed, audit=audit_options)
         runs.append(r)
     wall = time.perf_counter() - t_all
     _stop_workers()
@@ -301,7 +311,7 @@ class _LoadedDataset:
 
 
 def _run_guarded(proto, r: ProtocolRun, loaded: _LoadedDataset, *, echo: Callable[[str], None], jobs: int,
-                 progress: bool | None, failed: list[str] | None, audit: bool) -> None:
+                 progress: bool | None, failed: list[str] | None, audit: dict[str, Any] | None) -> None:
     """Run one protocol into ``r``: any error is recorded in ``r.error`` (and the protocol's name in
     ``failed``) instead of raised, so that the other reproductions go on."""
     t0 = time.perf_counter()
@@ -320,8 +330,9 @@ def _run_guarded(proto, r: ProtocolRun, loaded: _LoadedDataset, *, echo: Callabl
 
 
 def _run_one(proto, r: ProtocolRun, dataset, *, echo: Callable[[str], None], jobs: int, progress: bool | None,
-             failed: list[str] | None, audit: bool) -> None:
-    """Run one protocol on ``dataset`` into ``r.out``, and its leakage audit when asked."""
+             failed: list[str] | None, audit: dict[str, Any] | None) -> None:
+    """Run one protocol on ``dataset`` into ``r.out``, and its leakage audit when asked (``audit``: the
+    profile's options of :func:`touchbench.engine.audit.run_audit`, None: no audit)."""
     echo(f"{proto.name}: running -> {r.out}")
     res = run_protocol(proto, r.out, jobs=jobs, progress=progress, dataset=dataset)
     r.n_ran = res.n_ran
@@ -329,11 +340,11 @@ def _run_one(proto, r: ProtocolRun, dataset, *, echo: Callable[[str], None], job
          f"{res.seconds:.0f} s")
     if res.n_failed and failed is not None:
         failed.append(proto.name)
-    if audit and proto.audit is not None:
+    if audit is not None and proto.audit is not None:
         echo(f"{proto.name}: leakage audit -> {audit_dir(r.out)}")
         a = run_audit(proto, audit_dir(r.out), jobs=jobs, k=proto.audit.k,
                       window_seconds=proto.audit.window_seconds, tune=proto.audit.tune,
-                      variants=tuple(proto.audit.variants), progress=progress)
+                      variants=tuple(proto.audit.variants), progress=progress, **audit)
         write_audit(a.table, audit_dir(r.out), a.published, a.notes, title=f"Leakage audit: {proto.name}")
 
 
@@ -425,34 +436,58 @@ def _deviation_section(check: ExpectedDeviation, scores: pd.DataFrame, flags: li
             f"{'within' if within else '**outside**'}."]
 
 
+def _confusion_matrices(check: ExpectedConfusion, scores: pd.DataFrame,
+                        preds: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """The paper's matrix and ours (pooled over the folds of ``check.classifier``'s tasks, or of the
+    configuration of it with the best mean accuracy where a grid named several), rows the true class."""
+    paper = np.asarray(check.matrix, dtype=float)
+    if check.rows == "predicted":
+        paper = paper.T  # rows = true class, as ours
+    ok = _ok_tasks(scores)
+    mine = ok[ok["classifier"] == check.classifier]
+    if mine.empty:
+        named = ok[ok["classifier"].astype(str).str.startswith(check.classifier)]
+        if len(named):
+            best = named.groupby("classifier")["accuracy"].mean().idxmax()
+            mine = named[named["classifier"] == best]
+    p = preds[preds["task_id"].isin(mine["task_id"])]
+    ours = pd.crosstab(p[TRUE].astype(str), p[PREDICTED].astype(str)).reindex(
+        index=check.classes, columns=check.classes, fill_value=0).to_numpy(dtype=float)
+    return paper, ours
+
+
+def _recalls(paper: np.ndarray, ours: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-class recall (%) of the paper's matrix and ours (rows the true class)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return 100 * np.diag(paper) / paper.sum(axis=1), 100 * np.diag(ours) / ours.sum(axis=1)
+
+
+def _confusion_outside(check: ExpectedConfusion, scores: pd.DataFrame, preds: pd.DataFrame) -> list[str]:
+    """The classes whose recall differs from the paper's by more than the tolerance, as ``class (+d)``."""
+    r_paper, r_ours = _recalls(*_confusion_matrices(check, scores, preds))
+    return [f"{c} ({d:+.1f})" for c, d in zip(check.classes, r_ours - r_paper) if not abs(d) <= check.tolerance]
+
+
 def _confusion_section(check: ExpectedConfusion, scores: pd.DataFrame, preds: pd.DataFrame | None,
                        flags: list[str], name: str) -> list[str]:
     """A paper's confusion matrix against ours (pooled over the folds), compared by per-class recall."""
     classes = check.classes
-    paper = np.asarray(check.matrix, dtype=float)
     printed = "rows: true class, columns: predicted"
     if check.rows == "predicted":
-        paper = paper.T  # rows = true class, as ours
         printed += " (the paper prints the transpose)"
     lines = [f"**{check.source}** vs ours ({check.classifier}), pooled over the folds; {printed}. Per-class recall "
              f"tolerance {check.tolerance:g} points."]
     if preds is None or preds.empty:
         return lines + ["", "_no predictions: not compared_"]
-    p = preds[preds["task_id"].isin(_ok_tasks(scores, check.classifier)["task_id"])]
-    ours = pd.crosstab(p[TRUE].astype(str), p[PREDICTED].astype(str)).reindex(
-        index=classes, columns=classes, fill_value=0).to_numpy(dtype=float)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        r_paper = 100 * np.diag(paper) / paper.sum(axis=1)
-        r_ours = 100 * np.diag(ours) / ours.sum(axis=1)
+    paper, ours = _confusion_matrices(check, scores, preds)
+    r_paper, r_ours = _recalls(paper, ours)
     lines += ["", "| true \\ predicted | " + " | ".join(classes) + " | recall paper % | recall ours % | difference |",
               "|---|" + "---|" * (len(classes) + 3)]
-    outside = []
+    outside = _confusion_outside(check, scores, preds)
     for i, c in enumerate(classes):
         cells = " | ".join(f"{int(paper[i, j])} / {int(ours[i, j])}" for j in range(len(classes)))
         d = r_ours[i] - r_paper[i]
         mark = "" if abs(d) <= check.tolerance else " **outside**"
-        if mark:
-            outside.append(f"{c} ({d:+.1f})")
         lines.append(f"| {c} | {cells} | {_fmt(r_paper[i])} | {_fmt(r_ours[i])} | {d:+.1f}{mark} |")
     acc_p = 100 * np.trace(paper) / paper.sum()
     acc_o = 100 * np.trace(ours) / ours.sum() if ours.sum() else math.nan
@@ -483,9 +518,37 @@ def _best_section(check: ExpectedBest, paper_best: str, scores: pd.DataFrame, fl
     ours = f"Paper: best {paper_best}; ours: best {best} ({100 * m.loc[best, 'mean']:.1f} %)"
     if paper_best in m.index and not same:
         ours += f", {paper_best} {100 * m.loc[paper_best, 'mean']:.1f} %"
-    lines += ["", ours + ("." if same else ": **differs**.")]
+    lines += ["", ours + ("." if same else ": **differs**."), "", *_best_distinguishable(ok, best, paper_best, order)]
     if not same:
         flags.append(f"{check.source} (`{name}`): our best configuration is {best}, not {paper_best}")
+    return lines
+
+
+def _best_distinguishable(ok: pd.DataFrame, best: str, paper_best: str, order: list[str],
+                          alpha: float = 0.05) -> list[str]:
+    """Whether the best configuration is distinguishable from each other one on the folds they share,
+    as the leaderboard tests fold-paired results: the corrected resampled t-test of the fold
+    differences (Nadeau & Bengio), Holm-adjusted over the comparisons with the best."""
+    acc = ok.pivot_table(index="fold", columns="classifier", values="accuracy", aggfunc="mean")
+    ratio = ok.assign(r=ok["n_test"] / ok["n_train"]).groupby("fold")["r"].mean()
+    others = [k for k in order if k != best]
+    tests = []
+    for k in others:
+        both = acc[[best, k]].dropna()
+        tests.append(corrected_resampled_t(both[best] - both[k], float(ratio.loc[both.index].mean())))
+    if not tests:
+        return []
+    adjusted = holm([t.pvalue for t in tests])
+    apart = [k for k, p in zip(others, adjusted) if p < alpha]
+    lines = [f"Is the best distinguishable (corrected resampled t-test over the folds, Holm-adjusted over the "
+             f"{len(others)} comparisons with the best, alpha {alpha:g})? Distinguishable from "
+             + (", ".join(apart) if apart else "none of the others") + "."]
+    if paper_best in others:
+        i = others.index(paper_best)
+        verdict = "distinguishable" if adjusted[i] < alpha else "not distinguishable"
+        lines += ["", f"**Best {best} (ours) vs the paper's {paper_best}: {verdict} on {tests[i].n} folds "
+                     f"(p = {tests[i].pvalue:.3f}, Holm-adjusted {adjusted[i]:.3f}; difference "
+                     f"{100 * tests[i].mean_difference:+.1f} points).**"]
     return lines
 
 
@@ -564,7 +627,29 @@ def _audit_section(proto, out: Path) -> list[str]:
         lines.append(f"**{method}: the paper's {pub['value']:g} % (tolerance {pub['tolerance']:g}) is reproduced by "
                      + (", ".join(f"`{v}`" for v in hits) if hits else "no variant")
                      + (f"; the honest figure is {100 * float(honest.iloc[0]):.1f} %." if len(honest) else ".") + "**")
+    for check in (proto.expected.confusions if proto.expected is not None else []):
+        lines += ["", *_audit_confusion(check, audit_dir(out), list(dict.fromkeys(table["variant"])))]
     return lines + [""]
+
+
+def _audit_confusion(check: ExpectedConfusion, folder: Path, variants: list[str]) -> list[str]:
+    """Each audit variant's confusion (its pooled predictions, ``folder/<variant>/``) against a paper's
+    matrix by per-class recall, and the variants whose every class comes within the tolerance."""
+    lines = [f"{check.source}, per-class recall within {check.tolerance:g} points, by variant:", ""]
+    matched = []
+    for v in variants:
+        scores, preds, _ = _read(folder / v)
+        if scores is None or preds is None or preds.empty:
+            lines.append(f"- `{v}`: no predictions")
+            continue
+        outside = _confusion_outside(check, scores, preds)
+        if not outside:
+            matched.append(v)
+        lines.append(f"- `{v}`: " + (f"{len(outside)} of {len(check.classes)} classes outside: {', '.join(outside)}"
+                                     if outside else f"all {len(check.classes)} classes within"))
+    lines += ["", f"**{check.source} is matched by " + (", ".join(f"`{v}`" for v in matched) if matched
+                                                         else "no variant") + ".**"]
+    return lines
 
 
 def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:

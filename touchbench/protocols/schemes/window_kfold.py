@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Literal
 
+import numpy as np
 import pandas as pd
 from pydantic import Field, model_validator
 
@@ -25,6 +26,10 @@ class _WindowKFoldParams(_KFoldParams):
     seconds: float | None = Field(default=None, gt=0)
     hop: int | None = Field(default=None, ge=1)
     group_by: Literal["none", "capture", "subject"] = "none"
+    #: keep only the first ``per_capture`` windows of each capture (None: every window)
+    per_capture: int | None = Field(default=None, ge=1)
+    #: run only the first ``folds`` of the ``k`` folds (None: all): a cheaper estimate of the same split
+    folds: int | None = Field(default=None, ge=1)
 
     @model_validator(mode="after")
     def _one_length(self) -> "_WindowKFoldParams":
@@ -32,6 +37,9 @@ class _WindowKFoldParams(_KFoldParams):
             raise ValueError("give exactly one of 'frames' or 'seconds' (the window length)")
         if self.grouped:
             raise ValueError("window-kfold groups with group_by: none, capture or subject (not grouped)")
+        if self.folds is not None and (self.folds > self.k or self.repeats > 1):
+            raise ValueError(f"folds: {self.folds} runs the first of k={self.k} folds of one repeat: at most k, "
+                             "and repeats 1")
         return self
 
 
@@ -53,6 +61,11 @@ class WindowKFold(KFold):
     :meth:`prepare` cuts the windows
     (:func:`touchbench.datasets.windows.window_dataset`); the metadata then
     has ``source_capture`` and ``window`` columns. Accuracy is per window.
+    ``per_capture: N`` keeps the first N windows of each capture (a method
+    that cuts a capture into L windows: ``per_capture: L``). ``folds: n``
+    runs only the first n of the k folds (every window dealt as for k folds,
+    so each fold trains on (k - 1) / k of the windows): fewer tasks, the
+    same kind of estimate, not every window tested.
     """
 
     name = "window-kfold"
@@ -72,6 +85,9 @@ class WindowKFold(KFold):
             return WINDOWS_SHARED + ("" if self.target == "subject" else ", and captures of one subject")
         return "" if self.target == "subject" or self.params.group_by == "subject" else SUBJECTS_SHARED
 
+    def tests_each_capture_once(self) -> bool:
+        return self.params.folds is None or self.params.folds == self.params.k
+
     def sample_windows(self):
         p = self.params
         return (p.frames, p.seconds, p.hop)
@@ -83,11 +99,19 @@ class WindowKFold(KFold):
             frames = seconds_to_frames(seconds, ds.sensor.frame_rate, "the window length")
         n = len(ds)
         ds = window_dataset(ds, frames, hop)
-        context.notes.append(f"the samples are windows of {frames} frames every {hop or frames} (from {n} "
-                             f"captures: {len(ds)} windows)")
+        first = self.params.per_capture
+        if first is not None:
+            ds = ds.subset(np.flatnonzero(ds.meta["window"].to_numpy() < first))
+        context.notes.append(f"the samples are windows of {frames} frames every {hop or frames}"
+                             + (f", the first {first} of each capture" if first is not None else "")
+                             + f" (from {n} captures: {len(ds)} windows)")
         return ds
 
     def _split(self, meta: pd.DataFrame) -> list[Fold]:
         require_columns(meta, self.name, "source_capture")
-        return super()._split(meta)
+        folds = super()._split(meta)
+        if self.params.folds is not None and self.params.folds < len(folds):
+            self.notes_.append(f"only the first {self.params.folds} of the {len(folds)} folds run")
+            folds = folds[:self.params.folds]
+        return folds
 
