@@ -72,7 +72,7 @@ from ..protocols.schema import (
 from ..reports.audit import audit_markdown, write_audit
 from ..reports.leaderboard import write_text
 from ..reports.stats import corrected_resampled_t, holm
-from ..results.manifest import git_revision
+from ..results.manifest import git_revision, load_average
 from ..results.store import PREDICTED, TRUE, read_results_table
 from ..results.summary import check_expected
 
@@ -368,10 +368,9 @@ def _cpu_seconds() -> float:
 
 
 def _load() -> float | None:
-    try:
-        return os.getloadavg()[0]
-    except OSError:
-        return None
+    """The load average for the timing record (JSON: None where the system keeps none)."""
+    value = load_average()
+    return None if math.isnan(value) else value
 
 
 def _stop_workers() -> None:
