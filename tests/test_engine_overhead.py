@@ -23,6 +23,7 @@ from sklearn.metrics import accuracy_score, balanced_accuracy_score, f1_score
 
 from touchbench.datasets import model as model_module
 from touchbench.datasets.model import TouchDataset
+from touchbench.core import hashing
 from touchbench.core.errors import WriteError
 from touchbench.datasets import cache as cache_module
 from touchbench.datasets.cache import cached_dataset
@@ -208,7 +209,7 @@ def test_the_test_set_checksums_are_kept_with_the_cache_entry(tmp_path, monkeypa
 
 
 def test_a_source_file_not_written_since_it_was_hashed_is_not_read_again(tmp_path, monkeypatch):
-    monkeypatch.setattr(cache_module, "RECENT_SECONDS", 0.0)  # the files below were just written
+    monkeypatch.setattr(hashing, "RECENT_SECONDS", 0.0)  # the files below were just written
     files = [tmp_path / "a.csv", tmp_path / "b.csv"]
     for f, text in zip(files, ("1,2,3\n", "4,5,6\n")):
         f.write_text(text)
@@ -223,7 +224,7 @@ def test_a_source_file_not_written_since_it_was_hashed_is_not_read_again(tmp_pat
 
 
 def test_a_source_file_edited_with_its_size_and_time_kept_is_hashed_again(tmp_path, monkeypatch):
-    monkeypatch.setattr(cache_module, "RECENT_SECONDS", 0.0)
+    monkeypatch.setattr(hashing, "RECENT_SECONDS", 0.0)
     f = tmp_path / "a.csv"
     f.write_text("1,2,3\n")
     known = tmp_path / "sources.json"
@@ -342,7 +343,7 @@ def _new_process() -> None:
 
 def test_a_new_process_parses_only_the_source_files_written_since(tmp_path, monkeypatch):
     monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
-    monkeypatch.setattr(identity, "RECENT_SECONDS", 0.0)
+    monkeypatch.setattr(hashing, "RECENT_SECONDS", 0.0)
     _new_process()
     first = identity.feature_set_identity("msd")
     _new_process()
@@ -353,7 +354,7 @@ def test_a_new_process_parses_only_the_source_files_written_since(tmp_path, monk
 
 def test_a_source_file_edited_with_its_size_and_time_kept_is_parsed_again(tmp_path, monkeypatch):
     monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
-    monkeypatch.setattr(identity, "RECENT_SECONDS", 0.0)
+    monkeypatch.setattr(hashing, "RECENT_SECONDS", 0.0)
     f = tmp_path / "helper.py"
     f.write_text("import abc\n")
     _new_process()

@@ -23,7 +23,6 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import time
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
@@ -32,6 +31,7 @@ import pyarrow.parquet as pq
 
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import DataError, WriteError
+from ..core.hashing import file_state, settled
 from ..core.paths import cache_dir as default_cache_dir
 from .model import FORMAT_VERSION, TouchDataset
 
@@ -40,28 +40,16 @@ log = logging.getLogger("touchbench.datasets")
 
 #: the SHA-256 of each source file hashed so far, with the file's state then (``datasets/sources.json``)
 SOURCES_NAME = "sources.json"
-#: a file changed less than this many seconds ago may change again within the same timestamp tick:
-#: its digest is not kept (it is hashed again next time)
-RECENT_SECONDS = 2.0
-
-
-def _file_state(f: Path) -> list[int]:
-    """What changes whenever a file is written: device, inode, size, modification and change times
-    (the change time is the system's: setting the modification time back changes it)."""
-    st = f.stat()
-    return [st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns]
-
-
 def _digest(f: Path, known: dict[str, Any]) -> bytes:
     """The SHA-256 of ``f``: from ``known`` (absolute path -> [state, hex digest]) while the file's
     state is the one it was hashed in, else read and hashed (and kept in ``known`` unless the file
-    changed within :data:`RECENT_SECONDS`)."""
-    key, state = str(f.absolute()), _file_state(f)
+    changed within :data:`~touchbench.core.hashing.RECENT_SECONDS`)."""
+    key, state = str(f.absolute()), file_state(f)
     entry = known.get(key)
     if isinstance(entry, list) and len(entry) == 2 and entry[0] == state:
         return bytes.fromhex(entry[1])
     digest = hashlib.sha256(f.read_bytes()).digest()
-    if time.time_ns() - state[4] > RECENT_SECONDS * 1e9:
+    if settled(state[4]):
         known[key] = [state, digest.hex()]
     else:
         known.pop(key, None)

@@ -27,7 +27,6 @@ from __future__ import annotations
 import hashlib
 import io
 import json
-import os
 import time
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -37,6 +36,7 @@ from joblib import delayed
 from threadpoolctl import threadpool_limits
 
 from ..core.atomic import atomic_write_bytes
+from ..core.hashing import file_state
 from ..core.paths import cache_dir
 from .backends import parallel, run_setup
 
@@ -51,11 +51,6 @@ def matrix_checksum(X: np.ndarray) -> str:
     h = hashlib.sha256(f"{a.shape}".encode())
     h.update(memoryview(a).cast("B") if a.size else b"")
     return h.hexdigest()
-
-
-def _signature(path: Path) -> tuple[int, int, int, int]:
-    st = os.stat(path)
-    return (st.st_mtime_ns, st.st_ctime_ns, st.st_size, st.st_ino)
 
 
 def crop_captures(captures: Sequence[np.ndarray], n_frames: int | None) -> list[np.ndarray]:
@@ -99,7 +94,7 @@ class FeatureCache:
 
     def _check(self, npy: Path, js: Path) -> tuple[str | None, np.ndarray | None, dict[str, Any]]:
         try:
-            sig = (_signature(npy), _signature(js))
+            sig = (file_state(npy), file_state(js))
             info = json.loads(js.read_text())
         except (OSError, ValueError):
             return "its description is unreadable", None, {}

@@ -42,7 +42,6 @@ import os
 import site
 import sys
 import sysconfig
-import time
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,7 +51,7 @@ from typing import Any, Iterable
 from ..classifiers import CLASSIFIERS
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import WriteError
-from ..core.hashing import canonical_json
+from ..core.hashing import canonical_json, file_state, settled
 from ..core.paths import cache_dir
 from ..core.plugins import installed_plugins
 from ..core.versions import package_versions
@@ -161,7 +160,7 @@ def _is_module(name: str) -> bool:
 
 
 @functools.lru_cache(maxsize=4096)
-def _parse(path: str, signature: tuple[int, int, int, int]) -> tuple[str, tuple[tuple[str, tuple[str, ...], int], ...]]:
+def _parse(path: str, signature: tuple[int, ...]) -> tuple[str, tuple[tuple[str, tuple[str, ...], int], ...]]:
     """``(content hash, imports)`` of a source file; imports as ``(module, names, level)``."""
     data = Path(path).read_bytes()
     digest = hashlib.sha256(data).hexdigest()[:16]
@@ -183,9 +182,6 @@ def _parse(path: str, signature: tuple[int, int, int, int]) -> tuple[str, tuple[
 #: the versions of the distributions behind sets of import names, kept in the cache folder with the
 #: state of the environment they were read in (``identity/packages.json``)
 PACKAGES_RECORD = "packages.json"
-#: a file or distribution changed less than this many seconds ago may change again within the same
-#: timestamp tick: what was read from it then is not kept
-RECENT_SECONDS = 2.0
 
 
 #: each source file's content hash and imports with the file's state when it was parsed
@@ -220,16 +216,15 @@ def _save_parses() -> None:
 def _file_info(path: str) -> tuple[str, tuple[tuple[str, tuple[str, ...], int], ...]]:
     """:func:`_parse` of ``path``, kept across processes while the file's state (modification and
     change times, size, inode) is the one it was parsed in; a file changed in the last
-    ``RECENT_SECONDS`` is not kept (it could change again within the same timestamp tick)."""
-    st = os.stat(path)
-    signature = (st.st_mtime_ns, st.st_ctime_ns, st.st_size, st.st_ino)
+    ``RECENT_SECONDS`` (:mod:`touchbench.core.hashing`) is not kept (it could change again within the same timestamp tick)."""
+    signature = file_state(path)
     kept = _kept_parses()
     entry = kept.get(path)
-    if isinstance(entry, list) and len(entry) == 3 and entry[0] == list(signature):
+    if isinstance(entry, list) and len(entry) == 3 and entry[0] == signature:
         return entry[1], tuple((m, tuple(n), lvl) for m, n, lvl in entry[2])
-    digest, imports = _parse(path, signature)
-    if time.time_ns() - st.st_ctime_ns > RECENT_SECONDS * 1e9:
-        kept[path] = [list(signature), digest, [[m, list(n), lvl] for m, n, lvl in imports]]
+    digest, imports = _parse(path, tuple(signature))
+    if settled(signature[4]):
+        kept[path] = [signature, digest, [[m, list(n), lvl] for m, n, lvl in imports]]
         _parsed["changed"] = True
     return digest, imports
 
@@ -438,7 +433,7 @@ def _versions_of(tops: tuple[str, ...]) -> dict[str, str | None]:
     if isinstance(kept, dict) and isinstance(kept.get(key), dict):
         return dict(kept[key])
     versions = dict(package_versions(modules=list(tops)))
-    if all(time.time_ns() - mtime > RECENT_SECONDS * 1e9 for _, mtime in state):
+    if all(settled(mtime) for _, mtime in state):
         kept = {k: v for k, v in kept.items() if json.loads(k).get("state") == state} if isinstance(kept, dict) else {}
         kept[key] = versions
         try:
