@@ -35,7 +35,7 @@ import pandas as pd
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError
 from ..core.suggest import did_you_mean
-from .results import ResultSet, find_result_dirs, load_results
+from .results import ResultSet, find_result_dirs, load_results, read_manifest
 
 __all__ = ["Reference", "ReferenceError", "add_reference", "find_reference", "reference_names", "save_reference"]
 
@@ -90,13 +90,6 @@ def find_reference(name: str) -> Reference:
                          f"saved: {', '.join(known) or 'none'}")
 
 
-def _manifest(folder: Path) -> dict[str, Any]:
-    try:
-        return json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-
-
 def _test_set(manifest: dict[str, Any]) -> str | None:
     return (manifest.get("ledger") or {}).get("test_set")
 
@@ -108,7 +101,7 @@ def _machine(manifest: dict[str, Any]) -> str:
 
 
 def _evaluation_entry(folder: Path, root: Path) -> dict[str, Any]:
-    m = _manifest(folder)
+    m = read_manifest(folder)
     if not _test_set(m) or not (folder / "scores.parquet").is_file():
         raise ReferenceError(f"{folder}: not a finished results folder with a recorded test set "
                              "(scores.parquet and the manifest's test-set hash are needed)")
@@ -167,7 +160,7 @@ def save_reference(results: str | Path, name: str, dest: str | Path | None = Non
 
 
 def _user_test_sets(rs: ResultSet) -> set[str]:
-    return {t for t in (_test_set(_manifest(Path(s["path"]))) for s in rs.sources) if t}
+    return {s["test_set"] for s in rs.sources if s.get("test_set")}
 
 
 def _as_reference(rs: ResultSet, name: str) -> ResultSet:

@@ -56,7 +56,7 @@ from ..results.ledger import LEDGER_NAME, Looks, looks, old_ledgers
 from ..results.manifest import LEFT_OUT
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE, ResultStore, check_schema, read_results_table
 
-__all__ = ["ResultSet", "find_result_dirs", "load_results", "machine_id", "method_id", "scheme_label"]
+__all__ = ["ResultSet", "find_result_dirs", "load_results", "machine_id", "method_id", "read_manifest", "scheme_label"]
 
 PREDICTION_COLUMNS = ["task_id", "fold", "capture_id", "subject", TRUE, PREDICTED, "correct"]
 
@@ -167,7 +167,8 @@ def _fragments_only(d: Path) -> bool:
     return not (d / "scores.parquet").is_file() and any((d / "fragments").glob("*.scores.parquet"))
 
 
-def _read_manifest(d: Path) -> dict[str, Any]:
+def read_manifest(d: Path) -> dict[str, Any]:
+    """A results folder's manifest ({} when it has none or it cannot be read; a newer layout is refused)."""
     p = d / "manifest.json"
     if not p.is_file():
         return {}
@@ -291,7 +292,7 @@ def _source_record(d: Path, m: dict[str, Any], s: pd.DataFrame, mid: str, mdesc:
         "seconds": sum(float(x.get("seconds") or 0) for x in (m.get("sessions") or [])),
         "design": (m.get("protocol") or {}).get("design"),
         "design_captures": (m.get("protocol") or {}).get("design_captures"),
-        "looks": _looks(m, d),
+        "looks": _looks(m, d), "test_set": (m.get("ledger") or {}).get("test_set"),
         "left_out": [n for n in (m.get("notes") or []) if str(n).startswith(LEFT_OUT)],
     }
 
@@ -316,7 +317,7 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
         s, store = _read_scores(d)
         if s.empty:
             continue
-        m = _read_manifest(d)
+        m = read_manifest(d)
         mid, mdesc = machine_id(m.get("platform"))
         s = _labelled_scores(s, d, m, mid, mdesc)
         p = _read_predictions(d, store)
