@@ -56,6 +56,19 @@ def test_one_protocol_in_two_folders_of_one_root_is_two_looks(tmp_path):
         assert any("scored by 2 run(s), 1 method(s)" in n for n in lb.notes)
 
 
+def test_a_run_of_some_methods_counts_only_the_methods_it_scored(tmp_path):
+    data = tmp_path / "data.parquet"
+    random_dataset(subjects=("s1", "s2", "s3"), per_cell=2).to_parquet(data)
+    p = tmp_path / "p.yaml"
+    p.write_text(f"name: p\ndataset: {data}\nscheme: loso\nfeatures: [[test-mean]]\n"
+                 "classifiers: [test-logreg, test-forest]\n")
+    out = tmp_path / "results" / "p"
+    run_protocol(p, out=out, progress=False, methods=["test-logreg"])
+    assert _looks_of(out) == Looks(runs=1, methods=1, finals=0)  # the other planned method was not scored
+    run_protocol(p, out=out, progress=False, methods=["test-forest"])
+    assert _looks_of(out) == Looks(runs=2, methods=2, finals=0)
+
+
 class _Interrupted(BaseException):
     """What Ctrl-C (or a kill) does to a run: it stops between two tasks."""
 

@@ -494,9 +494,11 @@ def plan_test_set(plan: Plan) -> str:
     return test_set_hash_of(checksums[i] for i in sorted({int(i) for t in plan.tasks for i in t.fold.test}))
 
 
-def plan_methods(plan: Plan) -> list[str]:
-    """The methods a plan evaluates, as ``features / method`` labels."""
-    return sorted({f"{t.method.features_label} / {t.method.label}" for t in plan.tasks})
+def plan_methods(plan: Plan, only: set[str] | None = None) -> list[str]:
+    """The methods a plan evaluates (those whose method label is in ``only``, when given), as
+    ``features / method`` labels."""
+    return sorted({f"{t.method.features_label} / {t.method.label}" for t in plan.tasks
+                   if only is None or t.method.label in only})
 
 
 def method_labels(plan: Plan) -> list[str]:

@@ -258,7 +258,7 @@ def _record_look(plan: Plan, store: ResultStore, ledger: Path, final: bool, forc
     if root is not None and ledger == root / LEDGER_NAME:  # the ledgers of earlier versions, deeper in the root
         merge_ledgers(ledger, old_ledgers(root))
     test_set = plan_test_set(plan)
-    methods = plan_methods(plan)
+    methods = plan_methods(plan, only)  # the methods this run scores (``--method``), not every one planned
     notes = check_final(ledger, test_set, methods, force_final) if final else []
     if n_pending or final:
         look, resumed = start_look(store.root, {"run_id": plan.run_id, "final": final,
