@@ -12,7 +12,7 @@ import click
 
 from ..core.atomic import atomic_write_bytes
 from ..deploy.model import TrainedModel
-from ..deploy.predict import accuracy_text, predict_dataset, read_data, write_table
+from ..deploy.predict import accuracy_text, adaptation_text, predict_dataset, read_data, write_table
 from ..deploy.stream import (
     SlidingRecognizer,
     load_replay,
@@ -87,6 +87,9 @@ def predict(model_path, data, fmt, out, whole, **options) -> None:
     model = _load_model(model_path)
     ds = read_data(data, fmt, model, **{k: v for k, v in options.items() if v is not None})
     table = predict_dataset(model, ds, whole=whole, source=data)
+    adapted = adaptation_text(model, ds)
+    if adapted:
+        click.echo(f"note: {adapted}", err=True)
     if out:
         write_table(table, out)
         click.echo(f"{out}: {len(table)} captures labelled", err=True)

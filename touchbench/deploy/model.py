@@ -54,6 +54,7 @@ from typing import Any, Sequence
 import joblib
 import numpy as np
 
+from ..classifiers.adapt import uses_unlabelled_test
 from ..classifiers.fastforest import compile_forest
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import DataError, TouchbenchError
@@ -141,6 +142,13 @@ class TrainedModel:
         if known is None:
             return None
         return np.array([capture_checksum(c) in known for c in captures], dtype=bool)
+
+    @property
+    def adapts_to_session(self) -> bool:
+        """Whether the model's classifier adapts to each new session from its unlabelled captures
+        (:func:`touchbench.classifiers.adapt.uses_unlabelled_test`): ``predict`` adapts it to the
+        captures it is given, ``stream`` refuses it."""
+        return self.estimator is not None and uses_unlabelled_test(str(self.manifest["classifier"]["name"]))
 
     @property
     def method(self) -> str:

@@ -14,6 +14,13 @@ probabilities; a capture shorter than every window is labelled whole
 classifier's own prediction and the probabilities are its
 ``predict_proba``.
 
+A model that adapts to each session from its unlabelled captures
+(``touch-et-adapt``: :attr:`.model.TrainedModel.adapts_to_session`) is
+adapted to the captures of the data it is given before labelling them:
+each subject's captures as a session where the data has a ``subject``
+column, else all of them as one (:func:`adaptation_sessions`); the command
+says so (:func:`adaptation_text`).
+
 A model file records a checksum of every capture it was trained on: the
 ``trained_on`` column says which captures of the data the model has seen
 (the same frames, whichever reader read them), and :func:`accuracy_text`
@@ -30,6 +37,7 @@ import numpy as np
 import pandas as pd
 
 from ..catalog import load_dataset
+from ..classifiers.adapt import adapt_each_session
 from ..core.atomic import atomic_write_bytes, atomic_write_parquet
 from ..core.errors import TouchbenchError
 from ..datasets.formats import FORMATS
@@ -38,7 +46,8 @@ from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
 from .model import TrainedModel
 from .windows import cut_windows
 
-__all__ = ["TRAINED_ON", "accuracy_text", "predict_dataset", "read_data", "write_table"]
+__all__ = ["TRAINED_ON", "accuracy_text", "adaptation_sessions", "adaptation_text", "predict_dataset", "read_data",
+           "write_table"]
 
 #: the column that says whether the model was trained on a capture
 TRAINED_ON = "trained_on"
@@ -60,18 +69,17 @@ def predict_dataset(model: TrainedModel, ds: TouchDataset, *, whole: bool = Fals
     model.check_sensor(ds.sensor, source or ds.name)
     classes = [str(c) for c in model.classes]
     w = model.manifest.get("windows")
+    sessions = adaptation_sessions(model, ds)
     if w and not whole:
         windows, src = cut_windows(ds.captures, w["lengths_frames"], w["train_hop_frames"])
-        Pw = model.predict_proba(windows, fast=True)
+        Pw, _ = _label(model, model.transform(windows), None if sessions is None else sessions[src])
         P = np.zeros((len(ds), len(classes)))
         np.add.at(P, src, Pw)
         P /= np.bincount(src, minlength=len(ds))[:, None]
         pred = np.array(classes, dtype=object)[np.argmax(P, axis=1)]
         n_windows = np.bincount(src, minlength=len(ds))
     else:
-        X = model.transform(ds.captures)
-        P = model.proba_from_features(X, fast=True)
-        pred = model.predict_from_features(X)
+        P, pred = _label(model, model.transform(ds.captures), sessions)
         n_windows = np.ones(len(ds), dtype=np.int64)
     meta = ds.meta
     out = pd.DataFrame({"capture_id": meta["capture_id"].astype(str).to_numpy()})
@@ -90,6 +98,35 @@ def predict_dataset(model: TrainedModel, ds: TouchDataset, *, whole: bool = Fals
     for i, c in enumerate(classes):
         out[f"{PROBA_PREFIX}{c}"] = P[:, i]
     return out
+
+
+def adaptation_sessions(model: TrainedModel, ds: TouchDataset) -> np.ndarray | None:
+    """The session each capture is adapted with, for a model that adapts to sessions: its subject
+    (every dataset has a ``subject`` column); None for any other model."""
+    return ds.meta["subject"].astype(str).to_numpy() if model.adapts_to_session else None
+
+
+def adaptation_text(model: TrainedModel, ds: TouchDataset) -> str | None:
+    """What ``predict`` says of a model that adapts to sessions (None for any other model)."""
+    sessions = adaptation_sessions(model, ds)
+    if sessions is None:
+        return None
+    n = len(np.unique(sessions))
+    return (f"adapted to the data's unlabelled captures, each of its {n} subject{'s' if n > 1 else ''} as a "
+            "session: these labels used the test captures themselves, not only the model")
+
+
+def _label(model: TrainedModel, X: np.ndarray, sessions: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """``(probabilities, labels)`` of the feature rows ``X``; with ``sessions`` the model is adapted
+    to each session's rows before they are labelled (:func:`adapt_each_session`)."""
+    if sessions is None:
+        return model.proba_from_features(X, fast=True), model.predict_from_features(X)
+    P = np.zeros((len(X), len(model.classes)), dtype=np.float64)
+    pred = np.empty(len(X), dtype=object)
+    for rows in adapt_each_session(model.estimator, X, sessions):
+        P[rows] = model.proba_from_features(X[rows], fast=True)
+        pred[rows] = model.predict_from_features(X[rows])
+    return P, pred
 
 
 def accuracy_text(model: TrainedModel, table: pd.DataFrame) -> str | None:

@@ -33,6 +33,11 @@ gesture types". Here:
   reached the recogniser more than one frame period after their scheduled
   time are counted as ``late`` (the recogniser did not keep up).
 
+A model that adapts to each session from its unlabelled captures
+(``touch-et-adapt``, :attr:`.model.TrainedModel.adapts_to_session`) is
+refused: a stream's frames arrive one at a time, with no session to adapt
+to beforehand.
+
 Defaults (interpretations): the window lengths are the model's training
 windows, or, for a model trained on whole captures, its median training
 capture length; hop 0.5 s; threshold 0.5 (the best class is more likely than
@@ -129,6 +134,10 @@ class SlidingRecognizer:
 
     def __init__(self, model: TrainedModel, windows_s: Iterable[float] | None = None, hop_s: float = 0.5,
                  threshold: float = 0.5, combine: str = "max", none_label: str = "none", fast: bool = True):
+        if model.adapts_to_session:
+            raise TouchbenchError(f"{model.method}: this model adapts to each session from that session's "
+                                  "captures (touchbench predict does it on a file); a stream has no session "
+                                  "to adapt to: train a method that does not adapt for stream")
         self.model = model
         sensor = model.sensor
         self.frame_rate = float(sensor.frame_rate)

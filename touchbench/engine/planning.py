@@ -415,6 +415,7 @@ def _base_row(place: _FoldPlace, m: Method, task_id: str, seed: int) -> dict[str
         "n_train": int(len(fold.train)), "n_test": int(len(fold.test)),
         "leakage": "; ".join(x for x in [place.scheme_leak, *m.leakage] if x),
         "selection": m.tuned_on_test,
+        "adaptation": m.adaptation,
     })
 
 

@@ -381,7 +381,7 @@ def _merge_and_record(plan: Plan, store: ResultStore, session: _Session, ledger:
     # what the plan says of each task, over what its fragment says: how it leaks, and how it is named
     # (a label renamed in the protocol changes no task, only the name its rows carry)
     per_task = {col: {t.task_id: t.base_row.get(col, "") for t in plan.tasks}
-                for col in ("leakage", "selection", "features", "classifier")}
+                for col in ("leakage", "selection", "adaptation", "features", "classifier")}
     merged = store.merge(plan.task_ids, stamp, protocol.metrics, session.notes, per_task, session.status)
     scores = merged["scores"]
     expected = check_expected(protocol.expected, scores, merged["predictions"], protocol.features_label_of)

@@ -31,12 +31,13 @@ from typing import Any, Callable
 import numpy as np
 import pandas as pd
 
+from ..classifiers.adapt import adapt_each_session
 from ..core.threads import available_cpus, single_thread
 from ..datasets.model import TouchDataset
 from ..evaluation.metrics import metrics
 from ..features.base import make_feature_set
 from ..methods import FittedMethod, Method
-from ..methods.fitting import fit_estimator
+from ..methods.fitting import FittedEstimator, fit_estimator
 from ..protocols.schemes import Fold, fold_notes
 from ..results.manifest import load_average
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
@@ -246,6 +247,21 @@ def _predictions(task: Task, ds: TouchDataset, y_test: np.ndarray, y_pred: np.nd
     return pd.DataFrame(columns)
 
 
+def _adapted_predictions(fitted: FittedEstimator, X_te: np.ndarray,
+                         sessions: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray] | None]:
+    """An adapted method's labels and probabilities of the test rows (None when its estimator gives
+    none): the estimator is adapted to each session's rows (``sessions``: each test row's subject),
+    unlabelled, before they are predicted (:func:`touchbench.classifiers.adapt.adapt_each_session`)."""
+    y_pred = np.empty(len(X_te), dtype=object)
+    proba: dict[str, np.ndarray] = {}
+    for rows in adapt_each_session(fitted.estimator, X_te, sessions):
+        part, p = fitted.predict_in_one_pass(X_te[rows])
+        y_pred[rows] = part
+        for label, v in (p if p is not None else fitted.predict_proba(X_te[rows]) or {}).items():
+            proba.setdefault(label, np.full(len(X_te), np.nan))[rows] = v
+    return y_pred, proba or None
+
+
 # ----------------------------------------------------------------- the task
 def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFrame | None]:
     """Run one task; a feature or classifier error becomes a ``failed`` row."""
@@ -273,13 +289,16 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
                                        sensor=ds.sensor)
             row["fit_seconds"] = time.perf_counter() - t0 if fitted_est.estimator is not None else 0.0
             row["n_classes_train"] = int(len(fitted_est.classes))
-            t0 = time.perf_counter()
-            y_pred, proba = fitted_est.predict_in_one_pass(X_te)  # probabilities too where the same pass gives them
-            row["predict_seconds"] = time.perf_counter() - t0
             est = fitted_est.estimator
+            t0 = time.perf_counter()
+            if task.method.adaptation and est is not None:  # adapted to each test subject's captures, unlabelled
+                y_pred, proba = _adapted_predictions(fitted_est, X_te, ds.meta["subject"].to_numpy()[fold.test])
+            else:
+                y_pred, proba = fitted_est.predict_in_one_pass(X_te)  # probabilities too where the same pass gives them
+            row["predict_seconds"] = time.perf_counter() - t0
             if getattr(est, "selection_note_", None):  # a method that searched inside the training fold says what it chose
                 notes.append(est.selection_note_)
-            if proba is None and est is not None:
+            if proba is None and est is not None and not task.method.adaptation:
                 proba = fitted_est.predict_proba(X_te)
             row.update(metrics(y_test, y_pred))
             if task.measure_latency:  # once per method and run: features + predict of one capture

@@ -12,15 +12,18 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..classifiers import CLASSIFIERS
+from ..classifiers.adapt import uses_unlabelled_test
 from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
 from ..core.registry import Registry
 
-__all__ = ["CAPTURES", "METHODS", "Method", "MethodSpec", "SUBJECT_ID_LEAK", "TUNED_ON_TEST_LEAK",
+__all__ = ["ADAPTED", "CAPTURES", "METHODS", "Method", "MethodSpec", "SUBJECT_ID_LEAK", "TUNED_ON_TEST_LEAK",
            "expand_candidates", "method_spec", "resolve_entry"]
 
 SUBJECT_ID_LEAK = "the subject's id is a feature"
 TUNED_ON_TEST_LEAK = "a parameter chosen by its test accuracy"
+#: what a method whose estimator adapts to the test session uses (the results' ``adaptation`` column)
+ADAPTED = "unlabelled test captures, per subject"
 
 
 @dataclass(frozen=True)
@@ -94,6 +97,12 @@ class Method:
     def method_id(self) -> str:
         """A short hash of :attr:`key`."""
         return hashlib.sha256(canonical_json(self.key).encode()).hexdigest()[:12]
+
+    @property
+    def adaptation(self) -> str:
+        """What the method adapts to at test time (:data:`ADAPTED`: its estimator is tagged
+        ``unlabelled_test``, it sees each test subject's captures without their labels); "" otherwise."""
+        return ADAPTED if uses_unlabelled_test(self.spec.estimator) else ""
 
     @property
     def leakage(self) -> list[str]:

@@ -15,6 +15,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..classifiers.adapt import uses_unlabelled_test
+from ..core.errors import TouchbenchError
 from ..datasets.model import SensorSpec
 from .base import MethodSpec
 from .fitting import FittedMethod, fit_method
@@ -32,7 +34,9 @@ class FeaturePipeline:
     what a feature set that learns nothing computes from the training
     captures is cached, so fitting again on the same captures (another
     estimator, another seed) reads it back. After ``fit``: ``method_`` (the
-    fitted method), ``classes_``.
+    fitted method), ``classes_``. An estimator that adapts to sessions
+    (``touch-et-adapt``) is adapted to a new session's captures with
+    :meth:`adapt` before :meth:`predict`.
     """
 
     def __init__(self, spec: MethodSpec, random_state: int | None = None, sensor: SensorSpec | None = None,
@@ -59,6 +63,16 @@ class FeaturePipeline:
 
     def transform(self, captures: Sequence[np.ndarray]) -> np.ndarray | list[np.ndarray]:
         return self.method_.transform(captures)
+
+    def adapt(self, captures: Sequence[np.ndarray]) -> "FeaturePipeline":
+        """Adapt an estimator that adapts to sessions (``session-centred``) to one new session's
+        captures, unlabelled, before :meth:`predict` labels them; refused for any other estimator."""
+        est = self.method_.estimator
+        if not uses_unlabelled_test(self.spec.estimator):
+            raise TouchbenchError(f"{self.spec.estimator!r} does not adapt to sessions: predict without adapt")
+        if est is not None:  # a training set of one class has no estimator to adapt
+            est.adapt(self.method_.transform(captures))
+        return self
 
     def predict(self, captures: Sequence[np.ndarray]) -> np.ndarray:
         return self.method_.predict(captures)

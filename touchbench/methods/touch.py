@@ -15,6 +15,9 @@ estimator sees the same matrix a user's own pipeline would.
 - ``touch-et-fast``: touch-rhythm alone -> extra-trees of 100 trees (the latency-bound entry);
 - ``touch-et-contact``: touch-et plus contact-evidence (level as a fraction of full scale and contact above
   the capture's noise floor, :mod:`touchbench.features.contact`: what the level-free sets remove) -> extra-trees;
+- ``touch-et-adapt``: touch-et-contact's feature sets -> the same extra-trees inside ``session-centred``
+  (:mod:`touchbench.classifiers.adapt`): each session (subject) centred by its own feature means, the test
+  session's from its unlabelled captures -- a figure of another kind, kept apart from the plain ones;
 - ``touch-select``: the design itself as a method: touch-et, touch-xgb, touch-et-win and touch-et-fast
   scored by leaving one training subject out at a time, inside every outer fold, the best refitted
   (``nested-select``, :mod:`touchbench.classifiers.search`); a candidate the sensor refuses is left out.
@@ -43,6 +46,11 @@ _TOUCH = {
     "touch-et-contact": ("touchbench: touch-et plus contact-evidence (level and contact above the noise floor)",
                          (*THREE, "contact-evidence"), "touch-extra-trees", {}),
 }
+
+_TOUCH["touch-et-adapt"] = (
+    "touchbench: touch-et-contact's feature sets -> its extra-trees on each session centred by its own means "
+    "(adapts to the test session's unlabelled captures)",
+    (*THREE, "contact-evidence"), "session-centred", {"estimator": "touch-extra-trees", "params": {}, "scale": False})
 
 for _name, (_desc, _sets, _est, _params) in _TOUCH.items():
     METHODS.register(_name, description=_desc, source=SOURCE, feature_sets=_sets, estimator=_est,

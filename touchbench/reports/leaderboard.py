@@ -27,6 +27,13 @@ its folds; :mod:`touchbench.reports.stats`). Titles carry the dataset, scheme an
 (two tables of different data with one name are told apart as ``data 2``,
 ``data 3``...); failed methods are shown as failed with their error; rows
 that would read the same show their feature (then classifier) parameters.
+
+Methods adapted to the test data (the results' ``adaptation``: a method
+that re-centres each test subject by that subject's unlabelled captures)
+are a figure of another kind: they get a table of their own (their rows'
+``table_key`` carries the adaptation, :mod:`touchbench.reports.results`),
+titled and explained as such, ranked, tested and put on a Pareto front
+among themselves only, and left out of every comparison across tables.
 """
 
 from __future__ import annotations
@@ -82,6 +89,7 @@ __all__ = [
     "method_label",
     "method_labels",
     "owns_input",
+    "plain_tables",
     "resolve_method",
     "subject_values",
     "to_csv",
@@ -117,11 +125,14 @@ class Leaderboard:
     has_design: bool = False
     #: how the title names the evaluation (:func:`table_heading`); ``scheme`` when empty
     heading: str = ""
+    #: what the table's methods adapted to at test time ("" for the plain methods' table)
+    adaptation: str = ""
 
     @property
     def title(self) -> str:
         t = f"{self.dataset}" + (f" ({self.variant})" if self.variant else "") + f" — {self.heading or self.scheme}"
         t = t if self.target == "gesture" else f"{t} — target {self.target}"
+        t += " — adapted to each test session" if self.adaptation else ""
         return t + (" — LEAKY evaluation" if self.is_leaky else "")
 
     @property
@@ -317,6 +328,7 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
         scheme=str(first["scheme_label"]), rows=df, folds=folds, machines=machines, reference_machine=ref,
         pooled_machines=pool_machines, alpha=alpha, frame_rate=float(fr.iloc[0]) if len(fr) else math.nan, notes=notes,
         looks=looks_here, has_design=design.captures is not None, heading=table_heading(sources, str(first["scheme_label"])),
+        adaptation=_mode(s_all["adaptation"]) if "adaptation" in s_all else "",
     )
 
 
@@ -586,11 +598,16 @@ def leaderboard(*results: Any, alpha: float = 0.05, pool_machines: bool = False,
     return build_leaderboards(load_results(paths), alpha=alpha, pool_machines=pool_machines, machine=machine)
 
 
+def plain_tables(lbs: list[Leaderboard]) -> list[Leaderboard]:
+    """The tables of methods that did not adapt to the test data: the only ones compared across tables."""
+    return [lb for lb in lbs if not lb.adaptation]
+
+
 def across_tables(lbs: list[Leaderboard]) -> pd.DataFrame:
     """Mean accuracy of each method (by label) in each table (rows: table titles); only methods
-    present, with an accuracy, in every table."""
+    present, with an accuracy, in every table; only the plain tables (:func:`plain_tables`)."""
     cols = {}
-    for lb in lbs:
+    for lb in plain_tables(lbs):
         labels = method_labels(lb.rows)
         r = lb.rows[lb.rows["accuracy"].notna()]
         cols[lb.title] = pd.Series(r["accuracy"].to_numpy(float), index=[labels[m] for m in r["method_id"]])
@@ -880,7 +897,10 @@ def legend(lb: Leaderboard) -> str:
             + (" † = the method was designed on part of this data (see the note); held out: accuracy on the "
                "test captures outside the design data (mean over folds)." if lb.has_design else "")
             + (" LEAKY rows: the evaluation let test data inform training (see the notes)."
-               if bool((lb.rows["leakage"] != "").any()) else ""))
+               if bool((lb.rows["leakage"] != "").any()) else "")
+            + (f" ADAPTED: every method of this table adapted to each test session using that session's "
+               f"unlabelled captures ({lb.adaptation}; never their labels): a figure of another kind, ranked "
+               f"and tested only against each other, never against the plain methods." if lb.adaptation else ""))
 
 
 def _md_escape(s: str) -> str:
@@ -903,7 +923,7 @@ def to_markdown(lbs: list[Leaderboard], title: str | None = "Leaderboard") -> st
             out.append("")
             out.append(f"Note: {n}")
         out.append("")
-    ranks = mean_ranks(lbs) if len(lbs) > 1 else None
+    ranks = mean_ranks(lbs) if len(plain_tables(lbs)) > 1 else None
     if ranks is not None and len(ranks):
         out += [f"## Mean rank across {int(ranks['tables'].iloc[0])} tables", "",
                 "| method | mean rank | mean accuracy % |", "|---|---|---|"]
@@ -942,6 +962,7 @@ def to_json(lbs: list[Leaderboard]) -> str:
             "alpha": lb.alpha, "machines": lb.machines, "reference_machine": lb.reference_machine,
             "pooled_machines": lb.pooled_machines, "notes": lb.notes, "rows": _records(lb),
             "leaky": lb.is_leaky, "looks": None if lb.looks is None else vars(lb.looks),
+            "adaptation": lb.adaptation,
         })
     return json.dumps({"tables": tables}, indent=2) + "\n"
 
@@ -964,6 +985,7 @@ def to_csv(lbs: list[Leaderboard]) -> str:
         d.insert(0, "target", lb.target)
         d.insert(0, "variant", lb.variant)
         d.insert(0, "dataset", lb.dataset)
+        d["adaptation"] = lb.adaptation
         frames.append(d)
     return pd.concat(frames, ignore_index=True).to_csv(index=False)
 
@@ -1033,7 +1055,7 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
         for n in lb.notes:
             console.print(escape(f"Note: {n}"), style="yellow")
         console.print()
-    ranks = mean_ranks(lbs) if len(lbs) > 1 else None
+    ranks = mean_ranks(lbs) if len(plain_tables(lbs)) > 1 else None
     if ranks is not None and len(ranks):
         t = Table(title=f"Mean rank across {int(ranks['tables'].iloc[0])} tables")
         for h in ("method", "mean rank", "mean accuracy %"):

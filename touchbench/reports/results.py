@@ -24,6 +24,11 @@ adds the columns the reports need:
   ``early`` scheme) are left out so runs with different lists combine.
 - ``frame_rate``: the dataset's frame rate from the manifest (to express
   frames seen in seconds).
+- ``table_key``: the table a row belongs to: dataset (content hash), target
+  and scheme label, and for a method adapted to the test data (its
+  ``adaptation``, e.g. to each test subject's unlabelled captures) that
+  adaptation too, so such a method is ranked, tested and put on a Pareto
+  front only with methods adapted the same way.
 
 A run interrupted before its reports were merged is read from its task
 fragments (``fragments/*.scores.parquet``).
@@ -245,8 +250,10 @@ def _labelled_scores(s: pd.DataFrame, d: Path, m: dict[str, Any], mid: str, mdes
         for t, fp, cn, cp, ef, v in zip(s["target"], s["feature_params"], s["classifier_name"],
                                         s["classifier_params"], s["early_frames"], variants)
     ]
-    s["table_key"] = [
-        _short_hash([dh, t, sc], 8) for dh, t, sc in zip(s["dataset_hash"], s["target"], s["scheme_label"])
+    adaptation = s["adaptation"] if "adaptation" in s else pd.Series("", index=s.index)
+    s["table_key"] = [  # a method adapted to the test data is never tabled with plain ones
+        _short_hash([dh, t, sc] + ([a] if a else []), 8)
+        for dh, t, sc, a in zip(s["dataset_hash"], s["target"], s["scheme_label"], adaptation.fillna("").astype(str))
     ]
     base_fold = s["fold"].astype(str).str.replace(_CROP_PREFIX, "", regex=True)
     s["fold_key"] = [f"{proto_seed}/{r}/{f}" for r, f in zip(s["repetition"], base_fold)]

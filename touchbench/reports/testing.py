@@ -39,7 +39,8 @@ class FakeMethod(dict):
     next class in sorted order); ``predicted``: capture id -> label, for any
     confusion (overrides ``wrong``); timings per fold (constant or a list):
     ``latency_cpu_ms`` as ``latency_ms`` unless given; ``load_avg``: the
-    machine's load average while it ran (on the platform's ``cpu_count`` CPUs).
+    machine's load average while it ran (on the platform's ``cpu_count`` CPUs); ``adaptation``:
+    what the method adapted to at test time (the results' column; "" for a plain method).
     """
 
     def __init__(self, features: str, classifier: str, *, classifier_name: str | None = None,
@@ -48,7 +49,7 @@ class FakeMethod(dict):
                  latency_cpu_ms: float | Sequence[float] | None = None, load_avg: float = 0.0,
                  fit_seconds: float | Sequence[float] = 0.5, feature_seconds_per_capture: float | Sequence[float] = 1e-3,
                  early_frames: int | None = None, failed_folds: Sequence[str] = (),
-                 predicted: dict[str, str] | None = None):
+                 predicted: dict[str, str] | None = None, adaptation: str = ""):
         super().__init__(
             features=features, classifier=classifier, classifier_name=classifier_name or classifier,
             classifier_params=classifier_params or {},
@@ -57,7 +58,7 @@ class FakeMethod(dict):
             latency_cpu_ms=latency_ms if latency_cpu_ms is None else latency_cpu_ms, load_avg=load_avg,
             fit_seconds=fit_seconds,
             feature_seconds_per_capture=feature_seconds_per_capture, early_frames=early_frames,
-            failed_folds=list(failed_folds), predicted=dict(predicted or {}),
+            failed_folds=list(failed_folds), predicted=dict(predicted or {}), adaptation=adaptation,
         )
 
 
@@ -98,6 +99,7 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
                 "classifier_name": m["classifier_name"], "classifier_params": canonical_json(m["classifier_params"]),
                 "seed": zlib.crc32(f"{m['features']}|{m['classifier']}|{fold_name}".encode()),
                 "n_train": len(caps) - len(ids), "n_test": len(ids), "leakage": "", "selection": "",
+                "adaptation": m["adaptation"],
             })
             base.update(run_id=run_id, protocol_hash="p" * 64, n_classes_train=len(classes), finished_at=finished_at)
             if fold in m["failed_folds"]:

@@ -86,8 +86,11 @@ def _sha256(path: Path) -> str:
 PLAN_COLUMNS = (
     "task_id", "protocol", "dataset", "dataset_hash", "target", "scheme", "repetition", "fold", "fold_group",
     "early_frames", "features", "feature_sets", "feature_params", "classifier", "classifier_name",
-    "classifier_params", "seed", "n_train", "n_test", "leakage", "selection",
+    "classifier_params", "seed", "n_train", "n_test", "leakage", "selection", "adaptation",
 )
+#: plan columns that results written before touchbench recorded them lack, with the value they read as
+#: (no method of those versions adapted to the test data)
+LATER_PLANNED = {"adaptation": ""}
 #: what running a task measures, each with its value before (or without) a measurement
 MEASURED = {
     "status": "ok", "error": "", "accuracy": np.nan, "balanced_accuracy": np.nan, "macro_f1": np.nan,
@@ -106,6 +109,7 @@ SCORE_COLUMNS = [
     "accuracy", "balanced_accuracy", "macro_f1",
     "feature_seconds_per_capture", "feature_fit_seconds", "fit_seconds", "predict_seconds", "latency_ms",
     "latency_cpu_ms", "load_avg", "usable_cpus", "status", "error", "notes", "finished_at", "leakage", "selection",
+    "adaptation",
 ]
 
 
@@ -143,7 +147,7 @@ def upgrade(df: pd.DataFrame, pooled: bool = False) -> pd.DataFrame:
     confusion table (per-task and pooled rows in one file, told apart by ``scope``) keeps the rows
     of one kind without that column: the ``pooled`` ones (without ``task_id`` / ``fold``) or the
     per-task ones. Scores without the columns measured since (:data:`LATER_MEASURED`) get them
-    empty (NaN)."""
+    empty (NaN), and the plan columns recorded since (:data:`LATER_PLANNED`) at their value then."""
     old = {k: v for k, v in _LEGACY.items() if k in df.columns and v not in df.columns}
     if old:
         df = df.rename(columns=old)
@@ -152,6 +156,9 @@ def upgrade(df: pd.DataFrame, pooled: bool = False) -> pd.DataFrame:
     later = [c for c in LATER_MEASURED if c not in df.columns]
     if later and "status" in df.columns:  # scores written before these were measured
         df = df.assign(**{c: np.nan for c in later})
+    planned = {c: v for c, v in LATER_PLANNED.items() if c not in df.columns}
+    if planned and "status" in df.columns:  # scores written before these were recorded
+        df = df.assign(**planned)
     if "scope" in df.columns:
         df = df[df["scope"] == ("pooled" if pooled else "task")].drop(columns="scope").reset_index(drop=True)
         if pooled:
