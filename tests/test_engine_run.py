@@ -346,3 +346,49 @@ def test_a_run_of_the_first_layout_is_still_read(tmp_path):
     with pytest.raises(TouchbenchError, match=r"predictions.parquet: written by a newer touchbench \(results schema 9; "
                                               r"this version reads up to 3\)"):
         read_results_table(out / "predictions.parquet")
+
+
+ADAPT_PROTOCOL = """\
+name: adapt
+dataset: {data}
+scheme: {{name: kfold, k: 2, grouped: true}}
+methods:
+  - {{features: [test-mean], estimator: jung-naive-bayes, label: plain-nb}}
+  - {{features: [test-mean], estimator: session-centred, params: {{estimator: jung-naive-bayes}}, label: adapted-nb}}
+seed: 7
+"""
+
+
+def test_an_adapted_method_is_adapted_to_each_test_subject_and_says_so(tmp_path):
+    """Two folds of two test subjects each: the adapted method's predictions are scikit-learn's
+    Gaussian naive Bayes on the training rows centred by their subject's mean, applied to the test
+    rows centred by their own subject's mean (worked out here with NumPy); its scores rows carry
+    the adaptation, the plain method's none."""
+    from sklearn.naive_bayes import GaussianNB
+
+    from touchbench.datasets.model import TouchDataset
+    from touchbench.methods.base import ADAPTED
+
+    ds = random_dataset(subjects=("s1", "s2", "s3", "s4"), per_cell=2)
+    offsets = {"s1": 0, "s2": 40, "s3": 80, "s4": 120}  # each person presses harder: a session offset
+    caps = [np.clip(c.astype(np.int64) + offsets[s], 0, 255).astype(np.uint8) for c, s in zip(ds.captures, ds.meta["subject"])]
+    data = TouchDataset(ds.name, caps, ds.meta, ds.sensor).to_parquet(tmp_path / "data.parquet")
+    (tmp_path / "adapt.yaml").write_text(ADAPT_PROTOCOL.format(data=data))
+    res = run_protocol(tmp_path / "adapt.yaml", out=tmp_path / "out", progress=False)
+    scores, preds = res.scores, pd.read_parquet(tmp_path / "out" / "predictions.parquet")
+    assert (scores["status"] == "ok").all() and len(scores) == 4
+    assert set(scores.loc[scores["classifier"] == "adapted-nb", "adaptation"]) == {ADAPTED}
+    assert set(scores.loc[scores["classifier"] == "plain-nb", "adaptation"]) == {""}
+    assert scores.loc[scores["classifier"] == "adapted-nb", "latency_ms"].notna().sum() == 1  # after adaptation
+    X = np.stack([c.astype(np.float64).mean(axis=0).ravel() for c in caps])  # test-mean by hand
+    subjects = ds.meta["subject"].astype(str).to_numpy()
+    centred = X.copy()
+    for s in offsets:
+        centred[subjects == s] -= X[subjects == s].mean(axis=0)
+    adapted = preds[preds["classifier"] == "adapted-nb"]
+    for _, fold in adapted.groupby("fold"):
+        test = ds.meta["capture_id"].isin(fold["capture_id"]).to_numpy()
+        assert len(set(subjects[test])) == 2  # two test subjects, each adapted to on its own
+        nb = GaussianNB().fit(centred[~test], ds.meta["gesture"].to_numpy()[~test])
+        expected = dict(zip(ds.meta["capture_id"][test], nb.predict(centred[test])))
+        assert fold["predicted_label"].tolist() == [expected[c] for c in fold["capture_id"]]

@@ -416,3 +416,38 @@ def test_a_method_that_brings_its_own_input_is_named_by_its_label_everywhere():
     pair = {"features": "msd", "classifier": "rf100", "classifier_name": "gaus-rf", "early_frames": math.nan}
     assert [method_label(r) for r in (registered, on_captures, pair)] == ["touch-et", "minirocket", "msd / rf100"]
     assert [short_label(r) for r in (registered, on_captures, pair)] == ["touch-et", "minirocket", "msd/rf100"]
+
+
+def test_an_adapted_method_gets_a_table_of_its_own(tmp_path):
+    """A method adapted to the test subjects' unlabelled captures (its rows' ``adaptation``) is never
+    ranked, tested or put on a Pareto front with the plain methods, even when it is more accurate and
+    faster than all of them; its own table says what it used."""
+    from touchbench.methods.base import ADAPTED
+
+    adapted = FakeMethod("touch-rhythm", "touch-et-adapt", classifier_name="touch-et-adapt", latency_ms=0.5,
+                         adaptation=ADAPTED)  # every capture right
+    path = _run1(tmp_path)
+    write_fake_run(tmp_path / "adapted", CAPS, FOLDS, [adapted], scheme={"name": "loso"})
+    lbs = build_leaderboards(load_results([path, tmp_path / "adapted"]))
+    plain, own = sorted(lbs, key=lambda lb: lb.adaptation)
+    assert plain.adaptation == "" and set(plain.rows["features"]) == {"msd", "sd", "bmh"}
+    assert plain.rows.iloc[0]["features"] == "msd" and plain.rows.iloc[0]["test"] == "best"  # A: 34/36
+    assert plain.rows["pareto"].tolist() == [True, True, False]  # msd (5 ms), sd (1 ms): as without it
+    assert own.adaptation == ADAPTED and own.rows["classifier"].tolist() == ["touch-et-adapt"]
+    assert own.rows.iloc[0]["accuracy"] == 1.0 and own.rows.iloc[0]["test"] == "best"
+    assert own.title.endswith("loso — adapted to each test session") and not plain.title.endswith("session")
+    md = to_markdown(lbs)
+    assert "ADAPTED: every method of this table adapted to each test session using that session's unlabelled " \
+           f"captures ({ADAPTED}; never their labels)" in md
+    assert md.count("ADAPTED:") == 1 and "Mean rank across" not in md  # one plain table: nothing across tables
+    assert [t["adaptation"] for t in json.loads(to_json(lbs))["tables"]] == [lb.adaptation for lb in lbs]
+
+
+def test_results_written_before_the_adaptation_column_read_as_plain(tmp_path):
+    import pyarrow.parquet as pq
+
+    path = _run1(tmp_path)
+    table = pq.read_table(path / "scores.parquet")
+    pq.write_table(table.drop_columns(["adaptation"]), path / "scores.parquet")  # keeps the schema version
+    (lb,) = build_leaderboards(load_results([path]))
+    assert lb.adaptation == "" and len(lb.rows) == 3 and lb.rows.iloc[0]["features"] == "msd"

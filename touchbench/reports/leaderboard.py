@@ -565,11 +565,13 @@ def _add_closing_notes(df: pd.DataFrame, notes: list[str]) -> None:
 
 def build_leaderboards(rs: ResultSet, *, alpha: float = 0.05, pool_machines: bool = False,
                        machine: str | None = None) -> list[Leaderboard]:
-    """One :class:`Leaderboard` per dataset, target and scheme of ``rs``."""
+    """One :class:`Leaderboard` per dataset, target and scheme of ``rs`` (and one per adaptation to the
+    test data, after the plain ones)."""
     ok = rs.ok
     out = []
     for key in dict.fromkeys(rs.scores["table_key"]):
         out.append(_build_one(rs, key, ok, alpha, pool_machines, machine))
+    out.sort(key=lambda lb: bool(lb.adaptation))  # the plain tables first, each adapted one after them
     seen: dict[tuple[str, str, str], list[str]] = {}
     for lb in out:  # one dataset name, different data: "data 2", "data 3"... in the order met
         hashes = seen.setdefault((lb.dataset, lb.scheme, lb.target), [])

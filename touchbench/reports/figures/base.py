@@ -110,10 +110,12 @@ def clean(text: str) -> str:
 
 
 def slug(lb: Leaderboard) -> str:
-    """A file stem from the table's dataset (a file's name without its suffix), scheme and target."""
+    """A file stem from the table's dataset (a file's name without its suffix), scheme and target
+    (and ``adapted`` for the table of methods adapted to the test sessions)."""
     dataset = Path(lb.dataset).stem if lb.dataset.endswith((".parquet", ".csv", ".gz")) else lb.dataset
     parts = [dataset, lb.scheme] + ([f"target-{lb.target}"] if lb.target != "gesture" else [])
     parts += [lb.variant] if getattr(lb, "variant", "") else []
+    parts += ["adapted"] if getattr(lb, "adaptation", "") else []
     return clean("-".join(parts))[:80] or "table"
 
 
