@@ -58,6 +58,16 @@ def test_touch_et_adapt_is_touch_et_contact_around_the_same_extra_trees():
     assert Method("c", contact, "touch-et-contact").adaptation == ""
 
 
+def test_the_task_identity_follows_the_inner_classifier_by_name():
+    from touchbench.engine.identity import classifier_identity
+
+    spec = method_spec("touch-et-adapt")
+    modules = classifier_identity(spec.estimator, spec.estimator_params).modules
+    assert {"touchbench.classifiers.adapt", "touchbench.classifiers.touch"} <= set(modules)
+    other = classifier_identity(spec.estimator, {**spec.estimator_params, "estimator": "jung-naive-bayes"})
+    assert "touchbench.classifiers.jung" in other.modules and "touchbench.classifiers.touch" not in other.modules
+
+
 # ------------------------------------------------------------------ centring and scaling
 def test_each_training_session_is_centred_by_its_own_mean():
     est = _nb().fit(X_TOY, Y_TOY, groups=G_TOY)

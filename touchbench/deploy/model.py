@@ -148,7 +148,8 @@ class TrainedModel:
         """Whether the model's classifier adapts to each new session from its unlabelled captures
         (:func:`touchbench.classifiers.adapt.uses_unlabelled_test`): ``predict`` adapts it to the
         captures it is given, ``stream`` refuses it."""
-        return self.estimator is not None and uses_unlabelled_test(str(self.manifest["classifier"]["name"]))
+        name = (self.manifest.get("classifier") or {}).get("name")
+        return self.estimator is not None and name is not None and uses_unlabelled_test(str(name))
 
     @property
     def method(self) -> str:
