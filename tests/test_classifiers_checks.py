@@ -1,8 +1,10 @@
 """scikit-learn's estimator checks for every registered classifier but the
 deep ones and the aeon peers (tests/test_classifiers_cnn.py,
 tests/test_classifiers_inception.py and tests/test_classifiers_peers.py run
-them for those) and the nested search over methods, which takes captures
-(tests/test_methods_nested_select.py).
+them for those) and the other estimators that take the captures themselves
+(registry tag ``input="captures"``) and compute feature sets inside: the
+nested search over methods (tests/test_methods_nested_select.py) and the
+training for shift (tests/test_augment.py).
 
 The papers' defaults (1000 trees, 500 boosting iterations, 500 MLP epochs,
 L-BFGS to 1e-10) are slow, so each classifier is checked with the smaller
@@ -44,7 +46,7 @@ NOT_APPLICABLE = {
 
 NAMES = [n for n in CLASSIFIERS.names()
          if not {"deep", "peers"} & set((CLASSIFIERS.entry(n).tags.get("extra") or "").split(","))
-         and not CLASSIFIERS.entry(n).tags.get("candidates")]
+         and CLASSIFIERS.entry(n).tags.get("input") != "captures"]
 
 
 def _expected(est):

@@ -15,11 +15,16 @@ estimator sees the same matrix a user's own pipeline would.
 - ``touch-et-fast``: touch-rhythm alone -> extra-trees of 100 trees (the latency-bound entry);
 - ``touch-et-contact``: touch-et plus contact-evidence (level as a fraction of full scale and contact above
   the capture's noise floor, :mod:`touchbench.features.contact`: what the level-free sets remove) -> extra-trees;
+- ``touch-et-shift``: touch-et-contact's feature sets -> the same extra-trees, trained on every training capture
+  plus two copies changed by the sensor's effects (gain, offset, read noise white or wandering, dead cells, a
+  window taken anywhere in the capture: ``shift-augmented``, :mod:`touchbench.classifiers.augment`, with its
+  defaults); the features are computed inside each task, on the captures and their copies;
 - ``touch-select``: the design itself as a method: touch-et, touch-xgb, touch-et-win and touch-et-fast
   scored by leaving one training subject out at a time, inside every outer fold, the best refitted
   (``nested-select``, :mod:`touchbench.classifiers.search`); a candidate the sensor refuses is left out.
 
-Parameters given to a method go to its estimator.
+Parameters given to a method go to its estimator (for ``touch-et-shift``: the augmentation's, e.g.
+``copies``; ``params`` replaces the extra-trees' parameters).
 """
 
 from __future__ import annotations
@@ -47,6 +52,13 @@ _TOUCH = {
 for _name, (_desc, _sets, _est, _params) in _TOUCH.items():
     METHODS.register(_name, description=_desc, source=SOURCE, feature_sets=_sets, estimator=_est,
                      defaults=dict(_params))(pipeline_method(_name, _sets, _est, _params))
+
+_contact_sets = _TOUCH["touch-et-contact"][1]
+_shift = {"features": list(_contact_sets), "estimator": "touch-extra-trees", "params": dict(_TOUCH["touch-et-contact"][3])}
+METHODS.register("touch-et-shift", description="touchbench: touch-et-contact trained on the captures plus copies changed "
+                 "by the sensor's effects (gain, offset, read noise, dead cells, a window anywhere)",
+                 source=SOURCE, feature_sets=(), estimator="shift-augmented",
+                 defaults=dict(_shift))(pipeline_method("touch-et-shift", (), "shift-augmented", _shift))
 
 SELECT_FROM = ("touch-et", "touch-xgb", "touch-et-win", "touch-et-fast")
 _select = expand_candidates("nested-select", {"candidates": list(SELECT_FROM)})
