@@ -14,8 +14,9 @@ Why: a recogniser trained on one study loses accuracy on recordings of the
 same sensor made elsewhere (docs/research/contact-features.md): the
 sensor's response, its baseline and the shape of its noise differ between
 set-ups. Drawing those differences at training time is data augmentation
-(as in Um et al. 2017, "Data augmentation of wearable sensor data",
-ICMI: scaling, jittering, cropping of sensor series); the effects and their
+(as in Um et al. 2017, "Data augmentation of wearable sensor data for
+Parkinson's disease monitoring using convolutional neural networks", ICMI:
+scaling, jittering, cropping of sensor series); the effects and their
 order are the sensor stack of the synthetic scenes
 (:mod:`touchbench.scenes.sensor`: gain, baseline, read noise, the ADC's
 rounding and clipping), whose ``add_noise`` and ``adc`` make every copy.
