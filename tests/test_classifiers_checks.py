@@ -1,8 +1,10 @@
 """scikit-learn's estimator checks for every registered classifier but the
 deep ones and the aeon peers (tests/test_classifiers_cnn.py,
 tests/test_classifiers_inception.py and tests/test_classifiers_peers.py run
-them for those), the nested search over methods, which takes captures
-(tests/test_methods_nested_select.py), and the classifiers that adapt to a
+them for those), the other estimators that take the captures themselves
+(registry tag ``input="captures"``) and compute feature sets inside: the
+nested search over methods (tests/test_methods_nested_select.py) and the
+training for shift (tests/test_augment.py), and the classifiers that adapt to a
 new session before they predict (tag ``unlabelled_test``: tests/test_adapt.py
 runs the checks on ``session-centred`` adapted to its training rows).
 
@@ -46,7 +48,7 @@ NOT_APPLICABLE = {
 
 NAMES = [n for n in CLASSIFIERS.names()
          if not {"deep", "peers"} & set((CLASSIFIERS.entry(n).tags.get("extra") or "").split(","))
-         and not CLASSIFIERS.entry(n).tags.get("candidates") and not CLASSIFIERS.entry(n).tags.get("unlabelled_test")]
+         and CLASSIFIERS.entry(n).tags.get("input") != "captures" and not CLASSIFIERS.entry(n).tags.get("unlabelled_test")]
 
 
 def _expected(est):

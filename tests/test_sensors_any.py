@@ -97,7 +97,8 @@ def expected_size(name: str, sensor: SensorSpec, frames: int) -> int:
 #: (component, sensor) -> what the refusal must say
 REFUSED: dict[tuple[str, str], str] = {
     **{(n, "1x16"): r"is a channel sensor \(c0, .*not cells of a pressure surface"
-       for n in ("sd", "bmh", "smmhh", "contact-evidence", "touch-et-contact", "touch-et-adapt")},
+       for n in ("sd", "bmh", "smmhh", "contact-evidence", "touch-et-contact", "touch-et-adapt",
+                 "shift-augmented", "touch-et-shift")},
     ("touch-windows", "19x24"): r"2-s windows \(24 frames at 12 Hz\) are longer than the shortest capture \(3 frames\)",
     ("touch-et-win", "19x24"): r"2-s windows \(24 frames at 12 Hz\) are longer than the shortest capture \(3 frames\)",
     ("cnn", "19x24"): r"L=30 windows need captures of at least 30 frames.*the shortest has 3",
@@ -105,6 +106,9 @@ REFUSED: dict[tuple[str, str], str] = {
 }
 #: the classifiers that read raw frames: they record the grid (and rate) they used
 RAW_FRAME = {"minirocket", "multirocket", "multirocket-hydra", "quant", "rdst", "cnn", "inception-time"}
+#: the classifiers that take the captures and compute feature sets inside (a search over methods,
+#: the training for shift)
+ON_CAPTURES = {n for n in CLASSIFIERS.names() if CLASSIFIERS.entry(n).tags.get("input") == "captures"} - RAW_FRAME
 RATE_SETS = {"touch-rhythm", "cell-rhythm", "contact-motion", "touch-windows"}
 
 
@@ -194,7 +198,7 @@ def test_every_classifier_uses_the_sensor_or_is_refused(name, key):
         return
     assert problem is None, problem
     # raw-frame classifiers read raw-window's frames; the others any feature matrix (flagg-stats here)
-    if CLASSIFIERS.entry(name).tags.get("candidates"):  # a search over methods takes the captures
+    if name in ON_CAPTURES:  # a search over methods, the training for shift: the captures themselves
         X = ds.captures
     else:
         X = _frames(ds) if name in RAW_FRAME else make_feature_set("flagg-stats", {}, sensor).fit_transform(ds.captures)
@@ -213,8 +217,12 @@ def test_every_classifier_uses_the_sensor_or_is_refused(name, key):
 SEARCHES = [n for n in METHODS.names() if CLASSIFIERS.entry(METHODS.entry(n).tags["estimator"]).tags.get("candidates")]
 
 
+#: named methods whose estimator takes the captures and computes the feature sets it names inside
+INSIDE = [n for n in METHODS.names() if n not in SEARCHES and not method_spec(n).feature_sets]
+
+
 @pytest.mark.parametrize("key", list(SENSORS))
-@pytest.mark.parametrize("name", [n for n in METHODS.names() if n not in SEARCHES])
+@pytest.mark.parametrize("name", [n for n in METHODS.names() if n not in SEARCHES + INSIDE])
 def test_every_method_uses_the_sensor_or_is_refused(name, key):
     """A named method's feature sets get the sensor (their sizes for this grid, worked out by hand)."""
     ds = dataset(key)
@@ -245,6 +253,29 @@ def test_a_search_serves_a_sensor_when_one_of_its_candidates_does(name, key):
         refused.append(any(problems))
     est = make_classifier(spec.estimator, random_state=0, sensor=sensor, **spec.estimator_params)
     assert (sensor_problem(est, sensor, n0) is None) == (not all(refused))
+
+
+@pytest.mark.parametrize("key", list(SENSORS))
+@pytest.mark.parametrize("name", INSIDE)
+def test_a_method_on_captures_serves_a_sensor_when_its_feature_sets_do(name, key):
+    """Its estimator is refused for a sensor exactly when (REFUSED says why), and otherwise it fits and
+    labels the captures, its inner feature sets sized for this grid as worked out by hand."""
+    ds = dataset(key)
+    sensor, n0 = ds.sensor, shortest(ds)
+    spec = method_spec(name)
+    est = make_classifier(spec.estimator, random_state=0, sensor=sensor, **spec.estimator_params)
+    problem = sensor_problem(est, sensor, n0)
+    if (name, key) in REFUSED:
+        assert problem is not None and re.search(REFUSED[name, key], problem), problem
+        return
+    assert problem is None, problem
+    cheap = {**spec.estimator_params, "copies": 1, "params": {"n_estimators": 5}}
+    est = make_classifier(spec.estimator, random_state=0, sensor=sensor, **cheap)
+    y = np.where(ds.meta["gesture"].to_numpy() == "rub", "rub", "other")
+    est.fit(ds.captures, y)
+    sets = est.method_.sets
+    assert est.method_.transform(ds.captures).shape == (len(ds), sum(expected_size(n, sensor, n0) for n in cheap["features"]))
+    assert len(sets) == len(cheap["features"]) and set(est.predict(ds.captures).tolist()) <= {"rub", "other"}
 
 
 @pytest.mark.parametrize("name", sorted(RAW_FRAME))

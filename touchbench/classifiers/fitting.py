@@ -27,11 +27,12 @@ from typing import Any
 import numpy as np
 from sklearn.utils.validation import check_memory
 
-from ..core.introspect import accepts
-from ..features.base import learns_from_data, make_feature_set, stack_features
+from ..core.introspect import accepts, sensor_problem
+from ..features.base import feature_set_refusal, learns_from_data, make_feature_set, stack_features
 from .base import make_classifier
 
-__all__ = ["FittedEstimator", "FittedMethod", "fit_on_codes", "fit_pipeline", "label_codes", "labels_are_argmax"]
+__all__ = ["FittedEstimator", "FittedMethod", "feature_specs", "fit_on_codes", "fit_pipeline", "label_codes",
+           "labels_are_argmax", "pipeline_refusal", "proba_matrix"]
 
 
 def label_codes(y: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -168,3 +169,46 @@ def fit_pipeline(feature_sets: Any, estimator: str, params: dict[str, Any], seed
     t1 = time.perf_counter()
     fitted = fit_on_codes(estimator, params, seed, X, y, groups, sensor=sensor)
     return FittedMethod(sets, fitted, t1 - t0, time.perf_counter() - t1)
+
+
+def feature_specs(entries: Any) -> list[tuple[str, dict[str, Any]]]:
+    """Feature sets as ``[(name, params)...]`` from names, ``{name, params}`` mappings or
+    ``[name, params]`` pairs (how a protocol or a Python user writes a pipeline's ``features``)."""
+    sets = []
+    for f in entries or []:
+        if isinstance(f, str):
+            sets.append((f, {}))
+        elif isinstance(f, dict):
+            sets.append((str(f["name"]), dict(f.get("params") or {})))
+        else:
+            name, params = f
+            sets.append((str(name), dict(params or {})))
+    return sets
+
+
+def pipeline_refusal(feature_sets: Any, estimator: str, params: dict[str, Any], sensor: Any,
+                     min_frames: int | None = None) -> str | None:
+    """Why the pipeline ``feature_sets`` (``[(name, params)...]``) -> ``estimator`` (with ``params``)
+    cannot serve ``sensor`` with captures from ``min_frames`` frames: its first feature set that
+    refuses, else its estimator's reason; None when every part serves."""
+    for name, set_params in feature_sets:
+        problem = feature_set_refusal(name, set_params, sensor, min_frames)
+        if problem:
+            return problem
+    return sensor_problem(make_classifier(estimator, random_state=0, sensor=sensor, **params), sensor, min_frames)
+
+
+def proba_matrix(method: FittedMethod, captures: Any, classes: np.ndarray) -> np.ndarray:
+    """``(n, len(classes))`` float64 probabilities of a fitted method over ``classes`` (sorted, a
+    superset of its training classes), columns in their order: zeros for a class it never saw; one
+    at its label for an estimator without probabilities."""
+    X = method.transform(captures)
+    out = np.zeros((len(X), len(classes)), dtype=np.float64)
+    P = method.fitted.predict_proba(X)
+    if P is None:
+        out[np.arange(len(X)), np.searchsorted(classes, method.fitted.predict(X))] = 1.0
+        return out
+    for j, c in enumerate(classes):
+        if str(c) in P:
+            out[:, j] = P[str(c)]
+    return out

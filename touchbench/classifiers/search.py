@@ -50,11 +50,10 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted
 
 from ..core.errors import TouchbenchError
-from ..core.introspect import sensor_problem
-from ..features.base import feature_set_refusal, learns_from_data, make_feature_set, stack_features
+from ..features.base import learns_from_data, make_feature_set, stack_features
 from ._util import build, seed_int
-from .base import CLASSIFIERS, make_classifier
-from .fitting import FittedEstimator, FittedMethod, fit_on_codes
+from .base import CLASSIFIERS
+from .fitting import FittedEstimator, FittedMethod, feature_specs, fit_on_codes, pipeline_refusal, proba_matrix
 
 SOURCE = "touchbench: nested selection over candidate methods by inner cross-validation over training subjects"
 
@@ -73,15 +72,7 @@ def candidate(entry: Any) -> dict[str, Any]:
                               f"from Python give {{features: [...], estimator: ..., params: {{...}}}}")
     if not isinstance(entry, dict) or "estimator" not in entry:
         raise TouchbenchError(f"nested-select: a candidate needs 'estimator' (and 'features'), got {entry!r}")
-    sets = []
-    for f in entry.get("features") or []:
-        if isinstance(f, str):
-            sets.append((f, {}))
-        elif isinstance(f, dict):
-            sets.append((str(f["name"]), dict(f.get("params") or {})))
-        else:
-            name, params = f
-            sets.append((str(name), dict(params or {})))
+    sets = feature_specs(entry.get("features"))
     est, params = str(entry["estimator"]), dict(entry.get("params") or {})
     label = entry.get("label") or ("+".join(n for n, _ in sets) + (" -> " if sets else "") + est)
     return {"label": str(label), "features": sets, "estimator": est, "params": params}
@@ -118,12 +109,7 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
     @staticmethod
     def _refusal(cand, sensor, min_frames) -> str | None:
         """Why ``cand`` cannot serve ``sensor`` (its feature set or estimator), or None."""
-        for name, params in cand["features"]:
-            problem = feature_set_refusal(name, params, sensor, min_frames)
-            if problem:
-                return problem
-        return sensor_problem(make_classifier(cand["estimator"], random_state=0, sensor=sensor, **cand["params"]),
-                              sensor, min_frames)
+        return pipeline_refusal(cand["features"], cand["estimator"], cand["params"], sensor, min_frames)
 
     def check_sensor(self, sensor, min_frames=None):
         """Why no candidate can serve ``sensor``, or None (a candidate that cannot is left out by ``fit``)."""
@@ -251,19 +237,7 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
     def predict_proba(self, X):
         """The chosen candidate's probabilities over ``classes_`` (zeros for a class it never saw)."""
         check_is_fitted(self)
-        Xs = stack_features(self.sets_, list(X))
-        out = np.zeros((len(Xs), len(self.classes_)))
-        if self.estimator_ is None:
-            out[:, np.searchsorted(self.classes_, self.est_classes_[0])] = 1.0
-            return out
-        if not hasattr(self.estimator_, "predict_proba"):
-            pred = self.method_.fitted.predict(Xs)
-            out[np.arange(len(Xs)), np.searchsorted(self.classes_, pred)] = 1.0
-            return out
-        P = np.asarray(self.estimator_.predict_proba(Xs), dtype=np.float64)
-        cols = np.searchsorted(self.classes_, self.est_classes_[np.asarray(self.estimator_.classes_).astype(np.int64)])
-        out[:, cols] = P
-        return out
+        return proba_matrix(self.method_, list(X), self.classes_)
 
 
 DEFAULTS = {"candidates": (), "inner_folds": None}

@@ -210,6 +210,7 @@ def _sets_refusal(protocol: Protocol, refs: Sequence[Any], field: tuple, sensor:
 
 def _classifier_refusal(name: str, params: dict, sensor: SensorSpec, min_frames: int) -> str | None:
     """Why the classifier or named method ``name`` (any of its parameter settings) cannot serve ``sensor``."""
+    kind = "method" if name in METHODS else "classifier"
     for p in expand_grid(params):
         spec_name = name
         if name in METHODS:  # a named method: its own feature sets, then its estimator
@@ -223,10 +224,10 @@ def _classifier_refusal(name: str, params: dict, sensor: SensorSpec, min_frames:
             p = expand_candidates(spec_name, p)
             est = make_classifier(spec_name, random_state=0, sensor=sensor, **p)
         except Exception as e:
-            return f"classifier {name!r} rejects {p}: {type(e).__name__}: {e}"
+            return f"{kind} {name!r} rejects {p}: {type(e).__name__}: {e}"
         problem = sensor_problem(est, sensor, min_frames)
         if problem:
-            return f"classifier {name!r} cannot serve sensor {sensor.describe()}: {problem}"
+            return f"{kind} {name!r} cannot serve sensor {sensor.describe()}: {problem}"
     return None
 
 

@@ -152,10 +152,8 @@ class ContactEvidence(FeatureSet):
     def _heights(self, stack: np.ndarray) -> tuple[np.ndarray, float]:
         """``(N, T, H, W)`` -> heights above the sensor's zero ``(N, T, C)`` float64 and the full scale."""
         lo, hi = self._range()
-        n, t, h, w = stack.shape
-        x = np.asarray(stack, dtype=np.float64).reshape(n, t, h * w)
         flipped = self.sensor is not None and not self.sensor.higher_is_more_pressure
-        return (hi - x if flipped else x - lo), hi - lo
+        return heights(stack, (lo, hi), flipped), hi - lo
 
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         u, full = self._heights(stack)
@@ -174,6 +172,15 @@ class ContactEvidence(FeatureSet):
         cols += [(flat[:, -1] - rest) / noise, (cell_mean.max(axis=1) - rest) / noise,
                  tstd.mean(axis=1) / noise, tstd.max(axis=1) / noise]
         return np.column_stack(cols)
+
+
+def heights(stack: np.ndarray, value_range: tuple[float, float], flipped: bool = False) -> np.ndarray:
+    """Readings ``(N, T, H, W)`` as heights above the sensor's zero, ``(N, T, H * W)`` float64:
+    ``x - lo``, or ``hi - x`` on a sensor whose higher values mean less pressure (``flipped``)."""
+    lo, hi = (float(v) for v in value_range)
+    n, t, h, w = np.shape(stack)
+    x = np.asarray(stack, dtype=np.float64).reshape(n, t, h * w)
+    return hi - x if flipped else x - lo
 
 
 def noise_floor(u: np.ndarray, floor: float) -> tuple[np.ndarray, np.ndarray]:

@@ -18,11 +18,16 @@ estimator sees the same matrix a user's own pipeline would.
 - ``touch-et-adapt``: touch-et-contact's feature sets -> the same extra-trees inside ``session-centred``
   (:mod:`touchbench.classifiers.adapt`): each session (subject) centred by its own feature means, the test
   session's from its unlabelled captures -- a figure of another kind, kept apart from the plain ones;
+- ``touch-et-shift``: touch-et-contact's feature sets -> the same extra-trees, trained on every training capture
+  plus two copies changed by the sensor's effects (gain, offset, read noise white or wandering, dead cells, a
+  window taken anywhere in the capture: ``shift-augmented``, :mod:`touchbench.classifiers.augment`, with its
+  defaults); the features are computed inside each task, on the captures and their copies;
 - ``touch-select``: the design itself as a method: touch-et, touch-xgb, touch-et-win and touch-et-fast
   scored by leaving one training subject out at a time, inside every outer fold, the best refitted
   (``nested-select``, :mod:`touchbench.classifiers.search`); a candidate the sensor refuses is left out.
 
-Parameters given to a method go to its estimator.
+Parameters given to a method go to its estimator (for ``touch-et-shift``: the augmentation's, e.g.
+``copies``; ``params`` replaces the extra-trees' parameters).
 """
 
 from __future__ import annotations
@@ -45,16 +50,22 @@ _TOUCH = {
                       ("touch-rhythm",), "touch-extra-trees", {"n_estimators": 100}),
     "touch-et-contact": ("touchbench: touch-et plus contact-evidence (level and contact above the noise floor)",
                          (*THREE, "contact-evidence"), "touch-extra-trees", {}),
+    "touch-et-adapt": ("touchbench: touch-et-contact's feature sets -> its extra-trees on each session centred by its "
+                       "own means (adapts to the test session's unlabelled captures)",
+                       (*THREE, "contact-evidence"), "session-centred",
+                       {"estimator": "touch-extra-trees", "params": {}, "scale": False}),
 }
-
-_TOUCH["touch-et-adapt"] = (
-    "touchbench: touch-et-contact's feature sets -> its extra-trees on each session centred by its own means "
-    "(adapts to the test session's unlabelled captures)",
-    (*THREE, "contact-evidence"), "session-centred", {"estimator": "touch-extra-trees", "params": {}, "scale": False})
 
 for _name, (_desc, _sets, _est, _params) in _TOUCH.items():
     METHODS.register(_name, description=_desc, source=SOURCE, feature_sets=_sets, estimator=_est,
                      defaults=dict(_params))(pipeline_method(_name, _sets, _est, _params))
+
+_contact_sets = _TOUCH["touch-et-contact"][1]
+_shift = {"features": list(_contact_sets), "estimator": "touch-extra-trees", "params": dict(_TOUCH["touch-et-contact"][3])}
+METHODS.register("touch-et-shift", description="touchbench: touch-et-contact trained on the captures plus copies changed "
+                 "by the sensor's effects (gain, offset, read noise, dead cells, a window anywhere)",
+                 source=SOURCE, feature_sets=(), estimator="shift-augmented",
+                 defaults=dict(_shift))(pipeline_method("touch-et-shift", (), "shift-augmented", _shift))
 
 SELECT_FROM = ("touch-et", "touch-xgb", "touch-et-win", "touch-et-fast")
 _select = expand_candidates("nested-select", {"candidates": list(SELECT_FROM)})

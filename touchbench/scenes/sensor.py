@@ -26,7 +26,9 @@ Order (top to bottom of the physical stack, then the electronics):
    recordings repeat its flat row pattern, about 4x higher), else along
    the crest profile of :func:`tension`; baseline
    (:func:`baseline_pattern`): resting offset per cell; noise
-   (:func:`add_noise`): Gaussian read noise of sd ``noise_sd`` counts;
+   (:func:`add_noise`): Gaussian read noise of sd ``noise_sd`` counts (white; an AR(1)
+   wander along the frames when asked, as the shift augmentation of
+   :mod:`touchbench.classifiers.augment` does);
 8. ADC (:func:`adc`): round, clip to the value range, cast.
 
 Steps 5-8 run in float32 (counts up to a few thousand keep a resolution
@@ -157,11 +159,18 @@ def baseline_pattern(
     return rng.gamma(k, level / k, size=grid)
 
 
-def add_noise(x: np.ndarray, sd: float, rng: np.random.Generator) -> np.ndarray:
-    """Gaussian read noise of standard deviation ``sd``."""
+def add_noise(x: np.ndarray, sd: float, rng: np.random.Generator, ar: float = 0.0) -> np.ndarray:
+    """Gaussian read noise of standard deviation ``sd``: white, or with ``0 < ar < 1`` an AR(1)
+    process along the first axis (frames), ``e_t = ar e_(t-1) + sqrt(1 - ar^2) w_t``, started
+    from its stationary distribution (``e_0 = w_0``), so its standard deviation is ``sd`` at
+    every frame and only its spectrum changes (a slow wander for ``ar`` near 1)."""
     if sd <= 0:
         return x
     noise = rng.standard_normal(x.shape, dtype=np.float32)
+    if ar > 0 and len(noise) > 1:
+        b = np.float32(np.sqrt(1.0 - ar * ar))
+        zi = (np.float32(1.0) - b) * noise[:1]  # so that e_0 = w_0
+        noise = lfilter([b], [np.float32(1.0), np.float32(-ar)], noise, axis=0, zi=zi)[0].astype(np.float32)
     noise *= np.float32(sd)
     noise += x
     return noise
