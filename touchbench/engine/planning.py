@@ -226,7 +226,8 @@ def _classifier_refusal(name: str, params: dict, sensor: SensorSpec, min_frames:
             return f"classifier {name!r} rejects {p}: {type(e).__name__}: {e}"
         problem = sensor_problem(est, sensor, min_frames)
         if problem:
-            return f"classifier {name!r} cannot serve sensor {sensor.describe()}: {problem}"
+            kind = "method" if name in METHODS else "classifier"
+            return f"{kind} {name!r} cannot serve sensor {sensor.describe()}: {problem}"
     return None
 
 
