@@ -23,7 +23,7 @@ from sklearn.model_selection import LeaveOneGroupOut
 from helpers import run_loso_method
 
 from touchbench.classifiers import CLASSIFIERS, make_classifier
-from touchbench.classifiers.fitting import FittedEstimator
+from touchbench.classifiers.fitting import FittedEstimator, labels_are_argmax
 from touchbench.classifiers.fusion import default_weights, pooled_accuracies, weight_grid
 from touchbench.classifiers.inner import proba_over
 from touchbench.core.errors import TouchbenchError
@@ -216,6 +216,8 @@ def test_cheap_real_parts_end_to_end():
     assert est.predict_proba(test) == pytest.approx(w[0] * lda_p + w[1] * rocket_p)
     assert np.allclose(est.predict_proba(test).sum(axis=1), 1.0)
     assert set(est.predict(test)) <= set(classes)
+    assert labels_are_argmax(est)  # the engine asks once for labels and probabilities
+    assert est.predict(test).tolist() == classes[np.argmax(w[0] * lda_p + w[1] * rocket_p, axis=1)].tolist()
     # same data and seed: bit-identical
     again = make_classifier("fusion", random_state=4, sensor=SENSOR, parts=CHEAP).fit(caps, y, groups=groups)
     assert np.array_equal(again.predict_proba(test), est.predict_proba(test))

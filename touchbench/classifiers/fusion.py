@@ -135,6 +135,9 @@ class Fusion(ClassifierMixin, BaseEstimator):
     random_state : seed of every part's estimator (the same for all).
     """
 
+    #: ``predict`` is ``classes_`` at the argmax of ``predict_proba``: the run engine asks once for both
+    labels_are_argmax_proba = True
+
     def __init__(self, parts=(), weights=None, inner_folds=None, sensor=None, random_state=None):
         self.parts = parts
         self.weights = weights
