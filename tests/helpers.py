@@ -142,3 +142,17 @@ def read_int(path: Path) -> int | None:
         return int(path.read_text())
     except (FileNotFoundError, ValueError):
         return None
+
+
+def run_loso_method(tmp_path: Path, method_yaml: str, n_subjects: int = 4):
+    """Run, through the engine, a protocol evaluating one method (``method_yaml``: its ``methods:``
+    entry, indented as a list item) by leaving one subject out on a small random dataset of the
+    test-only components' sensor (``n_subjects`` subjects, 2 captures per gesture)."""
+    from touchbench.engine import run_protocol
+    from touchbench.engine.testing import random_dataset
+
+    data = tmp_path / "d.parquet"
+    random_dataset(subjects=[f"s{i + 1}" for i in range(n_subjects)], per_cell=2).to_parquet(data)
+    p = tmp_path / "one-method.yaml"
+    p.write_text(f"name: one-method\ndataset: {data}\nscheme: loso\nmethods:\n{method_yaml}")
+    return run_protocol(p, out=tmp_path / "results", progress=False)

@@ -20,7 +20,7 @@ from touchbench.core.errors import TouchbenchError, UnknownNameError
 from touchbench.datasets.haart import HAART_SENSOR
 
 EXPECTED = snapshot()["classifiers"]  # tests/snapshots/registry-names.json (make snapshots)
-EXTRAS = {"cnn": "deep", "inception-time": "deep", "minirocket": "peers", "multirocket": "peers", "multirocket-hydra": "peers,deep", "quant": "peers,deep",
+EXTRAS = {"cnn": "deep", "inception-time": "deep", "fusion": "peers", "minirocket": "peers", "multirocket": "peers", "multirocket-hydra": "peers,deep", "quant": "peers,deep",
           "rdst": "peers", "xgboost": "xgboost"}
 
 

@@ -98,7 +98,7 @@ def expected_size(name: str, sensor: SensorSpec, frames: int) -> int:
 REFUSED: dict[tuple[str, str], str] = {
     **{(n, "1x16"): r"is a channel sensor \(c0, .*not cells of a pressure surface"
        for n in ("sd", "bmh", "smmhh", "contact-evidence", "touch-et-contact", "touch-et-adapt",
-                 "shift-augmented", "touch-et-shift")},
+                 "shift-augmented", "touch-et-shift", "touch-rocket-fusion")},
     ("touch-windows", "19x24"): r"2-s windows \(24 frames at 12 Hz\) are longer than the shortest capture \(3 frames\)",
     ("touch-et-win", "19x24"): r"2-s windows \(24 frames at 12 Hz\) are longer than the shortest capture \(3 frames\)",
     ("cnn", "19x24"): r"L=30 windows need captures of at least 30 frames.*the shortest has 3",
@@ -244,15 +244,22 @@ def test_every_method_uses_the_sensor_or_is_refused(name, key):
 @pytest.mark.parametrize("key", list(SENSORS))
 @pytest.mark.parametrize("name", SEARCHES)
 def test_a_search_serves_a_sensor_when_one_of_its_candidates_does(name, key):
+    """A search (nested-select) serves when one candidate does; a fusion only when every part does."""
     ds = dataset(key)
     sensor, n0 = ds.sensor, shortest(ds)
     spec = method_spec(name)
+    tags = CLASSIFIERS.entry(spec.estimator).tags
     refused = []
-    for c in spec.estimator_params["candidates"]:
+    for c in spec.estimator_params[tags["candidates"]]:
         problems = [sensor_problem(make_feature_set(n, p, sensor), sensor, n0) for n, p in c["features"]]
+        problems.append(sensor_problem(make_classifier(c["estimator"], random_state=0, sensor=sensor, **c["params"]),
+                                       sensor, n0))
         refused.append(any(problems))
     est = make_classifier(spec.estimator, random_state=0, sensor=sensor, **spec.estimator_params)
-    assert (sensor_problem(est, sensor, n0) is None) == (not all(refused))
+    serves = not any(refused) if tags.get("needs_every_candidate") else not all(refused)
+    assert (sensor_problem(est, sensor, n0) is None) == serves
+    if (name, key) in REFUSED:
+        assert not serves and re.search(REFUSED[name, key], sensor_problem(est, sensor, n0))
 
 
 @pytest.mark.parametrize("key", list(SENSORS))

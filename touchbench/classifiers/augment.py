@@ -101,7 +101,7 @@ from ..features.contact import MIN_NOISE, heights, noise_floor
 from ..scenes.sensor import adc, add_noise
 from ._util import build, seed_int
 from .base import CLASSIFIERS
-from .fitting import feature_specs, fit_pipeline, pipeline_refusal, proba_matrix
+from .fitting import feature_specs, fit_pipeline, pipeline_refusal, proba_over
 
 NAME = "shift-augmented"
 SOURCE = ("touchbench (docs/research/contact-features.md, section Training for shift): the synthetic scenes' "
@@ -316,7 +316,7 @@ class ShiftAugmented(ClassifierMixin, BaseEstimator):
     def predict_proba(self, X: Sequence[np.ndarray]) -> np.ndarray:
         """Probabilities over ``classes_`` of the captures as given."""
         check_is_fitted(self)
-        return proba_matrix(self.method_, check_captures(X, name=NAME), self.classes_)
+        return proba_over(self.method_.fitted, self.method_.transform(check_captures(X, name=NAME)), self.classes_)
 
 
 DEFAULTS = {"features": (), "estimator": "touch-extra-trees", "params": {}, "copies": 2, "gain": (0.8, 1.25),

@@ -32,7 +32,7 @@ from ..features.base import feature_set_refusal, learns_from_data, make_feature_
 from .base import make_classifier
 
 __all__ = ["FittedEstimator", "FittedMethod", "feature_specs", "fit_on_codes", "fit_pipeline", "label_codes",
-           "labels_are_argmax", "pipeline_refusal", "proba_matrix"]
+           "labels_are_argmax", "pipeline_refusal", "proba_over"]
 
 
 def label_codes(y: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -198,17 +198,16 @@ def pipeline_refusal(feature_sets: Any, estimator: str, params: dict[str, Any], 
     return sensor_problem(make_classifier(estimator, random_state=0, sensor=sensor, **params), sensor, min_frames)
 
 
-def proba_matrix(method: FittedMethod, captures: Any, classes: np.ndarray) -> np.ndarray:
-    """``(n, len(classes))`` float64 probabilities of a fitted method over ``classes`` (sorted, a
-    superset of its training classes), columns in their order: zeros for a class it never saw; one
-    at its label for an estimator without probabilities."""
-    X = method.transform(captures)
+def proba_over(fitted: FittedEstimator, X: Any, classes: np.ndarray) -> np.ndarray:
+    """``fitted``'s probabilities for the rows ``X`` as float64 columns of ``classes`` (sorted, a superset
+    of its training classes): 0 for a class it never saw, one-hot of its prediction when its estimator
+    gives no probabilities."""
     out = np.zeros((len(X), len(classes)), dtype=np.float64)
-    P = method.fitted.predict_proba(X)
-    if P is None:
-        out[np.arange(len(X)), np.searchsorted(classes, method.fitted.predict(X))] = 1.0
+    by_label = fitted.predict_proba(X)
+    if by_label is None:
+        out[np.arange(len(X)), np.searchsorted(classes, fitted.predict(X))] = 1.0
         return out
-    for j, c in enumerate(classes):
-        if str(c) in P:
-            out[:, j] = P[str(c)]
+    column = {str(c): j for j, c in enumerate(classes)}
+    for label, p in by_label.items():
+        out[:, column[label]] = p
     return out

@@ -156,26 +156,37 @@ def takes_captures(estimator: str) -> bool:
 
 
 def expand_candidates(classifier: str, params: dict[str, Any]) -> dict[str, Any]:
-    """``params`` with the ``candidates`` of a searching classifier (tag ``candidates=True``, e.g.
-    ``nested-select``) written out: a registered method's name, or ``{name, params}``, becomes its
-    feature sets and estimator (``{label, features, estimator, params}``), so the classifier never
-    needs the method registry and the task's identity covers every candidate's code."""
-    if classifier not in CLASSIFIERS or not CLASSIFIERS.entry(classifier).tags.get("candidates"):
+    """``params`` with the candidates of a classifier that fits other methods inside it written out.
+
+    Such a classifier (``nested-select``, ``fusion``) is tagged ``candidates=`` with the name
+    of the parameter holding them (``candidates``, ``parts``). A registered method's name, or
+    ``{name, params}``, becomes its feature sets and estimator (``{label, features, estimator,
+    params}``); so does the name of a classifier that takes the captures themselves
+    (``minirocket``: no feature sets). The classifier never needs the method registry and the
+    task's identity covers every candidate's code."""
+    key = CLASSIFIERS.entry(classifier).tags.get("candidates") if classifier in CLASSIFIERS else None
+    if not key:
         return params
-    out = []
-    for c in params.get("candidates") or []:
-        name, p = (c, {}) if isinstance(c, str) else (c.get("name"), dict(c.get("params") or {})) if isinstance(c, dict) else (None, {})
-        if name is not None and name in METHODS:
-            m = method_spec(name, **p)
-            out.append({"label": c.get("label", name) if isinstance(c, dict) else name,
-                        "features": [[n, dict(sp)] for n, sp in m.feature_sets], "estimator": m.estimator,
-                        "params": dict(m.estimator_params)})
-        elif name is not None:
-            raise TouchbenchError(f"classifier {classifier!r}: candidate {name!r} is not a registered method; "
-                                  f"write it as {{features: [...], estimator: ..., params: {{...}}}}")
-        else:
-            out.append(c)
-    return {**params, "candidates": out}
+    key = key if isinstance(key, str) else "candidates"
+    return {**params, key: [_written_out(classifier, c) for c in params.get(key) or []]}
+
+
+def _written_out(classifier: str, c: Any) -> Any:
+    """One candidate of ``classifier`` written out (see :func:`expand_candidates`); a mapping
+    without ``name`` is already written out."""
+    name, p = (c, {}) if isinstance(c, str) else (c.get("name"), dict(c.get("params") or {})) if isinstance(c, dict) else (None, {})
+    if name is None:
+        return c
+    label = c.get("label", name) if isinstance(c, dict) else name
+    if name in METHODS:
+        m = method_spec(name, **p)
+        return {"label": label, "features": [[n, dict(sp)] for n, sp in m.feature_sets], "estimator": m.estimator,
+                "params": dict(m.estimator_params)}
+    if takes_captures(name):
+        return {"label": label, "features": [], "estimator": name, "params": p}
+    raise TouchbenchError(f"classifier {classifier!r}: candidate {name!r} is not a registered method "
+                          f"(nor a classifier that takes the captures); "
+                          f"write it as {{features: [...], estimator: ..., params: {{...}}}}")
 
 
 def resolve_entry(sets: list[tuple[str, dict[str, Any]]] | tuple, classifier: str,

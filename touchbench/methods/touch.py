@@ -24,7 +24,11 @@ estimator sees the same matrix a user's own pipeline would.
   defaults); the features are computed inside each task, on the captures and their copies;
 - ``touch-select``: the design itself as a method: touch-et, touch-xgb, touch-et-win and touch-et-fast
   scored by leaving one training subject out at a time, inside every outer fold, the best refitted
-  (``nested-select``, :mod:`touchbench.classifiers.search`); a candidate the sensor refuses is left out.
+  (``nested-select``, :mod:`touchbench.classifiers.search`); a candidate the sensor refuses is left out;
+- ``touch-rocket-fusion``: touch-et-contact and MiniRocket (aeon, ``peers`` extra) fused: the weighted sum of
+  their probabilities, the weight chosen among 0, 0.25, 0.5, 0.75, 1 (on touch-et-contact) by the pooled
+  accuracy of leaving one training subject out at a time, inside every outer fold, both parts refitted
+  (``fusion``, :mod:`touchbench.classifiers.fusion`); a sensor either part cannot serve is refused.
 
 Parameters given to a method go to its estimator (for ``touch-et-shift``: the augmentation's, e.g.
 ``copies``; ``params`` replaces the extra-trees' parameters).
@@ -73,3 +77,10 @@ METHODS.register("touch-select", description="touchbench: the touch method with 
                  "training subjects (touch-et, touch-xgb, touch-et-win, touch-et-fast), refitted",
                  source=SOURCE, feature_sets=(), estimator="nested-select",
                  defaults=dict(_select))(pipeline_method("touch-select", (), "nested-select", _select))
+
+FUSE = ("touch-et-contact", "minirocket")
+_fuse = expand_candidates("fusion", {"parts": list(FUSE)})
+METHODS.register("touch-rocket-fusion", description="touchbench: touch-et-contact and MiniRocket, their probabilities "
+                 "summed with the weight of the best pooled inner LOSO accuracy over the training subjects, both refitted",
+                 source=SOURCE, feature_sets=(), estimator="fusion",
+                 defaults=dict(_fuse))(pipeline_method("touch-rocket-fusion", (), "fusion", _fuse))
