@@ -39,9 +39,7 @@ import numpy as np
 from sklearn.model_selection import GroupKFold, LeaveOneGroupOut, StratifiedKFold
 
 from ..core.errors import TouchbenchError
-from ..core.introspect import sensor_problem
-from ..features.base import feature_set_refusal, learns_from_data, make_feature_set, stack_features
-from .base import make_classifier
+from ..features.base import learns_from_data, make_feature_set, stack_features
 from .fitting import FittedEstimator, FittedMethod, feature_specs, fit_on_codes, pipeline_refusal, proba_over
 
 __all__ = ["candidate", "candidate_list", "candidate_refusal", "inner_fits", "inner_splits", "proba_over", "refit",
