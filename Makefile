@@ -9,8 +9,8 @@
 #   make snapshots         record the names every registry holds (tests/snapshots/), after adding an entry
 #   make reproduce-papers  run touchbench/protocols/papers/ and write results/papers/REPORT.md
 #   make examples          run the example protocols on real HAART and regenerate the example
-#                          leaderboards and report (results/examples/, results/touch-haart/) and
-#                          the figures the README shows (docs/figures/, stable names)
+#                          leaderboards and report (results/examples/) and their figures in the
+#                          README (docs/figures/, stable names); the touch methods' are touch-all's
 #   make touch-all         every method of touch-all under its five evaluations (hours on two cores:
 #                          QUANT and RDST; METHODS="--method touch-et --method minirocket" runs some),
 #                          then its leaderboard (results/touch-all/) and the README's figures
@@ -75,19 +75,12 @@ reproduce-papers: setup
 examples: setup
 	$(TB) run example-haart-loso --out $(RUNS)/example-haart-loso --jobs $(JOBS) --no-progress
 	$(TB) run example-haart-early --out $(RUNS)/example-haart-early --jobs $(JOBS) --no-progress
-	$(TB) run touch-haart --out $(RUNS)/touch-haart --jobs $(JOBS) --no-progress
 	$(TB) leaderboard $(RUNS)/example-haart-loso $(RUNS)/example-haart-early --out results/examples \
 	    --format md --format csv --format json
 	$(TB) report $(RUNS)/example-haart-loso $(RUNS)/example-haart-early --out results/examples \
 	    --title "touchbench example: real HAART, leave-one-subject-out"
-	$(TB) leaderboard $(RUNS)/touch-haart --out results/touch-haart \
-	    --format md --format csv
 	$(TB) plot $(RUNS)/example-haart-loso --out docs/figures --name example-haart-loso --format png --format svg \
 	    --kind pareto --kind confusion --reference "Gaus 2015 challenge=66.5"
-	$(TB) plot $(RUNS)/touch-haart/loso --out docs/figures --kind pareto --name touch-haart-loso --format png --format svg \
-	    --reference "Al-mashhadani 2021 CNN=83.2"
-	$(TB) plot $(RUNS)/touch-haart/challenge --out docs/figures --kind pareto --name touch-haart-challenge --format png --format svg \
-	    --reference "best 2015 entry=70.9" --reference "Gaus 2015=66.5" --reference "2023 transformer*=72.8"
 
 TOUCH_ALL := $(RUNS)/touch-all
 # the shipped reference results (`touchbench reference list`; `leaderboard --reference NAME`):

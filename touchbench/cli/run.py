@@ -151,8 +151,9 @@ def _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait
         log.warning(f"LEAKY evaluation ({reason}): its accuracy overstates accuracy on new people")
     adapted = list(dict.fromkeys(t.method.label for t in plan.tasks if t.method.adaptation))
     if adapted:
-        log.info(f"note: {', '.join(adapted)} adapt to each test subject's unlabelled captures: a figure of "
-                 "another kind, which the leaderboard tables apart from the plain methods")
+        who = f"method {adapted[0]} adapts" if len(adapted) == 1 else f"methods {', '.join(adapted)} adapt"
+        log.info(f"note: {who} to each test subject's unlabelled captures: a figure of another kind, which "
+                 "the leaderboard tables apart from the plain methods")
     try:
         with backend_for_run(backend, scheduler, address, plan.cache_root, jobs) as jobs:
             res = run_plan(plan, out_dir, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
