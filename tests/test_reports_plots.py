@@ -199,6 +199,19 @@ def test_plot_name_gives_stable_file_names(runs, tmp_path):
     assert res.exit_code == 3 and "--name figure-b" in res.output and "tables" in res.output
 
 
+def test_plot_name_serves_a_table_and_its_adapted_methods_table(tmp_path):
+    from touchbench.methods.base import ADAPTED
+
+    caps, folds, wrong = fake_loso(["s1", "s2", "s3"])
+    plain = FakeMethod("msd", "rf", wrong=wrong([1, 1, 1]), latency_ms=2.0)
+    adapted = FakeMethod("msd", "rf-adapted", latency_ms=2.0, adaptation=ADAPTED)
+    write_fake_run(tmp_path / "run", caps, folds, [plain, adapted], scheme={"name": "loso"})
+    res = CliRunner().invoke(cli, ["plot", str(tmp_path / "run"), "--out", str(tmp_path / "pl"), "--kind", "pareto",
+                                   "--format", "png", "--name", "fig"])
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in (tmp_path / "pl").iterdir()) == ["fig-adapted-pareto.png", "fig-pareto.png"]
+
+
 # ----------------------------------------------------------------- the figure kinds
 def test_every_figure_module_registers_one_kind_named_after_it():
     modules = sorted(m.name for m in pkgutil.iter_modules(figures.__path__)

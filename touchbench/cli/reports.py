@@ -255,7 +255,8 @@ def parse_reference(text: str) -> tuple[str, float]:
               metavar="LABEL=PERCENT",
               help="A reference accuracy drawn as a dashed line on the Pareto plots, e.g. 'Gaus 2015=66.5' (repeatable).")
 @click.option("--name", default=None, metavar="STEM",
-              help="File names STEM-<kind>.<format> instead of <dataset>-<scheme>-<kind> (one table only).")
+              help="File names STEM-<kind>.<format> instead of <dataset>-<scheme>-<kind> (one table only, and "
+                   "STEM-adapted-<kind> for its methods adapted to each test session).")
 @_with_table_options
 def plot(results, out, kinds, size, formats, methods, references, name, dataset, scheme, alpha, pool_machines,
          machine) -> None:
@@ -267,13 +268,15 @@ def plot(results, out, kinds, size, formats, methods, references, name, dataset,
     from ..reports.figures.cd import plot_cd_across
 
     rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
-    if name is not None and len(lbs) > 1:
+    n_adapted = sum(1 for lb in lbs if lb.adaptation)
+    if name is not None and max(len(lbs) - n_adapted, n_adapted) > 1:  # one table, and its adapted methods' one
         raise TouchbenchError(f"--name {name}: the results hold {len(lbs)} tables; choose one with --dataset/--scheme")
     taken: set[str] = set()
     formats = tuple(formats) or FORMATS
     for lb in lbs:
         ids = [resolve_method(lb.rows, m) for m in methods] if methods else None
-        made = plot_table(rs, lb, Path(out), tuple(kinds) or None, ids, references, name=name, size=size,
+        stem = None if name is None else f"{name}-adapted" if lb.adaptation else name  # its adapted table beside it
+        made = plot_table(rs, lb, Path(out), tuple(kinds) or None, ids, references, name=stem, size=size,
                           formats=formats, taken=taken)
         for kind, paths in made.items():
             click.echo(f"{lb.title}: {kind}: " + ", ".join(str(p) for p in paths))
