@@ -11,7 +11,7 @@
 #   make examples          run the example protocols on real HAART and regenerate the example
 #                          leaderboards and report (results/examples/) and their figures in the
 #                          README (docs/figures/, stable names); the touch methods' are touch-all's
-#   make touch-all         every method of touch-all under its five evaluations (hours on two cores:
+#   make touch-all         every method of touch-all under its seven evaluations (hours on two cores:
 #                          QUANT and RDST; METHODS="--method touch-et --method minirocket" runs some),
 #                          then its leaderboard (results/touch-all/) and the README's figures
 #   make touch-all-figures the leaderboard and figures alone, from the finished tasks
