@@ -19,8 +19,7 @@ from .leaderboard import (
     across_note,
     display_rows,
     legend,
-    mean_ranks,
-    plain_tables,
+    ranks_across,
     write_outputs,
     write_text,
 )
@@ -66,7 +65,7 @@ def _table_html(lb: Leaderboard) -> str:
 def _across_html(lbs: list[Leaderboard], cd: list[Path], cd_note: str) -> str:
     """The section across the tables: mean ranks, the Friedman test and critical difference, and the
     diagram or the note saying why there is none ("" for one table)."""
-    ranks = mean_ranks(lbs) if len(plain_tables(lbs)) > 1 else None
+    ranks = ranks_across(lbs)
     if ranks is None or ranks.empty:
         return ""
     out = [f"<h2>Across {int(ranks['tables'].iloc[0])} tables</h2><table><thead><tr><th>method</th>"

@@ -90,6 +90,7 @@ __all__ = [
     "method_labels",
     "owns_input",
     "plain_tables",
+    "ranks_across",
     "resolve_method",
     "subject_values",
     "to_csv",
@@ -328,7 +329,7 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
         scheme=str(first["scheme_label"]), rows=df, folds=folds, machines=machines, reference_machine=ref,
         pooled_machines=pool_machines, alpha=alpha, frame_rate=float(fr.iloc[0]) if len(fr) else math.nan, notes=notes,
         looks=looks_here, has_design=design.captures is not None, heading=table_heading(sources, str(first["scheme_label"])),
-        adaptation=_mode(s_all["adaptation"]) if "adaptation" in s_all else "",
+        adaptation=_mode(s_all["adaptation"]),
     )
 
 
@@ -639,6 +640,12 @@ def across_note(f: Friedman) -> str:
             f"{f.datasets_needed} tables (datasets or evaluations).")
 
 
+def ranks_across(lbs: list[Leaderboard]) -> pd.DataFrame | None:
+    """:func:`mean_ranks` of ``lbs`` when they hold at least two plain tables (:func:`plain_tables`:
+    the only ones compared across tables), else None: the section across tables of every report."""
+    return mean_ranks(lbs) if len(plain_tables(lbs)) > 1 else None
+
+
 def mean_ranks(lbs: list[Leaderboard]) -> pd.DataFrame:
     """Methods present in every table, ranked within each table (1 = best accuracy; ties get the
     average of their ranks) and the ranks averaged over the tables: columns ``method``,
@@ -925,7 +932,7 @@ def to_markdown(lbs: list[Leaderboard], title: str | None = "Leaderboard") -> st
             out.append("")
             out.append(f"Note: {n}")
         out.append("")
-    ranks = mean_ranks(lbs) if len(plain_tables(lbs)) > 1 else None
+    ranks = ranks_across(lbs)
     if ranks is not None and len(ranks):
         out += [f"## Mean rank across {int(ranks['tables'].iloc[0])} tables", "",
                 "| method | mean rank | mean accuracy % |", "|---|---|---|"]
@@ -1057,7 +1064,7 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
         for n in lb.notes:
             console.print(escape(f"Note: {n}"), style="yellow")
         console.print()
-    ranks = mean_ranks(lbs) if len(plain_tables(lbs)) > 1 else None
+    ranks = ranks_across(lbs)
     if ranks is not None and len(ranks):
         t = Table(title=f"Mean rank across {int(ranks['tables'].iloc[0])} tables")
         for h in ("method", "mean rank", "mean accuracy %"):

@@ -250,10 +250,9 @@ def _labelled_scores(s: pd.DataFrame, d: Path, m: dict[str, Any], mid: str, mdes
         for t, fp, cn, cp, ef, v in zip(s["target"], s["feature_params"], s["classifier_name"],
                                         s["classifier_params"], s["early_frames"], variants)
     ]
-    adaptation = s["adaptation"] if "adaptation" in s else pd.Series("", index=s.index)
     s["table_key"] = [  # a method adapted to the test data is never tabled with plain ones
         _short_hash([dh, t, sc] + ([a] if a else []), 8)
-        for dh, t, sc, a in zip(s["dataset_hash"], s["target"], s["scheme_label"], adaptation.fillna("").astype(str))
+        for dh, t, sc, a in zip(s["dataset_hash"], s["target"], s["scheme_label"], s["adaptation"].astype(str))
     ]
     base_fold = s["fold"].astype(str).str.replace(_CROP_PREFIX, "", regex=True)
     s["fold_key"] = [f"{proto_seed}/{r}/{f}" for r, f in zip(s["repetition"], base_fold)]
