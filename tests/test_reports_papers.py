@@ -9,19 +9,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+import yaml
 
 from touchbench.core.paths import REPO_ROOT
-from touchbench.papers.reproduce import (
-    PROFILES,
-    Profile,
-    ProtocolRun,
-    apply_profile,
-    paper_protocols,
-    write_report,
-)
+from touchbench.papers.profiles import PROFILES, Profile, apply_profile, paper_protocols
+from touchbench.papers.report import ProtocolRun, write_report
 from touchbench.protocols.library import PAPERS_DIR
 from touchbench.protocols.schema import load_protocol
 from touchbench.reports.testing import FakeMethod, write_fake_run
+from touchbench.scenes import load_scene, scene_path
+from touchbench.scenes.spec import read_yaml
 
 PAPERS = PAPERS_DIR
 PAPER_TEXTS = REPO_ROOT.parent / "shared" / "seeds"
@@ -177,9 +174,12 @@ classifiers:
     # grid capped at 100 and repeats dropped; 20 is under the cap and stays
     assert labels == ["gaus-rf(n_estimators=50)", "gaus-rf(n_estimators=100)", "small"]
     assert proto.scheme.params["k"] == 10
-    assert proto.dataset.options == {"repetitions": 10}
+    assert proto.dataset.options == {}  # a scene is used whole: the papers' people and repetitions
     full, none = apply_profile(load_protocol(p), PROFILES["full"])
     assert none == [] and full.scheme.params["k"] == 100
+    smaller = Profile("s", "test", dataset_options={"scene:fur-like": {"repetitions": 10}})
+    proto, changes = apply_profile(load_protocol(p), smaller)
+    assert proto.dataset.options == {"repetitions": 10} and changes == ["dataset scene:fur-like: repetitions=10"]
 
 
 def test_profile_never_touches_expected_or_features(tmp_path):
@@ -234,7 +234,8 @@ def test_report_compares_paper_and_ours(tmp_path):
     assert sec.count("| +0.0 |") == 7
     assert "| constant | 34 / 34 |" in sec
     assert "real HAART" in text and "protocols/papers/gaus-tables6-7-haart.yaml" in text
-    assert "1 of 2 paper numbers reproduced within tolerance; on real HAART data 1 of 2" in text
+    assert ("1 of 2 paper numbers reproduced within tolerance (Gaus et al. 2015 1 of 2). On real HAART data 1 of 2. "
+            "On the tables no scene value was calibrated on, 1 of 2") in text
 
 
 def test_report_states_a_failed_protocol(tmp_path):
@@ -267,7 +268,7 @@ expected:
     - {features: [msd], classifier: gaus-rf, value: 50.0, source: "made up"}
 """)
     prof = Profile("t", "test profile", classifier_caps={"gaus-rf": {"n_estimators": 5}})
-    import touchbench.papers.reproduce as P
+    import touchbench.papers.profiles as P
 
     P.PROFILES["t"] = prof
     try:
@@ -346,7 +347,40 @@ def test_report_gives_each_paper_number_its_cause(tmp_path):
     run = ProtocolRun(path=_cause_protocol(tmp_path / "scene", "scene:tiny"), name="gaus-causes", out=scene,
                       changes=[])
     text = write_report([run], PROFILES["full"], tmp_path / "S.md").read_text()
-    assert text.count("| synthetic data (scene tiny) |") == 3
+    # on a scene: within is reproduced on it; a measured cause is given; else the synthetic data
+    assert "| T5 SD | sd | gaus-rf | 100.00 | 100.00 | +0.00 | 5 | yes | reproduced on scene tiny |" in text
+    assert "**NO** | folds \\| subjects (measured by `touchbench run readings.yaml`) |" in text
+    assert "| T5 MSD | msd | gaus-rf | 100.00 | 50.00 | -50.00 | 5 | **NO** | synthetic data (scene tiny) |" in text
+
+
+def test_report_counts_apart_the_tables_a_scene_value_was_calibrated_on(tmp_path):
+    # a scene whose repetition spread was calibrated on the protocol "gaus-causes"
+    raw, _ = read_yaml(scene_path("tiny"))
+    raw["calibrated"] = {"population.repetition.sd": {"table": "T5", "protocol": "gaus-causes",
+                                                      "measured_by": "touchbench run cal.yaml"}}
+    (tmp_path / "cal").mkdir()
+    scene_file = tmp_path / "cal" / "tiny-cal.yaml"
+    scene_file.write_text(yaml.safe_dump(raw))
+    caps = pd.DataFrame({"capture_id": ["a", "b", "c", "d"], "subject": ["s1", "s1", "s2", "s2"],
+                         "gesture": ["pat", "rub", "pat", "rub"]})
+    folds = {"f1": ["a", "b"], "f2": ["c", "d"]}
+    half = {"f1": ["a"], "f2": ["c"]}
+    methods = [FakeMethod("sd", "gaus-rf"), FakeMethod("bmh", "gaus-rf", wrong=half),
+               FakeMethod("msd", "gaus-rf", wrong=half)]
+    runs = []
+    for name in ("gaus-causes", "gaus-other"):
+        d = tmp_path / name
+        d.mkdir()
+        proto = _cause_protocol(d, f"scene:{scene_file}")
+        proto.write_text(proto.read_text().replace("name: gaus-causes", f"name: {name}"))
+        out = write_fake_run(d / "res", caps, folds, methods, dataset=f"scene:{scene_file}")
+        runs.append(ProtocolRun(path=proto, name=name, out=out, changes=[]))
+    text = write_report(runs, PROFILES["full"], tmp_path / "R.md").read_text()
+    # 1 of 3 within on each table; only the other table counts as one no value was calibrated on
+    assert text.count(f"| scene:{scene_file} | 1 / 3 |") == 2
+    assert f"| {scene_file} `population.repetition.sd` |" in text
+    assert "Gaus et al. 2015 2 of 6" in text
+    assert "On the tables no scene value was calibrated on, 1 of 3" in text
 
 
 @pytest.mark.parametrize("path", paper_protocols(), ids=lambda p: p.stem)
@@ -356,6 +390,9 @@ def test_every_measured_cause_reruns_a_protocol_of_the_repository(path):
         if r.measured_by is None:
             continue
         words = r.measured_by.split()
+        if words[:2] == ["touchbench", "audit"]:  # the protocol's own leakage audit, shown beside it in REPORT.md
+            assert words[2] == path.stem and load_protocol(path, deep=False).audit is not None, r.measured_by
+            continue
         assert words[:2] == ["touchbench", "run"], r.measured_by
         measured = load_protocol(REPO_ROOT / words[2], deep=False)  # the reading's file exists and is valid
         assert measured.name.startswith(path.stem.split("-")[0]), (path.name, words[2])
@@ -476,3 +513,18 @@ audit:
     scores = pd.read_parquet(tmp_path / "res" / "quick" / "cnn-tiny-audit" / "window-kfold" / "scores.parquet")
     assert sorted(scores["fold"]) == ["f0", "f1"]  # 2 of the 3 folds
     assert "its first 2 folds run" in path.read_text()
+
+
+@pytest.mark.parametrize("scene", ["cost-like", "fur-like", "tpm-like"])
+def test_a_calibrated_scene_value_names_its_table_protocol_and_the_run_that_chose_it(scene):
+    spec = load_scene(scene)
+    for prop, cal in spec.calibrated.items():
+        proto = load_protocol(PAPERS_DIR / f"{cal.protocol}.yaml", deep=False)
+        assert proto.dataset.name == f"scene:{scene}", (scene, prop, cal.protocol)
+        words = cal.measured_by.split()
+        assert words[:2] == ["touchbench", "run"], cal.measured_by
+        measured = load_protocol(REPO_ROOT / words[2], deep=False)
+        # every candidate is the same scene with only the calibrated property changed
+        for ev in measured.evaluations:
+            assert ev.dataset.name == f"scene:{scene}"
+            assert all(k.replace("__", ".").startswith(prop) for k in ev.dataset.options), ev.dataset.options

@@ -314,7 +314,7 @@ def papers() -> None:
 @json_option
 def papers_list(profile: str, as_json: bool) -> None:
     """The paper protocols and what the profile changes in each."""
-    from ..papers.reproduce import PROFILES, apply_profile, paper_protocols
+    from ..papers.profiles import PROFILES, apply_profile, paper_protocols
     from ..protocols.schema import load_protocol
 
     if profile not in PROFILES:

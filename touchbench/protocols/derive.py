@@ -1,7 +1,7 @@
 """Protocols made from protocols: a study changed into another, as plain data, validated again.
 
 The leakage audit's variants (:mod:`touchbench.engine.audit`) and the paper
-reproduction's profiles (:mod:`touchbench.papers.reproduce`) are functions
+reproduction's profiles (:mod:`touchbench.papers.profiles`) are functions
 from a protocol to a protocol. They change :func:`protocol_data` -- the
 validated protocol as the data of a protocol file, never the file's text --
 and :func:`derive` validates the result like any protocol file, its text

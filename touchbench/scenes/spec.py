@@ -37,6 +37,7 @@ range) are the scene itself, always simulated.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any, Literal
 
@@ -291,6 +292,20 @@ class Protocol(_Strict):
 
 
 # ------------------------------------------------------------ gestures
+def property_value(spec: BaseModel, path: str) -> Any:
+    """The value at a dotted path of a scene (``population.repetition.sd``);
+    KeyError when the scene has no such property."""
+    node: Any = spec
+    for key in path.split("."):
+        if isinstance(node, BaseModel) and key in type(node).model_fields:
+            node = getattr(node, key)
+        elif isinstance(node, dict) and key in node:
+            node = node[key]
+        else:
+            raise KeyError(path)
+    return node
+
+
 def _check_gesture_override(where: str, gesture: str, params: dict[str, Any]) -> None:
     fields = GestureParams.__dataclass_fields__  # type: ignore[attr-defined]
     for k, v in params.items():
@@ -300,6 +315,17 @@ def _check_gesture_override(where: str, gesture: str, params: dict[str, Any]) ->
             GestureParams.check_value(k, v)
         except ValueError as e:
             raise ValueError(f"{where}.{gesture}.{k}: {e}") from None
+
+
+class Calibration(_Strict):
+    """Where a calibrated value comes from: a property the paper leaves
+    unstated (how noisy, how distinct two people are), chosen so that one
+    named table of the paper is reproduced; the paper's other tables are
+    the check."""
+
+    table: str = Field(min_length=1, description="the table or figure the value was chosen on")
+    protocol: str = Field(min_length=1, description="the paper protocol that computes that table")
+    measured_by: str = Field(min_length=1, description="the command that measured the candidates")
 
 
 # ---------------------------------------------------------------- scene
@@ -313,6 +339,15 @@ class SceneSpec(_Strict):
     gestures: dict[str, dict[str, Any] | None]
     protocol: Protocol
     calibrate_against: str | None = None
+    calibrated: dict[str, Calibration] = Field(default_factory=dict)
+
+    @field_validator("calibrated")
+    @classmethod
+    def _calibrated_paths(cls, v: dict[str, Calibration]) -> dict[str, Calibration]:
+        for path in v:
+            if not re.fullmatch(r"[A-Za-z_]\w*(\.\w+)+", path):
+                raise ValueError(f"{path}: a property's dotted path, e.g. population.repetition.sd")
+        return v
 
     @field_validator("effects")
     @classmethod
@@ -343,6 +378,7 @@ class SceneSpec(_Strict):
         self._check_sessions_and_hands(fx)
         self._check_people()
         self._check_split()
+        self._check_calibrated()
         if s.kind == "channels" and ("crosstalk" in fx or "curvature" in fx):
             raise ValueError("effects: crosstalk and curvature apply to grid sensors only")
         if pro.segmentation.mode == "fixed" and (pro.segmentation.min_s or pro.segmentation.max_s):
@@ -431,6 +467,14 @@ class SceneSpec(_Strict):
             bad = [v for v in pro.split.variants if v not in (pro.variants or {})]
             if bad:
                 raise ValueError(f"protocol.split.variants: {bad} are not variants of the scene")
+
+    def _check_calibrated(self) -> None:
+        """Each calibrated property is one the scene sets."""
+        for path in self.calibrated:
+            try:
+                property_value(self, path)
+            except KeyError:
+                raise ValueError(f"calibrated.{path}: the scene has no such property") from None
 
     # ------------------------------------------------------------ helpers
     def gesture_params(self, gesture: str, group: str | None = None) -> GestureParams:
