@@ -280,7 +280,8 @@ def calibration_tables(protocols: list) -> dict[str, list[str]]:
               if parse_dataset_ref(p.dataset.name).kind == "scene"}
     for scene in sorted(scenes):
         for prop, cal in load_scene(scene).calibrated.items():
-            out.setdefault(cal.protocol, []).append(f"{scene} `{prop}`")
+            for name in cal.protocols:
+                out.setdefault(name, []).append(f"{scene} `{prop}`")
     return out
 
 

@@ -324,7 +324,7 @@ class Calibration(_Strict):
     the check."""
 
     table: str = Field(min_length=1, description="the table or figure the value was chosen on")
-    protocol: str = Field(min_length=1, description="the paper protocol that computes that table")
+    protocols: list[str] = Field(min_length=1, description="the paper protocols that compute that table")
     measured_by: str = Field(min_length=1, description="the command that measured the candidates")
 
 
