@@ -11,7 +11,7 @@ from snapshots.registries import snapshot
 
 from touchbench.core.errors import DataError, UnknownNameError
 from touchbench.scenes import SCENES, SPECS_DIR, generate_scene, load_scene
-from touchbench.scenes.spec import n_captures, parse_spec, subject_ids
+from touchbench.scenes.spec import n_captures, parse_spec, property_value, subject_ids
 
 
 def tiny_raw():
@@ -180,3 +180,19 @@ def test_overrides():
     assert spec.protocol.segmentation.frames == 20 and spec.sensor.noise_sd == 2.0
     with pytest.raises(DataError, match="protocol.repetitions"):
         load_scene("tiny", repetitions=-1)
+
+
+def test_a_calibrated_property_must_be_one_the_scene_has():
+    cal = {"table": "T3", "protocols": ["p"], "measured_by": "touchbench run x.yaml"}
+    raw = tiny_raw()
+    raw["population"]["style"] = {"sd": 0.4}
+    raw["calibrated"] = {"population.style.sd": cal}
+    spec = parse_spec(raw, "scene.yaml")
+    assert property_value(spec, "population.style.sd") == 0.4
+    assert spec.calibrated["population.style.sd"].protocols == ["p"]
+    raw["calibrated"] = {"population.style.sdd": cal}
+    refused(raw, r"calibrated\.population\.style\.sdd: the scene has no such property")
+    raw["calibrated"] = {"style": cal}
+    refused(raw, r"style: a property's dotted path")
+    raw["calibrated"] = {"population.style.sd": {**cal, "protocols": []}}
+    refused(raw, r"calibrated\.population\.style\.sd\.protocols")
