@@ -32,7 +32,7 @@ from ..results.summary import check_expected
 from ..scenes import load_scene
 from .profiles import Profile, apply_profile
 
-__all__ = ["PAPERS", "ProtocolRun", "audit_dir", "calibration_tables", "write_report"]
+__all__ = ["PAPERS", "ProtocolRun", "audit_dir", "write_report"]
 
 # The papers, in report order: (short name, citation, protocol name prefix).
 PAPERS = [
@@ -262,27 +262,14 @@ def _cause(row: dict[str, Any], result, ref: str) -> str:
     return f"synthetic data (scene {scene})" if scene else "not explained"
 
 
-def _valid_protocols(runs: list[ProtocolRun]) -> list:
-    out = []
-    for r in runs:
-        try:
-            out.append(load_protocol(r.path))
-        except TouchbenchError:
-            continue  # its section says so
-    return out
-
-
-def calibration_tables(protocols: list) -> dict[str, list[str]]:
-    """For each paper protocol whose table a scene value was calibrated on: those values
-    (``"scene-name population.repetition"``), from the scenes' ``calibrated:`` blocks."""
-    out: dict[str, list[str]] = {}
-    scenes = {parse_dataset_ref(p.dataset.name).value for p in protocols
-              if parse_dataset_ref(p.dataset.name).kind == "scene"}
-    for scene in sorted(scenes):
-        for prop, cal in load_scene(scene).calibrated.items():
-            for name in cal.protocols:
-                out.setdefault(name, []).append(f"{scene} `{prop}`")
-    return out
+def _calibrated_on(ref: str, name: str) -> list[str]:
+    """The scene values (``"scene-name `population.repetition`"``) calibrated on the table of the paper
+    protocol ``name`` whose data is ``ref``, from that scene's ``calibrated:`` block; [] for real data."""
+    parsed = parse_dataset_ref(ref)
+    if parsed.kind != "scene":
+        return []
+    return [f"{parsed.value} `{prop}`" for prop, cal in load_scene(parsed.value).calibrated.items()
+            if name in cal.protocols]
 
 
 @dataclass
@@ -296,6 +283,7 @@ class _Section:
     within: int = 0
     seconds: float = 0.0
     status: str = "ran"
+    calibrated: list[str] = field(default_factory=list)  # the scene values calibrated on this table
 
 
 def audit_dir(out: Path) -> Path:
@@ -361,6 +349,7 @@ def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
         return sec
     ref = proto.dataset.name
     sec.real = _is_real(ref)
+    sec.calibrated = _calibrated_on(ref, r.name)
     sec.data = "real HAART" if sec.real else ref
     body, flags = sec.lines, sec.flags
     body += [f"### {proto.description or proto.name}", ""]
@@ -419,7 +408,6 @@ def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
 class _Tally:
     """What the report's head says: the counts and the overview, the flags, the problems."""
 
-    calibrated: dict[str, list[str]]
     body: list[str] = field(default_factory=list)
     overview: list[str] = field(default_factory=lambda: [
         "| paper | table / figure | data | accuracies within tolerance | other differences | scene values "
@@ -440,7 +428,7 @@ class _Tally:
         (self.flags_real if sec.real else self.flags_synth).extend(sec.flags)
         self.problems += sec.problems
         self.compute += sec.seconds
-        for key, counted in (("all", True), ("real", sec.real), ("free", r.name not in self.calibrated),
+        for key, counted in (("all", True), ("real", sec.real), ("free", not sec.calibrated),
                              (short, True)):
             if counted:
                 self.count(key, sec)
@@ -451,7 +439,7 @@ class _Tally:
             f"| {short} | {what} | {sec.data} | "
             + (f"{sec.within} / {sec.compared}" if sec.compared else "—") + " | "
             + (sec.status if sec.status != "ran" else (str(others) if others else "—")) + " | "
-            + (", ".join(self.calibrated.get(r.name, [])) or "—") + " | "
+            + (", ".join(sec.calibrated) or "—") + " | "
             + f"{sec.seconds / 60:.1f} | `{_rel(r.path)}` |")
 
     def of(self, key: str) -> str:
@@ -460,7 +448,7 @@ class _Tally:
 
 
 def _tally(runs: list[ProtocolRun], profile: Profile) -> _Tally:
-    t = _Tally(calibration_tables(_valid_protocols(runs)))
+    t = _Tally()
     for short, citation, prefix in PAPERS:
         mine = sorted((r for r in runs if r.name.startswith(prefix)), key=lambda r: r.name)
         if mine:

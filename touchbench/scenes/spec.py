@@ -292,20 +292,6 @@ class Protocol(_Strict):
 
 
 # ------------------------------------------------------------ gestures
-def property_value(spec: BaseModel, path: str) -> Any:
-    """The value at a dotted path of a scene (``population.repetition.sd``);
-    KeyError when the scene has no such property."""
-    node: Any = spec
-    for key in path.split("."):
-        if isinstance(node, BaseModel) and key in type(node).model_fields:
-            node = getattr(node, key)
-        elif isinstance(node, dict) and key in node:
-            node = node[key]
-        else:
-            raise KeyError(path)
-    return node
-
-
 def _check_gesture_override(where: str, gesture: str, params: dict[str, Any]) -> None:
     fields = GestureParams.__dataclass_fields__  # type: ignore[attr-defined]
     for k, v in params.items():
@@ -317,6 +303,7 @@ def _check_gesture_override(where: str, gesture: str, params: dict[str, Any]) ->
             raise ValueError(f"{where}.{gesture}.{k}: {e}") from None
 
 
+# ------------------------------------------------------------ calibration
 class Calibration(_Strict):
     """Where a calibrated value comes from: a property the paper leaves
     unstated (how noisy, how distinct two people are), chosen so that one
@@ -485,6 +472,20 @@ class SceneSpec(_Strict):
             if over:
                 p = p.replace(**over)
         return p
+
+
+def property_value(spec: BaseModel, path: str) -> Any:
+    """The value at a dotted path of a scene (``population.repetition.sd``);
+    KeyError when the scene has no such property."""
+    node: Any = spec
+    for key in path.split("."):
+        if isinstance(node, BaseModel) and key in type(node).model_fields:
+            node = getattr(node, key)
+        elif isinstance(node, dict) and key in node:
+            node = node[key]
+        else:
+            raise KeyError(path)
+    return node
 
 
 def subject_ids(spec: SceneSpec) -> list[str]:
