@@ -190,6 +190,16 @@ def test_profile_never_touches_expected_or_features(tmp_path):
     assert [c.label for c in proto.combinations()] == [c.label for c in orig.combinations()]
 
 
+def test_the_papers_readme_states_every_cap_of_the_quick_profile():
+    row = next(line for line in (PAPERS / "README.md").read_text().splitlines() if line.startswith("| `quick` |"))
+    for clf, caps in PROFILES["quick"].classifier_caps.items():
+        for param, cap in caps.items():
+            assert re.search(rf"`{re.escape(clf)}`[^;]*\b{param} <= {cap}\b", row), (clf, param, cap)
+    for scheme, caps in PROFILES["quick"].scheme_caps.items():
+        for param, cap in caps.items():
+            assert f"{param} <= {cap}" in row and scheme in row, (scheme, param, cap)
+
+
 HAART = ["constant", "notouch", "pat", "rub", "scratch", "stroke", "tickle"]
 
 
@@ -408,6 +418,18 @@ def test_each_gaus_reading_is_a_valid_protocol_on_the_training_subjects_only(pat
     rel = path.relative_to(REPO_ROOT).as_posix()
     assert f"touchbench run {rel} --out results/research/" in path.read_text()  # the command the note gives
     assert rel in (REPO_ROOT / "docs" / "research" / "gaus-table5.md").read_text()
+
+
+@pytest.mark.parametrize("path", sorted((REPO_ROOT / "docs" / "research" / "scene-calibration").glob("*.yaml")),
+                         ids=lambda p: p.stem)
+def test_each_scene_calibration_run_is_a_valid_protocol_the_note_gives(path):
+    proto = load_protocol(path, deep=False)
+    rel = path.relative_to(REPO_ROOT).as_posix()
+    assert f"touchbench run {rel} --out results/research/{proto.name}" in path.read_text()
+    assert f"touchbench run {rel} --out results/research/{proto.name}" in (
+        REPO_ROOT / "docs" / "research" / "scene-calibration.md").read_text()
+    for ev in proto.evaluations or []:  # the challenge's test captures are never looked at
+        assert "test" not in (ev.dataset.filters or {}).get("split", []), ev.name
 
 
 def _table3_run(out: Path, exact: bool) -> Path:

@@ -336,7 +336,7 @@ def papers_list(profile: str, as_json: bool) -> None:
 
 @papers.command("reproduce", epilog=example("touchbench papers reproduce --profile quick --jobs 2"))
 @click.option("--profile", default="quick", show_default=True, type=click.Choice(["quick", "full"]),
-              help="quick: fewer trees and epochs, smaller synthetic scenes (stated in the report); full: the papers' settings.")
+              help="quick: fewer trees, epochs and folds (stated in the report; the data and scenes whole); full: the papers' settings.")
 @click.option("--out", "-o", default="results/papers", show_default=True, type=click.Path(file_okay=False),
               help="Results go to OUT/<profile>/<protocol>/; the report to OUT/REPORT.md.")
 @click.option("--only", multiple=True, help="Only protocols whose name contains this (repeatable).")
