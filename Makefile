@@ -4,7 +4,7 @@
 #                          example plugin) and run the tests, spread over TEST_WORKERS processes
 #                          (pytest-xdist; TEST_WORKERS=1: one process)
 #   make lint              check every function of touchbench/: at most 80 lines, cyclomatic
-#                          complexity at most 15 (flake8, configured in pyproject.toml)
+#                          complexity at most 15, no unused import (flake8, configured in pyproject.toml)
 #   make api-docs          build the API reference (pdoc) into build/api; any warning fails
 #   make snapshots         record the names every registry holds (tests/snapshots/), after adding an entry
 #   make reproduce-papers  run touchbench/protocols/papers/ and write results/papers/REPORT.md

@@ -9,7 +9,6 @@ choice errors, frames from standard input and from a replayed file.
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pandas as pd

@@ -29,7 +29,7 @@ from touchbench.engine import run_protocol
 from touchbench.engine.planning import plan_run
 from touchbench.engine.testing import SENSOR, random_dataset
 from touchbench.protocols.schema import ProtocolError, parse_protocol
-from touchbench.protocols.schemes import SplitError, make_splitter
+from touchbench.protocols.schemes import make_splitter
 from touchbench.protocols.schemes.kfold import SUBJECTS_SHARED
 from touchbench.reports.html import write_report
 from touchbench.reports.leaderboard import build_leaderboards, display_rows, to_markdown

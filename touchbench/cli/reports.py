@@ -8,7 +8,6 @@ so the same method run twice is one row.
 
 from __future__ import annotations
 
-import json
 import math
 import sys
 from pathlib import Path

@@ -61,7 +61,7 @@ from ..core.errors import DataError, TouchbenchError
 from ..core.hashing import canonical_json
 from ..core.threads import single_thread
 from ..core.versions import package_versions
-from ..datasets.model import FRAME_RATE_TOLERANCE, SensorSpec, TouchDataset, frames_checksum, sensor_differences
+from ..datasets.model import SensorSpec, TouchDataset, frames_checksum, sensor_differences
 from ..classifiers.fitting import FittedEstimator, FittedMethod
 from ..methods import MethodSpec
 from ..methods.fitting import fit_method

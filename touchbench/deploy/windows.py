@@ -25,11 +25,8 @@ Interpretations (the thesis gives no more detail):
 
 from __future__ import annotations
 
-from typing import Iterable, Sequence
-
 import numpy as np
 
-from ..core.errors import TouchbenchError
 from ..datasets.windows import cut_windows, seconds_to_frames
 
 __all__ = ["COMBINE", "combine_windows", "cut_windows", "seconds_to_frames"]
