@@ -257,6 +257,36 @@ def test_report_states_a_failed_protocol(tmp_path):
     assert "Profile `quick`" in text and "gaus-rf: n_estimators ≤ 100" in text
 
 
+def test_rerunning_one_paper_keeps_the_others_in_the_report(tmp_path):
+    from touchbench.papers.reproduce import reproduce
+
+    d = tmp_path / "papers"
+    d.mkdir()
+    for name, feats in (("gaus-tiny", "msd"), ("gaus-small", "sd")):
+        _write(d / f"{name}.yaml", f"""# a tiny stand-in for a paper protocol
+name: {name}
+description: tiny scene, {feats}, small forest
+dataset: scene:tiny
+scheme: loso
+features: [[{feats}]]
+classifiers:
+  - {{name: gaus-rf, params: {{n_estimators: 5}}}}
+seed: 0
+expected:
+  metric: accuracy
+  tolerance: 100.0
+  results:
+    - {{features: [{feats}], classifier: gaus-rf, value: 50.0, source: "made up {name}"}}
+""")
+    (d / "gaus-never.yaml").write_text((d / "gaus-small.yaml").read_text().replace("gaus-small", "gaus-never"))
+    reproduce("quick", tmp_path / "res", protocols_dir=d, echo=lambda s: None, only=["gaus-tiny", "gaus-small"])
+    text = reproduce("quick", tmp_path / "res", protocols_dir=d, echo=lambda s: None, only=["gaus-small"]).read_text()
+    assert "| made up gaus-tiny | msd | gaus-rf |" in text  # computed by the first invocation, kept
+    assert "| made up gaus-small | sd | gaus-rf |" in text
+    assert "gaus-never" not in text  # never computed: not in the report
+    assert text.index("made up gaus-small") < text.index("made up gaus-tiny")  # the usual order: dataset, file
+
+
 def test_reproduce_end_to_end_on_a_tiny_protocol(tmp_path):
     from touchbench.papers.reproduce import reproduce
 

@@ -338,7 +338,8 @@ def papers_list(profile: str, as_json: bool) -> None:
               help="quick: fewer trees, epochs and folds (stated in the report; the data and scenes whole); full: the papers' settings.")
 @click.option("--out", "-o", default="results/papers", show_default=True, type=click.Path(file_okay=False),
               help="Results go to OUT/<profile>/<protocol>/; the report to OUT/REPORT.md.")
-@click.option("--only", multiple=True, help="Only protocols whose name contains this (repeatable).")
+@click.option("--only", multiple=True, help="Only protocols whose name contains this (repeatable); REPORT.md keeps the other protocols "
+                   "whose results an earlier run left in OUT.")
 @jobs_option
 @click.option("--report", "report_path", default=None, type=click.Path(dir_okay=False),
               help="Where to write the report [default: OUT/REPORT.md].")

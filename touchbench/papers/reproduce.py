@@ -81,6 +81,8 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
               "cpus": os.cpu_count(), "tasks_ran": sum(r.n_ran for r in runs),
               "protocols": len(runs), "finished_at": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     timing = _kept_timing(timing, out / profile / "invocation.json", subset=bool(only))
+    if only:
+        runs = _with_earlier_results(runs, out / profile, protocols_dir, prof)
     report_path = Path(report) if report is not None else out / "REPORT.md"
     write_report(runs, prof, report_path, timing=timing)
     return report_path
@@ -100,6 +102,21 @@ def _planned_protocols(protocols_dir: Path | None, only: list[str] | None, prof)
         planned.append((proto, changes, f))
     planned.sort(key=lambda t: (_dataset_key(t[0]), t[2].name))  # one dataset in memory at a time
     return planned
+
+
+def _with_earlier_results(runs: list[ProtocolRun], folder: Path, protocols_dir: Path | None,
+                          prof) -> list[ProtocolRun]:
+    """The runs a partial invocation (``only``) reports: every paper protocol in the usual order, those
+    just run as they ran and the others whose results an earlier invocation left in ``folder``, so that
+    rerunning one paper does not drop the others from REPORT.md."""
+    ran = {r.name: r for r in runs}
+    out = []
+    for proto, changes, f in _planned_protocols(protocols_dir, None, prof):
+        if proto.name in ran:
+            out.append(ran[proto.name])
+        elif (folder / proto.name / "manifest.json").is_file():
+            out.append(ProtocolRun(path=f, name=proto.name, out=folder / proto.name, changes=changes))
+    return out
 
 
 class _LoadedDataset:
