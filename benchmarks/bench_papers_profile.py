@@ -37,18 +37,16 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from touchbench.engine.planning import plan_run  # noqa: E402
 from touchbench.papers.profiles import PROFILES, apply_profile, paper_protocols  # noqa: E402
 from touchbench.protocols.schema import load_protocol  # noqa: E402
+from touchbench.results.store import ResultStore  # noqa: E402
 
 COST = ["fit_seconds", "predict_seconds", "feature_fit_seconds"]
 
 
 def finished_tasks(folder: Path) -> pd.DataFrame:
-    """Every finished task's id, method label and compute seconds (the merged reports and the fragments)."""
-    files = list(folder.glob("scores.parquet")) + list(folder.glob("fragments/*.scores.parquet"))
-    if not files:
-        return pd.DataFrame(columns=["task_id", "seconds"])
-    s = pd.concat([pd.read_parquet(f, columns=["task_id", "status", *COST]) for f in files])
-    s = s[s["status"] == "ok"].drop_duplicates("task_id")
-    return pd.DataFrame({"task_id": s["task_id"], "seconds": s[COST].fillna(0.0).sum(axis=1)})
+    """Every finished task's id and compute seconds (the results folder's task fragments)."""
+    s = ResultStore(folder).read_scores()
+    s = s[s["status"] == "ok"]
+    return pd.DataFrame({"task_id": s["task_id"], "seconds": s[COST].astype(float).fillna(0.0).sum(axis=1)})
 
 
 def protocol_rows(path: Path, profile: str, out: Path, slot: float) -> list[dict]:
