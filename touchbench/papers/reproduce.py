@@ -66,12 +66,13 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
         jobs = os.cpu_count() or 1
     cpu0 = _cpu_seconds()
     load0 = _load()
-    planned = _planned_protocols(protocols_dir, only, prof)
+    planned = _planned_protocols(protocols_dir, prof)
+    chosen = _chosen(planned, only)
     runs: list[ProtocolRun] = []
     t_all = time.perf_counter()
     loaded = _LoadedDataset()
     audit_options = dict(prof.audit_options) if audit else None
-    for proto, changes, f in planned:
+    for proto, changes, f in chosen:
         r = ProtocolRun(path=f, name=proto.name, out=out / profile / proto.name, changes=changes)
         _run_guarded(proto, r, loaded, echo=echo, jobs=jobs, progress=progress, failed=failed, audit=audit_options)
         runs.append(r)
@@ -82,36 +83,40 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
               "protocols": len(runs), "finished_at": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     timing = _kept_timing(timing, out / profile / "invocation.json", subset=bool(only))
     if only:
-        runs = _with_earlier_results(runs, out / profile, protocols_dir, prof)
+        runs = _with_earlier_results(runs, planned, out / profile)
     report_path = Path(report) if report is not None else out / "REPORT.md"
     write_report(runs, prof, report_path, timing=timing)
     return report_path
 
 
-def _planned_protocols(protocols_dir: Path | None, only: list[str] | None, prof) -> list[tuple]:
-    """The paper protocols chosen by ``only``, under the profile, each with its changes and file,
-    ordered so that the protocols of one dataset run together."""
-    files = paper_protocols(protocols_dir)
-    if only:
-        files = [f for f in files if any(o == f.stem or o in f.stem for o in only)]
-        if not files:
-            raise TouchbenchError(f"no paper protocol matches {only}")
+def _planned_protocols(protocols_dir: Path | None, prof) -> list[tuple]:
+    """Every paper protocol under the profile, each with its changes and file, ordered so that the
+    protocols of one dataset run together."""
     planned = []
-    for f in files:
+    for f in paper_protocols(protocols_dir):
         proto, changes = apply_profile(load_protocol(f), prof)
         planned.append((proto, changes, f))
     planned.sort(key=lambda t: (_dataset_key(t[0]), t[2].name))  # one dataset in memory at a time
     return planned
 
 
-def _with_earlier_results(runs: list[ProtocolRun], folder: Path, protocols_dir: Path | None,
-                          prof) -> list[ProtocolRun]:
-    """The runs a partial invocation (``only``) reports: every paper protocol in the usual order, those
-    just run as they ran and the others whose results an earlier invocation left in ``folder``, so that
+def _chosen(planned: list[tuple], only: list[str] | None) -> list[tuple]:
+    """The planned protocols whose file name contains one of ``only`` (all of them without ``only``)."""
+    if not only:
+        return planned
+    chosen = [p for p in planned if any(o in p[2].stem for o in only)]
+    if not chosen:
+        raise TouchbenchError(f"no paper protocol matches {only}")
+    return chosen
+
+
+def _with_earlier_results(runs: list[ProtocolRun], planned: list[tuple], folder: Path) -> list[ProtocolRun]:
+    """The runs a partial invocation (``only``) reports: every planned protocol in order, those just
+    run as they ran and the others whose results an earlier invocation left in ``folder``, so that
     rerunning one paper does not drop the others from REPORT.md."""
     ran = {r.name: r for r in runs}
     out = []
-    for proto, changes, f in _planned_protocols(protocols_dir, None, prof):
+    for proto, changes, f in planned:
         if proto.name in ran:
             out.append(ran[proto.name])
         elif (folder / proto.name / "manifest.json").is_file():
