@@ -106,8 +106,44 @@ def test_zhou_wavelet_haar_by_hand():
     assert list(fs.get_feature_names_out()[[0, 4, 8]]) == ["zhou_wavelet_D1_a4_mean", "zhou_wavelet_D1_d1_mean", "zhou_wavelet_D1_d1_skew"]
 
 
+def test_zhou_wavelet_zero_pads_to_ltfat_length_by_hand():
+    # LTFAT's fwt ('per') zero-pads the signal at its end to a multiple of 2^J before the transform.
+    # 1 x 1 grid, signal 1..5, padded with 2 copies of each end -> 9 samples, windowed, then 7 zeros -> 16
+    s = np.arange(1.0, 6.0)
+    padded = np.concatenate([[1.0] * 2, s, [5.0] * 2])
+    t = np.arange(9)
+    x = np.concatenate([padded * (0.54 - 0.46 * np.cos(2 * np.pi * t / 8)), np.zeros(7)])
+
+    def haar(v):  # one level of the orthonormal Haar transform
+        return (v[0::2] + v[1::2]) / np.sqrt(2), (v[0::2] - v[1::2]) / np.sqrt(2)
+
+    a1, d1 = haar(x)
+    a2, d2 = haar(a1)
+    a3, d3 = haar(a2)
+    a4, d4 = haar(a3)
+    dev = d1 - d1.mean()
+    sd = np.sqrt((dev**2).sum() / 7)
+    expected = [a4.mean(), d4.mean(), d3.mean(), d2.mean(),
+                d1.mean(), d1.max() - d1.min(), sd, (dev**4).mean() / sd**4, (dev**3).mean() / sd**3]
+    fs = FEATURES.create("zhou-wavelet", levels=4, wavelet="haar", upsample=1, trim=False, descriptors=("D1",))
+    assert_allclose(fs.fit_transform([s.reshape(5, 1, 1)])[0], expected, rtol=1e-10, atol=1e-12)
+
+
+def test_zhou_wavelet_db8_approximation_keeps_the_padded_sum():
+    # An orthogonal filter bank's low-pass taps sum to sqrt(2), so each level divides the sum of the
+    # approximation by sqrt(2): with the signal zero-padded to L = 64 = 2^6, a_6 is one coefficient,
+    # sum(windowed signal) / 2^3. Without the zero padding (60 samples) the odd lengths on the way break this.
+    s = np.random.default_rng(3).uniform(0, 100, size=30)
+    padded = np.concatenate([[s[0]] * 15, s, [s[-1]] * 15])  # 60 samples
+    windowed = padded * (0.54 - 0.46 * np.cos(2 * np.pi * np.arange(60) / 59))
+    fs = FEATURES.create("zhou-wavelet", levels=6, upsample=1, trim=False, descriptors=("D1",))
+    a6_mean = fs.fit_transform([s.reshape(30, 1, 1)])[0][0]
+    assert fs.get_feature_names_out()[0] == "zhou_wavelet_D1_a6_mean"
+    assert_allclose(a6_mean, windowed.sum() / 8, rtol=1e-10)
+
+
 def test_zhou_wavelet_deeper_than_signal():
-    # 10 frames padded to 20 samples cannot carry 10 db8 levels: fixed length, finite
+    # 10 frames padded to 20 samples, then zero-padded to 1024 for 10 db8 levels: fixed length, finite
     c = np.random.default_rng(1).integers(0, 1024, size=(10, 8, 8)).astype(np.uint16)
     out = FEATURES.create("zhou-wavelet", levels=10).fit_transform([c, c[:1]])
     assert out.shape == (2, 234) and np.isfinite(out).all()

@@ -270,18 +270,23 @@ class ZhouWavelet(_ZhouBase):
       39 (J = 10) is: four means (a_J, d_J, d_(J-1), d_(J-2)) and five
       statistics on each of d_1..d_(J-3). We follow the counts.
     - d_1 is the finest (highest-frequency) subband, as in the paper's
-      Table 2. Transform: LTFAT ``fwt`` with its default periodic boundary
-      = PyWavelets ``wavedec(mode="periodization")``, which halves the
-      length at each level exactly as Table 2 does (800, 400, ... for 1600
-      samples).
+      Table 2. Transform: the paper uses LTFAT's ``fwt``, whose default
+      periodic boundary ('per') first zero-pads the signal at its end to
+      the next multiple of 2^J ("zero padding to the next legal length and
+      periodic boundary extension", LTFAT's ``fwt`` help) and then halves
+      it exactly at each level, as Table 2 does (800, 400, ... for 1600
+      samples). We do the same: the windowed signal is zero-padded to a
+      multiple of 2^J, then PyWavelets ``wavedec(mode="periodization")``,
+      the same periodic orthogonal transform on such a length (whether
+      the two align their filters on the same samples was not checked
+      against LTFAT, which is MATLAB/Octave code). So for
+      J = 8 and 10 most captures carry many zeros, and their subband
+      statistics depend on the capture's length.
     - Padding size T/2 for odd T: floor(T/2).
-    - A level deeper than the signal allows (2^J > padded length, e.g. a
-      10-frame capture with J = 10): the periodized transform goes on
-      halving down to one coefficient per subband, so every subband
-      exists and the output length is fixed; statistics of one-coefficient
-      subbands take the constant-series limits (std and range 0, skewness
-      0, kurtosis 3). PyWavelets' warning about boundary effects is
-      silenced.
+    - A level deeper than the signal allows (e.g. a 10-frame capture with
+      J = 10) is no special case: the zero padding to 2^J gives every
+      subband its coefficients. PyWavelets' warning about boundary effects
+      is silenced.
     - Standard deviation, kurtosis and skewness as in ``zhou-basic``.
 
     Parameters: ``levels`` (J >= 3), ``wavelet`` ("db8"), ``upsample``,
@@ -333,6 +338,8 @@ class ZhouWavelet(_ZhouBase):
         pad = t // 2
         padded = np.pad(series, [(0, 0), (pad, pad)], mode="edge")
         windowed = padded * np.hamming(padded.shape[1])
+        block = 2**J  # LTFAT's 'per': zero padding at the end to the next multiple of 2^J
+        windowed = np.pad(windowed, [(0, 0), (0, -windowed.shape[1] % block)])
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)
             coeffs = pywt.wavedec(windowed, self.wavelet, mode="periodization", level=J, axis=-1)
