@@ -128,11 +128,12 @@ def test_tpm_like_groups_sessions_and_bursts():
         protocol__groups={"A": {"subjects": 2}, "B": {"subjects": 1}},
     )
     m = ds.meta
-    assert list(m.columns) == ["capture_id", "subject", "group", "session", "gesture", "repetition"]
+    assert list(m.columns) == ["capture_id", "subject", "group", "session", "substrate", "gesture", "repetition"]
+    assert set(m["substrate"]) == {"fabric"}  # every capture through the fabric's response lag
     assert m.groupby("group")["subject"].unique().apply(list).to_dict() == {"A": ["s01", "s02"], "B": ["s03"]}
     assert set(m.loc[m["group"] == "A", "session"]) == {1, 2} and set(m.loc[m["group"] == "B", "session"]) == {1}
     assert len(ds) == (2 * 2 + 1) * 7 * 2
-    assert m["capture_id"].iloc[0] == "s01-r1-grab-01"
+    assert m["capture_id"].iloc[0] == "s01-r1-fabric-grab-01"
     assert all(c.shape[1:] == (20, 20) for c in ds.captures)
     # group A's stroke is a quick burst of three: shorter than group B's continuous strokes
     n = ds.n_frames
