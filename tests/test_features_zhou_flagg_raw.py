@@ -81,12 +81,9 @@ def test_zhou_wavelet_counts():
     assert [FEATURES.create("zhou-wavelet", levels=j).n_features((8, 8)) for j in (4, 6, 8, 10)] == [54, 114, 174, 234]
 
 
-def test_zhou_wavelet_haar_by_hand():
-    # 1 x 1 grid so D1 is the value; signal 1..8, padded with 4 copies of each end -> 16 samples
-    s = np.arange(1.0, 9.0)
-    padded = np.concatenate([[1.0] * 4, s, [8.0] * 4])
-    t = np.arange(16)
-    x = padded * (0.54 - 0.46 * np.cos(2 * np.pi * t / 15))  # symmetric Hamming window
+def _haar_4_levels_features(x):
+    """The 9 zhou-wavelet features of a 16-sample signal with J = 4, by the orthonormal Haar transform:
+    the means of a4, d4, d3, d2, then d1's mean, range, sd (ddof 1), kurtosis and skewness."""
 
     def haar(v):  # one level of the orthonormal Haar transform
         return (v[0::2] + v[1::2]) / np.sqrt(2), (v[0::2] - v[1::2]) / np.sqrt(2)
@@ -95,11 +92,19 @@ def test_zhou_wavelet_haar_by_hand():
     a2, d2 = haar(a1)
     a3, d3 = haar(a2)
     a4, d4 = haar(a3)
-    n = 8
     dev = d1 - d1.mean()
-    sd = np.sqrt((dev**2).sum() / (n - 1))
-    expected = [a4.mean(), d4.mean(), d3.mean(), d2.mean(),
-                d1.mean(), d1.max() - d1.min(), sd, (dev**4).mean() / sd**4, (dev**3).mean() / sd**3]
+    sd = np.sqrt((dev**2).sum() / (len(d1) - 1))
+    return [a4.mean(), d4.mean(), d3.mean(), d2.mean(),
+            d1.mean(), d1.max() - d1.min(), sd, (dev**4).mean() / sd**4, (dev**3).mean() / sd**3]
+
+
+def test_zhou_wavelet_haar_by_hand():
+    # 1 x 1 grid so D1 is the value; signal 1..8, padded with 4 copies of each end -> 16 samples
+    s = np.arange(1.0, 9.0)
+    padded = np.concatenate([[1.0] * 4, s, [8.0] * 4])
+    t = np.arange(16)
+    x = padded * (0.54 - 0.46 * np.cos(2 * np.pi * t / 15))  # symmetric Hamming window
+    expected = _haar_4_levels_features(x)
     c = s.reshape(8, 1, 1)
     fs = FEATURES.create("zhou-wavelet", levels=4, wavelet="haar", upsample=1, trim=False, descriptors=("D1",))
     assert_allclose(fs.fit_transform([c])[0], expected, rtol=1e-10, atol=1e-12)
@@ -113,18 +118,7 @@ def test_zhou_wavelet_zero_pads_to_ltfat_length_by_hand():
     padded = np.concatenate([[1.0] * 2, s, [5.0] * 2])
     t = np.arange(9)
     x = np.concatenate([padded * (0.54 - 0.46 * np.cos(2 * np.pi * t / 8)), np.zeros(7)])
-
-    def haar(v):  # one level of the orthonormal Haar transform
-        return (v[0::2] + v[1::2]) / np.sqrt(2), (v[0::2] - v[1::2]) / np.sqrt(2)
-
-    a1, d1 = haar(x)
-    a2, d2 = haar(a1)
-    a3, d3 = haar(a2)
-    a4, d4 = haar(a3)
-    dev = d1 - d1.mean()
-    sd = np.sqrt((dev**2).sum() / 7)
-    expected = [a4.mean(), d4.mean(), d3.mean(), d2.mean(),
-                d1.mean(), d1.max() - d1.min(), sd, (dev**4).mean() / sd**4, (dev**3).mean() / sd**3]
+    expected = _haar_4_levels_features(x)
     fs = FEATURES.create("zhou-wavelet", levels=4, wavelet="haar", upsample=1, trim=False, descriptors=("D1",))
     assert_allclose(fs.fit_transform([s.reshape(5, 1, 1)])[0], expected, rtol=1e-10, atol=1e-12)
 
