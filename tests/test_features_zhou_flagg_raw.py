@@ -57,6 +57,19 @@ def test_zhou_basic_by_hand():
     assert names[0] == "zhou_basic_D1_mean" and names[-1] == "zhou_basic_D6_skew" and len(names) == 30
 
 
+def test_zhou_basic_sum_reading_by_hand():
+    # the formula as printed (no 1/T): D1 = 1, 2, 0 sums to 3, D2 = 4, 2, 0 to 6;
+    # the other four statistics are those of the average reading
+    avg = FEATURES.create("zhou-basic", upsample=1, trim=False).fit_transform([CAP])[0].reshape(6, 5)
+    fs = FEATURES.create("zhou-basic", upsample=1, trim=False, mean="sum")
+    out = fs.fit_transform([CAP])[0].reshape(6, 5)
+    assert_allclose(out[:2, 0], [3, 6], atol=1e-12)
+    assert_allclose(out[:, 1:], avg[:, 1:], atol=0)
+    assert fs.get_feature_names_out()[0] == "zhou_basic_D1_sum"
+    with pytest.raises(ValueError, match="mean must be one of"):
+        FEATURES.create("zhou-basic", mean="total").fit([CAP])
+
+
 def test_zhou_cutoff():
     # min 0, max 10: threshold 1; samples 2..4 exceed it
     assert cutoff_slice(np.array([0, 0.5, 5, 10, 5, 0])) == slice(2, 5)

@@ -62,6 +62,7 @@ from .numerics import as_f64, moments
 ZHOU_PAPER = "Zhou et al. 2017 (Sensors 17:2585), section 4.1"
 DESCRIPTORS = ("D1", "D2", "D3", "D4", "D5", "D6")
 BASIC_STATS = ("mean", "std", "range", "kurt", "skew")
+MEAN_READINGS = {"average": "mean", "sum": "sum"}  # reading of section 4.1.1's first statistic -> its name
 
 
 def _keys_cubic(x: np.ndarray) -> np.ndarray:
@@ -209,7 +210,13 @@ class ZhouBasic(_ZhouBase):
 
     Interpretations:
 
-    - The paper's mean formula lacks the 1/T: we take the mean.
+    - The paper names the first statistic "the average value in the window"
+      but prints its formula without the 1/T, as the sum of the series.
+      ``mean="average"`` (the default) follows the words; ``mean="sum"``
+      the formula as printed (the feature is then named ``..._sum``), a
+      reading measured in ``docs/research/scene-calibration.md``. Only the
+      basic features take it: section 4.1.2's wavelet "mean" gives no
+      formula of its own.
     - Kurtosis and skewness divide the biased 4th / 3rd central moment
       (1/T) by the ddof = 1 standard deviation to the 4th / 3rd power,
       literally as written (MATLAB's functions use the biased standard
@@ -219,29 +226,36 @@ class ZhouBasic(_ZhouBase):
       :mod:`touchbench.features.numerics`).
 
     Parameters: ``upsample`` (bicubic factor, 2), ``descriptors``
-    (subset of D1..D6), ``trim`` (the 10 % cut-off, True), ``sensor``
-    (its low end is the zero of the D4 weights).
+    (subset of D1..D6), ``trim`` (the 10 % cut-off, True), ``mean``
+    ("average" or "sum", above), ``sensor`` (its low end is the zero of the
+    D4 weights).
     """
 
     _name = "zhou-basic"
     paper = f"{ZHOU_PAPER}.1"
 
-    def __init__(self, upsample: float = 2, descriptors: Sequence = DESCRIPTORS, trim: bool = True, sensor: SensorSpec | None = None):
+    def __init__(self, upsample: float = 2, descriptors: Sequence = DESCRIPTORS, trim: bool = True,
+                 mean: str = "average", sensor: SensorSpec | None = None):
         self.upsample = upsample
         self.descriptors = descriptors
         self.trim = trim
+        self.mean = mean
         self.sensor = sensor
 
     def _check_params(self) -> None:
         self._common_check()
+        if self.mean not in MEAN_READINGS:
+            raise FeatureInputError(f"{self._name}: mean must be one of {list(MEAN_READINGS)}, got {self.mean!r}")
 
     def feature_names(self, grid: tuple[int, int]) -> list[str]:
         idx = _parse_descriptors(self._name, self.descriptors)
-        return [f"zhou_basic_{DESCRIPTORS[i]}_{s}" for i in idx for s in BASIC_STATS]
+        stats = (MEAN_READINGS[self.mean],) + BASIC_STATS[1:]
+        return [f"zhou_basic_{DESCRIPTORS[i]}_{s}" for i in idx for s in stats]
 
     def _per_descriptor(self, series: np.ndarray) -> np.ndarray:
         m = moments(series, ddof_scale=1)
-        return np.stack([m["mean"], np.sqrt(m["var"]), m["range"], m["kurt"], m["skew"]], axis=1).ravel()
+        first = m[MEAN_READINGS[self.mean]]
+        return np.stack([first, np.sqrt(m["var"]), m["range"], m["kurt"], m["skew"]], axis=1).ravel()
 
 
 @FEATURES.register("zhou-wavelet", description="db8 wavelet subband statistics of each frame-descriptor series")
