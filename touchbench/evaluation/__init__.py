@@ -1,1 +1,2 @@
-"""Evaluation helpers that sit beside the protocols: metrics and scene calibration."""
+"""Evaluation helpers that sit beside the protocols: metrics, scene calibration and
+the scores of a live recognition stream."""
