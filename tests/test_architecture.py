@@ -31,6 +31,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("touchbench.features",),
     ("touchbench.classifiers",),
     ("touchbench.methods",),                         # feature sets -> estimator; the one fit path
+    ("touchbench.streams",),                         # live recognition: recogniser, rules, streams, replay
     ("touchbench.protocols", "touchbench.evaluation"),  # schema, splitters, metrics, calibration
     ("touchbench.results",),                         # the results store and run manifests
     ("touchbench.engine",),                          # planning and running tasks

@@ -21,7 +21,8 @@ from touchbench.classifiers.fastforest import compile_forest
 from touchbench.classifiers.fitting import FittedEstimator, FittedMethod
 from touchbench.deploy.model import SensorMismatchError, TrainedModel, sensor_differences
 from touchbench.deploy.stream import SlidingRecognizer, replay, run_stream, text_frames
-from touchbench.deploy.windows import combine_windows, cut_windows, seconds_to_frames
+from touchbench.deploy.windows import cut_windows, seconds_to_frames
+from touchbench.streams.recognizer import combine_windows
 from touchbench.core.errors import DataError, TouchbenchError
 
 SENSOR = SensorSpec("stub", grid=(2, 2), frame_rate=10.0, value_range=(0.0, 100.0))
@@ -114,7 +115,7 @@ def test_compiled_forest_sees_through_touchbench_extra_trees(wrapped):
     model = TrainedModel(FittedMethod([], FittedEstimator(np.array(["a", "b", "c"], dtype=object), est)),
                          {"sensor": SENSOR.to_dict()})
     np.testing.assert_allclose(model.proba_from_features(Xt), sk, rtol=0, atol=1e-12)
-    assert isinstance(model._fast, type(fast))
+    assert isinstance(model.fitted._fast, type(fast))
 
 
 # ----------------------------------------------------------------- a hand-made model

@@ -24,9 +24,10 @@ def registries() -> dict:
     from touchbench.protocols.schemes import SPLITTERS
     from touchbench.reports.figures import FIGURES
     from touchbench.scenes import SCENES
+    from touchbench.streams.rules import RULES
 
     return {"classifiers": CLASSIFIERS, "datasets": DATASETS, "evaluation schemes": SPLITTERS,
-            "features": FEATURES, "figure kinds": FIGURES, "file formats": FORMATS, "methods": METHODS,
+            "decision rules": RULES, "features": FEATURES, "figure kinds": FIGURES, "file formats": FORMATS, "methods": METHODS,
             "scenes": SCENES}
 
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -120,6 +120,7 @@ class FittedMethod:
     fitted: FittedEstimator
     feature_seconds: float = float("nan")
     fit_seconds: float = float("nan")
+    _fast: Any = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def classes(self) -> np.ndarray:
@@ -138,6 +139,38 @@ class FittedMethod:
 
     def predict_proba(self, captures: Any) -> dict[str, np.ndarray] | None:
         return self.fitted.predict_proba(self.transform(captures))
+
+    def proba_rows(self, X: Any, fast: bool = True) -> np.ndarray:
+        """``(n, C)`` probabilities of the rows ``X`` (features, or captures without feature sets),
+        columns in the order of :attr:`classes`: what a live recogniser decides from.
+
+        A classifier without ``predict_proba`` gives 1 for its predicted class. ``fast`` uses the
+        flat-array forest walk for forests (same numbers as scikit-learn, :mod:`.fastforest`).
+        """
+        n, C = len(X), len(self.classes)
+        est = self.estimator
+        if est is None:
+            return np.ones((n, 1))
+        P = np.zeros((n, C), dtype=np.float64)
+        if hasattr(est, "predict_proba"):
+            compiled = self._compiled() if fast else None
+            raw = compiled.predict_proba(X) if compiled else np.asarray(est.predict_proba(X), dtype=np.float64)
+            codes = np.asarray(getattr(est, "classes_", np.arange(raw.shape[1]))).astype(np.int64)
+            P[:, codes] = raw
+        else:
+            P[np.arange(n), np.asarray(est.predict(X)).astype(np.int64)] = 1.0
+        return P
+
+    def _compiled(self) -> Any:
+        """The estimator's flat-array forest (:mod:`.fastforest`), built once; None for another estimator."""
+        if getattr(self, "_fast", None) is None:
+            from .fastforest import compile_forest  # a private scikit-learn API: imported where used
+            self._fast = compile_forest(self.estimator) or False
+        return self._fast or None
+
+    def window_proba(self, captures: Any, fast: bool = True) -> np.ndarray:
+        """:meth:`proba_rows` of ``captures``' features."""
+        return self.proba_rows(self.transform(captures), fast=fast)
 
 
 def _fitted_set(name: str, params: dict[str, Any], sensor: Any, captures: Any, y: Any) -> tuple[Any, np.ndarray]:

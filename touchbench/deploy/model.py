@@ -55,7 +55,6 @@ import joblib
 import numpy as np
 
 from ..classifiers.adapt import uses_unlabelled_test
-from ..classifiers.fastforest import compile_forest
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import DataError, TouchbenchError
 from ..core.hashing import canonical_json
@@ -101,7 +100,6 @@ class TrainedModel:
 
     fitted: FittedMethod
     manifest: dict[str, Any]
-    _fast: Any = field(default=None, init=False, repr=False, compare=False)
     #: what loading the file found worth saying (an older format...)
     file_notes: list[str] = field(default_factory=list, init=False, repr=False, compare=False)
 
@@ -177,20 +175,7 @@ class TrainedModel:
         class. ``fast`` uses the flat-array forest walk for forests (same
         numbers as scikit-learn, see :mod:`.fastforest`).
         """
-        n, C = len(X), len(self.classes)
-        if self.estimator is None:
-            return np.ones((n, 1))
-        est = self.estimator
-        P = np.zeros((n, C), dtype=np.float64)
-        if hasattr(est, "predict_proba"):
-            if fast and self._fast is None:
-                self._fast = compile_forest(est) or False
-            raw = self._fast.predict_proba(X) if (fast and self._fast) else np.asarray(est.predict_proba(X), dtype=np.float64)
-            codes = np.asarray(getattr(est, "classes_", np.arange(raw.shape[1]))).astype(np.int64)
-            P[:, codes] = raw
-        else:
-            P[np.arange(n), np.asarray(est.predict(X)).astype(np.int64)] = 1.0
-        return P
+        return self.fitted.proba_rows(X, fast=fast)
 
     def predict_proba(self, captures: Sequence[np.ndarray], fast: bool = True) -> np.ndarray:
         return self.proba_from_features(self.transform(captures), fast=fast)

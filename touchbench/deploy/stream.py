@@ -47,13 +47,12 @@ all others together); ``combine="max"``.
 from __future__ import annotations
 
 import gzip
-import json
 import math
 import os
 import re
 import time
 import zlib
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any, Callable, Iterable, Iterator
 
@@ -66,8 +65,9 @@ from ..datasets.formats import FORMATS
 from ..datasets.generic import cell_columns
 from ..datasets.model import TouchDataset
 from ..datasets.tables import numeric, read_table
+from ..streams.recognizer import Decision, WindowRecognizer, decide_all
+from ..streams.rules import DecisionRule
 from .model import TrainedModel
-from .windows import COMBINE, combine_windows, seconds_to_frames
 
 __all__ = [
     "Decision",
@@ -86,25 +86,6 @@ __all__ = [
 MAX_BUFFER_BYTES = 512 * 2 ** 20
 #: a decimal number as a frame line writes it (no ``_`` digit groups, no hexadecimal): float() accepts more
 _NUMBER = re.compile(r"\s*[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?\s*|\s*[+-]?(nan|inf|infinity)\s*", re.IGNORECASE)
-
-
-@dataclass
-class Decision:
-    frame: int  # frames received when the decision was made (1-based count: the 10th frame is 10)
-    t: float  # stream time of that frame, seconds (frame / frame rate)
-    label: str  # the best class, or the none label
-    probability: float  # the best class's probability (also when under the threshold)
-    best: str  # the best class, even when the decision is "none"
-    window_s: float | None  # the deciding window (combine="max"), None for "mean"
-    latency_ms: float
-    windows: list[dict[str, Any]] = field(default_factory=list)  # per window: length, best class, probability
-
-    def to_json(self) -> str:
-        return json.dumps(asdict(self), default=float)
-
-    def to_text(self) -> str:
-        w = f"window {self.window_s:g} s" if self.window_s is not None else "mean of windows"
-        return f"{self.t:8.3f} s  {self.label:12s} {self.probability:5.2f}  ({w}, {self.latency_ms:.2f} ms)"
 
 
 @dataclass
@@ -129,52 +110,23 @@ class StreamSummary:
                 + (f"; {self.skipped_lines} malformed lines skipped" if self.skipped_lines else ""))
 
 
-class SlidingRecognizer:
-    """Sliding windows over incoming frames -> thresholded decisions (module docstring)."""
+class SlidingRecognizer(WindowRecognizer):
+    """A model file's recogniser (module docstring): :class:`~touchbench.streams.recognizer.WindowRecognizer`
+    over the model's probabilities, with the model's windows by default."""
 
     def __init__(self, model: TrainedModel, windows_s: Iterable[float] | None = None, hop_s: float = 0.5,
-                 threshold: float = 0.5, combine: str = "max", none_label: str = "none", fast: bool = True):
+                 threshold: float = 0.5, combine: str = "max", none_label: str = "none", fast: bool = True,
+                 rule: DecisionRule | None = None):
         if model.adapts_to_session:
             raise TouchbenchError(f"{model.method}: this model adapts to each session from that session's "
                                   "captures (touchbench predict does it on a file); a stream has no session "
                                   "to adapt to: train a method that does not adapt for stream")
         self.model = model
-        sensor = model.sensor
-        self.frame_rate = float(sensor.frame_rate)
         if windows_s is None:
-            windows_s = model.windows or [model.manifest["capture_frames"]["median"] / self.frame_rate]
-        windows_s = sorted(float(w) for w in windows_s)
-        if not windows_s:
-            raise TouchbenchError("give at least one window length")
-        self.windows_s = windows_s
-        self.lengths = [seconds_to_frames(w, self.frame_rate, "--window") for w in windows_s]
-        self.hop = seconds_to_frames(hop_s, self.frame_rate, "--hop")
-        if not 0.0 <= threshold <= 1.0:
-            raise TouchbenchError(f"threshold must be in [0, 1], got {threshold}")
-        if combine not in COMBINE:
-            raise TouchbenchError(f"unknown --combine {combine!r} (known: {', '.join(COMBINE)})")
-        classes = [str(c) for c in model.classes]
-        if none_label in classes:
-            raise TouchbenchError(f"the none label {none_label!r} is one of the model's classes; choose another")
-        self.classes = np.array(classes, dtype=object)
-        self.threshold = float(threshold)
-        self.combine = combine
-        self.none_label = none_label
-        self.fast = fast
-        self.dtype = np.dtype(model.manifest.get("capture_dtype", "<f8"))
-        self.grid = sensor.grid
-        self._cap = 2 * max(self.lengths)
-        _check_buffer(self._cap, self.grid, self.dtype, self.frame_rate)
-        self._buf = np.zeros((self._cap, *self.grid), dtype=self.dtype)
-        self._n = 0  # frames in the buffer
-        self.seen = 0  # frames seen in total
-
-    def warm_up(self) -> None:
-        """Classify one window of each length once (constant frames at the sensor's minimum), so
-        that one-off costs (imports, the forest's flat arrays) do not count as a decision's latency."""
-        lo = self.model.sensor.value_range[0]
-        caps = [np.full((L, *self.grid), lo, dtype=self.dtype) for L in self.lengths]
-        self.model.predict_proba(caps, fast=self.fast)
+            windows_s = model.windows or [model.manifest["capture_frames"]["median"] / float(model.sensor.frame_rate)]
+        super().__init__(lambda caps: model.predict_proba(caps, fast=fast), model.classes, model.sensor, windows_s,
+                         dtype=model.manifest.get("capture_dtype", "<f8"), hop_s=hop_s, threshold=threshold,
+                         combine=combine, none_label=none_label, rule=rule, buffer_check=_check_buffer)
 
     def notes(self) -> list[str]:
         out = []
@@ -188,33 +140,6 @@ class SlidingRecognizer:
             out.append(f"the model was trained on windows of {', '.join(f'{w:g}' for w in trained)} s, "
                        f"streaming with {', '.join(f'{w:g}' for w in self.windows_s)} s")
         return out
-
-    def push(self, frame: np.ndarray, arrived: float | None = None) -> Decision | None:
-        """Add one ``(H, W)`` frame; a :class:`Decision` when one is due, else None."""
-        arrived = time.perf_counter() if arrived is None else arrived
-        if self._n == self._cap:
-            keep = max(self.lengths) - 1
-            self._buf[:keep] = self._buf[self._n - keep:self._n]
-            self._n = keep
-        self._buf[self._n] = frame
-        self._n += 1
-        self.seen += 1
-        first = self.lengths[0]
-        if self.seen < first or (self.seen - first) % self.hop:
-            return None
-        full = [(w, L) for w, L in zip(self.windows_s, self.lengths) if self.seen >= L]
-        caps = [self._buf[self._n - L:self._n] for _, L in full]
-        P = self.model.predict_proba(caps, fast=self.fast)
-        p, k = combine_windows(P, self.combine)
-        best = int(np.argmax(p))
-        prob = float(p[best])
-        latency = 1000.0 * (time.perf_counter() - arrived)
-        per = [{"window_s": w, "label": str(self.classes[int(np.argmax(P[i]))]), "probability": float(P[i].max())}
-               for i, (w, _) in enumerate(full)]
-        label = str(self.classes[best]) if prob >= self.threshold else self.none_label
-        return Decision(frame=self.seen, t=self.seen / self.frame_rate, label=label, probability=prob,
-                        best=str(self.classes[best]), window_s=None if k is None else full[k][0],
-                        latency_ms=latency, windows=per)
 
 
 def buffer_limit() -> int:
@@ -450,11 +375,13 @@ def run_stream(recognizer: SlidingRecognizer, frames: Iterable[tuple[np.ndarray,
     summary = StreamSummary(none_label=recognizer.none_label)
     with single_thread():
         recognizer.warm_up()
-        for frame, arrived in frames:
-            summary.frames += 1
-            d = recognizer.push(frame, arrived)
-            if d is None:
-                continue
+
+        def counted():
+            for item in frames:
+                summary.frames += 1
+                yield item
+
+        for d in decide_all(recognizer, counted()):
             lat.append(d.latency_ms)
             summary.decisions += 1
             summary.labels[d.label] = summary.labels.get(d.label, 0) + 1

@@ -16,35 +16,12 @@ Interpretations (the thesis gives no more detail):
   from every training capture with a training hop (default: half the
   window), each window labelled with its capture's gesture; a capture
   shorter than every window is kept whole, so no capture is lost;
-- when several windows are classified at once, the decision is the most
-  confident window's (``combine="max"``: the window whose best class
-  probability is highest, so a short gesture is not outvoted by a long
-  window that mostly saw something else), or the mean of the windows'
-  probabilities (``combine="mean"``).
+- a live recogniser's windows and how it combines them are
+  :mod:`touchbench.streams.recognizer`'s.
 """
 
 from __future__ import annotations
 
-import numpy as np
-
 from ..datasets.windows import cut_windows, seconds_to_frames
 
-__all__ = ["COMBINE", "combine_windows", "cut_windows", "seconds_to_frames"]
-
-COMBINE = ("max", "mean")
-
-
-def combine_windows(P: np.ndarray, how: str = "max") -> tuple[np.ndarray, int | None]:
-    """One probability row from the rows of ``P`` (one per window).
-
-    ``max``: the row of the window whose best probability is highest (ties:
-    the first, that is the shortest when rows are ordered by length), and
-    its index. ``mean``: the mean row, and None.
-    """
-    P = np.asarray(P, dtype=np.float64)
-    if how == "max":
-        k = int(np.argmax(P.max(axis=1)))
-        return P[k], k
-    if how == "mean":
-        return P.mean(axis=0), None
-    raise ValueError(f"unknown combination {how!r} (known: {', '.join(COMBINE)})")
+__all__ = ["cut_windows", "seconds_to_frames"]

@@ -398,6 +398,8 @@ def _task_identity(place: _FoldPlace, m: Method, comps: Components) -> dict[str,
     }
     if m.subject_id_feature:  # only then: the ids of every other task stay as they were
         identity["subject_id_feature"] = True
+    if fold.live is not None:  # a stream fold: its streams and recogniser
+        identity["live"] = fold.live.digest()
     return identity
 
 

@@ -43,6 +43,7 @@ from ..results.manifest import load_average
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
 from .backends import run_setup
 from .cache import FeatureCache, crop_captures
+from .live import live_outcome
 
 __all__ = ["RunContext", "SetSpec", "Task", "execute_task"]
 
@@ -262,6 +263,45 @@ def _adapted_predictions(fitted: FittedEstimator, X_te: np.ndarray,
     return y_pred, proba or None
 
 
+def _capture_outcome(task: Task, ctx: RunContext, row: dict[str, Any], notes: list[str]):
+    """Fit the task's method on the fold's training captures and label its test captures: ``(labels,
+    probabilities or None)``; the measurements go into ``row``, what the method chose into ``notes``."""
+    ds = ctx.dataset
+    y = ctx.labels()
+    fold = task.fold
+    y_train, y_test = y[fold.train], y[fold.test]
+    X_tr, X_te, fitted, per_capture, feat_fit = _fold_features(task, ctx, y_train)
+    if task.method.subject_id_feature:
+        X_tr, X_te = _with_subject_id(ds, fold, X_tr, X_te)
+    row["feature_seconds_per_capture"] = per_capture
+    row["feature_fit_seconds"] = feat_fit
+    groups = ds.meta["subject"].to_numpy()[fold.train]
+    t0 = time.perf_counter()
+    spec = task.method.spec
+    fitted_est = fit_estimator(spec.estimator, spec.estimator_params, task.seed, X_tr, y_train, groups,
+                               sensor=ds.sensor)
+    row["fit_seconds"] = time.perf_counter() - t0 if fitted_est.estimator is not None else 0.0
+    row["n_classes_train"] = int(len(fitted_est.classes))
+    est = fitted_est.estimator
+    t0 = time.perf_counter()
+    if task.method.adaptation and est is not None:  # adapted to each test subject's captures, unlabelled
+        y_pred, proba = _adapted_predictions(fitted_est, X_te, ds.meta["subject"].to_numpy()[fold.test])
+    else:
+        y_pred, proba = fitted_est.predict_in_one_pass(X_te)  # probabilities too where the same pass gives them
+    row["predict_seconds"] = time.perf_counter() - t0
+    if getattr(est, "selection_note_", None):  # a method that searched inside the training fold says what it chose
+        notes.append(est.selection_note_)
+    if proba is None and est is not None and not task.method.adaptation:
+        proba = fitted_est.predict_proba(X_te)
+    row.update(metrics(y_test, y_pred))
+    if task.measure_latency:  # once per method and run: features + predict of one capture
+        lat_sets = _latency_sets(task, ctx, fitted, y_train)
+        caps = [ds.captures[int(i)][: task.crop_frames] if task.crop_frames is not None else ds.captures[int(i)]
+                for i in fold.test[:LATENCY_CAPTURES]]
+        row["latency_ms"], row["latency_cpu_ms"] = _measure_latency(FittedMethod(lat_sets, fitted_est), caps)
+    return y_pred, proba
+
+
 # ----------------------------------------------------------------- the task
 def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFrame | None]:
     """Run one task; a feature or classifier error becomes a ``failed`` row."""
@@ -277,35 +317,13 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
     try:
         with single_thread(), warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            X_tr, X_te, fitted, per_capture, feat_fit = _fold_features(task, ctx, y_train)
-            if task.method.subject_id_feature:
-                X_tr, X_te = _with_subject_id(ds, fold, X_tr, X_te)
-            row["feature_seconds_per_capture"] = per_capture
-            row["feature_fit_seconds"] = feat_fit
-            groups = ds.meta["subject"].to_numpy()[fold.train]
-            t0 = time.perf_counter()
-            spec = task.method.spec
-            fitted_est = fit_estimator(spec.estimator, spec.estimator_params, task.seed, X_tr, y_train, groups,
-                                       sensor=ds.sensor)
-            row["fit_seconds"] = time.perf_counter() - t0 if fitted_est.estimator is not None else 0.0
-            row["n_classes_train"] = int(len(fitted_est.classes))
-            est = fitted_est.estimator
-            t0 = time.perf_counter()
-            if task.method.adaptation and est is not None:  # adapted to each test subject's captures, unlabelled
-                y_pred, proba = _adapted_predictions(fitted_est, X_te, ds.meta["subject"].to_numpy()[fold.test])
+            if fold.live is not None:  # a stream fold: trained once, every test stream replayed
+                values, y_pred, row["live"] = live_outcome(task, ds, y)
+                row.update(values)
+                row.update(metrics(y_test, y_pred))
+                proba = None
             else:
-                y_pred, proba = fitted_est.predict_in_one_pass(X_te)  # probabilities too where the same pass gives them
-            row["predict_seconds"] = time.perf_counter() - t0
-            if getattr(est, "selection_note_", None):  # a method that searched inside the training fold says what it chose
-                notes.append(est.selection_note_)
-            if proba is None and est is not None and not task.method.adaptation:
-                proba = fitted_est.predict_proba(X_te)
-            row.update(metrics(y_test, y_pred))
-            if task.measure_latency:  # once per method and run: features + predict of one capture
-                lat_sets = _latency_sets(task, ctx, fitted, y_train)
-                caps = [ds.captures[int(i)][: task.crop_frames] if task.crop_frames is not None else ds.captures[int(i)]
-                        for i in fold.test[:LATENCY_CAPTURES]]
-                row["latency_ms"], row["latency_cpu_ms"] = _measure_latency(FittedMethod(lat_sets, fitted_est), caps)
+                y_pred, proba = _capture_outcome(task, ctx, row, notes)
         preds = _predictions(task, ds, y_test, y_pred, proba)
     except Exception as e:  # the task fails, the run goes on
         tb = traceback.format_exc(limit=-3)

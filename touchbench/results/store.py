@@ -96,11 +96,12 @@ MEASURED = {
     "status": "ok", "error": "", "accuracy": np.nan, "balanced_accuracy": np.nan, "macro_f1": np.nan,
     "feature_seconds_per_capture": np.nan, "feature_fit_seconds": np.nan, "fit_seconds": np.nan,
     "predict_seconds": np.nan, "latency_ms": np.nan, "latency_cpu_ms": np.nan, "load_avg": np.nan,
-    "usable_cpus": np.nan, "n_classes_train": 0, "notes": "", "finished_at": "",
+    "usable_cpus": np.nan, "n_classes_train": 0, "notes": "", "finished_at": "", "live": "",
 }
-#: measured columns that results written before touchbench measured them lack (read as NaN): the CPU time
-#: of labelling one capture, the machine's 1-minute load average and the CPUs the run could use
-LATER_MEASURED = ("latency_cpu_ms", "load_avg", "usable_cpus")
+#: measured columns that results written before touchbench measured them lack, with the value they read as:
+#: the CPU time of labelling one capture, the machine's 1-minute load average and the CPUs the run could
+#: use (NaN); a stream evaluation's replays and scores (``live``, JSON: ``engine.live``; "" for captures)
+LATER_MEASURED = {"latency_cpu_ms": np.nan, "load_avg": np.nan, "usable_cpus": np.nan, "live": ""}
 # Columns of the scores table, in order: the run's stamp, the plan's, the measured ones.
 SCORE_COLUMNS = [
     "run_id", "task_id", "protocol", "protocol_hash", "dataset", "dataset_hash", "target", "scheme",
@@ -109,7 +110,7 @@ SCORE_COLUMNS = [
     "accuracy", "balanced_accuracy", "macro_f1",
     "feature_seconds_per_capture", "feature_fit_seconds", "fit_seconds", "predict_seconds", "latency_ms",
     "latency_cpu_ms", "load_avg", "usable_cpus", "status", "error", "notes", "finished_at", "leakage", "selection",
-    "adaptation",
+    "adaptation", "live",
 ]
 
 
@@ -147,15 +148,15 @@ def upgrade(df: pd.DataFrame, pooled: bool = False) -> pd.DataFrame:
     confusion table (per-task and pooled rows in one file, told apart by ``scope``) keeps the rows
     of one kind without that column: the ``pooled`` ones (without ``task_id`` / ``fold``) or the
     per-task ones. Scores without the columns measured since (:data:`LATER_MEASURED`) get them
-    empty (NaN), and the plan columns recorded since (:data:`LATER_PLANNED`) at their value then."""
+    at their value then (:data:`LATER_MEASURED`), and the plan columns recorded since (:data:`LATER_PLANNED`) at their value then."""
     old = {k: v for k, v in _LEGACY.items() if k in df.columns and v not in df.columns}
     if old:
         df = df.rename(columns=old)
     if "leakage" not in df.columns and ("status" in df.columns or "capture_id" in df.columns):
         df = df.assign(leakage=NOT_RECORDED)  # scores or predictions of schema 1 or 2
-    later = [c for c in LATER_MEASURED if c not in df.columns]
+    later = {c: v for c, v in LATER_MEASURED.items() if c not in df.columns}
     if later and "status" in df.columns:  # scores written before these were measured
-        df = df.assign(**{c: np.nan for c in later})
+        df = df.assign(**later)
     planned = {c: v for c, v in LATER_PLANNED.items() if c not in df.columns}
     if planned and "status" in df.columns:  # scores written before these were recorded
         df = df.assign(**planned)

@@ -78,7 +78,9 @@ class Fold:
     ``group`` is the scope the fold's scores are reported under (the subject
     of a within-subject fold, the direction of a transfer fold, the party of
     a person-independent fold, the repeat of a k-fold); ``crop`` is set by the
-    ``early`` scheme; ``notes`` says how the splitter handled an extreme case.
+    ``early`` scheme; ``live`` by the ``stream`` scheme (its test streams and recogniser,
+    :class:`touchbench.streams.replay.LiveSpec`); ``notes`` says how the splitter handled an
+    extreme case.
     """
 
     name: str
@@ -87,6 +89,7 @@ class Fold:
     group: str = ""
     crop: Crop | None = None
     notes: tuple[str, ...] = field(default=())
+    live: Any = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "train", np.asarray(self.train, dtype=np.int64))

@@ -1,0 +1,109 @@
+"""One task of a stream evaluation: train once, replay every test stream with every decision rule,
+score each replay frame by frame.
+
+The task (a fold of the ``stream`` scheme and a method) fits the method on
+the fold's training captures, or on windows cut from them
+(:func:`touchbench.streams.replay.training_samples`), fits each declared
+decision rule on the same training captures (the gate's ``level: auto``),
+then replays each test stream through the recogniser ``touchbench stream``
+runs (:func:`touchbench.streams.replay.replay`, one frame at a time) and
+scores the decisions against each frame's truth
+(:func:`touchbench.evaluation.stream_scores.score_stream`; the none label
+and the frames before the first decision count as idle).
+
+What it returns, plain data for the results store:
+
+- the scores row's ``live`` column: JSON with the rules and, per stream and
+  rule, the scores, the decisions in run-length form (``[[first frame,
+  label], ...]``, frames counted from 0), the replay's CPU and wall seconds
+  and the decisions' CPU time (median and 99th percentile, ms);
+- a predictions table with one row per test capture: the first rule's
+  decision held over most of the frames where the capture is shown (the
+  segment's majority); the row's ``accuracy`` is over those captures, so the
+  capture-level columns of a stream evaluation read "the segments, decided
+  live".
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections import Counter
+from typing import Any
+
+import numpy as np
+
+from ..evaluation.stream_scores import score_stream
+from ..methods.fitting import fit_method
+from ..protocols.schemes.stream import rule_specs
+from ..streams.replay import LiveSpec, training_samples
+from ..streams.replay import replay as replay_stream
+from ..streams.rules import make_rule
+from ..streams.timeline import decisions_per_frame, label_runs, stream_frames
+
+__all__ = ["UNDECIDED", "live_outcome"]
+
+#: the label of the frames before a stream's first decision (scored as idle)
+UNDECIDED = "undecided"
+
+
+def live_outcome(task: Any, ds: Any, y: np.ndarray) -> tuple[dict[str, Any], np.ndarray, str]:
+    """Fit, replay and score one stream task: ``(row values, each test capture's label, live JSON)``."""
+    fold, live = task.fold, task.fold.live
+    groups = ds.meta["subject"].astype(str).to_numpy()
+    train_caps = [ds.captures[i] for i in fold.train]
+    X, yy, gg = training_samples(train_caps, y[fold.train], groups[fold.train], live, ds.sensor.frame_rate)
+    t0 = time.perf_counter()
+    fitted = fit_method(task.method.spec, task.seed, X, yy, gg, sensor=ds.sensor)
+    row: dict[str, Any] = {"fit_seconds": time.perf_counter() - t0, "n_classes_train": int(len(fitted.classes))}
+    rules = [make_rule(r).fit(train_caps, y[fold.train], ds.sensor) for r in rule_specs(live)]
+    classes = [str(c) for c in fitted.classes]
+    streams, first_rule = [], []
+    lo, hi = ds.sensor.value_range
+    rest = float(lo if ds.sensor.higher_is_more_pressure else hi)
+    for s in live.streams:
+        frames, truth = stream_frames(ds.captures, y, s, live.idle, rest)
+        per_rule = [_replayed(frames, truth, fitted, classes, ds.sensor, live, rule) for rule in rules]
+        first_rule.append((s, per_rule[0].pop("_decided")))
+        for r in per_rule[1:]:
+            r.pop("_decided")
+        streams.append({"name": s.name, "subject": s.subject, "session": s.session, "source": s.source,
+                        "frames": int(len(truth)), "truth": label_runs(truth), "results": per_rule})
+    payload = {"rules": [r.describe() for r in rules], "idle": live.idle, "frame_rate": float(ds.sensor.frame_rate),
+               "windows_s": list(live.windows_s), "hop_s": live.hop_s, "train_on": live.train_on,
+               "streams": streams}
+    labels = _segment_labels(fold.test, first_rule, {UNDECIDED, live.none_label}, live.idle)
+    return row, labels, json.dumps(payload, default=float)
+
+
+def _replayed(frames: np.ndarray, truth: np.ndarray, fitted: Any, classes: list[str], sensor: Any, live: LiveSpec,
+              rule: Any) -> dict[str, Any]:
+    """One stream replayed with one rule: its scores, decisions and CPU."""
+    rp = replay_stream(frames, fitted.window_proba, classes, sensor, live, rule)
+    decided = decisions_per_frame([d.frame for d in rp.decisions], [d.label for d in rp.decisions], len(truth),
+                                  UNDECIDED)
+    scores = score_stream(truth, decided, live.idle, sensor.frame_rate, undecided=(UNDECIDED, live.none_label))
+    cpu = rp.decision_cpu_ms
+    return {"scores": scores.to_dict(), "decisions": label_runs(decided), "n_decisions": len(rp.decisions),
+            "cpu_s": rp.cpu_s, "wall_s": rp.wall_s,
+            "decision_cpu_ms_p50": float(np.percentile(cpu, 50)) if cpu.size else float("nan"),
+            "decision_cpu_ms_p99": float(np.percentile(cpu, 99)) if cpu.size else float("nan"),
+            "_decided": decided}
+
+
+def _segment_labels(test: np.ndarray, first_rule: list, idle_like: set[str], idle: str) -> np.ndarray:
+    """Each test capture's label: the decision held over most of the frames where it is shown (the
+    labels of ``idle_like``, the none label and the undecided frames, read as ``idle``; ties: the
+    first of the tied labels shown)."""
+    votes: dict[int, Counter] = {int(i): Counter() for i in test}
+    for stream, decided in first_rule:
+        at = 0
+        for i, a, b in stream.segments:
+            if int(i) in votes:
+                votes[int(i)].update(idle if v in idle_like else str(v) for v in decided[at:at + (b - a)])
+            at += b - a
+    out = np.empty(len(test), dtype=object)
+    for k, i in enumerate(test):
+        c = votes[int(i)]
+        out[k] = c.most_common(1)[0][0] if c else idle
+    return out

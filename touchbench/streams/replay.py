@@ -1,0 +1,90 @@
+"""Replaying streams through a fitted recogniser: what a stream evaluation's task does between
+training and scoring.
+
+- :class:`LiveSpec`: what a fold of the ``stream`` scheme carries: its test
+  streams, the idle class, the recogniser's windows and hop, the decision
+  rules to compare, and how the method is trained (on whole captures, or on
+  windows of the recogniser's lengths cut from them, each labelled with its
+  capture's label, as ``touchbench train --window`` does);
+- :func:`training_samples`: those training samples;
+- :func:`replay`: one stream through a :class:`WindowRecognizer`, as fast as
+  the recogniser goes, with the decisions, the CPU time of the replay and the
+  CPU time of each decision.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from dataclasses import dataclass
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from ..datasets.windows import cut_windows, seconds_to_frames
+from .recognizer import Decision, WindowRecognizer
+from .rules import DecisionRule
+from .timeline import Stream
+
+__all__ = ["LiveSpec", "Replayed", "replay", "training_samples"]
+
+
+@dataclass(frozen=True)
+class LiveSpec:
+    """A stream fold's settings and streams (module docstring)."""
+
+    streams: tuple[Stream, ...]
+    idle: str
+    windows_s: tuple[float, ...]
+    hop_s: float
+    train_on: str  # "windows" or "captures"
+    train_hop_s: float | None
+    rules: tuple[str, ...]  # each rule's declaration, canonical JSON
+    none_label: str
+
+    def digest(self) -> str:
+        """What the fold's results depend on beyond its indices (task identities)."""
+        parts = (self.idle, self.windows_s, self.hop_s, self.train_on, self.train_hop_s, self.rules,
+                 self.none_label, tuple(s.digest() for s in self.streams))
+        return hashlib.sha256(repr(parts).encode()).hexdigest()[:16]
+
+
+def training_samples(captures: Sequence[np.ndarray], labels: np.ndarray, groups: np.ndarray, spec: LiveSpec,
+                     frame_rate: float) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+    """The samples a stream fold trains on, with their labels and groups: the captures, or windows
+    of each of the recogniser's lengths cut every ``train_hop_s`` (default half the window) from
+    each capture (a capture shorter than every window kept whole)."""
+    if spec.train_on == "captures":
+        return list(captures), labels, groups
+    lengths = [seconds_to_frames(w, frame_rate, "windows_s") for w in spec.windows_s]
+    hops = [seconds_to_frames(spec.train_hop_s, frame_rate, "train_hop_s") if spec.train_hop_s else max(1, L // 2)
+            for L in lengths]
+    windows, src = cut_windows(captures, lengths, hops)
+    return windows, np.asarray(labels)[src], np.asarray(groups)[src]
+
+
+@dataclass
+class Replayed:
+    """One stream's replay: its decisions, the replay's CPU and wall seconds, each decision's CPU ms."""
+
+    decisions: list[Decision]
+    cpu_s: float
+    wall_s: float
+    decision_cpu_ms: np.ndarray
+
+
+def replay(frames: np.ndarray, proba: Callable[[list[np.ndarray]], np.ndarray], classes: Sequence[str], sensor: Any,
+           spec: LiveSpec, rule: DecisionRule) -> Replayed:
+    """``frames`` through a recogniser of ``spec``'s windows and hop with ``rule``, one frame at a time."""
+    rec = WindowRecognizer(proba, classes, sensor, spec.windows_s, dtype=frames.dtype, hop_s=spec.hop_s,
+                           none_label=spec.none_label, rule=rule)
+    decisions, cpu = [], []
+    c_start, w_start = time.thread_time_ns(), time.perf_counter()
+    for frame in frames:
+        c0 = time.thread_time_ns()
+        d = rec.push(frame)
+        if d is not None:
+            cpu.append((time.thread_time_ns() - c0) / 1e6)
+            decisions.append(d)
+    return Replayed(decisions, (time.thread_time_ns() - c_start) / 1e9, time.perf_counter() - w_start,
+                    np.asarray(cpu, dtype=np.float64))

@@ -1,0 +1,234 @@
+"""Decision rules: from a window's class probabilities to the label a live recogniser says.
+
+A rule is declared like any method parameter, ``{name: majority, n: 5}``
+(:func:`make_rule`), and gets, at every hop, the combined probabilities of
+the windows (:func:`touchbench.streams.recognizer.combine_windows`). A rule
+that ``gates`` may decide before any classifier runs, from the frames alone.
+
+- ``max``: the most probable class, or the none label when its probability is
+  under ``threshold`` (Flagg 2012, Sec. 4.5: "confidence estimates, so that
+  the model is not forced to classify everything it sees").
+- ``gate``: a rest/contact gate. The newest ``gate_s`` seconds' peak
+  contact, ``(max value - lo) / (hi - lo)`` over their frames and cells with
+  the sensor's value range (inverted for a sensor where lower means more
+  pressure), under ``level`` decides the ``idle`` class without running the
+  classifier; otherwise the most probable class other than ``idle``.
+  ``level: auto`` is chosen on the training captures
+  (:meth:`GateRule.fit`): the level that best separates the idle captures'
+  peaks from the others' (balanced accuracy over captures; ties: the
+  lowest).
+- ``majority``: the most frequent of the last ``n`` decisions of ``max``
+  (ties: the most recent of the tied labels), smoothing one-hop flickers.
+- ``hmm``: forward filtering over the classes (a hidden Markov model whose
+  state stays with probability ``1 - switch`` per hop and moves to any other
+  class uniformly; the classifier's probabilities are the emissions, the
+  scaled-likelihood reading of hybrid recognisers, Bourlard & Morgan 1994,
+  Sec. 7): the most probable class of the filtered posterior, or the none
+  label under ``threshold``.
+
+Interpretations: the gate's peak uses the raw values, so it needs a sensor
+whose rest reads near the bottom of its range (HAART's pressure cells do;
+a capacitive grid with a large resting offset should fit ``level: auto``,
+which learns the offset's level from the training captures).
+"""
+
+from __future__ import annotations
+
+from collections import Counter, deque
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..core.errors import TouchbenchError
+from ..core.registry import Registry
+
+__all__ = ["RULES", "DecisionRule", "GateRule", "MaxRule", "make_rule", "peak_contact"]
+
+RULES: Registry = Registry("decision rule")
+
+
+class DecisionRule:
+    """The interface: :meth:`start` before a stream, :meth:`gate` (a label decided from the frames
+    alone, or None) and :meth:`decide` at each hop; :meth:`fit` on training captures, when the rule
+    learns something."""
+
+    gates = False
+
+    def fit(self, captures: Sequence[np.ndarray], labels: Sequence[str], sensor: Any) -> "DecisionRule":
+        return self
+
+    def start(self, classes: np.ndarray, none_label: str, frame_rate: float, sensor: Any = None) -> None:
+        self.classes = np.asarray(classes, dtype=object)
+        self.none_label = none_label
+        self.frame_rate = frame_rate
+        self.sensor = sensor
+
+    def gate(self, frames: np.ndarray) -> str | None:
+        return None
+
+    def decide(self, p: np.ndarray) -> str:
+        raise NotImplementedError
+
+    def describe(self) -> dict[str, Any]:
+        return {"name": self.name, **self.params}  # type: ignore[attr-defined]
+
+
+def make_rule(spec: dict[str, Any] | str | None, threshold: float = 0.5) -> DecisionRule:
+    """A rule from its declaration (``{name: ..., params}`` or a name; None: ``max`` with ``threshold``)."""
+    if spec is None:
+        return MaxRule(threshold=threshold)
+    d = {"name": spec} if isinstance(spec, str) else dict(spec)
+    name = d.pop("name", None)
+    if not isinstance(name, str):
+        raise TouchbenchError("a decision rule needs a name: {name: max}")
+    try:
+        return RULES.create(name, **d)
+    except TypeError as e:
+        raise TouchbenchError(f"decision rule {name!r}: {e}") from None
+
+
+def _threshold(value: Any) -> float:
+    t = float(value)
+    if not 0.0 <= t <= 1.0:
+        raise TouchbenchError(f"threshold must be in [0, 1], got {value!r}")
+    return t
+
+
+@RULES.register("max", description="the most probable class, none under the threshold")
+class MaxRule(DecisionRule):
+    name = "max"
+
+    def __init__(self, threshold: float = 0.5):
+        self.threshold = _threshold(threshold)
+        self.params = {"threshold": self.threshold}
+
+    def decide(self, p: np.ndarray) -> str:
+        k = int(np.argmax(p))
+        return str(self.classes[k]) if p[k] >= self.threshold else self.none_label
+
+
+def peak_contact(frames: np.ndarray, value_range: tuple[float, float], higher_is_more: bool = True) -> float:
+    """The largest contact of ``frames`` as a fraction of the value range (0: rest at the range's
+    bottom, 1: full scale); for a sensor where lower means more pressure, measured from the top."""
+    lo, hi = float(value_range[0]), float(value_range[1])
+    span = hi - lo
+    if span <= 0 or frames.size == 0:
+        return 0.0
+    a = np.asarray(frames, dtype=np.float64)
+    return float((a.max() - lo) / span if higher_is_more else (hi - a.min()) / span)
+
+
+@RULES.register("gate", description="a rest/contact gate decides idle before the classifier; else the best "
+                "non-idle class")
+class GateRule(DecisionRule):
+    name = "gate"
+    gates = True
+
+    def __init__(self, idle: str, level: float | str = "auto", gate_s: float = 0.25, threshold: float = 0.0):
+        if not isinstance(idle, str) or not idle:
+            raise TouchbenchError("the gate needs the idle class: idle: notouch")
+        if level != "auto" and not (isinstance(level, (int, float)) and 0.0 <= float(level) <= 1.0):
+            raise TouchbenchError(f"the gate's level is a fraction of the value range in [0, 1] or auto, got {level!r}")
+        if not (isinstance(gate_s, (int, float)) and gate_s > 0):
+            raise TouchbenchError(f"the gate's gate_s must be a positive number of seconds, got {gate_s!r}")
+        self.idle, self.level, self.gate_s = idle, level, float(gate_s)
+        self.threshold = _threshold(threshold)
+        self.params = {"idle": idle, "level": level, "gate_s": self.gate_s, "threshold": self.threshold}
+
+    def fit(self, captures: Sequence[np.ndarray], labels: Sequence[str], sensor: Any) -> "GateRule":
+        """``level: auto``: the level that best separates the idle captures' peak contact from the
+        other captures' (balanced accuracy over the training captures; ties: the lowest level)."""
+        if self.level != "auto":
+            return self
+        y = np.asarray([str(v) for v in labels]) == self.idle
+        if y.all() or not y.any():
+            raise TouchbenchError(f"the gate's level: auto needs training captures of {self.idle!r} and of gestures")
+        peaks = np.array([peak_contact(c, sensor.value_range, sensor.higher_is_more_pressure) for c in captures])
+        self.fitted_level = best_level(peaks, y)
+        return self
+
+    def start(self, classes: np.ndarray, none_label: str, frame_rate: float, sensor: Any = None) -> None:
+        super().start(classes, none_label, frame_rate, sensor)
+        if self.idle not in set(self.classes):
+            raise TouchbenchError(f"the gate's idle class {self.idle!r} is not one of the classes "
+                                  f"({', '.join(map(str, self.classes))})")
+        if self.level == "auto" and not hasattr(self, "fitted_level"):
+            raise TouchbenchError("the gate's level: auto is chosen on training captures: fit the rule first")
+        self._level = self.fitted_level if self.level == "auto" else float(self.level)
+        self._n = max(1, int(round(self.gate_s * frame_rate)))
+        self._keep = self.classes != self.idle
+
+    def gate(self, frames: np.ndarray) -> str | None:
+        s = self.sensor
+        peak = peak_contact(frames[-self._n:], s.value_range, s.higher_is_more_pressure)
+        return self.idle if peak < self._level else None
+
+    def decide(self, p: np.ndarray) -> str:
+        q = np.where(self._keep, p, -np.inf)
+        k = int(np.argmax(q))
+        return str(self.classes[k]) if p[k] >= self.threshold else self.none_label
+
+    def describe(self) -> dict[str, Any]:
+        d = super().describe()
+        if self.level == "auto" and hasattr(self, "fitted_level"):
+            d["fitted_level"] = self.fitted_level
+        return d
+
+
+def best_level(peaks: np.ndarray, idle: np.ndarray) -> float:
+    """The level ``t`` maximising the balanced accuracy of "idle when peak < t" (candidates: midpoints
+    between consecutive distinct peaks, and just above the largest); ties: the lowest."""
+    v = np.unique(peaks)
+    cands = np.r_[(v[:-1] + v[1:]) / 2.0, np.nextafter(v[-1], np.inf)] if v.size > 1 else np.array([np.nextafter(v[0], np.inf)])
+    below = peaks[None, :] < cands[:, None]
+    bal = 0.5 * (below[:, idle].mean(axis=1) + (~below[:, ~idle]).mean(axis=1))
+    return float(cands[int(np.argmax(bal))])
+
+
+@RULES.register("majority", description="the most frequent of the last n decisions of max (smoothing)")
+class MajorityRule(MaxRule):
+    name = "majority"
+
+    def __init__(self, n: int = 5, threshold: float = 0.5):
+        super().__init__(threshold)
+        if not isinstance(n, int) or isinstance(n, bool) or n < 1:
+            raise TouchbenchError(f"majority's n must be a whole number of decisions >= 1, got {n!r}")
+        self.n = n
+        self.params = {"n": n, "threshold": self.threshold}
+
+    def start(self, classes: np.ndarray, none_label: str, frame_rate: float, sensor: Any = None) -> None:
+        super().start(classes, none_label, frame_rate, sensor)
+        self._last: deque[str] = deque(maxlen=self.n)
+
+    def decide(self, p: np.ndarray) -> str:
+        self._last.append(super().decide(p))
+        counts = Counter(self._last)
+        top = max(counts.values())
+        return next(label for label in reversed(self._last) if counts[label] == top)
+
+
+@RULES.register("hmm", description="forward filtering over the classes with a sticky transition (smoothing)")
+class HmmRule(MaxRule):
+    name = "hmm"
+
+    def __init__(self, switch: float = 0.05, threshold: float = 0.5):
+        super().__init__(threshold)
+        if not (isinstance(switch, (int, float)) and 0.0 <= float(switch) <= 1.0):
+            raise TouchbenchError(f"hmm's switch is a probability per hop in [0, 1], got {switch!r}")
+        self.switch = float(switch)
+        self.params = {"switch": self.switch, "threshold": self.threshold}
+
+    def start(self, classes: np.ndarray, none_label: str, frame_rate: float, sensor: Any = None) -> None:
+        super().start(classes, none_label, frame_rate, sensor)
+        self._post: np.ndarray | None = None
+
+    def decide(self, p: np.ndarray) -> str:
+        C = len(p)
+        if self._post is None:
+            prior = np.full(C, 1.0 / C)
+        else:
+            move = self.switch / (C - 1) if C > 1 else 0.0
+            prior = self._post * (1.0 - self.switch - move) + move * self._post.sum()
+        post = prior * np.maximum(np.asarray(p, dtype=np.float64), 1e-12)
+        self._post = post / post.sum()
+        return super().decide(self._post)
