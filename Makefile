@@ -84,13 +84,14 @@ examples: setup
 
 TOUCH_ALL := $(RUNS)/touch-all
 # the shipped reference results (`touchbench reference list`; `leaderboard --reference NAME`):
-# each protocol run afresh, then saved into the package under its own name
+# each protocol run afresh, then saved into the package under its own name (explicitly: `reference save`
+# writes into the user's folder of references by default, and replaces one only with --force)
 REFERENCES ?= tiny demo-haart haart-loso-msd-rf
 reference-results: setup
 	@for p in $(REFERENCES); do \
 	    rm -rf $(RUNS)/reference/$$p && \
 	    $(TB) run $$p --out $(RUNS)/reference/$$p --jobs $(JOBS) --no-progress && \
-	    $(TB) reference save $(RUNS)/reference/$$p --name $$p || exit 1; \
+	    $(TB) reference save $(RUNS)/reference/$$p --name $$p --to touchbench/data/reference --force || exit 1; \
 	done
 
 touch-all: setup

@@ -3,7 +3,12 @@
 
 from __future__ import annotations
 
+import errno
 import json
+import os
+import shutil
+import sys
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -13,6 +18,7 @@ from touchbench.cli.main import cli
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
 from touchbench.protocols.schema import parse_protocol
+from touchbench.reports import reference as reference_module
 
 
 def _run(tmp_path, out: str, seed: int = 4, classifiers: str = "[test-logreg]"):
@@ -83,7 +89,7 @@ def test_the_shipped_tiny_reference_is_what_this_code_computes(tmp_path, monkeyp
     """A fresh run of the shipped ``tiny`` protocol matches the shipped reference's test set and
     reproduces its accuracies (when it does not, `make reference-results` saves them again)."""
     monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
-    monkeypatch.delenv("TOUCHBENCH_REFERENCE_DIR", raising=False)
+    monkeypatch.setenv("TOUCHBENCH_REFERENCE_DIR", str(tmp_path / "no-user-references"))
     r = _invoke("run", "tiny", "--out", tmp_path / "tiny", "--no-progress")
     assert r.exit_code == 0, r.output
     r = _invoke("leaderboard", tmp_path / "tiny", "--reference", "tiny", "--json")
@@ -93,3 +99,163 @@ def test_the_shipped_tiny_reference_is_what_this_code_computes(tmp_path, monkeyp
     ref = {row["classifier"].replace(" (reference tiny)", "") + "/" + row["features"]: row["accuracy"]
            for row in rows if "(reference tiny)" in row["classifier"]}
     assert mine and mine == ref
+
+
+# -- names, destinations and replacement ------------------------------------------------------------
+
+def _files(folder: Path) -> dict[str, bytes]:
+    """Every file under ``folder`` (hidden ones too): relative path -> content."""
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+@pytest.fixture
+def shipped(tmp_path, monkeypatch):
+    """A stand-in for the package's shipped references (a copy of the shipped ``tiny``), so that no
+    test writes into the package whatever the code under test does."""
+    folder = tmp_path / "shipped"
+    shutil.copytree(Path(reference_module.__file__).parent.parent / "data" / "reference" / "tiny", folder / "tiny")
+    monkeypatch.setattr(reference_module, "SHIPPED", folder)
+    return folder
+
+
+def _test_set(results: Path) -> str:
+    return json.loads((results / "manifest.json").read_text())["ledger"]["test_set"]
+
+
+@pytest.mark.parametrize("name", ["..", ".", "", "a/b", "ABSOLUTE", "two\nlines", "x" * 300, ".hidden", "-x",
+                                  "caf\u00e9"])
+def test_a_name_that_is_not_one_folder_is_refused_and_nothing_is_deleted(refs, shipped, tmp_path, name):
+    box = tmp_path / "box"
+    dest = box / "refs"
+    assert _invoke("reference", "save", _run(tmp_path, "saved"), "--name", "other", "--to", dest).exit_code == 0
+    (box / "keep.txt").write_text("mine")
+    before, shipped_before = _files(box), _files(shipped)
+    name = str(tmp_path / "abs") if name == "ABSOLUTE" else name
+    r = _invoke("reference", "save", tmp_path / "saved", "--name", name, "--to", dest)
+    assert r.exit_code == 2 and isinstance(r.exception, SystemExit), r.output  # a usage error, no traceback
+    assert "Invalid value for '--name'" in r.output and "not a valid reference name" in r.output
+    assert "starting with a letter or a digit" in r.output
+    assert _files(box) == before  # the folder above, the other reference: all still there
+    assert not (tmp_path / "abs").exists() and _files(shipped) == shipped_before
+
+
+def test_the_longest_name_and_every_allowed_character_are_saved(refs, shipped, tmp_path):
+    name = "A9_b-c." + "z" * 57  # 64 characters
+    r = _invoke("reference", "save", _run(tmp_path, "saved"), "--name", name)
+    assert r.exit_code == 0, r.output
+    assert (refs / name / "reference.json").is_file()
+    r = _invoke("reference", "save", tmp_path / "saved", "--name", name + "z")  # 65
+    assert r.exit_code == 2 and "not a valid reference name" in r.output
+
+
+def test_a_name_that_is_not_one_folder_reaches_no_reference(refs, shipped, tmp_path):
+    """`leaderboard --reference` does not follow a path out of the folders of references, and `list`
+    shows only folders a valid name reaches (not a leftover temporary folder, not a name with a newline)."""
+    saved = _run(tmp_path, "saved")
+    outside = tmp_path / "outside"
+    assert _invoke("reference", "save", saved, "--name", "secret", "--to", outside).exit_code == 0
+    r = _invoke("leaderboard", saved, "--reference", "../outside/secret")
+    assert r.exit_code != 0 and "'../outside/secret' is not a valid reference name" in r.output, r.output
+    assert "Traceback" not in r.output
+    refs.mkdir(parents=True, exist_ok=True)
+    shutil.copytree(outside / "secret", refs / "bad\nname")
+    shutil.copytree(outside / "secret", refs / ".mine.0123456789ab.tmp")
+    shutil.copytree(outside / "secret", refs / "mine")
+    r = _invoke("reference", "list", "--json")
+    assert r.exit_code == 0, r.output
+    assert [e["name"] for e in json.loads(r.stdout)] == ["mine", "tiny"]
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="the user's data directory is $XDG_DATA_HOME on Linux only")
+def test_save_writes_into_the_user_data_folder_never_the_package(engine_env, shipped, tmp_path, monkeypatch):
+    monkeypatch.delenv("TOUCHBENCH_REFERENCE_DIR", raising=False)
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))
+    before = _files(shipped)
+    r = _invoke("reference", "save", _run(tmp_path, "saved"), "--name", "mine")
+    assert r.exit_code == 0, r.output
+    user = tmp_path / "xdg" / "touchbench" / "reference"
+    assert json.loads((user / "mine" / "reference.json").read_text())["protocol"] == "x"
+    assert _files(shipped) == before
+    r = _invoke("reference", "list", "--json")
+    assert {(e["name"], e["origin"]) for e in json.loads(r.stdout)} == {("mine", "user"), ("tiny", "shipped")}
+    r = _invoke("leaderboard", tmp_path / "saved", "--reference", "mine")
+    assert r.exit_code == 0 and "beside reference mine" in r.output, r.output
+
+
+def test_replacing_a_saved_reference_needs_force(refs, shipped, tmp_path):
+    first, second = _run(tmp_path, "first"), _run(tmp_path, "second", seed=5)
+    assert _invoke("reference", "save", first, "--name", "mine").exit_code == 0
+    before = _files(refs / "mine")
+    r = _invoke("reference", "save", second, "--name", "mine")
+    assert r.exit_code == 3 and r.output.startswith("error: ") and r.output.count("\n") == 1, r.output
+    assert "a reference named 'mine' exists" in r.output and "add --force to replace it" in r.output
+    assert _files(refs / "mine") == before
+    r = _invoke("reference", "save", second, "--name", "mine", "--force")
+    assert r.exit_code == 0, r.output
+    index = json.loads((refs / "mine" / "reference.json").read_text())
+    assert [e["test_set"] for e in index["evaluations"]] == [_test_set(second)] != [_test_set(first)]
+    assert sorted(p.name for p in refs.iterdir()) == ["mine"]  # nothing left beside it
+
+
+def test_a_folder_that_is_not_a_reference_is_never_replaced(refs, shipped, tmp_path):
+    (refs / "photos").mkdir(parents=True)
+    (refs / "photos" / "holiday.jpg").write_bytes(b"jpeg")
+    r = _invoke("reference", "save", _run(tmp_path, "saved"), "--name", "photos", "--force")
+    assert r.exit_code == 3 and "is not a saved reference: it is left as it is" in r.output, r.output
+    assert _files(refs) == {"photos/holiday.jpg": b"jpeg"}
+
+
+def test_a_shipped_name_is_refused_outside_the_shipped_folder(refs, shipped, tmp_path):
+    before = _files(shipped)
+    saved = _run(tmp_path, "saved")
+    for extra in ([], ["--force"], ["--to", tmp_path / "elsewhere", "--force"]):
+        r = _invoke("reference", "save", saved, "--name", "tiny", *extra)
+        assert r.exit_code == 3, r.output
+        assert "'tiny' is the name of a shipped reference (shipped references are read-only)" in r.output
+    assert _files(shipped) == before and not refs.exists() and not (tmp_path / "elsewhere").exists()
+    # the maintainers' way (make reference-results): --to the shipped folder itself, with --force
+    r = _invoke("reference", "save", saved, "--name", "tiny", "--to", shipped)
+    assert r.exit_code == 3 and "add --force to replace it" in r.output and _files(shipped) == before
+    r = _invoke("reference", "save", saved, "--name", "tiny", "--to", shipped, "--force")
+    assert r.exit_code == 0, r.output
+    assert json.loads((shipped / "tiny" / "reference.json").read_text())["protocol"] == "x"
+    assert sorted(p.name for p in shipped.iterdir()) == ["tiny"]
+
+
+def test_a_user_reference_hides_a_shipped_one_of_its_name(refs, shipped, tmp_path):
+    """A user reference saved before a shipped one took its name keeps its meaning; the list says so."""
+    saved = _run(tmp_path, "saved")
+    assert _invoke("reference", "save", saved, "--name", "mine").exit_code == 0
+    shutil.copytree(refs / "mine", refs / "tiny")
+    r = _invoke("reference", "list", "--json")
+    listed = {e["name"]: (e["origin"], e["hides_shipped"], e["path"]) for e in json.loads(r.stdout)}
+    assert listed == {"mine": ("user", False, str(refs / "mine")), "tiny": ("user", True, str(refs / "tiny"))}
+    r = _invoke("reference", "list")
+    assert "hides the shipped one of this name" in r.output.splitlines()[1]
+    r = _invoke("leaderboard", saved, "--reference", "tiny")  # the user's (protocol x): its test set matches
+    assert r.exit_code == 0 and "beside reference tiny: protocol x" in r.output, r.output
+
+
+@pytest.mark.parametrize("failure", ["disk full while writing", "the final rename"])
+def test_a_failed_replacement_leaves_the_old_reference_whole(refs, shipped, tmp_path, monkeypatch, failure):
+    first, second = _run(tmp_path, "first"), _run(tmp_path, "second", seed=5)
+    assert _invoke("reference", "save", first, "--name", "mine").exit_code == 0
+    before = _files(refs)
+    if failure == "disk full while writing":
+        def copyfile(src, dst, **kw):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        monkeypatch.setattr(shutil, "copyfile", copyfile)
+        reason = "no space left on the device"
+    else:
+        rename = os.rename
+
+        def failing_rename(src, dst, **kw):
+            if Path(src).name.endswith(".tmp") and Path(dst) == refs / "mine":
+                raise OSError(errno.EACCES, "Permission denied")
+            return rename(src, dst, **kw)
+        monkeypatch.setattr(os, "rename", failing_rename)
+        reason = "permission denied"
+    r = _invoke("reference", "save", second, "--name", "mine", "--force")
+    assert r.exit_code == 3 and isinstance(r.exception, SystemExit), r.output
+    assert r.output.startswith(f"error: {refs / 'mine'}: cannot write: {reason}") and r.output.count("\n") == 1
+    assert _files(refs) == before and sorted(p.name for p in refs.iterdir()) == ["mine"]

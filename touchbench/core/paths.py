@@ -6,6 +6,10 @@
   installed package never looks beside its install location.
 - Cache: ``$TOUCHBENCH_CACHE_DIR`` if set, else the user's cache directory
   (``~/.cache/touchbench`` on Linux).
+- The user's references (``touchbench reference save``): ``$TOUCHBENCH_REFERENCE_DIR``
+  if set, else ``reference/`` in the user's data directory
+  (``~/.local/share/touchbench/reference`` on Linux, ``$XDG_DATA_HOME`` when set).
+  Never the package's own folder: the shipped references there are read-only.
 - Results: ``results/`` under the current directory (:data:`RESULTS_DIR`) holds
   every results folder the commands write by default; the *results root* of a
   results folder is the nearest folder of that name above it
@@ -56,6 +60,13 @@ def data_dir_help(dataset: str) -> str:
 def cache_dir() -> Path:
     env = os.environ.get("TOUCHBENCH_CACHE_DIR")
     return Path(env) if env else Path(platformdirs.user_cache_dir("touchbench"))
+
+
+def user_reference_dir() -> Path:
+    """The folder of the user's own references: ``$TOUCHBENCH_REFERENCE_DIR`` if set, else
+    ``reference/`` in the user's data directory."""
+    env = os.environ.get("TOUCHBENCH_REFERENCE_DIR")
+    return Path(env) if env else Path(platformdirs.user_data_dir("touchbench")) / "reference"
 
 
 def results_root(folder: str | Path) -> Path | None:

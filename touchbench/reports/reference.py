@@ -2,15 +2,27 @@
 without rerunning the shipped methods.
 
 A reference is a finished run's results, saved under a name by
-``touchbench reference save RESULTS --name NAME`` (``make reference-results``
-runs the shipped protocols and saves each): per evaluation, its
+``touchbench reference save RESULTS --name NAME``: per evaluation, its
 ``scores.parquet`` (one row per fold and method), ``predictions.parquet``
 (one row per test capture and method, without the class probabilities, so
 that a comparison on one test set can pair the captures) and ``manifest.json`` (the touchbench version, the
 machine, the package versions and the test set's content hash), and a
-``reference.json`` that lists them (each evaluation's folder, dataset, test-set hash and methods). The shipped ones live in the package
-(``touchbench/data/reference/<name>/``); ``TOUCHBENCH_REFERENCE_DIR``, when
-set, is searched first.
+``reference.json`` that lists them (each evaluation's folder, dataset, test-set hash and methods).
+
+Where they live: the user's references in the user's folder of references
+(:func:`touchbench.core.paths.user_reference_dir`: ``$TOUCHBENCH_REFERENCE_DIR``,
+else ``reference/`` in the user's data directory), where ``save`` writes by
+default; the shipped ones in the package (``touchbench/data/reference/<name>/``),
+read-only: a user reference cannot take a shipped one's name. Only
+``--to touchbench/data/reference`` (``make reference-results``, in a source
+checkout) writes there. A name is found among the user's references first, then
+the shipped ones (a user reference made before a shipped one of its name existed
+keeps its meaning; ``reference list`` says which shipped one it hides).
+
+A name is 1 to 64 ASCII letters, digits, ``-``, ``_`` and ``.``, starting with
+a letter or a digit (:func:`check_reference_name`): it is one folder, never a path.
+Saving replaces the reference's own folder whole (:func:`touchbench.core.atomic.replace_dir`),
+only with ``force``, and only a folder that is a reference.
 
 ``touchbench leaderboard RESULTS --reference NAME`` places the reference's
 methods beside the user's, as other methods ("<label> (reference NAME)"),
@@ -24,7 +36,7 @@ paired as for any two runs: by the test captures of each fold.
 from __future__ import annotations
 
 import json
-import os
+import re
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,15 +44,20 @@ from typing import Any, Iterable
 
 import pandas as pd
 
-from ..core.atomic import atomic_write_bytes
+from ..core.atomic import atomic_write_bytes, replace_dir
 from ..core.errors import TouchbenchError
+from ..core.paths import user_reference_dir
 from ..core.suggest import did_you_mean
 from .results import ResultSet, find_result_dirs, load_results, read_manifest
 
-__all__ = ["Reference", "ReferenceError", "add_reference", "find_reference", "reference_names", "save_reference"]
+__all__ = ["Reference", "ReferenceError", "add_reference", "check_reference_name", "find_reference",
+           "reference_names", "save_reference", "shipped_names"]
 
 SHIPPED = Path(__file__).resolve().parent.parent / "data" / "reference"
 INDEX = "reference.json"
+#: what a reference name may be: one folder name, portable, never hidden, never a path
+NAME_RULE = "1 to 64 ASCII letters, digits, '-', '_' or '.', starting with a letter or a digit"
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
 
 
 class ReferenceError(TouchbenchError):
@@ -54,6 +71,7 @@ class Reference:
     name: str
     path: Path
     index: dict[str, Any]
+    origin: str = "shipped"  # "user" or "shipped"
 
     def evaluations(self) -> dict[str, str]:
         """Test-set content hash -> the evaluation's folder (relative to the reference)."""
@@ -65,26 +83,52 @@ class Reference:
                 f"on {i.get('machine')}, {i.get('created')}")
 
 
-def _search_path() -> list[Path]:
-    extra = os.environ.get("TOUCHBENCH_REFERENCE_DIR")
-    return ([Path(extra)] if extra else []) + [SHIPPED]
+def check_reference_name(name: str) -> str:
+    """``name`` when it is a valid reference name (:data:`NAME_RULE`), else a :class:`ReferenceError`."""
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise ReferenceError(f"{name!r} is not a valid reference name: use {NAME_RULE}")
+    return name
+
+
+def _is_shipped(folder: Path) -> bool:
+    return folder.resolve() == SHIPPED.resolve()
+
+
+def _search_path() -> list[tuple[str, Path]]:
+    """(origin, folder) in the order a name is looked for: the user's references, then the shipped ones."""
+    user = user_reference_dir()
+    return ([] if _is_shipped(user) else [("user", user)]) + [("shipped", SHIPPED)]
+
+
+def _names_in(root: Path) -> list[str]:
+    """The references in ``root``: its folders with a ``reference.json`` and a valid name (a
+    leftover temporary folder, or a folder no valid name reaches, is not one)."""
+    if not root.is_dir():
+        return []
+    return sorted(p.parent.name for p in root.glob(f"*/{INDEX}") if _NAME.fullmatch(p.parent.name))
+
+
+def shipped_names() -> list[str]:
+    """The names of the references shipped in the package (read-only)."""
+    return _names_in(SHIPPED)
 
 
 def reference_names() -> list[str]:
-    """The names of every reference found (``TOUCHBENCH_REFERENCE_DIR`` first, then the shipped ones)."""
+    """The names of every reference found (the user's first, then the shipped ones; each name once)."""
     names: dict[str, None] = {}
-    for root in _search_path():
-        if root.is_dir():
-            names.update(dict.fromkeys(sorted(p.parent.name for p in root.glob(f"*/{INDEX}"))))
+    for _, root in _search_path():
+        names.update(dict.fromkeys(_names_in(root)))
     return list(names)
 
 
 def find_reference(name: str) -> Reference:
-    """The reference ``name``; a name that is not saved is refused with the names that are."""
-    for root in _search_path():
+    """The reference ``name`` (the user's before a shipped one); a name that is not saved is refused
+    with the names that are."""
+    check_reference_name(name)
+    for origin, root in _search_path():
         index = root / name / INDEX
         if index.is_file():
-            return Reference(name, index.parent, json.loads(index.read_text(encoding="utf-8")))
+            return Reference(name, index.parent, json.loads(index.read_text(encoding="utf-8")), origin)
     known = reference_names()
     raise ReferenceError(f"no reference results named {name!r}{did_you_mean(name, known)}; "
                          f"saved: {', '.join(known) or 'none'}")
@@ -129,33 +173,56 @@ def _portable(manifest: dict[str, Any]) -> dict[str, Any]:
     return m
 
 
-def save_reference(results: str | Path, name: str, dest: str | Path | None = None) -> Path:
-    """Save the finished run in ``results`` (a results folder, or one holding an evaluation per
-    subfolder) as the reference ``name`` under ``dest`` (default: the shipped references'
-    folder); returns the reference's folder. An existing reference of that name is replaced whole."""
-    root = Path(results)
-    entries = [_evaluation_entry(d, root) for d in find_result_dirs(root)]
-    if not entries:
-        raise ReferenceError(f"{root}: no results folder found")
+def _destination(root: Path, name: str, force: bool) -> Path:
+    """The folder the reference ``name`` goes to under ``root``, once it is sure that saving there
+    replaces nothing it should not: a shipped reference's name is refused outside the shipped
+    folder, an existing reference is replaced only with ``force``, anything else never."""
+    if not _is_shipped(root) and name in shipped_names():
+        raise ReferenceError(f"{name!r} is the name of a shipped reference (shipped references are read-only): "
+                             "choose another --name")
+    out = root / name
+    if out.is_symlink() or (out.exists() and not (out / INDEX).is_file()):
+        raise ReferenceError(f"{out} exists and is not a saved reference: it is left as it is; "
+                             "choose another --name or --to")
+    if out.exists() and not force:
+        raise ReferenceError(f"a reference named {name!r} exists in {root}: add --force to replace it")
+    return out
+
+
+def _index(name: str, entries: list[dict[str, Any]]) -> dict[str, Any]:
     first = entries[0]["manifest"]
-    out = Path(dest or SHIPPED) / name
-    tmp = out.with_name(f".{name}.tmp")
-    shutil.rmtree(tmp, ignore_errors=True)
+    return {"name": name, "protocol": (first.get("protocol") or {}).get("name"),
+            "touchbench_version": first.get("touchbench_version"),
+            "git_revision": (first.get("git") or {}).get("revision"), "machine": _machine(first),
+            "created": first.get("finished_at"),
+            "evaluations": [{k: e[k] for k in ("folder", "test_set", "dataset", "methods")} for e in entries]}
+
+
+def _write_reference(out: Path, name: str, entries: list[dict[str, Any]]) -> None:
     for e in entries:
-        (tmp / e["folder"]).mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(e["source"] / "scores.parquet", tmp / e["folder"] / "scores.parquet")
+        (out / e["folder"]).mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(e["source"] / "scores.parquet", out / e["folder"] / "scores.parquet")
         if (e["source"] / "predictions.parquet").is_file():
-            _write_predictions(e["source"] / "predictions.parquet", tmp / e["folder"] / "predictions.parquet")
+            _write_predictions(e["source"] / "predictions.parquet", out / e["folder"] / "predictions.parquet")
         manifest = json.dumps(_portable(e["manifest"]), indent=2) + "\n"
-        atomic_write_bytes(tmp / e["folder"] / "manifest.json", manifest.encode())
-    index = {"name": name, "protocol": (first.get("protocol") or {}).get("name"),
-             "touchbench_version": first.get("touchbench_version"),
-             "git_revision": (first.get("git") or {}).get("revision"), "machine": _machine(first),
-             "created": first.get("finished_at"),
-             "evaluations": [{k: e[k] for k in ("folder", "test_set", "dataset", "methods")} for e in entries]}
-    atomic_write_bytes(tmp / INDEX, (json.dumps(index, indent=2) + "\n").encode())
-    shutil.rmtree(out, ignore_errors=True)
-    tmp.rename(out)
+        atomic_write_bytes(out / e["folder"] / "manifest.json", manifest.encode())
+    atomic_write_bytes(out / INDEX, (json.dumps(_index(name, entries), indent=2) + "\n").encode())
+
+
+def save_reference(results: str | Path, name: str, dest: str | Path | None = None, force: bool = False) -> Path:
+    """Save the finished run in ``results`` (a results folder, or one holding an evaluation per
+    subfolder) as the reference ``name`` under ``dest`` (default: the user's references,
+    :func:`touchbench.core.paths.user_reference_dir`); returns the reference's folder. An existing
+    reference of that name is replaced whole, and only with ``force``; the replacement is atomic
+    (written beside it, then renamed), so a failure leaves the old one as it was."""
+    check_reference_name(name)
+    root = Path(dest) if dest is not None else user_reference_dir()
+    out = _destination(root, name, force)
+    src = Path(results)
+    entries = [_evaluation_entry(d, src) for d in find_result_dirs(src)]
+    if not entries:
+        raise ReferenceError(f"{src}: no results folder found")
+    replace_dir(out, lambda tmp: _write_reference(tmp, name, entries))
     return out
 
 
