@@ -9,8 +9,10 @@ from dataclasses import asdict
 from pathlib import Path
 
 import click
+import yaml
 
 from ..core.atomic import atomic_write_bytes
+from ..core.errors import TouchbenchError
 from ..deploy.model import TrainedModel
 from ..deploy.predict import accuracy_text, adaptation_text, predict_dataset, read_data, write_table
 from ..deploy.stream import (
@@ -22,8 +24,23 @@ from ..deploy.stream import (
 )
 from ..deploy.train import parse_selection, train_from_protocol
 from ..results.store import PREDICTED, TRUE
+from ..streams.rules import make_rule
 from .common import example
 from .formats import FORMATS_HELP, FormatChoice, format_options
+
+
+def _rule(text: str | None, threshold: float):
+    """``--rule``: a rule's name or its YAML mapping (None: max with the threshold)."""
+    if text is None:
+        return None
+    try:
+        spec = yaml.safe_load(text)
+    except yaml.YAMLError as e:
+        raise click.BadParameter(f"not a rule name or a YAML mapping ({e})", param_hint="--rule") from None
+    try:
+        return make_rule(spec, threshold)
+    except TouchbenchError as e:
+        raise click.BadParameter(str(e), param_hint="--rule") from None
 
 
 def _floats(values, option: str) -> list[float] | None:
@@ -112,6 +129,9 @@ def predict(model_path, data, fmt, out, whole, **options) -> None:
 @click.option("--combine", type=click.Choice(["max", "mean"]), default="max", show_default=True,
               help="Several windows: the most confident one decides (max) or their mean probabilities.")
 @click.option("--none-label", default="none", show_default=True)
+@click.option("--rule", default=None, metavar="RULE",
+              help="Decision rule: a name (max, majority, hmm, gate) or a YAML mapping such as "
+                   "'{name: majority, n: 5}' [default: max with --threshold].")
 @click.option("--format", "fmt", type=FormatChoice("replay", lambda f: f.replay, extra=("auto",)), default="auto",
               show_default=True, help="Reader of the file SOURCE (auto: a touchbench dataset, or a table of one "
                                       f"frame per row; {FORMATS_HELP}).")
@@ -126,8 +146,8 @@ def predict(model_path, data, fmt, out, whole, **options) -> None:
                    "latency_ms, windows (each window's length, best class and probability).")
 @click.option("--summary-json", type=click.Path(dir_okay=False), default=None, help="Write the summary (latencies) here.")
 @format_options
-def stream(model_path, source, windows, hop, threshold, combine, none_label, fmt, capture, speed, realtime, jsonl,
-           summary_json, **options) -> None:
+def stream(model_path, source, windows, hop, threshold, combine, none_label, rule, fmt, capture, speed, realtime,
+           jsonl, summary_json, **options) -> None:
     """Label a stream of frames with MODEL: SOURCE is a CSV/Parquet file replayed at
     its frame rate, or - for standard input (one frame per line: H*W comma-separated
     values, row-major). Prints one decision per hop, then latency p50/p99. A file that does not say
@@ -137,7 +157,7 @@ def stream(model_path, source, windows, hop, threshold, combine, none_label, fmt
         raise click.UsageError("standard input is read as one frame per line; --format is for files")
     model = _load_model(model_path)
     rec = SlidingRecognizer(model, _floats(windows, "--window"), hop_s=hop, threshold=threshold,
-                            combine=combine, none_label=none_label)
+                            combine=combine, none_label=none_label, rule=_rule(rule, threshold))
     for note in rec.notes():
         click.echo(f"note: {note}", err=True)
     late, skipped = [0], [0]

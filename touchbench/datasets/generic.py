@@ -31,6 +31,15 @@ none. The frame counter must then count up by one from 0 or 1 (a gap or a
 frame given twice is refused, naming the line); times must increase
 strictly. Metadata columns must be constant within a capture.
 
+Continuous recordings labelled frame by frame (``frame_labels``: the column
+holding each frame's label, read as the gesture): the capture key then
+names a recording, and each run of one label in it, in frame order, becomes
+a capture of its own (id ``<recording>#<k>``, ``k`` from 1) with the
+metadata columns ``recording`` and ``start_frame`` (its first frame within
+the recording, from 0), so a stream evaluation can put the recording back
+together (:mod:`touchbench.streams.timeline`) and any other scheme sees its
+segments as captures.
+
 A folder is every ``.csv``, ``.csv.gz`` and ``.parquet`` file below it, in
 sorted order, each read as above with its own line numbers; the file each
 capture came from is kept in the metadata column ``source``, and a capture
@@ -74,6 +83,7 @@ from .formats import (
     FormatOption, check_frame_rate, check_value_range, parse_frame_rate, parse_grid, parse_value_range, register_format,
 )
 from .model import TIME_COLUMN, SensorSpec, TouchDataset, time_step_summary
+from .table_long import agree_grid, capture_key, from_zero_or_one, long_to_frames
 from .tables import find_column, numeric, read_table
 
 log = logging.getLogger("touchbench.datasets")
@@ -100,6 +110,7 @@ class TableLayout:
     cells: str | None = None
     value: str | None = None
     layout: str = "auto"
+    frame_labels: bool = False  # the gesture column labels each frame (module docstring)
 
     def __post_init__(self) -> None:
         if self.layout not in ("auto", "wide", "long"):
@@ -119,13 +130,6 @@ def _pattern_regex(pattern: str) -> tuple[re.Pattern, tuple[str, ...]]:
     parts = re.split(r"\{(?:i|row|col)\}", pattern)
     rx = "".join(re.escape(p) + (r"(\d+)" if k < len(fields) else "") for k, p in enumerate(parts))
     return re.compile(rx), fields
-
-
-def _from_zero_or_one(idx: np.ndarray, what: str, path: Path) -> np.ndarray:
-    lo = int(idx.min())
-    if lo not in (0, 1):
-        raise DataError(f"{what} count from {lo}; they must count from 0 or 1", path, 1)
-    return idx - lo
 
 
 def _numbered_groups(df: pd.DataFrame) -> dict[str, list[tuple[int, str]]]:
@@ -152,7 +156,7 @@ def cell_columns(df: pd.DataFrame, n_cells: int | None, path: Path,
             raise DataError(
                 f"cannot tell {want} apart (name them with a pattern such as --cells 'pixel{{i}}'); numbered "
                 f"column groups: { {k: len(v) for k, v in groups.items()} }", path, 1)
-        idx = _from_zero_or_one(np.array([i for i, _ in fits[0]]), "the cell columns", path)
+        idx = from_zero_or_one(np.array([i for i, _ in fits[0]]), "the cell columns", path)
         if not np.array_equal(idx, np.arange(len(idx))):
             raise DataError(f"cell columns {fits[0][0][1]}..{fits[0][-1][1]} skip a number", path, 1)
         return [c for _, c in fits[0]], None
@@ -161,7 +165,7 @@ def cell_columns(df: pd.DataFrame, n_cells: int | None, path: Path,
     if not found:
         raise DataError(f"no column matches the cell pattern {pattern!r} (columns: {list(df.columns)[:8]}...)", path, 1)
     if fields == ("i",):
-        idx = _from_zero_or_one(np.array([k[0] for k, _ in found]), "the cell columns", path)
+        idx = from_zero_or_one(np.array([k[0] for k, _ in found]), "the cell columns", path)
         order = np.argsort(idx, kind="stable")
         if not np.array_equal(idx[order], np.arange(len(found))):
             raise DataError(f"the columns matching {pattern!r} skip a number or give one twice", path, 1)
@@ -169,8 +173,8 @@ def cell_columns(df: pd.DataFrame, n_cells: int | None, path: Path,
     pos = np.array([k for k, _ in found])
     if fields == ("col", "row"):
         pos = pos[:, ::-1]
-    r = _from_zero_or_one(pos[:, 0], "the rows of the cell columns", path)
-    c = _from_zero_or_one(pos[:, 1], "the columns of the cell columns", path)
+    r = from_zero_or_one(pos[:, 0], "the rows of the cell columns", path)
+    c = from_zero_or_one(pos[:, 1], "the columns of the cell columns", path)
     shape = (int(r.max()) + 1, int(c.max()) + 1)
     flat = r * shape[1] + c
     if len(set(flat.tolist())) != len(found) or len(found) != shape[0] * shape[1]:
@@ -231,14 +235,6 @@ def _optional_column(df: pd.DataFrame, given: str | None, names: Sequence[str], 
     return next((lower[n] for n in names if n in lower), None)
 
 
-def _capture_key(df: pd.DataFrame, cols: Sequence[str]) -> np.ndarray:
-    parts = [df[c].astype(str).str.strip().to_numpy(dtype=object) for c in cols]
-    key = parts[0]
-    for p in parts[1:]:
-        key = key + "-" + p
-    return key.astype(str)
-
-
 def _read_file(path: Path, lay: TableLayout, grid: tuple[int, int] | None, value_range, allow_empty: bool):
     """One file's frames and the grid its columns give (or ``grid``)."""
     df = read_table(path, allow_empty=allow_empty, text_columns=(*lay.capture, lay.subject, lay.gesture))
@@ -260,7 +256,7 @@ def _read_file(path: Path, lay: TableLayout, grid: tuple[int, int] | None, value
     if layout == "wide":
         n = grid[0] * grid[1] if grid is not None else None
         cells, named_grid = cell_columns(df, n, path, lay.cells)
-        grid = _agree(grid, named_grid, path)
+        grid = agree_grid(grid, named_grid, path)
         if grid is None:
             raise DataError(f"{len(cells)} cell columns: give the grid (--grid HxW), their names do not say it", path, 1)
         if len(cells) != grid[0] * grid[1]:
@@ -269,7 +265,7 @@ def _read_file(path: Path, lay: TableLayout, grid: tuple[int, int] | None, value
         lines = np.arange(len(df)) + 2
         taken |= set(cells)
     else:
-        values, lines, df, grid = _long_to_frames(df, cap, frame, time, value, lay.cells, grid, path, lo, hi)
+        values, lines, df, grid = long_to_frames(df, cap, frame, time, value, lay.cells, grid, path, lo, hi)
         taken |= {value, *(lay.cells.split(",") if lay.cells else ()), "row", "col", "cell"}
     meta_cols = [c for c in df.columns if c not in taken or c in (subj, gest)]
     if frame is not None:
@@ -280,66 +276,13 @@ def _read_file(path: Path, lay: TableLayout, grid: tuple[int, int] | None, value
         raise DataError("no frame counter or time column to order the frames by (name one with --frame-column "
                         "or --time-column)", path, 1)
     t_ms = _time_ms(df, time, lay.time_unit, path, lines) if time is not None else None
-    fr = _Frames(_capture_key(df, cap), order if order is not None else t_ms, values, lines,
+    fr = _Frames(capture_key(df, cap), order if order is not None else t_ms, values, lines,
                  df[meta_cols].rename(columns={subj: "subject", gest: "gesture"}).reset_index(drop=True), t_ms)
     return fr, grid, frame, time
 
 
-def _agree(given: tuple[int, int] | None, found: tuple[int, int] | None, path: Path) -> tuple[int, int] | None:
-    if given is not None and found is not None and tuple(given) != tuple(found):
-        raise DataError(f"the cells give a {found[0]} x {found[1]} grid, not the {given[0]} x {given[1]} given", path, 1)
-    return tuple(found or given) if (found or given) else None
-
-
-def _long_to_frames(df, cap, frame, time, value, cells, grid, path, lo, hi):
-    """A long table's rows gathered into frames: values ``(frames, H*W)``, each frame's first line,
-    the frames' rows of ``df`` (for the other columns), the grid."""
-    names = cells.split(",") if cells else None
-    if names is None:
-        names = ["row", "col"] if {"row", "col"} <= {c.lower() for c in df.columns} else ["cell"]
-    pos_cols = [find_column(df, (n,), path, f"cell position ({n})") for n in names]
-    pos = numeric(df, pos_cols, path, integer=True).astype(np.int64)
-    if len(pos_cols) == 2:
-        r = _from_zero_or_one(pos[:, 0], f"the values of {pos_cols[0]!r}", path)
-        c = _from_zero_or_one(pos[:, 1], f"the values of {pos_cols[1]!r}", path)
-        grid = _agree(grid, (int(r.max()) + 1, int(c.max()) + 1), path)
-        k = r * grid[1] + c
-    elif len(pos_cols) == 1:
-        if grid is None:
-            raise DataError(f"the cell index {pos_cols[0]!r} does not say the grid: give --grid HxW", path, 1)
-        k = _from_zero_or_one(pos[:, 0], f"the values of {pos_cols[0]!r}", path)
-        if k.max() >= grid[0] * grid[1]:
-            i = int(np.argmax(k >= grid[0] * grid[1]))
-            raise DataError(f"cell {pos[i, 0]} beyond a {grid[0]} x {grid[1]} grid", path, i + 2)
-    else:
-        raise TouchbenchError(f"a long table's cells are one index column or row,col; got {cells!r}")
-    v = numeric(df, [value], path, lo=lo, hi=hi)[:, 0]
-    n_cells = grid[0] * grid[1]
-    fkey = df[frame if frame is not None else time].astype(str).to_numpy()
-    ckey = _capture_key(df, cap)
-    codes = pd.DataFrame({"c": ckey, "f": fkey}).groupby(["c", "f"], sort=False).ngroup().to_numpy()
-    order = np.lexsort((k, codes))
-    sc, sk = codes[order], k[order]
-    starts = np.flatnonzero(np.r_[True, sc[1:] != sc[:-1]])
-    counts = np.diff(np.r_[starts, len(sc)])
-    within = np.arange(len(sc)) - np.repeat(starts, counts)
-    wrong = np.flatnonzero(counts != n_cells)
-    if wrong.size:
-        i = order[starts[wrong[0]]]
-        raise DataError(f"frame {fkey[i]} of capture {str(ckey[i])!r}: {counts[wrong[0]]} cells "
-                        f"for a {grid[0]} x {grid[1]} grid", path, int(i) + 2)
-    bad = np.flatnonzero(sk != within)  # as many rows as cells, so one cell is there twice and another missing
-    if bad.size:
-        i = order[bad[0]]
-        raise DataError(f"frame {fkey[i]} of capture {str(ckey[i])!r}: cell "
-                        f"{pos[i].tolist()} given twice", path, int(i) + 2)
-    first_row = np.minimum.reduceat(order, starts)  # a frame's first row in the file (codes: first-seen order)
-    rows = df.iloc[first_row].reset_index(drop=True)
-    return v[order].reshape(-1, n_cells), first_row + 2, rows, grid
-
-
 # ---------------------------------------------------------------- captures
-def _captures(fr: _Frames, path: Path, frame_col: str | None, time_col: str | None):
+def _captures(fr: _Frames, path: Path, frame_col: str | None, time_col: str | None, per_frame: tuple[str, ...] = ()):
     """Group a file's frames into captures (rows in any order): ``[(key, rows in frame order)]``, the
     captures in the order the file first gives them."""
     codes, uniq = pd.factorize(fr.key)
@@ -368,7 +311,7 @@ def _captures(fr: _Frames, path: Path, frame_col: str | None, time_col: str | No
                                 "time, or times out of order against the frame counter)", path,
                                 int(fr.lines[rows[same[0] + 1]]))
         meta = fr.meta.iloc[rows]
-        varying = [c for c in meta.columns if meta[c].nunique(dropna=False) > 1]
+        varying = [c for c in meta.columns if c not in per_frame and meta[c].nunique(dropna=False) > 1]
         if varying:
             col = meta[varying[0]].to_numpy()
             j = rows[int(np.flatnonzero(col != col[0])[0])]
@@ -417,32 +360,46 @@ def _read_files(files: list[Path], columns: TableLayout, grid: tuple[int, int] |
     per_file, found_grid = [], grid
     for f in files:
         fr, g, frame_col, time_col = _read_file(f, columns, found_grid, value_range, allow_empty=len(files) > 1)
-        found_grid = _agree(found_grid, g, f)
+        found_grid = agree_grid(found_grid, g, f)
         per_file.append((f, fr, frame_col, time_col))
     return per_file, found_grid
 
 
-def _gather_captures(path: Path, per_file: list) -> tuple[list, list, list, bool]:
+def _gather_captures(path: Path, per_file: list, frame_labels: bool = False) -> tuple[list, list, list, bool]:
     """The captures of every file, their metadata rows, their frame times (ms from the first frame)
-    and whether every value is whole; a capture split across two files is refused."""
+    and whether every value is whole; a capture split across two files is refused. With
+    ``frame_labels``, each capture key is a recording cut into its runs of one gesture."""
     caps, meta_rows, times, seen = [], [], [], {}
     whole = True
     for f, fr, frame_col, time_col in per_file:
         if len(fr.key) == 0:
             continue
         whole &= bool(np.all(fr.values == np.round(fr.values)))
-        for key, rows in _captures(fr, f, frame_col, time_col):
+        for key, rows in _captures(fr, f, frame_col, time_col, ("gesture",) if frame_labels else ()):
             if key in seen:
                 raise DataError(f"capture {key!r} is also in {seen[key].name}: a capture's rows belong in one file",
                                 f, int(fr.lines[rows[0]]))
             seen[key] = f
-            caps.append(fr.values[rows])
-            row = {"capture_id": key, **fr.meta.iloc[rows[0]].to_dict()}
-            if len(per_file) > 1:
-                row["source"] = str(f.relative_to(path))
-            meta_rows.append(row)
-            times.append(None if fr.time_ms is None else fr.time_ms[rows] - fr.time_ms[rows[0]])
+            for cid, part, extra in _segments(key, rows, fr, frame_labels):
+                caps.append(fr.values[part])
+                row = {"capture_id": cid, **fr.meta.iloc[part[0]].to_dict(), **extra}
+                if len(per_file) > 1:
+                    row["source"] = str(f.relative_to(path))
+                meta_rows.append(row)
+                times.append(None if fr.time_ms is None else fr.time_ms[part] - fr.time_ms[part[0]])
     return caps, meta_rows, times, whole
+
+
+def _segments(key: str, rows: np.ndarray, fr: _Frames, frame_labels: bool):
+    """A capture's rows as ``(capture id, rows, extra metadata)``: itself, or with ``frame_labels`` each
+    run of one gesture of the recording ``key`` (module docstring)."""
+    if not frame_labels:
+        return [(key, rows, {})]
+    g = fr.meta["gesture"].astype(str).to_numpy()[rows]
+    starts = np.flatnonzero(np.r_[True, g[1:] != g[:-1]])
+    ends = np.r_[starts[1:], len(rows)]
+    return [(f"{key}#{k + 1}", rows[a:b], {"recording": key, "start_frame": int(a)})
+            for k, (a, b) in enumerate(zip(starts, ends))]
 
 
 def _inferred_value_range(path: Path, caps: list, whole: bool) -> tuple[float, float]:
@@ -486,7 +443,7 @@ def read_table_dataset(
     frame_rate = None if frame_rate is None else check_frame_rate(frame_rate)
     value_range = None if value_range is None else check_value_range(*value_range)
     per_file, found_grid = _read_files(_files(path), columns, grid, value_range)
-    caps, meta_rows, times, whole = _gather_captures(path, per_file)
+    caps, meta_rows, times, whole = _gather_captures(path, per_file, columns.frame_labels)
     if not caps:
         raise DataError("no data rows", path)
     if any(t is None for t in times) and not all(t is None for t in times):
@@ -523,16 +480,22 @@ def read_table_format(
     cells: str | None = None,
     value_column: str | None = None,
     layout: str | None = None,
+    frame_labels: str | None = None,
     name: str | None = None,
     like: SensorSpec | None = None,
 ) -> TouchDataset:
     """The ``table`` file format (module docstring). ``like`` (the sensor of the model that is to
     label the data) fills the grid and value range, never the frame rate: a recording at another
     rate must be refused, not read as if it had the model's."""
+    if frame_labels is not None and gesture_column is not None:
+        raise TouchbenchError("give --frame-labels (each frame's label) or --gesture-column (each capture's), "
+                              "not both")
+    gesture_column = frame_labels if frame_labels is not None else gesture_column
     kw = {k: v for k, v in (("capture", tuple(capture_columns) if capture_columns else None),
                             ("subject", subject_column), ("gesture", gesture_column), ("frame", frame_column),
                             ("time", time_column), ("time_unit", time_unit), ("cells", cells),
-                            ("value", value_column), ("layout", layout)) if v is not None}
+                            ("value", value_column), ("layout", layout),
+                            ("frame_labels", frame_labels is not None or None)) if v is not None}
     sensor_name = "custom"
     if like is not None:
         grid = grid or like.grid
@@ -580,5 +543,8 @@ register_format(
                      "position column(s), row,col or cell", metavar="PATTERN"),
         FormatOption("value_column", "A long table's value column (default value)", metavar="COL"),
         FormatOption("layout", "wide (a row per frame), long (a row per cell) or auto", metavar="LAYOUT"),
+        FormatOption("frame_labels", "Continuous recordings labelled frame by frame: the column of each frame's "
+                     "label (the capture columns then name a recording, cut into one capture per run of one label)",
+                     metavar="COL"),
     ),
 )

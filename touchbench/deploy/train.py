@@ -20,6 +20,10 @@ as the engine derives it. For a fold it is the seed of that fold's task in
 repetition 0, so ``train --fold F`` fits the same estimator, on the same
 features, as the run engine did for fold F (their test predictions agree);
 for the whole training side it is ``derive_seed(seed, "train", method id)``.
+
+A stream evaluation (the ``stream`` scheme) trains on windows of its
+recogniser's lengths, cut every ``train_hop_s``, as its tasks do; ``windows``
+and ``train_hop`` given here replace them.
 """
 
 from __future__ import annotations
@@ -144,6 +148,9 @@ def train_from_protocol(
             parts.append(f"the training side of {proto.scheme.name} ({len(ds) - len(idx)} test captures left out)")
         elif not parts:
             parts.append("all captures")
+    live = prepared.folds[0][0].live  # a stream evaluation trains as its tasks do, unless told otherwise
+    if live is not None and windows is None and live.train_on == "windows":
+        windows, train_hop = list(live.windows_s), live.train_hop_s if train_hop is None else train_hop
     if where or exclude:
         idx = idx[select(ds.meta.iloc[idx].reset_index(drop=True), where or {}, exclude or {})]
         parts += [f"where {k}={','.join(v)}" for k, v in (where or {}).items()]

@@ -1,0 +1,97 @@
+"""A stream evaluation runs through the engine, and its decisions are `touchbench stream`'s."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from touchbench.cli.main import cli
+from touchbench.datasets.model import TouchDataset
+from touchbench.engine.planning import prepare_evaluation
+from touchbench.protocols.schema import load_protocol
+from touchbench.streams.timeline import decisions_per_frame, stream_frames
+
+PROTOCOL = """\
+name: live-sample
+dataset: haart-sample
+target: gesture
+scheme:
+  name: stream
+  base: loso
+  idle: notouch
+  gap_s: [0.5, 1.5]
+  per_stream: 3
+  windows_s: [0.5, 1.0]
+  hop_s: 0.2
+  rules: [{name: max, threshold: 0.4}, {name: majority, n: 3, threshold: 0.4}]
+methods: [touch-et-fast]
+seed: 3
+"""
+
+
+def _expand(runs, n):
+    """Run-length decisions back to one label per frame."""
+    out = np.empty(n, dtype=object)
+    for k, (a, label) in enumerate(runs):
+        b = runs[k + 1][0] if k + 1 < len(runs) else n
+        out[a:b] = label
+    return out
+
+
+@pytest.fixture(scope="module")
+def live_run(tmp_path_factory):
+    root = tmp_path_factory.mktemp("live")
+    (root / "p.yaml").write_text(PROTOCOL)
+    res = CliRunner().invoke(cli, ["run", str(root / "p.yaml"), "--out", str(root / "res"), "--jobs", "1",
+                                   "--no-progress"], catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    return root, pd.read_parquet(root / "res" / "scores.parquet")
+
+
+def test_the_stream_evaluation_scores_every_stream_and_rule(live_run):
+    _, scores = live_run
+    assert (scores["status"] == "ok").all() and sorted(scores["fold"]) == ["subject=s01", "subject=s04"]
+    for _, row in scores.iterrows():
+        live = json.loads(row["live"])
+        assert [r["name"] for r in live["rules"]] == ["max", "majority"]
+        (stream,) = live["streams"]
+        assert stream["source"] == "spliced" and row["fold"].endswith(stream["subject"])
+        # three gestures of 8 s (432 frames at 54 Hz) and four idle stretches of 27..81 frames
+        assert 3 * 432 + 4 * 27 <= stream["frames"] <= 3 * 432 + 4 * 81
+        for r in stream["results"]:
+            s = r["scores"]
+            assert 0.0 <= s["frame_accuracy"] <= 1.0 and "frame_idle_baseline_accuracy" in s
+            # every hop of 0.2 s (11 frames) from the first full 0.5 s window (27 frames)
+            assert r["n_decisions"] == (stream["frames"] - 27) // 11 + 1
+
+
+def test_the_evaluation_decides_what_touchbench_stream_prints(live_run, tmp_path):
+    root, scores = live_run
+    proto = load_protocol(root / "p.yaml")
+    prepared = prepare_evaluation(proto)
+    fold = next(f for f in prepared.folds[0] if f.name == "subject=s04")
+    (stream,) = fold.live.streams
+    ds = prepared.dataset
+    y = ds.meta["gesture"].astype(str).to_numpy()
+    frames, truth = stream_frames(ds.captures, y, stream, "notouch", 0)
+    recording = TouchDataset("rec", [frames], pd.DataFrame({"capture_id": ["rec"], "subject": ["s04"],
+                                                              "gesture": ["mixed"]}), ds.sensor)
+    recording.to_parquet(tmp_path / "rec.parquet")
+    model = tmp_path / "m.joblib"
+    res = CliRunner().invoke(cli, ["train", str(root / "p.yaml"), "--fold", "s04", "--out", str(model)],
+                             catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    live = json.loads(scores.set_index("fold").loc["subject=s04", "live"])["streams"][0]["results"]
+    for k, rule in enumerate(["{name: max, threshold: 0.4}", "{name: majority, n: 3, threshold: 0.4}"]):
+        res = CliRunner().invoke(cli, ["stream", str(model), str(tmp_path / "rec.parquet"), "--hop", "0.2",
+                                       "--rule", rule, "--no-realtime", "--jsonl"], catch_exceptions=False)
+        assert res.exit_code == 0, res.output
+        printed = [json.loads(line) for line in res.stdout.splitlines() if line.startswith("{")]
+        cli_frames = decisions_per_frame([d["frame"] for d in printed], [d["label"] for d in printed], len(truth),
+                                         "undecided")
+        assert len(printed) == live[k]["n_decisions"]
+        assert cli_frames.tolist() == _expand(live[k]["decisions"], len(truth)).tolist()
