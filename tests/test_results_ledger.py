@@ -6,7 +6,6 @@ folder of results folders are still counted, then merged into the root's without
 from __future__ import annotations
 
 import json
-import logging
 import multiprocessing as mp
 from pathlib import Path
 
@@ -192,14 +191,6 @@ def test_a_merged_ledger_that_cannot_be_renamed_is_one_clear_error_and_loses_not
 
 # ------------------------------------------------------------------ lines of the wrong type
 
-@pytest.fixture
-def warnings_of_touchbench(caplog, monkeypatch):
-    """The warnings touchbench logs (the command line may have stopped its logger propagating)."""
-    monkeypatch.setattr(logging.getLogger("touchbench"), "propagate", True)
-    caplog.set_level(logging.WARNING, logger="touchbench")
-    return caplog
-
-
 ILL_TYPED = [  # (the line, the field named in the warning)
     ({"test_set": "t", "methods": 5, "final": False}, "methods is 5, not a list of strings"),
     ({"test_set": "t", "methods": "abcdef", "final": False}, 'methods is "abcdef", not a list of strings'),
@@ -213,7 +204,7 @@ ILL_TYPED = [  # (the line, the field named in the warning)
 ]
 
 
-def test_lines_of_the_wrong_type_are_skipped_with_a_warning_naming_the_line(tmp_path, warnings_of_touchbench):
+def test_lines_of_the_wrong_type_are_skipped_with_a_warning_naming_the_line(tmp_path, touchbench_warnings):
     ledger = tmp_path / "ledger.jsonl"
     good = {"test_set": "t", "look": "a", "methods": ["m1"], "final": False, "evaluation": None, "tasks": 3}
     ledger.write_text("\n".join([json.dumps(good)] + [json.dumps(line) for line, _ in ILL_TYPED]
@@ -222,18 +213,18 @@ def test_lines_of_the_wrong_type_are_skipped_with_a_warning_naming_the_line(tmp_
     # one run (look a), one method: neither 5, nor the letters of "abcdef", nor 7 are methods, "false" is no final
     assert looks(ledger, "t") == Looks(runs=1, methods=1, finals=0)
     assert check_final(ledger, "t", ["another"]) == []  # no final run before: "final": "false" is not one
-    text = warnings_of_touchbench.text
+    text = touchbench_warnings.text
     for n, (_, why) in enumerate(ILL_TYPED, 2):
         assert f"{ledger}:{n}: a line of the ledger of test-set looks was skipped: " in text
         assert why in text
     assert f"{ledger}:{len(ILL_TYPED) + 2}: a line of the ledger of test-set looks was skipped: not a complete JSON line" in text
     assert f"{ledger}:1:" not in text
-    warnings_of_touchbench.clear()
+    touchbench_warnings.clear()
     read_ledger(ledger)
-    assert warnings_of_touchbench.text == ""  # said once per process
+    assert touchbench_warnings.text == ""  # said once per process
 
 
-def test_the_leaderboard_skips_an_ill_typed_line_of_the_ledger(tmp_path, warnings_of_touchbench):
+def test_the_leaderboard_skips_an_ill_typed_line_of_the_ledger(tmp_path, touchbench_warnings):
     p = _protocol(tmp_path)
     out = tmp_path / "results" / "p"
     run_protocol(p, out=out, progress=False)
@@ -242,4 +233,4 @@ def test_the_leaderboard_skips_an_ill_typed_line_of_the_ledger(tmp_path, warning
     with ledger.open("a") as f:  # a line edited by hand: five methods written as a number, a final run as a string
         f.write(json.dumps({"test_set": test_set, "look": "x", "methods": 5, "final": "true"}) + "\n")
     assert _looks_of(out) == Looks(runs=1, methods=1, finals=0)
-    assert f"{ledger}:2: a line of the ledger of test-set looks was skipped: its methods is 5" in warnings_of_touchbench.text
+    assert f"{ledger}:2: a line of the ledger of test-set looks was skipped: its methods is 5" in touchbench_warnings.text

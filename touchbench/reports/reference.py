@@ -35,12 +35,15 @@ import pandas as pd
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError
 from ..core.suggest import did_you_mean
+from ..results.checksums import changed_files, file_checksums, recorded_checksums
 from .results import ResultSet, find_result_dirs, load_results, read_manifest
 
 __all__ = ["Reference", "ReferenceError", "add_reference", "find_reference", "reference_names", "save_reference"]
 
 SHIPPED = Path(__file__).resolve().parent.parent / "data" / "reference"
 INDEX = "reference.json"
+#: the files a reference keeps of each evaluation, beside its manifest
+SAVED_FILES = ("scores.parquet", "predictions.parquet")
 
 
 class ReferenceError(TouchbenchError):
@@ -107,6 +110,10 @@ def _evaluation_entry(folder: Path, root: Path) -> dict[str, Any]:
                              "(scores.parquet and the manifest's test-set hash are needed)")
     if m.get("finished_at") is None:
         raise ReferenceError(f"{folder}: the run is not finished; finish it before saving it as a reference")
+    changed = changed_files(folder, recorded_checksums(m))
+    if changed:
+        raise ReferenceError(f"{folder}: {'; '.join(changed)}: not saved as a reference (run its protocol into this "
+                             "folder again: the run rebuilds its files from the results of each task)")
     rel = folder.relative_to(root).as_posix() if folder != root else (m.get("protocol") or {}).get("name", "run")
     methods = sorted(set(pd.read_parquet(folder / "scores.parquet", columns=["classifier"])["classifier"].astype(str)))
     return {"folder": rel, "source": folder, "test_set": _test_set(m),
@@ -129,6 +136,16 @@ def _portable(manifest: dict[str, Any]) -> dict[str, Any]:
     return m
 
 
+def _saved_manifest(manifest: dict[str, Any], folder: Path) -> bytes:
+    """The manifest of a reference's evaluation saved in ``folder``: :func:`_portable`, recording the
+    SHA-256 of the files saved there (as a run does of those it wrote), which reports check."""
+    m = _portable(manifest)
+    if not isinstance(m.get("tasks"), dict):
+        m["tasks"] = {}
+    m["tasks"]["merged_files"] = file_checksums(folder, SAVED_FILES)
+    return (json.dumps(m, indent=2) + "\n").encode()
+
+
 def save_reference(results: str | Path, name: str, dest: str | Path | None = None) -> Path:
     """Save the finished run in ``results`` (a results folder, or one holding an evaluation per
     subfolder) as the reference ``name`` under ``dest`` (default: the shipped references'
@@ -146,8 +163,7 @@ def save_reference(results: str | Path, name: str, dest: str | Path | None = Non
         shutil.copyfile(e["source"] / "scores.parquet", tmp / e["folder"] / "scores.parquet")
         if (e["source"] / "predictions.parquet").is_file():
             _write_predictions(e["source"] / "predictions.parquet", tmp / e["folder"] / "predictions.parquet")
-        manifest = json.dumps(_portable(e["manifest"]), indent=2) + "\n"
-        atomic_write_bytes(tmp / e["folder"] / "manifest.json", manifest.encode())
+        atomic_write_bytes(tmp / e["folder"] / "manifest.json", _saved_manifest(e["manifest"], tmp / e["folder"]))
     index = {"name": name, "protocol": (first.get("protocol") or {}).get("name"),
              "touchbench_version": first.get("touchbench_version"),
              "git_revision": (first.get("git") or {}).get("revision"), "machine": _machine(first),
