@@ -113,3 +113,14 @@ def engine_env(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     with components_for_tests():
         yield
+
+
+@pytest.fixture
+def touchbench_warnings(caplog, monkeypatch):
+    """``caplog`` holding the warnings touchbench logs (a command run in-process before may have
+    stopped its logger passing them on)."""
+    import logging
+
+    monkeypatch.setattr(logging.getLogger("touchbench"), "propagate", True)
+    caplog.set_level(logging.WARNING, logger="touchbench")
+    return caplog

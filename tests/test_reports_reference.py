@@ -19,6 +19,7 @@ from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
 from touchbench.protocols.schema import parse_protocol
 from touchbench.reports import reference as reference_module
+from touchbench.results.store import read_results_table, write_results_table
 
 
 def _run(tmp_path, out: str, seed: int = 4, classifiers: str = "[test-logreg]"):
@@ -85,6 +86,39 @@ def test_an_unfinished_run_is_not_saved(refs, tmp_path):
     assert not (refs / "mine").exists()
 
 
+def _edit_scores(folder, accuracy: float) -> None:
+    """Every accuracy of ``folder``'s scores set to ``accuracy``, in the file's own format."""
+    scores = read_results_table(folder / "scores.parquet")
+    assert (scores["accuracy"] != accuracy).all()  # a change, not the run's own values
+    write_results_table(folder / "scores.parquet", scores.assign(accuracy=accuracy))
+
+
+def test_a_reference_edited_after_it_was_saved_is_named_beside_the_run(refs, tmp_path):
+    assert _invoke("reference", "save", _run(tmp_path, "saved"), "--name", "mine", "--to", refs).exit_code == 0
+    new = _run(tmp_path, "new")
+    r = _invoke("leaderboard", new, "--reference", "mine", "--json")
+    assert r.exit_code == 0 and "changed since" not in r.stderr  # as saved: nothing to say
+    _edit_scores(refs / "mine" / "x", 0.25)
+    r = _invoke("leaderboard", new, "--reference", "mine", "--json")
+    assert r.exit_code == 0, r.output
+    said = (f"{refs / 'mine' / 'x'}: scores.parquet changed since the run wrote it (its SHA-256 is not the one "
+            "manifest.json records)")
+    assert f"warning: {said}" in r.stderr
+    table = json.loads(r.stdout)["tables"][0]
+    assert any(n.startswith(said) for n in table["notes"])
+    rows = {row["classifier"]: row["accuracy"] for row in table["rows"]}
+    assert rows["test-logreg (reference mine)"] == pytest.approx(0.25)  # shown as it is now, with the note
+
+
+def test_a_run_edited_after_it_ran_is_not_saved_as_a_reference(refs, tmp_path):
+    saved = _run(tmp_path, "saved")
+    _edit_scores(saved, 0.25)
+    r = _invoke("reference", "save", saved, "--name", "mine", "--to", refs)
+    assert r.exit_code != 0 and "Traceback" not in r.output
+    assert f"{saved}: scores.parquet changed since the run wrote it: not saved as a reference" in r.output
+    assert not (refs / "mine").exists()
+
+
 def test_the_shipped_tiny_reference_is_what_this_code_computes(tmp_path, monkeypatch):
     """A fresh run of the shipped ``tiny`` protocol matches the shipped reference's test set and
     reproduces its accuracies (when it does not, `make reference-results` saves them again)."""
@@ -94,6 +128,7 @@ def test_the_shipped_tiny_reference_is_what_this_code_computes(tmp_path, monkeyp
     assert r.exit_code == 0, r.output
     r = _invoke("leaderboard", tmp_path / "tiny", "--reference", "tiny", "--json")
     assert r.exit_code == 0, r.output
+    assert "changed since" not in r.stderr and "missing" not in r.stderr  # the shipped files are as saved
     rows = json.loads(r.stdout)["tables"][0]["rows"]
     mine = {row["classifier"] + "/" + row["features"]: row["accuracy"] for row in rows if "(reference" not in row["classifier"]}
     ref = {row["classifier"].replace(" (reference tiny)", "") + "/" + row["features"]: row["accuracy"]

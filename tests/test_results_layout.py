@@ -10,13 +10,16 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+from click.testing import CliRunner
 
+from touchbench.cli.main import cli
 from touchbench.core.errors import TouchbenchError
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
 from touchbench.protocols.schema import parse_protocol
+from touchbench.reports.leaderboard import build_leaderboards
 from touchbench.reports.results import load_results
-from touchbench.results.store import ResultStore, read_results_table
+from touchbench.results.store import ResultStore, read_results_table, write_results_table
 
 
 def _write_old(df: pd.DataFrame, path) -> None:
@@ -107,3 +110,55 @@ def test_a_manifest_of_a_newer_layout_is_refused(engine_env, tmp_path):
         load_results([out])
     with pytest.raises(TouchbenchError, match=msg):  # a run never rewrites a newer layout
         run_protocol(p, out=out, progress=False)
+
+
+# ------------------------------------------------------------------ files edited after the run
+
+CHANGED_SCORES = "scores.parquet changed since the run wrote it (its SHA-256 is not the one manifest.json records)"
+
+
+def test_scores_edited_after_the_run_are_shown_with_a_warning_and_a_note(engine_env, tmp_path):
+    _, first = _run(tmp_path)
+    out = tmp_path / "out"
+    r = CliRunner().invoke(cli, ["leaderboard", str(out), "--format", "md"])
+    assert r.exit_code == 0 and "changed since" not in r.output  # as the run wrote it: nothing to say
+    scores = read_results_table(out / "scores.parquet")
+    assert (scores["accuracy"] != 0.25).all()  # the run did not score 25 %; the edit below says it did
+    write_results_table(out / "scores.parquet", scores.assign(accuracy=0.25))
+    r = CliRunner().invoke(cli, ["leaderboard", str(out), "--format", "md"])
+    assert r.exit_code == 0, r.output
+    assert r.stderr.count(f"warning: {out}: {CHANGED_SCORES}") == 1
+    assert f"Note: {out}: {CHANGED_SCORES}: the tables show these results as they are now" in r.stdout
+    assert "| 25.0" in r.stdout  # still shown, as it is now, beside the note
+    rows = json.loads(CliRunner().invoke(cli, ["leaderboard", str(out), "--json"]).stdout)["tables"][0]
+    assert any(n.startswith(f"{out}: {CHANGED_SCORES}") for n in rows["notes"])
+
+
+def test_predictions_edited_or_deleted_after_the_run_are_named(engine_env, tmp_path, touchbench_warnings):
+    _run(tmp_path)
+    out = tmp_path / "out"
+    preds = read_results_table(out / "predictions.parquet")
+    # the first capture's prediction changed to another class: the predictions no longer match the scores
+    other = sorted(set(preds["true_label"]) - {preds.loc[0, "predicted_label"]})[0]
+    preds.loc[0, ["predicted_label", "correct"]] = [other, other == preds.loc[0, "true_label"]]
+    write_results_table(out / "predictions.parquet", preds)
+    notes = build_leaderboards(load_results([out]))[0].notes
+    changed = [n for n in notes if "changed since the run wrote it" in n]
+    assert len(changed) == 1 and changed[0].startswith(f"{out}: predictions.parquet changed since the run wrote it")
+    assert changed[0] in touchbench_warnings.text
+    (out / "predictions.parquet").unlink()
+    notes = build_leaderboards(load_results([out]))[0].notes
+    assert f"{out}: predictions.parquet, which the run wrote, is missing: the tables show these results as they " \
+           "are now, which may not be what the run measured" in notes
+
+
+def test_a_folder_without_recorded_checksums_or_read_from_its_fragments_is_not_flagged(engine_env, tmp_path,
+                                                                                     touchbench_warnings):
+    _run(tmp_path)
+    out = tmp_path / "out"
+    manifest = json.loads((out / "manifest.json").read_text())
+    # an interrupted run: its tasks' fragments, no merged files (an old checksum record left in the manifest)
+    for name in ("scores.parquet", "predictions.parquet", "confusion.parquet", "confusion_pooled.parquet"):
+        (out / name).unlink()
+    assert build_leaderboards(load_results([out]))[0].rows["accuracy"].notna().all()
+    assert "changed since" not in touchbench_warnings.text and "missing" not in touchbench_warnings.text

@@ -10,13 +10,18 @@ import multiprocessing as mp
 from pathlib import Path
 
 import pytest
+from click.testing import CliRunner
 
+from touchbench.cli import exitcodes
+from touchbench.cli.main import cli
+from touchbench.core.errors import WriteError
 from touchbench.core.paths import results_root
 from touchbench.engine import run_protocol, runner
 from touchbench.engine.testing import random_dataset
 from touchbench.reports.leaderboard import build_leaderboards
 from touchbench.reports.results import load_results
-from touchbench.results.ledger import RUN_FILE, Looks, looks, merge_ledgers, old_ledgers, read_ledger, record_look
+from touchbench.results.ledger import (RUN_FILE, Looks, check_final, looks, merge_ledgers, old_ledgers, read_ledger,
+                                       record_look)
 
 
 @pytest.fixture(autouse=True)
@@ -143,3 +148,89 @@ def test_concurrent_runs_merge_an_old_ledger_once_and_lose_no_look(tmp_path):
     entries = read_ledger(root / "ledger.jsonl")
     assert len(entries) == 5 + 40
     assert looks(root / "ledger.jsonl", "t") == Looks(runs=45, methods=6, finals=0)
+
+
+# ------------------------------------------------------------------ a ledger that cannot be written
+
+def test_a_ledger_that_is_a_folder_stops_the_run_with_one_clear_error(tmp_path):
+    p = _protocol(tmp_path)
+    ledger = tmp_path / "results" / "ledger.jsonl"
+    ledger.mkdir(parents=True)
+    out = tmp_path / "results" / "p"
+    r = CliRunner().invoke(cli, ["run", str(p), "--out", str(out), "--no-progress"])
+    assert r.exit_code == exitcodes.DATA, r.output
+    assert r.output.strip().splitlines()[-1] == (
+        f"error: {ledger}: cannot write the ledger of test-set looks: it is a folder, not a file "
+        "(rename or remove that folder)")
+    assert "Traceback" not in r.output and "TypeError" not in r.output
+    assert not (out / "scores.parquet").exists() and not list(out.glob("fragments/*"))  # no task ran
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full (a device that is always full)")
+def test_a_full_disk_under_the_ledger_is_one_clear_error(tmp_path):
+    ledger = tmp_path / "ledger.jsonl"
+    ledger.symlink_to("/dev/full")  # every write to it fails with ENOSPC, as on a full disk
+    with pytest.raises(WriteError) as e:
+        record_look(ledger, {"test_set": "t", "methods": ["m"]})
+    assert str(e.value) == (f"{ledger}: cannot write the ledger of test-set looks: no space left on the device "
+                            "(free some space and run again; finished work is kept)")
+
+
+def test_a_merged_ledger_that_cannot_be_renamed_is_one_clear_error_and_loses_nothing(tmp_path):
+    root = tmp_path / "results"
+    old = root / "audit" / "p" / "ledger.jsonl"
+    old.parent.mkdir(parents=True)
+    old.write_text(json.dumps(_old_entry("t", "m")) + "\n")
+    (old.parent / "ledger.jsonl.merged" / "x").mkdir(parents=True)  # a folder where the rename goes
+    with pytest.raises(WriteError) as e:
+        merge_ledgers(root / "ledger.jsonl", [old])
+    assert str(e.value) == (f"{old}: merged into {root / 'ledger.jsonl'}, but cannot be renamed ledger.jsonl.merged: "
+                            "it is a folder, not a file (rename or remove that folder)")
+    assert read_ledger(root / "ledger.jsonl") == read_ledger(old) == [_old_entry("t", "m")]
+
+
+# ------------------------------------------------------------------ lines of the wrong type
+
+ILL_TYPED = [  # (the line, the field named in the warning)
+    ({"test_set": "t", "methods": 5, "final": False}, "methods is 5, not a list of strings"),
+    ({"test_set": "t", "methods": "abcdef", "final": False}, 'methods is "abcdef", not a list of strings'),
+    ({"test_set": "t", "methods": ["m1", 7], "final": False}, 'methods is ["m1", 7], not a list of strings'),
+    ({"test_set": "t", "methods": ["m1"], "final": "false"}, 'final is "false", not true or false'),
+    ({"test_set": "t", "methods": ["m1"], "evaluation": 3, "final": True}, "evaluation is 3, not a string or null"),
+    ({"test_set": "t", "methods": ["m1"], "look": ["a"]}, 'look is ["a"], not a string'),
+    ({"test_set": "t", "methods": ["m1"], "tasks": True}, "tasks is true, not a whole number >= 0"),
+    ({"test_set": 12, "methods": ["m1"]}, "test_set is 12, not a string"),
+    ([1, 2], "not an entry of the ledger"),
+]
+
+
+def test_lines_of_the_wrong_type_are_skipped_with_a_warning_naming_the_line(tmp_path, touchbench_warnings):
+    ledger = tmp_path / "ledger.jsonl"
+    good = {"test_set": "t", "look": "a", "methods": ["m1"], "final": False, "evaluation": None, "tasks": 3}
+    ledger.write_text("\n".join([json.dumps(good)] + [json.dumps(line) for line, _ in ILL_TYPED]
+                                + ['{"test_set": "t", "meth']) + "\n")
+    assert read_ledger(ledger) == [good]
+    # one run (look a), one method: neither 5, nor the letters of "abcdef", nor 7 are methods, "false" is no final
+    assert looks(ledger, "t") == Looks(runs=1, methods=1, finals=0)
+    assert check_final(ledger, "t", ["another"]) == []  # no final run before: "final": "false" is not one
+    text = touchbench_warnings.text
+    for n, (_, why) in enumerate(ILL_TYPED, 2):
+        assert f"{ledger}:{n}: a line of the ledger of test-set looks was skipped: " in text
+        assert why in text
+    assert f"{ledger}:{len(ILL_TYPED) + 2}: a line of the ledger of test-set looks was skipped: not a complete JSON line" in text
+    assert f"{ledger}:1:" not in text
+    touchbench_warnings.clear()
+    read_ledger(ledger)
+    assert touchbench_warnings.text == ""  # said once per process
+
+
+def test_the_leaderboard_skips_an_ill_typed_line_of_the_ledger(tmp_path, touchbench_warnings):
+    p = _protocol(tmp_path)
+    out = tmp_path / "results" / "p"
+    run_protocol(p, out=out, progress=False)
+    ledger = tmp_path / "results" / "ledger.jsonl"
+    test_set = read_ledger(ledger)[0]["test_set"]
+    with ledger.open("a") as f:  # a line edited by hand: five methods written as a number, a final run as a string
+        f.write(json.dumps({"test_set": test_set, "look": "x", "methods": 5, "final": "true"}) + "\n")
+    assert _looks_of(out) == Looks(runs=1, methods=1, finals=0)
+    assert f"{ledger}:2: a line of the ledger of test-set looks was skipped: its methods is 5" in touchbench_warnings.text

@@ -34,8 +34,9 @@ class RegistrationError(TouchbenchError, ValueError):
 
 
 class WriteError(TouchbenchError, OSError):
-    """A file touchbench could not write (permissions, a read-only or full disk), naming the file;
-    the writer left nothing half-written."""
+    """A file touchbench could not write (permissions, a read-only or full disk, a folder where
+    the file should be), naming the file, what could not be done (``action``, "cannot write" by
+    default) and why; the writer left nothing half-written."""
 
     _REASONS = {
         "EACCES": "permission denied: the folder is not writable for you (choose another output folder)",
@@ -43,10 +44,11 @@ class WriteError(TouchbenchError, OSError):
         "EROFS": "the file system is read-only (choose another output folder)",
         "ENOSPC": "no space left on the device (free some space and run again; finished work is kept)",
         "EDQUOT": "disk quota exceeded (free some space and run again; finished work is kept)",
+        "EISDIR": "it is a folder, not a file (rename or remove that folder)",
     }
 
-    def __init__(self, path: str | Path, error: OSError):
+    def __init__(self, path: str | Path, error: OSError, action: str = "cannot write"):
         self.path = str(path)
         name = errno.errorcode.get(error.errno or 0, "")
         reason = self._REASONS.get(name) or error.strerror or str(error)
-        TouchbenchError.__init__(self, f"{self.path}: cannot write: {reason}")
+        TouchbenchError.__init__(self, f"{self.path}: {action}: {reason}")

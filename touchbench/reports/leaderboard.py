@@ -393,9 +393,9 @@ class _Design:
 
 
 def _source_notes(sources: list[dict]) -> tuple[list[str], Looks | None]:
-    """The notes the sources carry (methods left out, the looks at the test set) and the ledger's
-    count of looks of the source with the most runs."""
-    notes = list(dict.fromkeys(n for s in sources for n in s.get("left_out") or []))
+    """The notes the sources carry (files changed since the run, methods left out, the looks at the
+    test set) and the ledger's count of looks of the source with the most runs."""
+    notes = list(dict.fromkeys(n for s in sources for n in [*(s.get("changed") or []), *(s.get("left_out") or [])]))
     table_looks = [s["looks"] for s in sources if s.get("looks") is not None]
     looks_here = max(table_looks, key=lambda x: x.runs) if table_looks else None
     if looks_here is not None:

@@ -48,6 +48,7 @@ from ..core.atomic import atomic_write_bytes, replace_dir
 from ..core.errors import TouchbenchError
 from ..core.paths import user_reference_dir
 from ..core.suggest import did_you_mean
+from ..results.checksums import changed_files, file_checksums, recorded_checksums
 from .results import ResultSet, find_result_dirs, load_results, read_manifest
 
 __all__ = ["Reference", "ReferenceError", "add_reference", "check_reference_name", "find_reference",
@@ -58,6 +59,8 @@ INDEX = "reference.json"
 #: what a reference name may be: one folder name, portable, never hidden, never a path
 NAME_RULE = "1 to 64 ASCII letters, digits, '-', '_' or '.', starting with a letter or a digit"
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
+#: the files a reference keeps of each evaluation, beside its manifest
+SAVED_FILES = ("scores.parquet", "predictions.parquet")
 
 
 class ReferenceError(TouchbenchError):
@@ -151,6 +154,10 @@ def _evaluation_entry(folder: Path, root: Path) -> dict[str, Any]:
                              "(scores.parquet and the manifest's test-set hash are needed)")
     if m.get("finished_at") is None:
         raise ReferenceError(f"{folder}: the run is not finished; finish it before saving it as a reference")
+    changed = changed_files(folder, recorded_checksums(m))
+    if changed:
+        raise ReferenceError(f"{folder}: {'; '.join(changed)}: not saved as a reference (run its protocol into this "
+                             "folder again: the run rebuilds its files from the results of each task)")
     rel = folder.relative_to(root).as_posix() if folder != root else (m.get("protocol") or {}).get("name", "run")
     methods = sorted(set(pd.read_parquet(folder / "scores.parquet", columns=["classifier"])["classifier"].astype(str)))
     return {"folder": rel, "source": folder, "test_set": _test_set(m),
@@ -171,6 +178,16 @@ def _portable(manifest: dict[str, Any]) -> dict[str, Any]:
         m["protocol"]["path"] = Path(m["protocol"]["path"]).name
     (m.get("run") or {}).pop("results_dir", None)
     return m
+
+
+def _saved_manifest(manifest: dict[str, Any], folder: Path) -> bytes:
+    """The manifest of a reference's evaluation saved in ``folder``: :func:`_portable`, recording the
+    SHA-256 of the files saved there (as a run does of those it wrote), which reports check."""
+    m = _portable(manifest)
+    if not isinstance(m.get("tasks"), dict):
+        m["tasks"] = {}
+    m["tasks"]["merged_files"] = file_checksums(folder, SAVED_FILES)
+    return (json.dumps(m, indent=2) + "\n").encode()
 
 
 def _destination(root: Path, name: str, force: bool) -> Path:
@@ -204,8 +221,7 @@ def _write_reference(out: Path, name: str, entries: list[dict[str, Any]]) -> Non
         shutil.copyfile(e["source"] / "scores.parquet", out / e["folder"] / "scores.parquet")
         if (e["source"] / "predictions.parquet").is_file():
             _write_predictions(e["source"] / "predictions.parquet", out / e["folder"] / "predictions.parquet")
-        manifest = json.dumps(_portable(e["manifest"]), indent=2) + "\n"
-        atomic_write_bytes(out / e["folder"] / "manifest.json", manifest.encode())
+        atomic_write_bytes(out / e["folder"] / "manifest.json", _saved_manifest(e["manifest"], out / e["folder"]))
     atomic_write_bytes(out / INDEX, (json.dumps(_index(name, entries), indent=2) + "\n").encode())
 
 

@@ -31,7 +31,11 @@ adds the columns the reports need:
   front only with methods adapted the same way.
 
 A run interrupted before its reports were merged is read from its task
-fragments (``fragments/*.scores.parquet``).
+fragments (``fragments/*.scores.parquet``). The merged files of any other are
+checked against the SHA-256 its manifest records
+(:func:`touchbench.results.checksums.changed_since_run`): each one changed or
+missing since the run wrote it is a logged warning and a note of the source
+(``changed``) that the leaderboard's tables repeat; the results are still read.
 
 A task that appears twice (the same results directory given twice, or a run
 copied) is counted once: rows with the same method, fold and classifier seed
@@ -42,6 +46,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import math
 import re
 from dataclasses import dataclass, field
@@ -57,11 +62,14 @@ from ..core.paths import results_root
 from ..core.yamlsafe import safe_load
 from ..methods.base import SUBJECT_ID_LEAK
 from ..protocols.schemes.base import scheme_class
+from ..results.checksums import changed_since_run
 from ..results.ledger import LEDGER_NAME, Looks, looks, old_ledgers
 from ..results.manifest import LEFT_OUT
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE, ResultStore, check_schema, read_results_table
 
 __all__ = ["ResultSet", "find_result_dirs", "load_results", "machine_id", "method_id", "read_manifest", "scheme_label"]
+
+log = logging.getLogger("touchbench.reports")
 
 PREDICTION_COLUMNS = ["task_id", "fold", "capture_id", "subject", TRUE, PREDICTED, "correct"]
 
@@ -284,8 +292,10 @@ def _labelled_predictions(p: pd.DataFrame, s: pd.DataFrame, d: Path) -> pd.DataF
     return pp
 
 
-def _source_record(d: Path, m: dict[str, Any], s: pd.DataFrame, mid: str, mdesc: str) -> dict[str, Any]:
-    """What a results directory says about its run: protocol, machine, versions, design, looks..."""
+def _source_record(d: Path, m: dict[str, Any], s: pd.DataFrame, mid: str, mdesc: str,
+                   changed: list[str]) -> dict[str, Any]:
+    """What a results directory says about its run: protocol, machine, versions, design, looks, the
+    files changed since the run wrote them (``changed``)..."""
     return {
         "path": str(d), "run_id": (m.get("run") or {}).get("run_id") or str(s["run_id"].iloc[0]),
         "protocol": (m.get("protocol") or {}).get("name") or str(s["protocol"].iloc[0]),
@@ -300,6 +310,7 @@ def _source_record(d: Path, m: dict[str, Any], s: pd.DataFrame, mid: str, mdesc:
         "design_captures": (m.get("protocol") or {}).get("design_captures"),
         "looks": _looks(m, d), "test_set": (m.get("ledger") or {}).get("test_set"),
         "left_out": [n for n in (m.get("notes") or []) if str(n).startswith(LEFT_OUT)],
+        "changed": changed,
     }
 
 
@@ -315,6 +326,16 @@ def _looks(manifest: dict[str, Any], folder: Path) -> Looks | None:
     return looks(ledgers, info["test_set"])
 
 
+def _changed(d: Path, manifest: dict[str, Any], store: ResultStore | None) -> list[str]:
+    """The warnings, logged here and kept for the tables' notes, of the merged files of ``d`` that are
+    not those its run wrote (:func:`touchbench.results.checksums.changed_since_run`); none for a
+    run read from its task fragments (``store``), whose merged files are not read."""
+    changed = [] if store is not None else changed_since_run(d, manifest)
+    for warning in changed:
+        log.warning("%s", warning)
+    return changed
+
+
 def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> ResultSet:
     """Read and combine results directories (see the module docstring)."""
     dirs = _result_dirs(paths)
@@ -324,6 +345,7 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
         if s.empty:
             continue
         m = read_manifest(d)
+        changed = _changed(d, m, store)
         mid, mdesc = machine_id(m.get("platform"))
         s = _labelled_scores(s, d, m, mid, mdesc)
         p = _read_predictions(d, store)
@@ -336,7 +358,7 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
             if predictions:
                 pred_frames.append(_labelled_predictions(p, s, d))
         score_frames.append(s)
-        sources.append(_source_record(d, m, s, mid, mdesc))
+        sources.append(_source_record(d, m, s, mid, mdesc, changed))
     if not score_frames:
         raise TouchbenchError(f"no scores in {', '.join(map(str, dirs))} (every run is empty)")
     scores = pd.concat(score_frames, ignore_index=True, sort=False)

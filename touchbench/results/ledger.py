@@ -11,8 +11,9 @@ whatever the protocol calls them), the methods and whether it was the
 
 A line is appended, under an exclusive ``flock``, and synced to disk
 *before* the run computes anything, so an interrupted run still counts as a
-look. A line cut short by a crash is skipped when read (and the next append
-starts on a new line). :func:`check_final` refuses a second final run on a
+look. A line cut short by a crash (the next append starts on a new line), or
+holding a field of the wrong type, is skipped when read, with a warning naming
+the file and line (:func:`read_ledger`). :func:`check_final` refuses a second final run on a
 test set with other methods than the first final run's, unless forced.
 
 A run is counted once, however many sessions it took: its ``look`` id is
@@ -29,11 +30,12 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import logging
 import os
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Sequence
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -50,6 +52,8 @@ __all__ = ["LEDGER_NAME", "RUN_FILE", "FinalRunError", "Looks", "check_final", "
            "old_ledgers", "read_ledger", "read_ledgers", "record_look", "start_look", "test_set_hash",
            "test_set_hash_of"]
 
+log = logging.getLogger("touchbench.results")
+
 LEDGER_NAME = "ledger.jsonl"
 #: in a results folder, while a run is under way (and after it was interrupted): its look id
 RUN_FILE = ".touchbench-run.json"
@@ -57,6 +61,8 @@ RUN_FILE = ".touchbench-run.json"
 MERGED_SUFFIX = ".merged"
 #: how deep below a results root earlier versions kept ledgers (``papers/<profile>/<protocol>-audit/``)
 _OLD_LEDGER_DEPTH = 3
+#: what a :class:`WriteError` of the ledger says could not be done
+_CANNOT_WRITE = "cannot write the ledger of test-set looks"
 
 
 class FinalRunError(TouchbenchError):
@@ -82,7 +88,7 @@ def _locked(path: Path) -> Iterator[int]:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o666)
     except OSError as e:
-        raise WriteError(f"{path}: cannot open the ledger of test-set looks: {e.strerror or e}") from None
+        raise WriteError(path, e, _CANNOT_WRITE) from None
     try:
         if fcntl is not None:
             fcntl.flock(fd, fcntl.LOCK_EX)
@@ -91,20 +97,54 @@ def _locked(path: Path) -> Iterator[int]:
         os.close(fd)  # releases the lock
 
 
+def _texts(v: Any) -> bool:
+    return isinstance(v, list) and all(isinstance(x, str) for x in v)
+
+
+#: each field a ledger line may hold: whether a value is of its type, and that type in words
+_FIELDS: dict[str, tuple[Callable[[Any], bool], str]] = {
+    **dict.fromkeys(("test_set", "time", "protocol", "run_id", "look", "results"),
+                    (lambda v: isinstance(v, str), "a string")),
+    "evaluation": (lambda v: v is None or isinstance(v, str), "a string or null"),
+    "methods": (_texts, "a list of strings"),
+    "tasks": (lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 0, "a whole number >= 0"),
+    **dict.fromkeys(("final", "forced", "resumed"), (lambda v: isinstance(v, bool), "true or false")),
+}
+#: the lines of ledgers already warned of in this process (path, line number, text)
+_warned: set[tuple[str, int, str]] = set()
+
+
+def _entry(line: str) -> tuple[dict[str, Any] | None, str]:
+    """The entry a ledger line holds, or None and why it is skipped."""
+    try:
+        entry = json.loads(line)
+    except ValueError:
+        return None, "not a complete JSON line (cut short by a crash, or edited)"
+    if not isinstance(entry, dict) or "test_set" not in entry:
+        return None, "not an entry of the ledger (a JSON object with a test_set)"
+    for key, (is_type, kind) in _FIELDS.items():
+        if key in entry and not is_type(entry[key]):
+            return None, f"its {key} is {json.dumps(entry[key])[:40]}, not {kind}"
+    return entry, ""
+
+
 def read_ledger(path: str | Path) -> list[dict[str, Any]]:
-    """Every complete entry of the ledger (none when there is no ledger); a line cut short by a
-    crash is skipped."""
+    """Every sound entry of the ledger (none when there is no ledger). A line that is not one (cut
+    short by a crash, a field of the wrong type: ``"methods": 5``, ``"final": "false"``) is
+    skipped with a warning naming the file and line (once per process)."""
     p = Path(path)
     if not p.is_file():
         return []
     out = []
-    for line in p.read_text(encoding="utf-8", errors="replace").splitlines():
-        try:
-            entry = json.loads(line)
-        except ValueError:
+    for n, line in enumerate(p.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
+        if not line.strip():
             continue
-        if isinstance(entry, dict) and "test_set" in entry:
+        entry, why = _entry(line)
+        if entry is not None:
             out.append(entry)
+        elif (str(p), n, line) not in _warned:
+            _warned.add((str(p), n, line))
+            log.warning("%s:%d: a line of the ledger of test-set looks was skipped: %s", p, n, why)
     return out
 
 
@@ -149,7 +189,7 @@ def _append(fd: int, p: Path, lines: list[str]) -> None:
         os.write(fd, text.encode())
         os.fsync(fd)
     except OSError as e:
-        raise WriteError(f"{p}: cannot write the ledger of test-set looks: {e.strerror or e}") from None
+        raise WriteError(p, e, _CANNOT_WRITE) from None
 
 
 def record_look(path: str | Path, entry: dict[str, Any]) -> None:
@@ -176,7 +216,7 @@ def merge_ledgers(path: str | Path, others: Sequence[str | Path]) -> int:
             try:
                 os.replace(o, o.with_name(o.name + MERGED_SUFFIX))
             except OSError as e:
-                raise WriteError(f"{o}: cannot rename the ledger merged into {p}: {e.strerror or e}") from None
+                raise WriteError(o, e, f"merged into {p}, but cannot be renamed {o.name}{MERGED_SUFFIX}") from None
         return len(new)
 
 

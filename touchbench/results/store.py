@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import contextlib
 import errno
-import hashlib
 import json
 import os
 import socket
@@ -53,6 +52,7 @@ import pyarrow.parquet as pq
 from ..core.atomic import atomic_write_bytes, atomic_write_parquet
 from ..core.errors import TouchbenchError, WriteError
 from ..evaluation.metrics import scorer_values
+from .checksums import changed_files, file_checksums
 
 try:  # POSIX
     import fcntl
@@ -74,13 +74,6 @@ class ResultsBusyError(TouchbenchError):
 class OtherResultsError(TouchbenchError):
     """A results folder that holds another protocol's (or evaluation's) results."""
 
-
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 #: what the plan says of a task: the first columns of its scores row (:func:`task_row`)
 PLAN_COLUMNS = (
@@ -540,20 +533,14 @@ class ResultStore:
 
     def merged_checksums(self) -> dict[str, str]:
         """SHA-256 of each merged file as it is now (recorded in the manifest after a merge)."""
-        return {name: _sha256(p) for name, p in self.merged_paths().items() if p.is_file()}
+        return file_checksums(self.root, self.merged_paths())
 
     def merged_problems(self, recorded: dict[str, str] | None) -> list[str]:
         """Why the merged files cannot be trusted against the checksums ``recorded`` at the last
         merge: missing, or changed since (edited, truncated, damaged). Empty when they can."""
         if not recorded:
             return ["the merged files have no recorded checksums"]
-        problems = []
-        for name, p in self.merged_paths().items():
-            if not p.is_file():
-                problems.append(f"{name} is missing")
-            elif recorded.get(name) != _sha256(p):
-                problems.append(f"{name} changed since the run wrote it")
-        return problems
+        return changed_files(self.root, recorded, self.merged_paths())
 
     def read_confusion(self, pooled: bool = False) -> pd.DataFrame:
         """The merged confusion counts per task, or ``pooled`` over the folds of each configuration;
