@@ -10,8 +10,9 @@ against each frame's truth (frame, event and timing scores).
 ``source`` says what the streams are (:mod:`touchbench.streams.timeline`):
 ``spliced`` (the test subject's captures end to end in a seeded random
 order, separated by ``gap_s`` seconds of its ``idle`` captures; the splice
-points are artificial), ``recorded`` (a user's recordings labelled frame by
-frame). ``rules`` lists the decision rules to compare
+points are artificial; a synthetic scene's are named ``scene``: a person's
+gestures with pauses of rest between them), ``recorded`` (a user's
+recordings labelled frame by frame). ``rules`` lists the decision rules to compare
 (:mod:`touchbench.streams.rules`): one task per fold and method trains once
 and replays every rule.
 """
@@ -37,9 +38,11 @@ if TYPE_CHECKING:
     from ...datasets.model import TouchDataset
 
 #: the metadata columns the scheme adds in ``prepare`` (its folds are made from the metadata alone):
-#: each capture's number of frames and frame rate
+#: each capture's number of frames and frame rate, and what a spliced stream of it is (``scene`` for a
+#: synthetic scene's captures, else ``spliced``)
 N_FRAMES = "n_frames"
 FRAME_RATE = "frame_rate"
+SOURCE = "stream_source"
 
 
 class _StreamParams(SchemeParams):
@@ -128,9 +131,11 @@ class Stream(Splitter):
         if self.params.idle not in set(ds.meta[self.target].astype(str)):
             raise SplitError(f"scheme 'stream': the idle class {self.params.idle!r} is not a {self.target} of the "
                              f"dataset ({', '.join(sorted(set(ds.meta[self.target].astype(str))))})")
+        spliced = "scene" if str(context.dataset_name).startswith("scene:") else "spliced"
         meta = ds.meta.assign(**{N_FRAMES: np.asarray(ds.n_frames, dtype=np.int64),
-                                 FRAME_RATE: float(ds.sensor.frame_rate)})
-        context.notes.append(f"{self.params.source} streams of the test subjects, replayed with windows "
+                                 FRAME_RATE: float(ds.sensor.frame_rate),
+                                 SOURCE: self.params.source if self.params.source == "recorded" else spliced})
+        context.notes.append(f"{meta[SOURCE].iloc[0]} streams of the test subjects, replayed with windows "
                              f"{', '.join(f'{w:g}' for w in self.params.windows_s)} s and hop {self.params.hop_s:g} s")
         return type(ds)(ds.name, ds.captures, meta, ds.sensor)
 
@@ -154,7 +159,9 @@ class Stream(Splitter):
         rate = float(meta[FRAME_RATE].iloc[0])
         gap = (max(1, int(round(p.gap_s[0] * rate))), max(1, int(round(p.gap_s[1] * rate))))
         rng = np.random.default_rng([self.random_state, *fold.name.encode()])
-        streams = spliced_streams(meta, n_frames, fold.test, self.target, p.idle, gap, rng, per_stream=p.per_stream)
+        source = str(meta[SOURCE].iloc[0]) if SOURCE in meta.columns else "spliced"
+        streams = spliced_streams(meta, n_frames, fold.test, self.target, p.idle, gap, rng, source=source,
+                                  per_stream=p.per_stream)
         if not streams:
             raise SplitError(f"scheme 'stream': fold {fold.name!r} has no test subject to make a stream of")
         return streams
