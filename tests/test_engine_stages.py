@@ -20,7 +20,7 @@ from touchbench.deploy.model import TrainedModel
 from touchbench.engine import run_protocol
 from touchbench.engine.planning import plan_run, prepare_evaluation, training_side
 from touchbench.engine.testing import random_dataset
-from touchbench.protocols.schema import parse_protocol
+from touchbench.protocols.loading import parse_protocol
 
 GESTURES = 3
 
@@ -188,7 +188,7 @@ def test_an_expected_result_finds_its_method_by_the_combination_as_written(tmp_p
 
 def test_a_feature_set_that_rejects_its_parameters_with_the_sensor_is_refused_at_its_field(tmp_path, monkeypatch):
     from touchbench.engine import planning
-    from touchbench.protocols.schema import ProtocolError
+    from touchbench.protocols.errors import ProtocolError
 
     data = tmp_path / "d.parquet"
     random_dataset(subjects=("s1", "s2"), per_cell=1).to_parquet(data)

@@ -12,7 +12,7 @@ from click.testing import CliRunner
 from touchbench.cli.main import cli
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
-from touchbench.protocols.schema import parse_protocol
+from touchbench.protocols.loading import parse_protocol
 
 
 def _run(tmp_path, out: str, seed: int = 4, classifiers: str = "[test-logreg]"):

@@ -49,8 +49,8 @@ _LAZY: dict[str, str] = {
     "Fold": "touchbench.protocols.schemes",
     "make_splitter": "touchbench.protocols.schemes",
     "Protocol": "touchbench.protocols.schema",
-    "load_protocol": "touchbench.protocols.schema",
-    "parse_protocol": "touchbench.protocols.schema",
+    "load_protocol": "touchbench.protocols.loading",
+    "parse_protocol": "touchbench.protocols.loading",
     "find_protocol": "touchbench.protocols.library",
     "run_protocol": "touchbench.engine.runner",
     "RunResult": "touchbench.engine.runner",
@@ -129,7 +129,8 @@ if TYPE_CHECKING:  # for type checkers and editors; at run time the names come f
     from .methods.base import METHODS, MethodSpec, method_spec
     from .methods.pipeline import FeaturePipeline
     from .protocols.library import find_protocol
-    from .protocols.schema import Protocol, load_protocol, parse_protocol
+    from .protocols.loading import load_protocol, parse_protocol
+    from .protocols.schema import Protocol
     from .protocols.schemes import SPLITTERS, Fold, make_splitter
     from .reports.leaderboard import (
         Leaderboard,

@@ -314,7 +314,7 @@ def papers() -> None:
 def papers_list(profile: str, as_json: bool) -> None:
     """The paper protocols and what the profile changes in each."""
     from ..papers.profiles import PROFILES, apply_profile, paper_protocols
-    from ..protocols.schema import load_protocol
+    from ..protocols.loading import load_protocol
 
     if profile not in PROFILES:
         raise TouchbenchError(f"unknown profile {profile!r} (known: {', '.join(PROFILES)})")
