@@ -35,7 +35,7 @@ EXPECTED = {
     "parse_protocol": "touchbench.protocols.loading", "find_protocol": "touchbench.protocols.library",
     "run_protocol": "touchbench.engine.runner", "RunResult": "touchbench.engine.runner",
     "leaderboard": "touchbench.reports.leaderboard", "Leaderboard": "touchbench.reports.leaderboard",
-    "build_leaderboards": "touchbench.reports.leaderboard", "compare_methods": "touchbench.reports.leaderboard",
+    "build_leaderboards": "touchbench.reports.leaderboard", "compare_methods": "touchbench.reports.compare",
     "load_results": "touchbench.reports.results",
     "fit_model": "touchbench.deploy.model", "TrainedModel": "touchbench.deploy.model",
     "TouchbenchError": "touchbench.core.errors", "DataError": "touchbench.core.errors",

@@ -150,7 +150,8 @@ def test_a_named_method_is_reported_by_its_own_feature_sets(tmp_path):
 
 
 def test_every_report_names_a_named_method_and_its_own_feature_sets(tmp_path):
-    from touchbench.reports.leaderboard import build_leaderboards, display_rows, to_markdown
+    from touchbench.reports.leaderboard import build_leaderboards
+    from touchbench.reports.rendering import display_rows, to_markdown
     from touchbench.reports.results import load_results
 
     data = tmp_path / "d.parquet"

@@ -33,7 +33,8 @@ from touchbench.protocols.loading import parse_protocol
 from touchbench.protocols.schemes import make_splitter
 from touchbench.protocols.schemes.kfold import SUBJECTS_SHARED
 from touchbench.reports.html import write_report
-from touchbench.reports.leaderboard import build_leaderboards, display_rows, to_markdown
+from touchbench.reports.leaderboard import build_leaderboards
+from touchbench.reports.rendering import display_rows, to_markdown
 from touchbench.reports.results import load_results
 from touchbench.results.ledger import FinalRunError, Looks, looks, read_ledger, record_look
 

@@ -57,7 +57,7 @@ _LAZY: dict[str, str] = {
     "load_results": "touchbench.reports.results",
     "Leaderboard": "touchbench.reports.leaderboard",
     "build_leaderboards": "touchbench.reports.leaderboard",
-    "compare_methods": "touchbench.reports.leaderboard",
+    "compare_methods": "touchbench.reports.compare",
     "leaderboard": "touchbench.reports.leaderboard",
     "TrainedModel": "touchbench.deploy.model",
     "fit_model": "touchbench.deploy.model",
@@ -132,11 +132,7 @@ if TYPE_CHECKING:  # for type checkers and editors; at run time the names come f
     from .protocols.loading import load_protocol, parse_protocol
     from .protocols.schema import Protocol
     from .protocols.schemes import SPLITTERS, Fold, make_splitter
-    from .reports.leaderboard import (
-        Leaderboard,
-        build_leaderboards,
-        compare_methods,
-        leaderboard,
-    )
+    from .reports.compare import compare_methods
+    from .reports.leaderboard import Leaderboard, build_leaderboards, leaderboard
     from .reports.results import load_results
     from .scenes import SCENES, generate_scene

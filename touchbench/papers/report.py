@@ -25,7 +25,7 @@ from ..core.version import __version__
 from ..protocols.expected import ExpectedBest, ExpectedConfusion, ExpectedDeviation
 from ..protocols.loading import load_protocol
 from ..reports.audit import audit_markdown
-from ..reports.leaderboard import write_text
+from ..reports.rendering import write_text
 from ..reports.stats import corrected_resampled_t, holm
 from ..results.manifest import git_revision
 from ..results.store import PREDICTED, TRUE, read_results_table

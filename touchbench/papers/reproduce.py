@@ -33,7 +33,7 @@ from ..engine.runner import run_protocol
 from ..protocols.loading import load_protocol
 from ..protocols.schema import resolve_dataset_ref
 from ..reports.audit import write_audit
-from ..reports.leaderboard import write_text
+from ..reports.rendering import write_text
 from ..results.manifest import load_average
 from .profiles import PROFILES, apply_profile, paper_protocols
 from .report import ProtocolRun, audit_dir, write_report
