@@ -96,7 +96,7 @@ from .errors import ProtocolError, UnknownEvaluation, _ErrorAt, _make_error
 from .expected import Expected, ExpectedBest
 from .seeding import derive_seed
 from .schemes import Splitter, make_splitter
-from .specs import _NAME_RE, EVALUATION_FIELDS, AuditSpec, DatasetSpec, DesignSpec, EvaluationSpec, SchemeSpec
+from .specs import EVALUATION_FIELDS, AuditSpec, DatasetSpec, DesignSpec, EvaluationSpec, SchemeSpec, _folder_name
 
 __all__ = ["Protocol", "resolve_dataset_ref"]
 
@@ -167,12 +167,7 @@ class Protocol(_Model):
             raise ValueError(f"{v} repetitions: at most {MAX_REPETITIONS} (each repeats the whole evaluation)")
         return v
 
-    @field_validator("name")
-    @classmethod
-    def _name_ok(cls, v: str) -> str:
-        if not _NAME_RE.match(v):
-            raise ValueError(f"name {v!r} must be letters, digits, '.', '_' or '-' (it names the results folder)")
-        return v
+    _name_ok = field_validator("name")(_folder_name)
 
     @model_validator(mode="before")
     @classmethod

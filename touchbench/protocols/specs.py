@@ -17,6 +17,13 @@ from .schemes import SPLITTERS
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
+def _folder_name(v: str) -> str:
+    """A protocol's or an evaluation's name: it names the results folder."""
+    if not _NAME_RE.match(v):
+        raise ValueError(f"name {v!r} must be letters, digits, '.', '_' or '-' (it names the results folder)")
+    return v
+
+
 def _coerce_str_lists(v: Any) -> Any:
     """A mapping of column -> values (filters, design rows) with every value list coerced."""
     if isinstance(v, dict):
@@ -124,12 +131,7 @@ class EvaluationSpec(_Model):
                     d[k] = {"name": d[k]}
         return d
 
-    @field_validator("name")
-    @classmethod
-    def _name_ok(cls, v: str) -> str:
-        if not _NAME_RE.match(v):
-            raise ValueError(f"name {v!r} must be letters, digits, '.', '_' or '-' (it names the results folder)")
-        return v
+    _name_ok = field_validator("name")(_folder_name)
 
 
 class AuditSpec(_Model):
