@@ -78,7 +78,7 @@ def _run(proto, out: Path, jobs: int = 1):
 
 
 def bench_overhead(work: Path, repeats: int, warmup: bool = True) -> dict:
-    from touchbench.protocols.schema import parse_protocol
+    from touchbench.protocols.loading import parse_protocol
 
     proto = parse_protocol(OVERHEAD_PROTOCOL, work / "overhead.yaml")
     if warmup:
@@ -106,7 +106,7 @@ def bench_overhead(work: Path, repeats: int, warmup: bool = True) -> dict:
 def bench_cache(work: Path, repeats: int, protocol: str) -> dict:
     from touchbench.core.paths import cache_dir
     from touchbench.protocols.library import find_protocol
-    from touchbench.protocols.schema import load_protocol
+    from touchbench.protocols.loading import load_protocol
 
     proto = load_protocol(find_protocol(protocol))
     cold, warm, rerun = [], [], []
@@ -126,7 +126,7 @@ def bench_cache(work: Path, repeats: int, protocol: str) -> dict:
 
 
 def bench_jobs(work: Path, repeats: int) -> dict:
-    from touchbench.protocols.schema import parse_protocol
+    from touchbench.protocols.loading import parse_protocol
 
     proto = parse_protocol(OVERHEAD_PROTOCOL, work / "overhead.yaml")
     _run(proto, work / "warmup-jobs")

@@ -113,7 +113,7 @@ def main() -> None:
     datasets = root / "datasets-warm"
     if not datasets.is_dir():
         from touchbench.catalog import load_dataset
-        from touchbench.protocols.schema import load_protocol
+        from touchbench.protocols.loading import load_protocol
 
         os.environ["TOUCHBENCH_CACHE_DIR"] = str(root / "warm")
         load_dataset(load_protocol(protos["head"]).dataset.name)

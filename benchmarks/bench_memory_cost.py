@@ -45,7 +45,7 @@ def child(features: str, trees: int, work: Path) -> None:
     os.environ["TOUCHBENCH_CACHE_DIR"] = str(work / "cache")
     from touchbench.catalog import load_dataset
     from touchbench.engine import run_protocol
-    from touchbench.protocols.schema import parse_protocol
+    from touchbench.protocols.loading import parse_protocol
 
     t0 = time.perf_counter()
     ds = load_dataset("scene:cost-like")

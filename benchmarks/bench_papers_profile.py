@@ -36,7 +36,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from touchbench.engine.planning import plan_run  # noqa: E402
 from touchbench.papers.profiles import PROFILES, apply_profile, paper_protocols  # noqa: E402
-from touchbench.protocols.schema import load_protocol  # noqa: E402
+from touchbench.protocols.loading import load_protocol  # noqa: E402
 from touchbench.results.store import ResultStore  # noqa: E402
 
 COST = ["fit_seconds", "predict_seconds", "feature_fit_seconds"]

@@ -25,7 +25,7 @@ from touchbench.engine.backends import supports_generator, use_backend  # noqa: 
 from touchbench.engine.testing import components_for_tests, register_test_components  # noqa: E402
 from touchbench.core.errors import TouchbenchError  # noqa: E402
 from test_backends_shared import PROTOCOL, assert_same_results, env, write_protocol  # noqa: E402,F401  (env: a fixture)
-from touchbench.protocols.schema import parse_protocol  # noqa: E402
+from touchbench.protocols.loading import parse_protocol  # noqa: E402
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 
 from touchbench.engine.testing import random_dataset
-from touchbench.protocols.schema import parse_protocol
+from touchbench.protocols.loading import parse_protocol
 
 PROTOCOL = """\
 name: dist-small

@@ -16,7 +16,8 @@ import pytest
 
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
-from touchbench.protocols.schema import ProtocolError, parse_protocol
+from touchbench.protocols.errors import ProtocolError
+from touchbench.protocols.loading import parse_protocol
 
 TEMPLATE = """\
 name: extreme

@@ -34,7 +34,7 @@ from touchbench.engine.planning import plan_run
 from touchbench.engine.runner import run_plan
 from touchbench.engine.testing import random_dataset
 from touchbench.features import FEATURES
-from touchbench.protocols.schema import parse_protocol
+from touchbench.protocols.loading import parse_protocol
 
 SOURCES = {
     "tb_user_deep": """

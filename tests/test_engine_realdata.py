@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from touchbench.engine import run_protocol
-from touchbench.protocols.schema import parse_protocol
+from touchbench.protocols.loading import parse_protocol
 
 pytestmark = pytest.mark.realdata
 

@@ -25,7 +25,7 @@ from touchbench.engine import run_protocol
 from touchbench.engine import testing as tk
 from touchbench.engine.tasks import LATENCY_MAX_CALLS, LATENCY_MIN_CALLS
 from touchbench.engine.testing import random_dataset, register_test_components
-from touchbench.protocols.schema import parse_protocol
+from touchbench.protocols.loading import parse_protocol
 
 PROTOCOL = """\
 name: small

@@ -20,7 +20,7 @@ from touchbench.deploy.model import TrainedModel
 from touchbench.engine import run_protocol
 from touchbench.engine.planning import plan_run, prepare_evaluation, training_side
 from touchbench.engine.testing import random_dataset
-from touchbench.protocols.schema import parse_protocol
+from touchbench.protocols.loading import parse_protocol
 
 GESTURES = 3
 
@@ -150,7 +150,8 @@ def test_a_named_method_is_reported_by_its_own_feature_sets(tmp_path):
 
 
 def test_every_report_names_a_named_method_and_its_own_feature_sets(tmp_path):
-    from touchbench.reports.leaderboard import build_leaderboards, display_rows, to_markdown
+    from touchbench.reports.leaderboard import build_leaderboards
+    from touchbench.reports.rendering import display_rows, to_markdown
     from touchbench.reports.results import load_results
 
     data = tmp_path / "d.parquet"
@@ -188,7 +189,7 @@ def test_an_expected_result_finds_its_method_by_the_combination_as_written(tmp_p
 
 def test_a_feature_set_that_rejects_its_parameters_with_the_sensor_is_refused_at_its_field(tmp_path, monkeypatch):
     from touchbench.engine import planning
-    from touchbench.protocols.schema import ProtocolError
+    from touchbench.protocols.errors import ProtocolError
 
     data = tmp_path / "d.parquet"
     random_dataset(subjects=("s1", "s2"), per_cell=1).to_parquet(data)

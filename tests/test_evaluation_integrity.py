@@ -28,11 +28,13 @@ from touchbench.datasets.windows import window_dataset
 from touchbench.engine import run_protocol
 from touchbench.engine.planning import plan_run
 from touchbench.engine.testing import SENSOR, random_dataset
-from touchbench.protocols.schema import ProtocolError, parse_protocol
+from touchbench.protocols.errors import ProtocolError
+from touchbench.protocols.loading import parse_protocol
 from touchbench.protocols.schemes import make_splitter
 from touchbench.protocols.schemes.kfold import SUBJECTS_SHARED
 from touchbench.reports.html import write_report
-from touchbench.reports.leaderboard import build_leaderboards, display_rows, to_markdown
+from touchbench.reports.leaderboard import build_leaderboards
+from touchbench.reports.rendering import display_rows, to_markdown
 from touchbench.reports.results import load_results
 from touchbench.results.ledger import FinalRunError, Looks, looks, read_ledger, record_look
 
@@ -405,7 +407,7 @@ def test_audit_refuses_a_tuned_parameter_no_entry_states(tmp_path, value):
     assert not (tmp_path / "audit").exists()  # refused before anything is written
     with pytest.raises(TouchbenchError, match=f"tune: '{name}' is no parameter.*parameters it can tune: C"):
         from touchbench.engine.audit import audit_protocols
-        from touchbench.protocols.schema import load_protocol
+        from touchbench.protocols.loading import load_protocol
         audit_protocols(load_protocol(p), tune={name: [1, 2]})
 
 
@@ -479,7 +481,7 @@ seed: 0
 
 def test_window_variant_of_a_cnn_is_its_first_L_windows_dealt_by_stratified_kfold(tmp_path):
     from touchbench.engine.audit import audit_protocols
-    from touchbench.protocols.schema import load_protocol
+    from touchbench.protocols.loading import load_protocol
 
     # 4 subjects x 3 gestures x 5 = 60 captures of 12 frames; L = 5: windows of floor(12 / 5) = 2 frames, of
     # which a capture has 6; the first 5 are kept: 300 windows, 100 per gesture
@@ -532,7 +534,7 @@ def test_window_kfold_keeps_the_first_windows_and_runs_the_first_folds():
 
 def test_the_window_variant_of_a_cnn_is_reported_as_the_same_method(tmp_path):
     from touchbench.engine.audit import run_audit
-    from touchbench.protocols.schema import load_protocol
+    from touchbench.protocols.loading import load_protocol
 
     p = _cnn_audit_protocol(tmp_path)
     text = p.read_text().replace("params: {L: 5}", "params: {L: 5, max_epochs: 1, channels: [4, 8, 8], hidden_units: 16}")

@@ -17,7 +17,8 @@ import pytest
 from touchbench.datasets.model import frames_checksum
 from touchbench.engine import run_protocol
 from touchbench.engine.planning import plan_run
-from touchbench.protocols.schema import ProtocolError, load_protocol
+from touchbench.protocols.errors import ProtocolError
+from touchbench.protocols.loading import load_protocol
 
 STEMS = ("curvefurpat", "foamfurstroke", "nonenonetickle", "curveshortrub")
 TRAINING_SUBJECTS = {"s03", "s04", "s05", "s06", "s07", "s08", "s10"}

@@ -239,7 +239,7 @@ def test_the_design_proxies_leave_one_condition_out_inside_the_challenge_trainin
     for s03-s08 and s10) and none of its test subjects; each value of the column tested once."""
     from touchbench.engine.planning import prepare_evaluation
     from touchbench.protocols.library import find_protocol
-    from touchbench.protocols.schema import load_protocol
+    from touchbench.protocols.loading import load_protocol
 
     (protocol,) = [p for p in load_protocol(find_protocol("touch-all")).evaluation_protocols() if p.evaluation == name]
     prepared = prepare_evaluation(protocol, real_haart)

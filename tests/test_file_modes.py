@@ -15,8 +15,9 @@ import pytest
 from touchbench.core.atomic import atomic_write_bytes, atomic_write_parquet
 from touchbench.datasets.tables import write_csv_atomic
 from touchbench.engine.runner import run_protocol
-from touchbench.protocols.schema import parse_protocol
-from touchbench.reports.leaderboard import leaderboard, write_outputs
+from touchbench.protocols.loading import parse_protocol
+from touchbench.reports.leaderboard import leaderboard
+from touchbench.reports.rendering import write_outputs
 
 
 @pytest.fixture

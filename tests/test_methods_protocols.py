@@ -14,7 +14,8 @@ from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
 from touchbench.features.base import make_feature_set
 from touchbench.methods import FeaturePipeline, method_spec
-from touchbench.protocols.schema import ProtocolError, parse_protocol
+from touchbench.protocols.errors import ProtocolError
+from touchbench.protocols.loading import parse_protocol
 
 SENSOR = SensorSpec("test-6x6", (6, 6), 20.0, (0.0, 255.0))
 

@@ -31,7 +31,7 @@ from touchbench.datasets.model import SensorSpec
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import SENSOR, random_dataset
 from touchbench.features import FEATURES
-from touchbench.protocols.schema import parse_protocol
+from touchbench.protocols.loading import parse_protocol
 
 REPO = Path(__file__).resolve().parent.parent
 FEATURE, CLASSIFIER = "example-pressure-stats", "example-nearest-centroid"

@@ -10,7 +10,7 @@ from click.testing import CliRunner
 from touchbench.cli.main import cli
 from touchbench.core.paths import REPO_ROOT
 from touchbench.protocols.library import PAPERS_DIR, SHIPPED_DIR
-from touchbench.protocols.schema import load_protocol
+from touchbench.protocols.loading import load_protocol
 
 SHIPPED = sorted(SHIPPED_DIR.glob("*.yaml")) + sorted(PAPERS_DIR.glob("*.yaml"))
 MINE = ["haart-loso-msd-rf", "gaus-table5-haart", "cnn-table2-loso-haart", "cnn-fig5-frame-sweep-haart", "tiny"]

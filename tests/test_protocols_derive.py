@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from touchbench.protocols.derive import derive, protocol_data
-from touchbench.protocols.schema import load_protocol
+from touchbench.protocols.loading import load_protocol
 
 SHIPPED = Path(__file__).resolve().parent.parent / "touchbench" / "protocols"
 FILES = sorted(SHIPPED.glob("*.yaml")) + sorted((SHIPPED / "papers").glob("*.yaml"))

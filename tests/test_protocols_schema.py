@@ -9,7 +9,9 @@ from __future__ import annotations
 import pytest
 
 from touchbench.engine.testing import random_dataset, components_for_tests
-from touchbench.protocols.schema import ProtocolError, expand_grid, load_protocol, parse_protocol
+from touchbench.protocols.entries import expand_grid
+from touchbench.protocols.errors import ProtocolError
+from touchbench.protocols.loading import load_protocol, parse_protocol
 
 BASE = """\
 name: t

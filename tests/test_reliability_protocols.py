@@ -31,14 +31,10 @@ from touchbench.core.yamlsafe import (
 )
 from touchbench.engine import backends, cache, runner
 from touchbench.features.base import make_feature_set
-from touchbench.protocols import schema
-from touchbench.protocols.schema import (
-    MAX_ENTRIES,
-    MAX_REPETITIONS,
-    ProtocolError,
-    load_protocol,
-    parse_protocol,
-)
+from touchbench.protocols import checks, schema
+from touchbench.protocols.errors import ProtocolError
+from touchbench.protocols.loading import load_protocol, parse_protocol
+from touchbench.protocols.schema import MAX_ENTRIES, MAX_REPETITIONS
 
 HEAD = "dataset: scene:tiny\nscheme: loso\n"
 BASE = HEAD + "features: [sd]\nclassifiers: [zhou-lda]\n"  # lines 1-4
@@ -135,6 +131,7 @@ def test_a_huge_grid_is_refused_with_its_count_before_anything_expands(monkeypat
         raise AssertionError("expanded")
 
     monkeypatch.setattr(schema, "expand_grid", no_expansion)
+    monkeypatch.setattr(checks, "expand_grid", no_expansion)
     assert refused(text) == (
         f"p.yaml:6: classifiers[0].params: the protocol expands to {2 * 900 * 900} entries (2 feature combination(s) "
         f"x {900 * 900} classifier entries, grids expanded): at most {MAX_ENTRIES}; this grid gives {900 * 900}: "
@@ -145,7 +142,7 @@ def test_the_entry_bound_counts_features_classifiers_and_methods():
     k = MAX_ENTRIES // 2 + 1  # two combinations x k classifiers > MAX_ENTRIES, one combination x k is not
     grid = f"{{grid: {list(range(1, k + 1))}}}"
     one = HEAD + f"features: [sd]\nclassifiers:\n  - {{name: gaus-rf, params: {{n_estimators: {grid}}}}}\n"
-    assert schema._size_issues(parse_protocol(one, "p.yaml", deep=False)) == []
+    assert checks._size_issues(parse_protocol(one, "p.yaml", deep=False)) == []
     two = HEAD + f"features: [sd, msd]\nclassifiers:\n  - {{name: gaus-rf, params: {{n_estimators: {grid}}}}}\n"
     assert f"expands to {2 * k} entries" in refused(two)
     methods = HEAD + f"methods:\n  - {{name: touch-et, params: {{n_estimators: {grid}}}}}\n  - {{name: touch-et, params: {{n_estimators: {grid}}}}}\n"
@@ -187,7 +184,7 @@ def test_scikit_learn_parameter_validation_without_fitting():
 
 
 def test_a_missing_extra_is_refused_with_its_install_hint(monkeypatch):
-    monkeypatch.setattr(schema, "missing_extra", lambda extra: ["torch"] if extra == "deep" else [])
+    monkeypatch.setattr(checks, "missing_extra", lambda extra: ["torch"] if extra == "deep" else [])
     text = HEAD + "features:\n  - [{name: raw-window, params: {frames: 50}}]\nclassifiers: [zhou-lda, cnn]\n"
     assert refused(text) == ("p.yaml:5: classifiers[1]: classifier 'cnn' needs the optional 'deep' extra, not "
                              "installed here (torch missing): pip install 'touchbench[deep]'")

@@ -49,7 +49,7 @@ from touchbench.engine.testing import SENSOR, random_dataset
 from touchbench.features import FEATURES
 from touchbench.features.base import FeatureInputError, make_feature_set
 from touchbench.methods import MethodSpec
-from touchbench.protocols.schema import parse_protocol
+from touchbench.protocols.loading import parse_protocol
 from touchbench.results.store import ResultsBusyError, ResultStore
 from touchbench.scenes.spec import load_spec
 

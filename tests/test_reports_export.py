@@ -15,7 +15,7 @@ from conftest import _missing
 from touchbench.cli.main import cli
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
-from touchbench.protocols.schema import parse_protocol
+from touchbench.protocols.loading import parse_protocol
 
 
 @pytest.fixture

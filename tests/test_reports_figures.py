@@ -14,14 +14,10 @@ from helpers import fake_loso
 from rich.console import Console
 from scipy.stats import rankdata
 
-from touchbench.reports.leaderboard import (
-    build_leaderboards,
-    display_rows,
-    mean_ranks,
-    method_labels,
-    print_terminal,
-    to_markdown,
-)
+from touchbench.reports.across import mean_ranks
+from touchbench.reports.labels import method_labels
+from touchbench.reports.leaderboard import build_leaderboards
+from touchbench.reports.rendering import display_rows, print_terminal, to_markdown
 from touchbench.reports.figures import SIZES, plot_table
 from touchbench.reports.figures.cd import NoDiagram, plot_cd_across
 from touchbench.reports.html import write_report
@@ -168,7 +164,7 @@ def test_critical_difference_diagram_across_tables_not_per_table(runs, third, tm
 def test_friedman_across_tables_against_scipy(runs, third):
     from scipy.stats import friedmanchisquare
 
-    from touchbench.reports.leaderboard import across_friedman
+    from touchbench.reports.across import across_friedman
 
     lbs = build_leaderboards(load_results([runs / "a", runs / "b", third]))
     f = across_friedman(lbs)

@@ -11,7 +11,9 @@ import pytest
 from scipy import stats
 
 from touchbench.core.errors import TouchbenchError
-from touchbench.reports.leaderboard import build_leaderboards, compare_methods, to_csv, to_json, to_markdown
+from touchbench.reports.compare import compare_methods
+from touchbench.reports.leaderboard import build_leaderboards
+from touchbench.reports.rendering import to_csv, to_json, to_markdown
 from touchbench.reports.results import load_results
 from touchbench.reports.stats import wilson_interval
 from touchbench.reports.testing import FakeMethod, write_fake_run
@@ -336,7 +338,7 @@ def test_compare_across_evaluations_combines_them_by_stouffer(tmp_path):
 
 # ----------------------------------------------------------------- terminal width
 def test_fitting_columns_adds_columns_in_priority_order_while_they_fit():
-    from touchbench.reports.leaderboard import fitting_columns
+    from touchbench.reports.rendering import fitting_columns
 
     widths = {"#": 1, "method": 10, "accuracy": 5, "macro": 4, "latency": 6, "fit": 2}
     essential = ("#", "method", "accuracy")
@@ -387,7 +389,7 @@ def test_an_80_column_terminal_shows_every_method_by_name_with_its_accuracy(tmp_
 def test_a_single_fold_table_keeps_names_and_wilson_intervals_whole_at_80_columns(tmp_path):
     from rich.console import Console
 
-    from touchbench.reports.leaderboard import print_terminal
+    from touchbench.reports.rendering import print_terminal
 
     one = {"challenge": CAPS["capture_id"].tolist()}  # 36 test captures
     write_fake_run(tmp_path / "r", CAPS, one, [
@@ -407,7 +409,7 @@ def test_a_single_fold_table_keeps_names_and_wilson_intervals_whole_at_80_column
 
 def test_a_method_that_brings_its_own_input_is_named_by_its_label_everywhere():
     from touchbench.reports.figures.base import short_label
-    from touchbench.reports.leaderboard import method_label
+    from touchbench.reports.labels import method_label
 
     registered = {"features": "touch-rhythm+cell-rhythm+contact-motion", "classifier": "touch-et",
                   "classifier_name": "touch-et", "early_frames": math.nan}

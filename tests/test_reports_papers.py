@@ -15,7 +15,7 @@ from touchbench.core.paths import REPO_ROOT
 from touchbench.papers.profiles import PROFILES, Profile, apply_profile, paper_protocols
 from touchbench.papers.report import ProtocolRun, write_report
 from touchbench.protocols.library import PAPERS_DIR
-from touchbench.protocols.schema import load_protocol
+from touchbench.protocols.loading import load_protocol
 from touchbench.reports.testing import FakeMethod, write_fake_run
 from touchbench.scenes import load_scene, scene_path
 from touchbench.scenes.spec import read_yaml

@@ -17,7 +17,7 @@ from click.testing import CliRunner
 from touchbench.cli.main import cli
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
-from touchbench.protocols.schema import parse_protocol
+from touchbench.protocols.loading import parse_protocol
 from touchbench.reports import reference as reference_module
 from touchbench.results.store import read_results_table, write_results_table
 

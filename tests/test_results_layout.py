@@ -16,7 +16,7 @@ from touchbench.cli.main import cli
 from touchbench.core.errors import TouchbenchError
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
-from touchbench.protocols.schema import parse_protocol
+from touchbench.protocols.loading import parse_protocol
 from touchbench.reports.leaderboard import build_leaderboards
 from touchbench.reports.results import load_results
 from touchbench.results.store import ResultStore, read_results_table, write_results_table

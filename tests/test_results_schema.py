@@ -11,7 +11,8 @@ from sklearn.metrics import f1_score, log_loss, matthews_corrcoef
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
 from touchbench.evaluation.metrics import scorer_values
-from touchbench.protocols.schema import ProtocolError, parse_protocol
+from touchbench.protocols.errors import ProtocolError
+from touchbench.protocols.loading import parse_protocol
 
 
 @pytest.fixture(autouse=True)

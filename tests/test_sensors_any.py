@@ -32,7 +32,8 @@ from touchbench.engine.planning import plan_run
 from touchbench.engine.testing import random_dataset
 from touchbench.features.base import FEATURES, FeatureInputError, make_feature_set
 from touchbench.methods import METHODS, FeaturePipeline, method_spec
-from touchbench.protocols.schema import ProtocolError, parse_protocol
+from touchbench.protocols.errors import ProtocolError
+from touchbench.protocols.loading import parse_protocol
 
 SENSORS = {
     "6x6": (SensorSpec("grid-6x6", (6, 6), 20.0, (0, 255)), (40, 60)),

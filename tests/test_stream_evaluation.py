@@ -12,7 +12,7 @@ from click.testing import CliRunner
 from touchbench.cli.main import cli
 from touchbench.datasets.model import TouchDataset
 from touchbench.engine.planning import prepare_evaluation
-from touchbench.protocols.schema import load_protocol
+from touchbench.protocols.loading import load_protocol
 from touchbench.streams.timeline import decisions_per_frame, stream_frames
 
 PROTOCOL = """\

@@ -17,7 +17,7 @@ from touchbench.classifiers import make_classifier
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
 from touchbench.features.base import FEATURES
-from touchbench.protocols.schema import parse_protocol
+from touchbench.protocols.loading import parse_protocol
 
 SUBJECTS = ("s1", "s2", "s3", "s4")
 

@@ -49,15 +49,15 @@ _LAZY: dict[str, str] = {
     "Fold": "touchbench.protocols.schemes",
     "make_splitter": "touchbench.protocols.schemes",
     "Protocol": "touchbench.protocols.schema",
-    "load_protocol": "touchbench.protocols.schema",
-    "parse_protocol": "touchbench.protocols.schema",
+    "load_protocol": "touchbench.protocols.loading",
+    "parse_protocol": "touchbench.protocols.loading",
     "find_protocol": "touchbench.protocols.library",
     "run_protocol": "touchbench.engine.runner",
     "RunResult": "touchbench.engine.runner",
     "load_results": "touchbench.reports.results",
     "Leaderboard": "touchbench.reports.leaderboard",
     "build_leaderboards": "touchbench.reports.leaderboard",
-    "compare_methods": "touchbench.reports.leaderboard",
+    "compare_methods": "touchbench.reports.compare",
     "leaderboard": "touchbench.reports.leaderboard",
     "TrainedModel": "touchbench.deploy.model",
     "fit_model": "touchbench.deploy.model",
@@ -129,13 +129,10 @@ if TYPE_CHECKING:  # for type checkers and editors; at run time the names come f
     from .methods.base import METHODS, MethodSpec, method_spec
     from .methods.pipeline import FeaturePipeline
     from .protocols.library import find_protocol
-    from .protocols.schema import Protocol, load_protocol, parse_protocol
+    from .protocols.loading import load_protocol, parse_protocol
+    from .protocols.schema import Protocol
     from .protocols.schemes import SPLITTERS, Fold, make_splitter
-    from .reports.leaderboard import (
-        Leaderboard,
-        build_leaderboards,
-        compare_methods,
-        leaderboard,
-    )
+    from .reports.compare import compare_methods
+    from .reports.leaderboard import Leaderboard, build_leaderboards, leaderboard
     from .reports.results import load_results
     from .scenes import SCENES, generate_scene

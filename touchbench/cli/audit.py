@@ -69,7 +69,8 @@ def audit(protocol: str, evaluation: str | None, variants: tuple[str, ...], k: i
     variants x 10 folds = 40 tasks) took 11 minutes on two cores."""
     from ..engine.audit import VARIANTS, plan_audit, run_audit, tunable_params
     from ..engine.planning import default_cache_root
-    from ..protocols.schema import UnknownEvaluation, load_protocol
+    from ..protocols.errors import UnknownEvaluation
+    from ..protocols.loading import load_protocol
     from ..reports.audit import audit_rows, write_audit
 
     proto = load_protocol(find_protocol(protocol))

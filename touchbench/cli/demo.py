@@ -23,7 +23,7 @@ def demo(ctx: click.Context, jobs: int) -> None:
     from ..datasets.haart import _raw_dir
     from ..engine.runner import default_results_dir
     from ..protocols.library import find_protocol
-    from ..protocols.schema import load_protocol
+    from ..protocols.loading import load_protocol
     from .reports import leaderboard
     from .run import run
 

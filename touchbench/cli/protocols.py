@@ -34,7 +34,7 @@ def protocols() -> None:
 def validate(file: str, schema_only: bool, as_json: bool) -> None:
     """Validate FILE: schema, names, parameters, and (unless --schema-only)
     the dataset filters and the folds of the scheme. Nothing is computed."""
-    from ..protocols.schema import load_protocol  # here: listing protocols reads no schema
+    from ..protocols.loading import load_protocol  # here: listing protocols reads no schema
 
     path = find_protocol(file)
     proto = load_protocol(path)

@@ -85,13 +85,7 @@ def leaderboard(results, as_json, formats, out, reference, dataset, scheme, alph
     time, feature time, the paired test against the best method (exact
     permutation or Wilcoxon, Holm-corrected) and the accuracy/latency Pareto
     front (★)."""
-    from ..reports.leaderboard import (
-        print_terminal,
-        to_csv,
-        to_json,
-        to_markdown,
-        write_outputs,
-    )
+    from ..reports.rendering import print_terminal, to_csv, to_json, to_markdown, write_outputs
 
     _, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine, reference=reference)
     if as_json:  # the same document as --format json, alone on stdout
@@ -123,7 +117,7 @@ def compare(results, a, b, as_json, dataset, scheme, alpha, pool_machines, machi
     one fold), the per-fold differences and the per-class recall and F1
     differences, in every table holding both methods; across several such
     tables, a meta-analysis (effect size per table, Stouffer's combined p)."""
-    from ..reports.leaderboard import compare_methods
+    from ..reports.compare import compare_methods
 
     rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
     done, errors = [], []
@@ -182,7 +176,7 @@ def _echo_test(t) -> None:
 
 def _echo_comparison(c) -> None:
     """One table's comparison: the methods, the test, the paired units (or McNemar's counts) and the classes."""
-    from ..reports.leaderboard import method_label
+    from ..reports.labels import method_label
 
     t = c.test
     click.echo(f"== {c.leaderboard.title}")
@@ -262,7 +256,7 @@ def plot(results, out, kinds, size, formats, methods, references, name, dataset,
     """Plot accuracy against latency / fit time / feature time (Pareto front),
     accuracy against frames and seconds seen (early scheme), confusion
     matrices (counts and row-normalised) and per-subject accuracy."""
-    from ..reports.leaderboard import resolve_method
+    from ..reports.compare import resolve_method
     from ..reports.figures import FORMATS, plot_table
     from ..reports.figures.cd import plot_cd_across
 
@@ -314,7 +308,7 @@ def papers() -> None:
 def papers_list(profile: str, as_json: bool) -> None:
     """The paper protocols and what the profile changes in each."""
     from ..papers.profiles import PROFILES, apply_profile, paper_protocols
-    from ..protocols.schema import load_protocol
+    from ..protocols.loading import load_protocol
 
     if profile not in PROFILES:
         raise TouchbenchError(f"unknown profile {profile!r} (known: {', '.join(PROFILES)})")

@@ -99,7 +99,8 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
     leaderboard reads. Exits with status 1 when a task failed."""
     from ..engine.planning import method_labels
     from ..engine.runner import plan_protocol
-    from ..protocols.schema import UnknownEvaluation, load_protocol
+    from ..protocols.errors import UnknownEvaluation
+    from ..protocols.loading import load_protocol
 
     if force_final and not final:
         raise click.UsageError("--force-final goes with --final")

@@ -39,7 +39,8 @@ from ..core.suggest import did_you_mean
 from ..engine.planning import Prepared, fold_seed, prepare_evaluation, serving_protocol, training_side
 from ..methods import Method
 from ..protocols.library import find_protocol
-from ..protocols.schema import Protocol, load_protocol, resolve_dataset_ref
+from ..protocols.loading import load_protocol
+from ..protocols.schema import Protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
 from ..protocols.schemes import Fold
 from .model import TrainedModel, fit_model

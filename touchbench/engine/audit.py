@@ -67,10 +67,10 @@ import pandas as pd
 
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError
-from ..methods import METHODS
+from ..methods import CAPTURES, METHODS
 from ..methods.base import takes_captures
 from ..protocols.derive import derive, protocol_data
-from ..protocols.schema import CAPTURES, Protocol
+from ..protocols.schema import Protocol
 from ..results.store import make_results_dir
 from .planning import Plan, method_labels, prepare_evaluation
 from .runner import plan_protocol, run_plan

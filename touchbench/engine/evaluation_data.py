@@ -26,7 +26,8 @@ from ..catalog import load_dataset, parse_dataset_ref
 from ..core.errors import TouchbenchError
 from ..core.suggest import did_you_mean
 from ..datasets.model import DatasetChangedWarning, TouchDataset
-from ..protocols.schema import DatasetSpec, Protocol
+from ..protocols.schema import Protocol
+from ..protocols.specs import DatasetSpec
 from ..protocols.schemes import DataContext
 
 __all__ = ["apply_filters", "evaluation_dataset", "load_spec"]

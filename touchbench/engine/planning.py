@@ -1,6 +1,6 @@
 """Planning a run in stages, each handing plain data to the next.
 
-1. **read**: :func:`touchbench.protocols.schema.load_protocol` validates the
+1. **read**: :func:`touchbench.protocols.loading.load_protocol` validates the
    file and reads every spelling of a method into a
    :class:`touchbench.methods.Method` (``Protocol.evaluated_methods``).
 2. **prepare** (:func:`prepare_evaluation`): one evaluation's data -- the
@@ -44,7 +44,8 @@ from ..core.suggest import did_you_mean
 from ..datasets.model import SensorSpec, TouchDataset
 from ..features.base import feature_set_refusal, learns_from_data
 from ..methods import METHODS, Method, expand_candidates, method_spec
-from ..protocols.schema import Protocol, expand_grid, resolve_dataset_ref
+from ..protocols.entries import expand_grid
+from ..protocols.schema import Protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
 from ..protocols.schemes import Fold, SplitError
 from ..results.ledger import test_set_hash_of
@@ -166,7 +167,7 @@ def sensor_refusals(protocol: Protocol, sensor: SensorSpec, min_frames: int) -> 
     ``min_frames`` is the shortest capture a task will see. One pair per
     entry (feature combination, classifier or method), its first reason. A
     feature set that rejects its parameters with this sensor is refused at
-    its field (:class:`touchbench.protocols.schema.ProtocolError`).
+    its field (:class:`touchbench.protocols.errors.ProtocolError`).
     """
     out: list[tuple[tuple, str]] = []
     for i, combo in enumerate(protocol.features):

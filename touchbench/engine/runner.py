@@ -46,7 +46,8 @@ from rich.progress import (
 
 from ..core.errors import TouchbenchError
 from ..datasets.model import TouchDataset
-from ..protocols.schema import Protocol, load_protocol
+from ..protocols.loading import load_protocol
+from ..protocols.schema import Protocol
 from ..core.paths import results_root
 from ..results.ledger import LEDGER_NAME, check_final, end_look, merge_ledgers, old_ledgers, record_look, start_look
 from ..results.manifest import now_iso, update_manifest

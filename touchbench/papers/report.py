@@ -22,9 +22,10 @@ from ..catalog import parse_dataset_ref
 from ..core.errors import TouchbenchError
 from ..core.paths import REPO_ROOT
 from ..core.version import __version__
-from ..protocols.schema import ExpectedBest, ExpectedConfusion, ExpectedDeviation, load_protocol
+from ..protocols.expected import ExpectedBest, ExpectedConfusion, ExpectedDeviation
+from ..protocols.loading import load_protocol
 from ..reports.audit import audit_markdown
-from ..reports.leaderboard import write_text
+from ..reports.rendering import write_text
 from ..reports.stats import corrected_resampled_t, holm
 from ..results.manifest import git_revision
 from ..results.store import PREDICTED, TRUE, read_results_table

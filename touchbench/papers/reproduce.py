@@ -4,7 +4,7 @@ Every one of them reproduces one table or figure of one of four papers
 (Gaus et al. 2015, Al-mashhadani et al. 2021, Flagg 2012, Zhou et al. 2017)
 and carries the paper's numbers in its ``expected:`` block: accuracies,
 standard deviations, confusion matrices, the best value of a sweep
-(:class:`touchbench.protocols.schema.Expected`).
+(:class:`touchbench.protocols.expected.Expected`).
 :func:`reproduce` runs them all through the run engine
 (:func:`touchbench.engine.runner.run_protocol`) under a *profile*, then
 :func:`write_report` compares each expected number with ours.
@@ -30,9 +30,10 @@ from ..catalog import load_dataset
 from ..core.errors import TouchbenchError
 from ..engine.audit import run_audit
 from ..engine.runner import run_protocol
-from ..protocols.schema import load_protocol, resolve_dataset_ref
+from ..protocols.loading import load_protocol
+from ..protocols.schema import resolve_dataset_ref
 from ..reports.audit import write_audit
-from ..reports.leaderboard import write_text
+from ..reports.rendering import write_text
 from ..results.manifest import load_average
 from .profiles import PROFILES, apply_profile, paper_protocols
 from .report import ProtocolRun, audit_dir, write_report

@@ -17,7 +17,8 @@ from typing import Any
 
 import yaml
 
-from .schema import Protocol, parse_protocol
+from .loading import parse_protocol
+from .schema import Protocol
 
 __all__ = ["derive", "protocol_data"]
 

@@ -30,7 +30,7 @@ def add_protocol_dir(path: str | Path) -> None:
     """Search ``path`` (a user's folder of protocols) before the shipped ones."""
     p = Path(path).resolve()
     if not p.is_dir():
-        from .schema import ProtocolError  # here: finding and listing protocols imports no schema
+        from .errors import ProtocolError  # here: finding and listing protocols imports no schema
 
         raise ProtocolError(f"{path}: no such protocol folder")
     if p not in _EXTRA:
@@ -63,7 +63,7 @@ def find_protocol(ref: str) -> Path:
             for cand in (sub / ref, sub / f"{ref}.yaml", sub / f"{ref}.yml"):
                 if cand.is_file():
                     return cand
-    from .schema import ProtocolError
+    from .errors import ProtocolError
 
     searched = ", ".join(str(d) for d in protocol_dirs())
     raise ProtocolError(f"{ref}: no such protocol file (nor a protocol of that name in {searched})")

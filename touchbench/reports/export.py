@@ -44,7 +44,8 @@ import numpy as np
 
 from ..core.atomic import atomic_write_bytes
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
-from .leaderboard import Leaderboard, method_labels
+from .labels import method_labels
+from .leaderboard import Leaderboard
 from .figures import slug, unique_stem
 from .results import ResultSet
 

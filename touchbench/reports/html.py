@@ -12,17 +12,9 @@ import html
 from datetime import datetime, timezone
 from pathlib import Path
 
-from .leaderboard import (
-    RANK_LEGEND,
-    Leaderboard,
-    across_friedman,
-    across_note,
-    display_rows,
-    legend,
-    ranks_across,
-    write_outputs,
-    write_text,
-)
+from .across import across_friedman, across_note, ranks_across
+from .leaderboard import Leaderboard
+from .rendering import RANK_LEGEND, display_rows, legend, write_outputs, write_text
 from .figures import plot_table
 from .figures.cd import NoDiagram, plot_cd_across
 from .results import ResultSet

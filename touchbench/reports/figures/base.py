@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 
 from ...core.registry import Entry, Registry
-from ..leaderboard import owns_input
+from ..labels import owns_input
 
 if TYPE_CHECKING:
     from ..leaderboard import Leaderboard

@@ -15,7 +15,8 @@ from pathlib import Path
 import pandas as pd
 
 from ...core.versions import missing_extra
-from ..leaderboard import Leaderboard, across_friedman, across_note, across_tables
+from ..across import across_friedman, across_note, across_tables
+from ..leaderboard import Leaderboard
 from ..results import ResultSet
 from .base import FIGURES, FORMATS, MIN_FONT_PT, FigureOptions, figure_width, pyplot, save, wrap
 

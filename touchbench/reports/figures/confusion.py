@@ -11,7 +11,8 @@ import numpy as np
 import pandas as pd
 
 from ...results.store import PREDICTED, TRUE
-from ..leaderboard import Leaderboard, method_label, method_labels
+from ..labels import method_label, method_labels
+from ..leaderboard import Leaderboard
 from ..results import ResultSet
 from .base import (
     FIGURES,

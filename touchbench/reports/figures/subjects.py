@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from ...protocols.schemes.base import natural_key
-from ..leaderboard import Leaderboard, subject_values
+from ..leaderboard import Leaderboard
+from ..paired import subject_values
 from ..results import ResultSet
 from .base import FIGURES, FORMATS, FigureOptions, figure_width, has_predictions, pyplot, save, short_label, wrap
 

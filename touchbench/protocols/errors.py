@@ -1,0 +1,165 @@
+"""Protocol errors and where they point: :class:`ProtocolError` (every line names the file, line
+and field), the YAML document's line of each field, and pydantic's errors mapped to them."""
+
+from __future__ import annotations
+
+import typing
+from pathlib import Path
+from typing import Any, Iterator
+
+import yaml
+from pydantic import BaseModel, ValidationError
+
+from ..core.errors import TouchbenchError
+from ..core.suggest import did_you_mean
+
+__all__ = ["ProtocolError", "UnknownEvaluation"]
+
+
+class UnknownEvaluation(TouchbenchError):
+    """An evaluation name the protocol does not have (``--evaluation``)."""
+
+
+class ProtocolError(TouchbenchError):
+    """An invalid protocol: every line names the file, line and field."""
+
+    def __init__(self, message: str, issues: list[tuple[str, int | None, str, str]] | None = None):
+        super().__init__(message)
+        self.issues = issues or []
+
+
+class _ErrorAt(ValueError):
+    """Raised by a model validator about one of the model's fields (``loc``
+    below the model), so that the error names that field's line."""
+
+    def __init__(self, loc: tuple, message: str):
+        super().__init__(message)
+        self.loc = loc
+
+
+# ----------------------------------------------------------------- YAML with lines
+def _nodes(root: yaml.Node | None) -> Iterator[tuple[tuple, yaml.Node, int]]:
+    """(path, node, 1-based line) of every node of a composed YAML document, a mapping's keys by their
+    key's line. The document comes from the bounded loader (``core.yamlsafe``): its aliases, once
+    expanded, stand for a bounded number of nodes, and none is recursive, so this walk is bounded too."""
+    stack = [((), root, root.start_mark.line + 1)] if root is not None else []
+    while stack:
+        path, node, line = stack.pop()
+        yield path, node, line
+        if isinstance(node, yaml.MappingNode):
+            stack += [(path + (str(k.value),), v, k.start_mark.line + 1) for k, v in reversed(node.value)]
+        elif isinstance(node, yaml.SequenceNode):
+            stack += [(path + (i,), v, v.start_mark.line + 1) for i, v in reversed(list(enumerate(node.value)))]
+
+
+def _line_map(root: yaml.Node | None) -> dict[tuple, int]:
+    """Path (tuple of keys / indices) -> 1-based line of every node of a composed YAML document."""
+    return {path: line for path, _, line in _nodes(root)}
+
+
+def _boolean_map(root: yaml.Node | None) -> dict[tuple, str]:
+    """Path -> what was written, for every value YAML read as a boolean (``no``, ``on``, ``yes``...)."""
+    return {path: node.value for path, node, _ in _nodes(root)
+            if isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:bool"}
+
+
+def _boolean_hint(loc: tuple, booleans: dict[tuple, str]) -> str:
+    """For an issue at ``loc`` on (or just above) a value YAML read as a boolean: what was written, quoted."""
+    for at, text in booleans.items():
+        if at == loc or (loc and at[:-1] == loc):
+            return (f" ({text!r} was read as a YAML boolean, {text.lower() in _TRUE}: quote it, \"{text}\", "
+                    "where a name or text is meant)")
+    return ""
+
+
+_TRUE = {"y", "yes", "true", "on"}
+
+
+def _loc_str(loc: tuple) -> str:
+    s = ""
+    for part in loc:
+        if isinstance(part, int):
+            s += f"[{part}]"
+        else:
+            s += ("." if s else "") + str(part)
+    return s or "(top level)"
+
+
+# ----------------------------------------------------------------- error mapping
+def _best_line(lines: dict[tuple, int], loc: tuple) -> int | None:
+    best = lines.get((), None)
+    prefix: tuple = ()
+    for part in loc:
+        cand = prefix + (part if isinstance(part, int) else str(part),)
+        if cand in lines:
+            prefix = cand
+            best = lines[cand]
+        else:
+            break
+    return best
+
+
+def _make_error(path: Path | None, lines: dict[tuple, int], issues: list[tuple[tuple, str]],
+                booleans: dict[tuple, str] | None = None) -> ProtocolError:
+    where = str(path) if path is not None else "<protocol>"
+    rows, out = [], []
+    for loc, msg in issues:
+        msg += _boolean_hint(loc, booleans or {})
+        line = _best_line(lines, loc) if loc else None
+        loc_s = _loc_str(loc)
+        rows.append((where, line, loc_s, msg))
+        out.append(f"{where}{':' + str(line) if line else ''}: {loc_s}: {msg}")
+    return ProtocolError("\n".join(out), rows)
+
+
+def _model_fields_at(model: type[BaseModel], loc: tuple) -> list[str] | None:
+    """Field names of the model reached by walking ``loc`` through annotations."""
+    tp: Any = model
+    for part in loc:
+        tp = _unwrap(tp, part)
+        if tp is None:
+            return None
+    if isinstance(tp, type) and issubclass(tp, BaseModel):
+        return list(tp.model_fields)
+    return None
+
+
+def _unwrap(tp: Any, part: Any) -> Any:
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, getattr(__import__("types"), "UnionType", None)):
+        args = [a for a in typing.get_args(tp) if a is not type(None)]
+        return _unwrap(args[0], part) if len(args) == 1 else None
+    if isinstance(tp, type) and issubclass(tp, BaseModel):
+        f = tp.model_fields.get(str(part))
+        return None if f is None else f.annotation
+    if origin in (list, tuple) and isinstance(part, int):
+        return typing.get_args(tp)[0]
+    if origin is dict:
+        return typing.get_args(tp)[1]
+    return None
+
+
+def _pydantic_issues(err: ValidationError, model: type[BaseModel], prefix: tuple = ()) -> list[tuple[tuple, str]]:
+    issues = []
+    for e in err.errors():
+        loc = tuple(e["loc"])
+        kind = e["type"]
+        msg = e["msg"]
+        if msg.startswith("Value error, "):
+            msg = msg[len("Value error, "):]
+        at = (e.get("ctx") or {}).get("error")
+        if isinstance(at, _ErrorAt):
+            loc += at.loc
+        if kind == "missing":
+            msg = "missing required field"
+        elif kind == "extra_forbidden":
+            fields = _model_fields_at(model, loc[:-1]) or []
+            msg = f"unknown field{did_you_mean(str(loc[-1]), fields)}"
+            if fields:
+                msg += f" (allowed: {', '.join(fields)})"
+        elif kind not in ("value_error", "assertion_error"):
+            value = e.get("input")
+            if isinstance(value, (str, int, float, bool)) or value is None:
+                msg = f"{msg}, got {value!r}"
+        issues.append((prefix + loc, msg))
+    return issues

@@ -1,0 +1,290 @@
+"""Leaderboards as text: the cells of a table (terminal, Markdown, HTML), Markdown, JSON and CSV
+documents, the terminal tables (columns fitted to its width), and the files written."""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+import pandas as pd
+from rich.cells import cell_len
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from ..core.atomic import atomic_write_bytes
+from .across import across_friedman, across_note, ranks_across
+from .labels import _label_parts, _name_cell, _num, _p, _pct, method_names
+from .leaderboard import Leaderboard
+from .stats import TEST_SHORT
+
+__all__ = ["to_csv", "to_json", "to_markdown"]
+
+
+def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
+    """Header and formatted cells of a leaderboard (terminal, Markdown, HTML)."""
+    header = ["#", "method", "features", "estimator", "folds", "accuracy % (±sd)", "95 % interval",
+              "macro F1 %", "latency ms", "fit s", "features ms", "vs best: Δ pp, p (Holm)", "Pareto"]
+    show_machine = len(set(lb.rows["timing_machine"])) > 1
+    if show_machine:
+        header.insert(11, "timing machine")
+    show_leak = bool((lb.rows["leakage"] != "").any())
+    if lb.has_design:
+        header.insert(7, "held out %")
+    if show_leak:
+        header.insert(2, "evaluation")
+    cells = []
+    parts = _label_parts(lb.rows)
+    for _, r in lb.rows.iterrows():
+        feats = _features_cell(r, parts[r["method_id"]][0], lb.frame_rate)
+        acc, ci = _accuracy_cells(r)
+        failed_all = r["n_folds"] == 0 and r["n_failed"] > 0
+        if failed_all:
+            acc, ci = "failed", "—"
+        vs = _versus_best_cell(r, failed_all)
+        row = [str(r["rank"]), _name_cell(r, parts[r["method_id"]]), feats, str(r["classifier_name"]),
+               f"{r['n_folds']}" + (f" (+{r['n_failed']} failed)" if r["n_failed"] else ""), acc, ci,
+               _pct(r["macro_f1"]), _num(r["latency_ms"]), _num(r["fit_seconds"]), _num(r["feature_ms"]), vs,
+               "★" if r["pareto"] else ""]
+        if show_machine:
+            row.insert(11, str(r["timing_machine"]))
+        if lb.has_design:
+            if r.get("designed"):
+                row[5] += " †"
+            row.insert(7, _pct(r["held_out_accuracy"]) + (f" (n={int(r['n_held_out'])})" if r.get("n_held_out") else ""))
+        if show_leak:
+            row.insert(2, f"LEAKY: {r['leakage']}" if r["leakage"] else "honest")
+        cells.append(row)
+    return header, cells
+
+
+def _features_cell(r: pd.Series, extra: str, frame_rate: float) -> str:
+    """A row's feature sets, with the parameters ``extra`` that tell colliding rows apart and its early
+    cut (frames, and seconds where the frame rate is known)."""
+    feats = str(r["features"]) + extra  # parameters shown where rows would collide
+    if np.isfinite(r["early_frames"]):
+        secs = f", {r['early_frames'] / frame_rate:.2g} s" if np.isfinite(frame_rate) and frame_rate > 0 else ""
+        feats += f" @ {int(r['early_frames'])} frames{secs}"
+    return feats
+
+
+def _accuracy_cells(r: pd.Series) -> tuple[str, str]:
+    """A row's accuracy (± sd, and the seeds behind a single fold's spread) and its 95 % interval."""
+    acc = _pct(r["accuracy"]) + (f" ± {_pct(r['accuracy_sd'])}" if np.isfinite(r["accuracy_sd"]) else "")
+    if r["ci_method"] == "wilson" and r.get("n_seeds", 1) > 1:
+        acc += f" ({int(r['n_seeds'])} seeds)"
+    ci = f"{_pct(r['ci_low'])}–{_pct(r['ci_high'])}" if np.isfinite(r["ci_low"]) else "—"
+    if r["ci_method"] == "wilson" and np.isfinite(r["ci_low"]):
+        ci += " (Wilson)"
+    return acc, ci
+
+
+def _versus_best_cell(r: pd.Series, failed_all: bool) -> str:
+    """A row's comparison with the best method: the difference, its Holm-adjusted p and test."""
+    if failed_all:
+        return f"failed: {r.get('error') or 'see the scores'}"
+    if r["test"] == "best":
+        return "best"
+    if r["test"] == "none":
+        return f"{100 * r['diff_vs_best']:+.1f}, not tested (n={r['n_pairs']})" if np.isfinite(r["diff_vs_best"]) else "not tested"
+    star = " *" if r["differs"] else ""
+    return (f"{100 * r['diff_vs_best']:+.1f}, p={_p(r['p_holm'])}{star} "
+            f"({TEST_SHORT.get(r['test'], r['test'])}, n={r['n_pairs']} {r['paired_by']}s)")
+
+
+def legend(lb: Leaderboard) -> str:
+    return (f"Accuracy: mean over folds (± sample sd; for a single fold evaluated with several seeds, the sd over "
+            f"the seeds); interval: Student t over folds (Wilson over captures for a "
+            f"single fold). Latency: median over folds of the time to compute the features of one capture and "
+            f"predict it; fit: median seconds per fold; features: median ms per capture. Δ: mean paired difference "
+            f"to the best method in percentage points; p: McNemar's exact test on the test captures (one test set) "
+            f"or the corrected resampled t-test over folds, Holm-adjusted over the table; * = differs at α={lb.alpha:g}. ★ = on the accuracy / "
+            f"latency Pareto front (latency as the CPU time of labelling one capture, which the machine's load "
+            f"changes far less than the wall-clock latency shown)."
+            + (" † = the method was designed on part of this data (see the note); held out: accuracy on the "
+               "test captures outside the design data (mean over folds)." if lb.has_design else "")
+            + (" LEAKY rows: the evaluation let test data inform training (see the notes)."
+               if bool((lb.rows["leakage"] != "").any()) else "")
+            + (f" ADAPTED: every method of this table adapted to each test session using that session's "
+               f"unlabelled captures ({lb.adaptation}; never their labels): a figure of another kind, ranked "
+               f"and tested only against each other, never against the plain methods." if lb.adaptation else ""))
+
+
+def _md_escape(s: str) -> str:
+    return s.replace("|", "\\|")
+
+
+def to_markdown(lbs: list[Leaderboard], title: str | None = "Leaderboard") -> str:
+    out = [f"# {title}", ""] if title else []
+    for lb in lbs:
+        out.append(f"## {lb.title}")
+        out.append("")
+        header, cells = display_rows(lb)
+        out.append("| " + " | ".join(header) + " |")
+        out.append("|" + "|".join("---" for _ in header) + "|")
+        for c in cells:
+            out.append("| " + " | ".join(_md_escape(x) for x in c) + " |")
+        out.append("")
+        out.append(legend(lb))
+        for n in lb.notes:
+            out.append("")
+            out.append(f"Note: {n}")
+        out.append("")
+    ranks = ranks_across(lbs)
+    if ranks is not None and len(ranks):
+        out += [f"## Mean rank across {int(ranks['tables'].iloc[0])} tables", "",
+                "| method | mean rank | mean accuracy % |", "|---|---|---|"]
+        out += [f"| {_md_escape(r.method)} | {r.mean_rank:.2f} | {_pct(r.mean_accuracy)} |" for r in ranks.itertuples()]
+        out += ["", RANK_LEGEND, ""]
+        f = across_friedman(lbs)
+        out += [across_note(f), ""] if f is not None else []
+    return "\n".join(out)
+
+
+RANK_LEGEND = ("Rank: within each table by mean accuracy (1 = best; ties share the average of their ranks), "
+               "averaged over the tables; only methods present in every table.")
+
+
+def _records(lb: Leaderboard) -> list[dict[str, Any]]:
+    recs = []
+    for r in lb.rows.to_dict(orient="records"):
+        clean = {}
+        for k, v in r.items():
+            if isinstance(v, (np.floating, float)):
+                v = None if not np.isfinite(v) else float(v)
+            elif isinstance(v, np.integer):
+                v = int(v)
+            elif isinstance(v, np.bool_):
+                v = bool(v)
+            clean[k] = v
+        recs.append(clean)
+    return recs
+
+
+def to_json(lbs: list[Leaderboard]) -> str:
+    tables = []
+    for lb in lbs:
+        tables.append({
+            "dataset": lb.dataset, "dataset_hash": lb.dataset_hash, "target": lb.target, "scheme": lb.scheme,
+            "alpha": lb.alpha, "machines": lb.machines, "reference_machine": lb.reference_machine,
+            "pooled_machines": lb.pooled_machines, "notes": lb.notes, "rows": _records(lb),
+            "leaky": lb.is_leaky, "looks": None if lb.looks is None else vars(lb.looks),
+            "adaptation": lb.adaptation,
+        })
+    return json.dumps({"tables": tables}, indent=2) + "\n"
+
+
+def to_csv(lbs: list[Leaderboard]) -> str:
+    """Every table's rows, a method named by its readable name (its id, and the data's hash, only in
+    the JSON document)."""
+    frames = []
+    for lb in lbs:
+        d = lb.rows.copy()
+        d.insert(1, "method", d["method_id"].map(method_names(lb.rows)))
+        d = d.drop(columns="method_id")
+        d.insert(0, "scheme", lb.scheme)
+        d.insert(0, "target", lb.target)
+        d.insert(0, "variant", lb.variant)
+        d.insert(0, "dataset", lb.dataset)
+        d["adaptation"] = lb.adaptation
+        frames.append(d)
+    return pd.concat(frames, ignore_index=True).to_csv(index=False)
+
+
+#: the columns a terminal always shows (the name, the accuracy and its interval, the test's verdict;
+#: which rows are leaky), then the others in the order a wider terminal adds them
+TERMINAL_ESSENTIAL = ("#", "method", "evaluation", "accuracy % (±sd)", "95 % interval", "vs best: Δ pp, p (Holm)")
+TERMINAL_PRIORITY = ("held out %", "features", "estimator", "macro F1 %", "latency ms", "Pareto", "folds",
+                     "timing machine", "fit s", "features ms")
+#: headers broken over two lines in a terminal, so that a header is no wider than its numbers
+_TERMINAL_HEADERS = {"accuracy % (±sd)": "accuracy %\n(±sd)", "95 % interval": "95 %\ninterval",
+                     "vs best: Δ pp, p (Holm)": "vs best: Δ pp,\np (Holm)", "macro F1 %": "macro\nF1 %",
+                     "latency ms": "latency\nms", "features ms": "features\nms", "held out %": "held out\n%",
+                     "timing machine": "timing\nmachine"}
+#: columns a narrow terminal may wrap (at spaces) when even the essential ones do not fit
+_TERMINAL_WRAPPING = {"evaluation", "accuracy % (±sd)", "95 % interval", "vs best: Δ pp, p (Holm)"}
+
+
+def fitting_columns(widths: dict[str, int], available: int, essential: Iterable[str]) -> list[str]:
+    """The columns a terminal table of ``available`` characters shows, in ``widths``' order (its
+    priority): every essential one, then the others while the table still fits with every column at
+    its own width (``widths``: the widest cell or header line). A rich table takes 3 characters per
+    column (padding and a border) and 1 for its left edge."""
+    essential = set(essential)
+    shown = [h for h in widths if h in essential]
+    used = 1 + sum(widths[h] + 3 for h in shown)
+    for h in (h for h in widths if h not in essential):
+        if used + widths[h] + 3 > available:
+            break
+        shown.append(h)
+        used += widths[h] + 3
+    return shown
+
+
+def _terminal_table(lb: Leaderboard, width: int) -> Table:
+    """The table of ``lb`` as a terminal of ``width`` characters shows it (:func:`fitting_columns`)."""
+    header, cells = display_rows(lb)
+    heads = [_TERMINAL_HEADERS.get(h, h) for h in header]
+    widths = {h: max([cell_len(x) for x in head.split("\n")] + [cell_len(c[i]) for c in cells])
+              for i, (h, head) in enumerate(zip(header, heads))}
+    order = [h for h in (*TERMINAL_ESSENTIAL, *TERMINAL_PRIORITY) if h in widths]
+    order += [h for h in header if h not in order]
+    shown = set(fitting_columns({h: widths[h] for h in order}, width, TERMINAL_ESSENTIAL))
+    keep = [i for i, h in enumerate(header) if h in shown]
+    t = Table(title=escape(lb.title), show_lines=False)  # a name like "[b5830b]" is text, not markup
+    for i in keep:
+        wrap = header[i] in _TERMINAL_WRAPPING
+        t.add_column(escape(heads[i]), overflow="fold", no_wrap=not wrap, min_width=None if wrap else widths[header[i]])
+    for c in cells:
+        t.add_row(*(escape(c[i]) for i in keep))
+    return t
+
+
+def _terminal_width() -> int | None:
+    """The console width: ``COLUMNS`` or the terminal's own (None lets rich read them), 250 for a
+    pipe or a file (the whole table)."""
+    return None if sys.stdout.isatty() or os.environ.get("COLUMNS", "").isdigit() else 250
+
+
+def print_terminal(lbs: list[Leaderboard], console=None) -> None:
+    """The leaderboards in a terminal: on a narrow one the rank, name, accuracy, interval and test
+    verdict of every method; a wider one adds columns (``TERMINAL_PRIORITY``)."""
+    console = console or Console(width=_terminal_width())
+    for lb in lbs:
+        console.print(_terminal_table(lb, console.width))
+        console.print(escape(legend(lb)), style="dim")
+        for n in lb.notes:
+            console.print(escape(f"Note: {n}"), style="yellow")
+        console.print()
+    ranks = ranks_across(lbs)
+    if ranks is not None and len(ranks):
+        t = Table(title=f"Mean rank across {int(ranks['tables'].iloc[0])} tables")
+        for h in ("method", "mean rank", "mean accuracy %"):
+            t.add_column(h)
+        for r in ranks.itertuples():
+            t.add_row(escape(r.method), f"{r.mean_rank:.2f}", _pct(r.mean_accuracy))
+        console.print(t)
+        console.print(RANK_LEGEND, style="dim")
+        f = across_friedman(lbs)
+        if f is not None:
+            console.print(escape(across_note(f)), style="dim")
+
+
+def write_text(path: Path, text: str) -> Path:
+    """Write ``text`` atomically (temporary file + rename), with the mode the umask gives."""
+
+    atomic_write_bytes(Path(path), text.encode())
+    return Path(path)
+
+
+def write_outputs(lbs: list[Leaderboard], out: Path, formats: Iterable[str]) -> list[Path]:
+    """Write ``leaderboard.{md,csv,json}`` into ``out`` for the chosen formats."""
+    written = []
+    for fmt in formats:
+        text = {"md": to_markdown, "csv": to_csv, "json": to_json}[fmt](lbs)
+        written.append(write_text(Path(out) / f"leaderboard.{fmt}", text))
+    return written
