@@ -446,7 +446,7 @@ def test_a_wrapping_scheme_declares_its_base_and_its_sweep():
 
     early = SPLITTERS.get("early")
     assert early.base_param == "base" and early.swept_params == ("frames", "seconds")
-    assert SPLITTERS.get("stream").base_param == "base" and not SPLITTERS.get("stream").swept_params
+    assert SPLITTERS.get("stream").base_param == "base" and SPLITTERS.get("stream").swept_params == ("rules",)
     assert all(SPLITTERS.get(n).base_param is None and not SPLITTERS.get(n).swept_params
                for n in SPLITTERS.names() if n not in ("early", "stream"))
     entry = {"name": "early", "base": {"name": "kfold", "k": 5}, "frames": [1, 5], "crop_train": True}

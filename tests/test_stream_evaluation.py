@@ -95,3 +95,71 @@ def test_the_evaluation_decides_what_touchbench_stream_prints(live_run, tmp_path
                                          "undecided")
         assert len(printed) == live[k]["n_decisions"]
         assert cli_frames.tolist() == _expand(live[k]["decisions"], len(truth)).tolist()
+
+
+def _recordings_csv(path):
+    """Three people, one recording each, labelled frame by frame at 10 Hz on a 4 x 4 grid: 10 frames
+    idle, 10 press (every cell high), 10 idle, 10 tap (high, low, alternating by two frames), 10 idle:
+    30 of 50 frames idle, so answering idle at every frame scores 60.0 %."""
+    rng = np.random.default_rng(0)
+    labels = ["idle"] * 10 + ["press"] * 10 + ["idle"] * 10 + ["tap"] * 10 + ["idle"] * 10
+    rows = []
+    for subject in ("p1", "p2", "p3"):
+        for f, lab in enumerate(labels):
+            if lab == "idle":
+                v = rng.integers(0, 6, 16)
+            elif lab == "press":
+                v = rng.integers(80, 91, 16)
+            else:
+                v = np.full(16, 90 if (f // 2) % 2 == 0 else 0)
+            rows.append({"recording": f"rec-{subject}", "subject": subject, "frame": f, "label": lab,
+                         **{f"cell{i}": int(x) for i, x in enumerate(v)}})
+    pd.DataFrame(rows).to_csv(path, index=False)
+
+
+RECORDED = """\
+name: live-recorded
+dataset: {data}
+target: gesture
+scheme:
+  name: stream
+  base: loso
+  source: recorded
+  idle: idle
+  windows_s: [0.5, 1.0]
+  hop_s: 0.2
+  rules: [max]
+methods: [touch-et-fast]
+seed: 0
+"""
+
+
+def test_a_per_frame_labelled_table_is_evaluated_as_streams_and_shown_in_a_stream_table(tmp_path, monkeypatch):
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    _recordings_csv(tmp_path / "rec.csv")
+    res = CliRunner().invoke(cli, ["data", "convert", str(tmp_path / "rec.csv"), str(tmp_path / "rec.parquet"),
+                                   "--format", "table", "--capture-columns", "recording", "--frame-labels", "label",
+                                   "--grid", "4x4", "--frame-rate", "10", "--value-range", "0..100"],
+                             catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    ds = TouchDataset.from_parquet(tmp_path / "rec.parquet")
+    # each recording cut into its five runs of one label, in order
+    assert len(ds) == 15 and ds.meta["recording"].nunique() == 3
+    assert ds.meta[ds.meta["recording"] == "rec-p1"].sort_values("start_frame")["gesture"].tolist() == \
+        ["idle", "press", "idle", "tap", "idle"]
+    (tmp_path / "p.yaml").write_text(RECORDED.format(data=tmp_path / "rec.parquet"))
+    res = CliRunner().invoke(cli, ["run", str(tmp_path / "p.yaml"), "--out", str(tmp_path / "res"), "--jobs", "1",
+                                   "--no-progress"], catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    res = CliRunner().invoke(cli, ["leaderboard", str(tmp_path / "res"), "--format", "md", "--out",
+                                   str(tmp_path / "lb")], catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    md = (tmp_path / "lb" / "leaderboard.md").read_text()
+    assert "recorded streams" in md and "idle-only %" in md
+    row = next(line for line in md.splitlines() if line.startswith("| touch-et-fast"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    header = [c.strip() for c in next(line for line in md.splitlines() if line.startswith("| method")).strip("|")
+              .split("|")]
+    got = dict(zip(header, cells))
+    assert got["rule"] == "max threshold=0.5" and got["streams"] == "3" and got["idle-only %"] == "60.0"
+    assert 0.0 <= float(got["frame %"]) <= 100.0

@@ -55,6 +55,7 @@ from .paired import _compare, _latest
 from .pareto import pareto_cost, pareto_front
 from .results import ResultSet, load_results, scheme_label
 from .stats import fold_interval, holm, wilson_interval
+from .stream_table import live_rows, live_sources
 
 __all__ = [
     "Leaderboard",
@@ -93,10 +94,13 @@ class Leaderboard:
     heading: str = ""
     #: what the table's methods adapted to at test time ("" for the plain methods' table)
     adaptation: str = ""
+    #: a stream evaluation's table: one row per method and decision rule (:mod:`.stream_table`)
+    live: pd.DataFrame | None = None
 
     @property
     def title(self) -> str:
         t = f"{self.dataset}" + (f" ({self.variant})" if self.variant else "") + f" — {self.heading or self.scheme}"
+        t += f" — {live_sources(self.live)}" if self.live is not None else ""
         t = t if self.target == "gesture" else f"{t} — target {self.target}"
         t += " — adapted to each test session" if self.adaptation else ""
         return t + (" — LEAKY evaluation" if self.is_leaky else "")
@@ -204,7 +208,7 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
         scheme=str(first["scheme_label"]), rows=df, folds=folds, machines=machines, reference_machine=ref,
         pooled_machines=pool_machines, alpha=alpha, frame_rate=float(fr.iloc[0]) if len(fr) else math.nan, notes=notes,
         looks=looks_here, has_design=design.captures is not None, heading=table_heading(sources, str(first["scheme_label"])),
-        adaptation=_mode(s_all["adaptation"]),
+        adaptation=_mode(s_all["adaptation"]), live=live_rows(ok),
     )
 
 

@@ -21,6 +21,7 @@ from .across import across_friedman, across_note, ranks_across
 from .labels import _label_parts, _name_cell, _num, _p, _pct, method_names
 from .leaderboard import Leaderboard
 from .stats import TEST_SHORT
+from .stream_table import LIVE_LEGEND, live_cells, live_columns, live_markdown
 
 __all__ = ["to_csv", "to_json", "to_markdown"]
 
@@ -123,6 +124,9 @@ def to_markdown(lbs: list[Leaderboard], title: str | None = "Leaderboard") -> st
     for lb in lbs:
         out.append(f"## {lb.title}")
         out.append("")
+        if lb.live is not None:
+            out += live_markdown(lb.live) + [""] + [f"Note: {n}\n" for n in lb.notes]
+            continue
         header, cells = display_rows(lb)
         out.append("| " + " | ".join(header) + " |")
         out.append("|" + "|".join("---" for _ in header) + "|")
@@ -244,6 +248,20 @@ def _terminal_table(lb: Leaderboard, width: int) -> Table:
     return t
 
 
+def _terminal_live(lb: Leaderboard, width: int) -> Table:
+    """A stream evaluation's table (:mod:`.stream_table`): every number whole, the least needed
+    columns left out first when the terminal is narrow."""
+    header, cells = live_cells(lb.live)
+    keep = live_columns(header, cells, width)
+    t = Table(title=escape(lb.title), show_lines=False)
+    for i in keep:
+        label = header[i] in ("method", "rule")
+        t.add_column(escape(header[i]), no_wrap=not label, overflow="ellipsis" if label else "fold")
+    for c in cells:
+        t.add_row(*(escape(c[i]) for i in keep))
+    return t
+
+
 def _terminal_width() -> int | None:
     """The console width: ``COLUMNS`` or the terminal's own (None lets rich read them), 250 for a
     pipe or a file (the whole table)."""
@@ -255,8 +273,8 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
     verdict of every method; a wider one adds columns (``TERMINAL_PRIORITY``)."""
     console = console or Console(width=_terminal_width())
     for lb in lbs:
-        console.print(_terminal_table(lb, console.width))
-        console.print(escape(legend(lb)), style="dim")
+        console.print(_terminal_table(lb, console.width) if lb.live is None else _terminal_live(lb, console.width))
+        console.print(escape(legend(lb) if lb.live is None else LIVE_LEGEND), style="dim")
         for n in lb.notes:
             console.print(escape(f"Note: {n}"), style="yellow")
         console.print()

@@ -40,8 +40,8 @@ if TYPE_CHECKING:
 #: the metadata columns the scheme adds in ``prepare`` (its folds are made from the metadata alone):
 #: each capture's number of frames and frame rate, and what a spliced stream of it is (``scene`` for a
 #: synthetic scene's captures, else ``spliced``)
-N_FRAMES = "n_frames"
-FRAME_RATE = "frame_rate"
+N_FRAMES = "stream_frames"
+FRAME_RATE = "stream_frame_rate"
 SOURCE = "stream_source"
 
 
@@ -109,6 +109,7 @@ class Stream(Splitter):
     name = "stream"
     Params = _StreamParams
     base_param = "base"
+    swept_params = ("rules",)  # each rule's scores are rows of their own in the stream table
 
     def __init__(self, target: str = "gesture", random_state: int | None = None, **params: Any):
         super().__init__(target=target, random_state=random_state, **params)
