@@ -37,7 +37,7 @@ from scipy import stats
 
 from .labels import method_label
 
-__all__ = ["LIVE_COLUMNS", "LIVE_LEGEND", "live_cells", "live_columns", "live_markdown", "live_rows", "live_sources"]
+__all__ = ["LIVE_COLUMNS", "LIVE_LEGEND", "live_cells", "live_columns", "live_markdown", "live_rows", "live_sources", "rule_label"]
 
 TIMES = ("0.3", "1", "2")
 EVENT_ERRORS = ("event_deleted", "event_fragmented", "event_merged", "return_inserted", "return_merging",
@@ -102,14 +102,14 @@ def live_rows(ok: pd.DataFrame) -> pd.DataFrame | None:
         rules = payloads[0]["rules"]
         for k, rule in enumerate(rules):
             results = [s["results"][k] for p in payloads for s in p["streams"]]
-            row = {"method_id": mid, "method": method_label(g.iloc[0]), "rule": _rule_label(rule),
+            row = {"method_id": mid, "method": method_label(g.iloc[0]), "rule": rule_label(rule),
                    "sources": sorted({s["source"] for p in payloads for s in p["streams"]}), **_one_rule(results)}
             rows.append(row)
     df = pd.DataFrame(rows)
     return df.sort_values("frame_accuracy", ascending=False, kind="stable", na_position="last").reset_index(drop=True)
 
 
-def _rule_label(rule: dict[str, Any]) -> str:
+def rule_label(rule: dict[str, Any]) -> str:
     """A rule as a person reads it: ``majority n=5``; a gate's level chosen on training captures as
     ``level=auto``."""
     parts = [f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in rule.items()
