@@ -95,7 +95,7 @@ _MAX_HEADER = 1 << 26  # bytes of the JSON line: a manifest (with one checksum p
 #: hexadecimal characters kept of each training capture's checksum (64 bits)
 CHECKSUM_CHARS = 16
 _VERSIONED = ("numpy", "scipy", "scikit-learn", "joblib", "pandas", "PyWavelets", "xgboost", "xgboost-cpu", "torch")
-# A pickle is only guaranteed to load with the versions that wrote it; these matter most.
+# Fitted parts are only guaranteed to read back with the versions that wrote them; these matter most.
 _CHECKED = ("scikit-learn", "numpy", "xgboost", "xgboost-cpu", "torch")
 
 
@@ -356,8 +356,8 @@ def _read_parts(version: int, body: bytes, path: Path, trust: bool) -> Any:
 
 
 def _read_model_file(path: Path) -> tuple[dict[str, Any], bytes]:
-    """The header and the pickle of a model file, the pickle checked against the header's
-    checksum before anyone unpickles it."""
+    """The header and the fitted parts of a model file, the parts checked against the header's
+    checksum before anything is read from them."""
     try:
         data = path.read_bytes()
     except OSError as e:
@@ -389,7 +389,7 @@ def _read_model_file(path: Path) -> tuple[dict[str, Any], bytes]:
 
 
 def _checksum(manifest: dict[str, Any], body: bytes) -> str:
-    """The SHA-256 a model file carries: the manifest's canonical JSON, a newline, the pickle."""
+    """The SHA-256 a model file carries: the manifest's canonical JSON, a newline, the fitted parts."""
     return hashlib.sha256(canonical_json(manifest).encode() + b"\n" + body).hexdigest()
 
 
