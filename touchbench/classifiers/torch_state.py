@@ -59,77 +59,73 @@ class ModuleState:
 _MODULE_PARTS = ("_parameters", "_buffers", "_modules", "training")
 
 
+_PASS = object()  # a converter's answer for an object that is no tensor, module or holder of them
+
+
 def encode_torch(obj: Any, memo: dict[int, Any] | None = None) -> Any:
     """A copy of ``obj``'s graph of containers and plain objects whose tensors and modules are data."""
-    memo = {} if memo is None else memo
-    if id(obj) in memo:
-        return memo[id(obj)]
     import torch
 
-    out: Any
-    if isinstance(obj, torch.Tensor):
-        out = TensorArray(obj.detach().cpu().numpy().copy(), isinstance(obj, torch.nn.Parameter))
-    elif isinstance(obj, torch.nn.Module):
-        attrs = {k: v for k, v in vars(obj).items() if not k.startswith("_") or k in _MODULE_PARTS}
-        out = ModuleState(type(obj), {})
-        memo[id(obj)] = out
-        out.attrs = {k: encode_torch(v, memo) for k, v in attrs.items()}
-        return out
-    elif isinstance(obj, (list, tuple)):
-        out = type(obj)(encode_torch(v, memo) for v in obj)
-    elif isinstance(obj, dict):
-        out = {k: encode_torch(v, memo) for k, v in obj.items()}
-    elif hasattr(obj, "__dict__") and not isinstance(obj, type) and _holds_torch(obj):
-        out = object.__new__(type(obj))
-        memo[id(obj)] = out
-        out.__dict__.update({k: encode_torch(v, memo) for k, v in vars(obj).items()})
-        return out
-    else:
-        out = obj
-    memo[id(obj)] = out
-    return out
+    def convert(o: Any, memo: dict[int, Any]) -> Any:
+        if isinstance(o, torch.Tensor):
+            return TensorArray(o.detach().cpu().numpy().copy(), isinstance(o, torch.nn.Parameter))
+        if isinstance(o, torch.nn.Module):
+            out = memo[id(o)] = ModuleState(type(o), {})
+            out.attrs = {k: _walk(v, memo, convert) for k, v in vars(o).items()
+                         if not k.startswith("_") or k in _MODULE_PARTS}
+            return out
+        if hasattr(o, "__dict__") and not isinstance(o, type) and _holds_torch(o, (torch.Tensor, torch.nn.Module)):
+            out = memo[id(o)] = object.__new__(type(o))
+            out.__dict__.update({k: _walk(v, memo, convert) for k, v in vars(o).items()})
+            return out
+        return _PASS
+
+    return _walk(obj, {} if memo is None else memo, convert)
 
 
 def decode_torch(obj: Any, memo: dict[int, Any] | None = None) -> Any:
     """The inverse of :func:`encode_torch`: tensors and modules again."""
-    memo = {} if memo is None else memo
-    if id(obj) in memo:
-        return memo[id(obj)]
     import torch
 
-    out: Any
-    if isinstance(obj, TensorArray):
-        t = torch.as_tensor(np.asarray(obj.array))
-        out = torch.nn.Parameter(t) if obj.parameter else t
-    elif isinstance(obj, ModuleState):
-        if not (isinstance(obj.cls, type) and issubclass(obj.cls, torch.nn.Module)):
-            raise TypeError(f"{obj.cls!r} is not a torch module class")
-        out = obj.cls.__new__(obj.cls)
-        torch.nn.Module.__init__(out)
-        memo[id(obj)] = out
-        for k, v in obj.attrs.items():
-            object.__setattr__(out, k, decode_torch(v, memo))
-        return out
-    elif isinstance(obj, (list, tuple)):
-        out = type(obj)(decode_torch(v, memo) for v in obj)
-    elif isinstance(obj, dict):
-        out = {k: decode_torch(v, memo) for k, v in obj.items()}
-    elif hasattr(obj, "__dict__") and not isinstance(obj, type) and _holds_torch(obj, (TensorArray, ModuleState)):
-        memo[id(obj)] = obj
-        obj.__dict__.update({k: decode_torch(v, memo) for k, v in vars(obj).items()})
-        return obj
-    else:
-        out = obj
+    def convert(o: Any, memo: dict[int, Any]) -> Any:
+        if isinstance(o, TensorArray):
+            t = torch.as_tensor(np.asarray(o.array))
+            return torch.nn.Parameter(t) if o.parameter else t
+        if isinstance(o, ModuleState):
+            if not (isinstance(o.cls, type) and issubclass(o.cls, torch.nn.Module)):
+                raise TypeError(f"{o.cls!r} is not a torch module class")
+            out = memo[id(o)] = o.cls.__new__(o.cls)
+            torch.nn.Module.__init__(out)
+            for k, v in o.attrs.items():
+                object.__setattr__(out, k, _walk(v, memo, convert))
+            return out
+        if hasattr(o, "__dict__") and not isinstance(o, type) and _holds_torch(o, (TensorArray, ModuleState)):
+            memo[id(o)] = o
+            o.__dict__.update({k: _walk(v, memo, convert) for k, v in vars(o).items()})
+            return o
+        return _PASS
+
+    return _walk(obj, {} if memo is None else memo, convert)
+
+
+def _walk(obj: Any, memo: dict[int, Any], convert: Any) -> Any:
+    """``obj`` with ``convert`` applied through lists, tuples and dicts (each object once)."""
+    if id(obj) in memo:
+        return memo[id(obj)]
+    out = convert(obj, memo)
+    if out is _PASS:
+        if isinstance(obj, (list, tuple)):
+            out = type(obj)(_walk(v, memo, convert) for v in obj)
+        elif isinstance(obj, dict):
+            out = {k: _walk(v, memo, convert) for k, v in obj.items()}
+        else:
+            out = obj
     memo[id(obj)] = out
     return out
 
 
-def _holds_torch(obj: Any, kinds: tuple[type, ...] | None = None, depth: int = 0) -> bool:
-    """Whether ``obj``'s attributes hold (``kinds``: by default torch tensors and modules), a few levels down."""
-    if kinds is None:
-        import torch
-
-        kinds = (torch.Tensor, torch.nn.Module)
+def _holds_torch(obj: Any, kinds: tuple[type, ...], depth: int = 0) -> bool:
+    """Whether ``obj`` or what it holds, a few levels down, is one of ``kinds``."""
     if isinstance(obj, kinds):
         return True
     if depth > 6:
