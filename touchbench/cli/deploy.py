@@ -43,7 +43,7 @@ def _floats(values, option: str) -> list[float] | None:
 @click.option("--method", "-m", default=None,
               help="FEATURES/METHOD as the results name it, e.g. msd+sd/gaus-rf, or a method's label alone when "
                    "unique, e.g. touch-et (optional when the protocol has one).")
-@click.option("--out", "-o", required=True, type=click.Path(dir_okay=False), help="Model file to write (.joblib).")
+@click.option("--out", "-o", required=True, type=click.Path(dir_okay=False), help="Model file to write (any name; the manifest goes beside it as <file>.json).")
 @click.option("--fold", default=None, help="Train on the training part of this fold of the protocol's scheme only.")
 @click.option("--evaluation", default=None, help="The evaluation to train on, for a protocol with several.")
 @click.option("--where", multiple=True, metavar="COL=V1,V2", help="Keep only captures with these values (repeatable).")
