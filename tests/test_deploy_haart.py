@@ -67,5 +67,19 @@ def test_stream_labels_an_unseen_subjects_capture(real_haart, tmp_path):
     res = CliRunner().invoke(cli, ["predict", str(model), "haart", "--out", str(tmp_path / "p.csv")],
                              catch_exceptions=False)
     assert res.exit_code == 0, res.output
-    assert (f"on {n_s01} unseen captures; {len(real_haart) - n_s01} captures the model was trained on are not scored"
-            in res.stderr)
+    assert (f"on {n_s01} captures of unseen subjects; {len(real_haart) - n_s01} captures the model was trained on are "
+            "not scored" in res.stderr)
+
+    # the challenge release of the same recordings (other frames: another cut, a few values changed): its
+    # captures of s02..s10 are of people the model was trained on, and never called unseen
+    from touchbench.catalog import load_dataset
+
+    challenge = load_dataset("haart-challenge")
+    n_new = int((challenge.meta["subject"] == "s01").sum())
+    res = CliRunner().invoke(cli, ["predict", str(model), "haart-challenge", "--out", str(tmp_path / "c.csv")],
+                             catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    assert f"on {n_new} captures of unseen subjects;" in res.stderr
+    assert (f"on {len(challenge) - n_new} captures of subjects the model was trained on (" in res.stderr
+            and "this accuracy is not on unseen people" in res.stderr), res.stderr
+    assert "unseen captures" not in res.stderr

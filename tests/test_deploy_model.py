@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 
+import joblib
 import numpy as np
 import pandas as pd
 import pytest
@@ -18,7 +19,8 @@ from click.testing import CliRunner
 
 from touchbench.cli.main import cli
 from touchbench.datasets.model import SensorSpec, TouchDataset
-from touchbench.deploy.model import TrainedModel
+from touchbench.deploy.model import TrainedModel, fit_model
+from touchbench.methods.base import MethodSpec
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
 
@@ -184,17 +186,62 @@ def test_predict_scores_unseen_captures_and_counts_the_seen_apart(setup, tmp_pat
     unseen = (table["subject"] == "s3").to_numpy()  # 9 captures of s3; the 18 others were trained on
     assert table["trained_on"].tolist() == (~unseen).tolist()
     acc = 100 * np.mean(table["true_label"].to_numpy()[unseen] == table["predicted_label"].to_numpy()[unseen])
-    assert f"accuracy {acc:.1f} % on 9 unseen captures; 18 captures the model was trained on are not scored" in res.stderr
+    assert (f"accuracy {acc:.1f} % on 9 captures of unseen subjects; 18 captures the model was trained on are not "
+            "scored") in res.stderr
     # the same recordings through another reader (float64 values from a CSV) are recognised as seen
     csv = _table_csv(ds, tmp_path / "t.csv")
     res = invoke("predict", tmp_path / "m.joblib", csv, "--format", "table", "--frame-rate", "10", "--out", tmp_path / "q.csv")
-    assert res.exit_code == 0 and "on 9 unseen captures; 18 captures the model" in res.stderr
+    assert res.exit_code == 0 and "on 9 captures of unseen subjects; 18 captures the model" in res.stderr
     # only captures it was trained on: nothing to score, said so
     seen_only = ds.subset(np.flatnonzero(ds.meta["subject"].to_numpy() != "s3"))
     seen_only.to_parquet(tmp_path / "seen.parquet")
     res = invoke("predict", tmp_path / "m.joblib", tmp_path / "seen.parquet")
     assert "no unseen captures of the model's classes to score; 18 captures the model was trained on" in res.stderr
     assert "accuracy" not in res.stderr
+
+
+def test_captures_of_training_subjects_with_other_frames_are_not_called_unseen(setup, tmp_path):
+    ds, data, proto = setup
+    assert invoke("train", proto, "-m", "msd/rf15", "--exclude", "subject=s3", "-o", tmp_path / "m.joblib").exit_code == 0
+    manifest = json.loads((tmp_path / "m.joblib.json").read_text())
+    kept = ds.meta[ds.meta["subject"] != "s3"]
+    assert manifest["dataset"]["subjects"] == ["s1", "s2"]
+    assert manifest["dataset"]["recordings"] == sorted(f"{s}/{c}" for s, c in zip(kept["subject"], kept["capture_id"]))
+    # every capture cut one frame shorter (another window), and one value changed in s1's first capture:
+    # no frames the model saw, 18 captures of its training subjects (their very recordings), 9 of s3
+    captures = [c[1:].copy() for c in ds.captures]
+    captures[0][0, 0, 0] += 1
+    TouchDataset(ds.name, captures, ds.meta, ds.sensor).to_parquet(tmp_path / "cut.parquet")
+    res = invoke("predict", tmp_path / "m.joblib", tmp_path / "cut.parquet", "--out", tmp_path / "p.csv")
+    assert res.exit_code == 0, res.output
+    table = pd.read_csv(tmp_path / "p.csv")
+    s3 = (table["subject"] == "s3").to_numpy()
+    assert not table["trained_on"].any()
+    assert table["trained_on_subject"].tolist() == table["trained_on_recording"].tolist() == (~s3).tolist()
+    ok = table["true_label"].to_numpy() == table["predicted_label"].to_numpy()
+    assert (f"accuracy {100 * ok[s3].mean():.1f} % on 9 captures of unseen subjects; accuracy "
+            f"{100 * ok[~s3].mean():.1f} % on 18 captures of subjects the model was trained on (18 of them "
+            "recordings it was trained on, with other frames): this accuracy is not on unseen people") in res.stderr
+    assert "unseen captures" not in res.stderr
+    # only the training subjects, under other capture ids: their people, not their recordings
+    renamed = ds.meta.assign(capture_id=[f"x{i}" for i in range(len(ds))])
+    keep = np.flatnonzero(~s3)
+    TouchDataset(ds.name, captures, renamed, ds.sensor).subset(keep).to_parquet(tmp_path / "renamed.parquet")
+    res = invoke("predict", tmp_path / "m.joblib", tmp_path / "renamed.parquet")
+    assert (f"accuracy {100 * ok[~s3].mean():.1f} % on 18 captures of subjects the model was trained on (0 of them "
+            "recordings it was trained on, with other frames): this accuracy is not on unseen people") in res.stderr
+    assert "unseen subjects" not in res.stderr and "unseen captures" not in res.stderr
+
+
+def test_sessions_are_recorded_and_compared(tmp_path):
+    ds = random_dataset(subjects=("s1", "s2"), gestures=("pat", "rub"), per_cell=2, extra={"session": [1, 2]},
+                        frames=(20, 24))
+    train = ds.subset(np.flatnonzero(ds.meta["session"].to_numpy() == 1))
+    model = fit_model(train, MethodSpec("lda", (("msd", {}),), "zhou-lda"))
+    assert model.manifest["dataset"]["sessions"] == ["s1/1", "s2/1"]
+    seen = model.seen_people(ds.meta)
+    assert seen["session"].tolist() == (ds.meta["session"] == 1).tolist()
+    assert seen["subject"].all()
 
 
 def _rewrite(path, edit_header):
@@ -215,17 +262,21 @@ def test_an_edited_manifest_is_refused_and_an_older_file_still_loads(setup, tmp_
     _rewrite(tmp_path / "m.joblib", lambda h: h["manifest"]["classifier"].update(random_state=99))
     res = CliRunner().invoke(cli, ["predict", str(tmp_path / "m.joblib"), str(data)])
     assert res.exit_code == 3 and "does not match the checksum" in res.output and "nothing was loaded" in res.output
-    # a file of the previous format: checksum of the pickle only, no training capture checksums
+    # a file of format 2: a joblib pickle, its checksum of the pickle only, no training capture checksums
     assert invoke("train", proto, "-m", "msd/rf15", "-o", tmp_path / "old.joblib").exit_code == 0
-    body = (tmp_path / "old.joblib").read_bytes()
-    body = body[body.index(b"\n", body.index(b"\n") + 1) + 1:]
+    m = TrainedModel.load(tmp_path / "old.joblib")
+    buf = __import__("io").BytesIO()
+    joblib.dump({"feature_sets": m.feature_sets, "estimator": m.estimator, "classes": list(m.classes)}, buf)
+    body = buf.getvalue()
+    raw = (tmp_path / "old.joblib").read_bytes()
+    (tmp_path / "old.joblib").write_bytes(raw[:raw.index(b"\n", raw.index(b"\n") + 1) + 1] + body)
 
     def as_older(h):
-        h.update(version=2, sha256=hashlib.sha256(body).hexdigest())
+        h.update(version=2, sha256=hashlib.sha256(body).hexdigest(), size=len(body))
         del h["manifest"]["dataset"]["capture_checksums"]
 
     _rewrite(tmp_path / "old.joblib", as_older)
-    res = invoke("predict", tmp_path / "old.joblib", data)
+    res = invoke("predict", tmp_path / "old.joblib", data, "--trust")  # a pickle: read only when trusted
     assert res.exit_code == 0, res.output
     assert "warning:" in res.stderr and "checksum does not cover its manifest" in res.stderr
     assert "on 27 captures of known classes" in res.stderr and "cannot be separated" in res.stderr

@@ -116,6 +116,7 @@ from ._util import (
 )
 from .base import CLASSIFIERS
 from .torch_fit import INSTALL_HINT, Threads, import_torch, softmax_batches, train, validation_split
+from .torch_state import load_weights, weights_as_arrays
 
 SOURCE = "Al-mashhadani et al. 2021, section 2.3, Table 1, Eq. 3"
 
@@ -310,6 +311,21 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
         self.best_epoch_ = best_epoch
         self.n_epochs_ = len(self.history_)
         return self
+
+    def __getstate__(self):
+        """Saved with the network's weights as numpy arrays (:mod:`.torch_state`): the network is built again."""
+        state = dict(super().__getstate__())  # a copy: the fitted estimator keeps its network
+        if state.get("net_") is not None:
+            state["net_"] = weights_as_arrays(state["net_"])
+        return state
+
+    def __setstate__(self, state):
+        super().__setstate__(state)
+        if isinstance(getattr(self, "net_", None), dict):
+            torch = import_torch("cnn")
+            net = build_network(torch, self.frames_per_window_, self.grid_, len(self.classes_),
+                                tuple(self.channels), int(self.hidden_units))
+            self.net_ = load_weights(torch, net, self.net_)
 
     # -- predict --------------------------------------------------------------
     def _window_proba(self, X):

@@ -161,6 +161,12 @@ class FittedMethod:
             P[np.arange(n), np.asarray(est.predict(X)).astype(np.int64)] = 1.0
         return P
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Everything but the compiled forest, which is built again from the estimator when asked."""
+        state = dict(self.__dict__)
+        state.pop("_fast", None)
+        return state
+
     def _compiled(self) -> Any:
         """The estimator's flat-array forest (:mod:`.fastforest`), built once; None for another estimator."""
         if getattr(self, "_fast", None) is None:

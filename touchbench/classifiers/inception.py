@@ -65,6 +65,7 @@ from ..core.errors import TouchbenchError
 from ._util import MAX_SEED, build, captures_to_rows, frames_in_row, is_captures, sensor_frames, torch_available
 from .base import CLASSIFIERS
 from .torch_fit import INSTALL_HINT, Plateau, Threads, import_torch, softmax_batches, train, validation_split
+from .torch_state import load_weights, weights_as_arrays
 
 SOURCE = "Ismail Fawaz et al. 2020 (InceptionTime), sections 3-4; aeon 1.x InceptionTimeClassifier's settings"
 
@@ -178,22 +179,17 @@ class InceptionTimeClassifier(ClassifierMixin, BaseEstimator):
                              bottleneck_size=int(self.bottleneck_size), use_residual=bool(self.use_residual))
 
     def __getstate__(self):
-        """Pickled as the networks' weights (the network classes are built when torch is imported)."""
+        """Saved as the networks' weights, numpy arrays (the network classes are built when torch is imported)."""
         state = dict(super().__getstate__())  # a copy: the fitted estimator keeps its networks
         if "nets_" in state:
-            state["nets_"] = [{k: v.detach().cpu() for k, v in net.state_dict().items()} for net in state["nets_"]]
+            state["nets_"] = [weights_as_arrays(net) for net in state["nets_"]]
         return state
 
     def __setstate__(self, state):
         super().__setstate__(state)
         if getattr(self, "nets_", None) and isinstance(self.nets_[0], dict):
             torch = import_torch("inception-time")
-            nets = []
-            for weights in self.nets_:
-                net = self._network(torch)
-                net.load_state_dict(weights)
-                nets.append(net.eval())
-            self.nets_ = nets
+            self.nets_ = [load_weights(torch, self._network(torch), weights) for weights in self.nets_]
 
     def _series(self, X) -> np.ndarray:
         """Rows of flattened frames -> scaled float32 ``(n, H * W, F)``."""

@@ -63,6 +63,7 @@ imported when a peer is fitted, never when the registry is listed.
 from __future__ import annotations
 
 import importlib
+import sys
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
@@ -80,6 +81,7 @@ from ._util import (
     sensor_frames,
 )
 from .base import CLASSIFIERS
+from .torch_state import decode_torch, encode_torch
 
 INSTALL_HINT = "pip install 'touchbench[peers]'  (or: pip install aeon)"
 INSTALL_HINT_TORCH = "pip install 'touchbench[peers,deep]'  (or: pip install aeon torch)"
@@ -135,6 +137,18 @@ class _AeonPeer(ClassifierMixin, BaseEstimator):
 
     def _series(self, X):
         return frames_to_series(X, self.grid_, self._min_timepoints)
+
+    def __getstate__(self):
+        """Saved with aeon's torch tensors and modules as arrays (:mod:`.torch_state`): a model file holds data."""
+        state = super().__getstate__()
+        if "torch" in sys.modules and getattr(self, "model_", None) is not None:
+            state = {**state, "model_": encode_torch(state["model_"])}
+        return state
+
+    def __setstate__(self, state):
+        super().__setstate__(state)
+        if getattr(self, "model_", None) is not None and "torch" in self._requires:
+            self.model_ = decode_torch(self.model_)
 
     def check_sensor(self, sensor, min_frames=None):
         """Why this peer cannot serve ``sensor`` (a ``grid`` that is not its own), or None."""

@@ -78,6 +78,26 @@ class XGBoostClassifier(ClassifierMixin, BaseEstimator):
         self.booster_model_.fit(X, yi, sample_weight=sample_weight)
         return self
 
+    def __getstate__(self):
+        """Saved with the booster as XGBoost's own JSON (``booster_json_``), not as Python objects."""
+        state = dict(super().__getstate__())
+        model = state.get("booster_model_")
+        if model is not None:
+            state["booster_model_"] = None
+            state["booster_json_"] = bytes(model.get_booster().save_raw(raw_format="json"))
+        return state
+
+    def __setstate__(self, state):
+        state = dict(state)
+        raw = state.pop("booster_json_", None)
+        super().__setstate__(state)
+        if raw is not None:
+            import xgboost
+
+            model = xgboost.XGBClassifier(n_jobs=self.n_jobs)
+            model.load_model(bytearray(raw))
+            self.booster_model_ = model
+
     def predict_proba(self, X):
         check_is_fitted(self)
         X = validate_data(self, X, dtype=np.float64, reset=False)

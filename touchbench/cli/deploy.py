@@ -60,7 +60,7 @@ def _floats(values, option: str) -> list[float] | None:
 @click.option("--method", "-m", default=None,
               help="FEATURES/METHOD as the results name it, e.g. msd+sd/gaus-rf, or a method's label alone when "
                    "unique, e.g. touch-et (optional when the protocol has one).")
-@click.option("--out", "-o", required=True, type=click.Path(dir_okay=False), help="Model file to write (.joblib).")
+@click.option("--out", "-o", required=True, type=click.Path(dir_okay=False), help="Model file to write (any name; the manifest goes beside it as <file>.json).")
 @click.option("--fold", default=None, help="Train on the training part of this fold of the protocol's scheme only.")
 @click.option("--evaluation", default=None, help="The evaluation to train on, for a protocol with several.")
 @click.option("--where", multiple=True, metavar="COL=V1,V2", help="Keep only captures with these values (repeatable).")
@@ -83,8 +83,15 @@ def train(protocol, method, out, fold, evaluation, where, exclude, windows, trai
     click.echo(f"saved {path} (manifest {path}.json); features {t['features_s']:.1f} s, fit {t['fit_s']:.1f} s", err=True)
 
 
-def _load_model(path: str) -> TrainedModel:
-    model = TrainedModel.load(path)
+#: the option that reads a model file naming types outside the trusted list, or an older (pickle) file
+trust_option = click.option(
+    "--trust", is_flag=True,
+    help="Also read a model file that can run code when read (an older, pickled model file, or one naming types "
+         "outside touchbench's trusted list): only for a file you made or trust.")
+
+
+def _load_model(path: str, trust: bool) -> TrainedModel:
+    model = TrainedModel.load(path, trust=trust)
     for note in model.version_notes():
         click.echo(f"warning: {note}", err=True)
     return model
@@ -97,11 +104,12 @@ def _load_model(path: str) -> TrainedModel:
               help=f"Reader of DATA (auto: dataset name, scene:NAME or touchbench Parquet; {FORMATS_HELP}).")
 @click.option("--out", "-o", type=click.Path(dir_okay=False), default=None, help="Write the labels here (.csv or .parquet).")
 @click.option("--whole", is_flag=True, help="Label whole captures even when the model was trained on windows.")
+@trust_option
 @format_options
-def predict(model_path, data, fmt, out, whole, **options) -> None:
+def predict(model_path, data, fmt, out, whole, trust, **options) -> None:
     """Label the captures of DATA with MODEL; refuses data from another sensor (grid, frame rate beyond
     1 %, value range), naming both."""
-    model = _load_model(model_path)
+    model = _load_model(model_path, trust)
     ds = read_data(data, fmt, model, **{k: v for k, v in options.items() if v is not None})
     table = predict_dataset(model, ds, whole=whole, source=data)
     adapted = adaptation_text(model, ds)
@@ -145,9 +153,10 @@ def predict(model_path, data, fmt, out, whole, **options) -> None:
                    "the none label), probability, best, window_s (the deciding window; null for --combine mean), "
                    "latency_ms, windows (each window's length, best class and probability).")
 @click.option("--summary-json", type=click.Path(dir_okay=False), default=None, help="Write the summary (latencies) here.")
+@trust_option
 @format_options
 def stream(model_path, source, windows, hop, threshold, combine, none_label, rule, fmt, capture, speed, realtime,
-           jsonl, summary_json, **options) -> None:
+           jsonl, summary_json, trust, **options) -> None:
     """Label a stream of frames with MODEL: SOURCE is a CSV/Parquet file replayed at
     its frame rate, or - for standard input (one frame per line: H*W comma-separated
     values, row-major). Prints one decision per hop, then latency p50/p99. A file that does not say
@@ -155,7 +164,7 @@ def stream(model_path, source, windows, hop, threshold, combine, none_label, rul
     line number) and skipped; a malformed file is refused before its replay."""
     if source == "-" and fmt != "auto":
         raise click.UsageError("standard input is read as one frame per line; --format is for files")
-    model = _load_model(model_path)
+    model = _load_model(model_path, trust)
     rec = SlidingRecognizer(model, _floats(windows, "--window"), hop_s=hop, threshold=threshold,
                             combine=combine, none_label=none_label, rule=_rule(rule, threshold))
     for note in rec.notes():

@@ -16,25 +16,30 @@ predict`` / ``touchbench stream`` read. It holds
   content hash of the training captures, the selection, and one checksum per
   training capture, :data:`CHECKSUM_CHARS` hexadecimal characters of
   :func:`touchbench.datasets.model.frames_checksum`, so that ``predict`` can
-  tell captures the model was trained on), the sensor spec,
+  tell captures the model was trained on), the training subjects, their
+  recordings (subject and capture id) and, where the dataset has them, their
+  sessions (so that ``predict`` tells the captures of people the model was
+  trained on, whatever their frames), the sensor spec,
   the feature sets and classifier with their parameters and seed, the
   window lengths, the class names and the package versions.
 
 The file (``MODEL_FORMAT``, ``MODEL_VERSION``), written atomically, is a
 first line ``touchbench-model``, a second line of JSON (the format version,
-the size of the pickle, one SHA-256 over the manifest (its canonical JSON)
-and the pickle, and the manifest), then a joblib pickle of the fitted
-parts. The manifest is also written beside it as ``<file>.json`` for
-reading without Python. Loading checks, before anything is unpickled, that
-the manifest and the pickle are the ones touchbench wrote (checksum and
-size: a damaged, truncated or edited file, manifest included, is refused).
-A file of format version 2 (whose checksum covered the pickle only) still
-loads, with a note that its manifest is not covered. Then loading checks that the parts
-agree with the manifest: the class list as the fit encoded it (sorted,
-unique, one per class the estimator knows) and the feature sets' sensor.
-The checksum catches damage and edits, not a file crafted to harm: like
-every pickle, a model file runs code when loaded, so load only files you
-trust.
+the size of the fitted parts, one SHA-256 over the manifest (its canonical
+JSON) and the fitted parts, and the manifest), then the fitted parts as
+skops data (:mod:`.safe_format`: a zip of JSON and numpy arrays, read back
+only as the types it trusts, by name; no pickle). The manifest is also
+written beside it as ``<file>.json`` for reading without Python. Loading
+checks, before anything is read, that the manifest and the fitted parts are
+the ones touchbench wrote (checksum and size: a damaged, truncated or edited
+file, manifest included, is refused); the checksum catches damage and edits,
+the trusted types a file crafted to harm. Files of format versions 2 and 3
+hold a joblib pickle, which runs code when read: they are read only when the
+user trusts them (``trust=True``, ``--trust``), else refused saying why (a
+version-2 file's checksum covered the pickle only: read with a note that its
+manifest is not covered). Then loading checks that the parts agree with the
+manifest: the class list as the fit encoded it (sorted, unique, one per
+class the estimator knows) and the feature sets' sensor.
 
 Sensor check: data is refused when its sensor differs from the model's in
 grid, channels, frame rate, value range or polarity (the name alone may
@@ -64,6 +69,7 @@ from ..datasets.model import SensorSpec, TouchDataset, frames_checksum, sensor_d
 from ..classifiers.fitting import FittedEstimator, FittedMethod
 from ..methods import MethodSpec
 from ..methods.fitting import fit_method
+from .safe_format import dump_parts, load_parts
 from .windows import cut_windows, seconds_to_frames
 
 __all__ = [
@@ -79,14 +85,16 @@ __all__ = [
 ]
 
 MODEL_FORMAT = "touchbench-model"
-MODEL_VERSION = 3
-_OLDER_VERSION = 2  # the checksum covered the pickle only: read, with a note
+MODEL_VERSION = 4
+# older files, whose fitted parts are a joblib pickle: read with trust only (2: the checksum covered the
+# pickle only, noted when read)
+_PICKLE_VERSIONS = (2, 3)
 _MAGIC = (MODEL_FORMAT + "\n").encode()
 _MAX_HEADER = 1 << 26  # bytes of the JSON line: a manifest (with one checksum per training capture), never more
 #: hexadecimal characters kept of each training capture's checksum (64 bits)
 CHECKSUM_CHARS = 16
 _VERSIONED = ("numpy", "scipy", "scikit-learn", "joblib", "pandas", "PyWavelets", "xgboost", "xgboost-cpu", "torch")
-# A pickle is only guaranteed to load with the versions that wrote it; these matter most.
+# Fitted parts are only guaranteed to read back with the versions that wrote them; these matter most.
 _CHECKED = ("scikit-learn", "numpy", "xgboost", "xgboost-cpu", "torch")
 
 
@@ -141,6 +149,22 @@ class TrainedModel:
             return None
         return np.array([capture_checksum(c) in known for c in captures], dtype=bool)
 
+    def seen_people(self, meta: Any) -> dict[str, np.ndarray] | None:
+        """Per row of ``meta``, whether the model was trained on its subject (``subject``), on its
+        recording (``recording``: the same subject and capture id, whatever the frames) and, where both
+        have sessions, on its session (``session``); None when the file does not record its subjects."""
+        ds = self.manifest.get("dataset", {})
+        if ds.get("subjects") is None:
+            return None
+        subjects = meta["subject"].astype(str).to_numpy()
+        out = {"subject": np.isin(subjects, list(ds["subjects"])),
+               "recording": np.isin([f"{s}/{c}" for s, c in zip(subjects, meta["capture_id"].astype(str))],
+                                    list(ds.get("recordings", [])))}
+        if ds.get("sessions") is not None and "session" in meta.columns:
+            out["session"] = np.isin([f"{s}/{v}" for s, v in zip(subjects, meta["session"].astype(str))],
+                                     list(ds["sessions"]))
+        return out
+
     @property
     def adapts_to_session(self) -> bool:
         """Whether the model's classifier adapts to each new session from its unlabelled captures
@@ -191,7 +215,7 @@ class TrainedModel:
 
     # ------------------------------------------------------------ files
     def save(self, path: str | Path) -> Path:
-        """Write the model (joblib) and ``<path>.json`` (the manifest), atomically."""
+        """Write the model (its fitted parts as skops data) and ``<path>.json`` (the manifest), atomically."""
 
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -200,9 +224,7 @@ class TrainedModel:
             "estimator": self.estimator,
             "classes": [str(c) for c in self.classes],
         }
-        buf = io.BytesIO()
-        joblib.dump(payload, buf, compress=3)
-        body = buf.getvalue()
+        body = dump_parts(payload)
         manifest = json.loads(json.dumps(self.manifest, default=str))  # as the file holds it
         header = {"version": MODEL_VERSION, "sha256": _checksum(manifest, body), "size": len(body),
                   "manifest": manifest}
@@ -213,17 +235,15 @@ class TrainedModel:
         return path
 
     @classmethod
-    def load(cls, path: str | Path) -> "TrainedModel":
-        """Read a model written by :meth:`save` (a pickle: trusted files only)."""
+    def load(cls, path: str | Path, trust: bool = False) -> "TrainedModel":
+        """Read a model written by :meth:`save`. ``trust``: the user trusts the file, so it may name
+        types outside the trusted list, and an older file (a pickle, which runs code when read) is read."""
 
         path = Path(path)
         if not path.is_file():
             raise DataError("no such model file", path)
         header, body = _read_model_file(path)
-        try:
-            payload = joblib.load(io.BytesIO(body))
-        except Exception as e:  # noqa: BLE001 - a module missing here, a class changed since...
-            raise DataError(f"not a readable touchbench model ({type(e).__name__}: {e})", path) from None
+        payload = _read_parts(header["version"], body, path, trust)
         if not isinstance(payload, dict) or not {"feature_sets", "estimator", "classes"} <= payload.keys():
             raise DataError("not a touchbench model (its parts are missing)", path)
         classes = np.array(payload["classes"], dtype=object)
@@ -232,9 +252,12 @@ class TrainedModel:
         problems = model.consistency_problems()
         if problems:
             raise DataError("the model's parts disagree (" + "; ".join(problems) + "); train it again", path)
-        if header["version"] == _OLDER_VERSION:
+        if header["version"] == _PICKLE_VERSIONS[0]:
             model.file_notes.append(f"{path}: an older model file, whose checksum does not cover its manifest "
                                     "(an edited manifest would go unnoticed); train it again to cover it")
+        if header["version"] in _PICKLE_VERSIONS:
+            model.file_notes.append(f"{path}: an older model file, a Python pickle read because of --trust; "
+                                    "train it again for a file that holds data only")
         return model
 
     def consistency_problems(self) -> list[str]:
@@ -302,9 +325,24 @@ class TrainedModel:
                          for length, hop in zip(w["lengths_s"], w["train_hop_frames"]))
 
 
+def _read_parts(version: int, body: bytes, path: Path, trust: bool) -> Any:
+    """The fitted parts of a checked body: skops data (:mod:`.safe_format`), or an older file's pickle
+    with ``trust`` only (a pickle runs code when read)."""
+    if version == MODEL_VERSION:
+        return load_parts(body, path, trust)
+    if not trust:
+        raise DataError(f"an older model file (format version {version}): its fitted parts are a Python pickle, "
+                        "which can run any code when it is read, so touchbench does not read it; if you trust "
+                        "who made the file, read it with --trust, or train the model again", path)
+    try:
+        return joblib.load(io.BytesIO(body))
+    except Exception as e:  # noqa: BLE001 - a module missing here, a class changed since...
+        raise DataError(f"not a readable touchbench model ({type(e).__name__}: {e})", path) from None
+
+
 def _read_model_file(path: Path) -> tuple[dict[str, Any], bytes]:
-    """The header and the pickle of a model file, the pickle checked against the header's
-    checksum before anyone unpickles it."""
+    """The header and the fitted parts of a model file, the parts checked against the header's
+    checksum before anything is read from them."""
     try:
         data = path.read_bytes()
     except OSError as e:
@@ -321,14 +359,14 @@ def _read_model_file(path: Path) -> tuple[dict[str, Any], bytes]:
         header["manifest"]["sensor"]  # noqa: B018 - must be there
     except (ValueError, KeyError, TypeError) as e:
         raise DataError(f"the model file's header is damaged ({type(e).__name__}); train it again", path) from None
-    if version not in (MODEL_VERSION, _OLDER_VERSION):
+    if version not in (MODEL_VERSION, *_PICKLE_VERSIONS):
         raise DataError(f"written by another touchbench model format (version {version}, this version reads "
-                        f"{_OLDER_VERSION} and {MODEL_VERSION}); train it again", path)
+                        f"{', '.join(map(str, _PICKLE_VERSIONS))} and {MODEL_VERSION}); train it again", path)
     body = data[end + 1:]
     if len(body) != size:
         raise DataError(f"the model file is {len(body) - size:+d} bytes off the size touchbench wrote "
                         "(truncated or edited); nothing was loaded", path)
-    expected = _checksum(header["manifest"], body) if version == MODEL_VERSION else hashlib.sha256(body).hexdigest()
+    expected = hashlib.sha256(body).hexdigest() if version == _PICKLE_VERSIONS[0] else _checksum(header["manifest"], body)
     if expected != digest:
         raise DataError("the model file (manifest or fitted parts) does not match the checksum touchbench wrote "
                         "with it (damaged or edited); nothing was loaded", path)
@@ -336,7 +374,7 @@ def _read_model_file(path: Path) -> tuple[dict[str, Any], bytes]:
 
 
 def _checksum(manifest: dict[str, Any], body: bytes) -> str:
-    """The SHA-256 a model file carries: the manifest's canonical JSON, a newline, the pickle."""
+    """The SHA-256 a model file carries: the manifest's canonical JSON, a newline, the fitted parts."""
     return hashlib.sha256(canonical_json(manifest).encode() + b"\n" + body).hexdigest()
 
 
@@ -421,8 +459,23 @@ def _dataset_manifest(dataset: TouchDataset, target: str, selection: str, n_samp
         "n_samples": int(n_samples),
         "by_class": {str(k): int(v) for k, v in zip(*np.unique(y, return_counts=True))},
         "capture_checksums": [capture_checksum(c) for c in dataset.captures],
+        **_people_manifest(dataset.meta),
         **(source or {}),
     }
+
+
+def _people_manifest(meta: Any) -> dict[str, Any]:
+    """Who and what the model was trained on, whatever the frames: the subjects, the recordings
+    (``subject/capture_id``) and, where the dataset has a ``session`` column, the sessions
+    (``subject/session``)."""
+    subjects = meta["subject"].astype(str).to_numpy()
+    out: dict[str, Any] = {
+        "subjects": sorted(set(subjects.tolist())),
+        "recordings": sorted({f"{s}/{c}" for s, c in zip(subjects, meta["capture_id"].astype(str))}),
+    }
+    if "session" in meta.columns:
+        out["sessions"] = sorted({f"{s}/{v}" for s, v in zip(subjects, meta["session"].astype(str))})
+    return out
 
 
 def _frames_manifest(dataset: TouchDataset) -> dict[str, Any]:

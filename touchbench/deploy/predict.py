@@ -24,9 +24,19 @@ says so (:func:`adaptation_text`).
 A model file records a checksum of every capture it was trained on: the
 ``trained_on`` column says which captures of the data the model has seen
 (the same frames, whichever reader read them), and :func:`accuracy_text`
-scores the unseen ones only, counting the seen ones apart. A model file
-without those checksums (an older one) gets no ``trained_on`` column, and
-its accuracy says it cannot be separated.
+scores the others only, counting the seen ones apart. A model file without
+those checksums (an older one) gets no ``trained_on`` column, and its
+accuracy says it cannot be separated.
+
+The same capture cut with another window, or with one value changed, has
+other frames: the model file also records its training subjects, recordings
+(subject and capture id) and sessions, and the columns
+``trained_on_subject``, ``trained_on_recording`` and (where the data and the
+model have sessions) ``trained_on_session`` say which captures share them.
+:func:`accuracy_text` scores the captures of unseen subjects apart from
+those of subjects the model was trained on, and says that the latter's
+accuracy is not on unseen people; a model file that does not record its
+subjects says they may be people it was trained on.
 """
 
 from __future__ import annotations
@@ -95,6 +105,8 @@ def predict_dataset(model: TrainedModel, ds: TouchDataset, *, whole: bool = Fals
     seen = model.seen_in_training(ds.captures)
     if seen is not None:
         out[TRAINED_ON] = seen
+    for what, hit in (model.seen_people(meta) or {}).items():
+        out[f"{TRAINED_ON}_{what}"] = hit
     for i, c in enumerate(classes):
         out[f"{PROBA_PREFIX}{c}"] = P[:, i]
     return out
@@ -131,7 +143,8 @@ def _label(model: TrainedModel, X: np.ndarray, sessions: np.ndarray | None) -> t
 
 def accuracy_text(model: TrainedModel, table: pd.DataFrame) -> str | None:
     """The accuracy line of ``predict``: on the captures of the model's classes it was not trained
-    on, the seen ones counted apart; None when the data has no true labels of the model's classes."""
+    on, the seen ones counted apart, those of subjects it was trained on scored apart (never called
+    unseen); None when the data has no true labels of the model's classes."""
     if TRUE not in table.columns:
         return None
     known = table[TRUE].isin([str(c) for c in model.classes]).to_numpy()
@@ -147,8 +160,31 @@ def accuracy_text(model: TrainedModel, table: pd.DataFrame) -> str | None:
     apart = f"{int(seen.sum())} captures the model was trained on are not scored" if seen.any() else ""
     if not scored.any():
         return "no unseen captures of the model's classes to score" + (f"; {apart}" if apart else "")
-    text = f"accuracy {100 * correct[scored].mean():.1f} % on {int(scored.sum())} unseen captures"
-    return text + (f"; {apart}" if apart else "")
+    return "; ".join([*_scores_by_subject(table, scored, correct), *([apart] if apart else [])])
+
+
+def _scores_by_subject(table: pd.DataFrame, scored: np.ndarray, correct: np.ndarray) -> list[str]:
+    """The accuracy on the scored captures of subjects the model never saw, and apart, on those of
+    subjects it was trained on (saying how many are its training recordings or sessions)."""
+    col = f"{TRAINED_ON}_subject"
+    if col not in table.columns:
+        return [f"accuracy {100 * correct[scored].mean():.1f} % on {int(scored.sum())} captures the model was not "
+                "trained on (this model file does not record its training subjects: they may be people it was "
+                "trained on)"]
+    known_subject = table[col].to_numpy(dtype=bool)
+    out = []
+    new, old = scored & ~known_subject, scored & known_subject
+    if new.any():
+        out.append(f"accuracy {100 * correct[new].mean():.1f} % on {int(new.sum())} captures of unseen subjects")
+    if old.any():
+        same = [f"{int((old & table[f'{TRAINED_ON}_{what}'].to_numpy(dtype=bool)).sum())} of them {label}"
+                for what, label in (("recording", "recordings it was trained on, with other frames"),
+                                    ("session", "from sessions it was trained on"))
+                if f"{TRAINED_ON}_{what}" in table.columns]
+        out.append(f"accuracy {100 * correct[old].mean():.1f} % on {int(old.sum())} captures of subjects the model "
+                   f"was trained on{' (' + '; '.join(same) + ')' if same else ''}: this accuracy is not on "
+                   "unseen people")
+    return out
 
 
 def write_table(df: pd.DataFrame, path: str | Path) -> Path:
