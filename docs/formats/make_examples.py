@@ -31,6 +31,29 @@ def my_skin(rng: np.random.Generator) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def skin_sessions(rng: np.random.Generator) -> pd.DataFrame:
+    """Continuous sessions labelled frame by frame, for a stream evaluation: the 6 x 6 skin at 20 Hz,
+    3 people, each one recording of 12 gestures (pat, stroke, press in turn, each 2-4 s) with 2-4 s
+    of rest (``idle``) before each and after the last; a ``label`` column per frame."""
+    rows = []
+    kinds = {"pat": 4.0, "stroke": 1.0, "press": 0.0}
+    for person in ("p1", "p2", "p3"):
+        f = 0
+        plan = [("idle", rng.uniform(2, 4))]
+        for k in range(12):
+            plan += [(("pat", "stroke", "press")[k % 3], rng.uniform(2, 4)), ("idle", rng.uniform(2, 4))]
+        for label, seconds in plan:
+            cells = rng.uniform(size=(6, 6)) > 0.5
+            for i in range(int(round(seconds * 20))):
+                touch = 0.0 if label == "idle" else (1.0 if label == "press" else
+                                                     0.5 + 0.5 * np.sin(2 * np.pi * kinds[label] * i / 20))
+                frame = rng.uniform(0, 10, (6, 6)) + 200 * touch * cells
+                rows.append({"session": f"{person}-s1", "person": person, "frame": f, "label": label,
+                             **{f"r{r}c{c}": int(v) for (r, c), v in np.ndenumerate(np.clip(frame, 0, 255))}})
+                f += 1
+    return pd.DataFrame(rows)
+
+
 def cells_long() -> pd.DataFrame:
     """A true long table: one 2 x 2 capture of three frames, a row per cell, rows in any order."""
     rows = [{"capture_id": "c1", "subject": "ann", "gesture": "poke", "frame": f, "row": r, "col": c,
@@ -63,6 +86,9 @@ def main() -> None:
     study.mkdir(parents=True, exist_ok=True)
     (study / "150301-21nonefurpat.csv").write_text(raw_recording())
     cost().to_csv(HERE / "cost-tiny.csv", index=False)
+    # shipped with the package: the protocol stream-table reads it
+    skin_sessions(np.random.default_rng(1)).to_csv(HERE.parent.parent / "touchbench" / "data" / "skin-sessions.csv.gz",
+                                                   index=False, compression={"method": "gzip", "mtime": 0})
 
 
 if __name__ == "__main__":

@@ -47,6 +47,25 @@ def format_summary(summary, expected) -> str:
     return "\n".join(lines)
 
 
+def _stream_tables(res) -> list[str]:
+    """A stream evaluation's summary: per method and rule, frame accuracy beside the idle-only baseline,
+    accuracy 1 s after onset and false activations per idle minute (the leaderboard has the rest)."""
+    from ..reports.leaderboard import leaderboard
+    from ..reports.stream_table import live_sources
+
+    lines = []
+    for lb in leaderboard(res.out):
+        if lb.live is None:
+            continue
+        lines.append(f"{live_sources(lb.live)}, {int(lb.live['streams'].iloc[0])} test streams:")
+        lines.append(f"{'method':24s} {'rule':30s} {'frame%':>6s} {'idle-only%':>10s} {'@1s%':>5s} {'FA/min':>6s}")
+        for _, r in lb.live.iterrows():
+            lines.append(f"{str(r['method'])[:24]:24s} {str(r['rule'])[:30]:30s} {_pct(r['frame_accuracy']):>6s} "
+                         f"{_pct(r['idle_baseline']):>10s} {_pct(r['accuracy_at_1s']):>5s} "
+                         f"{r['false_activations_per_idle_minute']:6.1f}")
+    return lines
+
+
 def run_summary(res, plan) -> dict:
     """What ``run --json`` prints: the run, its task counts and each method's scores."""
     cols = [c for c in dict.fromkeys(("features", "classifier", "early_frames", "n_folds", "n_failed", "accuracy_mean",
@@ -171,8 +190,9 @@ def _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait
     else:
         log.info(f"ran {res.n_ran} task(s), skipped {res.n_skipped} finished, {res.n_failed} failed, "
                  f"in {res.seconds:.1f} s")
+    live = _stream_tables(res) if any(t.fold.live is not None for t in plan.tasks) else []
     if not as_json:
-        click.echo(format_summary(res.summary, res.expected))
+        click.echo("\n".join(live) if live else format_summary(res.summary, res.expected))
     if res.stopped_early:
         log.warning("stopped at the first failed task (--fail-fast); run again without it to finish the others")
     if res.n_failed:
