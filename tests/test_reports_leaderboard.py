@@ -70,9 +70,9 @@ def test_accuracy_interval_and_tests_by_hand(tmp_path):
     assert a["ci_low"] == pytest.approx(34 / 36 - half) and a["ci_high"] == 1.0
     assert b["accuracy"] == pytest.approx(28 / 36) and c["accuracy"] == pytest.approx(27 / 36)
     # over folds: Nadeau & Bengio's corrected resampled t-test; each fold tests 6 captures and trains on 30
-    # B vs A: six differences of -1/6, no spread: t is -infinite, p = 0
+    # B vs A: six differences of -1/6, no spread: t = mean / 0 is undefined, so there is no p (never 0)
     assert b["test"] == "corrected-t" and b["n_pairs"] == 6 and b["paired_by"] == "fold"
-    assert b["p_value"] == 0.0
+    assert math.isnan(b["p_value"])
     assert b["diff_vs_best"] == pytest.approx(-1 / 6)
     # each fold tests one subject (leave-one-subject-out): the interval resamples subjects, and every
     # subject's difference is -1 of 6 captures, so every resample's difference is -1/6
@@ -84,9 +84,9 @@ def test_accuracy_interval_and_tests_by_hand(tmp_path):
     assert c["test"] == "corrected-t"
     assert c["p_value"] == pytest.approx(2 * stats.t.sf(abs(t), 5))
     assert 0.05 < c["p_value"] < 0.2
-    # Holm over the family {0, p_C}: 2 * 0 = 0, max(0, 1 * p_C) = p_C
-    assert b["p_holm"] == 0.0 and c["p_holm"] == pytest.approx(c["p_value"])
-    assert b["differs"] and not c["differs"]
+    # Holm over the family of defined p-values, {p_C} alone: 1 * p_C
+    assert math.isnan(b["p_holm"]) and c["p_holm"] == pytest.approx(c["p_value"])
+    assert not b["differs"] and not c["differs"]
     assert math.isnan(a["p_value"]) and a["test"] == "best"
     # Pareto on accuracy vs latency: A (best), B (fastest) on it; C (slower and worse than B) not
     assert bool(a["pareto"]) and bool(b["pareto"]) and not bool(c["pareto"])
@@ -224,8 +224,9 @@ def test_compare_per_fold_and_per_class(tmp_path):
     rs = load_results([d])
     [lb] = build_leaderboards(rs)
     cmp = compare_methods(rs, lb, "msd/rf", "sd/rf")
-    # six fold differences of +1/6, no spread: the corrected t is infinite, p = 0
-    assert cmp.test.test == "corrected-t" and cmp.test.n == 6 and cmp.test.pvalue == 0.0
+    # six fold differences of +1/6, no spread: the corrected t is undefined, no p
+    assert cmp.test.test == "corrected-t" and cmp.test.n == 6 and math.isnan(cmp.test.pvalue)
+    assert cmp.test.note == "no variance: every fold differs by the same amount"
     np.testing.assert_allclose(cmp.pairs["diff"].to_numpy(), np.full(6, 1 / 6))
     pc = cmp.per_class.set_index("class")
     # A misses 2 captures (first of folds s2 and s4: both 'pat'); B misses 8: in each fold 'pat' first,
