@@ -87,6 +87,7 @@ def test_accuracy_interval_and_tests_by_hand(tmp_path):
     # Holm over the family of defined p-values, {p_C} alone: 1 * p_C
     assert math.isnan(b["p_holm"]) and c["p_holm"] == pytest.approx(c["p_value"])
     assert not b["differs"] and not c["differs"]
+    assert any("1 method(s) differ from the best by the same amount in every fold" in n for n in lb.notes)
     assert math.isnan(a["p_value"]) and a["test"] == "best"
     # Pareto on accuracy vs latency: A (best), B (fastest) on it; C (slower and worse than B) not
     assert bool(a["pareto"]) and bool(b["pareto"]) and not bool(c["pareto"])
@@ -454,3 +455,25 @@ def test_results_written_before_the_adaptation_column_read_as_plain(tmp_path):
     pq.write_table(table.drop_columns(["adaptation"]), path / "scores.parquet")  # keeps the schema version
     (lb,) = build_leaderboards(load_results([path]))
     assert lb.adaptation == "" and len(lb.rows) == 3 and lb.rows.iloc[0]["features"] == "msd"
+
+
+# ----------------------------------------------------------------- ties, tests, and what compare says
+def test_equal_accuracies_summed_in_another_order_share_one_rank(tmp_path):
+    # both 35 of 36 right, one wrong capture in the first fold or the last: the mean of the six fold
+    # accuracies in fold order differs in its last bit
+    x, y = [1, 0, 0, 0, 0, 0], [0, 0, 0, 0, 0, 1]
+    assert np.mean((6 - np.array(x)) / 6) != np.mean((6 - np.array(y)) / 6)
+    for name, data in (("run1", "fake"), ("run2", "other")):
+        write_fake_run(tmp_path / name, CAPS, FOLDS, [
+            FakeMethod("msd", "x", wrong=_wrong(x)), FakeMethod("msd", "y", wrong=_wrong(y)),
+            FakeMethod("msd", "z", wrong=_wrong([1, 1, 0, 0, 0, 0]))],
+            dataset=data, dataset_hash=data[0] * 64, scheme={"name": "loso"}, run_id=name)
+    lbs = build_leaderboards(load_results([tmp_path]))
+    for lb in lbs:
+        assert lb.rows.set_index("classifier")["rank"].to_dict() == {"x": 1, "y": 1, "z": 3}
+    from touchbench.reports.across import mean_ranks
+
+    # one rank in each of the two tables: (1 + 2) / 2 for both, 3 for z
+    mr = mean_ranks(lbs).set_index("method")["mean_rank"]
+    assert mr.to_dict() == {"msd / x": 1.5, "msd / y": 1.5, "msd / z": 3.0}
+
