@@ -70,9 +70,9 @@ def test_accuracy_interval_and_tests_by_hand(tmp_path):
     assert a["ci_low"] == pytest.approx(34 / 36 - half) and a["ci_high"] == 1.0
     assert b["accuracy"] == pytest.approx(28 / 36) and c["accuracy"] == pytest.approx(27 / 36)
     # over folds: Nadeau & Bengio's corrected resampled t-test; each fold tests 6 captures and trains on 30
-    # B vs A: six differences of -1/6, no spread: t is -infinite, p = 0
+    # B vs A: six differences of -1/6, no spread: t = mean / 0 is undefined, so there is no p (never 0)
     assert b["test"] == "corrected-t" and b["n_pairs"] == 6 and b["paired_by"] == "fold"
-    assert b["p_value"] == 0.0
+    assert math.isnan(b["p_value"])
     assert b["diff_vs_best"] == pytest.approx(-1 / 6)
     # each fold tests one subject (leave-one-subject-out): the interval resamples subjects, and every
     # subject's difference is -1 of 6 captures, so every resample's difference is -1/6
@@ -84,9 +84,10 @@ def test_accuracy_interval_and_tests_by_hand(tmp_path):
     assert c["test"] == "corrected-t"
     assert c["p_value"] == pytest.approx(2 * stats.t.sf(abs(t), 5))
     assert 0.05 < c["p_value"] < 0.2
-    # Holm over the family {0, p_C}: 2 * 0 = 0, max(0, 1 * p_C) = p_C
-    assert b["p_holm"] == 0.0 and c["p_holm"] == pytest.approx(c["p_value"])
-    assert b["differs"] and not c["differs"]
+    # Holm over the family of defined p-values, {p_C} alone: 1 * p_C
+    assert math.isnan(b["p_holm"]) and c["p_holm"] == pytest.approx(c["p_value"])
+    assert not b["differs"] and not c["differs"]
+    assert any("1 method(s) differ from the best by the same amount in every fold" in n for n in lb.notes)
     assert math.isnan(a["p_value"]) and a["test"] == "best"
     # Pareto on accuracy vs latency: A (best), B (fastest) on it; C (slower and worse than B) not
     assert bool(a["pareto"]) and bool(b["pareto"]) and not bool(c["pareto"])
@@ -224,8 +225,9 @@ def test_compare_per_fold_and_per_class(tmp_path):
     rs = load_results([d])
     [lb] = build_leaderboards(rs)
     cmp = compare_methods(rs, lb, "msd/rf", "sd/rf")
-    # six fold differences of +1/6, no spread: the corrected t is infinite, p = 0
-    assert cmp.test.test == "corrected-t" and cmp.test.n == 6 and cmp.test.pvalue == 0.0
+    # six fold differences of +1/6, no spread: the corrected t is undefined, no p
+    assert cmp.test.test == "corrected-t" and cmp.test.n == 6 and math.isnan(cmp.test.pvalue)
+    assert cmp.test.note == "no variance: every fold differs by the same amount"
     np.testing.assert_allclose(cmp.pairs["diff"].to_numpy(), np.full(6, 1 / 6))
     pc = cmp.per_class.set_index("class")
     # A misses 2 captures (first of folds s2 and s4: both 'pat'); B misses 8: in each fold 'pat' first,
@@ -453,3 +455,82 @@ def test_results_written_before_the_adaptation_column_read_as_plain(tmp_path):
     pq.write_table(table.drop_columns(["adaptation"]), path / "scores.parquet")  # keeps the schema version
     (lb,) = build_leaderboards(load_results([path]))
     assert lb.adaptation == "" and len(lb.rows) == 3 and lb.rows.iloc[0]["features"] == "msd"
+
+
+# ----------------------------------------------------------------- ties, tests, and what compare says
+def test_equal_accuracies_summed_in_another_order_share_one_rank(tmp_path):
+    # both 35 of 36 right, one wrong capture in the first fold or the last: the mean of the six fold
+    # accuracies in fold order differs in its last bit
+    x, y = [1, 0, 0, 0, 0, 0], [0, 0, 0, 0, 0, 1]
+    assert np.mean((6 - np.array(x)) / 6) != np.mean((6 - np.array(y)) / 6)
+    for name, data in (("run1", "fake"), ("run2", "other")):
+        write_fake_run(tmp_path / name, CAPS, FOLDS, [
+            FakeMethod("msd", "x", wrong=_wrong(x)), FakeMethod("msd", "y", wrong=_wrong(y)),
+            FakeMethod("msd", "z", wrong=_wrong([1, 1, 0, 0, 0, 0]))],
+            dataset=data, dataset_hash=data[0] * 64, scheme={"name": "loso"}, run_id=name)
+    lbs = build_leaderboards(load_results([tmp_path]))
+    for lb in lbs:
+        assert lb.rows.set_index("classifier")["rank"].to_dict() == {"x": 1, "y": 1, "z": 3}
+    from touchbench.reports.across import mean_ranks
+
+    # one rank in each of the two tables: (1 + 2) / 2 for both, 3 for z
+    mr = mean_ranks(lbs).set_index("method")["mean_rank"]
+    assert mr.to_dict() == {"msd / x": 1.5, "msd / y": 1.5, "msd / z": 3.0}
+
+
+def _cli(*args):
+    from click.testing import CliRunner
+
+    from touchbench.cli.main import cli
+
+    res = CliRunner().invoke(cli, ["compare", *map(str, args)])
+    assert res.exit_code == 0, res.output
+    return res
+
+
+def test_compare_gives_the_interval_that_inverts_mcnemars_test_and_explains_the_leaderboards_p(tmp_path):
+    # one test set of 250 captures of 5 subjects; A wrong on one capture of each of s1-s4, B wrong on 14
+    # of s0: b = 14 captures only A gets right, c = 4 only B; C wrong on A's 4 and 3 more
+    caps, fold, ids = _one_test_set(0, 250)
+    s0 = caps[caps["subject"] == "s0"]["capture_id"].tolist()
+    a_wrong = [caps[caps["subject"] == s]["capture_id"].iloc[0] for s in ("s1", "s2", "s3", "s4")]
+    c_wrong = a_wrong + [caps[caps["subject"] == "s1"]["capture_id"].iloc[k] for k in (1, 2, 3)]
+    d = write_fake_run(tmp_path / "ch", caps, fold, [
+        FakeMethod("all", "a", wrong={"challenge": a_wrong}), FakeMethod("all", "b", wrong={"challenge": s0[:14]}),
+        FakeMethod("all", "c", wrong={"challenge": c_wrong})], scheme={"name": "challenge"})
+    # McNemar: p = 2 * P(X >= 14), X ~ Bin(18, 1/2); C against A: 3 discordant, all for A: p = 2 / 8
+    p = 2 * (3060 + 816 + 153 + 18 + 1) / 2 ** 18
+    # Holm over {p, 0.25}: 2 p = 0.0618, then max(0.0618, 0.25): the leaderboard's p for B is 2 p
+    lo, hi = (18 / 250 * (2 * stats.beta.ppf(q, k, 19 - k) - 1) for q, k in ((0.025, 14), (0.975, 15)))
+    assert 0 < lo  # the test rejects at 0.05, and so does its interval
+    out = _cli(d, "--a", "all/a", "--b", "all/b").output
+    assert f"McNemar's exact test, two-sided p = {p:.4g} (this comparison alone, no multiple-comparison correction)" in out
+    assert f"95 % interval of A-B {100 * lo:+.2f} to {100 * hi:+.2f} points (exact" in out
+    assert (f"the leaderboard's p for B against the best is {2 * p:.4g}: the same test (p = {p:.4g}), "
+            "Holm-adjusted over the table's 2 comparisons with the best") in out
+    # the bootstrap over subjects is said to be another thing: without s0 (a resample in (4/5)**5 = 33 %)
+    # B is the better, so it straddles 0
+    boot = next(line for line in out.splitlines() if line.startswith("between subjects: A-B "))
+    assert float(boot.split()[3]) < 0 < float(boot.split()[5])
+    doc = json.loads(_cli(d, "--a", "all/a", "--b", "all/b", "--json").stdout)["comparisons"][0]
+    assert doc["p_correction"] == "none" and doc["leaderboard"]["correction"] == "holm"
+    assert doc["leaderboard"]["p_holm"] == pytest.approx(2 * p) and doc["test"]["test_ci_low"] == pytest.approx(lo)
+    # neither method the best: the leaderboard has no p for the pair
+    assert "it has no p for A against B" in _cli(d, "--a", "all/b", "--b", "all/c").output
+
+
+def test_compare_across_evaluations_leaves_out_a_table_with_no_variance_in_either_order(tmp_path):
+    _run1(tmp_path)  # msd better than sd by 1/6 in every fold: no variance
+    write_fake_run(tmp_path / "run2", CAPS, FOLDS, [
+        FakeMethod("msd", "rf", classifier_name="gaus-rf", wrong=_wrong([0, 0, 1, 0, 0, 0])),
+        FakeMethod("sd", "rf", classifier_name="gaus-rf", wrong=_wrong([1, 0, 1, 2, 0, 1])),
+    ], dataset="other", dataset_hash="e" * 64, scheme={"name": "loso"}, run_id="run2")
+    # the other table, msd - sd in sixths 1, 0, 0, 2, 0, 1 (by hand in the test above): its z alone
+    t2 = (4 / 36) / math.sqrt((1 / 6 + 6 / 30) * 120 / 36 / 5 / 36)
+    z = stats.norm.isf(stats.t.sf(t2, 5))
+    for a, b, sign in (("msd/rf", "sd/rf", 1), ("sd/rf", "msd/rf", -1)):
+        out = _cli(tmp_path, "--a", a, "--b", b).output
+        assert (f"left out (no variance: every fold differs by the same amount: A-B {sign * 100 / 6:+.2f} points in "
+                f"every fold, {'A' if sign > 0 else 'B'} better; no p-value to combine)") in out
+        assert f"combined: z = {sign * z:+.2f} (positive: A better), two-sided p = {2 * stats.norm.sf(z):.4g}" in out
+        assert "p = 0 " not in out and "inf" not in out

@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy import stats
 
 from touchbench.reports.pareto import pareto_front
@@ -19,6 +21,7 @@ from touchbench.reports.stats import (
     meta_analysis,
     nemenyi_cd,
     no_test,
+    rank_values,
     subject_bootstrap,
     wilson_interval,
 )
@@ -167,3 +170,134 @@ def test_pareto_front_by_hand():
     assert pareto_front(acc, lat).tolist() == [True, True, True, False, True, False]
     # exact ties are both on the front
     assert pareto_front([0.8, 0.8], [1.0, 1.0]).tolist() == [True, True]
+
+
+# ----------------------------------------------------------------- degenerate limits and symmetry
+def test_corrected_t_with_no_variance_has_no_p_and_no_sign_of_its_own():
+    # every fold 75 points better: t = 0.75 / 0 is undefined, so is p (never 0, never an infinite t)
+    for d in ([0.75] * 5, [-0.75] * 5):
+        t = corrected_resampled_t(d, 0.25)
+        assert t.test == "corrected-t" and t.n == 5 and t.mean_difference == d[0]
+        assert math.isnan(t.pvalue) and math.isnan(t.statistic)
+        assert all(math.isnan(v) for v in (t.statistic, t.pvalue, t.p_greater, t.p_less, t.effect_size,
+                                           t.ci_low, t.ci_high, t.test_ci_low, t.test_ci_high))
+        assert t.note == "no variance: every fold differs by the same amount"
+    # fold accuracies that differ by one sixth in every fold differ in their last bits: still no variance
+    d = np.array([1.0, 5 / 6, 4 / 6, 1.0]) - np.array([5 / 6, 4 / 6, 3 / 6, 5 / 6])
+    assert np.std(d) > 0 and math.isnan(corrected_resampled_t(d, 0.2).pvalue)
+    # every difference zero: no difference; p = 1 (nothing is closer to 0 than 0), one-sided p 1/2 each
+    z = corrected_resampled_t([0.0, 0.0, 0.0], 0.25)
+    assert (z.statistic, z.pvalue, z.p_greater, z.p_less, z.note) == (0.0, 1.0, 0.5, 0.5, "")
+
+
+def test_meta_analysis_leaves_out_a_table_with_no_variance_and_never_reverses_it():
+    flat = corrected_resampled_t([0.75] * 5, 0.25)  # A better by 75 points in every fold
+    var = corrected_resampled_t([0.02, 0.05, 0.01, 0.04, 0.03], 0.25)  # t = 2 sqrt(2), 4 df (by hand above)
+    z = stats.norm.isf(stats.t.sf(2 * math.sqrt(2), 4))
+    m = meta_analysis([flat, var])
+    assert m.z == pytest.approx(z) and m.z > 0  # the other table alone: toward A
+    assert m.combined == [False, True] and math.isnan(m.z_tables[0])
+    assert m.pvalue == pytest.approx(2 * stats.t.sf(2 * math.sqrt(2), 4))
+    swapped = meta_analysis([corrected_resampled_t([-0.75] * 5, 0.25),
+                             corrected_resampled_t([-0.02, -0.05, -0.01, -0.04, -0.03], 0.25)])
+    assert swapped.z == pytest.approx(-z) and swapped.pvalue == pytest.approx(m.pvalue)
+    # only tables without a p: nothing to combine
+    none = meta_analysis([flat, corrected_resampled_t([0.5] * 3, 0.25)])
+    assert none.combined == [False, False] and math.isnan(none.z) and math.isnan(none.pvalue)
+
+
+def test_meta_analysis_keeps_a_one_sided_p_near_1_on_its_side():
+    # fold differences 0.4 +- 0.001: t of about 850 on 9 df; swapped, the p of "A better" is 1 - 1e-23,
+    # which float64 rounds to 1 (an infinite z): the table's z comes from the other, small tail
+    d = np.full(10, 0.4) + np.array([0.001, -0.001] * 5)
+    t, r = corrected_resampled_t(d, 0.1), corrected_resampled_t(-d, 0.1)
+    assert r.p_greater == 1.0 and 0 < r.p_less < 1e-20
+    m, s = meta_analysis([t]), meta_analysis([r])
+    assert m.z == pytest.approx(stats.norm.isf(stats.t.sf(t.statistic, 9)), rel=1e-12)
+    assert s.z == -m.z and m.z > 9
+
+
+def test_mcnemar_interval_inverts_the_exact_test_by_hand():
+    # b = 14 captures only A right, c = 4 only B right, 232 both right, n = 250:
+    # p = 2 * P(X >= 14), X ~ Bin(18, 1/2) = 2 * (C(18,14) + C(18,15) + C(18,16) + C(18,17) + 1) / 2**18
+    a = [True] * 14 + [False] * 4 + [True] * 232
+    b = [False] * 14 + [True] * 4 + [True] * 232
+    t = mcnemar_exact(a, b)
+    assert t.pvalue == pytest.approx(2 * (3060 + 816 + 153 + 18 + 1) / 2 ** 18)
+    # Clopper-Pearson of 14 / 18 from the beta quantiles, mapped by (b + c) / n * (2 pi - 1)
+    lo, hi = stats.beta.ppf(0.025, 14, 5), stats.beta.ppf(0.975, 15, 4)
+    assert (t.ci_low, t.ci_high) == (pytest.approx(18 / 250 * (2 * lo - 1)), pytest.approx(18 / 250 * (2 * hi - 1)))
+    assert (t.test_ci_low, t.test_ci_high, t.test_ci_method) == (t.ci_low, t.ci_high, "exact-conditional")
+    assert 0 < t.ci_low < 4 / 250 < t.ci_high
+    # all discordant captures one way: the lower bound of the share is 0.025**(1/b) (P(X = b) = pi**b)
+    t = mcnemar_exact([True] * 6 + [True] * 10, [False] * 6 + [True] * 10)
+    assert t.ci_low == pytest.approx(6 / 16 * (2 * 0.025 ** (1 / 6) - 1)) and t.ci_high == pytest.approx(6 / 16)
+    # no discordant capture: p = 1 and no interval
+    same = mcnemar_exact([True, False], [True, False])
+    assert same.pvalue == 1.0 and math.isnan(same.ci_low) and math.isnan(same.test_ci_low)
+
+
+_differences = st.one_of(
+    st.lists(st.floats(-1, 1, allow_subnormal=False), min_size=2, max_size=8),
+    st.tuples(st.floats(-1, 1, allow_subnormal=False), st.integers(2, 8)).map(lambda vk: [vk[0]] * vk[1]),
+    st.lists(st.sampled_from([-1 / 6, 0.0, 1 / 6, 2 / 6]), min_size=2, max_size=8),
+)
+_captures = st.lists(st.tuples(st.booleans(), st.booleans()), min_size=1, max_size=60)
+_tables = st.lists(st.one_of(st.tuples(st.just("t"), _differences, st.floats(0.01, 1.0)),
+                             st.tuples(st.just("m"), _captures)), min_size=1, max_size=4)
+
+
+def _both_orders(table):
+    """A table's test of A against B and of B against A."""
+    if table[0] == "t":
+        d = np.asarray(table[1])
+        return corrected_resampled_t(d, table[2]), corrected_resampled_t(-d, table[2])
+    x, y = [p[0] for p in table[1]], [p[1] for p in table[1]]
+    return mcnemar_exact(x, y), mcnemar_exact(y, x)
+
+
+def _same(u, v):
+    return (math.isnan(u) and math.isnan(v)) or u == pytest.approx(v, rel=1e-9, abs=1e-12)
+
+
+@given(_tables)
+@settings(max_examples=150, deadline=None)
+def test_swapping_the_methods_negates_z_and_keeps_p(tables):
+    ab, ba = zip(*(_both_orders(t) for t in tables))
+    m, s = meta_analysis(ab), meta_analysis(ba)
+    assert _same(m.z, -s.z) and _same(m.pvalue, s.pvalue)
+    assert _same(m.p_greater_combined, s.p_less_combined)
+    assert m.combined == s.combined
+    assert all(_same(u, -v) for u, v in zip(m.z_tables, s.z_tables))
+    for t, r in zip(ab, ba):
+        assert _same(t.pvalue, r.pvalue) and _same(t.p_greater, r.p_less) and _same(t.p_less, r.p_greater)
+        assert _same(t.ci_low, -r.ci_high) and t.note == r.note
+
+
+@given(_tables)
+@settings(max_examples=150, deadline=None)
+def test_tables_that_all_favour_a_only_push_toward_a(tables):
+    # every fold difference made nonnegative, every discordant capture one A gets right
+    fav = [("t", np.abs(t[1]), t[2]) if t[0] == "t" else ("m", [(x or y, x and y) for x, y in t[1]]) for t in tables]
+    m = meta_analysis([_both_orders(t)[0] for t in fav])
+    assert math.isnan(m.z) or m.z >= 0
+    assert all(math.isnan(z) or z >= 0 for z in m.z_tables)
+
+
+@given(st.integers(0, 80), st.integers(0, 80), st.integers(0, 40))
+@settings(max_examples=200, deadline=None)
+def test_mcnemar_interval_excludes_0_exactly_when_p_is_below_005(b, c, both):
+    t = mcnemar_exact([True] * b + [False] * c + [True] * both + [False],
+                      [False] * b + [True] * c + [True] * both + [False])
+    if b + c == 0:
+        assert t.pvalue == 1.0 and math.isnan(t.ci_low)
+        return
+    assert (t.ci_low > 0 or t.ci_high < 0) == (t.pvalue < 0.05)
+    assert t.ci_low <= t.mean_difference <= t.ci_high and (t.test_ci_low, t.test_ci_high) == (t.ci_low, t.ci_high)
+
+
+def test_rank_values_make_one_accuracy_of_equal_ones_in_another_order():
+    assert 0.1 + 0.2 != 0.3
+    r = rank_values([0.1 + 0.2, 0.3, 0.30000000001, math.nan, 0.0])
+    assert r[0] == r[1] and r[2] > r[1] and math.isnan(r[3]) and r[4] == 0.0
+    assert rank_values([1e-300 * 3, 3e-300])[0] == rank_values([3e-300])[0]

@@ -114,9 +114,12 @@ def leaderboard(results, as_json, formats, out, reference, dataset, scheme, alph
 def compare(results, a, b, as_json, dataset, scheme, alpha, pool_machines, machine) -> None:
     """The paired test of method A against B (the corrected resampled t-test
     over folds, McNemar's exact test on the test captures when they share
-    one fold), the per-fold differences and the per-class recall and F1
-    differences, in every table holding both methods; across several such
-    tables, a meta-analysis (effect size per table, Stouffer's combined p)."""
+    one fold) with the interval that inverts it, the per-fold differences and
+    the per-class recall and F1 differences, in every table holding both
+    methods; across several such tables, a meta-analysis (effect size per
+    table, Stouffer's combined p). Its p-values are this comparison's alone;
+    the leaderboard's are Holm-adjusted over each table's comparisons with
+    its best, and the output says which is which."""
     from ..reports.compare import compare_methods
 
     rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
@@ -147,42 +150,35 @@ def _meta(done):
 
 
 def _compare_json(done, meta) -> None:
-    """``compare --json``: each table's comparison, and the meta-analysis across them (null for one;
-    NaN and infinity as null)."""
+    """``compare --json``: each table's comparison (its p uncorrected: ``p_correction``; the
+    leaderboard's p of the pair and its correction: ``leaderboard``), and the meta-analysis across
+    them (null for one; NaN and infinity as null)."""
+    from ..reports.compare import leaderboard_p
+
     payload = [{
         "table": {"dataset": c.leaderboard.dataset, "scheme": c.leaderboard.scheme},
         "a": {k: c.a[k] for k in ("method_id", "features", "classifier", "accuracy", "macro_f1")},
         "b": {k: c.b[k] for k in ("method_id", "features", "classifier", "accuracy", "macro_f1")},
         "test": c.test.as_dict(),
+        "p_correction": "none",
+        "leaderboard": leaderboard_p(c),
         "pairs": c.pairs.to_dict(orient="records"),
         "per_class": c.per_class.to_dict(orient="records"),
     } for c in done]
     echo_json({"comparisons": payload, "meta_analysis": None if meta is None else meta.as_dict()})
 
 
-def _echo_test(t) -> None:
-    """The test's line: its name, unit and count, the difference with its interval, the p-value."""
-    from ..reports.stats import TEST_NAMES
-
-    if t.test == "none":
-        click.echo(f"paired test: not possible ({t.n} shared {t.paired_by or 'fold'}s)")
-        return
-    ci = (f" (95 % interval {100 * t.ci_low:+.2f} to {100 * t.ci_high:+.2f}, "
-          f"{'bootstrap over ' + str(t.n_subjects) + ' subjects' if t.ci_method == 'subject-bootstrap' else 'corrected t'})"
-          if math.isfinite(t.ci_low) else "")
-    click.echo(f"paired by {t.paired_by} (n={t.n}): mean difference A-B {100 * t.mean_difference:+.2f} points{ci}, "
-               f"{TEST_NAMES[t.test]}, two-sided p = {t.pvalue:.4g}")
-
-
 def _echo_comparison(c) -> None:
     """One table's comparison: the methods, the test, the paired units (or McNemar's counts) and the classes."""
+    from ..reports.compare import leaderboard_p, test_lines
     from ..reports.labels import method_label
 
     t = c.test
     click.echo(f"== {c.leaderboard.title}")
     click.echo(f"A = {c.a['method_id']}  {method_label(c.a)}: accuracy {100 * c.a['accuracy']:.2f} %")
     click.echo(f"B = {c.b['method_id']}  {method_label(c.b)}: accuracy {100 * c.b['accuracy']:.2f} %")
-    _echo_test(t)
+    for line in test_lines(t) + ([leaderboard_p(c)["text"]] if t.test != "none" else []):
+        click.echo(line)
     click.echo("")
     if t.paired_by == "capture":
         a, b = c.pairs["a"] >= 0.5, c.pairs["b"] >= 0.5
@@ -202,12 +198,23 @@ def _echo_comparison(c) -> None:
 
 
 def _echo_meta(done, meta) -> None:
-    """The meta-analysis across the tables: effect size per table, Stouffer's combined z and p."""
+    """The meta-analysis across the tables: effect size per table, Stouffer's combined z and p; a
+    table without a p-value named as left out, with the direction of its differences."""
     click.echo(f"== across {len(meta.n)} evaluations (meta-analysis: Stouffer's method, weights sqrt(n))")
     tested = [c for c in done if c.test.test != "none"]
-    for c, es, n, p in zip(tested, meta.effect_sizes, meta.n, meta.p_greater):
-        click.echo(f"{c.leaderboard.title[:48]:48s} d_z {es:+6.2f}  n={n:<4d} one-sided p (A better) {p:.4g}")
-    click.echo(f"combined: z = {meta.z:+.2f} (positive: A better), two-sided p = {meta.pvalue:.4g}")
+    for c, es, n, p, used in zip(tested, meta.effect_sizes, meta.n, meta.p_greater, meta.combined):
+        if used:
+            dz = f"{es:+6.2f}" if math.isfinite(es) else "     —"  # no d_z without spread
+            click.echo(f"{c.leaderboard.title[:48]:48s} d_z {dz}  n={n:<4d} one-sided p (A better) {p:.4g}")
+            continue
+        d = c.test.mean_difference
+        click.echo(f"{c.leaderboard.title[:48]:48s} left out ({c.test.note}: A-B {100 * d:+.2f} points in every fold, "
+                   f"{'A' if d > 0 else 'B'} better; no p-value to combine)")
+    if not any(meta.combined):
+        click.echo("combined: nothing to combine (no table has a p-value)")
+    else:
+        click.echo(f"combined: z = {meta.z:+.2f} (positive: A better), two-sided p = {meta.pvalue:.4g} "
+                   f"(Stouffer over {sum(meta.combined)} table(s); no multiple-comparison correction)")
     click.echo("")
 
 

@@ -10,7 +10,7 @@ from scipy.stats import rankdata
 
 from .labels import _p, method_labels
 from .leaderboard import Leaderboard
-from .stats import Friedman, friedman
+from .stats import Friedman, friedman, rank_values
 
 __all__ = ["across_friedman", "across_note", "across_tables", "mean_ranks", "plain_tables", "ranks_across"]
 
@@ -23,12 +23,15 @@ def plain_tables(lbs: list[Leaderboard]) -> list[Leaderboard]:
 
 def across_tables(lbs: list[Leaderboard]) -> pd.DataFrame:
     """Mean accuracy of each method (by label) in each table (rows: table titles); only methods
-    present, with an accuracy, in every table; only the plain tables (:func:`plain_tables`)."""
+    present, with an accuracy, in every table; only the plain tables (:func:`plain_tables`). The
+    accuracies are rounded to :data:`~touchbench.reports.stats.RANK_DIGITS` significant digits
+    (:func:`~touchbench.reports.stats.rank_values`), so that equal ones tie in every ranking of them
+    (mean ranks, Friedman, the critical difference diagram)."""
     cols = {}
     for lb in plain_tables(lbs):
         labels = method_labels(lb.rows)
         r = lb.rows[lb.rows["accuracy"].notna()]
-        cols[lb.title] = pd.Series(r["accuracy"].to_numpy(float), index=[labels[m] for m in r["method_id"]])
+        cols[lb.title] = pd.Series(rank_values(r["accuracy"]), index=[labels[m] for m in r["method_id"]])
     acc = pd.DataFrame(cols).T
     return acc.dropna(axis=1)
 

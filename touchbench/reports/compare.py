@@ -1,8 +1,12 @@
 """Comparing two methods of one table: :func:`compare_methods` (the paired test, per-fold and
-per-class differences) and :func:`resolve_method` (the method a name or id prefix names)."""
+per-class differences), :func:`resolve_method` (the method a name or id prefix names), and what
+``compare`` says of its test (:func:`test_lines`): which test and correction each p comes from,
+the interval that inverts the test, and why the leaderboard's p of the pair differs
+(:func:`leaderboard_p`: Holm over the comparisons with the best)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -11,12 +15,18 @@ from sklearn.metrics import precision_recall_fscore_support
 
 from ..core.errors import TouchbenchError
 from ..results.store import PREDICTED, TRUE
+from .labels import method_label
 from .leaderboard import Leaderboard
 from .paired import _compare
 from .results import ResultSet
-from .stats import PairedTest
+from .stats import TEST_NAMES, PairedTest
 
-__all__ = ["Comparison", "compare_methods", "resolve_method"]
+__all__ = ["Comparison", "compare_methods", "leaderboard_p", "resolve_method", "test_lines"]
+
+#: How each of the test's intervals is made, as ``compare`` says it.
+TEST_CI = {"exact-conditional": "exact, given the discordant captures: Clopper-Pearson's interval of the share of "
+                                "them A gets right, which inverts the test",
+           "corrected-t": "corrected t, which inverts the test"}
 
 
 def resolve_method(lb_rows: pd.DataFrame, spec: str) -> str:
@@ -89,3 +99,61 @@ def compare_methods(rs: ResultSet, lb: Leaderboard, a: str, b: str) -> Compariso
     ra = lb.rows[lb.rows["method_id"] == ida].iloc[0].to_dict()
     rb = lb.rows[lb.rows["method_id"] == idb].iloc[0].to_dict()
     return Comparison(lb, ra, rb, test, pairs, per_class)
+
+
+def _pts(v: float) -> str:
+    return f"{100 * v:+.2f}"
+
+
+def test_lines(t: PairedTest) -> list[str]:
+    """What ``compare`` says of a test: the difference; the test, its two-sided p and that it is this
+    comparison's alone (no multiple-comparison correction); the 95 % interval that inverts the test
+    (it excludes 0 exactly when p < 0.05); the bootstrap over subjects where subjects are the unit,
+    said to be a description, not the test's interval."""
+    if t.test == "none":
+        return [f"paired test: not possible ({t.n} shared {t.paired_by or 'fold'}s)"]
+    out = [f"paired by {t.paired_by} (n={t.n}): mean difference A-B {_pts(t.mean_difference)} points"]
+    df = f"{t.n - 1} df; " if t.test == "corrected-t" else ""
+    if not math.isfinite(t.pvalue):
+        out.append(f"{TEST_NAMES[t.test]}: no p-value ({t.note}: A-B {_pts(t.mean_difference)} points in every fold)")
+    else:
+        out.append(f"{TEST_NAMES[t.test]}, two-sided p = {t.pvalue:.4g} ({df}this comparison alone, "
+                   "no multiple-comparison correction)")
+    if math.isfinite(t.test_ci_low):
+        out.append(f"95 % interval of A-B {_pts(t.test_ci_low)} to {_pts(t.test_ci_high)} points "
+                   f"({TEST_CI[t.test_ci_method]}: it excludes 0 exactly when p < 0.05)")
+    elif t.test == "mcnemar-exact":
+        out.append("no interval: no discordant capture (each capture right for both methods or wrong for both)")
+    if t.ci_method == "subject-bootstrap":
+        out.append(f"between subjects: A-B {_pts(t.ci_low)} to {_pts(t.ci_high)} points, 95 % bootstrap over "
+                   f"{t.n_subjects} subjects (resampling people, not {t.paired_by}s: how the difference varies "
+                   "between people, not the test's interval, so it need not agree with p)")
+    return out
+
+
+def leaderboard_p(c: Comparison) -> dict[str, Any]:
+    """Where the leaderboard's p of the pair comes from: the leaderboard tests each method against its
+    best (``best``) only, with the same test, and Holm-adjusts over the table's ``comparisons``
+    (the p-values it has). ``p_value`` / ``p_holm``: its unadjusted and adjusted p for the pair when
+    one of them is the best (NaN otherwise: ``tested`` False); ``text``: this said in one line."""
+    rows = c.leaderboard.rows
+    best = rows.iloc[0]
+    k = int(rows["p_value"].notna().sum())
+    ids = (c.a["method_id"], c.b["method_id"])
+    out = {"best": str(best["method_id"]), "correction": "holm", "comparisons": k, "tested": best["method_id"] in ids,
+           "p_value": math.nan, "p_holm": math.nan}
+    family = (f"Holm-adjusted over the table's {k} comparisons with the best" if k > 1 else
+              "the table's only comparison with the best, which Holm leaves as it is")
+    if not out["tested"]:
+        out["text"] = (f"the leaderboard tests each method against the best ({method_label(best.to_dict())}) only, "
+                       f"{family}: it has no p for A against B")
+        return out
+    other, tag = (c.b, "B") if ids[0] == best["method_id"] else (c.a, "A")
+    row = rows[rows["method_id"] == other["method_id"]].iloc[0]
+    out.update(p_value=float(row["p_value"]), p_holm=float(row["p_holm"]))
+    if not math.isfinite(out["p_holm"]):
+        out["text"] = f"the leaderboard has no p for {tag} against the best either"
+        return out
+    out["text"] = (f"the leaderboard's p for {tag} against the best is {out['p_holm']:.4g}: the same test "
+                   f"(p = {out['p_value']:.4g}), {family}")
+    return out

@@ -54,7 +54,7 @@ from .labels import method_label
 from .paired import _compare, _latest
 from .pareto import pareto_cost, pareto_front
 from .results import ResultSet, load_results, scheme_label
-from .stats import fold_interval, holm, wilson_interval
+from .stats import fold_interval, holm, rank_values, wilson_interval
 from .stream_table import live_rows, live_sources
 
 __all__ = [
@@ -388,10 +388,13 @@ def _timing_machine(g: pd.DataFrame, ref: str | None, pool_machines: bool) -> st
 
 
 def _ranked(df: pd.DataFrame) -> pd.DataFrame:
-    """The rows by accuracy (then macro F1, then id), with their rank (ties share the best rank)."""
-    df = df.sort_values(["accuracy", "macro_f1", "method_id"], ascending=[False, False, True], na_position="last",
-                        kind="stable").reset_index(drop=True)
-    df.insert(0, "rank", df["accuracy"].rank(method="min", ascending=False, na_option="bottom").astype(int))
+    """The rows by accuracy (then macro F1, then id), with their rank (ties share the best rank);
+    accuracies equal to :data:`~touchbench.reports.stats.RANK_DIGITS` significant digits are one."""
+    key = pd.DataFrame({"acc": rank_values(df["accuracy"]), "f1": rank_values(df["macro_f1"]), "id": df["method_id"]},
+                       index=df.index)
+    key = key.sort_values(["acc", "f1", "id"], ascending=[False, False, True], na_position="last", kind="stable")
+    df = df.loc[key.index].reset_index(drop=True)
+    df.insert(0, "rank", key["acc"].rank(method="min", ascending=False, na_option="bottom").astype(int).to_numpy())
     return df
 
 
@@ -437,6 +440,10 @@ def _add_closing_notes(df: pd.DataFrame, notes: list[str]) -> None:
     if untested and len(df) > 1:
         notes.append(f"{len(untested)} method(s) share neither two folds nor the predictions of one test set "
                      "with the best: not tested")
+    flat = int(((df["test"] == "corrected-t") & df["p_value"].isna()).sum())
+    if flat:
+        notes.append(f"{flat} method(s) differ from the best by the same amount in every fold (no variance): "
+                     "the corrected t-test is undefined there, so no p (—), and they are left out of Holm's family")
     leaks = sorted(set(df["leakage"]) - {""})
     for reason in leaks:
         notes.insert(0, f"LEAKY: {reason}. Its accuracy overstates accuracy on new people; never compare it "

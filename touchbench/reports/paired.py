@@ -82,7 +82,7 @@ def paired_test(by: str, pairs: pd.DataFrame, caps: pd.DataFrame) -> PairedTest:
     """The test that fits the pairing (:mod:`touchbench.reports.stats`: McNemar's exact test on the
     captures of one test set, the corrected resampled t-test over folds), with the interval of the
     difference: by bootstrap over subjects where subjects are the unit (``caps``: the paired
-    captures, :func:`paired_captures`), else the corrected t interval."""
+    captures, :func:`paired_captures`), else the test's own (kept in ``test_ci_*`` in either case)."""
     if by == "fold":
         ratio = float(np.mean(pairs["n_test"] / pairs["n_train"])) if (pairs["n_train"] > 0).all() else math.nan
         test = corrected_resampled_t(pairs["a"] - pairs["b"], ratio)

@@ -21,7 +21,17 @@ Which test is used when (stated once, used everywhere):
   reverse, ``p = binomtest(b, b + c, 1/2)`` two-sided (:func:`mcnemar_exact`).
   A capture evaluated with several seeds counts as right for a method when
   it is right for at least half of that method's seeds. The unit is the
-  capture: ``n`` is the number of paired test captures.
+  capture: ``n`` is the number of paired test captures. The test's own
+  interval of the difference ``(b - c) / n`` is conditional on the ``b + c``
+  discordant captures: the Clopper-Pearson interval ``[L, U]`` of the share
+  ``b / (b + c)`` (scipy's ``BinomTestResult.proportion_ci(method="exact")``),
+  which inverts the exact binomial test, mapped to ``(b + c) / n * (2 L - 1,
+  2 U - 1)`` (Fay 2010, "Two-sided exact tests and matching confidence
+  intervals for discrete data", R Journal 2(1): McNemar's exact test with the
+  interval of its discordant-pair ratio; at the null share 1/2 the binomial
+  is symmetric, so the central interval matches the two-sided test): it
+  excludes 0 exactly when ``p < 0.05``. Without a discordant capture there
+  is no interval (``p = 1``).
 - **Two methods over folds** (k-fold, leave-one-subject-out, repeated
   splits: at least two shared folds): the corrected resampled t-test of
   Nadeau & Bengio (2003, Sec. 4, the "corrected resampled t"): over the
@@ -29,8 +39,21 @@ Which test is used when (stated once, used everywhere):
   n_test/n_train) * var(d))`` with ``J - 1`` degrees of freedom, where
   ``n_test/n_train`` is the mean ratio over the folds; the variance is
   inflated because training sets overlap (:func:`corrected_resampled_t`). The
-  unit is the fold: ``n`` is the number of paired folds. Differences all
-  equal and nonzero give ``t`` infinite and ``p = 0``; all zero, ``p = 1``.
+  unit is the fold: ``n`` is the number of paired folds. Its interval,
+  ``mean(d) +- t(0.975, J-1) * se``, inverts the test.
+- **Degenerate limits of the corrected t** (float64; ``var(d)`` is zero when
+  its sd is at most ``1e-12 * max(1, max |d|)``, the rounding of fold
+  accuracies that differ by one same fraction). Every fold differing by the
+  same nonzero amount: ``t = mean / 0`` is undefined, and so are ``p``, the
+  one-sided p-values, ``d_z`` and the interval (NaN; the test's ``note``
+  says "no variance: every fold differs by the same amount"), never
+  ``p = 0`` nor an infinite ``t``. Every difference zero (``|mean(d)| <=
+  1e-12``): no difference, ``t = 0``, ``p = 1``, one-sided p-values 1/2, no
+  interval; ``p`` is the probability under the null of a difference at
+  least as far from 0 as the observed one, and nothing is closer than 0 --
+  the convention of McNemar's exact test without a discordant pair (above;
+  statsmodels' ``mcnemar(exact=True)``: ``min(1, 2 * binom.cdf(0, 0, 1/2))
+  = 1``).
 - **Interval of a difference.** Where subjects are the unit (a single test
   set holding two or more subjects, or folds that each test one subject, as
   leave-one-subject-out), a percentile bootstrap over the test subjects
@@ -38,12 +61,19 @@ Which test is used when (stated once, used everywhere):
   difference of the pooled accuracies, :data:`BOOTSTRAP_RESAMPLES`
   resamples, seeded: :data:`BOOTSTRAP_SEED`); it resamples subjects, never
   captures, since captures of one person are not independent. Otherwise, the
-  corrected t interval ``mean(d) +- t(0.975, J-1) * sqrt((1/J +
-  n_test/n_train) * var(d))``. The decision is the test's; the interval
-  describes the difference.
+  test's own interval: the corrected t interval ``mean(d) +- t(0.975, J-1)
+  * sqrt((1/J + n_test/n_train) * var(d))``, or McNemar's exact conditional
+  one. The decision is the test's; the bootstrap interval describes the
+  difference between people and need not agree with it, so the test's own
+  interval is kept beside it (``test_ci_low`` / ``test_ci_high``).
 - **Multiple comparisons.** The p-values of one table (every method against
   the best) are adjusted with Holm's step-down method; a method "differs"
-  when its adjusted p is below ``alpha`` (0.05).
+  when its adjusted p is below ``alpha`` (0.05). An undefined p (above) is
+  left out of the family. ``compare`` reports one comparison's p unadjusted.
+- **Ranks.** Accuracies equal to 12 significant digits (:data:`RANK_DIGITS`,
+  :func:`rank_values`) are one accuracy: the same fractions summed in another
+  order differ in their last bits (``0.1 + 0.2 != 0.3``), never by a real
+  difference, and get one rank.
 - **Across evaluations** (datasets, or schemes of one dataset: each table
   is one data set in Demsar's sense, never its folds): the methods' ranks
   within each table, averaged (Demsar 2006, Sec. 3.2.2); the Friedman test
@@ -60,14 +90,27 @@ Which test is used when (stated once, used everywhere):
   standardized mean difference of the paired units of its test (Cohen's
   ``d_z = mean(d) / sd(d)``), the one-sided p of "the first is better" from
   the table's test, combined by Stouffer's method weighted by ``sqrt(n)``
-  (``scipy.stats.combine_pvalues(method="stouffer")``); the combined
+  (as ``scipy.stats.combine_pvalues(method="stouffer")``); the combined
   two-sided p is twice the smaller one-sided one (:func:`meta_analysis`).
+  A table's ``z`` is taken from its smaller one-sided p, signed
+  (``Phi^-1(1 - p_greater)`` when that is the smaller, else ``-Phi^-1(1 -
+  p_less)``, 0 when they are equal): for a continuous test it is Stouffer's
+  ``z``, computed in the tail where float64 keeps it (``1 - 1e-20`` is 1,
+  whose ``z`` is infinite); for McNemar's, whose one-sided p-values add to
+  more than 1, it is the same on both sides, so that swapping the methods
+  negates every ``z`` and keeps the two-sided p, and a table whose
+  differences all favour one method can only push toward it. One-sided
+  p-values below the smallest float64 are taken at it (``|z| <= 37.5``). A
+  table whose corrected t is undefined (every fold differing by the same
+  amount) is left out of the combination and named with the direction of
+  its differences: it has no p-value, and a capped ``z`` would be a number of
+  our choosing. With no table left, the combined ``z`` and p are undefined.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from typing import Sequence
 
 import numpy as np
@@ -78,7 +121,9 @@ __all__ = [
     "BOOTSTRAP_SEED",
     "Friedman",
     "MetaAnalysis",
+    "NO_VARIANCE",
     "PairedTest",
+    "RANK_DIGITS",
     "TEST_NAMES",
     "TEST_SHORT",
     "corrected_resampled_t",
@@ -90,6 +135,7 @@ __all__ = [
     "meta_analysis",
     "nemenyi_cd",
     "no_test",
+    "rank_values",
     "subject_bootstrap",
     "wilson_interval",
 ]
@@ -103,6 +149,20 @@ TEST_NAMES = {"mcnemar-exact": "McNemar's exact test", "corrected-t": "corrected
               "none": "no test"}
 #: The tests' short names, for a table cell.
 TEST_SHORT = {"mcnemar-exact": "McNemar", "corrected-t": "corrected t"}
+#: Why a corrected t-test has no p-value: every fold differs by the same amount.
+NO_VARIANCE = "no variance: every fold differs by the same amount"
+#: A mean of fold differences at most this far from 0 (with no variance) is no difference.
+ZERO_DIFFERENCE = 1e-12
+#: Significant digits to which accuracies are one when ranked.
+RANK_DIGITS = 12
+
+
+def rank_values(values: Sequence[float], digits: int = RANK_DIGITS) -> np.ndarray:
+    """``values`` rounded to ``digits`` significant digits (float64; NaN kept): what ranks
+    compare, so that one accuracy computed in another order (``0.1 + 0.2`` and ``0.3``) is one."""
+    x = np.asarray(values, dtype=np.float64)
+    # Python's formatting rounds correctly at any magnitude; NaN and infinities read back as themselves
+    return np.array([float(f"{v:.{digits}g}") for v in x.ravel()], dtype=np.float64).reshape(x.shape)
 
 
 def fold_interval(values: Sequence[float], level: float = 0.95) -> tuple[float, float, float, float]:
@@ -148,7 +208,10 @@ class PairedTest:
     only ``a`` gets right) or the corrected t; ``p_greater`` / ``p_less``: one-sided p-values of
     ``a`` better / worse (1/2 each when the pairs say nothing); ``effect_size``: Cohen's ``d_z`` of
     the paired differences; ``ci_low`` / ``ci_high``: 95 % interval of the difference, by
-    ``ci_method`` (``"subject-bootstrap"`` or ``"corrected-t"``) over ``n_subjects`` subjects.
+    ``ci_method`` (``"subject-bootstrap"`` over ``n_subjects`` subjects where subjects are the unit,
+    else the test's); ``test_ci_low`` / ``test_ci_high``: the 95 % interval that inverts the test
+    (``test_ci_method``: ``"exact-conditional"`` for McNemar's, ``"corrected-t"``), which excludes 0
+    exactly when ``pvalue < 0.05``; ``note``: why ``pvalue`` is undefined (:data:`NO_VARIANCE`).
     """
 
     test: str
@@ -164,6 +227,10 @@ class PairedTest:
     ci_high: float = math.nan
     ci_method: str = ""
     n_subjects: int = 0
+    test_ci_low: float = math.nan
+    test_ci_high: float = math.nan
+    test_ci_method: str = ""
+    note: str = ""
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -188,10 +255,13 @@ def _d_z(d: np.ndarray) -> float:
     return float(np.mean(d)) / sd if sd > 0 else math.nan
 
 
-def mcnemar_exact(a_correct: Sequence[bool], b_correct: Sequence[bool]) -> PairedTest:
+def mcnemar_exact(a_correct: Sequence[bool], b_correct: Sequence[bool], level: float = 0.95) -> PairedTest:
     """McNemar's exact test of two methods' correctness on the same test captures (see the module
     docstring): ``b`` = captures only ``a`` gets right, ``c`` = only ``b``; ``p =
-    binomtest(b, b + c, 1/2)``, two-sided; p = 1 without a discordant capture."""
+    binomtest(b, b + c, 1/2)``, two-sided; p = 1 without a discordant capture. Its interval
+    (``ci_*`` and ``test_ci_*``) is the exact conditional one, Clopper-Pearson's of ``b / (b + c)``
+    mapped to the difference (Fay 2010); the one-sided p-values are ``P(X >= b)`` and ``P(X >= c)``
+    with ``X ~ Binomial(b + c, 1/2)``, so that swapping the methods swaps them exactly."""
     x = np.asarray(a_correct, dtype=bool)
     y = np.asarray(b_correct, dtype=bool)
     if x.shape != y.shape:
@@ -203,16 +273,21 @@ def mcnemar_exact(a_correct: Sequence[bool], b_correct: Sequence[bool]) -> Paire
     d = x.astype(np.float64) - y.astype(np.float64)
     if b + c == 0:
         return PairedTest("mcnemar-exact", "capture", n, 0.0, 0.0, 1.0, 0.5, 0.5, math.nan)
-    p = float(stats.binomtest(b, b + c, 0.5).pvalue)
-    greater = float(stats.binomtest(b, b + c, 0.5, alternative="greater").pvalue)
-    less = float(stats.binomtest(b, b + c, 0.5, alternative="less").pvalue)
-    return PairedTest("mcnemar-exact", "capture", n, (b - c) / n, float(b), p, greater, less, _d_z(d))
+    res = stats.binomtest(b, b + c, 0.5)
+    greater, less = (float(stats.binom.sf(k - 1, b + c, 0.5)) for k in (b, c))
+    ci = res.proportion_ci(confidence_level=level, method="exact")
+    share = (b + c) / n  # the difference is share * (2 pi - 1), pi the discordant captures a gets right
+    lo, hi = share * (2.0 * ci.low - 1.0), share * (2.0 * ci.high - 1.0)
+    return PairedTest("mcnemar-exact", "capture", n, (b - c) / n, float(b), float(res.pvalue), greater, less,
+                      _d_z(d), lo, hi, "exact-conditional", test_ci_low=lo, test_ci_high=hi,
+                      test_ci_method="exact-conditional")
 
 
 def corrected_resampled_t(d: Sequence[float], test_train_ratio: float, level: float = 0.95) -> PairedTest:
     """Nadeau & Bengio's corrected resampled t-test of paired fold differences ``d`` (see the
-    module docstring), with its interval ``ci_low`` / ``ci_high``; ``test_train_ratio``: the folds'
-    mean ``n_test / n_train``."""
+    module docstring), with its interval (``ci_*`` and ``test_ci_*``); ``test_train_ratio``: the
+    folds' mean ``n_test / n_train``. No variance: undefined (NaN, ``note`` :data:`NO_VARIANCE`)
+    unless every difference is 0 (``p = 1``), as the module docstring defines."""
     x = np.asarray(d, dtype=np.float64)
     j = len(x)
     if j < 2 or not np.isfinite(test_train_ratio):
@@ -220,15 +295,15 @@ def corrected_resampled_t(d: Sequence[float], test_train_ratio: float, level: fl
     mean = float(np.mean(x))
     se = math.sqrt(1.0 / j + test_train_ratio) * _sd(x)
     if se == 0.0:
-        t = math.copysign(math.inf, mean) if mean else 0.0
-        return PairedTest("corrected-t", "fold", j, mean, t, 0.0 if mean else 1.0,
-                          float(t > 0) if mean else 0.5, float(t < 0) if mean else 0.5, math.nan,
-                          mean, mean, "corrected-t")
+        if abs(mean) <= ZERO_DIFFERENCE:
+            return PairedTest("corrected-t", "fold", j, 0.0, 0.0, 1.0, 0.5, 0.5)
+        return PairedTest("corrected-t", "fold", j, mean, math.nan, math.nan, note=NO_VARIANCE)
     t = mean / se
     half = float(stats.t.ppf(0.5 + level / 2.0, j - 1)) * se
+    lo, hi = mean - half, mean + half
     return PairedTest("corrected-t", "fold", j, mean, t, float(2 * stats.t.sf(abs(t), j - 1)),
                       float(stats.t.sf(t, j - 1)), float(stats.t.cdf(t, j - 1)), _d_z(x),
-                      mean - half, mean + half, "corrected-t")
+                      lo, hi, "corrected-t", test_ci_low=lo, test_ci_high=hi, test_ci_method="corrected-t")
 
 
 def subject_bootstrap(right_a: Sequence[float], right_b: Sequence[float], n: Sequence[float], *,
@@ -321,8 +396,10 @@ def friedman(scores: np.ndarray, alpha: float) -> Friedman:
 
 @dataclass(frozen=True)
 class MetaAnalysis:
-    """Two methods across tables: per table the effect size (``d_z``), units and one-sided p-values;
-    Stouffer's combined ``z`` (positive: ``a`` better) and the two-sided combined p."""
+    """Two methods across tables, per table with a test (in the order given): the effect size
+    (``d_z``), units, one-sided p of ``a`` better, its signed ``z`` (``z_tables``) and whether it is
+    ``combined`` (False: its p is undefined, NaN ``z``); Stouffer's combined ``z`` (positive: ``a``
+    better), the two-sided combined p and the one-sided ones (NaN when no table is combined)."""
 
     effect_sizes: list[float]
     n: list[int]
@@ -331,24 +408,38 @@ class MetaAnalysis:
     pvalue: float
     p_greater_combined: float
     p_less_combined: float
+    z_tables: list[float] = field(default_factory=list)
+    combined: list[bool] = field(default_factory=list)
 
     def as_dict(self) -> dict:
         return asdict(self)
 
 
+def _signed_z(p_greater: float, p_less: float) -> float:
+    """A table's Stouffer ``z`` from its smaller one-sided p, signed (module docstring): positive
+    when ``a`` is the better, 0 when the two are equal; NaN when they are undefined."""
+    if not (np.isfinite(p_greater) and np.isfinite(p_less)):
+        return math.nan
+    tiny = np.finfo(np.float64).tiny
+    if p_greater < p_less:
+        return float(stats.norm.isf(max(p_greater, tiny)))
+    if p_less < p_greater:
+        return -float(stats.norm.isf(max(p_less, tiny)))
+    return 0.0
+
+
 def meta_analysis(tests: Sequence[PairedTest]) -> MetaAnalysis:
-    """MOABB's meta-analysis of one comparison across tables (see the module docstring); tables
-    without a test are left out."""
-    done = [t for t in tests if t.test != "none" and np.isfinite(t.p_greater)]
+    """MOABB's meta-analysis of one comparison across tables (see the module docstring): Stouffer's
+    ``Z = sum(w z) / sqrt(sum w^2)``, ``w = sqrt(n)``; tables without a test are left out, and so
+    are those whose p is undefined (``combined`` False)."""
+    done = [t for t in tests if t.test != "none"]
     if not done:
         raise ValueError("no table has a test of the two methods to combine")
-    w = np.sqrt(np.array([t.n for t in done], dtype=np.float64))
-    # a one-sided p of exactly 0 or 1 (differences all of one sign) is an infinite z: kept finite
-    tiny = np.finfo(np.float64).tiny
-    greater = np.clip([t.p_greater for t in done], tiny, 1.0)
-    less = np.clip([t.p_less for t in done], tiny, 1.0)
-    g = stats.combine_pvalues(greater, method="stouffer", weights=w)
-    lo = stats.combine_pvalues(less, method="stouffer", weights=w)
+    z = np.array([_signed_z(t.p_greater, t.p_less) for t in done], dtype=np.float64)
+    ok = np.isfinite(z)
+    w = np.sqrt(np.array([t.n for t in done], dtype=np.float64))[ok]
+    big_z = float(np.sum(w * z[ok]) / math.sqrt(np.sum(w * w))) if ok.any() else math.nan
+    greater, less = float(stats.norm.sf(big_z)), float(stats.norm.sf(-big_z))
     return MetaAnalysis([t.effect_size for t in done], [t.n for t in done], [t.p_greater for t in done],
-                        float(g.statistic), float(min(1.0, 2 * min(g.pvalue, lo.pvalue))), float(g.pvalue),
-                        float(lo.pvalue))
+                        big_z, float(2 * stats.norm.sf(abs(big_z))), greater, less,
+                        [float(v) for v in z], [bool(v) for v in ok])
