@@ -363,3 +363,16 @@ values = st.recursive(st.none() | st.booleans() | st.integers(-10, 10**12) | st.
 def test_random_documents_are_a_protocol_or_one_protocol_error(doc):
     base = yaml.safe_load(BASE)
     _outcome(yaml.safe_dump({**base, **doc}))
+
+
+def test_training_one_method_needs_only_its_own_extra(tmp_path, monkeypatch):
+    from touchbench.deploy.train import train_from_protocol
+
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(checks, "missing_extra", lambda extra: ["xgboost"] if extra == "xgboost" else [])
+    p = tmp_path / "p.yaml"
+    p.write_text("name: core\n" + HEAD + "features: [sd]\nclassifiers: [zhou-lda, xgboost]\nseed: 0\n")
+    assert train_from_protocol(p, "zhou-lda") is not None
+    with pytest.raises(ProtocolError, match=r"p.yaml:5: classifiers\[1\]: classifier 'xgboost' needs the optional "
+                                            r"'xgboost' extra"):
+        train_from_protocol(p, "xgboost")
