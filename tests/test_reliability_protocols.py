@@ -183,11 +183,50 @@ def test_scikit_learn_parameter_validation_without_fitting():
     assert parse_protocol(HEAD + "features: [sd]\nclassifiers: [gaus-rf]\n", "p.yaml").name
 
 
-def test_a_missing_extra_is_refused_with_its_install_hint(monkeypatch):
+def test_a_missing_extra_is_refused_with_its_install_hint_for_the_methods_that_need_it(monkeypatch):
     monkeypatch.setattr(checks, "missing_extra", lambda extra: ["torch"] if extra == "deep" else [])
     text = HEAD + "features:\n  - [{name: raw-window, params: {frames: 50}}]\nclassifiers: [zhou-lda, cnn]\n"
-    assert refused(text) == ("p.yaml:5: classifiers[1]: classifier 'cnn' needs the optional 'deep' extra, not "
-                             "installed here (torch missing): pip install 'touchbench[deep]'")
+    proto = parse_protocol(text, "p.yaml")  # reading it needs no extra: running the CNN does
+    checks.require_extras(proto, {"zhou-lda"})
+    with pytest.raises(ProtocolError) as e:
+        checks.require_extras(proto)
+    assert str(e.value) == ("p.yaml:5: classifiers[1]: classifier 'cnn' needs the optional 'deep' extra, not "
+                            "installed here (torch missing): pip install 'touchbench[deep]'")
+
+
+class _NoModule:
+    """An import finder for which ``names`` are not installed (a core install)."""
+
+    def __init__(self, *names):
+        self.names = names
+
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in self.names:
+            raise ModuleNotFoundError(f"No module named {name!r}")
+        return None
+
+
+def test_a_core_install_runs_the_methods_asked_for_and_refuses_the_others_naming_their_extra(tmp_path,
+                                                                                             monkeypatch):
+    import sys
+
+    import pandas as pd
+
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(checks, "missing_extra", lambda extra: ["xgboost"] if extra == "xgboost" else [])
+    monkeypatch.setattr(sys, "meta_path", [_NoModule("xgboost"), *sys.meta_path])
+    p = tmp_path / "p.yaml"
+    p.write_text("name: core\n" + HEAD + "features: [sd]\nclassifiers: [zhou-lda, xgboost]\nseed: 0\n")
+    r = CliRunner().invoke(cli, ["run", str(p), "--method", "zhou-lda", "--out", str(tmp_path / "a"), "--jobs", "1",
+                                 "--no-progress"])
+    assert r.exit_code == 0, r.output
+    scores = pd.read_parquet(tmp_path / "a" / "scores.parquet")
+    assert set(scores["classifier"]) == {"zhou-lda"} and (scores["status"] == "ok").all()
+    r = CliRunner().invoke(cli, ["run", str(p), "--out", str(tmp_path / "b"), "--jobs", "1", "--no-progress"])
+    assert r.exit_code == 3, r.output
+    assert (f"{p}:5: classifiers[1]: classifier 'xgboost' needs the optional 'xgboost' extra, not installed here "
+            "(xgboost missing): pip install 'touchbench[xgboost]'") in r.output
+    assert "Traceback" not in r.output and not (tmp_path / "b" / "scores.parquet").exists()
 
 
 def test_missing_extra_reads_the_installed_metadata(monkeypatch):
@@ -324,3 +363,16 @@ values = st.recursive(st.none() | st.booleans() | st.integers(-10, 10**12) | st.
 def test_random_documents_are_a_protocol_or_one_protocol_error(doc):
     base = yaml.safe_load(BASE)
     _outcome(yaml.safe_dump({**base, **doc}))
+
+
+def test_training_one_method_needs_only_its_own_extra(tmp_path, monkeypatch):
+    from touchbench.deploy.train import train_from_protocol
+
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(checks, "missing_extra", lambda extra: ["xgboost"] if extra == "xgboost" else [])
+    p = tmp_path / "p.yaml"
+    p.write_text("name: core\n" + HEAD + "features: [sd]\nclassifiers: [zhou-lda, xgboost]\nseed: 0\n")
+    assert train_from_protocol(p, "zhou-lda") is not None
+    with pytest.raises(ProtocolError, match=r"p.yaml:5: classifiers\[1\]: classifier 'xgboost' needs the optional "
+                                            r"'xgboost' extra"):
+        train_from_protocol(p, "xgboost")

@@ -94,8 +94,8 @@ def test_a_title_names_the_evaluation_and_never_carries_a_whole_file_name_patter
                    protocol="to-other-study", run_id="a")
     [lb] = build_leaderboards(load_results([tmp_path / "a"]))
     assert pattern not in lb.title and "(?P<" not in lb.title
-    assert lb.title == ("haart — to-other-study: cross-dataset(test={format=haart-raw,name=other-study/,"
-                        "options={pattern=…}})")
+    # named as a person would: what it was trained on and what tested on, never the scheme's options
+    assert lb.title == "haart — cross-dataset: trained on haart, tested on other-study"
     assert pattern in lb.scheme  # the table's identity (--scheme, JSON) keeps the whole entry
     console = Console(record=True, width=300)
     print_terminal([lb], console)
@@ -108,6 +108,29 @@ def test_a_title_names_the_evaluation_and_never_carries_a_whole_file_name_patter
     (tmp_path / "b" / "manifest.json").write_text(json.dumps(manifest))
     [lb] = build_leaderboards(load_results([tmp_path / "b"]))
     assert lb.title == "haart — to-curve: challenge(column=substrate,test=[curve],train=[foam,none])"
+
+
+
+@pytest.mark.parametrize("test_name, shown", [
+    ("/srv/studies/2024/haart-replication-recordings-second-site/", "haart-replication-recordings-second-site"),
+    ("../recordings/session-3.parquet", "session-3.parquet"),
+    ("socialtouch", "socialtouch"),
+])
+def test_a_cross_dataset_title_names_the_test_data_by_its_name_or_file_name(tmp_path, test_name, shown):
+    import json
+
+    scheme = {"name": "cross-dataset", "test": {"name": test_name, "format": "haart-raw",
+                                                "filters": {"substrate": ["foam"]}, "options": {"pattern": "(?P<x>.+)"}}}
+    write_fake_run(tmp_path / "a", CAPS, FOLDS, METHODS[:2], dataset="haart", scheme=scheme, run_id="a")
+    [lb] = build_leaderboards(load_results([tmp_path / "a"]))
+    assert lb.title == f"haart — cross-dataset: trained on haart, tested on {shown}"
+    # one evaluation of several: its name, then the scheme named
+    manifest = json.loads((tmp_path / "a" / "manifest.json").read_text())
+    manifest["protocol"]["evaluation"] = "replication"
+    (tmp_path / "a" / "manifest.json").write_text(json.dumps(manifest))
+    [lb] = build_leaderboards(load_results([tmp_path / "a"]))
+    assert lb.title == f"haart — replication — cross-dataset: trained on haart, tested on {shown}"
+    assert "{" not in to_markdown([lb]).split("\n")[2]  # the Markdown heading: no raw options
 
 
 # ----------------------------------------------------------------- print sizes and fonts

@@ -409,6 +409,54 @@ def test_a_single_fold_table_keeps_names_and_wilson_intervals_whole_at_80_column
         assert f"{100 * k / 36:.1f}" in line and f"{100 * ci.low:.1f}–{100 * ci.high:.1f}" in line
 
 
+LONG_LABEL = "head" + "x" * 242 + "tail"  # 250 characters
+
+
+@pytest.mark.parametrize("width", [20, 40, 80, 120])
+def test_a_terminal_of_any_width_shows_every_number_whole_and_shortens_a_long_label(tmp_path, width):
+    """Numbers are never cut nor wrapped: a long label is shortened to "…" first (its start and its
+    end kept), and where even the numbers do not fit the table is printed wider than the terminal."""
+    from rich.console import Console
+
+    from touchbench.reports.rendering import display_rows, print_terminal
+
+    write_fake_run(tmp_path / "r", CAPS, FOLDS, [
+        FakeMethod("msd", LONG_LABEL, classifier_name="gaus-rf", wrong=_wrong(A_WRONG)),
+        FakeMethod("sd", "rf", wrong=_wrong(B_WRONG)),
+    ])
+    [lb] = build_leaderboards(load_results([tmp_path / "r"]))
+    console = Console(record=True, width=width)
+    print_terminal([lb], console)
+    lines = console.export_text().splitlines()
+    table = [x for x in lines if x.startswith("│")]
+    # fold accuracies: A 1, 5/6, 1, 5/6, 1, 1; B 1/6 below on every fold; Student t interval, clipped at 100 %
+    for name, accs in (("1", [1, 5 / 6, 1, 5 / 6, 1, 1]), ("2", [5 / 6, 4 / 6, 5 / 6, 4 / 6, 5 / 6, 5 / 6])):
+        m, sd = np.mean(accs), np.std(accs, ddof=1)
+        half = stats.t.ppf(0.975, 5) * sd / math.sqrt(6)
+        rows = [x for x in table if x.startswith(f"│ {name} ")]
+        assert len(rows) == 1, "\n".join(lines)
+        row = rows[0]
+        assert f"│ {100 * m:.1f} ± {100 * sd:.1f} │" in row
+        assert f"│ {100 * (m - half):.1f}–{100 * min(m + half, 1):.1f} " in row
+    # B against A: -1/6 on every fold: no variance, so the corrected t-test gives no p ("—")
+    assert any("│ -16.7, p=—" in x for x in table) and any("(corrected t, n=6 folds)" in x for x in table)
+    # every piece of text in a cell is its whole cell, or a number or its note in parentheses (a line
+    # each), or the long label shortened
+    cells = [cell for c in display_rows(lb)[1] for cell in c]
+    whole = set(cells) | {x for cell in cells if " (" in cell for x in (cell.split(" (")[0], "(" + cell.split(" (", 1)[1])}
+    label = f"msd / {LONG_LABEL}"
+    for x in table:
+        for piece in (p.strip() for p in x.strip("│").split("│")):
+            if piece and piece not in whole:
+                head, _, tail = piece.partition("…")
+                assert head and tail and label.startswith(head) and label.endswith(tail), piece
+    assert sum("…" in x for x in table) == 1  # the long label, on one line
+    if width >= 80:
+        assert max(len(x) for x in lines) <= width
+    else:  # the numbers alone are wider: the table is, and the terminal wraps its lines
+        assert max(len(x) for x in table) > width
+
+
 def test_a_method_that_brings_its_own_input_is_named_by_its_label_everywhere():
     from touchbench.reports.figures.base import short_label
     from touchbench.reports.labels import method_label

@@ -582,3 +582,57 @@ def test_a_calibrated_scene_value_names_its_table_protocol_and_the_run_that_chos
             assert ev.dataset.name == f"scene:{scene}"
             assert all(any(k.replace("__", ".").startswith(c) for c in spec.calibrated)
                        for k in ev.dataset.options), ev.dataset.options
+
+
+def test_papers_list_and_reproduce_only_need_the_extras_of_the_protocols_they_run(tmp_path, monkeypatch):
+    """A core install (the CNN's extra missing): ``papers list`` shows every protocol and the extra it
+    needs, ``reproduce --only`` runs a protocol that needs none; an empty ``--only``, or one that
+    names no protocol, is refused as a usage error naming the protocols."""
+    import json
+
+    from click.testing import CliRunner
+
+    from touchbench.cli.main import cli
+    from touchbench.papers import profiles
+    from touchbench.protocols import checks
+
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(checks, "missing_extra", lambda extra: ["torch"] if "deep" in extra.split(",") else [])
+    d = tmp_path / "papers"
+    d.mkdir()
+    _write(d / "gaus-tiny.yaml", """name: gaus-tiny
+description: tiny scene, sd, LDA
+dataset: scene:tiny
+scheme: loso
+features: [[sd]]
+classifiers: [zhou-lda]
+seed: 0
+""")
+    _write(d / "cnn-tiny.yaml", """name: cnn-tiny
+description: tiny scene, the CNN
+dataset: scene:tiny
+scheme: loso
+features:
+  - [{name: raw-window, params: {frames: 50}}]
+classifiers: [cnn]
+seed: 0
+""")
+    monkeypatch.setattr(profiles, "PAPERS_DIR", d)
+    r = CliRunner().invoke(cli, ["papers", "list"])
+    assert r.exit_code == 0, r.output
+    lines = r.output.splitlines()
+    cnn, gaus = (lines.index(next(x for x in lines if x.startswith(f"{n} "))) for n in ("cnn-tiny", "gaus-tiny"))
+    assert [x for x in lines[cnn:gaus] if "needs" in x] == [
+        " " * 40 + "needs the optional 'deep' extra (not installed here: torch; pip install 'touchbench[deep]')"]
+    assert not any("needs" in x for x in lines[gaus:])
+    doc = json.loads(CliRunner().invoke(cli, ["papers", "list", "--json"]).stdout)
+    assert {p["name"]: p["extras"] for p in doc["protocols"]} == {"cnn-tiny": {"deep": ["torch"]}, "gaus-tiny": {}}
+    out = tmp_path / "res"
+    r = CliRunner().invoke(cli, ["papers", "reproduce", "--only", "gaus-tiny", "--out", str(out), "--jobs", "1",
+                                 "--no-progress"])
+    assert r.exit_code == 0, r.output
+    assert (out / "quick" / "gaus-tiny" / "scores.parquet").is_file() and not (out / "quick" / "cnn-tiny").exists()
+    for only in ("", "no-such-paper"):
+        r = CliRunner().invoke(cli, ["papers", "reproduce", "--only", only, "--out", str(tmp_path / "none")])
+        assert r.exit_code == 2, r.output
+        assert "--only" in r.output and "cnn-tiny, gaus-tiny" in r.output and not (tmp_path / "none").exists()

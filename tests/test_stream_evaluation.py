@@ -161,5 +161,5 @@ def test_a_per_frame_labelled_table_is_evaluated_as_streams_and_shown_in_a_strea
     header = [c.strip() for c in next(line for line in md.splitlines() if line.startswith("| method")).strip("|")
               .split("|")]
     got = dict(zip(header, cells))
-    assert got["rule"] == "max threshold=0.5" and got["streams"] == "3" and got["idle-only %"] == "60.0"
+    assert got["rule"] == "max" and got["streams"] == "3" and got["idle-only %"] == "60.0"
     assert 0.0 <= float(got["frame %"]) <= 100.0

@@ -34,10 +34,12 @@ def protocols() -> None:
 def validate(file: str, schema_only: bool, as_json: bool) -> None:
     """Validate FILE: schema, names, parameters, and (unless --schema-only)
     the dataset filters and the folds of the scheme. Nothing is computed."""
+    from ..protocols.checks import require_extras
     from ..protocols.loading import load_protocol  # here: listing protocols reads no schema
 
     path = find_protocol(file)
     proto = load_protocol(path)
+    require_extras(proto)  # every method must run here (`run --method` needs only the extras of those it runs)
     combos = proto.combinations()
     clfs = proto.classifier_entries()
     n_methods = len(proto.evaluated_methods())

@@ -313,25 +313,31 @@ def papers() -> None:
 @click.option("--profile", default="quick", show_default=True, help="Show what this profile changes.")
 @json_option
 def papers_list(profile: str, as_json: bool) -> None:
-    """The paper protocols and what the profile changes in each."""
+    """The paper protocols, what the profile changes in each, and the optional extras each needs
+    (those not installed here marked so: only the protocols run need theirs)."""
     from ..papers.profiles import PROFILES, apply_profile, paper_protocols
+    from ..protocols.checks import needed_extras
     from ..protocols.loading import load_protocol
 
     if profile not in PROFILES:
         raise TouchbenchError(f"unknown profile {profile!r} (known: {', '.join(PROFILES)})")
+    rows = []
+    for f in paper_protocols():
+        proto, changes = apply_profile(load_protocol(f), PROFILES[profile])
+        rows.append({"name": f.stem, "description": proto.description, "changes": changes,
+                     "extras": needed_extras(proto)})
     if as_json:
-        rows = []
-        for f in paper_protocols():
-            proto, changes = apply_profile(load_protocol(f), PROFILES[profile])
-            rows.append({"name": f.stem, "description": proto.description, "changes": changes})
         echo_json({"profile": profile, "description": PROFILES[profile].description, "protocols": rows})
         return
     click.echo(f"profile {profile}: {PROFILES[profile].description}")
-    for f in paper_protocols():
-        proto, changes = apply_profile(load_protocol(f), PROFILES[profile])
-        click.echo(f"{f.stem:38s} {proto.description}")
-        for c in changes:
+    for row in rows:
+        click.echo(f"{row['name']:38s} {row['description']}")
+        for c in row["changes"]:
             click.echo(f"{'':40s}{c}")
+        for extra, missing in row["extras"].items():
+            click.echo(f"{'':40s}needs the optional {extra!r} extra"
+                       + (f" (not installed here: {', '.join(missing)}; pip install 'touchbench[{extra}]')"
+                          if missing else ""))
 
 
 @papers.command("reproduce", epilog=example("touchbench papers reproduce --profile quick --jobs 2"))
@@ -352,8 +358,14 @@ def papers_reproduce(profile, out, only, jobs, report_path, progress, audit) -> 
     finished tasks) and write REPORT.md: for each table and figure, the
     paper's number, ours, the difference, real or synthetic data, and the
     protocol file."""
-    from ..papers.reproduce import reproduce
+    from ..papers.profiles import paper_protocols
+    from ..papers.reproduce import chosen_files, reproduce
 
+    if only:
+        try:
+            chosen_files(paper_protocols(), list(only))
+        except TouchbenchError as e:
+            raise click.BadParameter(str(e).removeprefix("--only: "), param_hint="--only") from None
     failed: list[str] = []
     p = reproduce(profile, out, only=list(only) or None, jobs=jobs, progress=progress, report=report_path,
                   echo=log.info, failed=failed, audit=audit)

@@ -130,7 +130,7 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
         proto.evaluations_named(evaluations)
     except UnknownEvaluation as e:
         raise click.BadParameter(str(e), param_hint="--evaluation") from None
-    plans = plan_protocol(proto, out, evaluations=evaluations)  # every evaluation checked before any runs
+    plans = plan_protocol(proto, out, evaluations=evaluations, methods=methods)  # all checked before any runs
     if methods:
         labels = {m for plan, _ in plans for m in method_labels(plan)}
         unknown = [m for m in methods if m not in labels]

@@ -39,6 +39,7 @@ from ..core.suggest import did_you_mean
 from ..engine.planning import Prepared, fold_seed, prepare_evaluation, serving_protocol, training_side
 from ..methods import Method
 from ..protocols.library import find_protocol
+from ..protocols.checks import require_extras
 from ..protocols.loading import load_protocol
 from ..protocols.schema import Protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
@@ -132,6 +133,7 @@ def train_from_protocol(
     path = find_protocol(str(protocol))
     proto = _evaluation(load_protocol(path), evaluation)
     m = _choose(proto, method)
+    require_extras(proto, {m.label})  # the chosen method's extra, not the others'
     prepared = prepare_evaluation(proto)  # loads the data, applies the filters, builds the folds
     served, left_out = serving_protocol(prepared)  # refuses what cannot serve the sensor
     if m not in served.evaluated_methods():

@@ -46,6 +46,7 @@ from rich.progress import (
 
 from ..core.errors import TouchbenchError
 from ..datasets.model import TouchDataset
+from ..protocols.checks import require_extras
 from ..protocols.loading import load_protocol
 from ..protocols.schema import Protocol
 from ..core.paths import results_root
@@ -443,13 +444,18 @@ def results_dirs(protocol: Protocol, out: str | Path | None = None) -> list[tupl
 
 
 def plan_protocol(protocol: Protocol, out: str | Path | None = None, *, cache_root: str | Path | None = None,
-                  dataset: TouchDataset | None = None, evaluations: Sequence[str] | None = None
-                  ) -> list[tuple[Plan, Path]]:
+                  dataset: TouchDataset | None = None, evaluations: Sequence[str] | None = None,
+                  methods: Sequence[str] | None = None) -> list[tuple[Plan, Path]]:
     """Every evaluation of ``protocol`` (only those named in ``evaluations``) planned, each with its
-    results folder: every check of every evaluation is done before any task runs."""
+    results folder: every check of every evaluation is done before any task runs, among them that
+    the methods to run (those of ``methods`` the plans hold; all of them without) have their
+    optional extras installed (:func:`touchbench.protocols.checks.require_extras`)."""
     pairs = [(sub, folder) for sub, folder in results_dirs(protocol, out)
              if not evaluations or sub.evaluation in evaluations]
-    return [(plan_run(sub, cache_root=cache_root, dataset=dataset), folder) for sub, folder in pairs]
+    plans = [(plan_run(sub, cache_root=cache_root, dataset=dataset), folder) for sub, folder in pairs]
+    planned = {m for plan, _ in plans for m in method_labels(plan)}
+    require_extras(protocol, planned & set(methods) if methods else planned)
+    return plans
 
 
 def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None, *, jobs: int = 1,
@@ -464,7 +470,7 @@ def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None,
     if not isinstance(protocol, Protocol):
         protocol = load_protocol(protocol)
     out_list = []
-    for plan, folder in plan_protocol(protocol, out, cache_root=cache_root, dataset=dataset):
+    for plan, folder in plan_protocol(protocol, out, cache_root=cache_root, dataset=dataset, methods=methods):
         labels = set(method_labels(plan))
         present = [m for m in methods or () if m in labels]
         out_list.append(run_plan(plan, folder, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,

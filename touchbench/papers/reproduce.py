@@ -105,10 +105,20 @@ def _chosen(planned: list[tuple], only: list[str] | None) -> list[tuple]:
     """The planned protocols whose file name contains one of ``only`` (all of them without ``only``)."""
     if not only:
         return planned
-    chosen = [p for p in planned if any(o in p[2].stem for o in only)]
-    if not chosen:
-        raise TouchbenchError(f"no paper protocol matches {only}")
-    return chosen
+    return [p for p in planned if p[2] in set(chosen_files([f for _, _, f in planned], only))]
+
+
+def chosen_files(files: list[Path], only: list[str]) -> list[Path]:
+    """The paper protocol ``files`` whose name contains one of ``only``; an empty name (which every
+    name contains) or one that names no protocol is refused, naming the protocols."""
+    names = ", ".join(f.stem for f in files)
+    if any(not o.strip() for o in only):
+        raise TouchbenchError(f"--only: an empty name would select every protocol; give part of a "
+                              f"protocol's name (one of: {names})")
+    unmatched = [o for o in only if not any(o in f.stem for f in files)]
+    if unmatched:
+        raise TouchbenchError(f"--only: no paper protocol's name contains {unmatched[0]!r} (the protocols: {names})")
+    return [f for f in files if any(o in f.stem for o in only)]
 
 
 def _with_earlier_results(runs: list[ProtocolRun], planned: list[tuple], folder: Path) -> list[ProtocolRun]:

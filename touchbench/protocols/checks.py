@@ -9,7 +9,7 @@ import copy
 import inspect
 import math
 import re
-from typing import Any
+from typing import Any, Collection
 
 from pydantic import ValidationError
 
@@ -23,7 +23,7 @@ from ..features import FEATURES
 from ..features.base import FeatureInputError, SensorNeededError, make_feature_set
 from ..methods import METHODS
 from .entries import FeatureRef, _fmt_value, _is_grid, expand_grid
-from .errors import _loc_str, _pydantic_issues
+from .errors import _loc_str, _make_error, _pydantic_issues
 from .expected import ExpectedBest
 from .schema import MAX_ENTRIES, Protocol, protocol_dataset_ref
 from .schemes import SPLITTERS, SplitError
@@ -181,14 +181,14 @@ def _feature_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
 
 
 def _estimator_issues(name: str, params: dict[str, Any], loc: tuple, what: str) -> list[tuple[tuple, str]]:
-    """Parameters of the classifier or named method ``name`` (a method's go to its estimator), at ``loc``."""
+    """Parameters of the classifier or named method ``name`` (a method's go to its estimator), at ``loc``;
+    none when its optional extra is missing (it cannot be built here; the run of it is refused:
+    :func:`require_extras`)."""
     est_name, base = _estimator_and_defaults(name)
     factory = CLASSIFIERS.get(est_name)
     extra = CLASSIFIERS.entry(est_name).tags.get("extra")
-    missing = missing_extra(extra) if extra else []
-    if missing:
-        return [(loc, f"{what} {name!r} needs the optional {extra!r} extra, not installed here "
-                      f"({', '.join(missing)} missing): pip install 'touchbench[{extra}]'")]
+    if extra and missing_extra(extra):
+        return []
     issues = _reserved_param_issues(params, loc)
     issues += _unknown_param_issues(name, params, _estimator_param_names(factory), loc, what)
     if issues:
@@ -300,6 +300,42 @@ def _classifier_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
         else:
             issues += _estimator_issues(m.estimator or "", m.params, ("methods", i), "classifier")
     return issues
+
+
+def entry_extras(protocol: Protocol, labels: Collection[str] | None = None) -> list[tuple[tuple, str, str]]:
+    """``(field, what, extra)`` of each classifier or method entry of ``protocol`` (those whose method
+    label is in ``labels``; all without) whose estimator needs an optional extra (its ``extra`` tag:
+    ``"deep"``, ``"peers,deep"``...), once per field; ``what`` names the entry (``classifier 'cnn'``)."""
+    out = []
+    for _, k, loc in protocol._entry_pairs():
+        if labels is not None and k.label not in labels:
+            continue
+        est_name = _estimator_and_defaults(k.name)[0]
+        extra = CLASSIFIERS.entry(est_name).tags.get("extra") if est_name in CLASSIFIERS else None
+        if extra:
+            named = loc[0] == "methods" and protocol.methods[loc[1]].name is not None
+            out.append((loc, f"{'method' if named else 'classifier'} {k.name!r}", str(extra)))
+    return list(dict.fromkeys(out))
+
+
+def needed_extras(protocol: Protocol) -> dict[str, list[str]]:
+    """Each optional extra some entry of ``protocol`` needs, with its distributions not installed
+    here (``[]``: installed), in the order the protocol names them."""
+    extras = [part.strip() for _, _, extra in entry_extras(protocol) for part in extra.split(",")]
+    return {extra: missing_extra(extra) for extra in dict.fromkeys(extras)}
+
+
+def require_extras(protocol: Protocol, labels: Collection[str] | None = None) -> None:
+    """Refuse to run the entries of ``protocol`` (those whose method label is in ``labels``; all
+    without) that need an optional extra not installed here, each at its field with the install line."""
+    issues = []
+    for loc, what, extra in entry_extras(protocol, labels):
+        missing = missing_extra(extra)
+        if missing:
+            issues.append((loc, f"{what} needs the optional {extra!r} extra, not installed here "
+                                f"({', '.join(missing)} missing): pip install 'touchbench[{extra}]'"))
+    if issues:
+        raise _make_error(protocol.path, protocol._lines, issues, protocol._booleans)
 
 
 def _expected_issues(protocol: Protocol) -> list[tuple[tuple, str]]:

@@ -217,12 +217,17 @@ TITLE_VALUE_CHARS = 24
 
 
 def table_heading(sources: list[dict], scheme: str) -> str:
-    """How a table's title names its evaluation: the evaluation's name (one of several of a protocol)
-    and the scheme, its long values (a file-name pattern, a test dataset's filters) written ``…``
-    (:data:`TITLE_VALUE_CHARS`) and then the protocol named; ``scheme`` (the full label) otherwise."""
-    entries = [s["scheme"] for s in sources if s.get("scheme") is not None]
-    short = scheme_label(entries[0], scheme, limit=TITLE_VALUE_CHARS) if entries else scheme
+    """How a table's title names its evaluation: the evaluation's name (one of several of a protocol),
+    then the scheme as a person would name it (``cross-dataset: trained on haart, tested on
+    other-study``: :func:`touchbench.reports.results.scheme_label` with the dataset), else with its
+    long values (a file-name pattern, a test dataset's filters) written ``…`` (:data:`TITLE_VALUE_CHARS`)
+    and then the protocol named; ``scheme`` (the full label) otherwise."""
+    entry = next((s for s in sources if s.get("scheme") is not None), None)
     names = sorted({str(s["evaluation"]) for s in sources if s.get("evaluation")})
+    if entry is not None and scheme_label(entry["scheme"], dataset=entry.get("dataset")) != scheme_label(entry["scheme"]):
+        readable = scheme_label(entry["scheme"], limit=TITLE_VALUE_CHARS, dataset=entry.get("dataset"))
+        return f"{', '.join(names)} — {readable}" if names else readable
+    short = scheme_label(entry["scheme"], scheme, limit=TITLE_VALUE_CHARS) if entry is not None else scheme
     if not names and short != scheme:
         names = sorted({str(s["protocol"]) for s in sources if s.get("protocol")})
     return f"{', '.join(names)}: {short}" if names else short

@@ -21,13 +21,15 @@ from .across import across_friedman, across_note, ranks_across
 from .labels import _label_parts, _name_cell, _num, _p, _pct, method_names
 from .leaderboard import Leaderboard
 from .stats import TEST_SHORT
-from .stream_table import LIVE_LEGEND, live_cells, live_columns, live_markdown
+from .stream_table import LIVE_ESSENTIAL, LIVE_LEGEND, LIVE_PRIORITY, live_cells, live_markdown
 
 __all__ = ["to_csv", "to_json", "to_markdown"]
 
 
-def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
-    """Header and formatted cells of a leaderboard (terminal, Markdown, HTML)."""
+def display_rows(lb: Leaderboard, sep: str = " ") -> tuple[list[str], list[list[str]]]:
+    """Header and formatted cells of a leaderboard (terminal, Markdown, HTML); ``sep`` joins a
+    number and the note after it (the seeds, the interval's kind, the test: a terminal may break
+    the line there)."""
     header = ["#", "method", "features", "estimator", "folds", "accuracy % (±sd)", "95 % interval",
               "macro F1 %", "latency ms", "fit s", "features ms", "vs best: Δ pp, p (Holm)", "Pareto"]
     show_machine = len(set(lb.rows["timing_machine"])) > 1
@@ -42,11 +44,11 @@ def display_rows(lb: Leaderboard) -> tuple[list[str], list[list[str]]]:
     parts = _label_parts(lb.rows)
     for _, r in lb.rows.iterrows():
         feats = _features_cell(r, parts[r["method_id"]][0], lb.frame_rate)
-        acc, ci = _accuracy_cells(r)
+        acc, ci = _accuracy_cells(r, sep)
         failed_all = r["n_folds"] == 0 and r["n_failed"] > 0
         if failed_all:
             acc, ci = "failed", "—"
-        vs = _versus_best_cell(r, failed_all)
+        vs = _versus_best_cell(r, failed_all, sep)
         row = [str(r["rank"]), _name_cell(r, parts[r["method_id"]]), feats, str(r["classifier_name"]),
                f"{r['n_folds']}" + (f" (+{r['n_failed']} failed)" if r["n_failed"] else ""), acc, ci,
                _pct(r["macro_f1"]), _num(r["latency_ms"]), _num(r["fit_seconds"]), _num(r["feature_ms"]), vs,
@@ -73,27 +75,29 @@ def _features_cell(r: pd.Series, extra: str, frame_rate: float) -> str:
     return feats
 
 
-def _accuracy_cells(r: pd.Series) -> tuple[str, str]:
-    """A row's accuracy (± sd, and the seeds behind a single fold's spread) and its 95 % interval."""
+def _accuracy_cells(r: pd.Series, sep: str = " ") -> tuple[str, str]:
+    """A row's accuracy (± sd, and the seeds behind a single fold's spread) and its 95 % interval
+    (``sep`` before a note)."""
     acc = _pct(r["accuracy"]) + (f" ± {_pct(r['accuracy_sd'])}" if np.isfinite(r["accuracy_sd"]) else "")
     if r["ci_method"] == "wilson" and r.get("n_seeds", 1) > 1:
-        acc += f" ({int(r['n_seeds'])} seeds)"
+        acc += f"{sep}({int(r['n_seeds'])} seeds)"
     ci = f"{_pct(r['ci_low'])}–{_pct(r['ci_high'])}" if np.isfinite(r["ci_low"]) else "—"
     if r["ci_method"] == "wilson" and np.isfinite(r["ci_low"]):
-        ci += " (Wilson)"
+        ci += f"{sep}(Wilson)"
     return acc, ci
 
 
-def _versus_best_cell(r: pd.Series, failed_all: bool) -> str:
-    """A row's comparison with the best method: the difference, its Holm-adjusted p and test."""
+def _versus_best_cell(r: pd.Series, failed_all: bool, sep: str = " ") -> str:
+    """A row's comparison with the best method: the difference, its Holm-adjusted p and test (``sep``
+    before the test)."""
     if failed_all:
         return f"failed: {r.get('error') or 'see the scores'}"
     if r["test"] == "best":
         return "best"
     if r["test"] == "none":
-        return f"{100 * r['diff_vs_best']:+.1f}, not tested (n={r['n_pairs']})" if np.isfinite(r["diff_vs_best"]) else "not tested"
+        return f"{100 * r['diff_vs_best']:+.1f},{sep}not tested (n={r['n_pairs']})" if np.isfinite(r["diff_vs_best"]) else "not tested"
     star = " *" if r["differs"] else ""
-    return (f"{100 * r['diff_vs_best']:+.1f}, p={_p(r['p_holm'])}{star} "
+    return (f"{100 * r['diff_vs_best']:+.1f}, p={_p(r['p_holm'])}{star}{sep}"
             f"({TEST_SHORT.get(r['test'], r['test'])}, n={r['n_pairs']} {r['paired_by']}s)")
 
 
@@ -209,8 +213,12 @@ _TERMINAL_HEADERS = {"accuracy % (±sd)": "accuracy %\n(±sd)", "95 % interval":
                      "vs best: Δ pp, p (Holm)": "vs best: Δ pp,\np (Holm)", "macro F1 %": "macro\nF1 %",
                      "latency ms": "latency\nms", "features ms": "features\nms", "held out %": "held out\n%",
                      "timing machine": "timing\nmachine"}
-#: columns a narrow terminal may wrap (at spaces) when even the essential ones do not fit
-_TERMINAL_WRAPPING = {"evaluation", "accuracy % (±sd)", "95 % interval", "vs best: Δ pp, p (Holm)"}
+#: the columns of words, not numbers: a narrow terminal shortens them (:func:`shorten`) down to
+#: :data:`TEXT_MIN_WIDTH` characters (or their header's width); a number is never cut nor wrapped
+TERMINAL_TEXT = ("method", "features", "estimator", "evaluation", "timing machine")
+TEXT_MIN_WIDTH = 12
+#: the width a text column counts for when a terminal chooses which other columns fit
+TEXT_FIT_WIDTH = 40
 
 
 def fitting_columns(widths: dict[str, int], available: int, essential: Iterable[str]) -> list[str]:
@@ -229,37 +237,118 @@ def fitting_columns(widths: dict[str, int], available: int, essential: Iterable[
     return shown
 
 
-def _terminal_table(lb: Leaderboard, width: int) -> Table:
-    """The table of ``lb`` as a terminal of ``width`` characters shows it (:func:`fitting_columns`)."""
-    header, cells = display_rows(lb)
-    heads = [_TERMINAL_HEADERS.get(h, h) for h in header]
-    widths = {h: max([cell_len(x) for x in head.split("\n")] + [cell_len(c[i]) for c in cells])
-              for i, (h, head) in enumerate(zip(header, heads))}
-    order = [h for h in (*TERMINAL_ESSENTIAL, *TERMINAL_PRIORITY) if h in widths]
-    order += [h for h in header if h not in order]
-    shown = set(fitting_columns({h: widths[h] for h in order}, width, TERMINAL_ESSENTIAL))
-    keep = [i for i, h in enumerate(header) if h in shown]
-    t = Table(title=escape(lb.title), show_lines=False)  # a name like "[b5830b]" is text, not markup
+def shorten(text: str, width: int) -> str:
+    """``text`` in at most ``width`` terminal cells: when longer, its start and its end around "…"
+    (the start the longer half), so that rows told apart by their last parameters stay apart."""
+    if cell_len(text) <= width:
+        return text
+    keep = max(width - 1, 0)
+    head, tail = "", ""
+    for ch in text:
+        if cell_len(head + ch) > keep - keep // 2:
+            break
+        head += ch
+    for ch in reversed(text):
+        if cell_len(head) + cell_len(ch + tail) > keep:
+            break
+        tail = ch + tail
+    return head + "…" + tail
+
+
+def _table_width(widths: dict[str, int], shown: Iterable[str]) -> int:
+    """The characters a rich table takes with columns ``shown`` at ``widths`` (:func:`fitting_columns`)."""
+    return 1 + sum(widths[h] + 3 for h in shown)
+
+
+def _narrowed(widths: dict[str, int], least: dict[str, int], shown: list[str], available: int) -> dict[str, int]:
+    """``widths`` with the text columns among ``shown`` narrowed, the widest first, until the table
+    fits in ``available`` characters or each is at its ``least``."""
+    out = dict(widths)
+    while _table_width(out, shown) > available:
+        text = [h for h in shown if out[h] > least[h]]
+        if not text:
+            break
+        widest = max(text, key=lambda h: out[h])
+        out[widest] -= 1
+    return out
+
+
+def terminal_layout(header: list[str], cells: list[list[str]], text_cells: list[set[int]], available: int,
+                    essential: Iterable[str], priority: Iterable[str] = ()) -> tuple[list[int], dict[str, int]]:
+    """The columns (indices into ``header``) a terminal of ``available`` characters shows and their
+    widths. Every essential column is shown, then those of ``priority`` while they fit whole
+    (:func:`fitting_columns`; a text column counted as at most :data:`TEXT_FIT_WIDTH`); while the table is too wide, its text shrinks (the text columns,
+    :data:`TERMINAL_TEXT`, and each row's cells ``text_cells`` names, down to :data:`TEXT_MIN_WIDTH`).
+    A number never shrinks: where even the numbers do not fit, the table is wider than ``available``
+    (the terminal wraps its lines). A cell's lines are ``\n``-separated; ``header`` holds the
+    header lines as shown."""
+    names = [h.replace("\n", " ") for h in header]
+    widths, least = {}, {}
+    for i, (h, head) in enumerate(zip(names, header)):
+        head_w = max(cell_len(x) for x in head.split("\n"))
+        lines = [(cell_len(x), i in row_text or h in TERMINAL_TEXT) for c, row_text in zip(cells, text_cells)
+                 for x in c[i].split("\n")]
+        widths[h] = max([head_w] + [w for w, _ in lines])
+        numbers = max([head_w] + [w for w, is_text in lines if not is_text])
+        least[h] = max(numbers, min(widths[h], max(TEXT_MIN_WIDTH, head_w)))
+    order = [h for h in (*essential, *priority) if h in widths] + [h for h in names if h not in (*essential, *priority)]
+    # a long label does not keep the other columns off: it counts as TEXT_FIT_WIDTH when they are chosen
+    shown = fitting_columns({h: min(widths[h], max(least[h], TEXT_FIT_WIDTH)) for h in order}, available, essential)
+    widths = _narrowed(widths, least, shown, available)
+    return [i for i, h in enumerate(names) if h in shown], widths
+
+
+def _fitted_table(title: str, header: list[str], cells: list[list[str]], text_cells: list[set[int]],
+                  available: int, essential: Iterable[str], priority: Iterable[str] = ()) -> Table:
+    """A rich table of ``cells`` laid out by :func:`terminal_layout`: its text shortened to the
+    widths, no cell wrapped."""
+    keep, widths = terminal_layout(header, cells, text_cells, available, essential, priority)
+    names = [h.replace("\n", " ") for h in header]
+    t = Table(title=escape(title), show_lines=False)  # a name like "[b5830b]" is text, not markup
     for i in keep:
-        wrap = header[i] in _TERMINAL_WRAPPING
-        t.add_column(escape(heads[i]), overflow="fold", no_wrap=not wrap, min_width=None if wrap else widths[header[i]])
-    for c in cells:
-        t.add_row(*(escape(c[i]) for i in keep))
+        t.add_column(escape(header[i]), no_wrap=True, overflow="ignore", width=widths[names[i]])
+    for c, row_text in zip(cells, text_cells):
+        t.add_row(*(escape("\n".join(shorten(x, widths[names[i]]) if i in row_text or names[i] in TERMINAL_TEXT
+                                      else x for x in c[i].split("\n"))) for i in keep))
     return t
+
+
+def _terminal_table(lb: Leaderboard, width: int) -> Table:
+    """The table of ``lb`` as a terminal of ``width`` characters shows it (:func:`terminal_layout`):
+    a number and its note on one line where the whole table fits so, else on two."""
+    failed = [r["n_folds"] == 0 and r["n_failed"] > 0 for _, r in lb.rows.iterrows()]
+    for sep in (" ", "\n"):
+        header, cells = display_rows(lb, sep)
+        heads = [_TERMINAL_HEADERS.get(h, h) for h in header]
+        vs = header.index("vs best: Δ pp, p (Holm)")
+        text_cells = [{vs} if f else set() for f in failed]  # a failed method's error is words
+        keep, widths = terminal_layout(heads, cells, text_cells, width, TERMINAL_ESSENTIAL, TERMINAL_PRIORITY)
+        whole = all(widths[header[i]] >= cell_len(c[i]) for c in cells for i in keep)
+        if whole and _table_width(widths, [header[i] for i in keep]) <= width:
+            break  # fits with nothing shortened
+    return _fitted_table(lb.title, heads, cells, text_cells, width, TERMINAL_ESSENTIAL, TERMINAL_PRIORITY)
+
+
+def _print_fitted(console: Console, table: Table) -> None:
+    """Print ``table`` whole: wider than the console when its numbers need it (the terminal wraps
+    the lines; no number is cut)."""
+    need = console.measure(table, options=console.options.update_width(10 ** 4)).maximum
+    if need <= console.width:
+        console.print(table)
+        return
+    width = console.width
+    console.width = need
+    try:
+        console.print(table)
+    finally:
+        console.width = width
 
 
 def _terminal_live(lb: Leaderboard, width: int) -> Table:
-    """A stream evaluation's table (:mod:`.stream_table`): every number whole, the least needed
-    columns left out first when the terminal is narrow."""
+    """A stream evaluation's table (:mod:`.stream_table`) laid out as any table (:func:`terminal_layout`):
+    the method and rule shortened first, no number cut."""
     header, cells = live_cells(lb.live)
-    keep = live_columns(header, cells, width)
-    t = Table(title=escape(lb.title), show_lines=False)
-    for i in keep:
-        label = header[i] in ("method", "rule")
-        t.add_column(escape(header[i]), no_wrap=not label, overflow="ellipsis" if label else "fold")
-    for c in cells:
-        t.add_row(*(escape(c[i]) for i in keep))
-    return t
+    return _fitted_table(lb.title, header, cells, [{0, 1}] * len(cells), width, LIVE_ESSENTIAL, LIVE_PRIORITY)
 
 
 def _terminal_width() -> int | None:
@@ -273,19 +362,17 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
     verdict of every method; a wider one adds columns (``TERMINAL_PRIORITY``)."""
     console = console or Console(width=_terminal_width())
     for lb in lbs:
-        console.print(_terminal_table(lb, console.width) if lb.live is None else _terminal_live(lb, console.width))
+        _print_fitted(console, _terminal_table(lb, console.width) if lb.live is None else _terminal_live(lb, console.width))
         console.print(escape(legend(lb) if lb.live is None else LIVE_LEGEND), style="dim")
         for n in lb.notes:
             console.print(escape(f"Note: {n}"), style="yellow")
         console.print()
     ranks = ranks_across(lbs)
     if ranks is not None and len(ranks):
-        t = Table(title=f"Mean rank across {int(ranks['tables'].iloc[0])} tables")
-        for h in ("method", "mean rank", "mean accuracy %"):
-            t.add_column(h)
-        for r in ranks.itertuples():
-            t.add_row(escape(r.method), f"{r.mean_rank:.2f}", _pct(r.mean_accuracy))
-        console.print(t)
+        header = ["method", "mean rank", "mean accuracy %"]
+        cells = [[r.method, f"{r.mean_rank:.2f}", _pct(r.mean_accuracy)] for r in ranks.itertuples()]
+        _print_fitted(console, _fitted_table(f"Mean rank across {int(ranks['tables'].iloc[0])} tables", header, cells,
+                                             [set() for _ in cells], console.width, header))
         console.print(RANK_LEGEND, style="dim")
         f = across_friedman(lbs)
         if f is not None:

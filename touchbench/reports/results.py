@@ -117,22 +117,27 @@ def _fmt(v: Any, limit: int | None = None) -> str:
     return "…" if limit is not None and len(str(v)) > limit else str(v)
 
 
-def scheme_label(scheme: Any, fallback: str = "?", limit: int | None = None) -> str:
+def scheme_label(scheme: Any, fallback: str = "?", limit: int | None = None, dataset: str | None = None) -> str:
     """``name(param=value,...)`` of a protocol's ``scheme`` entry (string or mapping); with ``limit``,
     a value (a parameter's, or one inside a list or mapping) longer than ``limit`` characters, such as
-    a file-name pattern, is written ``…``."""
+    a file-name pattern, is written ``…``; with the protocol's ``dataset``, a scheme that names itself
+    as a person would (``Splitter.heading``: ``cross-dataset: trained on haart, tested on other``)
+    does so."""
     if isinstance(scheme, str):
         return scheme
     if not isinstance(scheme, dict) or "name" not in scheme:
         return fallback
     params = {k: v for k, v in scheme.items() if k != "name"}
     cls = scheme_class(str(scheme["name"]))
+    heading = cls.heading(params, dataset) if cls is not None and dataset is not None else None
+    if heading:
+        return heading
     written = {k: _fmt(v, limit) for k, v in params.items()}
     if cls is not None:
         for k in cls.swept_params:
             written.pop(k, None)
         if cls.base_param is not None and isinstance(params.get(cls.base_param), dict):
-            written[cls.base_param] = scheme_label(params[cls.base_param], limit=limit)
+            written[cls.base_param] = scheme_label(params[cls.base_param], limit=limit, dataset=dataset)
     if not written:
         return str(scheme["name"])
     return f"{scheme['name']}(" + ",".join(f"{k}={written[k]}" for k in sorted(written)) + ")"

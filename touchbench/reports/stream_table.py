@@ -27,6 +27,7 @@ fragmentations, merges) are summed over streams in the JSON output.
 
 from __future__ import annotations
 
+import inspect
 import json
 import math
 from typing import Any
@@ -35,9 +36,10 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from ..streams.rules import RULES
 from .labels import method_label
 
-__all__ = ["LIVE_COLUMNS", "LIVE_LEGEND", "live_cells", "live_columns", "live_markdown", "live_rows", "live_sources", "rule_label"]
+__all__ = ["LIVE_COLUMNS", "LIVE_ESSENTIAL", "LIVE_LEGEND", "LIVE_PRIORITY", "live_cells", "live_markdown", "live_rows", "live_sources", "rule_label"]
 
 TIMES = ("0.3", "1", "2")
 EVENT_ERRORS = ("event_deleted", "event_fragmented", "event_merged", "return_inserted", "return_merging",
@@ -110,10 +112,15 @@ def live_rows(ok: pd.DataFrame) -> pd.DataFrame | None:
 
 
 def rule_label(rule: dict[str, Any]) -> str:
-    """A rule as a person reads it: ``majority n=5``; a gate's level chosen on training captures as
-    ``level=auto``."""
+    """A rule as a person reads it: its name and the parameters it was given other than its defaults
+    (``majority n=9``; ``max`` for the default threshold); the idle class and the level a gate chose
+    on training captures are left out."""
+    try:
+        defaults = {k: p.default for k, p in inspect.signature(RULES.get(str(rule["name"]))).parameters.items()}
+    except Exception:  # a rule this version does not know: every parameter
+        defaults = {}
     parts = [f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in rule.items()
-             if k not in ("name", "fitted_level", "idle")]
+             if k not in ("name", "fitted_level", "idle") and defaults.get(k, object()) != v]
     return " ".join([str(rule["name"]), *parts])
 
 
@@ -155,23 +162,10 @@ LIVE_LEGEND = ("Stream table: each test stream replayed frame by frame (the unit
 
 
 #: the columns a narrow terminal keeps; the others follow, in this order, while the table fits
+#: (``reports.rendering.terminal_layout``)
 LIVE_ESSENTIAL = ("method", "rule", "frame %", "idle-only %")
 LIVE_PRIORITY = ("@1 s", "FA/min", "95 % interval", "@0.3 s", "@2 s", "decide s", "gesture %", "idle %", "bal %",
                  "CPU ms", "x real time", "never %", "streams")
-
-
-def live_columns(header: list[str], cells: list[list[str]], width: int) -> list[int]:
-    """The columns of a stream table a terminal of ``width`` characters shows (their indices, in
-    table order): the essential ones, then the others by priority while every column fits whole
-    (3 characters of border and padding each), so a number never wraps."""
-    w = {h: max([len(h)] + [len(c[i]) for c in cells]) for i, h in enumerate(header)}
-    used = sum(w[h] + 3 for h in LIVE_ESSENTIAL) + 1
-    keep = set(LIVE_ESSENTIAL)
-    for h in LIVE_PRIORITY:
-        if used + w[h] + 3 <= width:
-            keep.add(h)
-            used += w[h] + 3
-    return [i for i, h in enumerate(header) if h in keep]
 
 
 def live_markdown(rows: pd.DataFrame) -> list[str]:

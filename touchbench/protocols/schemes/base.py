@@ -226,6 +226,12 @@ class Splitter:
     #: scheme's lengths): not part of the scheme's label, so runs with different lists combine
     swept_params: ClassVar[tuple[str, ...]] = ()
 
+    @classmethod
+    def heading(cls, params: dict[str, Any], dataset: str) -> str | None:
+        """How a report's title names this scheme with ``params`` (as the protocol wrote them) on the
+        protocol's ``dataset``, as a person would; None: ``name(param=value,...)``."""
+        return None
+
     def __init__(self, target: str = "gesture", random_state: int | None = None, **params: Any):
         self.target = target
         self.random_state = 0 if random_state is None else int(random_state)

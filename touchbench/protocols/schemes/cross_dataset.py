@@ -4,6 +4,7 @@ training sensor when declared).
 
 from __future__ import annotations
 
+from pathlib import PurePath
 from typing import Any
 
 import numpy as np
@@ -61,6 +62,16 @@ class CrossDataset(Splitter):
 
     name = "cross-dataset"
     Params = _CrossParams
+
+    @classmethod
+    def heading(cls, params: dict[str, Any], dataset: str) -> str | None:
+        """``cross-dataset: trained on DATASET, tested on TEST``: the test dataset by its name, or a
+        folder's or file's own name (never its path, options or filters)."""
+        test = named(params, "test").get("test")
+        name = test.get("name") if isinstance(test, dict) else None
+        if not isinstance(name, str) or not name.strip("/"):
+            return None
+        return f"cross-dataset: trained on {dataset}, tested on {PurePath(name.rstrip('/')).name or name}"
 
     def keeps_subjects_apart(self) -> bool:
         return True

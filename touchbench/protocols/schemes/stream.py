@@ -111,6 +111,21 @@ class Stream(Splitter):
     base_param = "base"
     swept_params = ("rules",)  # each rule's scores are rows of their own in the stream table
 
+    @classmethod
+    def heading(cls, params: dict[str, Any], dataset: str) -> str | None:
+        """``live, leave one subject out: windows 0.5 + 1 s, hop 0.1 s`` (the streams' source is in
+        the stream table's title; the rules are its rows)."""
+        base = named(params, "base").get("base")
+        name = base.get("name") if isinstance(base, dict) else None
+        windows, hop = params.get("windows_s", [0.5, 1.0]), params.get("hop_s", 0.1)
+        if not isinstance(name, str) or not isinstance(windows, list):
+            return None
+        try:
+            w = " + ".join(f"{float(x):g}" for x in windows)
+            return f"live over {name}: windows {w} s, hop {float(hop):g} s"
+        except (TypeError, ValueError):
+            return None
+
     def __init__(self, target: str = "gesture", random_state: int | None = None, **params: Any):
         super().__init__(target=target, random_state=random_state, **params)
         base = dict(self.params.base)
