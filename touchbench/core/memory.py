@@ -15,7 +15,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-__all__ = ["FALLBACK_BYTES", "available_memory", "memory_limit"]
+__all__ = ["FALLBACK_BYTES", "available_memory", "describe_bytes", "memory_limit"]
 
 #: what :func:`memory_limit` allows where the system says nothing about its memory
 FALLBACK_BYTES = 2 * 2**30
@@ -77,3 +77,11 @@ def memory_limit(at_most: int | None = None) -> int:
     available = available_memory()
     limit = FALLBACK_BYTES if available is None else available // SHARE
     return int(limit if at_most is None else min(at_most, limit))
+
+
+def describe_bytes(n: int) -> str:
+    """``n`` bytes as a refusal says it: in bytes below a MiB, else in MiB, GiB or TiB."""
+    if n < 2**20:
+        return f"{n:,} bytes"
+    unit = next(u for u in (("TiB", 2**40), ("GiB", 2**30), ("MiB", 2**20)) if n >= u[1])
+    return f"{n / unit[1]:,.1f} {unit[0]}" if unit[0] != "MiB" else f"{n / unit[1]:,.0f} MiB"

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.memory import memory_limit
+from ..core.memory import describe_bytes, memory_limit
 
 __all__ = ["CAPTURE_OVERHEAD", "SceneSize", "scene_size", "size_problem"]
 
@@ -89,12 +89,6 @@ def scene_size(spec) -> SceneSize:
     return SceneSize(captures, frames, grid, sen.dtype, values * itemsize + captures * CAPTURE_OVERHEAD, field)
 
 
-def _amount(n: int) -> str:
-    if n < 2**20:
-        return f"{n:,} bytes"
-    return f"{n / 2**20:,.0f} MiB" if n < 2**40 else f"{n / 2**40:,.3g} TiB"
-
-
 def size_problem(spec, limit: int | None = None) -> tuple[str, str] | None:
     """``(field, message)`` when the captures of ``spec`` would take more than ``limit`` bytes
     (default :func:`touchbench.core.memory.memory_limit`), else None."""
@@ -106,5 +100,5 @@ def size_problem(spec, limit: int | None = None) -> tuple[str, str] | None:
     return size.field, (
         f"the scene would make {size.captures:,} captures ({n_gestures} gesture(s), "
         f"{size.frames / n_gestures:,.0f} frames each on average, {size.grid[0]} x {size.grid[1]} values of "
-        f"{size.dtype}): {_amount(size.bytes)}, over the limit of {_amount(limit)} (a quarter of the memory available); "
+        f"{size.dtype}): {describe_bytes(size.bytes)}, over the limit of {describe_bytes(limit)} (a quarter of the memory available); "
         f"make {size.field} smaller")
