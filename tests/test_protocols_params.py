@@ -57,37 +57,29 @@ def test_a_classifier_entry_is_checked_as_a_method_entry_is(tmp_path):
     assert r.exit_code == 3 and f"{path}:8: classifiers[0].params.sd_floor: session-centred: sd_floor" in r.output
 
 
-def test_a_shift_crop_of_zero_is_refused_naming_its_line(tmp_path):
-    out = validate(tmp_path, "  - name: shift-augmented\n    params:\n      features: [contact-evidence]\n"
-                             "      crop: 0\n")
-    assert out == "p.yaml:8: methods[0].params.crop: shift-augmented: crop must be a fraction in (0, 1], got 0"
-
-
-def test_copies_that_could_never_fit_in_memory_are_refused(tmp_path):
-    # 10^12 copies of even one capture take at least 10^12 arrays of 128 bytes: 116 TiB
-    out = validate(tmp_path, "  - name: touch-et-shift\n    params:\n      copies: 1000000000000\n")
-    assert out.startswith("p.yaml:7: methods[0].params.copies: shift-augmented: copies=1000000000000 would make "
-                          "1,000,000,000,000 copies of even one training capture, at least 116.4 TiB")
-
-
-@needs_peers
-def test_a_bad_value_inside_a_fusion_part_names_the_part(tmp_path):
-    out = validate(tmp_path, "  - name: fusion\n    params:\n      parts:\n        - touch-et\n"
-                             "        - {name: touch-et-shift, params: {crop: 0}}\n")  # line 9
-    assert out.startswith("p.yaml:9: methods[0].params.parts[1].params.crop: shift-augmented: crop must be")
-
-
-def test_a_bad_value_inside_a_written_out_candidate_names_its_line(tmp_path):
-    out = validate(tmp_path, "  - name: nested-select\n    params:\n      candidates:\n        - touch-et\n"
-                             "        - features: [flagg-stats]\n          estimator: session-centred\n"
-                             "          params:\n            sd_floor: 0\n")  # line 12
-    assert out.startswith("p.yaml:12: methods[0].params.candidates[1].params.sd_floor: session-centred: sd_floor")
-
-
-def test_each_point_of_a_grid_is_checked(tmp_path):
-    out = validate(tmp_path, "  - name: touch-et-adapt\n    params:\n      sd_floor: {grid: [0.001, 0]}\n")
-    assert out.startswith("p.yaml:7: methods[0].params.sd_floor: session-centred: sd_floor must be a positive "
-                          "number (the smallest standard deviation a feature is divided by), got 0")
+@pytest.mark.parametrize("entry,start", [
+    ("  - name: shift-augmented\n    params:\n      features: [contact-evidence]\n      crop: 0\n",
+     "p.yaml:8: methods[0].params.crop: shift-augmented: crop must be a fraction in (0, 1], got 0"),
+    # 10^12 copies of even one capture take at least 10^12 arrays of 128 bytes: 116.4 TiB
+    ("  - name: touch-et-shift\n    params:\n      copies: 1000000000000\n",
+     "p.yaml:7: methods[0].params.copies: shift-augmented: copies=1000000000000 would make "
+     "1,000,000,000,000 copies of even one training capture, at least 116.4 TiB"),
+    # inside a fusion part: the part's line (9)
+    pytest.param("  - name: fusion\n    params:\n      parts:\n        - touch-et\n"
+                 "        - {name: touch-et-shift, params: {crop: 0}}\n",
+                 "p.yaml:9: methods[0].params.parts[1].params.crop: shift-augmented: crop must be", marks=needs_peers),
+    # inside a written-out candidate: the value's line (12)
+    ("  - name: nested-select\n    params:\n      candidates:\n        - touch-et\n"
+     "        - features: [flagg-stats]\n          estimator: session-centred\n"
+     "          params:\n            sd_floor: 0\n",
+     "p.yaml:12: methods[0].params.candidates[1].params.sd_floor: session-centred: sd_floor"),
+    # every point of a grid
+    ("  - name: touch-et-adapt\n    params:\n      sd_floor: {grid: [0.001, 0]}\n",
+     "p.yaml:7: methods[0].params.sd_floor: session-centred: sd_floor must be a positive "
+     "number (the smallest standard deviation a feature is divided by), got 0"),
+])
+def test_shift_values_and_nested_values_are_refused_naming_their_line(tmp_path, entry, start):
+    assert validate(tmp_path, entry).startswith(start)
 
 
 @needs_peers
