@@ -249,3 +249,18 @@ def test_one_class_and_one_capture_are_served():
     est = _augmenter(copies=2, gain=(0.8, 1.25), noise=(0.0, 1.0)).fit([x], ["pat"])
     assert est.n_training_ == 3 and est.predict([x]).tolist() == ["pat"]
     assert est.predict_proba([x]).tolist() == [[1.0]]
+
+
+def test_copies_that_would_not_fit_in_memory_are_refused_before_any_is_made(monkeypatch):
+    # 3 captures of 8 x 4 x 4 uint16 values (256 bytes each); 2 copies of each, 128 bytes of array
+    # header a copy: at most 2 x 3 x (256 + 128) = 2,304 bytes
+    captures = [_press(), _press(rest=20), _press(touched=80)]
+    made = []
+    monkeypatch.setattr(augment, "shifted_copy", lambda c, *a: made.append(c) or c)
+    monkeypatch.setattr(augment, "memory_limit", lambda: 2303)
+    with pytest.raises(augment.ParamError, match=r"copies=2 would make 6 copies of 3 training captures, up to "
+                                                 r"2,304 bytes, over the limit of 2,303 bytes") as e:
+        _augmenter(copies=2).augmented(captures)
+    assert e.value.field == ("copies",) and made == []
+    monkeypatch.setattr(augment, "memory_limit", lambda: 2304)
+    assert len(_augmenter(copies=2).augmented(captures)) == 9 and len(made) == 6

@@ -51,7 +51,7 @@ from touchbench.features.base import FeatureInputError, make_feature_set
 from touchbench.methods import MethodSpec
 from touchbench.protocols.loading import parse_protocol
 from touchbench.results.store import ResultsBusyError, ResultStore
-from touchbench.scenes.spec import load_spec
+from touchbench.scenes.loading import load_spec
 
 TEXT = "name: small\ndataset: scene:tiny\nscheme: loso\nfeatures: [sd]\nclassifiers: [zhou-lda]\n"
 # HAART's recording setting, so that the Gaus sets take their presets from the sensor

@@ -18,7 +18,7 @@ from touchbench.protocols.library import PAPERS_DIR
 from touchbench.protocols.loading import load_protocol
 from touchbench.reports.testing import FakeMethod, write_fake_run
 from touchbench.scenes import load_scene, scene_path
-from touchbench.scenes.spec import read_yaml
+from touchbench.scenes.loading import read_yaml
 
 PAPERS = PAPERS_DIR
 PAPER_TEXTS = REPO_ROOT.parent / "shared" / "seeds"

@@ -9,7 +9,7 @@ import pytest
 from touchbench.scenes import load_scene
 from touchbench.scenes.generate import generate
 from touchbench.scenes.person import STYLE_DIMS, capture_factors, make_people, spread_vector
-from touchbench.scenes.spec import parse_spec
+from touchbench.scenes.loading import parse_spec
 
 BASE = {
     "name": "people",

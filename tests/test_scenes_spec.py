@@ -11,7 +11,8 @@ from snapshots.registries import snapshot
 
 from touchbench.core.errors import DataError, UnknownNameError
 from touchbench.scenes import SCENES, SPECS_DIR, generate_scene, load_scene
-from touchbench.scenes.spec import n_captures, parse_spec, property_value, subject_ids
+from touchbench.scenes.loading import parse_spec
+from touchbench.scenes.spec import n_captures, property_value, subject_ids
 
 
 def tiny_raw():

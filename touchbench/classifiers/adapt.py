@@ -36,7 +36,9 @@ vector, not a trial of channels):
 - a standard deviation below ``sd_floor`` is taken as ``sd_floor`` (a
   constant feature, a session of one row): the centred value, zero, stays
   zero instead of becoming undefined; a session of one row is therefore
-  centred to zeros;
+  centred to zeros; ``sd_floor`` must be positive (registry tag
+  ``check_params``: a protocol's validation refuses 0, a negative or a
+  non-finite floor, and ``fit`` does too);
 - statistics in float64, in the order of the rows (bit-identical for the
   same rows).
 
@@ -47,6 +49,7 @@ figure of another kind than a plain one (:func:`uses_unlabelled_test`).
 
 from __future__ import annotations
 
+import math
 from typing import Any, Iterator
 
 import numpy as np
@@ -58,7 +61,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from ..core.errors import TouchbenchError
 from ..core.introspect import sensor_problem
 from ._util import build
-from .base import CLASSIFIERS, make_classifier
+from .base import CLASSIFIERS, ParamError, check_nested_params, make_classifier
 from .fitting import fit_on_codes
 
 __all__ = ["NotAdaptedError", "SessionCentred", "adapt_each_session", "session_statistics", "uses_unlabelled_test"]
@@ -97,6 +100,16 @@ def adapt_each_session(estimator: Any, X: np.ndarray, sessions: Any) -> Iterator
         rows = np.flatnonzero(sessions == s)
         estimator.adapt(X[rows])
         yield rows
+
+
+def check_params(params: dict[str, Any]) -> None:
+    """``sd_floor`` a positive finite number (a floor of 0 divides a constant feature by 0), and the
+    inner classifier's own checks of its ``params``."""
+    floor = params.get("sd_floor")
+    if isinstance(floor, bool) or not isinstance(floor, (int, float)) or not math.isfinite(floor) or floor <= 0:
+        raise ParamError("sd_floor", f"session-centred: sd_floor must be a positive number (the smallest standard "
+                                     f"deviation a feature is divided by), got {floor!r}")
+    check_nested_params(params.get("estimator"), dict(params.get("params") or {}), ("params",))
 
 
 class SessionCentred(ClassifierMixin, BaseEstimator):
@@ -153,6 +166,7 @@ class SessionCentred(ClassifierMixin, BaseEstimator):
         """Centre (scale) each training session by its own statistics, then fit the inner classifier."""
         X, y = validate_data(self, X, y, dtype=np.float64)
         check_classification_targets(y)
+        check_params(self.get_params(deep=False))
         self._check_inner()
         self.fitted_ = fit_on_codes(self.estimator, dict(self.params or {}), self.random_state,
                                     self._centred(X, groups), y, groups, sensor=self.sensor)
@@ -200,7 +214,7 @@ DEFAULTS = {"estimator": "touch-extra-trees", "params": None, "scale": False, "s
     "session-centred",
     description="a registered classifier on rows centred (optionally scaled) by their own session's statistics; "
                 "adapts to a new session from its unlabelled rows",
-    source=SOURCE, defaults=DEFAULTS, extra=None, unlabelled_test=True,
+    source=SOURCE, defaults=DEFAULTS, extra=None, unlabelled_test=True, check_params=check_params,
     cheap_params=dict(params={"n_estimators": 5}),
 )
 def session_centred(random_state=None, sensor=None, **params):

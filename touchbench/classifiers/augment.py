@@ -78,6 +78,14 @@ recorded under another set-up, never like another gesture):
 - ``dead=(0.0, 0.05)``: up to 5 % of the cells (3 of an 8 x 8 grid);
 - ``crop=0.75``: windows from three quarters of the capture to all of it.
 
+Checks: the ranges, fractions and ``copies`` are the registry entry's
+``check_params`` (:func:`check_params`: a protocol's validation refuses a
+bad value with its file, line and field; ``fit`` uses the same checks), and
+``copies`` whose copies would take more than a quarter of the available
+memory (:func:`touchbench.core.memory.memory_limit`) are refused before any
+copy is made: at validation, by the least a copy costs (its array), in
+``fit`` by the training captures' bytes.
+
 Sensors: pressure grids with a value range. Refused: no sensor (nothing
 gives the full scale or the range to round and clip to) and channel sensors
 (``sensor.channels``: dead cells, a rest level and a grid-wide offset have
@@ -96,14 +104,17 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted
 
 from ..core.errors import TouchbenchError
+from ..core.memory import describe_bytes, memory_limit
 from ..features.base import check_captures
 from ..features.contact import MIN_NOISE, heights, noise_floor
 from ..scenes.sensor import adc, add_noise
 from ._util import build, seed_int
-from .base import CLASSIFIERS
+from .base import CLASSIFIERS, ParamError, check_nested_params
 from .fitting import feature_specs, fit_pipeline, pipeline_refusal, proba_over
 
 NAME = "shift-augmented"
+#: bytes a copy costs beyond its values (its array's header), at least
+COPY_OVERHEAD = 128
 SOURCE = ("touchbench (docs/research/contact-features.md, section Training for shift): the synthetic scenes' "
           "sensor effects as data augmentation, after Um et al. 2017 (ICMI), scaling, jittering and cropping")
 
@@ -170,6 +181,54 @@ def shifted_copy(capture: np.ndarray, sensor: Any, shift: Shift, rng: np.random.
     return adc(x.reshape(t, h, w), (lo, hi), capture.dtype)
 
 
+def check_ranges(params: dict[str, Any]) -> dict[str, tuple[float, float]]:
+    """Every range of ``params`` as floats, the fractions and ``copies`` checked: a
+    :class:`ParamError` naming the one at fault."""
+    out = {}
+    for name, (ok, rule) in RANGES.items():
+        value = params.get(name)
+        try:
+            a, b = (float(v) for v in value)
+        except (TypeError, ValueError):
+            a = b = math.nan
+        if not (math.isfinite(a) and math.isfinite(b) and ok(a, b)):
+            raise ParamError(name, f"{NAME}: {name} must be (low, high) with {rule}, got {value!r}")
+        out[name] = (a, b)
+    for name, low_open in (("ar_share", False), ("crop", True)):
+        v = params.get(name)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (0 < v <= 1 if low_open else 0 <= v <= 1):
+            raise ParamError(name, f"{NAME}: {name} must be a fraction in {'(0, 1]' if low_open else '[0, 1]'}, "
+                                   f"got {v!r}")
+    c = params.get("copies")
+    if isinstance(c, bool) or not isinstance(c, (int, np.integer)) or c < 0:
+        raise ParamError("copies", f"{NAME}: copies must be a whole number >= 0, got {c!r}")
+    return out
+
+
+def check_copies_fit(copies: int, capture_bytes: Sequence[int] | None) -> None:
+    """Refuse ``copies`` copies of captures of ``capture_bytes`` bytes each (None: of one capture of
+    unknown size, at validation) when they would take more than
+    :func:`touchbench.core.memory.memory_limit`: each copy costs at most its capture's bytes (a crop
+    is never longer) and :data:`COPY_OVERHEAD` (its array), at least the latter."""
+    sizes = [0] if capture_bytes is None else list(capture_bytes)
+    need = int(copies) * sum(int(b) + COPY_OVERHEAD for b in sizes)
+    limit = memory_limit()
+    if need > limit:
+        made = (f"{int(copies):,} copies of even one training capture, at least {describe_bytes(need)} (an array "
+                f"each)" if capture_bytes is None else f"{int(copies) * len(sizes):,} copies of {len(sizes):,} "
+                f"training captures, up to {describe_bytes(need)}")
+        raise ParamError("copies", f"{NAME}: copies={copies} would make {made}, over the limit of "
+                                   f"{describe_bytes(limit)} (a quarter of the memory available): make copies smaller")
+
+
+def check_params(params: dict[str, Any]) -> None:
+    """The ranges, fractions and ``copies`` (even one capture's copies must fit: each is at least an
+    array), and the pipeline's estimator's own checks of its ``params``."""
+    check_ranges(params)
+    check_copies_fit(params["copies"], None)
+    check_nested_params(params.get("estimator"), dict(params.get("params") or {}), ("params",))
+
+
 class ShiftAugmented(ClassifierMixin, BaseEstimator):
     """A pipeline trained on captures plus copies changed by the sensor's effects (module docstring).
 
@@ -205,26 +264,8 @@ class ShiftAugmented(ClassifierMixin, BaseEstimator):
 
     # -- parameters -------------------------------------------------------------
     def _ranges(self) -> dict[str, tuple[float, float]]:
-        """Every range as floats, checked (a :class:`TouchbenchError` naming the one at fault)."""
-        out = {}
-        for name, (ok, rule) in RANGES.items():
-            value = getattr(self, name)
-            try:
-                a, b = (float(v) for v in value)
-            except (TypeError, ValueError):
-                a = b = math.nan
-            if not (math.isfinite(a) and math.isfinite(b) and ok(a, b)):
-                raise TouchbenchError(f"{NAME}: {name} must be (low, high) with {rule}, got {value!r}")
-            out[name] = (a, b)
-        for name, low_open in (("ar_share", False), ("crop", True)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (0 < v <= 1 if low_open else 0 <= v <= 1):
-                raise TouchbenchError(f"{NAME}: {name} must be a fraction in {'(0, 1]' if low_open else '[0, 1]'}, "
-                                      f"got {v!r}")
-        c = self.copies
-        if isinstance(c, bool) or not isinstance(c, (int, np.integer)) or c < 0:
-            raise TouchbenchError(f"{NAME}: copies must be a whole number >= 0, got {c!r}")
-        return out
+        """Every range as floats, checked (:func:`check_ranges`)."""
+        return check_ranges(self.get_params(deep=False))
 
     def _pipeline(self) -> tuple[list[tuple[str, dict[str, Any]]], str, dict[str, Any]]:
         return feature_specs(self.features), str(self.estimator), dict(self.params or {})
@@ -281,6 +322,7 @@ class ShiftAugmented(ClassifierMixin, BaseEstimator):
         ranges, copies = self._ranges(), int(self.copies)
         if not captures or copies == 0:
             return list(captures)
+        check_copies_fit(copies, [c.nbytes for c in captures])  # before any copy is made
         need = self.frames_needed(max(len(c) for c in captures))
         rng = np.random.default_rng(seed_int(self.random_state))
         out = list(captures)
@@ -328,7 +370,7 @@ DEFAULTS = {"features": (), "estimator": "touch-extra-trees", "params": {}, "cop
     NAME,
     description="a pipeline (feature sets -> estimator) trained on the captures plus copies changed by the "
                 "sensor's effects: gain, offset, read noise (white or AR(1)), dead cells, a window anywhere",
-    source=SOURCE, defaults=DEFAULTS, extra=None, input="captures",
+    source=SOURCE, defaults=DEFAULTS, extra=None, input="captures", check_params=check_params,
     cheap_params=dict(features=["contact-evidence"], estimator="zhou-tree", copies=1),
 )
 def shift_augmented(random_state=None, sensor=None, **params):

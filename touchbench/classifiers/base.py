@@ -11,12 +11,23 @@ are slow, ``cheap_params`` (smaller settings that run the same code paths in
 seconds: the tests' estimator checks use them). The estimators are plain
 scikit-learn estimators (or follow that API), so users can use them in their
 own pipelines.
+
+A classifier whose parameter values can only fail when it runs (a weight,
+a floor, a fraction, a count) names its own check in the tag
+``check_params``: a function of its parameters over its defaults that
+raises :class:`ParamError` naming the parameter. :func:`check_classifier_params`
+calls it, and that of every classifier nested in the parameters (the
+candidates a ``candidates=`` tag names, written out; an inner estimator that
+the check itself hands to :func:`check_nested_params`), so a protocol's
+validation refuses the value with its file, line and field, before anything
+runs; the classifier calls the same function when it is fitted.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+from ..core.errors import TouchbenchError
 from ..core.introspect import with_accepted
 from ..core.registry import Registry
 
@@ -34,3 +45,42 @@ def make_classifier(name: str, random_state: int | None = None, sensor: Any = No
     """
     factory = CLASSIFIERS.get(name)
     return CLASSIFIERS.create(name, random_state=random_state, **with_accepted(factory, params, sensor=sensor))
+
+
+class ParamError(TouchbenchError):
+    """A parameter value a classifier refuses: ``field`` is its path below the classifier's
+    parameters (``("weights", 0)``: the first weight vector)."""
+
+    def __init__(self, field: str | tuple, message: str):
+        self.field = field if isinstance(field, tuple) else (field,)
+        super().__init__(message)
+
+
+def check_classifier_params(name: str, params: dict[str, Any]) -> None:
+    """Refuse a value of ``params`` the registered classifier ``name`` cannot run with (module
+    docstring): its ``check_params`` over its defaults, then each candidate of its ``candidates=``
+    parameter that is written out (``{features, estimator, params}``), as a nested classifier."""
+    entry = CLASSIFIERS.entry(name)
+    full = {**(entry.tags.get("defaults") or {}), **params}
+    check = entry.tags.get("check_params")
+    if check is not None:
+        check(full)
+    key = entry.tags.get("candidates")
+    if key:
+        key = key if isinstance(key, str) else "candidates"
+        entries = full.get(key) or ()
+        for i, c in enumerate(entries if isinstance(entries, (list, tuple)) else ()):
+            if isinstance(c, dict) and isinstance(c.get("params") or {}, dict):
+                check_nested_params(c.get("estimator"), dict(c.get("params") or {}), (key, i, "params"))
+
+
+def check_nested_params(name: Any, params: Any, at: tuple) -> None:
+    """:func:`check_classifier_params` of a registered classifier ``name`` nested at ``at`` in
+    another's parameters (its refusal's field prefixed with ``at``); nothing for a name that is not
+    registered or parameters that are not a mapping (the classifier refuses those when it is built)."""
+    if not isinstance(name, str) or name not in CLASSIFIERS or not isinstance(params, dict):
+        return
+    try:
+        check_classifier_params(name, params)
+    except ParamError as e:
+        raise ParamError(at + e.field, str(e)) from None

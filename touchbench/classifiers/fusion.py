@@ -37,7 +37,8 @@ touchbench's feature methods and the Rocket family make different errors.
 
 ``weights``: a list of weight vectors, one weight per part in the order of
 ``parts``, each non-negative with a positive sum; a vector is scaled to sum
-1 (the argmax is unchanged, and ``predict_proba`` stays a distribution).
+1 (the argmax is unchanged, and ``predict_proba`` stays a distribution). A
+protocol's validation refuses any other (registry tag ``check_params``).
 None gives a default grid: for two parts ``(w, 1 - w)`` for w in 0, 0.25,
 0.5, 0.75, 1 (the second part alone first); for k parts the equal weights,
 then each part alone.
@@ -78,7 +79,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..core.errors import TouchbenchError
 from ._util import build, seed_int
-from .base import CLASSIFIERS
+from .base import CLASSIFIERS, ParamError
 from .inner import candidate_list, candidate_refusal, inner_fits, inner_splits, proba_over, refit, shortest_capture
 
 __all__ = ["Fusion", "default_weights", "weight_grid"]
@@ -96,18 +97,33 @@ def default_weights(k: int) -> list[tuple[float, ...]]:
 
 
 def weight_grid(weights: Any, k: int) -> np.ndarray:
-    """The weight vectors ``(m, k)`` as float64, each scaled to sum 1 (``weights`` None: :func:`default_weights`)."""
+    """The weight vectors ``(m, k)`` as float64, each scaled to sum 1 (``weights`` None: :func:`default_weights`);
+    a :class:`ParamError` naming the vector at fault."""
+    if weights is not None and (isinstance(weights, (str, bytes, dict)) or not hasattr(weights, "__iter__")):
+        raise ParamError("weights", f"fusion: 'weights' must be a list of weight vectors (one weight per part), "
+                                    f"got {weights!r}")
     vectors = default_weights(k) if weights is None else list(weights)
     if not vectors:
-        raise TouchbenchError("fusion: 'weights' is an empty list; give weight vectors or None for the default grid")
+        raise ParamError("weights", "fusion: 'weights' is an empty list; give weight vectors or None for the default grid")
     W = []
-    for v in vectors:
-        w = np.asarray(v, dtype=np.float64).reshape(-1)
+    for i, v in enumerate(vectors):
+        try:
+            w = np.asarray(v, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            w = np.array([np.nan])
         if len(w) != k or not np.all(np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
-            raise TouchbenchError(f"fusion: weight vector {list(v) if np.ndim(v) else v!r} is not {k} non-negative "
-                                  f"weights with a positive sum (one per part, in the order of 'parts')")
+            raise ParamError(("weights", i), f"fusion: weight vector {list(v) if np.ndim(v) else v!r} is not {k} "
+                                             f"non-negative weights with a positive sum (one per part, in the order "
+                                             f"of 'parts')")
         W.append(w / w.sum())
     return np.vstack(W)
+
+
+def check_params(params: dict[str, Any]) -> None:
+    """The weights against the number of parts (the parts' own values: their classifiers' checks)."""
+    parts = params.get("parts")
+    if isinstance(parts, (list, tuple)) and len(parts) >= 2:
+        weight_grid(params.get("weights"), len(parts))
 
 
 def pooled_accuracies(probas: Sequence[np.ndarray], codes: np.ndarray, rows: np.ndarray, W: np.ndarray) -> np.ndarray:
@@ -229,7 +245,7 @@ DEFAULTS = {"parts": (), "weights": None, "inner_folds": None}
     description="late fusion: the weighted sum of candidate methods' probabilities, the weights chosen by "
                 "inner-CV accuracy over the training subjects, every part refitted",
     source=SOURCE, defaults=DEFAULTS, extra="peers", input="captures", candidates="parts",
-    needs_every_candidate=True,
+    needs_every_candidate=True, check_params=check_params,
     cheap_params=dict(parts=[{"features": ["flagg-stats"], "estimator": "zhou-lda"},
                              {"features": [], "estimator": "minirocket", "params": {"n_kernels": 84}}]),
 )

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -11,6 +12,7 @@ import yaml
 
 from ..core.errors import TouchbenchError
 from ..core.yamlsafe import safe_load
+from . import exitcodes
 from .common import echo_json, example, json_option
 
 
@@ -58,12 +60,18 @@ def list_(as_json: bool) -> None:
 @click.option("--set", "sets", multiple=True, metavar="KEY=VALUE", help="override a scene field, e.g. protocol.repetitions=2")
 def generate(name: str, out: str, seed: int | None, sets: tuple[str, ...]) -> None:
     """Generate scene NAME (a shipped name or a YAML file) into a dataset
-    file that `load_dataset` and the protocols read."""
-    from ..scenes import generate_scene
-
+    file that `load_dataset` and the protocols read. A scene too large for
+    the memory available is refused before anything is made; Ctrl-C or
+    SIGTERM stop it, writing nothing."""
     t = time.perf_counter()
-    ds = generate_scene(name, seed=seed, **_parse_sets(sets))
-    ds.to_parquet(out)
+    try:
+        from ..scenes import generate_scene
+
+        ds = generate_scene(name, seed=seed, **_parse_sets(sets))
+        ds.to_parquet(out)  # atomic: a file whole or none
+    except KeyboardInterrupt:  # Ctrl-C, or SIGTERM (the group turns it into this)
+        click.echo(f"\ninterrupted: nothing was written to {out}", err=True)
+        sys.exit(exitcodes.INTERRUPTED)
     n = ds.n_frames
     click.echo(
         f"{ds.name}: {len(ds)} captures, {ds.meta['subject'].nunique()} subjects, "

@@ -18,17 +18,20 @@ with its own hooks:
 
 Every refusal is a :class:`yaml.MarkedYAMLError` whose ``problem_mark`` is
 the line it is about; :func:`yaml_problem` turns one into ``line, message``.
+:func:`node_lines` maps every field of a composed document to its line, and
+:func:`best_line` finds the line of a field (or of the nearest field above it
+that the file writes).
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Iterator
 
 import yaml
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
-__all__ = ["MAX_ALIASES", "MAX_BYTES", "MAX_DEPTH", "MAX_NODES", "BoundedLoader", "YamlLimitError", "load_bounded", "safe_load",
-           "yaml_problem"]
+__all__ = ["MAX_ALIASES", "MAX_BYTES", "MAX_DEPTH", "MAX_NODES", "BoundedLoader", "YamlLimitError", "best_line", "load_bounded",
+           "node_lines", "safe_load", "yaml_nodes", "yaml_problem"]
 
 MAX_BYTES = 256 * 1024  # the longest shipped protocol is under 10 kB
 MAX_ALIASES = 100
@@ -144,3 +147,37 @@ def yaml_problem(err: yaml.YAMLError) -> tuple[int | None, str]:
     if not isinstance(err, YamlLimitError):
         problem = f"invalid YAML: {problem}"
     return line, problem
+
+
+def yaml_nodes(root: Node | None) -> Iterator[tuple[tuple, Node, int]]:
+    """(path, node, 1-based line) of every node of a composed YAML document, a mapping's keys by their
+    key's line. The document comes from the bounded loader: its aliases, once expanded, stand for a
+    bounded number of nodes, and none is recursive, so this walk is bounded too."""
+    stack = [((), root, root.start_mark.line + 1)] if root is not None else []
+    while stack:
+        path, node, line = stack.pop()
+        yield path, node, line
+        if isinstance(node, MappingNode):
+            stack += [(path + (str(k.value),), v, k.start_mark.line + 1) for k, v in reversed(node.value)]
+        elif isinstance(node, SequenceNode):
+            stack += [(path + (i,), v, v.start_mark.line + 1) for i, v in reversed(list(enumerate(node.value)))]
+
+
+def node_lines(root: Node | None) -> dict[tuple, int]:
+    """Path (tuple of keys / indices) -> 1-based line of every node of a composed YAML document."""
+    return {path: line for path, _, line in yaml_nodes(root)}
+
+
+def best_line(lines: dict[tuple, int], loc: tuple) -> int | None:
+    """The line of field ``loc`` in a document's :func:`node_lines`, or of the deepest field above it
+    that the document writes (a value left to its default is named by its parent's line)."""
+    best = lines.get((), None)
+    prefix: tuple = ()
+    for part in loc:
+        cand = prefix + (part if isinstance(part, int) else str(part),)
+        if cand in lines:
+            prefix = cand
+            best = lines[cand]
+        else:
+            break
+    return best

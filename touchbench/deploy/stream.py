@@ -48,7 +48,6 @@ from __future__ import annotations
 
 import gzip
 import math
-import os
 import re
 import time
 import zlib
@@ -60,6 +59,7 @@ import numpy as np
 import pyarrow.parquet as pq
 
 from ..core.errors import DataError, TouchbenchError
+from ..core.memory import memory_limit
 from ..core.threads import single_thread
 from ..datasets.formats import FORMATS
 from ..datasets.generic import cell_columns
@@ -144,12 +144,8 @@ class SlidingRecognizer(WindowRecognizer):
 
 def buffer_limit() -> int:
     """The most bytes of frames a recogniser may keep: :data:`MAX_BUFFER_BYTES`, or a quarter of the
-    available memory when that is less."""
-    try:
-        available = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):  # not every system says
-        return MAX_BUFFER_BYTES
-    return int(min(MAX_BUFFER_BYTES, available // 4))
+    available memory when that is less (:func:`touchbench.core.memory.memory_limit`)."""
+    return memory_limit(MAX_BUFFER_BYTES)
 
 
 def _check_buffer(n_frames: int, grid: tuple[int, int], dtype: np.dtype, frame_rate: float) -> None:

@@ -1,7 +1,8 @@
 """The validation passes after the shape (see :mod:`touchbench.protocols.schema`): the number
 of entries the grids expand to, the scheme's parameters, feature and classifier parameters (names
-and values), the ``expected`` references, each evaluation's dataset and target. Each pass gives
-``(field location, message)`` issues."""
+and values: a classifier's own checks, :func:`touchbench.classifiers.check_classifier_params`,
+for every entry and every candidate nested in one), the ``expected`` references, each
+evaluation's dataset and target. Each pass gives ``(field location, message)`` issues."""
 
 from __future__ import annotations
 
@@ -14,14 +15,15 @@ from typing import Any, Collection
 from pydantic import ValidationError
 
 from ..catalog import dataset_ref_problem, format_ref_problem
-from ..classifiers import CLASSIFIERS
+from ..classifiers import CLASSIFIERS, ParamError, check_classifier_params
+from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
 from ..core.suggest import did_you_mean
 from ..core.versions import missing_extra
 from ..datasets.formats import FORMATS
 from ..features import FEATURES
 from ..features.base import FeatureInputError, SensorNeededError, make_feature_set
-from ..methods import METHODS
+from ..methods import METHODS, expand_candidates
 from .entries import FeatureRef, _fmt_value, _is_grid, expand_grid
 from .errors import _loc_str, _make_error, _pydantic_issues
 from .expected import ExpectedBest
@@ -193,7 +195,23 @@ def _estimator_issues(name: str, params: dict[str, Any], loc: tuple, what: str) 
     issues += _unknown_param_issues(name, params, _estimator_param_names(factory), loc, what)
     if issues:
         return issues
-    return _construction_issues(factory, base, name, params, loc, what)
+    return _construction_issues(factory, base, name, params, loc, what) or _own_check_issues(est_name, base, params, loc)
+
+
+def _own_check_issues(est_name: str, base: dict[str, Any], params: dict[str, Any], loc: tuple) -> list[tuple[tuple, str]]:
+    """The first point of the grid ``params`` whose values the classifier's own checks refuse
+    (``check_classifier_params``: its registry entry's ``check_params`` and those of the classifiers
+    nested in it, candidates written out), at the field the refusal names."""
+    for p in expand_grid(params):
+        try:
+            check_classifier_params(est_name, expand_candidates(est_name, {**base, **p}))
+        except ParamError as e:
+            return [(loc + ("params",) + e.field, str(e))]
+        except TouchbenchError as e:  # a candidate that cannot be written out
+            return [(loc + ("params",), str(e))]
+        except Exception as e:  # a value of a type the check did not foresee
+            return [(loc + ("params",), f"{est_name!r} rejects {p}: {type(e).__name__}: {e}")]
+    return []
 
 
 def _estimator_and_defaults(name: str) -> tuple[str, dict[str, Any]]:

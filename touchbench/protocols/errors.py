@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import typing
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 import yaml
 from pydantic import BaseModel, ValidationError
 
 from ..core.errors import TouchbenchError
 from ..core.suggest import did_you_mean
+from ..core.yamlsafe import best_line, yaml_nodes
 
 __all__ = ["ProtocolError", "UnknownEvaluation"]
 
@@ -38,28 +39,10 @@ class _ErrorAt(ValueError):
 
 
 # ----------------------------------------------------------------- YAML with lines
-def _nodes(root: yaml.Node | None) -> Iterator[tuple[tuple, yaml.Node, int]]:
-    """(path, node, 1-based line) of every node of a composed YAML document, a mapping's keys by their
-    key's line. The document comes from the bounded loader (``core.yamlsafe``): its aliases, once
-    expanded, stand for a bounded number of nodes, and none is recursive, so this walk is bounded too."""
-    stack = [((), root, root.start_mark.line + 1)] if root is not None else []
-    while stack:
-        path, node, line = stack.pop()
-        yield path, node, line
-        if isinstance(node, yaml.MappingNode):
-            stack += [(path + (str(k.value),), v, k.start_mark.line + 1) for k, v in reversed(node.value)]
-        elif isinstance(node, yaml.SequenceNode):
-            stack += [(path + (i,), v, v.start_mark.line + 1) for i, v in reversed(list(enumerate(node.value)))]
-
-
-def _line_map(root: yaml.Node | None) -> dict[tuple, int]:
-    """Path (tuple of keys / indices) -> 1-based line of every node of a composed YAML document."""
-    return {path: line for path, _, line in _nodes(root)}
-
-
+# (the walk over a composed document and the line of a field: core.yamlsafe)
 def _boolean_map(root: yaml.Node | None) -> dict[tuple, str]:
     """Path -> what was written, for every value YAML read as a boolean (``no``, ``on``, ``yes``...)."""
-    return {path: node.value for path, node, _ in _nodes(root)
+    return {path: node.value for path, node, _ in yaml_nodes(root)
             if isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:bool"}
 
 
@@ -86,26 +69,13 @@ def _loc_str(loc: tuple) -> str:
 
 
 # ----------------------------------------------------------------- error mapping
-def _best_line(lines: dict[tuple, int], loc: tuple) -> int | None:
-    best = lines.get((), None)
-    prefix: tuple = ()
-    for part in loc:
-        cand = prefix + (part if isinstance(part, int) else str(part),)
-        if cand in lines:
-            prefix = cand
-            best = lines[cand]
-        else:
-            break
-    return best
-
-
 def _make_error(path: Path | None, lines: dict[tuple, int], issues: list[tuple[tuple, str]],
                 booleans: dict[tuple, str] | None = None) -> ProtocolError:
     where = str(path) if path is not None else "<protocol>"
     rows, out = [], []
     for loc, msg in issues:
         msg += _boolean_hint(loc, booleans or {})
-        line = _best_line(lines, loc) if loc else None
+        line = best_line(lines, loc) if loc else None
         loc_s = _loc_str(loc)
         rows.append((where, line, loc_s, msg))
         out.append(f"{where}{':' + str(line) if line else ''}: {loc_s}: {msg}")

@@ -11,7 +11,7 @@ from typing import Any
 import yaml
 from pydantic import ValidationError
 
-from ..core.yamlsafe import MAX_BYTES, load_bounded, yaml_problem
+from ..core.yamlsafe import MAX_BYTES, load_bounded, node_lines, yaml_problem
 from .checks import (
     _classifier_issues,
     _evaluation_issues,
@@ -20,7 +20,7 @@ from .checks import (
     _shape_issues,
     _size_issues,
 )
-from .errors import ProtocolError, _boolean_map, _line_map, _make_error, _pydantic_issues
+from .errors import ProtocolError, _boolean_map, _make_error, _pydantic_issues
 from .schema import Protocol
 
 __all__ = ["load_protocol", "parse_protocol"]
@@ -33,7 +33,7 @@ def parse_protocol(text: str, path: str | Path | None = None, *, deep: bool = Tr
     """
     p = Path(path) if path is not None else None
     data, root = _load_mapping(text, str(p) if p is not None else "<protocol>")
-    lines, booleans = _line_map(root), _boolean_map(root)
+    lines, booleans = node_lines(root), _boolean_map(root)
     data = copy.deepcopy(data)
     if "name" not in data and p is not None:
         data["name"] = p.stem.replace(".yaml", "")

@@ -19,7 +19,8 @@ from typing import Any
 from ..core.errors import DataError
 from ..core.registry import Registry
 from .generate import generate
-from .spec import SceneSpec, deep_merge, load_spec, parse_spec, read_yaml
+from .loading import deep_merge, load_spec, parse_spec, read_yaml
+from .spec import SceneSpec, is_subject_id
 
 SPECS_DIR = Path(__file__).resolve().parent / "specs"
 
@@ -90,8 +91,8 @@ def overrides_to_dict(raw: dict[str, Any], overrides: dict[str, Any]) -> dict[st
     if "subjects" in overrides and isinstance(split, dict) and "split" not in out.get("protocol", {}):
         # fewer people: keep the split of those that remain
         n = int(overrides["subjects"])
-        keep = {f"s{i + 1:0{max(2, len(str(n)))}d}" for i in range(n)}
-        out = deep_merge(out, {"protocol": {"split": {k: [s for s in split.get(k, []) if s in keep] for k in ("train", "test")}}})
+        kept = {k: [s for s in split.get(k, []) if is_subject_id(s, n)] for k in ("train", "test")}
+        out = deep_merge(out, {"protocol": {"split": kept}})
     return out
 
 
@@ -106,8 +107,7 @@ def load_scene(name_or_yaml: str | Path, **overrides: Any) -> SceneSpec:
     over = overrides_to_dict(raw, overrides)
     if _SUBSET in over:
         raw = {**raw, "gestures": over.pop(_SUBSET)}
-
-    return parse_spec(deep_merge(raw, over), path, text)
+    return parse_spec(deep_merge(raw, over), path, text, over)
 
 
 def generate_scene(name_or_yaml: str | Path, seed: int | None = None, **overrides: Any):
@@ -118,7 +118,7 @@ def generate_scene(name_or_yaml: str | Path, seed: int | None = None, **override
     """
 
     spec = load_scene(name_or_yaml, **overrides)
-    return generate(spec, seed=seed)
+    return generate(spec, seed=seed, source=scene_path(name_or_yaml))
 
 
 __all__ = ["SCENES", "SPECS_DIR", "SceneSpec", "generate_scene", "load_scene", "scene_path"]

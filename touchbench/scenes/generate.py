@@ -23,16 +23,19 @@ Metadata follows the real readers: ``capture_id``, ``subject`` (``s01``..),
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from ..core.errors import DataError
 from ..datasets.model import SensorSpec, TouchDataset
 from . import sensor as S
 from .gestures import Events, Factors, GestureParams, plan_events
 from .hand import Tracks, active, footprint, render, tracks
 from .person import Person, capture_factors, make_people
+from .size import size_problem
 from .spec import CHANNELS, SceneSpec
 
 LOST_STREAM = 3_000_017
@@ -94,9 +97,10 @@ def lost_indices(spec: SceneSpec, n: int, seed: int) -> set[int]:
 class _Scene:
     """Everything shared by the captures of one generation run."""
 
-    def __init__(self, spec: SceneSpec, seed: int):
+    def __init__(self, spec: SceneSpec, seed: int, source: str | Path | None = None):
         self.spec = spec
         self.seed = seed
+        self.source = source
         self.fx = frozenset(spec.effects)
         s = spec.sensor
         self.grid = tuple(s.grid)
@@ -180,11 +184,16 @@ class _Scene:
         if "crosstalk" in fx and sen.kind == "grid":
             c = float(sen.crosstalk)  # type: ignore[arg-type]
             leak = lambda w: S.crosstalk_lines(w, c)  # noqa: E731
-        field = render(tr, self.grid, self.pitch, line_filter=leak)  # type: ignore[arg-type]
-        x = self._readout(field, tr)
-        x = self._with_rest(x, row, curve, rng)
-        if "noise" in fx:
-            x = S.add_noise(x, sen.noise_sd, rng)  # type: ignore[arg-type]
+        with np.errstate(over="ignore", invalid="ignore"):  # an overflow is refused below, in words
+            field = render(tr, self.grid, self.pitch, line_filter=leak)  # type: ignore[arg-type]
+            x = self._readout(field, tr)
+            x = self._with_rest(x, row, curve, rng)
+            if "noise" in fx:
+                x = S.add_noise(x, sen.noise_sd, rng)  # type: ignore[arg-type]
+        if not np.isfinite(x).all():
+            raise DataError(f"capture {index} ({row.subject}, {row.gesture}): the sensor's readings overflowed before the "
+                            "ADC (infinite or NaN counts): the scene's forces, sensor.gain, noise_sd, baseline or "
+                            "tension are beyond its float32 electronics; make them smaller", self.source)
         return S.adc(x, tuple(sen.value_range), sen.dtype)  # type: ignore[arg-type]
 
     def _covered_tracks(self, row: Row, ev: Events, p: GestureParams, person: Person, T: int,
@@ -328,12 +337,18 @@ def _meta(spec: SceneSpec, rows: list[Row]) -> pd.DataFrame:
     return pd.DataFrame(cols)
 
 
-def generate(spec: SceneSpec, seed: int | None = None, name: str | None = None) -> TouchDataset:
-    """The dataset of scene ``spec`` for ``seed`` (default: the scene's)."""
+def generate(spec: SceneSpec, seed: int | None = None, name: str | None = None,
+             source: str | Path | None = None) -> TouchDataset:
+    """The dataset of scene ``spec`` for ``seed`` (default: the scene's). A scene whose captures
+    would not fit in memory is refused before any is made (:func:`.size.size_problem`), and so is a
+    capture whose counts overflow; ``source`` (the scene's file) is named in those errors."""
     seed = spec.seed if seed is None else int(seed)
     if seed < 0:
         raise ValueError(f"seed must be non-negative, got {seed}")
-    scene = _Scene(spec, seed)
+    problem = size_problem(spec)
+    if problem is not None:
+        raise DataError(f"invalid scene: {problem[0]}: {problem[1]}", source)
+    scene = _Scene(spec, seed, source)
     rows = enumerate_rows(spec, scene.people)
     lost = lost_indices(spec, len(rows), seed)
     keep = [i for i in range(len(rows)) if i not in lost]

@@ -48,6 +48,7 @@ Zhou's "quick burst of three repetitions").
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
@@ -120,6 +121,8 @@ class GestureParams:
             return
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ValueError(f"must be a number, got {value!r}")
+        if not math.isfinite(value):
+            raise ValueError(f"must be a finite number, got {value!r}")
         if name in ("knead_depth", "wobble") and not 0 <= value <= 1:
             raise ValueError("must be within 0..1")
         if (name in cls._POSITIVE or name == "rate_hz") and not value > 0:

@@ -8,8 +8,11 @@ an error, and so is a listed effect without the configuration it needs
 (``cover`` without ``protocol.covers``, ``curvature`` without a radius...).
 
 Every validation error names the field (``protocol.covers.fur.transmission:
-...``) and the file. Units: millimetres, seconds, newtons; sensor values in
-ADC counts.
+...``), and :mod:`touchbench.scenes.loading` adds the file and line. Numbers
+are finite (``.inf`` and ``.nan`` are refused), the value range fits the
+dtype, and a gain, noise or saturation level stays within what the float32
+electronics compute (:data:`FLOAT32_COUNTS`). Units: millimetres, seconds,
+newtons; sensor values in ADC counts.
 
 Effects (see the module that implements each):
 
@@ -38,22 +41,12 @@ range) are the scene itself, always simulated.
 from __future__ import annotations
 
 import re
-from pathlib import Path
 from typing import Any, Literal
 
-import yaml
-from pydantic import (
-    BaseModel,
-    ConfigDict,
-    Field,
-    ValidationError,
-    field_validator,
-    model_validator,
-)
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from ..core.errors import DataError
 from ..core.suggest import did_you_mean
-from ..core.yamlsafe import safe_load
 from .gestures import LIBRARY, GestureParams
 
 Effect = Literal[
@@ -71,12 +64,16 @@ Effect = Literal[
     "noise",
 ]
 CHANNELS = ("x", "y", "pressure", "fur")
+#: the largest gain, noise or saturation level (counts) the float32 electronics take: a gain of
+#: this many counts per newton still leaves a force of 10^6 N finite in float32 (3.4e38)
+FLOAT32_COUNTS = 1e32
 
 _NonNeg = Field(ge=0)
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # a scene's numbers are finite: .inf or .nan in a scene file is refused, naming the field
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 # ----------------------------------------------------------------- sensor
@@ -156,6 +153,7 @@ class SensorModel(_Strict):
         lo, hi = self.value_range
         if not lo < hi:
             raise ValueError("value_range: low must be below high")
+        self._check_representable()
         if self.kind == "channels":
             if self.channels is None or tuple(self.channels) != CHANNELS:
                 raise ValueError(f"channels: a channel sensor has channels {list(CHANNELS)}")
@@ -171,6 +169,20 @@ class SensorModel(_Strict):
             if self.response is not None:
                 raise ValueError("response: only a sensor of kind 'channels' has a channel response")
         return self
+
+    def _check_representable(self) -> None:
+        """The value range fits the dtype (else clipping then casting wraps round), and the
+        counts the electronics compute in float32 stay finite there."""
+        dt = np.dtype(self.dtype)
+        info = np.iinfo(dt) if dt.kind in "iu" else np.finfo(dt)
+        lo, hi = self.value_range
+        if lo < info.min or hi > info.max:
+            raise ValueError(f"value_range: [{lo:g}, {hi:g}] does not fit {self.dtype} ({info.min:g} .. {info.max:g})")
+        for name in ("gain", "noise_sd", "saturation"):
+            v = getattr(self, name)
+            if v is not None and v > FLOAT32_COUNTS:
+                raise ValueError(f"{name}: {v:g} is beyond what the sensor's electronics compute (float32 counts: "
+                                 f"at most {FLOAT32_COUNTS:g})")
 
 
 # ------------------------------------------------------------- population
@@ -442,14 +454,16 @@ class SceneSpec(_Strict):
             raise ValueError("population.subjects: required (or give protocol.groups)")
 
     def _check_split(self) -> None:
-        """The split's subjects and variants are the scene's."""
+        """The split's subjects and variants are the scene's (subject ids parsed, not listed: a
+        scene of absurdly many people is refused by its size, not here)."""
         pro = self.protocol
         if pro.split is None:
             return
-        subjects = set(subject_ids(self))
-        unknown = sorted((set(pro.split.train) | set(pro.split.test)) - subjects)
+        n = n_subjects(self)
+        unknown = sorted(s for s in set(pro.split.train) | set(pro.split.test) if not is_subject_id(s, n))
         if unknown:
-            raise ValueError(f"protocol.split: unknown subjects {unknown} (the scene has {min(subjects)}..{max(subjects)})")
+            first, last = subject_id(1, n), subject_id(n, n)
+            raise ValueError(f"protocol.split: unknown subjects {unknown} (the scene has {first}..{last})")
         if pro.split.variants is not None:
             bad = [v for v in pro.split.variants if v not in (pro.variants or {})]
             if bad:
@@ -488,11 +502,26 @@ def property_value(spec: BaseModel, path: str) -> Any:
     return node
 
 
+def n_subjects(spec: SceneSpec) -> int:
+    """The scene's people: ``population.subjects``, or the groups' subjects."""
+    pro = spec.protocol
+    return (spec.population.subjects or 0) if pro.groups is None else sum(g.subjects for g in pro.groups.values())
+
+
+def subject_id(i: int, n: int) -> str:
+    """The id of subject ``i`` (1-based) of ``n``: ``s01``.. (HAART convention), wider for 100 or more."""
+    return f"s{i:0{max(2, len(str(n)))}d}"
+
+
+def is_subject_id(s: str, n: int) -> bool:
+    m = re.fullmatch(r"s(\d+)", s) if isinstance(s, str) else None
+    return m is not None and 1 <= int(m.group(1)) <= n and subject_id(int(m.group(1)), n) == s
+
+
 def subject_ids(spec: SceneSpec) -> list[str]:
     """``s01``.. (HAART convention), numbered through the groups in order."""
-    n = spec.population.subjects if spec.protocol.groups is None else sum(g.subjects for g in spec.protocol.groups.values())
-    width = max(2, len(str(n)))
-    return [f"s{i + 1:0{width}d}" for i in range(n or 0)]
+    n = n_subjects(spec)
+    return [subject_id(i + 1, n) for i in range(n)]
 
 
 def n_captures(spec: SceneSpec) -> int:
@@ -502,68 +531,3 @@ def n_captures(spec: SceneSpec) -> int:
     if pro.groups is None:
         return (spec.population.subjects or 0) * pro.sessions * per
     return sum(g.subjects * g.sessions for g in pro.groups.values()) * per
-
-
-# ---------------------------------------------------------------- loading
-def _format_error(e: ValidationError) -> str:
-    parts = []
-    for err in e.errors():
-        loc = ".".join(str(x) for x in err["loc"] if not str(x).startswith("function-after"))
-        msg = err["msg"].removeprefix("Value error, ")
-        if err.get("type") in ("literal_error", "enum") and isinstance(err.get("input"), (str, int, float)):
-            msg += f", got {err['input']!r}"
-        parts.append(f"{loc}: {msg}" if loc else msg)
-    return "; ".join(parts)
-
-
-def _line_of(text: str, key: str) -> int | None:
-    for i, line in enumerate(text.splitlines(), 1):
-        if line.strip().startswith(f"{key}:"):
-            return i
-    return None
-
-
-def deep_merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
-    out = dict(base)
-    for k, v in over.items():
-        if isinstance(v, dict) and isinstance(out.get(k), dict):
-            out[k] = deep_merge(out[k], v)
-        else:
-            out[k] = v
-    return out
-
-
-def parse_spec(raw: dict[str, Any], source: str | Path = "<scene>", text: str | None = None) -> SceneSpec:
-    """Validate a scene dict; errors become a :class:`DataError` naming the
-    file, the field and (for the top-level key) the line."""
-    if not isinstance(raw, dict):
-        raise DataError("a scene file holds a mapping (name, description, effects, sensor, ...)", source)
-    try:
-        return SceneSpec.model_validate(raw)
-    except ValidationError as e:
-        first = e.errors()[0]["loc"]
-        line = _line_of(text, str(first[0])) if (text and first) else None
-        raise DataError(f"invalid scene: {_format_error(e)}", source, line) from None
-
-
-def read_yaml(path: str | Path) -> tuple[dict[str, Any], str]:
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as e:
-        raise DataError(f"cannot read scene file ({e.strerror})", path) from None
-    try:
-        raw = safe_load(text)
-    except yaml.YAMLError as e:
-        mark = getattr(e, "problem_mark", None)
-        raise DataError(f"invalid YAML ({getattr(e, 'problem', e)})", path, None if mark is None else mark.line + 1) from None
-    return raw, text
-
-
-def load_spec(path: str | Path, overrides: dict[str, Any] | None = None) -> SceneSpec:
-    raw, text = read_yaml(path)
-    if overrides:
-        if not isinstance(raw, dict):
-            raise DataError("a scene file holds a mapping", path)
-        raw = deep_merge(raw, overrides)
-    return parse_spec(raw, path, text)

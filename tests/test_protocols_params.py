@@ -1,0 +1,102 @@
+"""Classifier parameter values that could only fail when a method runs are refused by
+`touchbench protocols validate`, with the file, the line and the field (each classifier's own
+checks: the registry tag ``check_params``, called for every entry and every nested candidate)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from touchbench.classifiers import ParamError, check_classifier_params, make_classifier
+from touchbench.cli.main import cli
+from touchbench.core.versions import missing_extra
+
+HEAD = "name: t\ndataset: scene:tiny\nscheme: loso\nmethods:\n"  # lines 1-4; the entry starts on line 5
+
+needs_peers = pytest.mark.skipif(bool(missing_extra("peers")), reason="fusion needs the peers extra")
+
+
+def validate(tmp_path, entry: str) -> str:
+    """The one error line of `protocols validate --schema-only` on HEAD + ``entry``."""
+    path = tmp_path / "p.yaml"
+    path.write_text(HEAD + entry)
+    r = CliRunner().invoke(cli, ["protocols", "validate", "--schema-only", str(path)])
+    assert r.exit_code == 3, r.output
+    assert "Traceback" not in r.output and len(r.output.strip().splitlines()) == 1, r.output
+    return r.output.strip().removeprefix("error: ").replace(str(path), "p.yaml")
+
+
+FUSION = "  - name: fusion\n    params:\n      parts: [touch-et-contact, touch-et]\n"  # lines 5-7
+
+
+@needs_peers
+@pytest.mark.parametrize("weights,shown", [("[[-1, 2]]", "[-1, 2]"), ("[[1, 1], [.nan, 1]]", "[nan, 1]")])
+def test_fusion_weights_that_are_not_a_distribution_are_refused(tmp_path, weights, shown):
+    out = validate(tmp_path, FUSION + f"      weights: {weights}\n")  # line 8
+    vector = 0 if weights.startswith("[[-1") else 1
+    assert out.startswith(f"p.yaml:8: methods[0].params.weights[{vector}]: fusion: weight vector {shown} is not 2 "
+                          "non-negative weights with a positive sum")
+
+
+@pytest.mark.parametrize("entry,line,field", [
+    ("  - name: touch-et-adapt\n    params:\n      sd_floor: 0\n", 7, "methods[0].params.sd_floor"),
+    ("  - name: touch-et-adapt\n    params:\n      sd_floor: -1.0e-6\n", 7, "methods[0].params.sd_floor"),
+    ("  - name: touch-et-adapt\n    params: {scale: true, sd_floor: .nan}\n", 6, "methods[0].params.sd_floor"),
+])
+def test_a_session_floor_that_is_not_positive_is_refused(tmp_path, entry, line, field):
+    out = validate(tmp_path, entry)
+    assert out.startswith(f"p.yaml:{line}: {field}: session-centred: sd_floor must be a positive number")
+
+
+def test_a_classifier_entry_is_checked_as_a_method_entry_is(tmp_path):
+    path = tmp_path / "p.yaml"
+    path.write_text("name: t\ndataset: scene:tiny\nscheme: loso\nfeatures: [[flagg-stats]]\nclassifiers:\n"
+                    "  - name: session-centred\n    params:\n      sd_floor: 0\n")
+    r = CliRunner().invoke(cli, ["protocols", "validate", "--schema-only", str(path)])
+    assert r.exit_code == 3 and f"{path}:8: classifiers[0].params.sd_floor: session-centred: sd_floor" in r.output
+
+
+@pytest.mark.parametrize("entry,start", [
+    ("  - name: shift-augmented\n    params:\n      features: [contact-evidence]\n      crop: 0\n",
+     "p.yaml:8: methods[0].params.crop: shift-augmented: crop must be a fraction in (0, 1], got 0"),
+    # 10^12 copies of even one capture take at least 10^12 arrays of 128 bytes: 116.4 TiB
+    ("  - name: touch-et-shift\n    params:\n      copies: 1000000000000\n",
+     "p.yaml:7: methods[0].params.copies: shift-augmented: copies=1000000000000 would make "
+     "1,000,000,000,000 copies of even one training capture, at least 116.4 TiB"),
+    # inside a fusion part: the part's line (9)
+    pytest.param("  - name: fusion\n    params:\n      parts:\n        - touch-et\n"
+                 "        - {name: touch-et-shift, params: {crop: 0}}\n",
+                 "p.yaml:9: methods[0].params.parts[1].params.crop: shift-augmented: crop must be", marks=needs_peers),
+    # inside a written-out candidate: the value's line (12)
+    ("  - name: nested-select\n    params:\n      candidates:\n        - touch-et\n"
+     "        - features: [flagg-stats]\n          estimator: session-centred\n"
+     "          params:\n            sd_floor: 0\n",
+     "p.yaml:12: methods[0].params.candidates[1].params.sd_floor: session-centred: sd_floor"),
+    # every point of a grid
+    ("  - name: touch-et-adapt\n    params:\n      sd_floor: {grid: [0.001, 0]}\n",
+     "p.yaml:7: methods[0].params.sd_floor: session-centred: sd_floor must be a positive "
+     "number (the smallest standard deviation a feature is divided by), got 0"),
+])
+def test_shift_values_and_nested_values_are_refused_naming_their_line(tmp_path, entry, start):
+    assert validate(tmp_path, entry).startswith(start)
+
+
+@needs_peers
+def test_good_values_pass(tmp_path):
+    path = tmp_path / "p.yaml"
+    path.write_text(HEAD + FUSION + "      weights: [[1, 3], [0, 1]]\n"
+                    "  - {name: touch-et-adapt, params: {scale: true, sd_floor: 0.001}}\n"
+                    "  - {name: touch-et-shift, params: {crop: 0.5, copies: 1}}\n")
+    r = CliRunner().invoke(cli, ["protocols", "validate", "--schema-only", str(path)])
+    assert r.exit_code == 0, r.output
+
+
+def test_the_check_runs_when_the_classifier_is_fitted_too():
+    # the same function the protocol's validation calls, from Python
+    with pytest.raises(ParamError) as e:
+        check_classifier_params("session-centred", {"sd_floor": 0.0})
+    assert e.value.field == ("sd_floor",)
+    est = make_classifier("session-centred", random_state=0, sd_floor=-1)
+    with pytest.raises(ParamError, match="sd_floor must be a positive number"):
+        est.fit(np.arange(8.0).reshape(4, 2), ["a", "b", "a", "b"])
