@@ -63,7 +63,8 @@ def live_outcome(task: Any, ds: Any, y: np.ndarray) -> tuple[dict[str, Any], np.
     rest = float(lo if ds.sensor.higher_is_more_pressure else hi)
     for s in live.streams:
         frames, truth = stream_frames(ds.captures, y, s, live.idle, rest)
-        per_rule = [_replayed(frames, truth, fitted, classes, ds.sensor, live, rule) for rule in rules]
+        per_rule = [_scored(rp, truth, ds.sensor.frame_rate, live)
+                    for rp in replay_stream(frames, fitted.window_proba, classes, ds.sensor, live, rules)]
         first_rule.append((s, per_rule[0].pop("_decided")))
         for r in per_rule[1:]:
             r.pop("_decided")
@@ -76,16 +77,14 @@ def live_outcome(task: Any, ds: Any, y: np.ndarray) -> tuple[dict[str, Any], np.
     return row, labels, json.dumps(payload, default=float)
 
 
-def _replayed(frames: np.ndarray, truth: np.ndarray, fitted: Any, classes: list[str], sensor: Any, live: LiveSpec,
-              rule: Any) -> dict[str, Any]:
-    """One stream replayed with one rule: its scores, decisions and CPU."""
-    rp = replay_stream(frames, fitted.window_proba, classes, sensor, live, rule)
+def _scored(rp: Any, truth: np.ndarray, frame_rate: float, live: LiveSpec) -> dict[str, Any]:
+    """One stream's replay with one rule, scored: its scores, decisions and CPU."""
     decided = decisions_per_frame([d.frame for d in rp.decisions], [d.label for d in rp.decisions], len(truth),
                                   UNDECIDED)
-    scores = score_stream(truth, decided, live.idle, sensor.frame_rate, undecided=(UNDECIDED, live.none_label))
+    scores = score_stream(truth, decided, live.idle, frame_rate, undecided=(UNDECIDED, live.none_label))
     cpu = rp.decision_cpu_ms
     return {"scores": scores.to_dict(), "decisions": label_runs(decided), "n_decisions": len(rp.decisions),
-            "cpu_s": rp.cpu_s, "wall_s": rp.wall_s,
+            "cpu_s": float(cpu.sum()) / 1000.0, "wall_s": rp.wall_s,
             "decision_cpu_ms_p50": float(np.percentile(cpu, 50)) if cpu.size else float("nan"),
             "decision_cpu_ms_p99": float(np.percentile(cpu, 99)) if cpu.size else float("nan"),
             "_decided": decided}

@@ -17,9 +17,11 @@ test subject is for captures.
   decision, over the events decided; ``never %``: events never decided;
 - ``FA/min``: false activations per minute of idle (pooled: every stream's
   false activations over every stream's idle minutes);
-- ``CPU ms``: the median CPU time of a decision, and ``x real time``: the
-  streams' length over the replay's CPU time, both measured on one thread of
-  the machine the run used (its load is in the table's notes).
+- ``CPU ms``: the median CPU time of a decision (the windows' features and
+  classifier, which a gate skips when it decides idle, and the rule), and
+  ``x real time``: the streams' length over the CPU time of their
+  decisions, both measured on one thread of the machine the run used (its
+  load is in the table's notes).
 
 Ward, Lukowicz & Gellersen's event errors (insertions, deletions,
 fragmentations, merges) are summed over streams in the JSON output.

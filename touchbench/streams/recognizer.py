@@ -77,6 +77,7 @@ class Decision:
     best: str  # the best class, even when the decision is "none"
     window_s: float | None  # the deciding window (combine="max"), None for "mean"
     latency_ms: float
+    cpu_ms: float = float("nan")  # CPU time of this thread for the decision (features, classifier, rule)
     windows: list[dict[str, Any]] = field(default_factory=list)  # per window: length, best class, probability
 
     def to_json(self) -> str:
@@ -94,13 +95,15 @@ class WindowRecognizer:
     are the window lengths in seconds, rounded to whole frames at the
     sensor's frame rate; ``dtype`` is the frames' type (the training
     captures'); ``rule`` decides from the combined probabilities (default:
-    :class:`~touchbench.streams.rules.MaxRule` with ``threshold``).
+    :class:`~touchbench.streams.rules.MaxRule` with ``threshold``), or several rules do, each
+    from the same probabilities (:meth:`step`; :meth:`push` gives the first rule's decision).
     """
 
     def __init__(self, proba: Callable[[list[np.ndarray]], np.ndarray], classes: Sequence[str], sensor: SensorSpec,
                  windows_s: Iterable[float], *, dtype: Any = np.float64, hop_s: float = 0.5,
                  threshold: float = 0.5, combine: str = "max", none_label: str = "none",
-                 rule: DecisionRule | None = None, buffer_check: Callable[..., None] | None = None):
+                 rule: DecisionRule | Sequence[DecisionRule] | None = None,
+                 buffer_check: Callable[..., None] | None = None):
         self.proba = proba
         self.sensor = sensor
         self.frame_rate = float(sensor.frame_rate)
@@ -120,8 +123,13 @@ class WindowRecognizer:
         self.threshold = float(threshold)
         self.combine = combine
         self.none_label = none_label
-        self.rule = rule if rule is not None else MaxRule(threshold=self.threshold)
-        self.rule.start(self.classes, none_label, self.frame_rate, sensor)
+        rules = [MaxRule(threshold=self.threshold)] if rule is None else (
+            [rule] if isinstance(rule, DecisionRule) else list(rule))
+        if not rules:
+            raise TouchbenchError("give at least one decision rule")
+        for r in rules:
+            r.start(self.classes, none_label, self.frame_rate, sensor)
+        self.rules = rules
         self.dtype = np.dtype(dtype)
         self.grid = sensor.grid
         self._cap = 2 * max(self.lengths)
@@ -138,7 +146,13 @@ class WindowRecognizer:
         self.proba([np.full((L, *self.grid), lo, dtype=self.dtype) for L in self.lengths])
 
     def push(self, frame: np.ndarray, arrived: float | None = None) -> Decision | None:
-        """Add one ``(H, W)`` frame; a :class:`Decision` when one is due, else None."""
+        """Add one ``(H, W)`` frame; the first rule's :class:`Decision` when one is due, else None."""
+        out = self.step(frame, arrived)
+        return None if out is None else out[0]
+
+    def step(self, frame: np.ndarray, arrived: float | None = None) -> list[Decision] | None:
+        """Add one ``(H, W)`` frame; when a decision is due, one :class:`Decision` per rule (the
+        windows' probabilities computed once, when a rule needs them), else None."""
         arrived = time.perf_counter() if arrived is None else arrived
         if self._n == self._cap:
             keep = max(self.lengths) - 1
@@ -152,21 +166,30 @@ class WindowRecognizer:
             return None
         full = [(w, L) for w, L in zip(self.windows_s, self.lengths) if self.seen >= L]
         window_frames = [self._buf[self._n - L:self._n] for _, L in full]
-        gated = self.rule.gate(window_frames[0]) if self.rule.gates else None
-        if gated is not None:  # decided from the frames alone: no classifier runs
-            P = (self.classes == gated).astype(np.float64)[None, :]
-            full = full[:1]
-        else:
+        gated = [r.gate(window_frames[0]) if r.gates else None for r in self.rules]
+        P, proba_cpu = None, 0.0
+        if any(g is None for g in gated):
+            c0 = time.thread_time_ns()
             P = np.asarray(self.proba(window_frames), dtype=np.float64)
+            proba_cpu = (time.thread_time_ns() - c0) / 1e6
+        return [self._decide(rule, g, P, full, proba_cpu, arrived) for rule, g in zip(self.rules, gated)]
+
+    def _decide(self, rule: DecisionRule, gated: str | None, P: np.ndarray | None, full: list, proba_cpu: float,
+                arrived: float) -> Decision:
+        """One rule's decision from the windows' probabilities ``P`` (or its gate's label ``gated``, decided
+        from the frames alone: no classifier ran for it); its CPU time adds the probabilities' when it used them."""
+        c0 = time.thread_time_ns()
+        if gated is not None:
+            P, full = (self.classes == gated).astype(np.float64)[None, :], full[:1]
         p, k = combine_windows(P, self.combine)
         best = int(np.argmax(p))
-        label = gated if gated is not None else self.rule.decide(p)
-        latency = 1000.0 * (time.perf_counter() - arrived)
+        label = gated if gated is not None else rule.decide(p)
+        cpu = (time.thread_time_ns() - c0) / 1e6 + (proba_cpu if gated is None else 0.0)
         per = [{"window_s": w, "label": str(self.classes[int(np.argmax(P[i]))]), "probability": float(P[i].max())}
                for i, (w, _) in enumerate(full)]
         return Decision(frame=self.seen, t=self.seen / self.frame_rate, label=label, probability=float(p[best]),
                         best=str(self.classes[best]), window_s=None if k is None else full[k][0],
-                        latency_ms=latency, windows=per)
+                        latency_ms=1000.0 * (time.perf_counter() - arrived), cpu_ms=cpu, windows=per)
 
 
 def decide_all(recognizer: WindowRecognizer, frames: Iterable[tuple[np.ndarray, float]]) -> Iterator[Decision]:

@@ -65,26 +65,27 @@ def training_samples(captures: Sequence[np.ndarray], labels: np.ndarray, groups:
 
 @dataclass
 class Replayed:
-    """One stream's replay: its decisions, the replay's CPU and wall seconds, each decision's CPU ms."""
+    """One stream's replay with one rule: its decisions, and each decision's CPU ms (the windows'
+    probabilities, when the rule used them, and the rule); the replay's CPU and wall seconds (every
+    rule's, the probabilities computed once)."""
 
     decisions: list[Decision]
+    decision_cpu_ms: np.ndarray
     cpu_s: float
     wall_s: float
-    decision_cpu_ms: np.ndarray
 
 
 def replay(frames: np.ndarray, proba: Callable[[list[np.ndarray]], np.ndarray], classes: Sequence[str], sensor: Any,
-           spec: LiveSpec, rule: DecisionRule) -> Replayed:
-    """``frames`` through a recogniser of ``spec``'s windows and hop with ``rule``, one frame at a time."""
+           spec: LiveSpec, rules: Sequence[DecisionRule]) -> list[Replayed]:
+    """``frames`` through one recogniser of ``spec``'s windows and hop deciding with every rule of
+    ``rules``, one frame at a time: one :class:`Replayed` per rule."""
     rec = WindowRecognizer(proba, classes, sensor, spec.windows_s, dtype=frames.dtype, hop_s=spec.hop_s,
-                           none_label=spec.none_label, rule=rule)
-    decisions, cpu = [], []
+                           none_label=spec.none_label, rule=rules)
+    decided: list[list[Decision]] = [[] for _ in rules]
     c_start, w_start = time.thread_time_ns(), time.perf_counter()
     for frame in frames:
-        c0 = time.thread_time_ns()
-        d = rec.push(frame)
-        if d is not None:
-            cpu.append((time.thread_time_ns() - c0) / 1e6)
-            decisions.append(d)
-    return Replayed(decisions, (time.thread_time_ns() - c_start) / 1e9, time.perf_counter() - w_start,
-                    np.asarray(cpu, dtype=np.float64))
+        out = rec.step(frame)
+        for k, d in enumerate(out or ()):
+            decided[k].append(d)
+    cpu_s, wall_s = (time.thread_time_ns() - c_start) / 1e9, time.perf_counter() - w_start
+    return [Replayed(ds, np.array([d.cpu_ms for d in ds], dtype=np.float64), cpu_s, wall_s) for ds in decided]
