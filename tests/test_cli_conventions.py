@@ -10,6 +10,7 @@ import subprocess
 import sys
 
 import pytest
+from helpers import SUBPROCESS_HANG_S
 from click.testing import CliRunner
 
 from touchbench.cli import exitcodes
@@ -175,7 +176,7 @@ def _imported_by(args: list[str], cache) -> set[str]:
     code = ("import json, sys\nfrom touchbench.cli.main import cli\n"
             f"try:\n    cli({args!r})\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
             "print(json.dumps(sorted({m.split('.')[0] for m in sys.modules})), file=sys.stderr)")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=SUBPROCESS_HANG_S,
                        env={**os.environ, "TOUCHBENCH_CACHE_DIR": str(cache)})
     assert r.returncode == 0, r.stderr
     return set(json.loads(r.stderr.strip().splitlines()[-1]))
@@ -199,7 +200,7 @@ def _listings(commands: list[list[str]], cache) -> dict:
             f"runs = [CliRunner().invoke(cli, args, env={{'COLUMNS': '200'}}) for args in {commands!r}]\n"
             "print(json.dumps({'outputs': [[r.exit_code, r.stdout] for r in runs], "
             "'modules': sorted({m.split('.')[0] for m in sys.modules})}))")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=SUBPROCESS_HANG_S,
                        env={**os.environ, "TOUCHBENCH_CACHE_DIR": str(cache)})
     assert r.returncode == 0, r.stderr
     return json.loads(r.stdout.strip().splitlines()[-1])

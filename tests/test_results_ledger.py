@@ -10,6 +10,7 @@ import multiprocessing as mp
 from pathlib import Path
 
 import pytest
+from helpers import SUBPROCESS_HANG_S
 
 from touchbench.core.paths import results_root
 from touchbench.engine import run_protocol, runner
@@ -138,7 +139,7 @@ def test_concurrent_runs_merge_an_old_ledger_once_and_lose_no_look(tmp_path):
     for proc in procs:
         proc.start()
     for proc in procs:
-        proc.join(120)
+        proc.join(SUBPROCESS_HANG_S)
         assert proc.exitcode == 0
     entries = read_ledger(root / "ledger.jsonl")
     assert len(entries) == 5 + 40
