@@ -10,10 +10,12 @@ runs it: ``-n 0`` for ``--workers 1`` (one process; xdist stays loaded, so its m
 ``-n N --dist loadgroup`` otherwise, then the arguments after ``--`` (test paths relative to the
 repository root, as there). Its working folder is a folder of its own under ``cache_dir() /
 "benchmarks" / "tests"``, which holds what a run leaves for the next: ``TOUCHBENCH_CACHE_DIR``
-(converted datasets, feature caches, the registry index) and Hypothesis's example database
-(``.hypothesis/``, kept in the working folder). ``cold``: both new and empty for every run, as in
-CI's fresh clone. ``warm``: one such folder for every warm run, filled by one untimed run first.
-(Python's bytecode of the repository is not removed: a fresh clone also compiles it once.) The rest
+(converted datasets, feature caches, the registry index), Hypothesis's example database
+(``.hypothesis/``, kept in the working folder) and ``NUMBA_CACHE_DIR`` (the machine code numba
+compiles for aeon's peers, otherwise kept beside aeon in the virtual environment, which CI builds
+anew). ``cold``: all new and empty for every run, as in CI's fresh clone. ``warm``: one such folder
+for every warm run, filled by one untimed run first. (Python's bytecode of the repository is not
+removed: a fresh clone also compiles it once, a few seconds.) The rest
 of the environment (``CI``, ``TOUCHBENCH_DATA_DIR``) is this process's. The settings take turns
 within each of the ``--repeats`` rounds, so that a machine getting busier slows them alike.
 
@@ -61,8 +63,9 @@ def children_cpu() -> float:
 
 def one_run(workers: int, extra: list[str], work: Path) -> tuple[float, float, str, list[str]]:
     """Wall time, CPU time, pytest's summary line and the lines naming the tests that failed (none when
-    every test passed), for one run in the working folder ``work`` (its cache and Hypothesis folder)."""
-    env = dict(os.environ, TOUCHBENCH_CACHE_DIR=str(work / "cache"), TOUCHBENCH_DATA_DIR=str(data_dir()))
+    every test passed), for one run in the working folder ``work`` (its caches and Hypothesis folder)."""
+    env = dict(os.environ, TOUCHBENCH_CACHE_DIR=str(work / "cache"), TOUCHBENCH_DATA_DIR=str(data_dir()),
+               NUMBA_CACHE_DIR=str(work / "numba"))
     cpu0, t0 = children_cpu(), time.perf_counter()
     r = subprocess.run(pytest_command(workers, extra), cwd=work, env=env, capture_output=True, text=True)
     wall, cpu = time.perf_counter() - t0, children_cpu() - cpu0

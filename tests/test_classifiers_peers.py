@@ -28,6 +28,11 @@ from touchbench.classifiers import make_classifier  # noqa: E402
 from touchbench.classifiers.peers import MIN_TIMEPOINTS, frames_to_series  # noqa: E402
 from helpers import SUBPROCESS_HANG_S, slow_fast_rows  # noqa: E402
 
+# one worker of pytest-xdist runs this module whole: numba compiles each peer's aeon kernels once per
+# process (most of this module's time when its cache, kept beside aeon, is empty, as in a new
+# environment), so two workers taking turns at these tests would compile every kernel twice
+pytestmark = pytest.mark.xdist_group("aeon")
+
 
 def _labelled_capture(frames: int, h: int, w: int) -> np.ndarray:
     """value = 1000 * frame + cell (row-major), flattened frame-major as raw-window does."""
