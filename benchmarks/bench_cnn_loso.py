@@ -46,11 +46,12 @@ import time
 import numpy as np
 
 
-def haart_raw():
-    """(X, gestures, subjects) of real HAART, X from the ``raw-window`` set."""
+def haart_raw(dataset: str = "haart"):
+    """(X, gestures, subjects) of real HAART (or another dataset of 432-frame HAART captures, such as
+    ``haart-sample``), X from the ``raw-window`` set."""
     from touchbench.catalog import load_dataset
 
-    ds = load_dataset("haart")
+    ds = load_dataset(dataset)
     try:
         from touchbench.features.base import FEATURES
 
@@ -94,16 +95,17 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--subjects", default=None, help="comma-separated subset, e.g. s01,s03 (default: all)")
+    ap.add_argument("--dataset", default="haart", help="HAART captures to use (haart-sample: a smoke run in seconds)")
     ap.add_argument("--no-groups", dest="use_groups", action="store_false",
                     help="stratified capture split for early stopping instead of held-out training subjects")
     a = ap.parse_args(argv)
 
     t0 = time.perf_counter()
-    X, y, s, grid, how = haart_raw()
+    X, y, s, grid, how = haart_raw(a.dataset)
     subjects = a.subjects.split(",") if a.subjects else sorted(set(s))
     params = dict(L=a.L, train_windows=a.windows, test_windows=a.windows, vote=a.vote,
                   max_epochs=a.max_epochs, patience=a.patience, n_jobs=a.threads)
-    print(f"real HAART: {X.shape[0]} captures x {X.shape[1]} values ({how}); load {time.perf_counter() - t0:.1f} s")
+    print(f"{a.dataset}: {X.shape[0]} captures x {X.shape[1]} values ({how}); load {time.perf_counter() - t0:.1f} s")
     print(f"machine: {os.cpu_count()} cores, {platform.processor() or platform.machine()}, no GPU used; "
           f"python {sys.version.split()[0]}")
     print(f"cnn params: {params}, seed {a.seed}, early stopping on "

@@ -42,16 +42,19 @@ def main(argv=None) -> int:
     ap.add_argument("--max-epochs", type=int, default=100)
     ap.add_argument("--patience", type=int, default=10)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--dataset", default="haart", help="HAART captures to use (haart-sample: a smoke run in seconds)")
+    ap.add_argument("--no-groups", dest="use_groups", action="store_false",
+                    help="stratified capture split for early stopping instead of held-out training subjects")
     a = ap.parse_args(argv)
-    X, y, s, grid, how = haart_raw()
+    X, y, s, grid, how = haart_raw(a.dataset)
     subjects = a.subjects.split(",")
-    print(f"real HAART, {how}; subjects {subjects}; windows {a.windows}; {os.cpu_count()} cores, no GPU")
+    print(f"{a.dataset}, {how}; subjects {subjects}; windows {a.windows}; {os.cpu_count()} cores, no GPU")
     print(f"{'L':>3} {'F':>4} " + " ".join(f"{x:>6}" for x in subjects) + "   mean  s/fold")
     for L in [int(v) for v in a.L.split(",")]:
         params = dict(L=L, train_windows=a.windows, test_windows=a.windows, max_epochs=a.max_epochs,
                       patience=a.patience)
         t0 = time.perf_counter()
-        rows = loso(X, y, s, grid, subjects, params, a.seed, True, log=lambda *_: None)
+        rows = loso(X, y, s, grid, subjects, params, a.seed, a.use_groups, log=lambda *_: None)
         accs = [r[1] for r in rows]
         per = (time.perf_counter() - t0) / len(rows)
         print(f"{L:>3} {432 // L:>4} " + " ".join(f"{x:6.1%}" for x in accs) + f" {np.mean(accs):6.1%} {per:6.1f}",

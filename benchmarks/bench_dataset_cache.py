@@ -2,7 +2,7 @@
 
 Prints the median of several warm loads in a fresh cache directory under
 ``cache_dir() / "benchmarks" / "dataset_cache"``, removed afterwards.
-Usage: python benchmarks/bench_dataset_cache.py [--repeats 7]
+Usage: python benchmarks/bench_dataset_cache.py [--repeats 7] [--name haart --name haart-challenge]
 """
 
 from __future__ import annotations
@@ -19,9 +19,10 @@ from touchbench.catalog import load_dataset
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--name", action="append", help="dataset (repeatable; default haart and haart-challenge)")
     args = ap.parse_args()
     with fresh_dir(__file__) as cache:
-        for name in ("haart", "haart-challenge"):
+        for name in args.name or ("haart", "haart-challenge"):
             t = time.perf_counter()
             ds = load_dataset(name, cache_dir=cache)
             cold = time.perf_counter() - t

@@ -3,6 +3,7 @@
     python benchmarks/bench_engine.py                 # all three, 3 repeats each
     python benchmarks/bench_engine.py --what cache --repeats 1
     python benchmarks/bench_engine.py --what overhead --base f2fe39c --repeats 3
+    python benchmarks/bench_engine.py --repeats 1 --dataset haart-sample --protocol tiny   # seconds
 
 Everything runs on the real HAART data in a fresh cache and results folder
 under ``cache_dir() / "benchmarks" / "engine"``, removed afterwards (the
@@ -58,13 +59,13 @@ from workdir import bench_dir, fresh_dir
 
 OVERHEAD_PROTOCOL = """\
 name: bench-overhead
-dataset: haart
+dataset: {dataset}
 scheme: loso
 features:
   - [msd]
   - [sd]
 classifiers:
-  - {name: gaus-rf, params: {n_estimators: 100}, label: rf100}
+  - {{name: gaus-rf, params: {{n_estimators: 100}}, label: rf100}}
 seed: 0
 """
 
@@ -77,10 +78,14 @@ def _run(proto, out: Path, jobs: int = 1):
     return time.perf_counter() - t0, res
 
 
-def bench_overhead(work: Path, repeats: int, warmup: bool = True) -> dict:
+def overhead_protocol(work: Path, dataset: str):
     from touchbench.protocols.loading import parse_protocol
 
-    proto = parse_protocol(OVERHEAD_PROTOCOL, work / "overhead.yaml")
+    return parse_protocol(OVERHEAD_PROTOCOL.format(dataset=dataset), work / "overhead.yaml")
+
+
+def bench_overhead(work: Path, repeats: int, warmup: bool = True, dataset: str = "haart") -> dict:
+    proto = overhead_protocol(work, dataset)
     if warmup:
         _run(proto, work / "warmup-overhead")  # fills the feature cache
     per_task, bare, over, lat = [], [], [], []
@@ -125,10 +130,8 @@ def bench_cache(work: Path, repeats: int, protocol: str) -> dict:
             "cold_over_warm": c / w, "cold_over_rerun": c / r, "runs": repeats}
 
 
-def bench_jobs(work: Path, repeats: int) -> dict:
-    from touchbench.protocols.loading import parse_protocol
-
-    proto = parse_protocol(OVERHEAD_PROTOCOL, work / "overhead.yaml")
+def bench_jobs(work: Path, repeats: int, dataset: str = "haart") -> dict:
+    proto = overhead_protocol(work, dataset)
     _run(proto, work / "warmup-jobs")
     out = {}
     for jobs in (1, 2):
@@ -145,6 +148,7 @@ def main(argv=None) -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--protocol", default="gaus-tables6-7-haart", help="The protocol of the cache benchmark.")
     ap.add_argument("--json", default=None, help="Also write the figures here.")
+    ap.add_argument("--dataset", default="haart", help="The dataset of the overhead and jobs benchmarks.")
     ap.add_argument("--base", default=None, metavar="REV",
                     help="With --what overhead: measure REV's code and this checkout's, alternating.")
     ap.add_argument("--cache", default=None, help=argparse.SUPPRESS)  # a side's feature cache (--base)
@@ -172,13 +176,18 @@ def main(argv=None) -> None:
 
 def run_all(args, work: Path) -> dict:
     from touchbench.catalog import load_dataset
+    from touchbench.protocols.library import find_protocol
+    from touchbench.protocols.loading import load_protocol
 
-    for name in ("haart", "haart-challenge"):
+    names = [args.dataset]
+    if args.what in ("all", "cache"):
+        names.append(load_protocol(find_protocol(args.protocol)).dataset.name)
+    for name in dict.fromkeys(names):
         load_dataset(name)  # convert once, outside the timings
     print(f"cpus {os.cpu_count()}, load average {os.getloadavg()[0]:.1f}", file=sys.stderr)
     figures = {}
     if args.what in ("all", "overhead"):
-        figures["overhead"] = r = bench_overhead(work, args.repeats, getattr(args, "warmup", True))
+        figures["overhead"] = r = bench_overhead(work, args.repeats, getattr(args, "warmup", True), args.dataset)
         print(f"overhead: {r['tasks']} tasks, {1000 * r['wall_per_task_s']:.0f} ms per task, bare fit+predict "
               f"{1000 * r['bare_fit_predict_s']:.0f} ms, overhead {1000 * r['overhead_per_task_s']:.0f} ms per task, "
               f"of which ~{1000 * r['latency_measurement_s']:.0f} ms measure the one-capture latency "
@@ -189,7 +198,7 @@ def run_all(args, work: Path) -> dict:
               f"({r['cold_over_warm']:.1f}x), rerun {r['rerun_s']:.2f} s ({r['cold_over_rerun']:.0f}x) "
               f"(median of {r['runs']})")
     if args.what in ("all", "jobs"):
-        figures["jobs"] = r = bench_jobs(work, args.repeats)
+        figures["jobs"] = r = bench_jobs(work, args.repeats, args.dataset)
         print(f"jobs: 1 job {r['jobs1_s']:.1f} s, 2 jobs {r['jobs2_s']:.1f} s ({r['speedup']:.2f}x) "
               f"(median of {r['runs']})")
     figures["load_average_end"] = os.getloadavg()[0]

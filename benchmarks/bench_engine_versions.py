@@ -5,8 +5,9 @@
         --filter subject=s01,s02,s03 --runs 3
 
 ``--base REV`` is checked out into a git worktree under this benchmark's
-folder (``cache_dir() / "benchmarks" / "engine_versions"``); the other side
-is this checkout. Each run of each side starts from an empty feature cache
+folder (``cache_dir() / "benchmarks" / "engine_versions"``), removed at the
+end (``--base`` may also be a folder holding another checkout); the other
+side is this checkout. Each run of each side starts from an empty feature cache
 and an empty results folder, with the dataset cache already converted (the
 real-data conversion is not timed), and runs ``touchbench run PROTOCOL
 --jobs N`` in a subprocess with the same Python, alternating which side
@@ -21,6 +22,7 @@ protocol) for a shorter measurement on the same methods.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import shutil
 import statistics
@@ -32,20 +34,13 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
+from compare_runs import side_root
 from touchbench.core.paths import data_dir
 from touchbench.protocols.library import find_protocol
 from workdir import bench_dir
 
 REPO = Path(__file__).resolve().parent.parent
 RUN = "from touchbench.cli.main import cli; cli()"
-
-
-def worktree(rev: str, root: Path) -> Path:
-    path = root / f"src-{rev}"
-    if not path.is_dir():
-        subprocess.run(["git", "-C", str(REPO), "worktree", "add", "--detach", str(path), rev], check=True,
-                       capture_output=True)
-    return path
 
 
 def protocol_file(src: Path, name: str, filters: dict[str, list[str]], out: Path) -> Path:
@@ -90,7 +85,7 @@ def accuracies(results: Path) -> pd.Series:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--base", required=True, help="git revision of the 'before' side")
+    ap.add_argument("--base", required=True, help="git revision (or checkout folder) of the 'before' side")
     ap.add_argument("--protocol", required=True, help="protocol name in this checkout")
     ap.add_argument("--base-protocol", default=None, help="its name in the base revision [default: the same]")
     ap.add_argument("--jobs", type=int, default=2)
@@ -103,7 +98,11 @@ def main() -> None:
         col, _, vals = f.partition("=")
         filters[col] = vals.split(",")
     root = bench_dir(__file__)
-    base_src = worktree(args.base, root)
+    with contextlib.ExitStack() as stack:
+        compare(args, filters, root, side_root(args.base, root, stack))
+
+
+def compare(args, filters: dict[str, list[str]], root: Path, base_src: Path) -> None:
     head_src = REPO
     find_protocol(args.protocol)  # fails early with the known names
     protos = {"base": protocol_file(base_src, args.base_protocol or args.protocol, filters, root / "base.yaml"),
@@ -117,7 +116,8 @@ def main() -> None:
 
         os.environ["TOUCHBENCH_CACHE_DIR"] = str(root / "warm")
         load_dataset(load_protocol(protos["head"]).dataset.name)
-        shutil.copytree(root / "warm" / "datasets", datasets)
+        if (root / "warm" / "datasets").is_dir():  # a scene is generated, not cached
+            shutil.copytree(root / "warm" / "datasets", datasets)
     walls: dict[str, list[float]] = {"base": [], "head": []}
     for i in range(args.runs):
         order = ["base", "head"] if i % 2 == 0 else ["head", "base"]

@@ -1,6 +1,7 @@
 """Classifier time per stream decision for touchbench's extra-trees: the flat-array walk vs scikit-learn.
 
     python benchmarks/bench_forest_wrapped.py [--method touch-et] [--runs 7] [--decisions 100]
+    python benchmarks/bench_forest_wrapped.py --dataset haart-sample --method touch-et-fast --runs 1 --decisions 2
 
 The model: the method ``--method`` (default ``touch-et``: touch-rhythm +
 cell-rhythm + contact-motion -> ``touch-extra-trees``, 500 trees, whose
@@ -40,13 +41,14 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 
-def fitted_model(method: str):
-    """The model (fitted on haart-challenge's training captures) and the test captures' feature rows."""
+def fitted_model(method: str, dataset: str = "haart-challenge"):
+    """The model (fitted on the training captures of ``dataset``'s challenge split) and the test captures'
+    feature rows."""
     from touchbench.catalog import load_dataset
     from touchbench.deploy.model import fit_model
     from touchbench.methods import method_spec
 
-    ds = load_dataset("haart-challenge")
+    ds = load_dataset(dataset)
     split = ds.meta["split"].astype(str).to_numpy()
     t0 = time.perf_counter()
     model = fit_model(ds.subset(np.flatnonzero(split == "train")), method_spec(method), seed=0)
@@ -71,10 +73,11 @@ def main() -> None:
     ap.add_argument("--method", default="touch-et")
     ap.add_argument("--runs", type=int, default=7)
     ap.add_argument("--decisions", type=int, default=100, help="feature rows classified one at a time per run")
+    ap.add_argument("--dataset", default="haart-challenge", help="captures with a train/test split column")
     args = ap.parse_args()
     cpus = sorted(os.sched_getaffinity(0))
     os.sched_setaffinity(0, {cpus[-1]})
-    model, X = fitted_model(args.method)
+    model, X = fitted_model(args.method, args.dataset)
     ways = paths(model)
     for x in X[:20]:  # warm-up (the compiled arrays), and the paths agree
         got = {k: f(x[None, :]) for k, f in ways.items()}

@@ -19,6 +19,7 @@ A trial is byte-identical when all three hold. Prints one line per trial and
 the counts::
 
     python benchmarks/bench_kill_resume.py --kills 20
+    python benchmarks/bench_kill_resume.py --kills 1 --jobs 1 --dataset haart-sample   # seconds
 
 Files go to ``cache_dir()/benchmarks/kill_resume`` (``benchmarks/workdir.py``);
 needs ../shared/data/haart (or ``TOUCHBENCH_DATA_DIR``).
@@ -43,8 +44,8 @@ from workdir import bench_dir  # noqa: E402
 
 PROTOCOL = """\
 name: soak-haart
-description: real HAART, leave one subject out, MSD and Zhou basic features, a 50-tree random forest
-dataset: haart
+description: {dataset}, leave one subject out, MSD and Zhou basic features, a 50-tree random forest
+dataset: {dataset}
 target: gesture
 scheme: loso
 features:
@@ -52,7 +53,7 @@ features:
   - [zhou-basic]
 classifiers:
   - name: gaus-rf
-    params: {n_estimators: 50}
+    params: {{n_estimators: 50}}
 seed: 0
 """
 TIMES = ["feature_seconds_per_capture", "feature_fit_seconds", "fit_seconds", "predict_seconds", "latency_ms",
@@ -133,11 +134,12 @@ def main() -> None:
     ap.add_argument("--kills", type=int, default=20)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--dataset", default="haart", help="the protocol's dataset")
     args = ap.parse_args()
     root = bench_dir(__file__)
     shutil.rmtree(root, ignore_errors=True)
     root.mkdir(parents=True)
-    (root / "soak-haart.yaml").write_text(PROTOCOL)
+    (root / "soak-haart.yaml").write_text(PROTOCOL.format(dataset=args.dataset))
     rng = random.Random(args.seed)
 
     ref = root / "reference"

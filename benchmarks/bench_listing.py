@@ -10,6 +10,7 @@ new, empty cache folder each run (the listing imports the registries and writes 
     python benchmarks/bench_listing.py --runs 5
     python benchmarks/bench_listing.py --runs 5 --checkout ../other-checkout   # the same, of another checkout
     python benchmarks/bench_listing.py --runs 3 --base ../old-checkout         # and that checkout's times beside
+    python benchmarks/bench_listing.py --runs 1 --command "data list"          # one listing only
 
 ``--checkout`` puts that folder first on ``PYTHONPATH`` (same interpreter), to time another
 checkout; ``--base`` adds a third case, the same commands of another checkout (its own cache folder,
@@ -55,15 +56,18 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--checkout", default=None, help="a touchbench checkout to import instead of the installed one")
     ap.add_argument("--base", default=None, help="another checkout, timed beside (e.g. the code before a change)")
+    ap.add_argument("--command", action="append", choices=[" ".join(c) for c in COMMANDS],
+                    help="only this listing (repeatable; default: all)")
     args = ap.parse_args()
+    commands = [c for c in COMMANDS if not args.command or " ".join(c) in args.command]
     root = tempfile.mkdtemp(prefix="bench-listing-")
     envs = {"index": checkout_env(args.checkout, os.path.join(root, "warm"))}
     if args.base:
         envs["base"] = checkout_env(args.base, os.path.join(root, "base"))
     for env in envs.values():  # the index written (where the checkout keeps one) before any timing
-        for c in COMMANDS:
+        for c in commands:
             subprocess.run([sys.executable, "-c", ENTRY, *c], env=env, cwd=root, capture_output=True)
-    cases = [(" ".join(c), kind, [sys.executable, "-c", ENTRY, *c]) for c in COMMANDS
+    cases = [(" ".join(c), kind, [sys.executable, "-c", ENTRY, *c]) for c in commands
              for kind in ("index", "no index", *(("base",) if args.base else ()))]
     cases.append(("python -c pass (floor)", "index", [sys.executable, "-c", "pass"]))
     cpu: dict[tuple[str, str], list[float]] = {(n, k): [] for n, k, _ in cases}

@@ -1,6 +1,7 @@
 """What a profile of ``touchbench papers reproduce`` costs, from a sample of its tasks.
 
     python benchmarks/bench_papers_profile.py --out results/papers-full --profile full --jobs 2
+    python benchmarks/bench_papers_profile.py --out results/papers-full --protocol gaus-table5-haart   # one
 
 The full profile (1000-tree forests, 500 boosting iterations, 100-fold
 cross-validation, up to 100 CNN epochs) takes too long on two cores to be
@@ -74,8 +75,13 @@ def main() -> None:
     ap.add_argument("--slot", type=float, default=0.0,
                     help="seconds each protocol was run for: the least an unfinished task of a method "
                          "with no finished task is counted at")
+    ap.add_argument("--protocol", action="append", metavar="NAME",
+                    help="only this paper protocol (repeatable; default: every one)")
     args = ap.parse_args()
-    rows = [r for p in paper_protocols() for r in protocol_rows(p, args.profile, args.out, args.slot)]
+    paths = [p for p in paper_protocols() if not args.protocol or p.stem in args.protocol]
+    if args.protocol and len(paths) != len(set(args.protocol)):
+        ap.error(f"no paper protocol {sorted(set(args.protocol) - {p.stem for p in paths})}")
+    rows = [r for p in paths for r in protocol_rows(p, args.profile, args.out, args.slot)]
     table = pd.DataFrame(rows)
     pd.set_option("display.width", 200)
     pd.set_option("display.max_rows", 500)

@@ -1,6 +1,7 @@
 """Decision latency of ``touchbench stream`` on one core: p50 and p99.
 
     python benchmarks/bench_stream.py [--model m.joblib] [--trees 1000]
+    python benchmarks/bench_stream.py --dataset haart-sample --trees 2 --sklearn-decisions 2   # seconds
 
 The model: the five Gaus et al. feature sets (SD, BMH, MSD, SMMHH, LBP-TOP)
 and their random forest (``gaus-rf``, 1000 trees), trained on 2-second
@@ -96,6 +97,7 @@ def main(argv=None) -> None:
     ap.add_argument("--trees", type=int, default=1000)
     ap.add_argument("--sklearn-decisions", type=int, default=100)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--dataset", default="haart", help="HAART captures (s01 streamed, the others trained on)")
     args = ap.parse_args(argv)
     cpu = pin_one_core()
 
@@ -103,7 +105,7 @@ def main(argv=None) -> None:
     from touchbench.core.threads import single_thread
     from touchbench.deploy.model import TrainedModel
 
-    ds = load_dataset("haart")
+    ds = load_dataset(args.dataset)
     path = Path(args.model) if args.model else None
     model = TrainedModel.load(path) if path is not None and path.is_file() else train(ds, args.trees, path)
     s01 = np.flatnonzero(ds.meta["subject"].to_numpy() == "s01")

@@ -1,6 +1,7 @@
 """Per-capture cost of touchbench's own methods and the peers side by side: features + prediction of one capture, one core.
 
     python benchmarks/bench_touch_latency.py [--runs 5] [--captures 40] [--methods touch-et-fast,minirocket]
+    python benchmarks/bench_touch_latency.py --dataset haart-sample --runs 1 --captures 1 --methods touch-et-fast
 
 Every method of the shipped protocol ``touch-haart`` (its challenge evaluation) but the CNN (and
 the CNN too with ``--methods``) is fitted once on the challenge's training
@@ -40,6 +41,7 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--captures", type=int, default=40, help="test captures labelled one at a time per run")
     ap.add_argument("--methods", default=DEFAULT_METHODS)
+    ap.add_argument("--dataset", default="haart-challenge", help="captures with a train/test split column")
     args = ap.parse_args()
 
     from touchbench.catalog import load_dataset
@@ -48,7 +50,7 @@ def main() -> None:
 
     cpus = sorted(os.sched_getaffinity(0))
     os.sched_setaffinity(0, {cpus[-1]})
-    ds = load_dataset("haart-challenge")
+    ds = load_dataset(args.dataset)
     split = ds.meta["split"].astype(str).to_numpy()
     tr, te = np.flatnonzero(split == "train"), np.flatnonzero(split == "test")
     X = np.stack(ds.captures).reshape(len(ds.captures), -1).astype(np.float64)

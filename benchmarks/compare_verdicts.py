@@ -4,7 +4,7 @@
 
 For each results folder, ``touchbench leaderboard --json`` is run with the
 base revision's code (checked out with ``git worktree add --detach`` into a
-temporary folder, removed afterwards) and with this checkout's, each in a
+temporary folder, removed afterwards; or a folder holding another checkout) and with this checkout's, each in a
 subprocess with ``PYTHONPATH`` set to that side's root. Per table and method
 (matched by features and label), printed: the test and its unit count on
 each side, p after Holm's correction on each side, and whether the method
@@ -15,12 +15,16 @@ changed. Exit status 0.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from compare_runs import side_root  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -49,31 +53,27 @@ def _p(v) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--base", required=True, help="git revision of the older code")
+    ap.add_argument("--base", required=True, help="git revision (or checkout folder) of the older code")
     ap.add_argument("results", nargs="+", type=Path)
     args = ap.parse_args(argv)
-    with tempfile.TemporaryDirectory() as tmp:
-        base = Path(tmp) / "base"
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(base), args.base], check=True)
-        try:
-            changed = []
-            for res in (p.resolve() for p in args.results):
-                old, new = _verdicts(_leaderboard(base, res)), _verdicts(_leaderboard(ROOT, res))
-                print(f"\n{res}")
-                print(f"  {'method':40s} {'base test':24s} {'p':>8s} {'head test':24s} {'p':>8s}  verdict")
-                for key in new:
-                    o, n = old.get(key, {}), new[key]
-                    verdict = ("differs" if n["differs"] else "-") + ("" if o.get("differs") == n["differs"] else
-                                                                        f" (was {'differs' if o.get('differs') else '-'})")
-                    print(f"  {key[1] + ' / ' + key[2]:40.40s} {o.get('test', '?'):24.24s} {_p(o.get('p')):>8s} "
-                          f"{n['test']:24.24s} {_p(n['p']):>8s}  {verdict}")
-                    if o and o.get("differs") != n["differs"]:
-                        changed.append(f"{res.name}: {key[1]} / {key[2]}")
-            print(f"\nverdicts changed: {len(changed)}")
-            for c in changed:
-                print(f"  {c}")
-        finally:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(base)], check=False)
+    with tempfile.TemporaryDirectory() as tmp, contextlib.ExitStack() as stack:
+        base = side_root(args.base, Path(tmp), stack)
+        changed = []
+        for res in (p.resolve() for p in args.results):
+            old, new = _verdicts(_leaderboard(base, res)), _verdicts(_leaderboard(ROOT, res))
+            print(f"\n{res}")
+            print(f"  {'method':40s} {'base test':24s} {'p':>8s} {'head test':24s} {'p':>8s}  verdict")
+            for key in new:
+                o, n = old.get(key, {}), new[key]
+                verdict = ("differs" if n["differs"] else "-") + ("" if o.get("differs") == n["differs"] else
+                                                                    f" (was {'differs' if o.get('differs') else '-'})")
+                print(f"  {key[1] + ' / ' + key[2]:40.40s} {o.get('test', '?'):24.24s} {_p(o.get('p')):>8s} "
+                      f"{n['test']:24.24s} {_p(n['p']):>8s}  {verdict}")
+                if o and o.get("differs") != n["differs"]:
+                    changed.append(f"{res.name}: {key[1]} / {key[2]}")
+        print(f"\nverdicts changed: {len(changed)}")
+        for c in changed:
+            print(f"  {c}")
     return 0
 
 

@@ -122,7 +122,12 @@ def slow_fast_rows(n_per_class=12, frames=40, seed=0):
     return np.array(X), np.array(y)
 
 
-def wait_for(probe: Callable[[], T | None], what: str, timeout: float = 60.0, interval: float = 0.05) -> T:
+#: the bound on a test's wait for another process (a subprocess to end, a file to appear): only a hang
+#: reaches it, never a slow or busy machine, so it is generous
+SUBPROCESS_HANG_S = 30 * 60
+
+
+def wait_for(probe: Callable[[], T | None], what: str, timeout: float = SUBPROCESS_HANG_S, interval: float = 0.05) -> T:
     """Call ``probe`` until it returns a true value and return that; fail the test,
     naming ``what``, when ``timeout`` seconds pass first. For tests that wait on another process
     (a file it writes, a state it reaches): a loaded machine (parallel tests) only makes them wait longer."""

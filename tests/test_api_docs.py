@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from helpers import SUBPROCESS_HANG_S
 
 REPO = Path(__file__).resolve().parent.parent
 SCRIPT = REPO / "docs" / "build_api_docs.py"
@@ -30,7 +31,8 @@ def test_the_reference_builds_without_warnings(tmp_path):
             pytest.fail(msg)
         pytest.skip(msg)
     out = tmp_path / "api"
-    r = subprocess.run([sys.executable, str(SCRIPT), str(out)], capture_output=True, text=True, timeout=600, check=False)
+    r = subprocess.run([sys.executable, str(SCRIPT), str(out)], capture_output=True, text=True,
+                       timeout=SUBPROCESS_HANG_S, check=False)
     assert r.returncode == 0 and r.stderr == "", r.stderr
     page = (out / "touchbench.html").read_text(encoding="utf-8")
     for name in ("load_dataset", "make_feature_set", "run_protocol", "leaderboard", "FeaturePipeline"):

@@ -26,17 +26,18 @@ from touchbench.engine.testing import components_for_tests, register_test_compon
 from touchbench.core.errors import TouchbenchError  # noqa: E402
 from test_backends_shared import PROTOCOL, assert_same_results, env, write_protocol  # noqa: E402,F401  (env: a fixture)
 from touchbench.protocols.loading import parse_protocol  # noqa: E402
+from helpers import SUBPROCESS_HANG_S  # noqa: E402
 
 
 @pytest.fixture(scope="module")
 def cluster():
-    faulthandler.dump_traceback_later(600, exit=True)
+    faulthandler.dump_traceback_later(SUBPROCESS_HANG_S, exit=True)
     lc = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                                   dashboard_address=None, worker_dashboard_address=None)
     try:
         yield lc.scheduler_address
     finally:
-        lc.close(timeout=60)
+        lc.close(timeout=SUBPROCESS_HANG_S)
         faulthandler.cancel_dump_traceback_later()
 
 

@@ -20,12 +20,13 @@ from touchbench.engine import run_protocol  # noqa: E402
 from touchbench.engine.backends import supports_generator, use_backend  # noqa: E402
 from touchbench.engine.testing import components_for_tests, register_test_components  # noqa: E402
 
+from helpers import SUBPROCESS_HANG_S  # noqa: E402
 from test_backends_shared import assert_same_results, env, write_protocol  # noqa: E402,F401  (env: a fixture)
 
 
 @pytest.fixture(scope="module")
 def ray_local():
-    faulthandler.dump_traceback_later(600, exit=True)
+    faulthandler.dump_traceback_later(SUBPROCESS_HANG_S, exit=True)
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
         yield

@@ -26,7 +26,12 @@ from sklearn.utils.estimator_checks import parametrize_with_checks  # noqa: E402
 
 from touchbench.classifiers import make_classifier  # noqa: E402
 from touchbench.classifiers.peers import MIN_TIMEPOINTS, frames_to_series  # noqa: E402
-from helpers import slow_fast_rows  # noqa: E402
+from helpers import SUBPROCESS_HANG_S, slow_fast_rows  # noqa: E402
+
+# one worker of pytest-xdist runs this module whole: numba compiles each peer's aeon kernels once per
+# process (most of this module's time when its cache, kept beside aeon, is empty, as in a new
+# environment), so two workers taking turns at these tests would compile every kernel twice
+pytestmark = pytest.mark.xdist_group("aeon")
 
 
 def _labelled_capture(frames: int, h: int, w: int) -> np.ndarray:
@@ -148,7 +153,7 @@ except Exception as e:
 
 def test_without_aeon_the_peer_says_how_to_install():
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
-    proc = subprocess.run([sys.executable, "-c", _NO_AEON], capture_output=True, text=True, env=env, timeout=120)
+    proc = subprocess.run([sys.executable, "-c", _NO_AEON], capture_output=True, text=True, env=env, timeout=SUBPROCESS_HANG_S)
     assert proc.returncode == 0, proc.stderr
     assert "TouchbenchError" in proc.stdout and "pip install 'touchbench[peers]'" in proc.stdout
 
@@ -159,7 +164,7 @@ _NO_TORCH = _NO_AEON.replace('name == "aeon" or name.startswith("aeon.")', 'name
 
 def test_a_peer_aeon_runs_in_pytorch_says_so_without_it():
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
-    proc = subprocess.run([sys.executable, "-c", _NO_TORCH], capture_output=True, text=True, env=env, timeout=120)
+    proc = subprocess.run([sys.executable, "-c", _NO_TORCH], capture_output=True, text=True, env=env, timeout=SUBPROCESS_HANG_S)
     assert proc.returncode == 0, proc.stderr
     assert "needs torch" in proc.stdout and "pip install 'touchbench[peers,deep]'" in proc.stdout
 
@@ -169,7 +174,7 @@ def test_listing_does_not_import_aeon_and_marks_the_extra():
             "rows = json.loads(CliRunner().invoke(classifiers, ['list', '--json']).output); "
             "print(json.dumps({'aeon': 'aeon' in sys.modules, 'extra': {r['name']: r['extra'] for r in rows}}))")
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=SUBPROCESS_HANG_S)
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout.strip().splitlines()[-1])
     assert out["aeon"] is False

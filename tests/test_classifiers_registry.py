@@ -11,6 +11,7 @@ import textwrap
 
 import numpy as np
 import pytest
+from helpers import SUBPROCESS_HANG_S
 from click.testing import CliRunner
 
 from snapshots.registries import builtin_names, snapshot
@@ -158,7 +159,7 @@ _NO_TORCH = textwrap.dedent("""
 
 def test_without_torch_everything_else_works_and_cnn_says_how_to_install():
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
-    proc = subprocess.run([sys.executable, "-c", _NO_TORCH], capture_output=True, text=True, env=env, timeout=120)
+    proc = subprocess.run([sys.executable, "-c", _NO_TORCH], capture_output=True, text=True, env=env, timeout=SUBPROCESS_HANG_S)
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout.strip().splitlines()[-1])
     assert "cnn" in out["names"] and out["list_exit"] == 0
@@ -176,7 +177,7 @@ def test_listing_does_not_import_torch():
     code = ("import sys; from touchbench.cli.classifiers import classifiers; from click.testing import CliRunner; "
             "CliRunner().invoke(classifiers, ['list']); print('torch' in sys.modules)")
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=SUBPROCESS_HANG_S)
     assert proc.stdout.strip() == "False", proc.stderr
 
 

@@ -17,7 +17,7 @@ from touchbench.catalog import load_dataset
 from touchbench.datasets.haart import build_haart, find_recordings
 from touchbench.core.errors import DataError
 
-from helpers import random_recording, write_recording
+from helpers import SUBPROCESS_HANG_S, random_recording, write_recording
 
 # The ten placeholders as the data README lists them (by hand, not by code).
 README_PLACEHOLDERS = {f"s05-foam-none-{g}" for g in ("constant", "notouch", "pat", "rub", "scratch", "stroke", "tickle")} | {
@@ -194,7 +194,7 @@ def test_cache_is_used_and_keyed_by_content(tmp_path, monkeypatch):
 
 
 def _load_at_once(data_dir: str, cache: str, barrier, out) -> None:
-    barrier.wait(60)
+    barrier.wait(SUBPROCESS_HANG_S)
     out.put(load_dataset("haart", data_dir=data_dir, cache_dir=cache).content_hash)
 
 
@@ -210,9 +210,9 @@ def test_two_processes_filling_one_cache_at_once_both_get_the_whole_dataset(tmp_
     procs = [ctx.Process(target=_load_at_once, args=(str(d), str(cache), barrier, out)) for _ in range(2)]
     for p in procs:
         p.start()
-    hashes = [out.get(timeout=120) for _ in procs]
+    hashes = [out.get(timeout=SUBPROCESS_HANG_S) for _ in procs]
     for p in procs:
-        p.join(60)
+        p.join(SUBPROCESS_HANG_S)
         assert p.exitcode == 0
     expected = load_dataset("haart", data_dir=d, cache_dir=tmp_path / "fresh").content_hash
     assert hashes == [expected, expected]

@@ -18,7 +18,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from helpers import wait_for
+from helpers import SUBPROCESS_HANG_S, wait_for
 
 from touchbench.cli.main import cli as main
 from touchbench.core.errors import TouchbenchError
@@ -323,7 +323,7 @@ def test_the_ledger_survives_a_writer_killed_mid_line(tmp_path):
     started = ctx.Event()
     proc = ctx.Process(target=_append_forever, args=(str(path), started))
     proc.start()
-    assert started.wait(60)
+    assert started.wait(SUBPROCESS_HANG_S)
     # killed once it has written some lines, at no chosen moment: most often in the middle of one
     wait_for(lambda: path.is_file() and path.stat().st_size > 20000, "the writer's first lines")
     os.kill(proc.pid, signal.SIGKILL)

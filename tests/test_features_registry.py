@@ -4,6 +4,7 @@ compatibility, and every set on the real HAART recordings."""
 from __future__ import annotations
 
 import inspect
+import json
 
 import numpy as np
 import pytest
@@ -65,7 +66,7 @@ def test_sklearn_api():
 
 
 def test_cli_features_list_and_show():
-    r = CliRunner().invoke(cli, ["features", "list", "--grid", "8x8", "--rate", "54", "--range", "0", "1023"], terminal_width=200)
+    r = CliRunner().invoke(cli, ["features", "list", "--grid", "8x8", "--rate", "54", "--value-range", "0..1023"], terminal_width=200)
     assert r.exit_code == 0, r.output
     for name, size in EXPECTED_8X8.items():
         if name in STATED:  # its size depends on a parameter that must be stated: shown as '-'
@@ -78,6 +79,27 @@ def test_cli_features_list_and_show():
     r = CliRunner().invoke(cli, ["features", "show", "smmh"])
     assert r.exit_code == 3 and "did you mean 'smmhh'" in r.output
 
+
+
+def test_cli_features_list_value_range_is_spelled_as_the_readers_spell_it():
+    """``--value-range LO..HI``, as every reader's option; the former ``--range LO HI`` still works
+    for one release, with a warning that gives the new spelling."""
+    args = ["features", "list", "--grid", "8x8", "--rate", "54", "--json"]
+    new = CliRunner().invoke(cli, args + ["--value-range", "0..1023"])
+    assert new.exit_code == 0, new.output
+    sizes = {r["name"]: r["size"] for r in json.loads(new.stdout)}
+    assert sizes["msd"] == EXPECTED_8X8["msd"]
+    old = CliRunner().invoke(cli, args + ["--range", "0", "1023"])
+    assert old.exit_code == 0, old.output
+    assert {r["name"]: r["size"] for r in json.loads(old.stdout)} == sizes
+    assert "--range LO HI is deprecated" in old.stderr and "--value-range 0..1023" in old.stderr
+    assert "deprecated" not in new.stderr
+    both = CliRunner().invoke(cli, args + ["--value-range", "0..1023", "--range", "0", "1023"])
+    assert both.exit_code == 2 and "give the value range once" in both.output
+    for bad in ("1023..0", "0-1023"):
+        r = CliRunner().invoke(cli, args + ["--value-range", bad])
+        assert r.exit_code == 2 and "--value-range" in r.output and "Traceback" not in r.output, r.output
+    assert "--range" not in CliRunner().invoke(cli, ["features", "list", "--help"]).output
 
 @pytest.mark.realdata
 def test_every_set_on_real_haart(real_haart):

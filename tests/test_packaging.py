@@ -15,6 +15,7 @@ import sysconfig
 from pathlib import Path
 
 import pytest
+from helpers import SUBPROCESS_HANG_S
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -79,7 +80,7 @@ def tb(installed: Path, cwd: Path, *args: str, core_only: bool = False) -> subpr
     env["TOUCHBENCH_CACHE_DIR"] = str(cwd / "cache")
     env["TOUCHBENCH_DATA_DIR"] = str(cwd / "no-data-here")
     return subprocess.run([str(installed / "touchbench"), *args], cwd=cwd, env=env, capture_output=True,
-                          text=True, timeout=600)
+                          text=True, timeout=SUBPROCESS_HANG_S)
 
 
 @pytest.fixture()

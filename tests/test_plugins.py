@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from click.testing import CliRunner
+from helpers import SUBPROCESS_HANG_S
 
 from touchbench.classifiers import CLASSIFIERS
 from touchbench.cli.main import cli
@@ -194,7 +195,7 @@ def _touchbench(site: Path, tmp_path: Path, *args: str) -> subprocess.CompletedP
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(site), str(REPO), os.environ.get("PYTHONPATH", "")]),
                TOUCHBENCH_CACHE_DIR=str(tmp_path / "cache"))
     return subprocess.run([sys.executable, "-c", "from touchbench.cli.main import cli; cli()", *args],
-                          env=env, cwd=tmp_path, capture_output=True, text=True, timeout=300)
+                          env=env, cwd=tmp_path, capture_output=True, text=True, timeout=SUBPROCESS_HANG_S)
 
 
 def _where(package: str, module: str) -> str:

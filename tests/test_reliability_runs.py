@@ -34,7 +34,7 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from helpers import read_int, wait_for
+from helpers import SUBPROCESS_HANG_S, read_int, wait_for
 
 from touchbench.cli.main import cli
 from touchbench.core import atomic
@@ -172,15 +172,15 @@ def test_a_second_run_waits_for_the_first(env):
 
     t = threading.Thread(target=hold)
     t.start()
-    assert held.wait(60)
-    res = run(wait=30)  # blocks until the holder lets go, then finds everything finished
+    assert held.wait(SUBPROCESS_HANG_S)
+    res = run(wait=SUBPROCESS_HANG_S)  # blocks until the holder lets go, then finds everything finished
     t.join()
     assert res.noop
 
 
 def test_the_lock_of_a_killed_run_is_free_at_once(tmp_path):
     code = ("import sys, time\nfrom touchbench.results.store import ResultStore\n"
-            f"with ResultStore({str(tmp_path / 'out')!r}).lock():\n    print('held', flush=True)\n    time.sleep(120)\n")
+            f"with ResultStore({str(tmp_path / 'out')!r}).lock():\n    print('held', flush=True)\n    time.sleep({SUBPROCESS_HANG_S})\n")
     p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
     try:
         assert p.stdout.readline().strip() == "held"
@@ -228,17 +228,17 @@ def test_worker_processes_end_with_their_parent(tmp_path, sig):
     script.write_text(WORKERS)
     p = subprocess.Popen([sys.executable, str(script), str(tmp_path)])
     try:
-        pids = [wait_for(lambda: read_int(tmp_path / f"w{i}"), f"worker {i}'s pid", timeout=120) for i in range(2)]
+        pids = [wait_for(lambda: read_int(tmp_path / f"w{i}"), f"worker {i}'s pid") for i in range(2)]
         assert all(_alive(w) for w in pids)
     finally:
         p.send_signal(sig)
-        p.wait(timeout=60)
-    wait_for(lambda: not any(_alive(w) for w in pids), "the workers to end", timeout=60)
+        p.wait(timeout=SUBPROCESS_HANG_S)
+    wait_for(lambda: not any(_alive(w) for w in pids), "the workers to end")
 
 
 def test_a_worker_whose_parent_is_already_gone_exits_at_once():
     code = "from touchbench.engine.backends import end_with_parent\nimport time\nend_with_parent(1)\ntime.sleep(60)\n"
-    p = subprocess.run([sys.executable, "-c", code], timeout=50)
+    p = subprocess.run([sys.executable, "-c", code], timeout=SUBPROCESS_HANG_S)
     assert os.getpid() != 1 and p.returncode == 1  # its parent is this process, not pid 1: it did not wait
 
 

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
+from helpers import SUBPROCESS_HANG_S
 
 from touchbench.cli import exitcodes
 from touchbench.cli.main import cli
@@ -143,7 +144,7 @@ def test_concurrent_runs_merge_an_old_ledger_once_and_lose_no_look(tmp_path):
     for proc in procs:
         proc.start()
     for proc in procs:
-        proc.join(120)
+        proc.join(SUBPROCESS_HANG_S)
         assert proc.exitcode == 0
     entries = read_ledger(root / "ledger.jsonl")
     assert len(entries) == 5 + 40

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import click
 
 from ..core.listing import cached_rows
-from .common import echo_json, example, json_option
+from .common import echo_json, example, json_option, log
 from .plugins import package_of
 
 if TYPE_CHECKING:
@@ -63,27 +63,50 @@ def feature_table(sensor: SensorSpec | None = None) -> list[dict]:
     return rows
 
 
-@click.group(epilog=example("touchbench features list --grid 8x8 --rate 54 --range 0 1023", "touchbench features show msd"))
+@click.group(epilog=example("touchbench features list --grid 8x8 --rate 54 --value-range 0..1023", "touchbench features show msd"))
 def features() -> None:
     """Feature sets: scikit-learn transformers over captures."""
 
 
-@features.command("list", epilog=example("touchbench features list --grid 19x24 --rate 12 --range 0 255 --json"))
+def _value_range(text: str | None, old: tuple[float, float] | None) -> tuple[float, float] | None:
+    """The sensor's value range from ``--value-range LO..HI`` (the spelling of every reader's option),
+    or from the former ``--range LO HI``, still read for one release with a warning."""
+    if old is not None:
+        if text is not None:
+            raise click.UsageError("give the value range once: --value-range LO..HI (--range LO HI is its former spelling)")
+        log.warning(f"--range LO HI is deprecated and goes in the next release: write --value-range {old[0]:g}..{old[1]:g}")
+        text = f"{old[0]!r}..{old[1]!r}"
+    if text is None:
+        return None
+    from ..datasets.formats import parse_value_range
+
+    try:
+        return parse_value_range(text)
+    except ValueError as e:
+        raise click.BadParameter(str(e), param_hint="--value-range") from None
+
+
+@features.command("list", epilog=example("touchbench features list --grid 19x24 --rate 12 --value-range 0..255 --json"))
 @json_option
 @click.option("--grid", "grid", default=None, help="sensor grid (HxW) to compute the output sizes for")
 @click.option("--rate", "rate", type=float, default=None, help="sensor frame rate (Hz), with --grid")
-@click.option("--range", "value_range", type=(float, float), default=None, help="sensor value range LOW HIGH, with --grid")
-def list_(as_json: bool, grid: str | None, rate: float | None, value_range: tuple[float, float] | None) -> None:
+@click.option("--value-range", "value_range", default=None, metavar="LO..HI",
+              help="sensor value range, e.g. 0..1023 (as data convert's --value-range), with --grid")
+@click.option("--range", "old_range", type=(float, float), default=None, hidden=True,
+              help="deprecated spelling of --value-range: LO HI")
+def list_(as_json: bool, grid: str | None, rate: float | None, value_range: str | None,
+          old_range: tuple[float, float] | None) -> None:
     """Every feature set with its paper, output size and cost tag (sizes for the sensor
-    given by --grid, --rate and --range; '-' where a set needs parameters stated or
+    given by --grid, --rate and --value-range; '-' where a set needs parameters stated or
     refuses that sensor)."""
     from rich.console import Console
     from rich.table import Table
 
+    value_range = _value_range(value_range, old_range)
     sensor = None
     if grid is not None or rate is not None or value_range is not None:
         if grid is None or rate is None or value_range is None:
-            raise click.UsageError("give --grid, --rate and --range together (the sensor the sizes are computed for)")
+            raise click.UsageError("give --grid, --rate and --value-range together (the sensor the sizes are computed for)")
         from ..datasets.model import SensorSpec
 
         try:
@@ -91,7 +114,7 @@ def list_(as_json: bool, grid: str | None, rate: float | None, value_range: tupl
         except ValueError as e:
             raise click.BadParameter(str(e)) from None
     title = ("feature sets (output size for " + sensor.describe().replace("'--grid' ", "") + ", default parameters)"
-             if sensor is not None else "feature sets (output sizes: give --grid, --rate and --range)")
+             if sensor is not None else "feature sets (output sizes: give --grid, --rate and --value-range)")
     rows = feature_table(sensor) if sensor is not None else cached_rows("features", feature_table, ("touchbench.features",))
     if as_json:
         echo_json(rows)
