@@ -159,3 +159,35 @@ def test_rules_are_declared_by_name_and_refuse_bad_values():
         make_rule({"name": "majority", "n": 0})
     with pytest.raises(TouchbenchError, match="needs a name"):
         make_rule({"threshold": 0.5})
+
+
+# ----------------------------------------------------------------- onset-aligned windows
+def test_contact_run_bridges_short_gaps_by_hand():
+    from touchbench.streams.onset import contact_run
+
+    T, F = True, False
+    assert contact_run([F, F, T, T, T], bridge=2) == 3  # a gap of 2 frames is not bridged
+    assert contact_run([T, T, F, T, T], bridge=2) == 5  # a gap of 1 frame is: one touch since frame 0
+    assert contact_run([T, F, F, T], bridge=2) == 1
+    assert contact_run([T, T, F], bridge=5) == 0  # the newest frame is not in contact
+    assert contact_run([], bridge=1) == 0
+
+
+def test_onset_rule_classifies_the_window_from_the_onset():
+    from touchbench.streams.onset import OnsetRule
+
+    seen = []
+
+    def proba(windows):
+        seen.append([len(w) for w in windows])
+        return np.tile([0.2, 0.5, 0.3], (len(windows), 1))
+
+    # 10 Hz, windows 0.2 s (2 frames) and 0.4 s (4 frames), hop 0.1 s; contact from the 4th frame on
+    rule = OnsetRule(idle="idle", level=0.3, gate_s=0.1, bridge_s=0.0)
+    rec = WindowRecognizer(proba, CLASSES, SENSOR, [0.2, 0.4], hop_s=0.1, rule=rule)
+    labels = [None if (d := rec.push(np.array([[v]]))) is None else d.label for v in (0, 0, 0, 80, 80, 80, 80, 80)]
+    # frame 2: no contact in the newest 0.1 s -> idle (no classifier); frame 3 likewise;
+    # frame 4: 1 frame of contact, under the shortest window (2) -> none; frame 5: 2 frames -> window [2];
+    # frame 6: 3 -> [3]; frame 7: 4 frames, the whole kept window in contact -> the sliding windows [2, 4]
+    assert labels == [None, "idle", "idle", "none", "b", "b", "b", "b"]
+    assert seen[:3] == [[2], [3], [2, 4]]

@@ -165,14 +165,22 @@ class WindowRecognizer:
         if self.seen < first or (self.seen - first) % self.hop:
             return None
         full = [(w, L) for w, L in zip(self.windows_s, self.lengths) if self.seen >= L]
-        window_frames = [self._buf[self._n - L:self._n] for _, L in full]
-        gated = [r.gate(window_frames[0]) if r.gates else None for r in self.rules]
-        P, proba_cpu = None, 0.0
-        if any(g is None for g in gated):
-            c0 = time.thread_time_ns()
-            P = np.asarray(self.proba(window_frames), dtype=np.float64)
-            proba_cpu = (time.thread_time_ns() - c0) / 1e6
-        return [self._decide(rule, g, P, full, proba_cpu, arrived) for rule, g in zip(self.rules, gated)]
+        newest = self._buf[self._n - full[-1][1]:self._n]  # the longest full window's frames
+        out = []
+        probas: dict[tuple, tuple[np.ndarray, float]] = {}  # windows -> their probabilities, computed once
+        for rule in self.rules:
+            gated = rule.gate(newest) if rule.gates else None
+            wanted = None if gated is not None else rule.window_lengths(newest, [L for _, L in full])
+            windows = full if wanted is None else [(L / self.frame_rate, L) for L in wanted]
+            if gated is None and windows and tuple(windows) not in probas:
+                c0 = time.thread_time_ns()
+                P = np.asarray(self.proba([self._buf[self._n - L:self._n] for _, L in windows]), dtype=np.float64)
+                probas[tuple(windows)] = (P, (time.thread_time_ns() - c0) / 1e6)
+            if gated is None and not windows:
+                gated = self.none_label  # the rule wants more frames before it decides
+            P, cpu = probas.get(tuple(windows), (None, 0.0)) if gated is None else (None, 0.0)
+            out.append(self._decide(rule, gated, P, windows, cpu, arrived))
+        return out
 
     def _decide(self, rule: DecisionRule, gated: str | None, P: np.ndarray | None, full: list, proba_cpu: float,
                 arrived: float) -> Decision:
@@ -181,6 +189,8 @@ class WindowRecognizer:
         c0 = time.thread_time_ns()
         if gated is not None:
             P, full = (self.classes == gated).astype(np.float64)[None, :], full[:1]
+            if not full:  # the rule wants more frames: no window was classified
+                full = [(self.windows_s[0], self.lengths[0])]
         p, k = combine_windows(P, self.combine)
         best = int(np.argmax(p))
         label = gated if gated is not None else rule.decide(p)
@@ -188,7 +198,8 @@ class WindowRecognizer:
         per = [{"window_s": w, "label": str(self.classes[int(np.argmax(P[i]))]), "probability": float(P[i].max())}
                for i, (w, _) in enumerate(full)]
         return Decision(frame=self.seen, t=self.seen / self.frame_rate, label=label, probability=float(p[best]),
-                        best=str(self.classes[best]), window_s=None if k is None else full[k][0],
+                        best=str(self.classes[best]) if p[best] > 0 else label,
+                        window_s=None if k is None else full[k][0],
                         latency_ms=1000.0 * (time.perf_counter() - arrived), cpu_ms=cpu, windows=per)
 
 

@@ -19,6 +19,8 @@ that ``gates`` may decide before any classifier runs, from the frames alone.
   lowest).
 - ``majority``: the most frequent of the last ``n`` decisions of ``max``
   (ties: the most recent of the tied labels), smoothing one-hop flickers.
+- ``onset`` (:mod:`touchbench.streams.onset`): the gate, and windows
+  aligned to the touch's onset instead of sliding ones.
 - ``hmm``: forward filtering over the classes (a hidden Markov model whose
   state stays with probability ``1 - switch`` per hop and moves to any other
   class uniformly; the classifier's probabilities are the emissions, the
@@ -44,7 +46,7 @@ from ..core.registry import Registry
 
 __all__ = ["RULES", "DecisionRule", "GateRule", "MaxRule", "make_rule", "peak_contact"]
 
-RULES: Registry = Registry("decision rule")
+RULES: Registry = Registry("decision rule", package="touchbench.streams")
 
 
 class DecisionRule:
@@ -64,6 +66,12 @@ class DecisionRule:
         self.sensor = sensor
 
     def gate(self, frames: np.ndarray) -> str | None:
+        """A label decided from ``frames`` (the newest frames, the longest window's) alone, or None."""
+        return None
+
+    def window_lengths(self, frames: np.ndarray, lengths: list[int]) -> list[int] | None:
+        """The windows (frames, each ending at the newest) this rule decides from, given the newest
+        ``frames``; None: the recogniser's sliding ``lengths``; an empty list: none yet (the none label)."""
         return None
 
     def decide(self, p: np.ndarray) -> str:
