@@ -66,7 +66,7 @@ from ..datasets.generic import cell_columns
 from ..datasets.model import TouchDataset
 from ..datasets.tables import numeric, read_table
 from ..streams.recognizer import Decision, WindowRecognizer, decide_all
-from ..streams.rules import DecisionRule
+from ..streams.rules import DecisionRule, make_rule
 from .model import TrainedModel
 
 __all__ = [
@@ -124,12 +124,15 @@ class SlidingRecognizer(WindowRecognizer):
         self.model = model
         if windows_s is None:
             windows_s = model.windows or [model.manifest["capture_frames"]["median"] / float(model.sensor.frame_rate)]
+        recorded = model.manifest.get("stream_rule")
+        if rule is None and recorded:
+            rule = make_rule(recorded)  # the rule the model was trained with (touchbench train on a stream evaluation)
         super().__init__(lambda caps: model.predict_proba(caps, fast=fast), model.classes, model.sensor, windows_s,
                          dtype=model.manifest.get("capture_dtype", "<f8"), hop_s=hop_s, threshold=threshold,
                          combine=combine, none_label=none_label, rule=rule, buffer_check=_check_buffer)
 
     def notes(self) -> list[str]:
-        out = []
+        out = [f"deciding with the rule {self.rules[0].describe()}"]
         trained = self.model.windows
         if trained is None:
             med = self.model.manifest["capture_frames"]["median"]

@@ -23,7 +23,10 @@ for the whole training side it is ``derive_seed(seed, "train", method id)``.
 
 A stream evaluation (the ``stream`` scheme) trains on windows of its
 recogniser's lengths, cut every ``train_hop_s``, as its tasks do; ``windows``
-and ``train_hop`` given here replace them.
+and ``train_hop`` given here replace them. Its model file also records the
+decision rule ``touchbench stream`` uses by default
+(:data:`touchbench.streams.rules.DEFAULT_RULE` with the evaluation's idle
+class, its level fitted on the same training captures).
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ from ..protocols.loading import load_protocol
 from ..protocols.schema import Protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
 from ..protocols.schemes import Fold
+from ..streams.rules import stream_rule
 from .model import TrainedModel, fit_model
 
 __all__ = ["parse_selection", "select", "train_from_protocol"]
@@ -167,6 +171,10 @@ def train_from_protocol(
                      "evaluation": proto.evaluation},
         "fold": fold, "where": where or {}, "exclude": exclude or {},
     }
-    return fit_model(ds.subset(idx), m.spec, seed=default_seed if seed is None else seed, target=proto.target,
-                     windows=windows, train_hop=train_hop, features_label=m.features_label, label=m.label,
-                     selection="; ".join(parts), source=source)
+    train = ds.subset(idx)
+    model = fit_model(train, m.spec, seed=default_seed if seed is None else seed, target=proto.target,
+                      windows=windows, train_hop=train_hop, features_label=m.features_label, label=m.label,
+                      selection="; ".join(parts), source=source)
+    if live is not None:  # the rule `touchbench stream` decides with, fitted on the same captures
+        model.manifest["stream_rule"] = stream_rule(live.idle, train.captures, train.meta[proto.target], train.sensor)
+    return model

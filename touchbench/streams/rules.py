@@ -44,7 +44,7 @@ import numpy as np
 from ..core.errors import TouchbenchError
 from ..core.registry import Registry
 
-__all__ = ["RULES", "DecisionRule", "GateRule", "MaxRule", "make_rule", "peak_contact"]
+__all__ = ["DEFAULT_RULE", "RULES", "DecisionRule", "GateRule", "MaxRule", "make_rule", "peak_contact", "stream_rule"]
 
 RULES: Registry = Registry("decision rule", package="touchbench.streams")
 
@@ -93,6 +93,24 @@ def make_rule(spec: dict[str, Any] | str | None, threshold: float = 0.5) -> Deci
         return RULES.create(name, **d)
     except TypeError as e:
         raise TouchbenchError(f"decision rule {name!r}: {e}") from None
+
+
+#: the rule ``touchbench stream`` decides with when a model file records one (``touchbench train`` on a
+#: stream evaluation writes it, with that evaluation's idle class and the level fitted on the model's
+#: training captures); chosen on the HAART challenge's training subjects only
+#: (docs/research/stream-rules.md). A model without it decides with ``max`` and ``--threshold``.
+DEFAULT_RULE: dict[str, Any] = {"name": "max", "threshold": 0.5}
+
+
+def stream_rule(idle: str, captures: Sequence[np.ndarray], labels: Sequence[str], sensor: Any) -> dict[str, Any]:
+    """:data:`DEFAULT_RULE` for a model whose idle class is ``idle``, fitted on its training
+    ``captures``: its declaration with the fitted level written in (``make_rule`` builds it again)."""
+    spec = dict(DEFAULT_RULE)
+    if spec["name"] in ("gate", "onset"):
+        spec["idle"] = idle
+    rule = make_rule(spec).fit(captures, labels, sensor)
+    fitted = getattr(rule, "fitted_level", None)
+    return {**spec, "level": fitted} if fitted is not None else spec
 
 
 def _threshold(value: Any) -> float:
