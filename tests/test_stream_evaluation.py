@@ -147,6 +147,8 @@ def test_a_per_frame_labelled_table_is_evaluated_as_streams_and_shown_in_a_strea
     assert len(ds) == 15 and ds.meta["recording"].nunique() == 3
     assert ds.meta[ds.meta["recording"] == "rec-p1"].sort_values("start_frame")["gesture"].tolist() == \
         ["idle", "press", "idle", "tap", "idle"]
+    info = CliRunner().invoke(cli, ["data", "info", str(tmp_path / "rec.parquet")], catch_exceptions=False)
+    assert "streams       recorded: 3 recordings labelled frame by frame (15 s)" in info.output  # 3 x 50 frames at 10 Hz
     (tmp_path / "p.yaml").write_text(RECORDED.format(data=tmp_path / "rec.parquet"))
     res = CliRunner().invoke(cli, ["run", str(tmp_path / "p.yaml"), "--out", str(tmp_path / "res"), "--jobs", "1",
                                    "--no-progress"], catch_exceptions=False)

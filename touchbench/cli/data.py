@@ -80,6 +80,12 @@ def format_info(info: dict) -> str:
     ]
     if "by_split" in info:
         lines.append("by split      " + ", ".join(f"{k}: {v}" for k, v in info["by_split"].items()))
+    st = info.get("streams") or {}
+    if st.get("source") == "recorded":
+        lines.append(f"streams       recorded: {st['recordings']} recordings labelled frame by frame "
+                     f"({st['seconds']:.0f} s)")
+    elif st:
+        lines.append(f"streams       spliced: {st['note']}")
     return "\n".join(lines + provenance_lines(info.get("provenance", {})))
 
 

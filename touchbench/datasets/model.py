@@ -367,9 +367,19 @@ class TouchDataset:
             out["recorded_time_steps_ms"] = time_step_summary(self.meta[RECORDED_TIME_COLUMN].tolist())
         if "split" in self.meta.columns:
             out["by_split"] = {str(k): int(v) for k, v in self.meta["split"].value_counts().sort_index().items()}
+        out["streams"] = self._streams_info(n)
         if self.provenance:
             out["provenance"] = self.provenance
         return out
+
+    def _streams_info(self, n: np.ndarray) -> dict[str, Any]:
+        """What a stream evaluation replays of this dataset: its recordings labelled frame by frame
+        (``recording`` and ``start_frame`` columns), or streams spliced from its cut captures."""
+        if {"recording", "start_frame"} <= set(self.meta.columns):
+            return {"source": "recorded", "recordings": int(self.meta["recording"].nunique()),
+                    "seconds": float(n.sum() / self.sensor.frame_rate)}
+        return {"source": "spliced", "note": "cut captures: a stream evaluation splices each subject's captures "
+                "between stretches of its idle captures (the splice points are artificial)"}
 
 
 def time_step_summary(times: Iterable[Sequence[float]]) -> dict[str, float]:
