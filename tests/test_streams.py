@@ -191,3 +191,16 @@ def test_onset_rule_classifies_the_window_from_the_onset():
     # frame 6: 3 -> [3]; frame 7: 4 frames, the whole kept window in contact -> the sliding windows [2, 4]
     assert labels == [None, "idle", "idle", "none", "b", "b", "b", "b"]
     assert seen[:3] == [[2], [3], [2, 4]]
+
+
+def test_gate_level_auto_is_fitted_on_stretches_of_gate_s_by_hand():
+    # 10 Hz, gate_s 0.2 s: stretches of 2 frames. Idle capture 1, 1, 3, 3 -> peaks 0.01, 0.03; the gesture
+    # capture 0, 50, 0, 0 -> 0.5, 0.0. Candidates 0.005, 0.02, 0.265, just above 0.5; balanced accuracy
+    # 0.25, 0.5, 0.75, 0.5: the level is 0.265 (a capture's own peak, 0.5, would have missed the gesture's
+    # second stretch)
+    idle = np.array([1, 1, 3, 3], dtype=float).reshape(4, 1, 1)
+    touch = np.array([0, 50, 0, 0], dtype=float).reshape(4, 1, 1)
+    rule = GateRule(idle="idle", gate_s=0.2).fit([idle, touch], ["idle", "tap"], SENSOR)
+    assert rule.fitted_level == pytest.approx(0.265)
+    with pytest.raises(TouchbenchError, match="needs training captures of 'idle'"):
+        GateRule(idle="idle").fit([touch], ["tap"], SENSOR)

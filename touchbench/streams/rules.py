@@ -14,9 +14,9 @@ that ``gates`` may decide before any classifier runs, from the frames alone.
   pressure), under ``level`` decides the ``idle`` class without running the
   classifier; otherwise the most probable class other than ``idle``.
   ``level: auto`` is chosen on the training captures
-  (:meth:`GateRule.fit`): the level that best separates the idle captures'
-  peaks from the others' (balanced accuracy over captures; ties: the
-  lowest).
+  (:meth:`GateRule.fit`): the level that best separates the peaks of the
+  idle captures' stretches of ``gate_s`` seconds from the others' (balanced
+  accuracy over the stretches; ties: the lowest).
 - ``majority``: the most frequent of the last ``n`` decisions of ``max``
   (ties: the most recent of the tied labels), smoothing one-hop flickers.
 - ``onset`` (:mod:`touchbench.streams.onset`): the gate, and windows
@@ -162,15 +162,22 @@ class GateRule(DecisionRule):
         self.params = {"idle": idle, "level": level, "gate_s": self.gate_s, "threshold": self.threshold}
 
     def fit(self, captures: Sequence[np.ndarray], labels: Sequence[str], sensor: Any) -> "GateRule":
-        """``level: auto``: the level that best separates the idle captures' peak contact from the
-        other captures' (balanced accuracy over the training captures; ties: the lowest level)."""
+        """``level: auto``: the level that best separates the peak contact of the idle captures'
+        stretches of ``gate_s`` seconds from the other captures' (balanced accuracy over the
+        stretches, each capture cut into consecutive ones; ties: the lowest level), the peaks the gate
+        reads at each decision."""
         if self.level != "auto":
             return self
         y = np.asarray([str(v) for v in labels]) == self.idle
         if y.all() or not y.any():
             raise TouchbenchError(f"the gate's level: auto needs training captures of {self.idle!r} and of gestures")
-        peaks = np.array([peak_contact(c, sensor.value_range, sensor.higher_is_more_pressure) for c in captures])
-        self.fitted_level = best_level(peaks, y)
+        n = max(1, int(round(self.gate_s * float(sensor.frame_rate))))
+        peaks, idle = [], []
+        for c, is_idle in zip(captures, y):
+            for a in range(0, max(1, len(c) - n + 1), n):
+                peaks.append(peak_contact(c[a:a + n], sensor.value_range, sensor.higher_is_more_pressure))
+                idle.append(is_idle)
+        self.fitted_level = best_level(np.asarray(peaks), np.asarray(idle))
         return self
 
     def start(self, classes: np.ndarray, none_label: str, frame_rate: float, sensor: Any = None) -> None:
