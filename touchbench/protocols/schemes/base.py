@@ -405,3 +405,31 @@ def fold_notes(fold: Fold, y: np.ndarray) -> list[str]:
     if len(te_vals) == 1:
         notes.append(f"test fold has a single class {te_vals[0]!r}")
     return notes
+
+
+class WrappingSplitter(Splitter):
+    """A scheme that wraps another (its ``base`` parameter, ``{name: loso}``): the base's folds, data,
+    subjects kept apart and leakage, unless the subclass says otherwise."""
+
+    base_param = "base"
+
+    def __init__(self, target: str = "gesture", random_state: int | None = None, **params: Any):
+        super().__init__(target=target, random_state=random_state, **params)
+        base = dict(self.params.base)  # type: ignore[attr-defined]
+        self.base = make_splitter(base.pop("name"), target=target, random_state=random_state, **base)
+
+    def keeps_subjects_apart(self) -> bool:
+        return self.base.keeps_subjects_apart()
+
+    def check_target(self) -> None:
+        self.base.check_target()
+
+    def leakage(self) -> str:
+        return self.base.leakage()
+
+    def sample_windows(self):
+        return self.base.sample_windows()
+
+    def prepare(self, ds: "TouchDataset", context: DataContext) -> "TouchDataset":
+        return self.base.prepare(ds, context)
+

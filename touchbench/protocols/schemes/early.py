@@ -5,15 +5,12 @@ to their first N frames or S seconds, N swept over a list (Al-mashhadani et al. 
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import pandas as pd
 from pydantic import Field, model_validator
 
-from .base import SPLITTERS, Crop, DataContext, Fold, SchemeParams, Splitter, make_splitter, named
-
-if TYPE_CHECKING:
-    from ...datasets.model import TouchDataset
+from .base import SPLITTERS, Crop, Fold, SchemeParams, WrappingSplitter, named
 
 
 class _EarlyParams(SchemeParams):
@@ -48,7 +45,7 @@ class _EarlyParams(SchemeParams):
     description="any scheme, test captures cut to their first N frames / S seconds, N swept (CNN real-time claim)",
     paper="Al-mashhadani et al. 2021, Sec. 2.3 and 4",
 )
-class Early(Splitter):
+class Early(WrappingSplitter):
     """Recognition from the beginning of a gesture.
 
     ``base`` is another scheme (``{name: loso}`` or ``{name: kfold, k: 5}``);
@@ -62,31 +59,10 @@ class Early(Splitter):
 
     name = "early"
     Params = _EarlyParams
-    base_param = "base"
     swept_params = ("frames", "seconds")
-
-    def __init__(self, target: str = "gesture", random_state: int | None = None, **params: Any):
-        super().__init__(target=target, random_state=random_state, **params)
-        base = dict(self.params.base)
-        self.base = make_splitter(base.pop("name"), target=target, random_state=random_state, **base)
-
-    def keeps_subjects_apart(self) -> bool:
-        return self.base.keeps_subjects_apart()
 
     def tests_each_capture_once(self) -> bool:
         return False  # once per crop length
-
-    def check_target(self) -> None:
-        self.base.check_target()
-
-    def leakage(self) -> str:
-        return self.base.leakage()
-
-    def sample_windows(self):
-        return self.base.sample_windows()
-
-    def prepare(self, ds: "TouchDataset", context: DataContext) -> "TouchDataset":
-        return self.base.prepare(ds, context)
 
     def _split(self, meta: pd.DataFrame) -> list[Fold]:
         base_folds = self.base.folds(meta)

@@ -32,7 +32,7 @@ from ...core.hashing import canonical_json
 from ...streams.replay import LiveSpec
 from ...streams.rules import make_rule
 from ...streams.timeline import recorded_streams, spliced_streams
-from .base import SPLITTERS, DataContext, Fold, SchemeParams, SplitError, Splitter, make_splitter, named
+from .base import SPLITTERS, DataContext, Fold, SchemeParams, SplitError, WrappingSplitter, named
 
 if TYPE_CHECKING:
     from ...datasets.model import TouchDataset
@@ -103,12 +103,11 @@ class _StreamParams(SchemeParams):
     description="any subject-level scheme, its test subjects replayed as continuous streams (live recognition)",
     paper="Ward, Lukowicz & Gellersen 2011 (scoring); Flagg 2012, Sec. 4.5 (sliding windows)",
 )
-class Stream(Splitter):
+class Stream(WrappingSplitter):
     """Live recognition over the base scheme's folds (module docstring)."""
 
     name = "stream"
     Params = _StreamParams
-    base_param = "base"
     swept_params = ("rules",)  # each rule's scores are rows of their own in the stream table
 
     @classmethod
@@ -126,24 +125,13 @@ class Stream(Splitter):
         except (TypeError, ValueError):
             return None
 
-    def __init__(self, target: str = "gesture", random_state: int | None = None, **params: Any):
-        super().__init__(target=target, random_state=random_state, **params)
-        base = dict(self.params.base)
-        self.base = make_splitter(base.pop("name"), target=target, random_state=random_state, **base)
-
-    def keeps_subjects_apart(self) -> bool:
-        return self.base.keeps_subjects_apart()
-
     def check_target(self) -> None:
         self.base.check_target()
         if self.target != "gesture":
             raise SplitError("scheme 'stream' scores gestures over time: its target must be 'gesture'")
 
-    def leakage(self) -> str:
-        return self.base.leakage()
-
     def prepare(self, ds: "TouchDataset", context: DataContext) -> "TouchDataset":
-        ds = self.base.prepare(ds, context)
+        ds = super().prepare(ds, context)
         if self.params.idle not in set(ds.meta[self.target].astype(str)):
             raise SplitError(f"scheme 'stream': the idle class {self.params.idle!r} is not a {self.target} of the "
                              f"dataset ({', '.join(sorted(set(ds.meta[self.target].astype(str))))})")
