@@ -99,7 +99,7 @@ def make_rule(spec: dict[str, Any] | str | None, threshold: float = 0.5) -> Deci
 #: stream evaluation writes it, with that evaluation's idle class and the level fitted on the model's
 #: training captures); chosen on the HAART challenge's training subjects only
 #: (docs/research/stream-rules.md). A model without it decides with ``max`` and ``--threshold``.
-DEFAULT_RULE: dict[str, Any] = {"name": "max", "threshold": 0.5}
+DEFAULT_RULE: dict[str, Any] = {"name": "hmm", "switch": 0.01}
 
 
 def stream_rule(idle: str, captures: Sequence[np.ndarray], labels: Sequence[str], sensor: Any) -> dict[str, Any]:
