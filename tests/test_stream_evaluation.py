@@ -27,7 +27,7 @@ scheme:
   per_stream: 3
   windows_s: [0.5, 1.0]
   hop_s: 0.2
-  rules: [{name: max, threshold: 0.4}, {name: majority, n: 3, threshold: 0.4}]
+  rules: [{name: max, threshold: 0.4}, {name: majority, n: 3, threshold: 0.4}, {name: hmm, switch: 0.01}]
 methods: [touch-et-fast]
 seed: 3
 """
@@ -57,7 +57,7 @@ def test_the_stream_evaluation_scores_every_stream_and_rule(live_run):
     assert (scores["status"] == "ok").all() and sorted(scores["fold"]) == ["subject=s01", "subject=s04"]
     for _, row in scores.iterrows():
         live = json.loads(row["live"])
-        assert [r["name"] for r in live["rules"]] == ["max", "majority"]
+        assert [r["name"] for r in live["rules"]] == ["max", "majority", "hmm"]
         (stream,) = live["streams"]
         assert stream["source"] == "spliced" and row["fold"].endswith(stream["subject"])
         # three gestures of 8 s (432 frames at 54 Hz) and four idle stretches of 27..81 frames
@@ -86,9 +86,12 @@ def test_the_evaluation_decides_what_touchbench_stream_prints(live_run, tmp_path
                              catch_exceptions=False)
     assert res.exit_code == 0, res.output
     live = json.loads(scores.set_index("fold").loc["subject=s04", "live"])["streams"][0]["results"]
-    for k, rule in enumerate(["{name: max, threshold: 0.4}", "{name: majority, n: 3, threshold: 0.4}"]):
+    # the model file records stream's default rule (an HMM, switch 0.01), which the third rule is
+    assert json.loads((tmp_path / "m.joblib.json").read_text())["stream_rule"] == {"name": "hmm", "switch": 0.01}
+    for k, rule in enumerate([["--rule", "{name: max, threshold: 0.4}"],
+                              ["--rule", "{name: majority, n: 3, threshold: 0.4}"], []]):
         res = CliRunner().invoke(cli, ["stream", str(model), str(tmp_path / "rec.parquet"), "--hop", "0.2",
-                                       "--rule", rule, "--no-realtime", "--jsonl"], catch_exceptions=False)
+                                       *rule, "--no-realtime", "--jsonl"], catch_exceptions=False)
         assert res.exit_code == 0, res.output
         printed = [json.loads(line) for line in res.stdout.splitlines() if line.startswith("{")]
         cli_frames = decisions_per_frame([d["frame"] for d in printed], [d["label"] for d in printed], len(truth),
