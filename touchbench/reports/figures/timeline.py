@@ -50,7 +50,7 @@ def plot_timeline(rs: ResultSet, lb: Leaderboard, base: Path, size: str, formats
     colours = dict(zip(labels, pyplot().get_cmap("tab10")(np.arange(len(labels)) % 10)))
     plt = pyplot()
     w = figure_width(size)
-    fig, ax = plt.subplots(figsize=(w, 1.9), layout="constrained")
+    fig, ax = plt.subplots(figsize=(w, 2.2), layout="constrained")
     for lane, runs in ((1, truth), (0, decided)):
         for a, b, lab in runs:
             if a < n:
@@ -59,7 +59,7 @@ def plot_timeline(rs: ResultSet, lb: Leaderboard, base: Path, size: str, formats
     ax.set_xlim(0, n / rate)
     ax.set_xlabel("time (s)")
     handles = [plt.Rectangle((0, 0), 1, 1, color=colours[lab]) for lab in labels]
-    ax.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 5), frameon=False, fontsize=7)
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 7), frameon=False, fontsize=7)
     best = lb.live.iloc[0]
     ax.set_title(wrap(f"{lb.title}: stream {stream['name']} ({stream['source']}), {best['method']} · {best['rule']}",
                       w), fontsize=8)
