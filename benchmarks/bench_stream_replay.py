@@ -10,10 +10,13 @@ What is timed is what a task of the ``stream`` scheme does after training
 captures in a seeded random order between 1-3 s stretches of its
 ``notouch`` captures) pushed one frame at a time through the recogniser
 ``touchbench stream`` runs (windows 0.5 s + 1 s, hop 0.1 s), deciding
-with each rule. A rule's CPU is that of its decisions (the windows'
-features and classifier, which a gate skips when it decides idle, and the
-rule): what a recogniser with that rule alone spends; frames per CPU second
-and times real time are the stream's frames and seconds over it. The
+with each rule: the evaluation's replay (the windows due at every hop
+classified in batches; a rule's CPU is its decisions' share, what a replay
+with that rule alone spends: frames per CPU second and times real time are
+the stream's frames and seconds over it), and live (the stream's first 100
+decisions made again one frame at a time, as ``touchbench stream`` makes
+them: the CPU of a decision, p50 and p99, and the times real time a
+decision every hop at the median allows). The
 method is trained once on windows of the other subjects' captures (not
 timed). One core: the process is pinned to one CPU and BLAS/OpenMP limited
 to one thread before numpy is imported. Medians over ``--repeats`` replays
@@ -90,11 +93,14 @@ def main() -> None:
         with single_thread():
             for k, rp in enumerate(replay(frames, fitted.window_proba, classes, ds.sensor, spec, rules)):
                 per_rule[k].append(rp)
+    print(f"{'rule':10s} {'frames/CPU s':>13s} {'x real time':>12s}   live: {'x real time':>11s} "
+          f"{'CPU/decision p50':>17s} {'p99':>8s}")
     for r, runs in zip(RULES, per_rule):
         cpu = statistics.median(float(rp.decision_cpu_ms.sum()) / 1000.0 for rp in runs)
-        per = np.concatenate([rp.decision_cpu_ms for rp in runs])
-        print(f"{r['name']:10s} {len(frames) / cpu:13.0f} {seconds / cpu:12.1f} {np.percentile(per, 50):14.2f} ms "
-              f"{np.percentile(per, 99):5.2f} ms")
+        live = np.concatenate([rp.live_cpu_ms for rp in runs])
+        live_x = spec.hop_s * 1000.0 / float(np.median(live))  # a decision every hop, each at the median CPU
+        print(f"{r['name']:10s} {len(frames) / cpu:13.0f} {seconds / cpu:12.1f}   live: {live_x:11.1f} "
+              f"{np.percentile(live, 50):14.2f} ms {np.percentile(live, 99):5.2f} ms")
     print(f"load average (1 min) {load0:.2f} before, {os.getloadavg()[0]:.2f} after, on {os.cpu_count()} CPUs")
 
 

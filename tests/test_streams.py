@@ -204,3 +204,27 @@ def test_gate_level_auto_is_fitted_on_stretches_of_gate_s_by_hand():
     assert rule.fitted_level == pytest.approx(0.265)
     with pytest.raises(TouchbenchError, match="needs training captures of 'idle'"):
         GateRule(idle="idle").fit([touch], ["tap"], SENSOR)
+
+
+def test_a_batched_replay_decides_what_stepping_frame_by_frame_decides():
+    from touchbench.streams.onset import OnsetRule
+
+    def proba(windows):  # a deterministic function of each window alone
+        m = np.array([[w.mean(), w.max(), len(w)] for w in windows], dtype=np.float64)
+        e = np.exp(m / 40.0 - (m / 40.0).max(axis=1, keepdims=True))
+        return e / e.sum(axis=1, keepdims=True)
+
+    rng = np.random.default_rng(0)
+    frames = np.concatenate([np.full((7, 1, 1), 2.0), rng.uniform(0, 100, (30, 1, 1)), np.full((9, 1, 1), 1.0),
+                             rng.uniform(40, 100, (25, 1, 1))])
+
+    def rules():
+        return [MaxRule(0.4), MajorityRule(3), HmmRule(0.1), GateRule("idle", level=0.3, gate_s=0.2),
+                OnsetRule("idle", level=0.3, gate_s=0.1, bridge_s=0.2)]
+
+    stepped = WindowRecognizer(proba, CLASSES, SENSOR, [0.3, 0.6], hop_s=0.2, rule=rules())
+    by_frame = [out for f in frames if (out := stepped.step(f)) is not None]
+    batched = WindowRecognizer(proba, CLASSES, SENSOR, [0.3, 0.6], hop_s=0.2, rule=rules()).replay(frames, batch=4)
+    for k in range(5):
+        assert [(d.frame, d.label) for d in batched[k]] == [(o[k].frame, o[k].label) for o in by_frame]
+    assert len(batched[0]) == (len(frames) - 3) // 2 + 1  # every 2 frames from the first 3-frame window

@@ -82,11 +82,11 @@ def _scored(rp: Any, truth: np.ndarray, frame_rate: float, live: LiveSpec) -> di
     decided = decisions_per_frame([d.frame for d in rp.decisions], [d.label for d in rp.decisions], len(truth),
                                   UNDECIDED)
     scores = score_stream(truth, decided, live.idle, frame_rate, undecided=(UNDECIDED, live.none_label))
-    cpu = rp.decision_cpu_ms
+    live_cpu = rp.live_cpu_ms
     return {"scores": scores.to_dict(), "decisions": label_runs(decided), "n_decisions": len(rp.decisions),
-            "cpu_s": float(cpu.sum()) / 1000.0, "wall_s": rp.wall_s,
-            "decision_cpu_ms_p50": float(np.percentile(cpu, 50)) if cpu.size else float("nan"),
-            "decision_cpu_ms_p99": float(np.percentile(cpu, 99)) if cpu.size else float("nan"),
+            "cpu_s": float(rp.decision_cpu_ms.sum()) / 1000.0, "wall_s": rp.wall_s,
+            "decision_cpu_ms_p50": float(np.percentile(live_cpu, 50)) if live_cpu.size else float("nan"),
+            "decision_cpu_ms_p99": float(np.percentile(live_cpu, 99)) if live_cpu.size else float("nan"),
             "_decided": decided}
 
 

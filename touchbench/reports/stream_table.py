@@ -17,11 +17,13 @@ test subject is for captures.
   decision, over the events decided; ``never %``: events never decided;
 - ``FA/min``: false activations per minute of idle (pooled: every stream's
   false activations over every stream's idle minutes);
-- ``CPU ms``: the median CPU time of a decision (the windows' features and
-  classifier, which a gate skips when it decides idle, and the rule), and
-  ``x real time``: the streams' length over the CPU time of their
-  decisions, both measured on one thread of the machine the run used (its
-  load is in the table's notes).
+- ``CPU ms``: the median CPU time of a decision made live, one frame at a
+  time (the windows' features and classifier, which a gate skips when it
+  decides idle, and the rule; the first decisions of each stream), and
+  ``x real time``: the streams' length over the CPU time the evaluation's
+  replay spent on their decisions (the windows classified in batches),
+  both on one thread of the machine the run used (its load is in the
+  table's notes).
 
 Ward, Lukowicz & Gellersen's event errors (insertions, deletions,
 fragmentations, merges) are summed over streams in the JSON output.
@@ -159,8 +161,8 @@ LIVE_LEGEND = ("Stream table: each test stream replayed frame by frame (the unit
                "frame; bal %: balanced accuracy; gesture % / idle %: recall of gesture and idle frames; @t s: "
                "gesture events decided correctly t s after onset; decide s: median time from onset to the first "
                "correct decision; never %: events never decided; FA/min: false activations per minute of idle; "
-               "CPU ms: median CPU time of one decision on one thread; x real time: stream time over replay CPU "
-               "time.")
+               "CPU ms: median CPU time of a decision made live, one frame at a time, on one thread; x real time: "
+               "stream time over the CPU time of the evaluation's replay (windows classified in batches).")
 
 
 #: the columns a narrow terminal keeps; the others follow, in this order, while the table fits

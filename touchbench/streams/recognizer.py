@@ -36,6 +36,7 @@ probabilities (``combine="mean"``).
 from __future__ import annotations
 
 import json
+import math
 import time
 from dataclasses import asdict, dataclass, field
 from typing import Any, Callable, Iterable, Iterator, Sequence
@@ -165,24 +166,68 @@ class WindowRecognizer:
         if self.seen < first or (self.seen - first) % self.hop:
             return None
         full = [(w, L) for w, L in zip(self.windows_s, self.lengths) if self.seen >= L]
-        newest = self._buf[self._n - full[-1][1]:self._n]  # the longest full window's frames
-        out = []
+        plans = self._plan(self._buf[self._n - full[-1][1]:self._n], full)
         probas: dict[tuple, tuple[np.ndarray, float]] = {}  # windows -> their probabilities, computed once
-        for rule in self.rules:
-            gated = rule.gate(newest) if rule.gates else None
-            wanted = None if gated is not None else rule.window_lengths(newest, [L for _, L in full])
-            windows = full if wanted is None else [(L / self.frame_rate, L) for L in wanted]
-            if gated is None and windows and tuple(windows) not in probas:
+        for _, windows in plans:
+            if windows and tuple(windows) not in probas:
                 c0 = time.thread_time_ns()
                 P = np.asarray(self.proba([self._buf[self._n - L:self._n] for _, L in windows]), dtype=np.float64)
                 probas[tuple(windows)] = (P, (time.thread_time_ns() - c0) / 1e6)
+        return [self._decide(rule, gated, *probas.get(tuple(windows), (None, 0.0)), windows, arrived)
+                for rule, (gated, windows) in zip(self.rules, plans)]
+
+    def _plan(self, newest: np.ndarray, full: list[tuple[float, int]]) -> list[tuple[str | None, list]]:
+        """What each rule needs at this decision, from the newest frames (the longest full window's):
+        ``(label decided from the frames alone, None)`` or ``(None, the windows to classify)``."""
+        out = []
+        for rule in self.rules:
+            gated = rule.gate(newest) if rule.gates else None
+            wanted = None if gated is not None else rule.window_lengths(newest, [L for _, L in full])
+            windows = [] if gated is not None else full if wanted is None else [(L / self.frame_rate, L) for L in wanted]
             if gated is None and not windows:
                 gated = self.none_label  # the rule wants more frames before it decides
-            P, cpu = probas.get(tuple(windows), (None, 0.0)) if gated is None else (None, 0.0)
-            out.append(self._decide(rule, gated, P, windows, cpu, arrived))
+            out.append((gated, windows))
         return out
 
-    def _decide(self, rule: DecisionRule, gated: str | None, P: np.ndarray | None, full: list, proba_cpu: float,
+    def replay(self, frames: np.ndarray, batch: int = 256) -> list[list[Decision]]:
+        """Every decision of a recorded stream ``frames`` (from a fresh recogniser), one list per rule:
+        the decisions :meth:`step` would make frame by frame, the windows due at every hop classified
+        ``batch`` at a time (the features and the classifier of a window do not depend on the other
+        windows of its batch), then each rule deciding in order. A decision's ``cpu_ms`` is its share
+        of its windows' batch and its rule's own time; ``latency_ms`` is not measured (NaN)."""
+        due = np.arange(self.lengths[0], len(frames) + 1, self.hop)
+        plans = []
+        for s in due:
+            full = [(w, L) for w, L in zip(self.windows_s, self.lengths) if s >= L]
+            plans.append(self._plan(frames[s - full[-1][1]:s], full))
+        wanted = sorted({(int(s), L) for s, plan in zip(due, plans) for _, ws in plan for _, L in ws})
+        rows, cpu = self._batched_proba(frames, wanted, batch)
+        out: list[list[Decision]] = [[] for _ in self.rules]
+        for s, plan in zip(due, plans):
+            self.seen = int(s)
+            for k, (rule, (gated, windows)) in enumerate(zip(self.rules, plan)):
+                P = np.stack([rows[(int(s), L)] for _, L in windows]) if windows else None
+                out[k].append(self._decide(rule, gated, P, sum(cpu[(int(s), L)] for _, L in windows), windows,
+                                           math.nan))
+        return out
+
+    def _batched_proba(self, frames: np.ndarray, wanted: list[tuple[int, int]], batch: int):
+        """The probabilities of every window ``(end frame, length)`` of ``wanted``, classified ``batch``
+        windows of one length at a time, and each window's share of its batch's CPU ms."""
+        rows: dict[tuple[int, int], np.ndarray] = {}
+        cpu: dict[tuple[int, int], float] = {}
+        for L in sorted({L for _, L in wanted}):
+            keys = [k for k in wanted if k[1] == L]
+            for a in range(0, len(keys), batch):
+                part = keys[a:a + batch]
+                c0 = time.thread_time_ns()
+                P = np.asarray(self.proba([frames[s - L:s] for s, _ in part]), dtype=np.float64)
+                share = (time.thread_time_ns() - c0) / 1e6 / len(part)
+                for key, row in zip(part, P):
+                    rows[key], cpu[key] = row, share
+        return rows, cpu
+
+    def _decide(self, rule: DecisionRule, gated: str | None, P: np.ndarray | None, proba_cpu: float, full: list,
                 arrived: float) -> Decision:
         """One rule's decision from the windows' probabilities ``P`` (or its gate's label ``gated``, decided
         from the frames alone: no classifier ran for it); its CPU time adds the probabilities' when it used them."""
@@ -200,7 +245,8 @@ class WindowRecognizer:
         return Decision(frame=self.seen, t=self.seen / self.frame_rate, label=label, probability=float(p[best]),
                         best=str(self.classes[best]) if p[best] > 0 else label,
                         window_s=None if k is None else full[k][0],
-                        latency_ms=1000.0 * (time.perf_counter() - arrived), cpu_ms=cpu, windows=per)
+                        latency_ms=1000.0 * (time.perf_counter() - arrived) if math.isfinite(arrived) else math.nan,
+                        cpu_ms=cpu, windows=per)
 
 
 def decide_all(recognizer: WindowRecognizer, frames: Iterable[tuple[np.ndarray, float]]) -> Iterator[Decision]:

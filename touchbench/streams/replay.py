@@ -8,8 +8,10 @@ training and scoring.
   capture's label, as ``touchbench train --window`` does);
 - :func:`training_samples`: those training samples;
 - :func:`replay`: one stream through a :class:`WindowRecognizer`, as fast as
-  the recogniser goes, with the decisions, the CPU time of the replay and the
-  CPU time of each decision.
+  the recogniser goes (the windows due at every hop classified in batches:
+  the same decisions as frame by frame), with the decisions, the CPU time of
+  the replay, and the CPU time of a decision made live (the first ones made
+  again one frame at a time).
 """
 
 from __future__ import annotations
@@ -63,29 +65,42 @@ def training_samples(captures: Sequence[np.ndarray], labels: np.ndarray, groups:
     return windows, np.asarray(labels)[src], np.asarray(groups)[src]
 
 
+#: the decisions of a stream stepped one frame at a time, as live, to measure a live decision's CPU
+LIVE_SAMPLE = 100
+
+
 @dataclass
 class Replayed:
-    """One stream's replay with one rule: its decisions, and each decision's CPU ms (the windows'
-    probabilities, when the rule used them, and the rule); the replay's CPU and wall seconds (every
-    rule's, the probabilities computed once)."""
+    """One stream's replay with one rule: its decisions; each decision's CPU ms as the replay spent it
+    (its share of its windows' batch, and the rule); the CPU ms of the first :data:`LIVE_SAMPLE`
+    decisions made one frame at a time, as ``touchbench stream`` makes them; the replay's CPU and wall
+    seconds (every rule's, the probabilities computed once)."""
 
     decisions: list[Decision]
     decision_cpu_ms: np.ndarray
+    live_cpu_ms: np.ndarray
     cpu_s: float
     wall_s: float
 
 
 def replay(frames: np.ndarray, proba: Callable[[list[np.ndarray]], np.ndarray], classes: Sequence[str], sensor: Any,
            spec: LiveSpec, rules: Sequence[DecisionRule]) -> list[Replayed]:
-    """``frames`` through one recogniser of ``spec``'s windows and hop deciding with every rule of
-    ``rules``, one frame at a time: one :class:`Replayed` per rule."""
-    rec = WindowRecognizer(proba, classes, sensor, spec.windows_s, dtype=frames.dtype, hop_s=spec.hop_s,
-                           none_label=spec.none_label, rule=rules)
-    decided: list[list[Decision]] = [[] for _ in rules]
+    """``frames`` through a recogniser of ``spec``'s windows and hop deciding with every rule of
+    ``rules`` (:meth:`WindowRecognizer.replay`: the windows due at every hop classified in batches),
+    one :class:`Replayed` per rule; then the first decisions again, one frame at a time, timed."""
+    def recogniser() -> WindowRecognizer:
+        return WindowRecognizer(proba, classes, sensor, spec.windows_s, dtype=frames.dtype, hop_s=spec.hop_s,
+                                none_label=spec.none_label, rule=rules)
+
     c_start, w_start = time.thread_time_ns(), time.perf_counter()
-    for frame in frames:
-        out = rec.step(frame)
-        for k, d in enumerate(out or ()):
-            decided[k].append(d)
+    decided = recogniser().replay(frames)
     cpu_s, wall_s = (time.thread_time_ns() - c_start) / 1e9, time.perf_counter() - w_start
-    return [Replayed(ds, np.array([d.cpu_ms for d in ds], dtype=np.float64), cpu_s, wall_s) for ds in decided]
+    live: list[list[float]] = [[] for _ in rules]
+    rec = recogniser()
+    for frame in frames:
+        for k, d in enumerate(rec.step(frame) or ()):
+            live[k].append(d.cpu_ms)
+        if len(live[0]) >= LIVE_SAMPLE:
+            break
+    return [Replayed(ds, np.array([d.cpu_ms for d in ds], dtype=np.float64), np.array(lv, dtype=np.float64),
+                     cpu_s, wall_s) for ds, lv in zip(decided, live)]
