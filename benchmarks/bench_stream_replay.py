@@ -85,7 +85,6 @@ def main() -> None:
     load0 = os.getloadavg()[0]
     print(f"{args.method} on {args.dataset}: {test}'s spliced stream, {len(frames)} frames ({seconds:.0f} s at "
           f"{rate:g} Hz), windows 0.5 + 1 s, hop 0.1 s; core {core}, {args.repeats} replays per rule")
-    print(f"{'rule':10s} {'frames/CPU s':>13s} {'x real time':>12s} {'CPU/decision p50':>17s} {'p99':>8s}")
     classes = [str(c) for c in fitted.classes]
     per_rule: list[list] = [[] for _ in RULES]
     for _ in range(args.repeats):
