@@ -43,7 +43,7 @@ SOURCES_NAME = "sources.json"
 def _digest(f: Path, known: dict[str, Any]) -> bytes:
     """The SHA-256 of ``f``: from ``known`` (absolute path -> [state, hex digest]) while the file's
     state is the one it was hashed in, else read and hashed (and kept in ``known`` unless the file
-    changed within :data:`~touchbench.core.hashing.RECENT_SECONDS`)."""
+    changed within :data:`touchbench.core.hashing.RECENT_SECONDS`)."""
     key, state = str(f.absolute()), file_state(f)
     entry = known.get(key)
     if isinstance(entry, list) and len(entry) == 2 and entry[0] == state:

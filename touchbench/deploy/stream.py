@@ -111,7 +111,7 @@ class StreamSummary:
 
 
 class SlidingRecognizer(WindowRecognizer):
-    """A model file's recogniser (module docstring): :class:`~touchbench.streams.recognizer.WindowRecognizer`
+    """A model file's recogniser (module docstring): :class:`touchbench.streams.recognizer.WindowRecognizer`
     over the model's probabilities, with the model's windows by default."""
 
     def __init__(self, model: TrainedModel, windows_s: Iterable[float] | None = None, hop_s: float = 0.5,

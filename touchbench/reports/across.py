@@ -24,8 +24,8 @@ def plain_tables(lbs: list[Leaderboard]) -> list[Leaderboard]:
 def across_tables(lbs: list[Leaderboard]) -> pd.DataFrame:
     """Mean accuracy of each method (by label) in each table (rows: table titles); only methods
     present, with an accuracy, in every table; only the plain tables (:func:`plain_tables`). The
-    accuracies are rounded to :data:`~touchbench.reports.stats.RANK_DIGITS` significant digits
-    (:func:`~touchbench.reports.stats.rank_values`), so that equal ones tie in every ranking of them
+    accuracies are rounded to :data:`touchbench.reports.stats.RANK_DIGITS` significant digits
+    (:func:`touchbench.reports.stats.rank_values`), so that equal ones tie in every ranking of them
     (mean ranks, Friedman, the critical difference diagram)."""
     cols = {}
     for lb in plain_tables(lbs):

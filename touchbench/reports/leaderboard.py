@@ -394,7 +394,7 @@ def _timing_machine(g: pd.DataFrame, ref: str | None, pool_machines: bool) -> st
 
 def _ranked(df: pd.DataFrame) -> pd.DataFrame:
     """The rows by accuracy (then macro F1, then id), with their rank (ties share the best rank);
-    accuracies equal to :data:`~touchbench.reports.stats.RANK_DIGITS` significant digits are one."""
+    accuracies equal to :data:`touchbench.reports.stats.RANK_DIGITS` significant digits are one."""
     key = pd.DataFrame({"acc": rank_values(df["accuracy"]), "f1": rank_values(df["macro_f1"]), "id": df["method_id"]},
                        index=df.index)
     key = key.sort_values(["acc", "f1", "id"], ascending=[False, False, True], na_position="last", kind="stable")

@@ -3,10 +3,10 @@
 A sliding window that starts before a touch mixes rest with the gesture's
 first frames, and one that spans two gestures mixes both; a window that
 starts where the touch starts sees the gesture alone. The rule finds the
-onset with the contact gate's level (:class:`~touchbench.streams.rules.GateRule`,
+onset with the contact gate's level (:class:`touchbench.streams.rules.GateRule`,
 ``level: auto`` chosen on the training captures): over the newest frames
 (the longest window's), each frame is in contact when its peak contact
-(:func:`~touchbench.streams.rules.peak_contact`) reaches the level; gaps of
+(:func:`touchbench.streams.rules.peak_contact`) reaches the level; gaps of
 contact shorter than ``bridge_s`` are bridged (a pat or a tickle lifts the
 hand between contacts: one touch, not many); the onset is the start of the
 last run of contact. Then:

@@ -96,7 +96,7 @@ class WindowRecognizer:
     are the window lengths in seconds, rounded to whole frames at the
     sensor's frame rate; ``dtype`` is the frames' type (the training
     captures'); ``rule`` decides from the combined probabilities (default:
-    :class:`~touchbench.streams.rules.MaxRule` with ``threshold``), or several rules do, each
+    :class:`touchbench.streams.rules.MaxRule` with ``threshold``), or several rules do, each
     from the same probabilities (:meth:`step`; :meth:`push` gives the first rule's decision).
     """
 
