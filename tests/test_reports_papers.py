@@ -636,3 +636,36 @@ seed: 0
         r = CliRunner().invoke(cli, ["papers", "reproduce", "--only", only, "--out", str(tmp_path / "none")])
         assert r.exit_code == 2, r.output
         assert "--only" in r.output and "cnn-tiny, gaus-tiny" in r.output and not (tmp_path / "none").exists()
+
+
+def test_the_report_gives_the_load_sampled_during_the_run_peak_memory_and_the_machine(tmp_path):
+    out = _challenge_run(tmp_path)
+    run = ProtocolRun(path=PAPERS / "gaus-tables6-7-haart.yaml", name="gaus-tables6-7-haart", out=out, changes=[])
+    timing = {"wall_seconds": 600.0, "cpu_seconds": 900.0, "cpus": 2, "jobs": 2, "load": [1.8, 2.0],
+              "load_sampled": {"n": 21, "interval_s": 30.0, "min": 1.8, "median": 9.5, "max": 18.2},
+              "peak_rss_mb": 2457.6, "machine": {"cpu_model": "AMD EPYC", "cpu_count": 2, "usable_cpus": 2,
+                                                 "platform": "Linux-6", "python": "3.11.7"}}
+    text = write_report([run], PROFILES["full"], tmp_path / "REPORT.md", timing=timing).read_text()
+    # the samples say what the ends (1.8, 2.0) could not: the machine was busy during the run
+    assert ("load average, sampled every 30 s during the run (21 samples), was 1.8 to 18.2 (median 9.5): above 2, "
+            "other jobs shared the CPUs.") in text
+    assert "at the start and" not in text
+    assert "Peak memory (resident, the largest process): 2458 MiB." in text
+    assert "Machine: AMD EPYC, 2 CPUs (2 usable), Linux-6, Python 3.11.7." in text
+
+
+def test_the_load_sampler_samples_during_the_block_and_at_its_ends():
+    from helpers import wait_for
+
+    from touchbench.results.manifest import LoadSampler
+
+    values = iter([1.0, 3.0])
+    with LoadSampler(interval=3600, read=lambda: next(values)) as s:  # no sample in between: start and end only
+        pass
+    assert s.summary() == {"n": 2, "interval_s": 3600.0, "min": 1.0, "median": 2.0, "max": 3.0}
+    ticks = iter(range(1000))
+    with LoadSampler(interval=0.01, read=lambda: float(next(ticks))) as s:
+        wait_for(lambda: len(s.samples) >= 4, "four samples of the load")
+    # 0, 1, 2, ... taken in order: at least the start, three in the block and the end
+    assert s.samples == [float(i) for i in range(len(s.samples))] and len(s.samples) >= 5
+    assert LoadSampler(read=lambda: float("nan")).summary() is None

@@ -537,9 +537,26 @@ def _timing_text(t: dict[str, Any]) -> str:
         text += (f", and {t['cpu_seconds'] / 60:.1f} min of CPU time (user + system, worker processes included): "
                  f"{t['cpu_seconds'] / 60 / cpus:.1f} min per CPU, the wall time to expect on an otherwise idle "
                  f"{cpus}-CPU machine")
-    load = t.get("load") or []
-    if len(load) == 2 and None not in load:
-        text += (f". The machine's 1-minute load average was {load[0]:.1f} at the start and {load[1]:.1f} at the "
-                 f"end (above {cpus}: other jobs shared the CPUs)" if max(load) > cpus else
-                 f". The machine's 1-minute load average was {load[0]:.1f} at the start and {load[1]:.1f} at the end")
-    return text + "."
+    return text + "." + _conditions_text(t, cpus)
+
+
+def _conditions_text(t: dict[str, Any], cpus: int) -> str:
+    """The run's conditions: the load average sampled during the run (else at its ends), peak memory,
+    the machine."""
+    out = ""
+    sampled, load = t.get("load_sampled"), t.get("load") or []
+    if sampled:
+        out += (f" The machine's 1-minute load average, sampled every {sampled['interval_s']:g} s during the run "
+                f"({sampled['n']} samples), was {sampled['min']:.1f} to {sampled['max']:.1f} (median "
+                f"{sampled['median']:.1f})" + (f": above {cpus}, other jobs shared the CPUs." if sampled["max"] > cpus
+                                               else "."))
+    elif len(load) == 2 and None not in load:
+        out += (f" The machine's 1-minute load average was {load[0]:.1f} at the start and {load[1]:.1f} at the end"
+                + (f" (above {cpus}: other jobs shared the CPUs)." if max(load) > cpus else "."))
+    if t.get("peak_rss_mb") is not None:
+        out += f" Peak memory (resident, the largest process): {t['peak_rss_mb']:.0f} MiB."
+    m = t.get("machine") or {}
+    if m:
+        out += (f" Machine: {m.get('cpu_model') or m.get('processor') or m.get('machine')}, {m.get('cpu_count')} CPUs "
+                f"({m.get('usable_cpus')} usable), {m.get('platform')}, Python {m.get('python')}.")
+    return out

@@ -34,7 +34,7 @@ from ..protocols.loading import load_protocol
 from ..protocols.schema import resolve_dataset_ref
 from ..reports.audit import write_audit
 from ..reports.rendering import write_text
-from ..results.manifest import load_average
+from ..results.manifest import LoadSampler, load_average, platform_info
 from .profiles import PROFILES, apply_profile, paper_protocols
 from .report import ProtocolRun, audit_dir, write_report
 
@@ -73,13 +73,16 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
     t_all = time.perf_counter()
     loaded = _LoadedDataset()
     audit_options = dict(prof.audit_options) if audit else None
-    for proto, changes, f in chosen:
-        r = ProtocolRun(path=f, name=proto.name, out=out / profile / proto.name, changes=changes)
-        _run_guarded(proto, r, loaded, echo=echo, jobs=jobs, progress=progress, failed=failed, audit=audit_options)
-        runs.append(r)
-    wall = time.perf_counter() - t_all
-    _stop_workers()
+    with LoadSampler() as sampler:
+        for proto, changes, f in chosen:
+            r = ProtocolRun(path=f, name=proto.name, out=out / profile / proto.name, changes=changes)
+            _run_guarded(proto, r, loaded, echo=echo, jobs=jobs, progress=progress, failed=failed,
+                         audit=audit_options)
+            runs.append(r)
+        wall = time.perf_counter() - t_all
+        _stop_workers()
     timing = {"wall_seconds": wall, "cpu_seconds": _cpu_seconds() - cpu0, "load": [load0, _load()], "jobs": jobs,
+              "load_sampled": sampler.summary(), "peak_rss_mb": _peak_rss_mb(), "machine": platform_info(),
               "cpus": os.cpu_count(), "tasks_ran": sum(r.n_ran for r in runs),
               "protocols": len(runs), "finished_at": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     timing = _kept_timing(timing, out / profile / "invocation.json", subset=bool(only))
@@ -208,6 +211,13 @@ def _cpu_seconds() -> float:
     """User + system CPU seconds of this process and its finished child processes."""
     me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
     return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def _peak_rss_mb() -> float:
+    """The largest resident memory of this process or of any of its finished child processes, MiB
+    (Linux reports ``ru_maxrss`` in KiB)."""
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return max(me.ru_maxrss, kids.ru_maxrss) / 1024.0
 
 
 def _load() -> float | None:

@@ -17,6 +17,7 @@ import os
 import platform
 import subprocess
 import sys
+import threading
 from datetime import datetime, timezone
 from typing import Any
 
@@ -26,7 +27,7 @@ from ..core.threads import available_cpus
 from ..core.versions import package_versions
 from .store import SCHEMA_VERSION
 
-__all__ = ["cpu_model", "git_revision", "load_average", "now_iso", "package_versions", "platform_info",
+__all__ = ["LoadSampler", "cpu_model", "git_revision", "load_average", "now_iso", "package_versions", "platform_info",
            "update_manifest"]
 
 def now_iso() -> str:
@@ -70,6 +71,47 @@ def load_average() -> float:
         return float(os.getloadavg()[0])
     except (OSError, AttributeError):
         return math.nan
+
+
+class LoadSampler:
+    """The 1-minute load average sampled every ``interval`` seconds in a thread of its own while the
+    ``with`` block runs (one sample at the start and one at the end as well), so that a long run can
+    say how busy the machine was throughout, not only at its ends."""
+
+    def __init__(self, interval: float = 30.0, read: Any = None):
+        self.interval = float(interval)
+        self.read = read or load_average
+        self.samples: list[float] = []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._loop, name="touchbench-load", daemon=True)
+
+    def _loop(self) -> None:
+        while not self._stop.wait(self.interval):
+            self._take()
+
+    def _take(self) -> None:
+        v = self.read()
+        if v is not None and math.isfinite(v):
+            self.samples.append(float(v))
+
+    def __enter__(self) -> "LoadSampler":
+        self._take()
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self._stop.set()
+        self._thread.join()
+        self._take()
+
+    def summary(self) -> dict[str, Any] | None:
+        """``{n, interval_s, min, median, max}`` of the samples (None without any)."""
+        if not self.samples:
+            return None
+        a = sorted(self.samples)
+        mid = len(a) // 2
+        median = a[mid] if len(a) % 2 else (a[mid - 1] + a[mid]) / 2.0
+        return {"n": len(a), "interval_s": self.interval, "min": a[0], "median": median, "max": a[-1]}
 
 
 def platform_info() -> dict[str, Any]:
