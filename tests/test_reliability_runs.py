@@ -50,7 +50,8 @@ from touchbench.features import FEATURES
 from touchbench.features.base import FeatureInputError, make_feature_set
 from touchbench.methods import MethodSpec
 from touchbench.protocols.loading import parse_protocol
-from touchbench.results.store import ResultsBusyError, ResultStore
+from touchbench.results.locking import ResultsBusyError
+from touchbench.results.store import ResultStore
 from touchbench.scenes.loading import load_spec
 
 TEXT = "name: small\ndataset: scene:tiny\nscheme: loso\nfeatures: [sd]\nclassifiers: [zhou-lda]\n"

@@ -71,7 +71,7 @@ from ..methods import CAPTURES, METHODS
 from ..methods.base import takes_captures
 from ..protocols.derive import derive, protocol_data
 from ..protocols.schema import Protocol
-from ..results.store import make_results_dir
+from ..results.locking import make_results_dir
 from .planning import Plan, method_labels, prepare_evaluation
 from .runner import plan_protocol, run_plan
 
