@@ -61,7 +61,7 @@ def main() -> None:
     from touchbench.methods.fitting import fit_method
     from touchbench.streams.replay import LiveSpec, replay, training_samples
     from touchbench.streams.rules import make_rule
-    from touchbench.streams.timeline import spliced_streams, stream_frames
+    from touchbench.streams.timeline import rest_value, spliced_streams, stream_frames
 
     ds = load_dataset(args.dataset)
     meta = ds.meta.reset_index(drop=True)
@@ -80,7 +80,7 @@ def main() -> None:
     spec_m = METHODS.create(args.method)
     with single_thread():
         fitted = fit_method(spec_m, 0, X, yy, gg, sensor=ds.sensor)
-    frames, _ = stream_frames(ds.captures, y, stream, "notouch", ds.sensor.value_range[0])
+    frames, _ = stream_frames(ds.captures, y, stream, "notouch", rest_value(ds.sensor))
     seconds = len(frames) / rate
     load0 = os.getloadavg()[0]
     print(f"{args.method} on {args.dataset}: {test}'s spliced stream, {len(frames)} frames ({seconds:.0f} s at "

@@ -70,7 +70,7 @@ from ..classifiers.fitting import FittedEstimator, FittedMethod
 from ..methods import MethodSpec
 from ..methods.fitting import fit_method
 from .safe_format import dump_parts, load_parts
-from .windows import cut_windows, seconds_to_frames
+from ..streams.replay import window_samples
 
 __all__ = [
     "CHECKSUM_CHARS",
@@ -491,15 +491,11 @@ def _n_columns(fitted: FittedMethod) -> int | None:
 def _training_samples(dataset: TouchDataset, windows: Sequence[float] | None,
                       train_hop: float | None) -> tuple[list[np.ndarray], np.ndarray, list[int], list[int]]:
     """The samples to train on and the capture each comes from: windows of each length (frames) cut
-    every hop (frames; default half a window), or the whole captures (no lengths, no hops)."""
+    every hop (frames; default half a window, :func:`touchbench.streams.replay.window_samples`), or the
+    whole captures (no lengths, no hops)."""
     if not windows:
         return list(dataset.captures), np.arange(len(dataset)), [], []
-    rate = dataset.sensor.frame_rate
-    lengths = [seconds_to_frames(w, rate, "--window") for w in windows]
-    hops = [seconds_to_frames(train_hop, rate, "--train-hop") if train_hop is not None
-            else max(1, L // 2) for L in lengths]
-    samples, src = cut_windows(dataset.captures, lengths, hops)
-    return samples, src, lengths, hops
+    return window_samples(dataset.captures, windows, train_hop, dataset.sensor.frame_rate)
 
 
 def _windows_manifest(windows: Sequence[float] | None, lengths: list[int], hops: list[int],

@@ -6,7 +6,8 @@ the fold's training captures, or on windows cut from them
 (:func:`touchbench.streams.replay.training_samples`), fits each declared
 decision rule on the same training captures (the gate's ``level: auto``),
 then replays each test stream through the recogniser ``touchbench stream``
-runs (:func:`touchbench.streams.replay.replay`, one frame at a time) and
+runs (:func:`touchbench.streams.replay.replay`: the windows due at every hop
+classified in batches, the decisions those of stepping frame by frame) and
 scores the decisions against each frame's truth
 (:func:`touchbench.evaluation.stream_scores.score_stream`; the none label
 and the frames before the first decision count as idle).
@@ -16,7 +17,8 @@ What it returns, plain data for the results store:
 - the scores row's ``live`` column: JSON with the rules and, per stream and
   rule, the scores, the decisions in run-length form (``[[first frame,
   label], ...]``, frames counted from 0), the replay's CPU and wall seconds
-  and the decisions' CPU time (median and 99th percentile, ms);
+  and a live decision's CPU time (median and 99th percentile, ms, over the
+  stream's first decisions made one frame at a time);
 - a predictions table with one row per test capture: the first rule's
   decision held over most of the frames where the capture is shown (the
   segment's majority); the row's ``accuracy`` is over those captures, so the
@@ -39,7 +41,7 @@ from ..protocols.schemes.stream import rule_specs
 from ..streams.replay import LiveSpec, training_samples
 from ..streams.replay import replay as replay_stream
 from ..streams.rules import make_rule
-from ..streams.timeline import decisions_per_frame, label_runs, stream_frames
+from ..streams.timeline import decisions_per_frame, label_runs, rest_value, stream_frames
 
 __all__ = ["UNDECIDED", "live_outcome"]
 
@@ -59,10 +61,8 @@ def live_outcome(task: Any, ds: Any, y: np.ndarray) -> tuple[dict[str, Any], np.
     rules = [make_rule(r).fit(train_caps, y[fold.train], ds.sensor) for r in rule_specs(live)]
     classes = [str(c) for c in fitted.classes]
     streams, first_rule = [], []
-    lo, hi = ds.sensor.value_range
-    rest = float(lo if ds.sensor.higher_is_more_pressure else hi)
     for s in live.streams:
-        frames, truth = stream_frames(ds.captures, y, s, live.idle, rest)
+        frames, truth = stream_frames(ds.captures, y, s, live.idle, rest_value(ds.sensor))
         per_rule = [_scored(rp, truth, ds.sensor.frame_rate, live)
                     for rp in replay_stream(frames, fitted.window_proba, classes, ds.sensor, live, rules)]
         first_rule.append((s, per_rule[0].pop("_decided")))

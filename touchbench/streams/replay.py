@@ -28,7 +28,7 @@ from .recognizer import Decision, WindowRecognizer
 from .rules import DecisionRule
 from .timeline import Stream
 
-__all__ = ["LiveSpec", "Replayed", "replay", "training_samples"]
+__all__ = ["LiveSpec", "Replayed", "replay", "training_samples", "window_samples"]
 
 
 @dataclass(frozen=True)
@@ -51,17 +51,28 @@ class LiveSpec:
         return hashlib.sha256(repr(parts).encode()).hexdigest()[:16]
 
 
+def window_samples(captures: Sequence[np.ndarray], windows_s: Sequence[float], train_hop_s: float | None,
+                   frame_rate: float, options: tuple[str, str] = ("--window", "--train-hop"),
+                   ) -> tuple[list[np.ndarray], np.ndarray, list[int], list[int]]:
+    """Windows of each length (``windows_s``, rounded to frames) cut every ``train_hop_s`` (default
+    half the window) from each capture (a capture shorter than every window kept whole): ``(windows,
+    the capture each comes from, lengths, hops)``. ``touchbench train --window`` and a stream task
+    train on these; ``options`` names the settings in an error."""
+    lengths = [seconds_to_frames(w, frame_rate, options[0]) for w in windows_s]
+    hops = [seconds_to_frames(train_hop_s, frame_rate, options[1]) if train_hop_s is not None else max(1, L // 2)
+            for L in lengths]
+    samples, src = cut_windows(captures, lengths, hops)
+    return samples, src, lengths, hops
+
+
 def training_samples(captures: Sequence[np.ndarray], labels: np.ndarray, groups: np.ndarray, spec: LiveSpec,
                      frame_rate: float) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
-    """The samples a stream fold trains on, with their labels and groups: the captures, or windows
-    of each of the recogniser's lengths cut every ``train_hop_s`` (default half the window) from
-    each capture (a capture shorter than every window kept whole)."""
+    """The samples a stream fold trains on, with their labels and groups: the captures, or
+    :func:`window_samples` of the recogniser's lengths."""
     if spec.train_on == "captures":
         return list(captures), labels, groups
-    lengths = [seconds_to_frames(w, frame_rate, "windows_s") for w in spec.windows_s]
-    hops = [seconds_to_frames(spec.train_hop_s, frame_rate, "train_hop_s") if spec.train_hop_s else max(1, L // 2)
-            for L in lengths]
-    windows, src = cut_windows(captures, lengths, hops)
+    windows, src, _, _ = window_samples(captures, spec.windows_s, spec.train_hop_s, frame_rate,
+                                        ("windows_s", "train_hop_s"))
     return windows, np.asarray(labels)[src], np.asarray(groups)[src]
 
 

@@ -38,7 +38,7 @@ import pandas as pd
 
 from ..core.errors import TouchbenchError
 
-__all__ = ["REST", "SOURCES", "Stream", "decisions_per_frame", "label_runs", "recorded_streams", "spliced_streams",
+__all__ = ["REST", "SOURCES", "Stream", "decisions_per_frame", "label_runs", "recorded_streams", "rest_value", "spliced_streams",
            "stream_frames"]
 
 #: the capture index of a stretch of the sensor's rest (frames at the bottom of its value range)
@@ -68,6 +68,13 @@ class Stream:
     def digest(self) -> str:
         return hashlib.sha256(repr((self.name, self.subject, self.session, self.source,
                                     self.segments)).encode()).hexdigest()[:16]
+
+
+def rest_value(sensor) -> float:
+    """The value a cell reads at rest: the bottom of the sensor's range, or its top for a sensor where
+    lower means more pressure (the frames of a stretch of :data:`REST`)."""
+    lo, hi = sensor.value_range
+    return float(lo if sensor.higher_is_more_pressure else hi)
 
 
 def stream_frames(captures: Sequence[np.ndarray], labels: Sequence[str], stream: Stream, idle: str,
