@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import TouchbenchError
-from .rules import RULES, GateRule
+from .rules import RULES, GateRule, frame_contact
 
 __all__ = ["OnsetRule", "contact_run"]
 
@@ -68,10 +68,7 @@ class OnsetRule(GateRule):
         self.params = {**self.params, "bridge_s": self.bridge_s}
 
     def window_lengths(self, frames: np.ndarray, lengths: list[int]) -> list[int] | None:
-        s = self.sensor
-        lo, hi = float(s.value_range[0]), float(s.value_range[1])
-        flat = np.asarray(frames, dtype=np.float64).reshape(len(frames), -1)
-        peak = (flat.max(axis=1) - lo) / (hi - lo) if s.higher_is_more_pressure else (hi - flat.min(axis=1)) / (hi - lo)
+        peak = frame_contact(frames, self.sensor.value_range, self.sensor.higher_is_more_pressure)
         run = contact_run(peak >= self._level, max(1, int(round(self.bridge_s * self.frame_rate))))
         if run >= len(frames):
             return None  # in contact throughout: the sliding windows

@@ -44,7 +44,7 @@ import numpy as np
 from ..core.errors import TouchbenchError
 from ..core.registry import Registry
 
-__all__ = ["DEFAULT_RULE", "RULES", "DecisionRule", "GateRule", "MaxRule", "make_rule", "peak_contact", "stream_rule"]
+__all__ = ["DEFAULT_RULE", "RULES", "DecisionRule", "GateRule", "MaxRule", "frame_contact", "make_rule", "peak_contact", "stream_rule"]
 
 RULES: Registry = Registry("decision rule", package="touchbench.streams")
 
@@ -133,15 +133,21 @@ class MaxRule(DecisionRule):
         return str(self.classes[k]) if p[k] >= self.threshold else self.none_label
 
 
-def peak_contact(frames: np.ndarray, value_range: tuple[float, float], higher_is_more: bool = True) -> float:
-    """The largest contact of ``frames`` as a fraction of the value range (0: rest at the range's
-    bottom, 1: full scale); for a sensor where lower means more pressure, measured from the top."""
+def frame_contact(frames: np.ndarray, value_range: tuple[float, float], higher_is_more: bool = True) -> np.ndarray:
+    """Each frame's largest contact as a fraction of the value range (0: rest at the range's bottom,
+    1: full scale); for a sensor where lower means more pressure, measured from the top; zeros for a
+    range of no width."""
     lo, hi = float(value_range[0]), float(value_range[1])
-    span = hi - lo
-    if span <= 0 or frames.size == 0:
-        return 0.0
-    a = np.asarray(frames, dtype=np.float64)
-    return float((a.max() - lo) / span if higher_is_more else (hi - a.min()) / span)
+    a = np.asarray(frames, dtype=np.float64).reshape(len(frames), -1)
+    if hi - lo <= 0 or a.size == 0:
+        return np.zeros(len(a))
+    return (a.max(axis=1) - lo) / (hi - lo) if higher_is_more else (hi - a.min(axis=1)) / (hi - lo)
+
+
+def peak_contact(frames: np.ndarray, value_range: tuple[float, float], higher_is_more: bool = True) -> float:
+    """The largest contact of ``frames`` (:func:`frame_contact`; 0 for no frame)."""
+    c = frame_contact(frames, value_range, higher_is_more)
+    return float(c.max()) if c.size else 0.0
 
 
 @RULES.register("gate", description="a rest/contact gate decides idle before the classifier; else the best "
