@@ -47,7 +47,7 @@ from ..methods import METHODS, Method, expand_candidates, method_spec
 from ..protocols.entries import expand_grid
 from ..protocols.schema import Protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
-from ..protocols.schemes import Fold, SplitError
+from ..protocols.schemes import Fold, SplitError, curve_columns
 from ..results.ledger import test_set_hash_of
 from ..results.manifest import LEFT_OUT
 from ..results.store import task_row
@@ -420,6 +420,7 @@ def _base_row(place: _FoldPlace, m: Method, task_id: str, seed: int) -> dict[str
         "leakage": "; ".join(x for x in [place.scheme_leak, *m.leakage] if x),
         "selection": m.tuned_on_test,
         "adaptation": m.adaptation,
+        **curve_columns(fold.curve),
     })
 
 

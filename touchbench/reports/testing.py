@@ -24,6 +24,7 @@ import yaml
 
 from ..core.hashing import canonical_json
 from ..evaluation.metrics import metrics
+from ..protocols.schemes import curve_columns
 from ..results.store import PREDICTED, SCHEMA_VERSION, TRUE, confusion_table, task_row, write_results_table
 
 __all__ = ["FakeMethod", "write_fake_run"]
@@ -99,7 +100,7 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
                 "classifier_name": m["classifier_name"], "classifier_params": canonical_json(m["classifier_params"]),
                 "seed": zlib.crc32(f"{m['features']}|{m['classifier']}|{fold_name}".encode()),
                 "n_train": len(caps) - len(ids), "n_test": len(ids), "leakage": "", "selection": "",
-                "adaptation": m["adaptation"],
+                "adaptation": m["adaptation"], **curve_columns(None),
             })
             base.update(run_id=run_id, protocol_hash="p" * 64, n_classes_train=len(classes), finished_at=finished_at)
             if fold in m["failed_folds"]:

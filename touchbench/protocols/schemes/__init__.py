@@ -48,15 +48,18 @@ and ``get_n_splits`` give the same folds to scikit-learn
 
 from __future__ import annotations
 
-from .base import SPLITTERS, Crop, DataContext, Fold, SplitError, Splitter, fold_notes, make_splitter
+from .base import (SPLITTERS, Crop, CurvePoint, DataContext, Fold, SplitError, Splitter, curve_columns, fold_notes,
+                   make_splitter)
 
 __all__ = [
     "SPLITTERS",
     "Crop",
+    "CurvePoint",
     "DataContext",
     "Fold",
     "SplitError",
     "Splitter",
+    "curve_columns",
     "fold_notes",
     "make_splitter",
 ]

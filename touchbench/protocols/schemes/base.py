@@ -72,6 +72,25 @@ class Crop:
 
 
 @dataclass(frozen=True)
+class CurvePoint:
+    """Where a fold sits on a data curve: ``axis`` ``"subjects"`` (trained on ``size`` of the base
+    fold's training subjects, a number, or a fraction when below 1) or ``"calibration"`` (``size``
+    labelled captures per class of the test side joined the training data); ``draw`` numbers the
+    random draws of those subjects or captures (0 when there is one)."""
+
+    axis: str
+    size: float
+    draw: int = 0
+
+
+def curve_columns(point: CurvePoint | None) -> dict[str, Any]:
+    """The scores columns of a task at ``point`` (``curve`` "" and ``curve_size`` NaN off a curve)."""
+    if point is None:
+        return {"curve": "", "curve_size": np.nan, "curve_draw": 0}
+    return {"curve": point.axis, "curve_size": np.float64(point.size), "curve_draw": int(point.draw)}
+
+
+@dataclass(frozen=True)
 class Fold:
     """One train/test split over positional indices of the metadata table.
 
@@ -79,8 +98,8 @@ class Fold:
     of a within-subject fold, the direction of a transfer fold, the party of
     a person-independent fold, the repeat of a k-fold); ``crop`` is set by the
     ``early`` scheme; ``live`` by the ``stream`` scheme (its test streams and recogniser,
-    :class:`touchbench.streams.replay.LiveSpec`); ``notes`` says how the splitter handled an
-    extreme case.
+    :class:`touchbench.streams.replay.LiveSpec`); ``curve`` by a scheme that sweeps the training
+    data (:class:`CurvePoint`); ``notes`` says how the splitter handled an extreme case.
     """
 
     name: str
@@ -90,6 +109,7 @@ class Fold:
     crop: Crop | None = None
     notes: tuple[str, ...] = field(default=())
     live: Any = None
+    curve: CurvePoint | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "train", np.asarray(self.train, dtype=np.int64))
