@@ -66,6 +66,11 @@ Which test is used when (stated once, used everywhere):
   one. The decision is the test's; the bootstrap interval describes the
   difference between people and need not agree with it, so the test's own
   interval is kept beside it (``test_ci_low`` / ``test_ci_high``).
+- **One test set, several seeds** (a scheme with a single test set runs every
+  method with several seeds): the interval of a method's accuracy and the
+  test of two methods resample the captures and the seeds, Owen's pigeonhole
+  bootstrap for crossed random effects (:mod:`touchbench.reports.seeds`),
+  instead of Wilson's interval and McNemar's test over the captures alone.
 - **Multiple comparisons.** The p-values of one table (every method against
   the best) are adjusted with Holm's step-down method; a method "differs"
   when its adjusted p is below ``alpha`` (0.05). An undefined p (above) is
@@ -146,9 +151,9 @@ BOOTSTRAP_RESAMPLES = 10000
 BOOTSTRAP_SEED = 0
 #: The tests' names as reports write them.
 TEST_NAMES = {"mcnemar-exact": "McNemar's exact test", "corrected-t": "corrected resampled t-test",
-              "none": "no test"}
+              "pigeonhole": "pigeonhole bootstrap over captures and seeds", "none": "no test"}
 #: The tests' short names, for a table cell.
-TEST_SHORT = {"mcnemar-exact": "McNemar", "corrected-t": "corrected t"}
+TEST_SHORT = {"mcnemar-exact": "McNemar", "corrected-t": "corrected t", "pigeonhole": "pigeonhole"}
 #: Why a corrected t-test has no p-value: every fold differs by the same amount.
 NO_VARIANCE = "no variance: every fold differs by the same amount"
 #: A mean of fold differences at most this far from 0 (with no variance) is no difference.
