@@ -7,7 +7,9 @@ balanced accuracy, the median latency per capture (features + predict of one
 capture, ms), the median fit time (s per fold) and feature extraction time
 (ms per capture), the paired test against the best method (Holm-adjusted
 within the table; statistics in :mod:`touchbench.reports.stats`) and whether
-the method is on the accuracy / latency Pareto front.
+the method is on the accuracy / latency Pareto front. A single test set scored
+with several seeds shows the mean over the seeds, their spread, and an interval
+and test over captures and seeds (:mod:`touchbench.reports.seeds`).
 
 Timings and machines: accuracy does not depend on the machine and is pooled
 over every run of a method. Timings do, so a table uses one *reference

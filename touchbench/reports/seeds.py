@@ -38,7 +38,10 @@ more seeds on the one test set they share, from the predictions):
   ``p_greater = (1 + #{theta* <= 0}) / (B + 1)`` (``a`` better),
   ``p_less = (1 + #{theta* >= 0}) / (B + 1)``, two-sided ``p = min(1, 2
   min(p_greater, p_less))``: the percentile interval's inversion, so it
-  excludes 0 when ``p < 0.05`` up to the resampling's resolution. The
+  excludes 0 when ``p < 0.05`` up to the resampling's resolution. Its
+  ``statistic`` is the mean difference over the resamples' sd, ``n`` the
+  paired captures, ``effect_size`` Cohen's ``d_z`` of the captures' mean
+  differences over the seeds. The
   leaderboard's call "differs from the best" on such a table is this test,
   Holm-adjusted over the table as every test is.
 

@@ -11,10 +11,11 @@ Which test is used when (stated once, used everywhere):
   not independent (their training sets overlap), so the interval is a
   description of fold-to-fold variation, not an exact confidence statement
   (Bengio & Grandvalet 2004); it is still the interval the literature means.
-- **One fold** (the challenge split): no spread; the interval is the Wilson
-  score interval of the accuracy as a binomial proportion over the test
-  captures.
-- **Two methods on one test set** (they share a single fold): McNemar's
+- **One fold** (the challenge split) with one seed: no spread; the interval
+  is the Wilson score interval of the accuracy as a binomial proportion over
+  the test captures. With several seeds, below ("One test set, several
+  seeds").
+- **Two methods on one test set** (they share a single fold) with one seed: McNemar's
   exact test on the paired test captures (Dietterich 1998, Sec. 3.1; the
   exact binomial form, since the discordant counts are often small): ``b``
   captures the first method gets right and the second wrong, ``c`` the
