@@ -156,13 +156,14 @@ def test_cross_dataset_trains_on_one_dataset_and_tests_on_the_other(tmp_path):
     p = _protocol(tmp_path, f"dataset: {train}\nscheme: {{name: cross-dataset, test: {test}}}\n"
                             "features: [[test-mean]]\nclassifiers: [test-logreg]\n")
     plan = plan_run(parse_protocol(p.read_text(), p))
-    (t,) = plan.tasks
+    t = plan.tasks[0]  # one test set: five seeds of the one split by default
+    assert len(plan.tasks) == 5 and all(np.array_equal(u.fold.test, t.fold.test) for u in plan.tasks)
     meta = plan.dataset.meta
     assert set(meta["origin"].to_numpy()[t.fold.train]) == {"train"} and len(t.fold.train) == 2 * 3 * 2
     assert set(meta["origin"].to_numpy()[t.fold.test]) == {"test"} and len(t.fold.test) == 3 * 2
     assert set(meta["subject"].to_numpy()[t.fold.test]) == {"b1"}
     res = run_protocol(p, out=tmp_path / "out", progress=False)
-    assert res.scores["leakage"].tolist() == [""]
+    assert res.scores["leakage"].tolist() == [""] * 5
 
 
 def test_early_prepares_the_data_as_its_base_does(tmp_path):
@@ -195,7 +196,7 @@ def test_cross_dataset_refuses_test_captures_that_are_training_ones(tmp_path):
                  "features: [[test-mean]]\nclassifiers: [test-logreg]\n")
     plan = plan_run(parse_protocol(p.read_text(), p))
     sha = plan.dataset.meta["frames_sha256"].to_numpy()
-    (t,) = plan.tasks
+    t = plan.tasks[0]
     assert not set(sha[t.fold.test]) & set(sha[t.fold.train])
     assert {frames_checksum(c) for c in same.captures}.isdisjoint(sha[t.fold.test])
 
@@ -233,10 +234,10 @@ evaluations:
 """, name="multi")
     res = run_protocol(p, out=tmp_path / "results" / "multi", progress=False)
     assert isinstance(res, list) and [r.out.name for r in res] == ["loso", "to-curve", "to-s4"]
-    assert len(res[0].scores) == 4 and len(res[1].scores) == 1
+    assert len(res[0].scores) == 4 and len(res[1].scores) == 5  # one test set: five seeds by default
     preds = pd.read_parquet(res[1].out / "predictions.parquet")
     train_sub = pd.read_parquet(data)  # no curve capture is trained on: the test captures are all curve
-    assert len(preds) == (train_sub["substrate"] == "curve").sum()
+    assert len(preds) == 5 * (train_sub["substrate"] == "curve").sum()
     lbs = build_leaderboards(load_results([tmp_path / "results" / "multi"]))
     assert len(lbs) == 3
     # a test set without design subjects: the usual figure is the held-out one, not marked

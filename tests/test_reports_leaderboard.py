@@ -310,7 +310,7 @@ def test_single_fold_with_several_seeds_reports_their_spread(tmp_path):
     assert x["accuracy"] == pytest.approx((33 / 36 + 30 / 36) / 2)
     assert x["accuracy_sd"] == pytest.approx((3 / 36) / math.sqrt(2))  # sample sd of two values: |a - b| / sqrt(2)
     assert x["n_seeds"] == 2 and x["n_folds"] == 1
-    assert "± 5.9 (2 seeds)" in to_markdown([lb])
+    assert "± 5.9 (2 seeds, 83.3–91.7)" in to_markdown([lb])  # the seeds: 30 and 33 of 36
 
 
 def test_compare_across_evaluations_combines_them_by_stouffer(tmp_path):

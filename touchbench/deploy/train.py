@@ -18,8 +18,12 @@ names one with ``evaluation``.
 Seeds: the estimator's ``random_state`` is derived from the protocol seed
 as the engine derives it. For a fold it is the seed of that fold's task in
 repetition 0, so ``train --fold F`` fits the same estimator, on the same
-features, as the run engine did for fold F (their test predictions agree);
-for the whole training side it is ``derive_seed(seed, "train", method id)``.
+features, as the run engine did for fold F (their test predictions agree).
+An evaluation of a single fold (a challenge split, a cross-dataset
+transfer: its training side is that fold's training part) trains as that
+fold without ``--fold``: the saved model is the run's repetition-0 model
+and scores its accuracy. For the training side of several folds it is
+``derive_seed(seed, "train", method id)``.
 
 A stream evaluation (the ``stream`` scheme) trains on windows of its
 recogniser's lengths, cut every ``train_hop_s``, as its tasks do; ``windows``
@@ -121,6 +125,13 @@ def _fold(proto: Protocol, prepared: Prepared, fold: str) -> Fold:
     return named[0]
 
 
+def _single_fold(prepared: Prepared) -> Fold | None:
+    """The evaluation's one fold (a single test set: its training side is that fold's training part),
+    or None when it has several or cuts captures."""
+    folds = prepared.folds[0]
+    return folds[0] if len(folds) == 1 and folds[0].crop is None else None
+
+
 def train_from_protocol(
     protocol: str | Path,
     method: str | None = None,
@@ -144,13 +155,15 @@ def train_from_protocol(
         raise TouchbenchError(f"method {m.label!r} cannot serve this evaluation: {'; '.join(left_out)}")
     ds = prepared.dataset
     parts = [f"protocol {proto.name} filters"] if (proto.dataset.filters or proto.dataset.exclude) else []
+    single = _single_fold(prepared)
     if fold is not None:
         chosen = _fold(proto, prepared, fold)
         fold, idx, default_seed = chosen.name, np.asarray(chosen.train), fold_seed(prepared, m, chosen)
         parts.append(f"training part of fold {fold} ({proto.scheme.name})")
     else:
-        idx = training_side(prepared)
-        default_seed = derive_seed(proto.seed, "train", m.method_id)
+        # one fold (a single test set): its training part, with its task's seed of repetition 0
+        idx = training_side(prepared) if single is None else np.asarray(single.train)
+        default_seed = derive_seed(proto.seed, "train", m.method_id) if single is None else fold_seed(prepared, m, single)
         if len(idx) < len(ds):
             parts.append(f"the training side of {proto.scheme.name} ({len(ds) - len(idx)} test captures left out)")
         elif not parts:

@@ -21,7 +21,8 @@ A protocol names everything a benchmark run needs::
       - {name: gaus-rf, params: {n_estimators: 100}, label: rf100}
       - {name: cnn, params: {epochs: {grid: [10, 20]}}}   # a grid: one entry per value
     seed: 0                            # every randomness is derived from it
-    repetitions: 1                     # the whole evaluation repeated with derived seeds
+    repetitions: 1                     # the whole evaluation repeated with derived seeds (default: 1;
+                                       # 5 seeds of every method where the scheme has a single test set)
     expected:                          # optional: the paper's numbers, in percent
       metric: accuracy
       tolerance: 3.0                   # percentage points
@@ -38,6 +39,17 @@ A protocol names everything a benchmark run needs::
           matrix: [[30, 2], [6, 34]]
       best_parameters:                 # the best value of a parameter grid
         - {classifier: cnn, parameter: L, value: 30, source: Fig. 5}
+
+**Repetitions.** Each repetition re-draws the scheme's folds (its seed) and
+every method's seed (``engine.planning``). A scheme whose folds each test one
+fixed set of captures (``Splitter.single_test_set``: ``challenge``,
+``transfer``, ``cross-dataset``) has the same folds in every repetition, so
+its repetitions are seeds of the methods alone; left unsaid, such an
+evaluation runs :data:`touchbench.protocols.schemes.DEFAULT_SEEDS` (5) of
+them, the protocol's or the evaluation's ``repetitions`` (``1`` for one)
+deciding otherwise. The engine cannot tell a deterministic method (it cannot
+see whether an estimator or a feature set draws from its seed), so every
+method is repeated; a deterministic one shows a spread of 0 over its seeds.
 
 **Parameter grids.** A feature or classifier parameter written
 ``{grid: [v1, v2, ...]}`` expands to one entry per value (the cartesian
@@ -95,7 +107,8 @@ from .entries import (
 from .errors import ProtocolError, UnknownEvaluation, _ErrorAt, _make_error
 from .expected import Expected, ExpectedBest
 from .seeding import derive_seed
-from .schemes import Splitter, make_splitter
+from .schemes import DEFAULT_SEEDS, Splitter, make_splitter
+from .schemes.base import scheme_class
 from .specs import EVALUATION_FIELDS, AuditSpec, DatasetSpec, DesignSpec, EvaluationSpec, SchemeSpec, _folder_name
 
 __all__ = ["Protocol", "resolve_dataset_ref"]
@@ -200,6 +213,16 @@ class Protocol(_Model):
         return d
 
     @model_validator(mode="after")
+    def _seeds_of_a_single_test_set(self) -> "Protocol":
+        """Repetitions left unsaid: :data:`DEFAULT_SEEDS` for a scheme with a single test set (set in
+        the instance's values, not as given: :meth:`evaluation_protocols` lets each evaluation's
+        scheme decide)."""
+        cls = scheme_class(self.scheme.name)
+        if "repetitions" not in self.model_fields_set and cls is not None and cls.single_test_set:
+            self.__dict__["repetitions"] = DEFAULT_SEEDS
+        return self
+
+    @model_validator(mode="after")
     def _methods_or_cross_product(self) -> "Protocol":
         if (self.features is None) != (self.classifiers is None):
             missing = "classifiers" if self.classifiers is None else "features"
@@ -241,6 +264,8 @@ class Protocol(_Model):
             return [self]
         if self._subs is None:
             base = self.model_dump(mode="python", exclude={"evaluations", "evaluation"})
+            if "repetitions" not in self.model_fields_set:  # each evaluation's scheme decides
+                base.pop("repetitions")
             if not base.get("features"):  # methods: alone
                 base.pop("features", None)
                 base.pop("classifiers", None)

@@ -17,7 +17,7 @@ from ..core.errors import TouchbenchError
 from ..results.store import PREDICTED, TRUE
 from .labels import method_label
 from .leaderboard import Leaderboard
-from .paired import _compare
+from .seeds import PIGEONHOLE, compare_pair
 from .results import ResultSet
 from .stats import TEST_NAMES, PairedTest
 
@@ -26,7 +26,9 @@ __all__ = ["Comparison", "compare_methods", "leaderboard_p", "resolve_method", "
 #: How each of the test's intervals is made, as ``compare`` says it.
 TEST_CI = {"exact-conditional": "exact, given the discordant captures: Clopper-Pearson's interval of the share of "
                                 "them A gets right, which inverts the test",
-           "corrected-t": "corrected t, which inverts the test"}
+           "corrected-t": "corrected t, which inverts the test",
+           PIGEONHOLE: "pigeonhole bootstrap over the test captures and the seeds (Owen 2007), the resamples "
+                       "the test's p counts"}
 
 
 def resolve_method(lb_rows: pd.DataFrame, spec: str) -> str:
@@ -91,7 +93,7 @@ def compare_methods(rs: ResultSet, lb: Leaderboard, a: str, b: str) -> Compariso
     if ida == idb:
         raise TouchbenchError(f"{a!r} and {b!r} are the same method ({ida})")
     preds = rs.predictions[rs.predictions["table_key"] == lb.key] if rs.predictions is not None else None
-    test, pairs = _compare(lb.folds, preds, ida, idb)
+    test, pairs = compare_pair(lb.folds, preds, ida, idb)
     pairs = pairs.assign(diff=pairs["a"] - pairs["b"])
     fa = set(lb.folds[lb.folds["method_id"] == ida]["fold_key"])
     fb = set(lb.folds[lb.folds["method_id"] == idb]["fold_key"])

@@ -7,7 +7,9 @@ balanced accuracy, the median latency per capture (features + predict of one
 capture, ms), the median fit time (s per fold) and feature extraction time
 (ms per capture), the paired test against the best method (Holm-adjusted
 within the table; statistics in :mod:`touchbench.reports.stats`) and whether
-the method is on the accuracy / latency Pareto front.
+the method is on the accuracy / latency Pareto front. A single test set scored
+with several seeds shows the mean over the seeds, their spread, and an interval
+and test over captures and seeds (:mod:`touchbench.reports.seeds`).
 
 Timings and machines: accuracy does not depend on the machine and is pooled
 over every run of a method. Timings do, so a table uses one *reference
@@ -51,9 +53,10 @@ from ..core.errors import TouchbenchError
 from ..results.ledger import Looks
 from ..results.store import NOT_RECORDED
 from .labels import method_label
-from .paired import _compare, _latest
+from .paired import _latest
 from .pareto import pareto_cost, pareto_front
 from .results import ResultSet, load_results, scheme_label
+from .seeds import compare_pair, seed_fields
 from .stats import fold_interval, holm, rank_values, wilson_interval
 from .stream_table import live_rows, live_sources
 
@@ -350,6 +353,7 @@ def _method_row(mid: str, g_all: pd.DataFrame, g: pd.DataFrame, f: pd.DataFrame,
         "selection": _mode(g_all["selection"]) if "selection" in g_all else "",
     }
     row.update(_accuracy_fields(g, f))
+    row.update(seed_fields(g, f, preds, mid))  # one test set, several seeds: over captures and seeds
     tm = _timing_machine(g, ref, pool_machines)
     gt = g if pool_machines else g[g["machine"] == tm]
     row["timing_machine"] = tm
@@ -373,7 +377,8 @@ def _accuracy_fields(g: pd.DataFrame, f: pd.DataFrame) -> dict[str, Any]:
         n_seeds = int(len(per_seed))
         if n_seeds > 1:
             sd = float(per_seed.std(ddof=1))
-    return dict(accuracy=mean, accuracy_sd=sd, n_seeds=n_seeds, ci_low=lo, ci_high=hi, ci_method=ci_method,
+    return dict(accuracy=mean, accuracy_sd=sd, n_seeds=n_seeds, seed_min=math.nan, seed_max=math.nan,
+                ci_low=lo, ci_high=hi, ci_method=ci_method,
                 balanced_accuracy=float(f["balanced_accuracy"].mean()) if len(f) else math.nan,
                 macro_f1=float(f["macro_f1"].mean()) if len(f) else math.nan,
                 n_test=int(f["n_test"].sum()) if len(f) else 0)
@@ -407,7 +412,7 @@ def _add_tests_against_best(df: pd.DataFrame, folds: pd.DataFrame, preds: pd.Dat
     """Each method's paired test against the best (the first row), Holm-adjusted over the table:
     the test's name, its unit and number of units, the difference with its interval."""
     best = df["method_id"].iloc[0]
-    tests = [None if mid == best else _compare(folds, preds, mid, best)[0] for mid in df["method_id"]]
+    tests = [None if mid == best else compare_pair(folds, preds, mid, best)[0] for mid in df["method_id"]]
     pvals = [t.pvalue if t is not None else math.nan for t in tests]
     adj = holm(pvals)
     df["test"] = [t.test if t is not None else "best" for t in tests]

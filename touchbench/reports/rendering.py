@@ -20,6 +20,7 @@ from ..core.atomic import atomic_write_bytes
 from .across import across_friedman, across_note, ranks_across
 from .labels import _label_parts, _name_cell, _num, _p, _pct, method_names
 from .leaderboard import Leaderboard
+from .seeds import CI_NOTES, legend_note, seeds_note
 from .stats import TEST_SHORT
 from .stream_table import LIVE_ESSENTIAL, LIVE_LEGEND, LIVE_PRIORITY, live_cells, live_markdown
 
@@ -79,11 +80,10 @@ def _accuracy_cells(r: pd.Series, sep: str = " ") -> tuple[str, str]:
     """A row's accuracy (± sd, and the seeds behind a single fold's spread) and its 95 % interval
     (``sep`` before a note)."""
     acc = _pct(r["accuracy"]) + (f" ± {_pct(r['accuracy_sd'])}" if np.isfinite(r["accuracy_sd"]) else "")
-    if r["ci_method"] == "wilson" and r.get("n_seeds", 1) > 1:
-        acc += f"{sep}({int(r['n_seeds'])} seeds)"
+    acc += seeds_note(r, sep)
     ci = f"{_pct(r['ci_low'])}–{_pct(r['ci_high'])}" if np.isfinite(r["ci_low"]) else "—"
-    if r["ci_method"] == "wilson" and np.isfinite(r["ci_low"]):
-        ci += f"{sep}(Wilson)"
+    if r["ci_method"] in CI_NOTES and np.isfinite(r["ci_low"]):
+        ci += f"{sep}({CI_NOTES[r['ci_method']]})"
     return acc, ci
 
 
@@ -112,6 +112,7 @@ def legend(lb: Leaderboard) -> str:
             f"changes far less than the wall-clock latency shown)."
             + (" † = the method was designed on part of this data (see the note); held out: accuracy on the "
                "test captures outside the design data (mean over folds)." if lb.has_design else "")
+            + legend_note(lb.rows)
             + (" LEAKY rows: the evaluation let test data inform training (see the notes)."
                if bool((lb.rows["leakage"] != "").any()) else "")
             + (f" ADAPTED: every method of this table adapted to each test session using that session's "

@@ -291,7 +291,7 @@ def _labelled_predictions(p: pd.DataFrame, s: pd.DataFrame, d: Path) -> pd.DataF
     keep = [c for c in PREDICTION_COLUMNS if c in p.columns] + [c for c in p.columns if c.startswith(PROBA_PREFIX)]
     pp = p[keep].copy()
     info = s.drop_duplicates("task_id").set_index("task_id")[
-        ["method_id", "fold_key", "seed", "finished_at", "table_key"]]
+        ["method_id", "fold_key", "repetition", "seed", "finished_at", "table_key"]]
     pp = pp.join(info, on="task_id", how="inner")
     pp["source"] = str(d)
     return pp

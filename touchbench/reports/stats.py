@@ -11,10 +11,11 @@ Which test is used when (stated once, used everywhere):
   not independent (their training sets overlap), so the interval is a
   description of fold-to-fold variation, not an exact confidence statement
   (Bengio & Grandvalet 2004); it is still the interval the literature means.
-- **One fold** (the challenge split): no spread; the interval is the Wilson
-  score interval of the accuracy as a binomial proportion over the test
-  captures.
-- **Two methods on one test set** (they share a single fold): McNemar's
+- **One fold** (the challenge split) with one seed: no spread; the interval
+  is the Wilson score interval of the accuracy as a binomial proportion over
+  the test captures. With several seeds, below ("One test set, several
+  seeds").
+- **Two methods on one test set** (they share a single fold) with one seed: McNemar's
   exact test on the paired test captures (Dietterich 1998, Sec. 3.1; the
   exact binomial form, since the discordant counts are often small): ``b``
   captures the first method gets right and the second wrong, ``c`` the
@@ -66,6 +67,11 @@ Which test is used when (stated once, used everywhere):
   one. The decision is the test's; the bootstrap interval describes the
   difference between people and need not agree with it, so the test's own
   interval is kept beside it (``test_ci_low`` / ``test_ci_high``).
+- **One test set, several seeds** (a scheme with a single test set runs every
+  method with several seeds): the interval of a method's accuracy and the
+  test of two methods resample the captures and the seeds, Owen's pigeonhole
+  bootstrap for crossed random effects (:mod:`touchbench.reports.seeds`),
+  instead of Wilson's interval and McNemar's test over the captures alone.
 - **Multiple comparisons.** The p-values of one table (every method against
   the best) are adjusted with Holm's step-down method; a method "differs"
   when its adjusted p is below ``alpha`` (0.05). An undefined p (above) is
@@ -146,9 +152,9 @@ BOOTSTRAP_RESAMPLES = 10000
 BOOTSTRAP_SEED = 0
 #: The tests' names as reports write them.
 TEST_NAMES = {"mcnemar-exact": "McNemar's exact test", "corrected-t": "corrected resampled t-test",
-              "none": "no test"}
+              "pigeonhole": "pigeonhole bootstrap over captures and seeds", "none": "no test"}
 #: The tests' short names, for a table cell.
-TEST_SHORT = {"mcnemar-exact": "McNemar", "corrected-t": "corrected t"}
+TEST_SHORT = {"mcnemar-exact": "McNemar", "corrected-t": "corrected t", "pigeonhole": "pigeonhole"}
 #: Why a corrected t-test has no p-value: every fold differs by the same amount.
 NO_VARIANCE = "no variance: every fold differs by the same amount"
 #: A mean of fold differences at most this far from 0 (with no variance) is no difference.

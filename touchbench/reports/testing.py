@@ -71,11 +71,12 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
                    dataset: str = "fake", dataset_hash: str = "d" * 64, scheme: Any = None, target: str = "gesture",
                    seed: int = 0, run_id: str = "run1", protocol: str = "fake-protocol",
                    platform: dict[str, Any] | None = None, frame_rate: float | None = None,
-                   finished_at: str = "2026-01-01T00:00:00+00:00", seconds: float = 1.0) -> Path:
+                   finished_at: str = "2026-01-01T00:00:00+00:00", seconds: float = 1.0, repetition: int = 0) -> Path:
     """Write a results directory (see the module docstring); returns its path.
 
     ``frame_rate``: the fake sensor's (None: the manifest gives none, so
-    reports cannot turn frames into seconds)."""
+    reports cannot turn frames into seconds); ``repetition``: the tasks' repetition (another one
+    gives every task another classifier seed, as the engine's repetitions do)."""
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -92,13 +93,14 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
             base = task_row({
                 "task_id": task_id, "protocol": protocol,
                 "dataset": dataset, "dataset_hash": dataset_hash, "target": target,
-                "scheme": scheme if isinstance(scheme, str) else scheme["name"], "repetition": 0,
+                "scheme": scheme if isinstance(scheme, str) else scheme["name"], "repetition": repetition,
                 "fold": fold_name, "fold_group": fold,
                 "early_frames": np.nan if m["early_frames"] is None else float(m["early_frames"]),
                 "features": m["features"], "feature_sets": "+".join(n for n, _ in m["feature_params"]),
                 "feature_params": canonical_json(m["feature_params"]), "classifier": m["classifier"],
                 "classifier_name": m["classifier_name"], "classifier_params": canonical_json(m["classifier_params"]),
-                "seed": zlib.crc32(f"{m['features']}|{m['classifier']}|{fold_name}".encode()),
+                "seed": zlib.crc32(f"{m['features']}|{m['classifier']}|{fold_name}".encode()
+                                   + (f"|{repetition}".encode() if repetition else b"")),
                 "n_train": len(caps) - len(ids), "n_test": len(ids), "leakage": "", "selection": "",
                 "adaptation": m["adaptation"], **curve_columns(None),
             })
@@ -120,7 +122,7 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
                         load_avg=m["load_avg"], usable_cpus=(platform or DEFAULT_PLATFORM).get("cpu_count"))
             score_rows.append(base)
             pred_frames.append(pd.DataFrame({
-                "run_id": run_id, "task_id": task_id, "repetition": 0, "fold": fold_name, "fold_group": fold,
+                "run_id": run_id, "task_id": task_id, "repetition": repetition, "fold": fold_name, "fold_group": fold,
                 "early_frames": base["early_frames"], "features": m["features"], "classifier": m["classifier"],
                 "capture_id": ids, "subject": caps.loc[ids, "subject"].astype(str).to_numpy(),
                 "gesture": caps.loc[ids, "gesture"].astype(str).to_numpy(), TRUE: true, PREDICTED: pred.astype(str),

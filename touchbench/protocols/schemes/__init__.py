@@ -39,7 +39,11 @@ A scheme that lets the test data inform training says why in
 ``leakage()`` (k-fold ignoring subjects when the target is not the subject,
 window-level k-fold): the engine writes it into every result row and the
 reports flag it; no such scheme is a default. A scheme that changes the
-data (``window-kfold``, ``cross-dataset``) does it in ``prepare``.
+data (``window-kfold``, ``cross-dataset``) does it in ``prepare``. A scheme
+whose folds each test one fixed set of captures whatever the seed
+(``challenge``, ``transfer``, ``cross-dataset``: ``Splitter.single_test_set``)
+is run with ``DEFAULT_SEEDS`` repetitions (seeds of every method) unless the
+protocol sets ``repetitions``.
 
 ``folds(meta)`` returns a list of :class:`Fold`; ``split(X, y, groups)``
 and ``get_n_splits`` give the same folds to scikit-learn
@@ -48,10 +52,11 @@ and ``get_n_splits`` give the same folds to scikit-learn
 
 from __future__ import annotations
 
-from .base import (SPLITTERS, Crop, CurvePoint, DataContext, Fold, SplitError, Splitter, curve_columns, fold_notes,
-                   make_splitter)
+from .base import (DEFAULT_SEEDS, SPLITTERS, Crop, CurvePoint, DataContext, Fold, SplitError, Splitter, curve_columns,
+                   fold_notes, make_splitter)
 
 __all__ = [
+    "DEFAULT_SEEDS",
     "SPLITTERS",
     "Crop",
     "CurvePoint",

@@ -39,6 +39,12 @@ if TYPE_CHECKING:
     from ...datasets.model import TouchDataset
 
 
+#: the repetitions (seeds of every method) of an evaluation whose scheme has a single test set
+#: (:attr:`Splitter.single_test_set`) when its protocol does not say: one seed's accuracy on one test
+#: set is one draw of the methods' randomness, which the captures' interval does not cover
+DEFAULT_SEEDS = 5
+
+
 class SplitError(TouchbenchError):
     """A scheme that cannot be evaluated on this metadata (refused before any work)."""
 
@@ -245,6 +251,11 @@ class Splitter:
     #: the parameters swept over, each value evaluated as result rows of its own (the ``early``
     #: scheme's lengths): not part of the scheme's label, so runs with different lists combine
     swept_params: ClassVar[tuple[str, ...]] = ()
+    #: each fold tests one fixed set of captures whatever the seed (a challenge split, a transfer to
+    #: another group or dataset): the folds are the same in every repetition, which re-draws only the
+    #: methods' seeds, and such an evaluation runs :data:`DEFAULT_SEEDS` repetitions unless its
+    #: protocol or evaluation sets ``repetitions``
+    single_test_set: ClassVar[bool] = False
 
     @classmethod
     def heading(cls, params: dict[str, Any], dataset: str) -> str | None:

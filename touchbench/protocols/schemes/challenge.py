@@ -59,6 +59,7 @@ class ChallengeSplit(Splitter):
     """
 
     name = "challenge"
+    single_test_set = True
     Params = _ChallengeParams
 
     def keeps_subjects_apart(self) -> bool:

@@ -61,6 +61,7 @@ class CrossDataset(Splitter):
     """
 
     name = "cross-dataset"
+    single_test_set = True
     Params = _CrossParams
 
     @classmethod

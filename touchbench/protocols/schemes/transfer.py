@@ -34,6 +34,7 @@ class Transfer(Splitter):
     """
 
     name = "transfer"
+    single_test_set = True
     Params = _TransferParams
 
     def keeps_subjects_apart(self) -> bool:
