@@ -84,3 +84,14 @@ def test_a_report_naming_what_the_data_lacks_is_refused_at_its_field(engine_env,
         run_protocol(p, out=tmp_path / "results", progress=False)
     assert message in str(e.value) and field in str(e.value)
     assert not list((tmp_path / "results").rglob("*.scores.parquet"))  # refused before any task
+
+
+def test_a_report_added_after_the_run_is_merged_in_without_rerunning(engine_env, tmp_path):
+    p = _protocol(tmp_path, "{recall: [pat]}")
+    p.write_text(p.read_text().replace("    report: {recall: [pat]}\n", ""))
+    (first,) = run_protocol(p, out=tmp_path / "results", progress=False)
+    assert build_leaderboards(load_results([first.out]))[0].breakdown == []
+    p.write_text(p.read_text() + "    report: {by: [cover]}\n")
+    (again,) = run_protocol(p, out=tmp_path / "results", progress=False)
+    assert again.n_ran == 0
+    assert build_leaderboards(load_results([again.out]))[0].breakdown == ["accuracy[cover=bare]", "accuracy[cover=fur]"]

@@ -443,7 +443,8 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
                if t.task_id not in finished or (retry_failed and finished[t.task_id] == "failed")]
     design_captures = _design_captures(plan)  # a design naming an unknown column is refused before any task
     report = _report_block(plan)  # so is a report naming an unknown column or class
-    if not pending and not final and _reports_current(store, plan, notes):
+    same_report = ((store.read_manifest() or {}).get("protocol") or {}).get("report") == report  # added later: merge again
+    if not pending and not final and same_report and _reports_current(store, plan, notes):
         return _noop_result(plan, store, [t.task_id for t in selected], notes, t_start)
 
     test_set, final_notes = _record_look(plan, store, ledger, final, force_final, len(pending), methods)  # before any task
