@@ -43,7 +43,8 @@ benchmark). Two files giving one capture are refused.
     the middle SECONDS of each recording, whatever its length (of its first
     ``recording_seconds`` when that is given). A recording shorter than
     SECONDS is refused, naming the file and its length: choose a shorter
-    window (no recording is left out for being short).
+    window, or ``short_recordings="leave-out"`` (it is then left out,
+    counted in the warning and listed in the provenance's ``left_out``).
 ``challenge``
     the organisers' window with its bug (README, "window bug"), exactly as
     ``haart-challenge``; at 54 Hz over 10-s recordings only (longer ones cut
@@ -58,7 +59,9 @@ a shorter one is used whole (so a folder of recordings of different lengths
 is read, not refused at its first short file). Every cut and every
 recording used whole for being short is counted in a warning at conversion
 (with the median length) and in the provenance (``recordings``; ``cut``
-lists the files).
+lists the files; ``lengths`` counts the recordings of each length as read).
+``checksums``: a SHA256SUMS file naming the recordings relative to the
+folder (without ``.gz``); a recording whose content differs is refused.
 
 Every frame is cropped to
 the inner 8 x 8 (grid rows and columns 2..9, the organisers' crop) and
