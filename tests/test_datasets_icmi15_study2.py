@@ -52,6 +52,7 @@ def test_the_participants_the_folder_holds_with_haarts_window(study, tmp_path, c
     assert ds.captures[1][-1, 0, 0] == _inner(4850)  # frame 486
     assert ds.provenance["left_out"] == ["150505-3coverdynamicrub.csv.gz: 6 s, shorter than the 8-s window"]
     assert "1 left out as shorter than the 8-s window" in caplog.text
+    assert "2 of 4 recordings cut to their first 10 s" in caplog.text and "--recording" not in caplog.text  # no CLI hint
     assert ds.provenance["participants"] == "2: 3 (3 recordings), 11 (1 recordings)"
     assert ds.provenance["conditions"] == {"cover / dynamic": 1, "cover / static": 1, "none / dynamic": 1,
                                            "none / static": 1}

@@ -344,7 +344,7 @@ def read_haart_raw(
                                    f"{len(left_out)} left out as shorter than the {win.seconds:g}-s window") if x)
     if report:
         more = (" (--recording-seconds SECONDS, --recording-window middle:SECONDS or whole use more of each recording)"
-                if trims.cut else "")
+                if trims.cut and recording_seconds is None else "")  # a cut asked for needs no hint
         log.warning("%s: %s%s", folder, report, more)
     ds = TouchDataset(name or folder.name, captures, _meta(folder, kept), replace(HAART_SENSOR, frame_rate=rate))
     ds.provenance = {
