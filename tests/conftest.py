@@ -1,6 +1,6 @@
 """Shared fixtures. Real-data tests use ``real_haart_dir`` and
-``real_socialtouch_dir``: they fail (not skip) when CI=true and
-../shared/data/haart (or ../shared/data/socialtouch) is missing. Plugin tests use
+``real_socialtouch_dir`` (``real_icmi15_study2``): they fail (not skip) when CI=true and
+../shared/data/haart (or ../shared/data/socialtouch, icmi15-study2) is missing. Plugin tests use
 ``example_plugin``: it fails (not skips) when CI=true and the example plugin
 (examples/touchbench-plugin-example, installed by ``make setup``) is not
 installed."""
@@ -25,6 +25,13 @@ def _haart_dir():
     d = data_dir() / "haart"
     if not (d / "raw").is_dir():
         _missing(f"real HAART data not found at {d} (set TOUCHBENCH_DATA_DIR)")
+    return d
+
+
+def _icmi15_study2_dir():
+    d = data_dir() / "icmi15-study2"
+    if not (d / "raw").is_dir():
+        _missing(f"real icmi15-study2 data not found at {d} (set TOUCHBENCH_DATA_DIR)")
     return d
 
 
@@ -80,6 +87,15 @@ def real_haart_challenge(real_haart_dir, tb_cache):
     from touchbench.catalog import load_dataset
 
     return load_dataset("haart-challenge", cache_dir=tb_cache)
+
+
+@pytest.fixture(scope="session")
+def real_icmi15_study2(tb_cache):
+    """The HAART organisers' second study, HAART's window (fails under CI=true when the data is missing)."""
+    from touchbench.catalog import load_dataset
+
+    _icmi15_study2_dir()
+    return load_dataset("icmi15-study2", cache_dir=tb_cache)
 
 
 @pytest.fixture(scope="session")

@@ -7,6 +7,7 @@ Python (gzip + str.split), not by the reader under test.
 from __future__ import annotations
 
 import gzip
+import hashlib
 import multiprocessing as mp
 from pathlib import Path
 
@@ -281,3 +282,16 @@ def test_missing_data_names_where_touchbench_looked_never_the_install_location(t
     monkeypatch.setenv("TOUCHBENCH_DATA_DIR", str(tmp_path / "nowhere"))
     with pytest.raises(DataError, match=r"looked for the haart data in .*nowhere/haart \(TOUCHBENCH_DATA_DIR="):
         load_dataset("haart", cache_dir=tmp_path / "c")
+
+
+def test_a_recording_that_does_not_match_sha256sums_is_refused(tmp_path):
+    raw = tmp_path / "raw" / "140729-1"
+    raw.mkdir(parents=True)
+    lines = random_recording(3)
+    write_recording(raw / "140729-1foamfurpat", lines, gz=True)
+    good = hashlib.sha256(("\n".join(lines) + "\n").encode()).hexdigest()
+    (tmp_path / "SHA256SUMS").write_text(f"{good}  ./140729-1/140729-1foamfurpat\n")
+    assert len(build_haart(tmp_path / "raw")) == 1
+    (tmp_path / "SHA256SUMS").write_text(f"{'0' * 64}  ./140729-1/140729-1foamfurpat\n")
+    with pytest.raises(DataError, match="140729-1foamfurpat.gz: content does not match SHA256SUMS"):
+        build_haart(tmp_path / "raw")

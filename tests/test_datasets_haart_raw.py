@@ -234,3 +234,21 @@ def test_a_frame_rate_of_zero_is_refused_not_ignored(tmp_path):
         with pytest.raises(TouchbenchError, match="--frame-rate must be"):
             FORMATS.get("haart-raw").read(tmp_path / "z", frame_rate=rate)
     assert not (tmp_path / "z.parquet").exists()
+
+
+def test_short_recordings_leave_out_lists_what_a_window_refuses(tmp_path):
+    folder = _lengths_folder(tmp_path)  # 10, 20 and 40 s
+    r = convert(folder, tmp_path / "m.parquet", "--format", "haart-raw", "--recording-window", "middle:15")
+    assert r.exit_code == 3 and "choose a shorter window, or --short-recordings leave-out" in r.output
+    r = convert(folder, tmp_path / "m.parquet", "--format", "haart-raw", "--recording-window", "middle:15",
+                "--short-recordings", "leave-out")
+    assert r.exit_code == 0, r.output
+    assert "1 left out as shorter than the 15-s window" in r.output
+    ds = TouchDataset.from_parquet(tmp_path / "m.parquet")
+    assert [c.shape for c in ds.captures] == [(810, 8, 8)] * 2  # 15 s at 54 Hz of the 20- and 40-s ones
+    assert ds.provenance["left_out"] == ["8-1nonenonepat.csv: 10 s, shorter than the 15-s window"]
+    assert ds.provenance["lengths"] == {"10 s (5400 lines)": "1: 8-1nonenonepat.csv",
+                                        "20 s (10800 lines)": "1: 8-1nonenonerub.csv",
+                                        "40 s (21600 lines)": "1: 8-1nonenonetickle.csv"}
+    r = convert(folder, tmp_path / "m.parquet", "--format", "haart-raw", "--short-recordings", "skip")
+    assert r.exit_code == 2 and "--short-recordings must be refuse or leave-out, got 'skip'" in r.output

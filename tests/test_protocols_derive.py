@@ -23,7 +23,7 @@ def test_a_protocol_read_back_from_its_data_is_the_same_protocol(path):
     original = load_protocol(path, deep=False)
     again = derive(original, protocol_data(original))
     assert again.content() == original.content()
-    for block in ("expected", "design", "audit", "description", "evaluations"):
+    for block in ("expected", "design", "report", "audit", "description", "evaluations"):
         assert getattr(again, block) == getattr(original, block), block
     assert again.path == original.path  # relative dataset paths resolve from the same folder
 

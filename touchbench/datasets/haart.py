@@ -266,19 +266,25 @@ def find_placeholders(raw: Path, recs: list[Recording], digests: dict[tuple, str
     return sorted(out, key=lambda d: d["file"])
 
 
-def _verify_checksums(raw: Path, recs: list[Recording], digests: dict[tuple, str]) -> None:
-    sums = raw.parent / "SHA256SUMS"
+def verify_checksums(sums: Path, files: list[tuple[str, Path, str]]) -> None:
+    """Check each ``(name, path, sha256)`` against the SHA-256 file ``sums`` (``sha256  ./name`` lines,
+    names relative to the folder of recordings, without ``.gz``): a mismatch is refused naming the
+    file; a name it does not list, or no ``sums`` file, is not checked."""
     if not sums.is_file():
         return
     expected = {}
     for line in sums.read_text().splitlines():
         parts = line.split()
         if len(parts) == 2:
-            expected[parts[1].lstrip("./")] = parts[0]
-    for r in recs:
-        rel = f"{r.path.parent.name}/{r.path.name}".removesuffix(".gz")
-        if rel in expected and expected[rel] != digests[r.key]:
-            raise DataError("content does not match SHA256SUMS (corrupted copy?)", r.path)
+            expected[parts[1].removeprefix("./")] = parts[0]
+    for name, path, digest in files:
+        if name in expected and expected[name] != digest:
+            raise DataError("content does not match SHA256SUMS (corrupted copy?)", path)
+
+
+def _verify_checksums(raw: Path, recs: list[Recording], digests: dict[tuple, str]) -> None:
+    verify_checksums(raw.parent / "SHA256SUMS",
+                     [(f"{r.path.parent.name}/{r.path.name}".removesuffix(".gz"), r.path, digests[r.key]) for r in recs])
 
 
 def _source_files(raw: Path) -> list[Path]:

@@ -43,7 +43,8 @@ benchmark). Two files giving one capture are refused.
     the middle SECONDS of each recording, whatever its length (of its first
     ``recording_seconds`` when that is given). A recording shorter than
     SECONDS is refused, naming the file and its length: choose a shorter
-    window (no recording is left out for being short).
+    window, or ``short_recordings="leave-out"`` (it is then left out,
+    counted in the warning and listed in the provenance's ``left_out``).
 ``challenge``
     the organisers' window with its bug (README, "window bug"), exactly as
     ``haart-challenge``; at 54 Hz over 10-s recordings only (longer ones cut
@@ -58,7 +59,9 @@ a shorter one is used whole (so a folder of recordings of different lengths
 is read, not refused at its first short file). Every cut and every
 recording used whole for being short is counted in a warning at conversion
 (with the median length) and in the provenance (``recordings``; ``cut``
-lists the files).
+lists the files; ``lengths`` counts the recordings of each length as read).
+``checksums``: a SHA256SUMS file naming the recordings relative to the
+folder (without ``.gz``); a recording whose content differs is refused.
 
 Every frame is cropped to
 the inner 8 x 8 (grid rows and columns 2..9, the organisers' crop) and
@@ -73,7 +76,7 @@ import hashlib
 import logging
 import re
 import statistics
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import pandas as pd
@@ -82,7 +85,7 @@ from ..core.errors import DataError, TouchbenchError
 from .formats import FormatOption, OptionValueError, check_frame_rate, parse_frame_rate, register_format
 from .haart import (
     GESTURES, HAART_SENSOR, RAW_SIDE, STUDY, challenge_window, find_placeholders, frame_window, parse_recording,
-    read_bytes,
+    read_bytes, verify_checksums,
 )
 from .model import TouchDataset
 
@@ -93,6 +96,8 @@ __all__ = ["DEFAULT_PATTERN", "read_haart_raw"]
 DEFAULT_PATTERN = (r"(?P<study>\d+)-(?P<participant>\d+)(?P<substrate>curve|foam|none)(?P<cover>fur|long|none|short)"
                    r"(?P<gesture>" + "|".join(GESTURES) + r")")
 RECORDING_SECONDS = 10.0  # HAART's protocol: 10 s per gesture
+#: a length of recording that at most this many have is listed with their files (provenance ``lengths``)
+NAMED_LENGTHS = 10
 NOT_RECORDINGS = re.compile(r"(?i)^(note\.txt|readme.*|sha256sums|\..*)$")
 
 
@@ -227,6 +232,17 @@ class _Trims:
     seconds: float | None
     cut: list[tuple[str, float, int]]
     short: list[tuple[str, float, int]]
+    #: (file, lines of values) of every recording read, before any cut
+    lines: list[tuple[str, int]] = field(default_factory=list)
+
+    def lengths(self, rate: float) -> dict[str, str]:
+        """How many recordings have each length, shortest first, naming the files of a length that
+        at most :data:`NAMED_LENGTHS` have (``"10 s (5400 lines)": "2: a.csv, b.csv"``)."""
+        by: dict[int, list[str]] = {}
+        for f, n in self.lines:
+            by.setdefault(n, []).append(f)
+        return {f"{n / RAW_SIDE / rate:.4g} s ({n} lines)": f"{len(fs)}" + (f": {', '.join(fs)}" if len(fs) <= NAMED_LENGTHS else "")
+                for n, fs in sorted(by.items())}
 
     def report(self, n: int, placeholders: list[dict]) -> str:
         """The counts in words (``""`` when every recording was used as it is)."""
@@ -255,6 +271,7 @@ def _read_arrays(folder: Path, recs: list[RawRecording], win: Window, rate: floa
         digests[r.key] = hashlib.sha256(data).hexdigest()
         arr = parse_recording(data, r.path, min_lines=lines_used if strict else RAW_SIDE)
         rel, length_s = str(r.path.relative_to(folder)), len(arr) / RAW_SIDE / rate
+        trims.lines.append((rel, len(arr)))
         if lines_used is not None and len(arr) > lines_used:
             trims.cut.append((rel, length_s, len(arr)))
             arr = arr[:lines_used]
@@ -267,18 +284,21 @@ def _read_arrays(folder: Path, recs: list[RawRecording], win: Window, rate: floa
     return arrays, digests, trims
 
 
-def _capture(arr, win: Window, rate: float, path: Path):
-    """The window of one parsed recording."""
+def _capture(arr, win: Window, rate: float, path: Path, leave_out: bool = False):
+    """The window of one parsed recording; None when it is shorter than the window and
+    ``leave_out`` (else refused)."""
     total = len(arr) // RAW_SIDE
     if win.kind == "whole":
         return frame_window(arr, 0, total)
     if win.kind == "challenge":
         return challenge_window(arr)
     first, n = win.frames(total, rate)
+    if n > total and leave_out:
+        return None
     if n > total:
         raise DataError(f"a {total / rate:g}-s recording ({total} frames) is shorter than the {win.seconds:g}-s "
                         f"window (--recording-window middle:{win.seconds:g} asks for {n} frames): choose a shorter "
-                        "window", path)
+                        "window, or --short-recordings leave-out", path)
     return frame_window(arr, first, n)
 
 
@@ -290,14 +310,20 @@ def read_haart_raw(
     recording_seconds: float | None = None,
     frame_rate: float | None = None,
     name: str | None = None,
+    short_recordings: str = "refuse",
+    checksums: str | Path | None = None,
 ) -> TouchDataset:
     """Read a folder of raw-format recordings (module docstring). The sensor is HAART's (at
-    ``frame_rate``): a model of another sensor refuses the data, naming both."""
+    ``frame_rate``): a model of another sensor refuses the data, naming both. ``short_recordings``:
+    ``leave-out`` leaves out a recording shorter than a ``middle:SECONDS`` window (counted in the
+    warning, listed in the provenance's ``left_out``) instead of refusing it. ``checksums``: a
+    SHA256SUMS file naming the recordings relative to ``path`` (:func:`verify_checksums`)."""
     folder = Path(path)
     rx = compile_pattern(pattern or DEFAULT_PATTERN)
     win = recording_window if isinstance(recording_window, Window) else Window.parse(recording_window)
     rate = HAART_SENSOR.frame_rate if frame_rate is None else check_frame_rate(frame_rate)
     rec_s = None if recording_seconds is None else parse_seconds(recording_seconds)
+    leave_out = parse_short(short_recordings) == "leave-out"
     if rec_s is None and win.haart_protocol:
         rec_s = RECORDING_SECONDS
     if win.kind == "challenge" and (rate != HAART_SENSOR.frame_rate or rec_s != RECORDING_SECONDS):
@@ -305,33 +331,56 @@ def read_haart_raw(
     recs = find_raw_recordings(folder, rx)
     strict = win.kind == "challenge" or (recording_seconds is None and win.haart_protocol)
     arrays, digests, trims = _read_arrays(folder, recs, win, rate, rec_s, strict)
+    if checksums is not None:
+        verify_checksums(Path(checksums), [(str(r.path.relative_to(folder)).removesuffix(".gz"), r.path,
+                                            digests[r.key]) for r in recs])
     placeholders = find_placeholders(folder, recs, digests)
     dropped = {p["capture_id"] for p in placeholders}
-    kept = [r for r in recs if r.capture_id not in dropped]
-    captures = [_capture(arrays[r.key], win, rate, r.path) for r in kept]
-    report = trims.report(len(recs), placeholders)
+    windows = [(r, _capture(arrays[r.key], win, rate, r.path, leave_out)) for r in recs if r.capture_id not in dropped]
+    kept, captures = [r for r, c in windows if c is not None], [c for _, c in windows if c is not None]
+    left_out = [f"{r.path.relative_to(folder)}: {len(arrays[r.key]) // RAW_SIDE / rate:.4g} s, shorter than the "
+                f"{win.seconds:g}-s window" for r, c in windows if c is None]
+    report = "; ".join(x for x in (trims.report(len(recs), placeholders), left_out and
+                                   f"{len(left_out)} left out as shorter than the {win.seconds:g}-s window") if x)
     if report:
         more = (" (--recording-seconds SECONDS, --recording-window middle:SECONDS or whole use more of each recording)"
-                if trims.cut else "")
+                if trims.cut and recording_seconds is None else "")  # a cut asked for needs no hint
         log.warning("%s: %s%s", folder, report, more)
+    ds = TouchDataset(name or folder.name, captures, _meta(folder, kept), replace(HAART_SENSOR, frame_rate=rate))
+    ds.provenance = {
+        "pattern": rx.pattern,
+        "window": win.describe(rate, rec_s, {len(arrays[r.key]) // RAW_SIDE for r in kept}),
+        "crop": "inner 8 x 8 of the 10 x 10 grid (rows and columns 2..9), pressure = 1023 - raw",
+        "recordings": f"{len(recs)} read" + (f": {report}" if report else ", each used as it is"),
+        "lengths": trims.lengths(rate),
+        "cut": [f"{f}: {n} lines, the first {round(rec_s * rate) * RAW_SIDE} used" for f, _, n in trims.cut] or "none",
+        "left_out": left_out or "none",
+        "placeholders": placeholders,
+    }
+    return ds
+
+
+def _meta(folder: Path, kept: list[RawRecording]) -> pd.DataFrame:
+    """The metadata of the recordings ``kept``: every group of the pattern a column."""
     columns = [k for k, _ in kept[0].groups] if kept else []
-    meta = pd.DataFrame({
+    return pd.DataFrame({
         "capture_id": [r.capture_id for r in kept],
         "subject": [r.subject for r in kept],
         **{k: [r.fields.get(k) for r in kept] for k in columns if k != "participant"},
         "participant": [r.participant for r in kept],
         "source": [str(r.path.relative_to(folder)).removesuffix(".gz") for r in kept],
     })
-    ds = TouchDataset(name or folder.name, captures, meta, replace(HAART_SENSOR, frame_rate=rate))
-    ds.provenance = {
-        "pattern": rx.pattern,
-        "window": win.describe(rate, rec_s, {len(arrays[r.key]) // RAW_SIDE for r in kept}),
-        "crop": "inner 8 x 8 of the 10 x 10 grid (rows and columns 2..9), pressure = 1023 - raw",
-        "recordings": f"{len(recs)} read" + (f": {report}" if report else ", each used as it is"),
-        "cut": [f"{f}: {n} lines, the first {round(rec_s * rate) * RAW_SIDE} used" for f, _, n in trims.cut] or "none",
-        "placeholders": placeholders,
-    }
-    return ds
+
+
+SHORT_CHOICES = ("refuse", "leave-out")
+
+
+def parse_short(text: str) -> str:
+    """What to do with a recording shorter than the window (``--short-recordings``)."""
+    v = str(text).strip().lower()
+    if v not in SHORT_CHOICES:
+        raise OptionValueError(f"--short-recordings must be {' or '.join(SHORT_CHOICES)}, got {text!r}")
+    return v
 
 
 def parse_seconds(text: str | float) -> float:
@@ -361,5 +410,7 @@ register_format(
                      "default: 10 s, HAART's, for middle and challenge, every frame for middle:SECONDS and whole",
                      parse_seconds, metavar="SECONDS"),
         FormatOption("frame_rate", "Frames per second (default 54, the HAART sensor's)", parse_frame_rate),
+        FormatOption("short_recordings", "refuse (default) or leave-out: a recording shorter than a "
+                     "middle:SECONDS window is refused, or left out and listed", parse_short, metavar="WHAT"),
     ),
 )

@@ -252,6 +252,28 @@ def _design_captures(plan: Plan) -> list[str] | None:
     return meta["capture_id"].astype(str)[keep].tolist()
 
 
+def _report_block(plan: Plan) -> dict[str, Any] | None:
+    """The protocol's ``report`` with, per ``by`` column, the ids of the captures of each of its values
+    (what :mod:`touchbench.reports.breakdown` reads from the manifest); a column the dataset lacks, or
+    a class its target never takes, is refused at its field before any task."""
+    report, meta = plan.protocol.report, plan.dataset.meta
+    if report is None:
+        return None
+    classes = set(meta[plan.protocol.target].astype(str)) if plan.protocol.target in meta.columns else set()
+    for i, c in enumerate(report.recall):
+        if c not in classes:
+            raise plan.protocol.error_at(("report", "recall", i), f"{c!r} is not a value of the target "
+                                         f"{plan.protocol.target!r} ({', '.join(sorted(classes))})")
+    rows: dict[str, dict[str, list[str]]] = {}
+    for i, col in enumerate(report.by):
+        if col not in meta.columns:
+            raise plan.protocol.error_at(("report", "by", i), f"the dataset has no metadata column {col!r} "
+                                         f"(columns: {', '.join(map(str, meta.columns))})")
+        known = meta[meta[col].notna()]
+        rows[col] = {str(v): g["capture_id"].astype(str).tolist() for v, g in known.groupby(known[col].astype(str))}
+    return {"recall": list(report.recall), "by": list(report.by), "rows": rows}
+
+
 def _record_look(plan: Plan, store: ResultStore, ledger: Path, final: bool, force_final: bool, n_pending: int,
                  only: set[str] | None) -> tuple[str, list[str]]:
     """The plan's test-set hash; the look recorded in the ledger (when the run scores the test set:
@@ -376,7 +398,7 @@ class _Session:
 
 
 def _merge_and_record(plan: Plan, store: ResultStore, session: _Session, ledger: Path, test_set: str,
-                      final: bool, design_captures: list[str] | None) -> RunResult:
+                      final: bool, design_captures: list[str] | None, report: dict[str, Any] | None = None) -> RunResult:
     """Merge every finished task of the plan into the tables and write the manifest."""
     protocol, out = plan.protocol, store.root
     stamp = {"run_id": plan.run_id, "protocol": protocol.name, "protocol_hash": protocol.text_hash}
@@ -395,6 +417,7 @@ def _merge_and_record(plan: Plan, store: ResultStore, session: _Session, ledger:
         notes=session.notes, expected=expected)
     manifest["ledger"] = {"path": os.path.relpath(ledger, out), "test_set": test_set, "final": final}
     manifest["protocol"]["design_captures"] = design_captures
+    manifest["protocol"]["report"] = report
     store.write_manifest(manifest)
     return RunResult(out=out, run_id=plan.run_id, n_tasks=len(session.selected), n_ran=session.n_ran,
                      n_skipped=len(session.selected) - session.n_pending,
@@ -419,7 +442,9 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
     pending = [t for t in selected
                if t.task_id not in finished or (retry_failed and finished[t.task_id] == "failed")]
     design_captures = _design_captures(plan)  # a design naming an unknown column is refused before any task
-    if not pending and not final and _reports_current(store, plan, notes):
+    report = _report_block(plan)  # so is a report naming an unknown column or class
+    same_report = ((store.read_manifest() or {}).get("protocol") or {}).get("report") == report  # added later: merge again
+    if not pending and not final and same_report and _reports_current(store, plan, notes):
         return _noop_result(plan, store, [t.task_id for t in selected], notes, t_start)
 
     test_set, final_notes = _record_look(plan, store, ledger, final, force_final, len(pending), methods)  # before any task
@@ -430,7 +455,7 @@ def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry
             session.notes += _fill_cache(plan, pending, jobs, prog, worker_setup)
             session.n_ran, session.stopped = _execute(plan, store, pending, jobs, prog, worker_setup, fail_fast,
                                                       session.status)
-    result = _merge_and_record(plan, store, session, ledger, test_set, final, design_captures)
+    result = _merge_and_record(plan, store, session, ledger, test_set, final, design_captures, report)
     if not session.stopped:  # the run ended: the next one is another look
         end_look(store.root)
     return result

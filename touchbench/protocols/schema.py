@@ -109,7 +109,8 @@ from .expected import Expected, ExpectedBest
 from .seeding import derive_seed
 from .schemes import DEFAULT_SEEDS, Splitter, make_splitter
 from .schemes.base import scheme_class
-from .specs import EVALUATION_FIELDS, AuditSpec, DatasetSpec, DesignSpec, EvaluationSpec, SchemeSpec, _folder_name
+from .specs import (EVALUATION_FIELDS, AuditSpec, DatasetSpec, DesignSpec, EvaluationSpec, ReportSpec, SchemeSpec,
+                    _folder_name)
 
 __all__ = ["Protocol", "resolve_dataset_ref"]
 
@@ -134,6 +135,8 @@ class Protocol(_Model):
     #: the evaluation this protocol is (set on the protocols :meth:`evaluation_protocols` gives)
     evaluation: str = ""
     design: DesignSpec | None = None
+    #: the leaderboard's extra columns: recall of named classes, accuracy per metadata value
+    report: ReportSpec | None = None
     #: the leakage audit of this protocol's methods (see :mod:`touchbench.engine.audit`)
     audit: AuditSpec | None = None
     features: list[list[FeatureRef]] | None = Field(default=None, min_length=1)
@@ -250,7 +253,7 @@ class Protocol(_Model):
 
     def content(self) -> dict[str, Any]:
         """The validated protocol as plain data (what determines results)."""
-        skip = {"description", "expected", "design", "audit"}
+        skip = {"description", "expected", "design", "report", "audit"}
         if not self.evaluations:
             skip.add("evaluations")
         if not self.evaluation:

@@ -1,5 +1,6 @@
 """What a protocol's methods are evaluated on and how: the dataset (:class:`DatasetSpec`), the
-scheme (:class:`SchemeSpec`), the design data (:class:`DesignSpec`), the evaluations
+scheme (:class:`SchemeSpec`), the design data (:class:`DesignSpec`), the leaderboard's extra
+columns (:class:`ReportSpec`), the evaluations
 (:class:`EvaluationSpec`) and the leakage audit (:class:`AuditSpec`)."""
 
 from __future__ import annotations
@@ -110,6 +111,30 @@ class DesignSpec(_Model):
         return {**({"subject": list(self.subjects)} if self.subjects else {}), **self.rows}
 
 
+class ReportSpec(_Model):
+    """Columns the leaderboard adds to the evaluation's table (:mod:`touchbench.reports.breakdown`):
+    the recall of each class of ``recall`` (a value of the target), and the accuracy on the test
+    captures of each value of each metadata column of ``by`` (``cover``...). Results do not
+    depend on it."""
+
+    recall: list[str] = Field(default_factory=list)
+    by: list[str] = Field(default_factory=list)
+
+    @field_validator("recall", "by", mode="before")
+    @classmethod
+    def _strs(cls, v: Any) -> Any:
+        return _coerce_str_list(v)
+
+    @model_validator(mode="after")
+    def _something(self) -> "ReportSpec":
+        if not self.recall and not self.by:
+            raise ValueError("report needs recall (classes) or by (metadata columns): report: {recall: [notouch]}")
+        for field_name in ("recall", "by"):
+            if len(set(getattr(self, field_name))) != len(getattr(self, field_name)):
+                raise _ErrorAt((field_name,), "a value is named twice")
+        return self
+
+
 class EvaluationSpec(_Model):
     """One (dataset, scheme) pair a protocol's methods are evaluated under; results in
     ``<results>/<protocol>/<name>/``. Fields not given are the protocol's."""
@@ -120,6 +145,7 @@ class EvaluationSpec(_Model):
     target: str | None = None
     repetitions: int | None = Field(default=None, ge=1)
     design: DesignSpec | None = None
+    report: ReportSpec | None = None
 
     @model_validator(mode="before")
     @classmethod
@@ -146,4 +172,4 @@ class AuditSpec(_Model):
 
 
 #: fields an evaluation may set for itself (the protocol's are the default)
-EVALUATION_FIELDS = ("dataset", "scheme", "target", "repetitions", "design")
+EVALUATION_FIELDS = ("dataset", "scheme", "target", "repetitions", "design", "report")

@@ -52,6 +52,7 @@ import pandas as pd
 from ..core.errors import TouchbenchError
 from ..results.ledger import Looks
 from ..results.store import NOT_RECORDED
+from .breakdown import Breakdown
 from .labels import method_label
 from .paired import _latest
 from .pareto import pareto_cost, pareto_front
@@ -99,6 +100,8 @@ class Leaderboard:
     adaptation: str = ""
     #: a stream evaluation's table: one row per method and decision rule (:mod:`.stream_table`)
     live: pd.DataFrame | None = None
+    #: the row columns the evaluation's ``report:`` block adds (:mod:`.breakdown`: ``recall[notouch]``...)
+    breakdown: list[str] = field(default_factory=list)
 
     @property
     def title(self) -> str:
@@ -201,6 +204,10 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
                         ref, pool_machines, design)
             for mid, g_all in s_all.groupby("method_id", sort=False)]
     notes += design.row_notes(rows)
+    report = Breakdown.of(sources)
+    report = report.tested(preds) if report is not None else None
+    for r in rows if report is not None else []:
+        r.update(report.fields(preds, r["method_id"]))
     df = _ranked(_tuned_on_test(pd.DataFrame(rows)))
     _add_tests_against_best(df, folds, preds, alpha)
     notes += _mark_pareto_fronts(df)
@@ -211,7 +218,7 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
         scheme=str(first["scheme_label"]), rows=df, folds=folds, machines=machines, reference_machine=ref,
         pooled_machines=pool_machines, alpha=alpha, frame_rate=float(fr.iloc[0]) if len(fr) else math.nan, notes=notes,
         looks=looks_here, has_design=design.captures is not None, heading=table_heading(sources, str(first["scheme_label"])),
-        adaptation=_mode(s_all["adaptation"]), live=live_rows(ok),
+        adaptation=_mode(s_all["adaptation"]), live=live_rows(ok), breakdown=report.columns if report is not None else [],
     )
 
 

@@ -18,6 +18,7 @@ from rich.table import Table
 
 from ..core.atomic import atomic_write_bytes
 from .across import across_friedman, across_note, ranks_across
+from .breakdown import breakdown_cells, breakdown_headers, breakdown_legend
 from .labels import _label_parts, _name_cell, _num, _p, _pct, method_names
 from .leaderboard import Leaderboard
 from .seeds import CI_NOTES, legend_note, seeds_note
@@ -33,6 +34,7 @@ def display_rows(lb: Leaderboard, sep: str = " ") -> tuple[list[str], list[list[
     the line there)."""
     header = ["#", "method", "features", "estimator", "folds", "accuracy % (±sd)", "95 % interval",
               "macro F1 %", "latency ms", "fit s", "features ms", "vs best: Δ pp, p (Holm)", "Pareto"]
+    header += breakdown_headers(lb.breakdown)
     show_machine = len(set(lb.rows["timing_machine"])) > 1
     if show_machine:
         header.insert(11, "timing machine")
@@ -53,7 +55,7 @@ def display_rows(lb: Leaderboard, sep: str = " ") -> tuple[list[str], list[list[
         row = [str(r["rank"]), _name_cell(r, parts[r["method_id"]]), feats, str(r["classifier_name"]),
                f"{r['n_folds']}" + (f" (+{r['n_failed']} failed)" if r["n_failed"] else ""), acc, ci,
                _pct(r["macro_f1"]), _num(r["latency_ms"]), _num(r["fit_seconds"]), _num(r["feature_ms"]), vs,
-               "★" if r["pareto"] else ""]
+               "★" if r["pareto"] else ""] + breakdown_cells(r, lb.breakdown)
         if show_machine:
             row.insert(11, str(r["timing_machine"]))
         if lb.has_design:
@@ -113,6 +115,7 @@ def legend(lb: Leaderboard) -> str:
             + (" † = the method was designed on part of this data (see the note); held out: accuracy on the "
                "test captures outside the design data (mean over folds)." if lb.has_design else "")
             + legend_note(lb.rows)
+            + breakdown_legend(lb.breakdown)
             + (" LEAKY rows: the evaluation let test data inform training (see the notes)."
                if bool((lb.rows["leakage"] != "").any()) else "")
             + (f" ADAPTED: every method of this table adapted to each test session using that session's "

@@ -313,6 +313,7 @@ def _source_record(d: Path, m: dict[str, Any], s: pd.DataFrame, mid: str, mdesc:
         "seconds": sum(float(x.get("seconds") or 0) for x in (m.get("sessions") or [])),
         "design": (m.get("protocol") or {}).get("design"),
         "design_captures": (m.get("protocol") or {}).get("design_captures"),
+        "report": (m.get("protocol") or {}).get("report"),
         "looks": _looks(m, d), "test_set": (m.get("ledger") or {}).get("test_set"),
         "left_out": [n for n in (m.get("notes") or []) if str(n).startswith(LEFT_OUT)],
         "changed": changed,
