@@ -229,6 +229,21 @@ def named(d: Any, key: str) -> Any:
     return d
 
 
+#: the schemes that place their folds on a data curve (``Fold.curve``): a fold sits on one curve, so
+#: neither wraps the other
+CURVE_SCHEMES = ("learning-curve", "calibration")
+
+
+def check_base(base: dict[str, Any], scheme: str, refused: tuple[str, ...] = ()) -> None:
+    """Refuse a wrapping scheme's ``base`` entry that names no scheme, or names ``scheme`` itself or
+    one of ``refused`` (ValueError: the parameter model reports it at the field)."""
+    name = base.get("name")
+    if not isinstance(name, str):
+        raise ValueError("base must name a scheme: base: {name: loso}")
+    if name == scheme or name in refused:
+        raise ValueError(f"the base of {scheme!r} cannot be {name!r}")
+
+
 # ----------------------------------------------------------------- base
 class Splitter:
     """Base class: subclasses set ``Params`` and implement ``_split``.

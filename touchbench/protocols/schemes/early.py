@@ -10,7 +10,7 @@ from typing import Any
 import pandas as pd
 from pydantic import Field, model_validator
 
-from .base import SPLITTERS, Crop, Fold, SchemeParams, WrappingSplitter, named
+from .base import SPLITTERS, Crop, Fold, SchemeParams, WrappingSplitter, check_base, named
 
 
 class _EarlyParams(SchemeParams):
@@ -32,11 +32,7 @@ class _EarlyParams(SchemeParams):
             raise ValueError("frames must be at least 1")
         if self.seconds is not None and min(self.seconds) <= 0:
             raise ValueError("seconds must be positive")
-        name = self.base.get("name")
-        if not isinstance(name, str):
-            raise ValueError("base must name a scheme: base: {name: loso}")
-        if name == "early":
-            raise ValueError("the base of 'early' cannot be 'early'")
+        check_base(self.base, "early")
         return self
 
 
