@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Annotated, Any, Callable, ClassVar, Iterator
 
 import numpy as np
 import pandas as pd
-from pydantic import BaseModel, BeforeValidator, ConfigDict
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
 from ...core.errors import TouchbenchError, UnknownNameError
 from ...core.registry import Registry
@@ -227,6 +227,24 @@ def named(d: Any, key: str) -> Any:
     if isinstance(d, dict) and isinstance(d.get(key), str):
         return {**d, key: {"name": d[key]}}
     return d
+
+
+class WrappingParams(SchemeParams):
+    """The parameters of a scheme that wraps another: ``base``, the wrapped scheme's entry
+    (``base: loso`` is short for ``base: {name: loso}``)."""
+
+    base: dict[str, Any]
+
+    @model_validator(mode="before")
+    @classmethod
+    def _base(cls, d: Any) -> Any:
+        return named(d, "base")
+
+
+class CurveParams(WrappingParams):
+    """A data-curve scheme's parameters: its base and the number of random ``draws`` per point."""
+
+    draws: int = Field(default=5, ge=1, le=1000)
 
 
 #: the schemes that place their folds on a data curve (``Fold.curve``): a fold sits on one curve, so

@@ -18,26 +18,18 @@ measures a model calibrated to its user, not accuracy on new people.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
 
 import numpy as np
 import pandas as pd
 from pydantic import Field, field_validator, model_validator
 
-from .base import (CURVE_SCHEMES, SPLITTERS, CurvePoint, Fold, SchemeParams, SplitError, WrappingSplitter, check_base, named,
+from .base import (CURVE_SCHEMES, SPLITTERS, CurveParams, CurvePoint, Fold, SplitError, WrappingSplitter, check_base,
                    require_columns, sorted_values, str_col)
 
 
-class _CalibrationParams(SchemeParams):
-    base: dict[str, Any]
+class _CalibrationParams(CurveParams):
     per_class: list[int] = Field(min_length=1)
-    draws: int = Field(default=5, ge=1, le=1000)
     unit: str = Field(default="subject", min_length=1)
-
-    @model_validator(mode="before")
-    @classmethod
-    def _base(cls, d: Any) -> Any:
-        return named(d, "base")
 
     @field_validator("per_class")
     @classmethod

@@ -5,24 +5,17 @@ to their first N frames or S seconds, N swept over a list (Al-mashhadani et al. 
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
 
 import pandas as pd
 from pydantic import Field, model_validator
 
-from .base import SPLITTERS, Crop, Fold, SchemeParams, WrappingSplitter, check_base, named
+from .base import SPLITTERS, Crop, Fold, WrappingParams, WrappingSplitter, check_base
 
 
-class _EarlyParams(SchemeParams):
-    base: dict[str, Any]
+class _EarlyParams(WrappingParams):
     frames: list[int] | None = Field(default=None, min_length=1)
     seconds: list[float] | None = Field(default=None, min_length=1)
     crop_train: bool = False
-
-    @model_validator(mode="before")
-    @classmethod
-    def _base(cls, d: Any) -> Any:
-        return named(d, "base")
 
     @model_validator(mode="after")
     def _check(self) -> "_EarlyParams":

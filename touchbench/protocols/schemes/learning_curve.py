@@ -13,26 +13,18 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import replace
-from typing import Any
 
 import numpy as np
 import pandas as pd
 from pydantic import Field, field_validator, model_validator
 
-from .base import (CURVE_SCHEMES, SPLITTERS, CurvePoint, Fold, SchemeParams, SplitError, WrappingSplitter, check_base,
-                   make_splitter, named, require_columns, sorted_values, str_col)
+from .base import (CURVE_SCHEMES, SPLITTERS, CurveParams, CurvePoint, Fold, SplitError, WrappingSplitter, check_base,
+                   make_splitter, require_columns, sorted_values, str_col)
 
-class _LearningCurveParams(SchemeParams):
-    base: dict[str, Any]
+class _LearningCurveParams(CurveParams):
     subjects: list[int] | None = Field(default=None, min_length=1)
     fractions: list[float] | None = Field(default=None, min_length=1)
-    draws: int = Field(default=5, ge=1, le=1000)
     stratify: str | None = Field(default=None, min_length=1)
-
-    @model_validator(mode="before")
-    @classmethod
-    def _base(cls, d: Any) -> Any:
-        return named(d, "base")
 
     @field_validator("subjects")
     @classmethod
