@@ -186,7 +186,7 @@ def test_calibration_scores_the_same_captures_for_every_k_and_never_the_calibrat
                 extra = np.setdiff1d(f.train, b.train)
                 assert set(b.train) <= set(f.train) and len(f.train) == len(b.train) + 2 * k
                 assert not set(extra) & set(scored) and set(extra) <= set(b.test)
-                assert sorted(y[extra]) == ["pat"] * k + ["rub"] * k
+                assert sorted(y[extra]) == ["pat"] * int(k) + ["rub"] * int(k)
                 calib[k] = set(extra)
             assert np.array_equal(points[0].train, b.train) and not calib[0]
             assert calib[1] < calib[3]  # nested: k = 1 takes the first of the k = 3 pool

@@ -91,7 +91,7 @@ class Calibration(WrappingSplitter):
                     calib = np.concatenate([f.train[:0], *(pool[:k] for pool in pools)])
                     note = (f"calibration: {k} labelled capture(s) per class of each test {p.unit} in training",) if k else ()
                     out.append(replace(f, name=f"k{k}#{d}/{f.name}", train=np.union1d(f.train, calib), test=test,
-                                       curve=CurvePoint("calibration", k, d), notes=f.notes + note + short))
+                                       curve=CurvePoint("calibration", float(k), d), notes=f.notes + note + short))
         self.notes_.append(f"calibration: k = {', '.join(map(str, p.per_class))} labelled captures per class of each "
                            f"test {p.unit} join the training data ({p.draws} random draws); every k of a fold and draw "
                            f"scores the same captures (the test captures less the k = {p.per_class[-1]} pool); with "
