@@ -343,3 +343,19 @@ def test_calibration_accuracy_grows_with_k_on_the_same_scored_captures(tmp_path,
     for d in (0, 1):
         ids = [set(preds.loc[preds["fold"] == f"k{k}#{d}/subject=t", "capture_id"]) for k in (0, 1)]
         assert ids[0] == ids[1] and len(ids[0]) == 8
+
+
+# ----------------------------------------------------------------- what the schemes declare
+def test_curve_schemes_are_labelled_without_their_sweep_and_keep_a_wrapped_crop():
+    from touchbench.reports.results import scheme_label
+
+    assert scheme_label({"name": "learning-curve", "base": {"name": "loso"}, "subjects": [1, 2], "draws": 3,
+                         "stratify": "site"}) == "learning-curve(base=loso,stratify=site)"
+    assert scheme_label({"name": "calibration", "base": {"name": "loso"}, "per_class": [1, 2],
+                         "draws": 2}) == "calibration(base=loso,per_class=[1,2])"
+    meta = grid(["a", "b", "c"], ["pat", "rub"])
+    folds = make_splitter("learning-curve", base={"name": "early", "base": "loso", "frames": [4]},
+                          subjects=[1]).folds(meta)
+    assert {f.crop.frames for f in folds} == {4}
+    assert {f.name for f in folds if f.curve.size == 2} == {"n2#0/first4f/subject=a", "n2#0/first4f/subject=b",
+                                                            "n2#0/first4f/subject=c"}
