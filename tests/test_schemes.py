@@ -447,8 +447,12 @@ def test_a_wrapping_scheme_declares_its_base_and_its_sweep():
     early = SPLITTERS.get("early")
     assert early.base_param == "base" and early.swept_params == ("frames", "seconds")
     assert SPLITTERS.get("stream").base_param == "base" and SPLITTERS.get("stream").swept_params == ("rules",)
+    assert SPLITTERS.get("learning-curve").swept_params == ("subjects", "fractions", "draws")
+    assert SPLITTERS.get("calibration").swept_params == ("draws",)  # per_class sets the scored captures
+    wrapping = ("early", "stream", "learning-curve", "calibration")
+    assert all(SPLITTERS.get(n).base_param == "base" for n in wrapping)
     assert all(SPLITTERS.get(n).base_param is None and not SPLITTERS.get(n).swept_params
-               for n in SPLITTERS.names() if n not in ("early", "stream"))
+               for n in SPLITTERS.names() if n not in wrapping)
     entry = {"name": "early", "base": {"name": "kfold", "k": 5}, "frames": [1, 5], "crop_train": True}
     assert scheme_label(entry) == "early(base=kfold(k=5),crop_train=true)"
     assert scheme_label({"name": "no-such-scheme", "frames": [1]}) == "no-such-scheme(frames=[1])"

@@ -33,6 +33,13 @@ schemes by importing every module of this package):
                             training captures too) cut to their first N frames
                             or S seconds, N swept over a list (Al-mashhadani
                             Sec. 2.3: recognition after the first frames).
+``learning-curve``          any scheme keeping subjects apart, each fold trained
+                            on n of its training subjects (drawn at random,
+                            ``draws`` distinct subsets), n swept, plus the
+                            full point; the base fold's test captures.
+``calibration``             any scheme, k labelled captures per class of each
+                            test subject (``unit``) joining training, k swept
+                            from 0; the largest-k pool is never scored.
 ==========================  ====================================================
 
 A scheme that lets the test data inform training says why in

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Annotated, Any, Callable, ClassVar, Iterator
 
 import numpy as np
 import pandas as pd
-from pydantic import BaseModel, BeforeValidator, ConfigDict
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
 from ...core.errors import TouchbenchError, UnknownNameError
 from ...core.registry import Registry
@@ -233,6 +233,39 @@ def named(d: Any, key: str) -> Any:
     if isinstance(d, dict) and isinstance(d.get(key), str):
         return {**d, key: {"name": d[key]}}
     return d
+
+
+class WrappingParams(SchemeParams):
+    """The parameters of a scheme that wraps another: ``base``, the wrapped scheme's entry
+    (``base: loso`` is short for ``base: {name: loso}``)."""
+
+    base: dict[str, Any]
+
+    @model_validator(mode="before")
+    @classmethod
+    def _base(cls, d: Any) -> Any:
+        return named(d, "base")
+
+
+class CurveParams(WrappingParams):
+    """A data-curve scheme's parameters: its base and the number of random ``draws`` per point."""
+
+    draws: int = Field(default=5, ge=1, le=1000)
+
+
+#: the schemes that place their folds on a data curve (``Fold.curve``): a fold sits on one curve, so
+#: neither wraps the other
+CURVE_SCHEMES = ("learning-curve", "calibration")
+
+
+def check_base(base: dict[str, Any], scheme: str, refused: tuple[str, ...] = ()) -> None:
+    """Refuse a wrapping scheme's ``base`` entry that names no scheme, or names ``scheme`` itself or
+    one of ``refused`` (ValueError: the parameter model reports it at the field)."""
+    name = base.get("name")
+    if not isinstance(name, str):
+        raise ValueError("base must name a scheme: base: {name: loso}")
+    if name == scheme or name in refused:
+        raise ValueError(f"the base of {scheme!r} cannot be {name!r}")
 
 
 # ----------------------------------------------------------------- base

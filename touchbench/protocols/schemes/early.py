@@ -5,24 +5,17 @@ to their first N frames or S seconds, N swept over a list (Al-mashhadani et al. 
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
 
 import pandas as pd
 from pydantic import Field, model_validator
 
-from .base import SPLITTERS, Crop, Fold, SchemeParams, WrappingSplitter, named
+from .base import SPLITTERS, Crop, Fold, WrappingParams, WrappingSplitter, check_base
 
 
-class _EarlyParams(SchemeParams):
-    base: dict[str, Any]
+class _EarlyParams(WrappingParams):
     frames: list[int] | None = Field(default=None, min_length=1)
     seconds: list[float] | None = Field(default=None, min_length=1)
     crop_train: bool = False
-
-    @model_validator(mode="before")
-    @classmethod
-    def _base(cls, d: Any) -> Any:
-        return named(d, "base")
 
     @model_validator(mode="after")
     def _check(self) -> "_EarlyParams":
@@ -32,11 +25,7 @@ class _EarlyParams(SchemeParams):
             raise ValueError("frames must be at least 1")
         if self.seconds is not None and min(self.seconds) <= 0:
             raise ValueError("seconds must be positive")
-        name = self.base.get("name")
-        if not isinstance(name, str):
-            raise ValueError("base must name a scheme: base: {name: loso}")
-        if name == "early":
-            raise ValueError("the base of 'early' cannot be 'early'")
+        check_base(self.base, "early")
         return self
 
 

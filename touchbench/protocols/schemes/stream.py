@@ -32,7 +32,7 @@ from ...core.hashing import canonical_json
 from ...streams.replay import LiveSpec
 from ...streams.rules import make_rule
 from ...streams.timeline import recorded_streams, spliced_streams
-from .base import SPLITTERS, DataContext, Fold, SchemeParams, SplitError, WrappingSplitter, named
+from .base import SPLITTERS, DataContext, Fold, SplitError, WrappingParams, WrappingSplitter, check_base, named
 
 if TYPE_CHECKING:
     from ...datasets.model import TouchDataset
@@ -45,8 +45,7 @@ FRAME_RATE = "stream_frame_rate"
 SOURCE = "stream_source"
 
 
-class _StreamParams(SchemeParams):
-    base: dict[str, Any]
+class _StreamParams(WrappingParams):
     source: Literal["spliced", "recorded"] = "spliced"
     idle: str = Field(min_length=1)
     gap_s: tuple[float, float] = (1.0, 3.0)
@@ -88,11 +87,7 @@ class _StreamParams(SchemeParams):
         lo, hi = self.gap_s
         if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo <= hi):
             raise ValueError("gap_s is [shortest, longest] idle stretch in seconds, 0 < shortest <= longest")
-        name = self.base.get("name")
-        if not isinstance(name, str):
-            raise ValueError("base must name a scheme: base: {name: loso}")
-        if name == "stream":
-            raise ValueError("the base of 'stream' cannot be 'stream'")
+        check_base(self.base, "stream")
         if self.none_label == self.idle:
             raise ValueError("none_label must differ from the idle class")
         return self
