@@ -57,7 +57,7 @@ def test_every_format_is_registered_once_with_its_capabilities():
     assert [o.flag for o in FORMATS.get("table").options][:3] == ["--grid", "--frame-rate", "--value-range"]
     assert FORMATS.get("table").reads == "file or folder" and FORMATS.get("haart-raw").reads == "folder"
     assert [o.flag for o in FORMATS.get("haart-raw").options] == ["--pattern", "--recording-window", "--recording-seconds",
-                                                                   "--frame-rate"]
+                                                                   "--frame-rate", "--short-recordings"]
     assert all(not e.obj.options for e in FORMATS.entries() if e.name not in ("table", "haart-raw"))
     assert not any(o.required for e in FORMATS.entries() for o in e.obj.options)
     assert all(e.obj.replay for e in FORMATS.entries())
