@@ -14,7 +14,11 @@ adds the columns the reports need:
   label but differ in any parameter have two ids.
 - ``fold_key``: which test captures a fold scored (a hash of the fold's
   sorted capture ids, read from the predictions; without predictions, the
-  protocol seed, repetition and fold name). Methods are paired on it.
+  protocol seed, repetition and fold name). Methods are paired on it. A
+  point of a data curve (its ``curve``) is scored on its base fold's
+  captures: its key is the point's (``subjects:3#1|``) before its base
+  fold's, so the points stay apart and :mod:`touchbench.reports.curves`
+  pairs them on what follows ``|``.
 - ``machine``: a short hash of the manifest's platform description
   (platform string, architecture, processor, CPU count), ``machine_desc``
   its readable form. Timings are compared only within one machine.
@@ -217,6 +221,16 @@ def _protocol_scheme(manifest: dict[str, Any]) -> Any:
 
 
 _CROP_PREFIX = re.compile(r"^first[^/]*/")
+#: a data curve's point before its base fold's name (``n3#1/subject=s01``, ``k2#0/subject=s01``)
+_CURVE_PREFIX = re.compile(r"^[^/#]*#\d+/")
+
+
+def _curve_keys(s: pd.DataFrame) -> list[str]:
+    """The fold keys of ``s`` with each point of a data curve named before its base fold's key."""
+    if "curve" not in s:
+        return list(s["fold_key"])
+    return [f"{c}:{z:g}#{int(d)}|{k}" if c else k
+            for c, z, d, k in zip(s["curve"].astype(str), s["curve_size"], s["curve_draw"], s["fold_key"])]
 
 
 def _result_dirs(paths: Iterable[str | Path]) -> list[Path]:
@@ -268,6 +282,8 @@ def _labelled_scores(s: pd.DataFrame, d: Path, m: dict[str, Any], mid: str, mdes
         for dh, t, sc, a in zip(s["dataset_hash"], s["target"], s["scheme_label"], s["adaptation"].astype(str))
     ]
     base_fold = s["fold"].astype(str).str.replace(_CROP_PREFIX, "", regex=True)
+    on_curve = s["curve"].astype(str) != "" if "curve" in s else pd.Series(False, index=s.index)
+    base_fold = base_fold.where(~on_curve, base_fold.str.replace(_CURVE_PREFIX, "", regex=True))
     s["fold_key"] = [f"{proto_seed}/{r}/{f}" for r, f in zip(s["repetition"], base_fold)]
     s["finished_at"] = s["finished_at"].astype(str) if "finished_at" in s else ""
     return s
@@ -360,8 +376,9 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
                 .apply(lambda c: "c:" + hashlib.sha256("\n".join(sorted(map(str, c))).encode()).hexdigest()[:12])
             )
             s["fold_key"] = [keys.get(t, fk) for t, fk in zip(s["task_id"], s["fold_key"])]
-            if predictions:
-                pred_frames.append(_labelled_predictions(p, s, d))
+        s["fold_key"] = _curve_keys(s)
+        if p is not None and len(p) and predictions:
+            pred_frames.append(_labelled_predictions(p, s, d))
         score_frames.append(s)
         sources.append(_source_record(d, m, s, mid, mdesc, changed))
     if not score_frames:
