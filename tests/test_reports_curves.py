@@ -14,7 +14,8 @@ from rich.console import Console
 from scipy import stats
 
 from touchbench.cli.main import cli
-from touchbench.reports.curves import crossed_bootstrap
+from touchbench.reports.curve_table import size_label, size_words
+from touchbench.reports.curves import Curve, crossed_bootstrap
 from touchbench.reports.figures import plot_table
 from touchbench.reports.figures import learning_curve
 from touchbench.reports.figures.confusion import confusion_matrix
@@ -200,7 +201,9 @@ def test_figure_one_line_and_band_per_method(runs, tmp_path, monkeypatch):
     learning_curve.plot_learning_curve(lb, tmp_path / "x", "column", ("svg",))
     [ax] = seen[0].axes
     assert len(ax.lines) == 2 and len(ax.collections) == 2  # a line and a band per method
-    assert "held-out captures" in ax.get_title() and "training subjects" in ax.get_xlabel()
+    title = ax.get_title().replace("\n", " ")
+    assert "held-out captures against n training subjects" in title and "over 4 test folds" in title
+    assert ax.get_xlabel() == "training subjects (n)"
     assert list(ax.lines[0].get_ydata()) == pytest.approx([55.0, 77.5, 85.0])
 
 
@@ -224,6 +227,12 @@ def test_cli_fraction(runs, tmp_path):
     assert len(list(tmp_path.glob("*learning-curve.png"))) == 1
 
 
+def test_two_curves_never_share_a_table(runs):
+    lbs = build_leaderboards(load_results([runs / "learn", runs / "calib"]))  # one dataset, one scheme label
+    assert sorted(lb.curve.axis for lb in lbs) == ["calibration", "subjects"]
+    assert sorted(lb.rows.set_index("features").loc["msd", "accuracy"] for lb in lbs) == pytest.approx([0.55, 0.85])
+
+
 def test_off_curve_run_is_unchanged(runs):
     rs = load_results([runs / "plain"])
     assert not rs.scores["fold_key"].str.contains("|", regex=False).any()
@@ -234,3 +243,35 @@ def test_off_curve_run_is_unchanged(runs):
     print_terminal([lb], console)
     assert "curve" not in console.export_text() and "curve" not in to_markdown([lb])
     assert json.loads(to_json([lb]))["tables"][0]["curve"] is None
+
+
+def test_sizes_read_as_subjects_shares_or_captures():
+    empty = pd.DataFrame()
+    shares = Curve("subjects", [0.25, 0.5, 1.0], empty, empty, empty, 0.95)
+    counts = Curve("subjects", [0.5, 2.0, 8.0], empty, empty, empty, 0.95)
+    calib = Curve("calibration", [0.0, 1.0, 5.0], empty, empty, empty, 0.95)
+    assert [size_label(shares, s) for s in shares.sizes] == ["25 %", "50 %", "100 %"]
+    assert [size_label(counts, s) for s in counts.sizes] == ["50 %", "n=2", "n=8"]
+    assert size_words(counts, 1.0) == "1 subject" and size_words(shares, 1.0) == "100 % of the training subjects"
+    assert [size_label(calib, s) for s in calib.sizes] == ["k=0", "k=1", "k=5"]
+    assert size_words(calib, 0.0) == "no labelled capture of the test subject"
+    assert size_words(calib, 5.0) == "5 labelled captures per class"
+
+
+def test_base_folds_with_different_numbers_of_training_subjects(tmp_path):
+    """Each base fold's own largest n is its full point: one column "all", and the table's rows."""
+    sides = {"fa": CAPS[CAPS["subject"].isin(["s1", "s2"])]["capture_id"].tolist(),  # 20 captures each
+             "fb": CAPS[CAPS["subject"].isin(["s3", "s4"])]["capture_id"].tolist()}
+    wrong = {"n1#0/fa": 8, "n2#0/fa": 4, "n3#0/fa": 2, "n1#0/fb": 10, "n2#0/fb": 3}  # fa has 3 training subjects, fb 2
+    folds = {name: sides[name.split("/")[1]] for name in wrong}
+    write_fake_run(tmp_path / "uneven", CAPS, folds, [FakeMethod("msd", "rf", wrong={
+        name: folds[name][:c] for name, c in wrong.items()})], run_id="uneven", curve="subjects")
+    lb = _board(tmp_path / "uneven")
+    assert lb.rows["accuracy"].iloc[0] == pytest.approx((0.9 + 0.85) / 2) and lb.rows["n_folds"].iloc[0] == 2
+    p = lb.curve.points.set_index("size")
+    assert lb.curve.sizes == [1.0, 2.0, 3.0] and lb.curve.full_varies
+    assert p.loc[1.0, "accuracy"] == pytest.approx(0.55) and p.loc[1.0, "n_units"] == 2
+    assert p.loc[2.0, "accuracy"] == pytest.approx(0.8) and p.loc[2.0, "n_units"] == 1  # fa's n=2 alone
+    assert p.loc[3.0, "accuracy"] == pytest.approx(0.875) and p.loc[3.0, "n_units"] == 2
+    header = to_markdown([lb])
+    assert "| method | n=1 | n=2 | all |" in header and "(every training subject)" in header

@@ -33,6 +33,8 @@ def size_label(curve: Curve, size: float) -> str:
     """A size as a column header: ``n=4`` (subjects), ``50 %`` (a share of them), ``k=2`` (calibration)."""
     if curve.axis == "calibration":
         return f"k={size:g}"
+    if curve.full_varies and size == curve.sizes[-1]:
+        return "all"
     return f"{100 * size:g} %" if size < 1 or _shares(curve) else f"n={size:g}"
 
 
@@ -42,6 +44,8 @@ def size_words(curve: Curve, size: float) -> str:
         if size == 0:
             return "no labelled capture of the test subject"
         return f"{size:g} labelled capture{'' if size == 1 else 's'} per class"
+    if curve.full_varies and size == curve.sizes[-1]:
+        return "every training subject"
     if size < 1 or _shares(curve):
         return f"{100 * size:g} % of the training subjects"
     return f"{size:g} subject{'' if size == 1 else 's'}"
@@ -177,11 +181,11 @@ def reach_lines(curve: Curve, names: dict[str, str]) -> list[str]:
 
 def reference_note(curve: Curve) -> str:
     """The note of a curve's leaderboard: which point its table ranks."""
-    if curve.axis == "calibration" and 0.0 in curve.sizes:
-        return ("a calibration curve: this table ranks the methods at k=0 (no labelled capture of the test "
-                "subject); the curve and the gains of each k follow")
-    return (f"a learning curve: this table ranks the methods at its full point ({size_label(curve, curve.sizes[-1])}, "
-            "every training subject); the curve follows")
+    if curve.axis == "calibration":
+        at = "k=0 (no labelled capture of the test subject)" if 0.0 in curve.sizes else size_label(curve, curve.sizes[-1])
+        return f"a calibration curve: this table ranks the methods at {at}; the curve and the gains of each k follow"
+    full = "" if curve.full_varies else f"{size_label(curve, curve.sizes[-1])}, "
+    return f"a learning curve: this table ranks the methods at its full point ({full}every training subject); the curve follows"
 
 
 def _md_table(header: list[str], cells: list[list[str]]) -> list[str]:

@@ -78,6 +78,9 @@ class Curve:
     gains: pd.DataFrame
     reach: pd.DataFrame
     fraction: float
+    #: a subjects curve whose base folds have different numbers of training subjects: the largest size
+    #: is each base fold's full point ("all")
+    full_varies: bool = False
 
     @property
     def units(self) -> int:
@@ -97,21 +100,30 @@ def _on_curve(s: pd.DataFrame) -> pd.Series:
     return s["curve"].astype(str) != "" if "curve" in s else pd.Series(False, index=s.index)
 
 
+def _reference_sizes(scores: pd.DataFrame) -> dict[tuple[str, str], float]:
+    """Per curve and base fold, the size of the reference point: the base fold's largest (its full
+    point: every training subject of that fold) on a subjects curve, 0 on a calibration curve (its
+    largest where 0 was not swept)."""
+    on = scores[_on_curve(scores)]
+    out = {}
+    for (axis, base), g in on.groupby([on["curve"].astype(str), _base(on["fold_key"])], sort=False):
+        sizes = g["curve_size"].astype(np.float64)
+        out[(axis, base)] = 0.0 if axis == "calibration" and (sizes == 0).any() else float(sizes.max())
+    return out
+
+
 def reference_rows(scores: pd.DataFrame, ok: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """A table's tasks (``scores``) and its finished ones (``ok``) at the reference point of its curve
-    (the largest size of a subjects curve, 0 of a calibration curve); both unchanged off a curve."""
-    on = _on_curve(scores)
-    if not on.any():
+    """A table's tasks (``scores``) and its finished ones (``ok``) at the reference point of their
+    curve (:func:`_reference_sizes`); both unchanged off a curve."""
+    ref = _reference_sizes(scores)
+    if not ref:
         return scores, ok
-    keep = []
-    for frame in (scores, ok):
-        on_f = _on_curve(frame)
-        mask = ~on_f
-        for axis, g in scores[on].groupby("curve", sort=False):
-            size = 0.0 if axis == "calibration" and (g["curve_size"] == 0).any() else float(g["curve_size"].max())
-            mask |= on_f & (frame["curve"] == axis) & np.isclose(frame["curve_size"].astype(np.float64), size)
-        keep.append(frame[mask])
-    return keep[0], keep[1]
+
+    def keep(frame: pd.DataFrame) -> pd.DataFrame:
+        want = [ref.get((str(c), b), math.nan) for c, b in zip(frame["curve"], _base(frame["fold_key"]))]
+        return frame[~_on_curve(frame) | np.isclose(frame["curve_size"].astype(np.float64), want)]
+
+    return keep(scores), keep(ok)
 
 
 def _base(fold_keys: pd.Series) -> pd.Series:
@@ -212,22 +224,29 @@ def _reach(points: pd.DataFrame, axis: str, fraction: float) -> dict:
             "baseline": float(base["accuracy"].iloc[0]) if axis == "calibration" and len(base) else math.nan}
 
 
-def _curve_tasks(ok: pd.DataFrame, preds: pd.DataFrame | None) -> tuple[pd.DataFrame, pd.DataFrame | None]:
-    """The finished tasks on a curve with their base fold, and their predictions with each task's draw."""
+def _curve_tasks(ok: pd.DataFrame, preds: pd.DataFrame | None) -> tuple[pd.DataFrame, pd.DataFrame | None, bool]:
+    """The finished tasks on a curve with their base fold, their predictions with each task's draw,
+    and whether the full points of a subjects curve differ between base folds (each then set to the
+    largest: one column)."""
     g = ok[_on_curve(ok)].copy()
     g["base"] = _base(g["fold_key"])
     g["curve_size"] = g["curve_size"].astype(np.float64)
+    subjects = g["curve"] == "subjects"
+    full = g[subjects].groupby("base")["curve_size"].transform("max")
+    varies = full.nunique() > 1
+    if varies:  # base folds with different numbers of training subjects: their full points form one column
+        g.loc[full.index[g.loc[full.index, "curve_size"] == full], "curve_size"] = float(full.max())
     if preds is not None and len(preds):
         info = g.drop_duplicates("task_id").set_index("task_id")[["curve_draw"]]
         preds = preds.drop(columns=[c for c in ("curve_draw",) if c in preds]).join(info, on="task_id", how="inner")
-    return g, preds
+    return g, preds, bool(varies)
 
 
 def curve_of(ok: pd.DataFrame, preds: pd.DataFrame | None, fraction: float = DEFAULT_FRACTION) -> Curve | None:
     """The curve of one table's finished tasks ``ok`` (``preds``: their predictions; None when the
     table's tasks are on no curve)."""
     fraction = check_fraction(fraction)
-    g, preds = _curve_tasks(ok, preds)
+    g, preds, varies = _curve_tasks(ok, preds)
     if g.empty:
         return None
     axis = str(g["curve"].value_counts().index[0])
@@ -245,4 +264,4 @@ def curve_of(ok: pd.DataFrame, preds: pd.DataFrame | None, fraction: float = DEF
     return Curve(axis=axis, sizes=sorted(set(g["curve_size"])), points=pd.DataFrame(points),
                  gains=pd.DataFrame(gains, columns=["method_id", "size", "gain", "ci_low", "ci_high", "ci_method",
                                                     "n_units"]),
-                 reach=reach_df.reset_index(drop=True), fraction=fraction)
+                 reach=reach_df.reset_index(drop=True), fraction=fraction, full_varies=varies and axis == "subjects")

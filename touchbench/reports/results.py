@@ -32,7 +32,9 @@ adds the columns the reports need:
   and scheme label, and for a method adapted to the test data (its
   ``adaptation``, e.g. to each test subject's unlabelled captures) that
   adaptation too, so such a method is ranked, tested and put on a Pareto
-  front only with methods adapted the same way.
+  front only with methods adapted the same way; for a point of a data
+  curve, the curve (``subjects``, ``calibration``), so two curves never
+  share a table.
 
 A run interrupted before its reports were merged is read from its task
 fragments (``fragments/*.scores.parquet``). The merged files of any other are
@@ -277,9 +279,10 @@ def _labelled_scores(s: pd.DataFrame, d: Path, m: dict[str, Any], mid: str, mdes
         for t, fp, cn, cp, ef, v in zip(s["target"], s["feature_params"], s["classifier_name"],
                                         s["classifier_params"], s["early_frames"], variants)
     ]
-    s["table_key"] = [  # a method adapted to the test data is never tabled with plain ones
-        _short_hash([dh, t, sc] + ([a] if a else []), 8)
-        for dh, t, sc, a in zip(s["dataset_hash"], s["target"], s["scheme_label"], s["adaptation"].astype(str))
+    s["table_key"] = [  # a method adapted to the test data is never tabled with plain ones, nor two curves' points
+        _short_hash([dh, t, sc] + ([a] if a else []) + ([f"curve={c}"] if c else []), 8)
+        for dh, t, sc, a, c in zip(s["dataset_hash"], s["target"], s["scheme_label"], s["adaptation"].astype(str),
+                                   s["curve"].astype(str) if "curve" in s else [""] * len(s))
     ]
     base_fold = s["fold"].astype(str).str.replace(_CROP_PREFIX, "", regex=True)
     on_curve = s["curve"].astype(str) != "" if "curve" in s else pd.Series(False, index=s.index)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..curve_table import curve_titles, size_label
+from ..curve_table import size_label
 from ..labels import method_names
 from ..leaderboard import Leaderboard
 from ..results import ResultSet
@@ -17,10 +17,14 @@ from .base import FIGURES, FigureOptions, figure_width, pyplot, save, wrap
 __all__ = ["draw", "plot_learning_curve"]
 
 
-def _xlabel(lb: Leaderboard) -> str:
-    if lb.curve.axis == "calibration":
-        return "labelled captures per class of the test subject added to training (k)"
-    return "training subjects (n)"
+def _axis(lb: Leaderboard) -> tuple[str, str]:
+    """The x axis's label and what the title says the curve is against."""
+    curve = lb.curve
+    if curve.axis == "calibration":
+        return "labelled captures per class (k)", "k labelled captures per class of the test subject"
+    if size_label(curve, curve.sizes[-1]).endswith("%"):
+        return "training subjects (%)", "the share of the training subjects"
+    return "training subjects (n)", "n training subjects"
 
 
 def plot_learning_curve(lb: Leaderboard, base: Path, size: str, formats: tuple[str, ...]) -> list[Path]:
@@ -39,13 +43,14 @@ def plot_learning_curve(lb: Leaderboard, base: Path, size: str, formats: tuple[s
         lo, hi = p["ci_low"].to_numpy(np.float64), p["ci_high"].to_numpy(np.float64)
         ax.fill_between(x, 100 * lo, 100 * hi, color=line.get_color(), alpha=0.18, lw=0)
     ax.set_xticks(curve.sizes, labels=[size_label(curve, s).removeprefix("n=").removeprefix("k=") for s in curve.sizes])
-    ax.set_xlabel(_xlabel(lb))
-    ax.set_ylabel("accuracy on held-out captures (%)")
+    xlabel, against = _axis(lb)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("accuracy (%)")
     ax.grid(True, alpha=0.3)
     ax.legend(loc="lower right", frameon=False)
-    unit = (f"band: 95 % interval over {curve.units} test folds" if curve.units >= 2
+    unit = (f"band: 95 % t interval over {curve.units} test folds" if curve.units >= 2
             else "band: 95 % bootstrap over draws and test captures")
-    ax.set_title(wrap(f"{curve_titles(lb.title, curve)[0]} ({unit})", w), fontsize=8)
+    ax.set_title(wrap(f"{lb.title}: accuracy on the held-out captures against {against} ({unit})", w), fontsize=8)
     return save(fig, base, formats)
 
 
