@@ -275,3 +275,37 @@ def test_base_folds_with_different_numbers_of_training_subjects(tmp_path):
     assert p.loc[3.0, "accuracy"] == pytest.approx(0.875) and p.loc[3.0, "n_units"] == 2
     header = to_markdown([lb])
     assert "| method | n=1 | n=2 | all |" in header and "(every training subject)" in header
+
+
+def test_calibration_draws_scoring_different_captures_stay_one_test_fold(tmp_path):
+    """A calibration pool is drawn per draw, so the draws of a point score different captures: they
+    are still one test fold (averaged first), in the curve and in the table at k=0."""
+    wrong0 = {"subject=s1": (2, 4), "subject=s2": (0, 2), "subject=s3": (4, 4), "subject=s4": (2, 2)}  # of 8
+    folds, wrong = {}, {}
+    for b, ids in BASE.items():
+        for d, scored in enumerate((ids[:8], ids[2:])):
+            for k in (0, 2):
+                folds[f"k{k}#{d}/{b}"] = scored
+                wrong[f"k{k}#{d}/{b}"] = scored[:wrong0[b][d]] if k == 0 else []
+    write_fake_run(tmp_path / "pools", CAPS, folds, [FakeMethod("msd", "rf", wrong=wrong)], run_id="pools",
+                   curve="calibration")
+    lb = _board(tmp_path / "pools")
+    per_base = [0.625, 0.875, 0.5, 0.75]  # the two draws' accuracies averaged, e.g. s1: (6/8 + 4/8) / 2
+    assert lb.rows["n_folds"].iloc[0] == 4 and lb.rows["accuracy"].iloc[0] == pytest.approx(np.mean(per_base))
+    p = lb.curve.points.set_index("size")
+    assert p.loc[0.0, "n_units"] == 4 and p.loc[0.0, "n_draws"] == 2
+    g = lb.curve.gains.set_index("size").loc[2.0]
+    mean, lo, hi = _t([1 - v for v in per_base])
+    assert (g["gain"], g["ci_low"], g["ci_high"], g["n_units"]) == pytest.approx((mean, lo, hi, 4))
+
+
+def test_one_test_set_calibration_gain_by_bootstrap(tmp_path):
+    ids = CAPS["capture_id"].tolist()
+    folds = {f"k{k}#{d}/holdout": ids[d * 5:] for k in (0, 1) for d in (0, 1)}  # the draws score different captures
+    wrong = {f"k0#{d}/holdout": ids[d * 5:][:10] for d in (0, 1)}  # k=0: 10 wrong; k=1: none
+    write_fake_run(tmp_path / "one", CAPS, folds, [FakeMethod("msd", "rf", wrong=wrong)], run_id="one",
+                   curve="calibration")
+    g = _board(tmp_path / "one").curve.gains.set_index("size").loc[1.0]
+    gain = ((1 - (1 - 10 / 40)) + (1 - (1 - 10 / 35))) / 2  # 1 minus each draw's accuracy at k=0, averaged
+    assert g["gain"] == pytest.approx(gain) and g["ci_method"] == "bootstrap" and g["n_units"] == 1
+    assert 0 < g["ci_low"] < gain < g["ci_high"] < 1

@@ -125,14 +125,14 @@ def curve_titles(title: str, curve: Curve) -> tuple[str, str]:
     """The titles of the curve's table and of its gains' table, after the leaderboard's ``title``."""
     what = "calibration curve" if curve.axis == "calibration" else "learning curve"
     return (f"{title} — {what}: accuracy % on the held-out captures {_axis_words(curve)}",
-            f"{title} — gain over k=0 (no labelled capture of the test subject), percentage points")
+            "gain over k=0 (no labelled capture of the test subject), percentage points")
 
 
 def curve_legend(curve: Curve) -> str:
     """What the curve's cells are: the points, the unit of the interval, what full means."""
     kinds = set(curve.points["ci_method"])
-    parts = ["Each point is scored on the same held-out test captures as the other points of its fold; "
-             "its accuracy is the mean over the test folds of each fold's mean over its random draws."]
+    parts = ["Each point is scored on the same held-out test captures as the other points of its test fold and "
+             "random draw; its accuracy is the mean over the test folds of each fold's mean over its draws."]
     if "t" in kinds:
         parts.append(f"Interval: 95 % Student t over the test folds (up to {curve.units}; the unit is the test "
                      "fold, its draws averaged first).")

@@ -139,9 +139,10 @@ def _unit_means(g: pd.DataFrame) -> pd.Series:
 def crossed_bootstrap(a: np.ndarray, b: np.ndarray | None = None, *, level: float = LEVEL,
                       resamples: int = BOOTSTRAP_RESAMPLES, seed: int = BOOTSTRAP_SEED) -> tuple[float, float]:
     """Percentile interval of the mean of ``a`` (draws x captures, each cell 1 right / 0 wrong, or the
-    mean over seeds), minus the mean of ``b`` (another point's draws x the same captures) when given:
-    the pigeonhole bootstrap (Owen 2007), captures and each point's draws resampled independently, the
-    captures once for both points. NaN with fewer than two captures."""
+    mean over seeds; NaN: a capture the draw did not score), minus the mean of ``b`` (another point's
+    draws x the same captures) when given: the pigeonhole bootstrap (Owen 2007), captures and each
+    point's draws resampled independently, the captures once for both points; each resample's mean is
+    over the cells scored. NaN with fewer than two captures."""
     a = np.asarray(a, dtype=np.float64)
     n_caps = a.shape[1]
     if n_caps < 2:
@@ -156,26 +157,30 @@ def crossed_bootstrap(a: np.ndarray, b: np.ndarray | None = None, *, level: floa
     caps = counts(n_caps)
 
     def means(m: np.ndarray) -> np.ndarray:
-        draws = counts(m.shape[0])
-        return np.einsum("rd,dc,rc->r", draws, m, caps) / (m.shape[0] * n_caps)
+        draws, scored = counts(m.shape[0]), np.isfinite(m)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return (np.einsum("rd,dc,rc->r", draws, np.where(scored, m, 0.0), caps)
+                    / np.einsum("rd,dc,rc->r", draws, scored.astype(np.float64), caps))
 
     stat = means(a) - (means(np.asarray(b, dtype=np.float64)) if b is not None else 0.0)
+    stat = stat[np.isfinite(stat)]  # a resample that drew no scored cell says nothing
+    if stat.size == 0:
+        return math.nan, math.nan
     tail = 100.0 * (1.0 - level) / 2.0
     lo, hi = np.percentile(stat, [tail, 100.0 - tail])
     return float(lo), float(hi)
 
 
-def _matrix(preds: pd.DataFrame | None, task_ids: pd.Series, captures: pd.Index | None = None) -> pd.DataFrame:
+def _matrix(preds: pd.DataFrame | None, task_ids: pd.Series) -> pd.DataFrame:
     """Draws x test captures of the tasks ``task_ids``: each cell the capture's correctness (the mean
-    over seeds); captures not predicted in every draw left out (or the columns ``captures``)."""
+    over seeds; NaN where the draw did not score the capture)."""
     if preds is None or preds.empty:
         return pd.DataFrame()
     p = preds[preds["task_id"].isin(set(task_ids))]
     if p.empty:
         return pd.DataFrame()
-    m = p.astype({"correct": np.float64}).pivot_table(index="curve_draw", columns="capture_id", values="correct",
-                                                      aggfunc="mean")
-    return m.dropna(axis=1) if captures is None else m.reindex(columns=captures)
+    return p.astype({"correct": np.float64}).pivot_table(index="curve_draw", columns="capture_id", values="correct",
+                                                         aggfunc="mean")
 
 
 def _point(g: pd.DataFrame, preds: pd.DataFrame | None) -> dict:
@@ -201,10 +206,10 @@ def _gain(g: pd.DataFrame, g0: pd.DataFrame, preds: pd.DataFrame | None) -> dict
         return {"gain": mean, "ci_low": mean - half, "ci_high": mean + half, "ci_method": "t", "n_units": n}
     out = {"gain": float(d.mean()) if n else math.nan, "ci_low": math.nan, "ci_high": math.nan, "ci_method": "",
            "n_units": n}
-    m = _matrix(preds, g["task_id"])
-    m0 = _matrix(preds, g0["task_id"], m.columns) if m.shape[1] else pd.DataFrame()
-    if m.shape[1] and not m0.isna().to_numpy().any():
-        lo, hi = crossed_bootstrap(m.to_numpy(), m0.to_numpy())
+    m, m0 = _matrix(preds, g["task_id"]), _matrix(preds, g0["task_id"])
+    if m.shape[1] and m0.shape[1]:
+        caps = m.columns.union(m0.columns)
+        lo, hi = crossed_bootstrap(m.reindex(columns=caps).to_numpy(), m0.reindex(columns=caps).to_numpy())
         out.update(ci_low=lo, ci_high=hi, ci_method="bootstrap" if np.isfinite(lo) else "")
     return out
 

@@ -15,10 +15,12 @@ adds the columns the reports need:
 - ``fold_key``: which test captures a fold scored (a hash of the fold's
   sorted capture ids, read from the predictions; without predictions, the
   protocol seed, repetition and fold name). Methods are paired on it. A
-  point of a data curve (its ``curve``) is scored on its base fold's
-  captures: its key is the point's (``subjects:3#1|``) before its base
-  fold's, so the points stay apart and :mod:`touchbench.reports.curves`
-  pairs them on what follows ``|``.
+  point of a data curve (its ``curve``) is keyed by the point
+  (``subjects:3|``) before its base fold's protocol seed, repetition and
+  name: the points stay apart, a point's random draws (which may score
+  different captures: a calibration pool is drawn per draw) are replicates
+  of its base fold, and :mod:`touchbench.reports.curves` pairs the points
+  of a base fold on what follows ``|``.
 - ``machine``: a short hash of the manifest's platform description
   (platform string, architecture, processor, CPU count), ``machine_desc``
   its readable form. Timings are compared only within one machine.
@@ -227,12 +229,13 @@ _CROP_PREFIX = re.compile(r"^first[^/]*/")
 _CURVE_PREFIX = re.compile(r"^[^/#]*#\d+/")
 
 
-def _curve_keys(s: pd.DataFrame) -> list[str]:
-    """The fold keys of ``s`` with each point of a data curve named before its base fold's key."""
+def _curve_keys(s: pd.DataFrame, by_name: pd.Series) -> list[str]:
+    """The fold keys of ``s``, a point of a data curve's the point before its base fold's key by name
+    (``by_name``: protocol seed, repetition and base fold)."""
     if "curve" not in s:
         return list(s["fold_key"])
-    return [f"{c}:{z:g}#{int(d)}|{k}" if c else k
-            for c, z, d, k in zip(s["curve"].astype(str), s["curve_size"], s["curve_draw"], s["fold_key"])]
+    return [f"{c}:{z:g}|{n}" if c else k
+            for c, z, n, k in zip(s["curve"].astype(str), s["curve_size"], by_name, s["fold_key"])]
 
 
 def _result_dirs(paths: Iterable[str | Path]) -> list[Path]:
@@ -373,13 +376,14 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
         mid, mdesc = machine_id(m.get("platform"))
         s = _labelled_scores(s, d, m, mid, mdesc)
         p = _read_predictions(d, store)
+        by_name = s["fold_key"].copy()
         if p is not None and len(p):
             keys = (
                 p.groupby("task_id", sort=False)["capture_id"]
                 .apply(lambda c: "c:" + hashlib.sha256("\n".join(sorted(map(str, c))).encode()).hexdigest()[:12])
             )
             s["fold_key"] = [keys.get(t, fk) for t, fk in zip(s["task_id"], s["fold_key"])]
-        s["fold_key"] = _curve_keys(s)
+        s["fold_key"] = _curve_keys(s, by_name)
         if p is not None and len(p) and predictions:
             pred_frames.append(_labelled_predictions(p, s, d))
         score_frames.append(s)
