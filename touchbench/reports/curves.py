@@ -144,31 +144,41 @@ def crossed_bootstrap(a: np.ndarray, b: np.ndarray | None = None, *, level: floa
     point's draws resampled independently, the captures once for both points; each resample's mean is
     over the cells scored. NaN with fewer than two captures."""
     a = np.asarray(a, dtype=np.float64)
-    n_caps = a.shape[1]
-    if n_caps < 2:
+    b = None if b is None else np.asarray(b, dtype=np.float64)
+    if a.shape[1] < 2:
         return math.nan, math.nan
     rng = np.random.default_rng(seed)
-    offsets = np.arange(resamples)[:, None]
-
-    def counts(n: int) -> np.ndarray:  # how often each of n items is drawn, per resample
-        idx = rng.integers(0, n, size=(resamples, n)) + n * offsets
-        return np.bincount(idx.ravel(), minlength=resamples * n).reshape(resamples, n).astype(np.float64)
-
-    caps = counts(n_caps)
-
-    def means(m: np.ndarray) -> np.ndarray:
-        draws, scored = counts(m.shape[0]), np.isfinite(m)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return (np.einsum("rd,dc,rc->r", draws, np.where(scored, m, 0.0), caps)
-                    / np.einsum("rd,dc,rc->r", draws, scored.astype(np.float64), caps))
-
-    stat = means(a) - (means(np.asarray(b, dtype=np.float64)) if b is not None else 0.0)
+    stat = np.concatenate([_crossed_block(rng, a, b, min(BLOCK, resamples - done))
+                           for done in range(0, resamples, BLOCK)])
     stat = stat[np.isfinite(stat)]  # a resample that drew no scored cell says nothing
     if stat.size == 0:
         return math.nan, math.nan
     tail = 100.0 * (1.0 - level) / 2.0
     lo, hi = np.percentile(stat, [tail, 100.0 - tail])
     return float(lo), float(hi)
+
+
+#: resamples drawn at a time (memory: a block of resamples x test captures)
+BLOCK = 1000
+
+
+def _counts(rng: np.random.Generator, rows: int, n: int) -> np.ndarray:
+    """How often each of ``n`` items is drawn (with replacement, ``n`` draws), in each of ``rows`` resamples."""
+    idx = rng.integers(0, n, size=(rows, n)) + n * np.arange(rows)[:, None]
+    return np.bincount(idx.ravel(), minlength=rows * n).reshape(rows, n).astype(np.float64)
+
+
+def _crossed_block(rng: np.random.Generator, a: np.ndarray, b: np.ndarray | None, rows: int) -> np.ndarray:
+    """``rows`` resamples of :func:`crossed_bootstrap`'s statistic."""
+    caps = _counts(rng, rows, a.shape[1])
+
+    def mean(m: np.ndarray) -> np.ndarray:  # over the scored cells the resample drew
+        draws, scored = _counts(rng, rows, m.shape[0]), np.isfinite(m)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return (((draws @ np.where(scored, m, 0.0)) * caps).sum(axis=1)
+                    / ((draws @ scored.astype(np.float64)) * caps).sum(axis=1))
+
+    return mean(a) - (mean(b) if b is not None else 0.0)
 
 
 def _matrix(preds: pd.DataFrame | None, task_ids: pd.Series) -> pd.DataFrame:
