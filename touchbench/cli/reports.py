@@ -53,7 +53,13 @@ def _with_table_options(f):
     return f
 
 
-def _boards(results, dataset, scheme, alpha, pool_machines, machine, predictions=True, reference=None):
+_fraction_option = click.option(
+    "--fraction", default=0.95, show_default=True, type=click.FloatRange(0, 1, min_open=True),
+    help="On a data curve (learning or calibration curve): the share of its full accuracy a method is asked to "
+         "reach; the tables show the smallest size that reaches it.")
+
+
+def _boards(results, dataset, scheme, alpha, pool_machines, machine, predictions=True, reference=None, fraction=0.95):
     from ..reports.leaderboard import build_leaderboards
 
     rs = _load(results, predictions=predictions)
@@ -63,7 +69,7 @@ def _boards(results, dataset, scheme, alpha, pool_machines, machine, predictions
         rs, lines = add_reference(rs, reference)
         for line in lines:
             click.echo(line, err=True)
-    lbs = build_leaderboards(rs, alpha=alpha, pool_machines=pool_machines, machine=machine)
+    lbs = build_leaderboards(rs, alpha=alpha, pool_machines=pool_machines, machine=machine, fraction=fraction)
     return rs, _filter(lbs, dataset, scheme)
 
 
@@ -78,8 +84,10 @@ def _boards(results, dataset, scheme, alpha, pool_machines, machine, predictions
 @click.option("--reference", default=None, metavar="NAME",
               help="Place the reference results NAME beside these (`touchbench reference list`); refused unless "
                    "a test set has the same content.")
+@_fraction_option
 @_with_table_options
-def leaderboard(results, as_json, formats, out, reference, dataset, scheme, alpha, pool_machines, machine) -> None:
+def leaderboard(results, as_json, formats, out, reference, fraction, dataset, scheme, alpha, pool_machines,
+                machine) -> None:
     """One table per dataset and scheme: rank, features, classifier, accuracy
     (mean over folds, sd, 95 % interval), macro F1, latency per capture, fit
     time, feature time, the paired test against the best method (exact
@@ -87,7 +95,7 @@ def leaderboard(results, as_json, formats, out, reference, dataset, scheme, alph
     front (★)."""
     from ..reports.rendering import print_terminal, to_csv, to_json, to_markdown, write_outputs
 
-    _, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine, reference=reference)
+    _, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine, reference=reference, fraction=fraction)
     if as_json:  # the same document as --format json, alone on stdout
         formats = tuple(f for f in formats if f != "terminal") or ("json",)
         if set(formats) != {"json"}:
@@ -257,9 +265,10 @@ def parse_reference(text: str) -> tuple[str, float]:
 @click.option("--name", default=None, metavar="STEM",
               help="File names STEM-<kind>.<format> instead of <dataset>-<scheme>-<kind> (one table only, and "
                    "STEM-adapted-<kind> for its methods adapted to each test session).")
+@_fraction_option
 @_with_table_options
-def plot(results, out, kinds, size, formats, methods, references, name, dataset, scheme, alpha, pool_machines,
-         machine) -> None:
+def plot(results, out, kinds, size, formats, methods, references, name, fraction, dataset, scheme, alpha,
+         pool_machines, machine) -> None:
     """Plot accuracy against latency / fit time / feature time (Pareto front),
     accuracy against frames and seconds seen (early scheme), confusion
     matrices (counts and row-normalised) and per-subject accuracy."""
@@ -267,7 +276,7 @@ def plot(results, out, kinds, size, formats, methods, references, name, dataset,
     from ..reports.figures import FORMATS, plot_table
     from ..reports.figures.cd import plot_cd_across
 
-    rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
+    rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine, fraction=fraction)
     n_adapted = sum(1 for lb in lbs if lb.adaptation)
     if name is not None and max(len(lbs) - n_adapted, n_adapted) > 1:  # one table, and its adapted methods' one
         raise TouchbenchError(f"--name {name}: the results hold {len(lbs)} tables; choose one with --dataset/--scheme")
@@ -292,14 +301,15 @@ def plot(results, out, kinds, size, formats, methods, references, name, dataset,
 @click.argument("results", nargs=-1, required=True, type=click.Path(exists=True))
 @click.option("--out", "-o", required=True, type=click.Path(file_okay=False), help="Folder for report.html and its files.")
 @click.option("--title", default="touchbench report", show_default=True)
+@_fraction_option
 @_with_table_options
-def report(results, out, title, dataset, scheme, alpha, pool_machines, machine) -> None:
+def report(results, out, title, fraction, dataset, scheme, alpha, pool_machines, machine) -> None:
     """Write one self-contained HTML page (images embedded) with every
     leaderboard and plot, plus the plots as PNG/SVG and the leaderboard as
     Markdown, CSV and JSON beside it."""
     from ..reports.html import write_report
 
-    rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine)
+    rs, lbs = _boards(results, dataset, scheme, alpha, pool_machines, machine, fraction=fraction)
     page = write_report(rs, lbs, Path(out), title=title)
     click.echo(f"wrote {page}")
 

@@ -13,6 +13,8 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from .across import across_friedman, across_note, ranks_across
+from .curve_table import curve_html
+from .labels import method_names
 from .leaderboard import Leaderboard
 from .rendering import RANK_LEGEND, display_rows, legend, write_outputs, write_text
 from .figures import plot_table
@@ -97,6 +99,8 @@ def render_html(rs: ResultSet, lbs: list[Leaderboard], plots: dict[str, dict[str
         parts.append(f"<p class='legend'>{html.escape(legend(lb))}</p>")
         for n in lb.notes:
             parts.append(f"<p class='note'>Note: {html.escape(n)}</p>")
+        if lb.curve is not None:
+            parts.append(curve_html(lb.title, lb.curve, method_names(lb.rows)))
         for name, paths in plots.get(lb.key, {}).items():
             png = [p for p in paths if p.suffix == ".png"]
             if png:

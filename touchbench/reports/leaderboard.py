@@ -38,6 +38,11 @@ are a figure of another kind: they get a table of their own (their rows'
 ``table_key`` carries the adaptation, :mod:`touchbench.reports.results`),
 titled and explained as such, ranked, tested and put on a Pareto front
 among themselves only, and left out of every comparison across tables.
+
+A table whose tasks are points of a data curve (:mod:`touchbench.reports.curves`: a learning curve
+over training subjects, or calibration captures of the test subject) ranks its methods at the
+curve's reference point (the full point; ``k = 0`` of a calibration curve) and carries the whole
+curve in ``curve``, with the smallest size reaching ``fraction`` of the full accuracy.
 """
 
 from __future__ import annotations
@@ -53,6 +58,8 @@ from ..core.errors import TouchbenchError
 from ..results.ledger import Looks
 from ..results.store import NOT_RECORDED
 from .breakdown import Breakdown
+from .curve_table import reference_note
+from .curves import DEFAULT_FRACTION, Curve, curve_of, reference_rows
 from .labels import method_label
 from .paired import _latest
 from .pareto import pareto_cost, pareto_front
@@ -102,6 +109,8 @@ class Leaderboard:
     live: pd.DataFrame | None = None
     #: the row columns the evaluation's ``report:`` block adds (:mod:`.breakdown`: ``recall[notouch]``...)
     breakdown: list[str] = field(default_factory=list)
+    #: the table's data curve, its rows at the curve's reference point (:mod:`.curves`); None off a curve
+    curve: Curve | None = None
 
     @property
     def title(self) -> str:
@@ -188,8 +197,7 @@ def _timings(s: pd.DataFrame) -> dict[str, float]:
 def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool_machines: bool,
                machine: str | None) -> Leaderboard:
     """The leaderboard of table ``key`` of ``rs``."""
-    s_all = rs.scores[rs.scores["table_key"] == key]
-    ok = ok_all[ok_all["table_key"] == key]
+    s_all, ok = reference_rows(rs.scores[rs.scores["table_key"] == key], ok_all[ok_all["table_key"] == key])
     first = s_all.iloc[0]
     folds = fold_values(ok) if len(ok) else pd.DataFrame(columns=["table_key", "method_id", "fold_key", *METRICS, "n_test",
                                                                   "n_train", "fold", "fold_group"])
@@ -468,13 +476,17 @@ def _add_closing_notes(df: pd.DataFrame, notes: list[str]) -> None:
 
 
 def build_leaderboards(rs: ResultSet, *, alpha: float = 0.05, pool_machines: bool = False,
-                       machine: str | None = None) -> list[Leaderboard]:
+                       machine: str | None = None, fraction: float = DEFAULT_FRACTION) -> list[Leaderboard]:
     """One :class:`Leaderboard` per dataset, target and scheme of ``rs`` (and one per adaptation to the
-    test data, after the plain ones)."""
+    test data, after the plain ones); ``fraction``: the share of the full accuracy a data curve's
+    methods are asked to reach."""
     ok = rs.ok
     out = []
     for key in dict.fromkeys(rs.scores["table_key"]):
         out.append(_build_one(rs, key, ok, alpha, pool_machines, machine))
+        preds = rs.predictions[rs.predictions["table_key"] == key] if rs.predictions is not None else None
+        out[-1].curve = curve_of(ok[ok["table_key"] == key], preds, fraction)
+        out[-1].notes[:0] = [reference_note(out[-1].curve)] if out[-1].curve is not None else []
     out.sort(key=lambda lb: bool(lb.adaptation))  # the plain tables first, each adapted one after them
     seen: dict[tuple[str, str, str], list[str]] = {}
     for lb in out:  # one dataset name, different data: "data 2", "data 3"... in the order met
@@ -489,7 +501,7 @@ def build_leaderboards(rs: ResultSet, *, alpha: float = 0.05, pool_machines: boo
 
 
 def leaderboard(*results: Any, alpha: float = 0.05, pool_machines: bool = False,
-                machine: str | None = None) -> list[Leaderboard]:
+                machine: str | None = None, fraction: float = DEFAULT_FRACTION) -> list[Leaderboard]:
     """The leaderboards of one or more runs, as ``touchbench leaderboard`` shows them.
 
     Each of ``results`` is a results directory written by a run (or a
@@ -501,4 +513,5 @@ def leaderboard(*results: Any, alpha: float = 0.05, pool_machines: bool = False,
     ``to_csv`` and ``to_json`` of :mod:`touchbench.reports.rendering` format a list of them.
     """
     paths = [getattr(r, "out", r) for r in results]
-    return build_leaderboards(load_results(paths), alpha=alpha, pool_machines=pool_machines, machine=machine)
+    return build_leaderboards(load_results(paths), alpha=alpha, pool_machines=pool_machines, machine=machine,
+                              fraction=fraction)

@@ -19,6 +19,7 @@ from rich.table import Table
 from ..core.atomic import atomic_write_bytes
 from .across import across_friedman, across_note, ranks_across
 from .breakdown import breakdown_cells, breakdown_headers, breakdown_legend
+from .curve_table import curve_cells, curve_essential, curve_json, curve_legend, curve_markdown, curve_titles, gain_cells, reach_lines
 from .labels import _label_parts, _name_cell, _num, _p, _pct, method_names
 from .leaderboard import Leaderboard
 from .seeds import CI_NOTES, legend_note, seeds_note
@@ -146,6 +147,7 @@ def to_markdown(lbs: list[Leaderboard], title: str | None = "Leaderboard") -> st
             out.append("")
             out.append(f"Note: {n}")
         out.append("")
+        out += curve_markdown(lb.title, lb.curve, method_names(lb.rows)) if lb.curve is not None else []
     ranks = ranks_across(lbs)
     if ranks is not None and len(ranks):
         out += [f"## Mean rank across {int(ranks['tables'].iloc[0])} tables", "",
@@ -185,7 +187,7 @@ def to_json(lbs: list[Leaderboard]) -> str:
             "alpha": lb.alpha, "machines": lb.machines, "reference_machine": lb.reference_machine,
             "pooled_machines": lb.pooled_machines, "notes": lb.notes, "rows": _records(lb),
             "leaky": lb.is_leaky, "looks": None if lb.looks is None else vars(lb.looks),
-            "adaptation": lb.adaptation,
+            "adaptation": lb.adaptation, "curve": curve_json(lb.curve, method_names(lb.rows)),
         })
     return json.dumps({"tables": tables}, indent=2) + "\n"
 
@@ -355,6 +357,28 @@ def _terminal_live(lb: Leaderboard, width: int) -> Table:
     return _fitted_table(lb.title, header, cells, [{0, 1}] * len(cells), width, LIVE_ESSENTIAL, LIVE_PRIORITY)
 
 
+def _print_curve(console: Console, lb: Leaderboard) -> None:
+    """A data curve's tables (:mod:`.curve_table`) laid out as any table, each cell's interval on the
+    number's line where every column fits so, else below it; then its sentences and legend."""
+    names = method_names(lb.rows)
+    for title, make in zip(curve_titles(lb.title, lb.curve), (curve_cells, gain_cells)):
+        for sep in (" ", "\n"):
+            header, cells = make(lb.curve, names, sep)
+            if not header:
+                break
+            essential = [h for h in curve_essential(lb.curve) if h in header] or header[:1]
+            keep, widths = terminal_layout(header, cells, [{0}] * len(cells), console.width, essential)
+            if len(keep) == len(header) and _table_width(widths, header) <= console.width:
+                break
+        if header:
+            _print_fitted(console, _fitted_table(title, header, cells, [{0}] * len(cells), console.width, essential))
+            console.print()
+    for line in reach_lines(lb.curve, names):
+        console.print(escape(line))
+    console.print(escape(curve_legend(lb.curve)), style="dim")
+    console.print()
+
+
 def _terminal_width() -> int | None:
     """The console width: ``COLUMNS`` or the terminal's own (None lets rich read them), 250 for a
     pipe or a file (the whole table)."""
@@ -371,6 +395,8 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
         for n in lb.notes:
             console.print(escape(f"Note: {n}"), style="yellow")
         console.print()
+        if lb.curve is not None:
+            _print_curve(console, lb)
     ranks = ranks_across(lbs)
     if ranks is not None and len(ranks):
         header = ["method", "mean rank", "mean accuracy %"]

@@ -14,7 +14,13 @@ adds the columns the reports need:
   label but differ in any parameter have two ids.
 - ``fold_key``: which test captures a fold scored (a hash of the fold's
   sorted capture ids, read from the predictions; without predictions, the
-  protocol seed, repetition and fold name). Methods are paired on it.
+  protocol seed, repetition and fold name). Methods are paired on it. A
+  point of a data curve (its ``curve``) is keyed by the point
+  (``subjects:3|``) before its base fold's protocol seed, repetition and
+  name: the points stay apart, a point's random draws (which may score
+  different captures: a calibration pool is drawn per draw) are replicates
+  of its base fold, and :mod:`touchbench.reports.curves` pairs the points
+  of a base fold on what follows ``|``.
 - ``machine``: a short hash of the manifest's platform description
   (platform string, architecture, processor, CPU count), ``machine_desc``
   its readable form. Timings are compared only within one machine.
@@ -28,7 +34,9 @@ adds the columns the reports need:
   and scheme label, and for a method adapted to the test data (its
   ``adaptation``, e.g. to each test subject's unlabelled captures) that
   adaptation too, so such a method is ranked, tested and put on a Pareto
-  front only with methods adapted the same way.
+  front only with methods adapted the same way; for a point of a data
+  curve, the curve (``subjects``, ``calibration``), so two curves never
+  share a table.
 
 A run interrupted before its reports were merged is read from its task
 fragments (``fragments/*.scores.parquet``). The merged files of any other are
@@ -217,6 +225,17 @@ def _protocol_scheme(manifest: dict[str, Any]) -> Any:
 
 
 _CROP_PREFIX = re.compile(r"^first[^/]*/")
+#: a data curve's point before its base fold's name (``n3#1/subject=s01``, ``k2#0/subject=s01``)
+_CURVE_PREFIX = re.compile(r"^[^/#]*#\d+/")
+
+
+def _curve_keys(s: pd.DataFrame, by_name: pd.Series) -> list[str]:
+    """The fold keys of ``s``, a point of a data curve's the point before its base fold's key by name
+    (``by_name``: protocol seed, repetition and base fold)."""
+    if "curve" not in s:
+        return list(s["fold_key"])
+    return [f"{c}:{z:g}|{n}" if c else k
+            for c, z, n, k in zip(s["curve"].astype(str), s["curve_size"], by_name, s["fold_key"])]
 
 
 def _result_dirs(paths: Iterable[str | Path]) -> list[Path]:
@@ -263,11 +282,14 @@ def _labelled_scores(s: pd.DataFrame, d: Path, m: dict[str, Any], mid: str, mdes
         for t, fp, cn, cp, ef, v in zip(s["target"], s["feature_params"], s["classifier_name"],
                                         s["classifier_params"], s["early_frames"], variants)
     ]
-    s["table_key"] = [  # a method adapted to the test data is never tabled with plain ones
-        _short_hash([dh, t, sc] + ([a] if a else []), 8)
-        for dh, t, sc, a in zip(s["dataset_hash"], s["target"], s["scheme_label"], s["adaptation"].astype(str))
+    s["table_key"] = [  # a method adapted to the test data is never tabled with plain ones, nor two curves' points
+        _short_hash([dh, t, sc] + ([a] if a else []) + ([f"curve={c}"] if c else []), 8)
+        for dh, t, sc, a, c in zip(s["dataset_hash"], s["target"], s["scheme_label"], s["adaptation"].astype(str),
+                                   s["curve"].astype(str) if "curve" in s else [""] * len(s))
     ]
     base_fold = s["fold"].astype(str).str.replace(_CROP_PREFIX, "", regex=True)
+    on_curve = s["curve"].astype(str) != "" if "curve" in s else pd.Series(False, index=s.index)
+    base_fold = base_fold.where(~on_curve, base_fold.str.replace(_CURVE_PREFIX, "", regex=True))
     s["fold_key"] = [f"{proto_seed}/{r}/{f}" for r, f in zip(s["repetition"], base_fold)]
     s["finished_at"] = s["finished_at"].astype(str) if "finished_at" in s else ""
     return s
@@ -355,14 +377,16 @@ def load_results(paths: Iterable[str | Path], *, predictions: bool = True) -> Re
         mid, mdesc = machine_id(m.get("platform"))
         s = _labelled_scores(s, d, m, mid, mdesc)
         p = _read_predictions(d, store)
+        by_name = s["fold_key"].copy()
         if p is not None and len(p):
             keys = (
                 p.groupby("task_id", sort=False)["capture_id"]
                 .apply(lambda c: "c:" + hashlib.sha256("\n".join(sorted(map(str, c))).encode()).hexdigest()[:12])
             )
             s["fold_key"] = [keys.get(t, fk) for t, fk in zip(s["task_id"], s["fold_key"])]
-            if predictions:
-                pred_frames.append(_labelled_predictions(p, s, d))
+        s["fold_key"] = _curve_keys(s, by_name)
+        if p is not None and len(p) and predictions:
+            pred_frames.append(_labelled_predictions(p, s, d))
         score_frames.append(s)
         sources.append(_source_record(d, m, s, mid, mdesc, changed))
     if not score_frames:

@@ -9,6 +9,12 @@ it gets right. Scores are computed from those predictions with the engine's
 own metric function, so a test can state accuracies by construction. The
 classifier seed of a task is derived from its labels and fold, as the
 engine's is, so the same method under another label is a replicate.
+
+A run on a data curve (``curve="subjects"`` or ``"calibration"``) names
+its folds as the engine does, the point before the base fold
+(``n3#1/subject=s01``: 3 training subjects, draw 1; ``k2#0/subject=s01``: 2
+labelled captures per class, draw 0): the scores get the point's ``curve``,
+``curve_size`` and ``curve_draw`` and the base fold's name as ``fold_group``.
 """
 
 from __future__ import annotations
@@ -24,7 +30,7 @@ import yaml
 
 from ..core.hashing import canonical_json
 from ..evaluation.metrics import metrics
-from ..protocols.schemes import curve_columns
+from ..protocols.schemes import CurvePoint, curve_columns
 from ..results.store import PREDICTED, SCHEMA_VERSION, TRUE, confusion_table, task_row, write_results_table
 
 __all__ = ["FakeMethod", "write_fake_run"]
@@ -67,16 +73,27 @@ def _per_fold(v: Any, i: int) -> float:
     return float(v[i]) if isinstance(v, (list, tuple, np.ndarray)) else float(v)
 
 
+def _curve_place(fold: str, curve: str) -> tuple[dict[str, Any], str]:
+    """The curve columns and base fold of fold name ``fold`` (``n3#1/subject=s01`` on a curve)."""
+    if not curve:
+        return curve_columns(None), fold
+    point, base = fold.split("/", 1)
+    size, draw = point[1:].split("#")
+    return curve_columns(CurvePoint(curve, float(size), int(draw))), base
+
+
 def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Sequence[str]], methods: list[FakeMethod], *,
                    dataset: str = "fake", dataset_hash: str = "d" * 64, scheme: Any = None, target: str = "gesture",
                    seed: int = 0, run_id: str = "run1", protocol: str = "fake-protocol",
                    platform: dict[str, Any] | None = None, frame_rate: float | None = None,
-                   finished_at: str = "2026-01-01T00:00:00+00:00", seconds: float = 1.0, repetition: int = 0) -> Path:
+                   finished_at: str = "2026-01-01T00:00:00+00:00", seconds: float = 1.0, repetition: int = 0,
+                   curve: str = "") -> Path:
     """Write a results directory (see the module docstring); returns its path.
 
     ``frame_rate``: the fake sensor's (None: the manifest gives none, so
     reports cannot turn frames into seconds); ``repetition``: the tasks' repetition (another one
-    gives every task another classifier seed, as the engine's repetitions do)."""
+    gives every task another classifier seed, as the engine's repetitions do); ``curve``: the data
+    curve the folds are points of ("": none)."""
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -90,11 +107,12 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
             ids = list(ids)
             task_id = f"{run_id}-t{m_i}-{f_i}-{m['features']}-{m['classifier']}"
             fold_name = fold if m["early_frames"] is None else f"first{m['early_frames']}f/{fold}"
+            place, group = _curve_place(fold, curve)
             base = task_row({
                 "task_id": task_id, "protocol": protocol,
                 "dataset": dataset, "dataset_hash": dataset_hash, "target": target,
                 "scheme": scheme if isinstance(scheme, str) else scheme["name"], "repetition": repetition,
-                "fold": fold_name, "fold_group": fold,
+                "fold": fold_name, "fold_group": group,
                 "early_frames": np.nan if m["early_frames"] is None else float(m["early_frames"]),
                 "features": m["features"], "feature_sets": "+".join(n for n, _ in m["feature_params"]),
                 "feature_params": canonical_json(m["feature_params"]), "classifier": m["classifier"],
@@ -102,7 +120,7 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
                 "seed": zlib.crc32(f"{m['features']}|{m['classifier']}|{fold_name}".encode()
                                    + (f"|{repetition}".encode() if repetition else b"")),
                 "n_train": len(caps) - len(ids), "n_test": len(ids), "leakage": "", "selection": "",
-                "adaptation": m["adaptation"], **curve_columns(None),
+                "adaptation": m["adaptation"], **place,
             })
             base.update(run_id=run_id, protocol_hash="p" * 64, n_classes_train=len(classes), finished_at=finished_at)
             if fold in m["failed_folds"]:
@@ -122,7 +140,7 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
                         load_avg=m["load_avg"], usable_cpus=(platform or DEFAULT_PLATFORM).get("cpu_count"))
             score_rows.append(base)
             pred_frames.append(pd.DataFrame({
-                "run_id": run_id, "task_id": task_id, "repetition": repetition, "fold": fold_name, "fold_group": fold,
+                "run_id": run_id, "task_id": task_id, "repetition": repetition, "fold": fold_name, "fold_group": group,
                 "early_frames": base["early_frames"], "features": m["features"], "classifier": m["classifier"],
                 "capture_id": ids, "subject": caps.loc[ids, "subject"].astype(str).to_numpy(),
                 "gesture": caps.loc[ids, "gesture"].astype(str).to_numpy(), TRUE: true, PREDICTED: pred.astype(str),

@@ -32,11 +32,13 @@ __all__ = ["confusion_matrix", "draw", "plot_confusion"]
 
 
 def confusion_matrix(rs: ResultSet, lb: Leaderboard, method: str) -> pd.DataFrame:
-    """Counts (rows: true class, columns: predicted) of ``method`` pooled over its folds."""
+    """Counts (rows: true class, columns: predicted) of ``method`` pooled over its folds (on a data
+    curve, those of the table's reference point)."""
     p = rs.predictions
     if p is None:
         raise ValueError("no predictions: confusion matrices need predictions.parquet")
     p = p[(p["table_key"] == lb.key) & (p["method_id"] == method)]
+    p = p[p["fold_key"].isin(set(lb.folds.loc[lb.folds["method_id"] == method, "fold_key"]))]
     p = p.sort_values("finished_at", kind="stable").drop_duplicates(["fold_key", "seed", "capture_id"], keep="last")
     classes = sorted(set(p[TRUE].astype(str)) | set(p[PREDICTED].astype(str)))
     m = pd.crosstab(p[TRUE].astype(str), p[PREDICTED].astype(str)).reindex(index=classes, columns=classes, fill_value=0)

@@ -25,7 +25,7 @@ def plot_subjects(rs: ResultSet, lb: Leaderboard, base: Path, top: int = 5, size
     rows = lb.rows.head(top)
     series = {}
     for _, r in rows.iterrows():
-        s = subject_values(preds, r["method_id"])
+        s = subject_values(preds, r["method_id"], lb.folds.loc[lb.folds["method_id"] == r["method_id"], "fold_key"])
         if len(s):
             series[r["method_id"]] = (r, s)
     if not series:

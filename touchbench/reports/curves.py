@@ -1,0 +1,282 @@
+"""Data curves: a method's accuracy against the training data it was given, from one table's tasks.
+
+A scheme that sweeps the training data writes one task per point of its
+curve (the scores' ``curve``, ``curve_size`` and ``curve_draw``,
+:class:`touchbench.protocols.schemes.CurvePoint`; fold names such as
+``n3#1/subject=s01``, the point before its base fold):
+
+- ``subjects``, a learning curve: trained on ``n`` of each base fold's
+  training subjects (a fraction of them when below 1), several random draws
+  per ``n``, the full point (every training subject) always among them;
+- ``calibration``: ``k`` labelled captures per class of the test subject
+  joined the training data, ``k = 0`` (none) among them.
+
+Every point of a base fold is scored on the same test captures as its other
+points (paired; :mod:`touchbench.reports.results` keys a point's fold by the
+point, then its base fold's captures).
+
+The statistics (float64):
+
+- a point's accuracy: per base fold (its test subject or subjects, the
+  statistical unit), the mean over its draws (and seeds), then the mean over
+  the base folds. Draws share their base fold's test captures, so they are
+  averaged first and never counted as independent;
+- its 95 % interval: Student's t over the base folds' means, clipped to
+  [0, 1] (as the leaderboard's interval over folds,
+  :func:`touchbench.reports.stats.fold_interval`). With a single base fold
+  (one test set), a percentile bootstrap over the draws and the test
+  captures crossed, the pigeonhole bootstrap of Owen (2007, Annals of
+  Applied Statistics 1(2), 2007): each resample draws the captures and the
+  draws with replacement, independently, so both the test set's and the
+  draws' variation widen it (from the predictions; without them, none);
+- ``reach``: the smallest size whose accuracy is at least ``fraction`` of
+  the full accuracy: on a subjects curve the full point's (the largest
+  ``n``); on a calibration curve the largest ``k`` swept's (``k = 0``, no
+  label of the test subject, is the baseline the gains are measured from);
+- ``gains`` (calibration): each ``k`` over ``k = 0``, paired over base
+  folds: per base fold the draws' mean at ``k`` minus that at ``k = 0``,
+  the mean of those differences and their Student t interval (not clipped);
+  one base fold: the pigeonhole bootstrap of the difference, the captures
+  drawn once for both points.
+
+The leaderboard's own table of a curve's tasks is its reference point
+(:func:`reference_rows`): the full point of a subjects curve, ``k = 0`` of a
+calibration curve.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from ..core.errors import TouchbenchError
+from .stats import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, fold_interval
+
+__all__ = ["Curve", "DEFAULT_FRACTION", "check_fraction", "crossed_bootstrap", "curve_of", "reference_rows"]
+
+#: the share of its full accuracy a method is asked to reach (``--fraction``)
+DEFAULT_FRACTION = 0.95
+LEVEL = 0.95
+
+
+@dataclass
+class Curve:
+    """One table's curve: ``axis`` ("subjects" or "calibration"), ``sizes`` (ascending), and per method
+    (``method_id``) its ``points`` (``size``, ``accuracy``, ``ci_low``, ``ci_high``, ``ci_method``: "t"
+    over ``n_units`` base folds or "bootstrap" over draws and captures, ``n_draws``), its ``gains`` over
+    ``k = 0`` (calibration only: ``size``, ``gain``, ``ci_low``, ``ci_high``, ``ci_method``, ``n_units``)
+    and its ``reach`` (``full_size``, ``full_accuracy``, ``size``: the smallest size reaching
+    ``fraction`` of ``full_accuracy``, ``accuracy`` there; ``baseline``: the accuracy at ``k = 0``)."""
+
+    axis: str
+    sizes: list[float]
+    points: pd.DataFrame
+    gains: pd.DataFrame
+    reach: pd.DataFrame
+    fraction: float
+    #: a subjects curve whose base folds have different numbers of training subjects: the largest size
+    #: is each base fold's full point ("all")
+    full_varies: bool = False
+
+    @property
+    def units(self) -> int:
+        """The most base folds a point was scored on."""
+        return int(self.points["n_units"].max()) if len(self.points) else 0
+
+
+def check_fraction(fraction: float) -> float:
+    """``fraction`` as a float in (0, 1], else one clear error."""
+    f = float(fraction)
+    if not (0.0 < f <= 1.0):
+        raise TouchbenchError(f"fraction {fraction!r}: the share of the full accuracy must be above 0 and at most 1")
+    return f
+
+
+def _on_curve(s: pd.DataFrame) -> pd.Series:
+    return s["curve"].astype(str) != "" if "curve" in s else pd.Series(False, index=s.index)
+
+
+def _reference_sizes(scores: pd.DataFrame) -> dict[tuple[str, str], float]:
+    """Per curve and base fold, the size of the reference point: the base fold's largest (its full
+    point: every training subject of that fold) on a subjects curve, 0 on a calibration curve (its
+    largest where 0 was not swept)."""
+    on = scores[_on_curve(scores)]
+    out = {}
+    for (axis, base), g in on.groupby([on["curve"].astype(str), _base(on["fold_key"])], sort=False):
+        sizes = g["curve_size"].astype(np.float64)
+        out[(axis, base)] = 0.0 if axis == "calibration" and (sizes == 0).any() else float(sizes.max())
+    return out
+
+
+def reference_rows(scores: pd.DataFrame, ok: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """A table's tasks (``scores``) and its finished ones (``ok``) at the reference point of their
+    curve (:func:`_reference_sizes`); both unchanged off a curve."""
+    ref = _reference_sizes(scores)
+    if not ref:
+        return scores, ok
+
+    def keep(frame: pd.DataFrame) -> pd.DataFrame:
+        want = [ref.get((str(c), b), math.nan) for c, b in zip(frame["curve"], _base(frame["fold_key"]))]
+        return frame[~_on_curve(frame) | np.isclose(frame["curve_size"].astype(np.float64), want)]
+
+    return keep(scores), keep(ok)
+
+
+def _base(fold_keys: pd.Series) -> pd.Series:
+    """The base fold of each point's fold key (what follows the point)."""
+    return fold_keys.astype(str).str.split("|", n=1).str[-1]
+
+
+def _unit_means(g: pd.DataFrame) -> pd.Series:
+    """Per base fold, the mean over its draws of each draw's accuracy (its seeds averaged first)."""
+    return g.groupby(["base", "curve_draw"])["accuracy"].mean().groupby(level=0).mean()
+
+
+def crossed_bootstrap(a: np.ndarray, b: np.ndarray | None = None, *, level: float = LEVEL,
+                      resamples: int = BOOTSTRAP_RESAMPLES, seed: int = BOOTSTRAP_SEED) -> tuple[float, float]:
+    """Percentile interval of the mean of ``a`` (draws x captures, each cell 1 right / 0 wrong, or the
+    mean over seeds; NaN: a capture the draw did not score), minus the mean of ``b`` (another point's
+    draws x the same captures) when given: the pigeonhole bootstrap (Owen 2007), captures and each
+    point's draws resampled independently, the captures once for both points; each resample's mean is
+    over the cells scored. NaN with fewer than two captures."""
+    a = np.asarray(a, dtype=np.float64)
+    b = None if b is None else np.asarray(b, dtype=np.float64)
+    if a.shape[1] < 2:
+        return math.nan, math.nan
+    rng = np.random.default_rng(seed)
+    stat = np.concatenate([_crossed_block(rng, a, b, min(BLOCK, resamples - done))
+                           for done in range(0, resamples, BLOCK)])
+    stat = stat[np.isfinite(stat)]  # a resample that drew no scored cell says nothing
+    if stat.size == 0:
+        return math.nan, math.nan
+    tail = 100.0 * (1.0 - level) / 2.0
+    lo, hi = np.percentile(stat, [tail, 100.0 - tail])
+    return float(lo), float(hi)
+
+
+#: resamples drawn at a time (memory: a block of resamples x test captures)
+BLOCK = 1000
+
+
+def _counts(rng: np.random.Generator, rows: int, n: int) -> np.ndarray:
+    """How often each of ``n`` items is drawn (with replacement, ``n`` draws), in each of ``rows`` resamples."""
+    idx = rng.integers(0, n, size=(rows, n)) + n * np.arange(rows)[:, None]
+    return np.bincount(idx.ravel(), minlength=rows * n).reshape(rows, n).astype(np.float64)
+
+
+def _crossed_block(rng: np.random.Generator, a: np.ndarray, b: np.ndarray | None, rows: int) -> np.ndarray:
+    """``rows`` resamples of :func:`crossed_bootstrap`'s statistic."""
+    caps = _counts(rng, rows, a.shape[1])
+
+    def mean(m: np.ndarray) -> np.ndarray:  # over the scored cells the resample drew
+        draws, scored = _counts(rng, rows, m.shape[0]), np.isfinite(m)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return (((draws @ np.where(scored, m, 0.0)) * caps).sum(axis=1)
+                    / ((draws @ scored.astype(np.float64)) * caps).sum(axis=1))
+
+    return mean(a) - (mean(b) if b is not None else 0.0)
+
+
+def _matrix(preds: pd.DataFrame | None, task_ids: pd.Series) -> pd.DataFrame:
+    """Draws x test captures of the tasks ``task_ids``: each cell the capture's correctness (the mean
+    over seeds; NaN where the draw did not score the capture)."""
+    if preds is None or preds.empty:
+        return pd.DataFrame()
+    p = preds[preds["task_id"].isin(set(task_ids))]
+    if p.empty:
+        return pd.DataFrame()
+    return p.astype({"correct": np.float64}).pivot_table(index="curve_draw", columns="capture_id", values="correct",
+                                                         aggfunc="mean")
+
+
+def _point(g: pd.DataFrame, preds: pd.DataFrame | None) -> dict:
+    """The accuracy and interval of one method at one size (its tasks ``g``)."""
+    units = _unit_means(g)
+    out = {"n_units": int(len(units)), "n_draws": int(g["curve_draw"].nunique())}
+    if len(units) >= 2:
+        mean, _, lo, hi = fold_interval(units.to_numpy(np.float64), LEVEL)
+        return {**out, "accuracy": mean, "ci_low": lo, "ci_high": hi, "ci_method": "t"}
+    m = _matrix(preds, g["task_id"])
+    lo, hi = crossed_bootstrap(m.to_numpy()) if m.shape[1] else (math.nan, math.nan)
+    return {**out, "accuracy": float(units.mean()) if len(units) else math.nan, "ci_low": lo, "ci_high": hi,
+            "ci_method": "bootstrap" if np.isfinite(lo) else ""}
+
+
+def _gain(g: pd.DataFrame, g0: pd.DataFrame, preds: pd.DataFrame | None) -> dict:
+    """The paired gain of one method at a size (tasks ``g``) over ``k = 0`` (tasks ``g0``)."""
+    d = (_unit_means(g) - _unit_means(g0)).dropna()
+    n = int(len(d))
+    if n >= 2:
+        mean, sd = float(d.mean()), float(d.std(ddof=1))
+        half = float(stats.t.ppf(0.5 + LEVEL / 2.0, n - 1)) * sd / math.sqrt(n)
+        return {"gain": mean, "ci_low": mean - half, "ci_high": mean + half, "ci_method": "t", "n_units": n}
+    out = {"gain": float(d.mean()) if n else math.nan, "ci_low": math.nan, "ci_high": math.nan, "ci_method": "",
+           "n_units": n}
+    m, m0 = _matrix(preds, g["task_id"]), _matrix(preds, g0["task_id"])
+    if m.shape[1] and m0.shape[1]:
+        caps = m.columns.union(m0.columns)
+        lo, hi = crossed_bootstrap(m.reindex(columns=caps).to_numpy(), m0.reindex(columns=caps).to_numpy())
+        out.update(ci_low=lo, ci_high=hi, ci_method="bootstrap" if np.isfinite(lo) else "")
+    return out
+
+
+def _reach(points: pd.DataFrame, axis: str, fraction: float) -> dict:
+    """One method's full accuracy and the smallest size reaching ``fraction`` of it (see the module)."""
+    p = points.dropna(subset=["accuracy"]).sort_values("size")
+    if p.empty:
+        return {"full_size": math.nan, "full_accuracy": math.nan, "size": math.nan, "accuracy": math.nan,
+                "baseline": math.nan}
+    full = p.iloc[-1]
+    # a tolerance of float rounding: a point equal to the target reaches it
+    reached = p[p["accuracy"] >= fraction * full["accuracy"] - 1e-12].iloc[0]
+    base = p[np.isclose(p["size"], 0.0)]
+    return {"full_size": float(full["size"]), "full_accuracy": float(full["accuracy"]), "size": float(reached["size"]),
+            "accuracy": float(reached["accuracy"]),
+            "baseline": float(base["accuracy"].iloc[0]) if axis == "calibration" and len(base) else math.nan}
+
+
+def _curve_tasks(ok: pd.DataFrame, preds: pd.DataFrame | None) -> tuple[pd.DataFrame, pd.DataFrame | None, bool]:
+    """The finished tasks on a curve with their base fold, their predictions with each task's draw,
+    and whether the full points of a subjects curve differ between base folds (each then set to the
+    largest: one column)."""
+    g = ok[_on_curve(ok)].copy()
+    g["base"] = _base(g["fold_key"])
+    g["curve_size"] = g["curve_size"].astype(np.float64)
+    subjects = g["curve"] == "subjects"
+    full = g[subjects].groupby("base")["curve_size"].transform("max")
+    varies = full.nunique() > 1
+    if varies:  # base folds with different numbers of training subjects: their full points form one column
+        g.loc[full.index[g.loc[full.index, "curve_size"] == full], "curve_size"] = float(full.max())
+    if preds is not None and len(preds):
+        info = g.drop_duplicates("task_id").set_index("task_id")[["curve_draw"]]
+        preds = preds.drop(columns=[c for c in ("curve_draw",) if c in preds]).join(info, on="task_id", how="inner")
+    return g, preds, bool(varies)
+
+
+def curve_of(ok: pd.DataFrame, preds: pd.DataFrame | None, fraction: float = DEFAULT_FRACTION) -> Curve | None:
+    """The curve of one table's finished tasks ``ok`` (``preds``: their predictions; None when the
+    table's tasks are on no curve)."""
+    fraction = check_fraction(fraction)
+    g, preds, varies = _curve_tasks(ok, preds)
+    if g.empty:
+        return None
+    axis = str(g["curve"].value_counts().index[0])
+    g = g[g["curve"] == axis]
+    points, gains, reach = [], [], []
+    for mid, gm in g.groupby("method_id", sort=False):
+        mine = [{"method_id": mid, "size": size, **_point(gs, preds)} for size, gs in gm.groupby("curve_size")]
+        points += mine
+        zero = gm[np.isclose(gm["curve_size"], 0.0)]
+        if axis == "calibration" and len(zero):
+            gains += [{"method_id": mid, "size": size, **_gain(gs, zero, preds)}
+                      for size, gs in gm.groupby("curve_size") if size > 0]
+        reach.append({"method_id": mid, **_reach(pd.DataFrame(mine), axis, fraction)})
+    reach_df = pd.DataFrame(reach).sort_values("full_accuracy", ascending=False, kind="stable", na_position="last")
+    return Curve(axis=axis, sizes=sorted(set(g["curve_size"])), points=pd.DataFrame(points),
+                 gains=pd.DataFrame(gains, columns=["method_id", "size", "gain", "ci_low", "ci_high", "ci_method",
+                                                    "n_units"]),
+                 reach=reach_df.reset_index(drop=True), fraction=fraction, full_varies=varies and axis == "subjects")
