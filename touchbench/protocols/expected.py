@@ -113,7 +113,8 @@ class ExpectedResult(_Model):
             return v
         if isinstance(v.get("cause"), str):
             raise _ErrorAt(("cause",), "a cause is a mapping with its kind: {kind: measured, text, command, "
-                                       "output}, {kind: ruled_out, ruled_out: [...]} or {kind: unexplained}")
+                                       "output}, {kind: ruled_out, ruled_out: [...]} or {kind: unexplained} "
+                                       "(a cause as text, with measured_by, is the former form)")
         if "measured_by" in v:
             raise _ErrorAt(("measured_by",), "measured_by is now a measured cause's command: "
                                              "cause: {kind: measured, text, command, output}")
