@@ -402,7 +402,7 @@ def test_report_gives_each_paper_number_its_cause_and_its_kind(tmp_path):
     # 4 numbers outside tolerance: BMH measured, MSD ruled out, SMMHH and LBPTOP unexplained
     assert "**Causes of the 4 accuracies outside tolerance:** 1 measured (" in text
     assert "), 1 ruled out (" in text and "), 2 unexplained (" in text
-    assert "paper 100.00 %, -50.00 points (tolerance 5); cause ruled out" in text
+    assert "paper 100.00 %, -50.00 points (tolerance 5); cause open, candidates ruled out" in text
 
     (tmp_path / "scene").mkdir()
     run = ProtocolRun(path=_cause_protocol(tmp_path / "scene", "scene:tiny"), name="gaus-causes",

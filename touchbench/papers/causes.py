@@ -11,10 +11,13 @@ from collections import Counter
 
 from ..protocols.expected import CAUSE_KINDS, Cause, RuledOut
 
-__all__ = ["KIND_LABELS", "cause_cell", "kind_counts"]
+__all__ = ["KIND_LABELS", "KIND_SHORT", "cause_cell", "kind_counts"]
 
-#: How the report names each kind of cause.
+#: How the report names each kind of cause (the cause column's first word).
 KIND_LABELS = {"measured": "measured", "ruled_out": "ruled out", "unexplained": "unexplained"}
+#: Each kind in a few words, for the list of the differences.
+KIND_SHORT = {"measured": "cause measured", "ruled_out": "cause open, candidates ruled out",
+              "unexplained": "cause unexplained"}
 
 
 def _tried(r: RuledOut) -> str:

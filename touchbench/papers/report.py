@@ -31,7 +31,7 @@ from ..results.manifest import git_revision
 from ..results.store import PREDICTED, TRUE, read_results_table
 from ..results.summary import check_expected
 from ..scenes import load_scene
-from .causes import KIND_LABELS, cause_cell, kind_counts
+from .causes import KIND_SHORT, cause_cell, kind_counts
 from .profiles import Profile, apply_profile
 
 __all__ = ["PAPERS", "ProtocolRun", "audit_dir", "write_report"]
@@ -404,7 +404,7 @@ def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
                 sec.kinds.append(e["kind"])
                 flags.append(f"{e['cell']} (`{r.name}`): ours {e['observed']:.2f} %, paper "
                              f"{e['expected']:.2f} %, {e['difference']:+.2f} points (tolerance {e['tolerance']:g}); "
-                             f"cause {KIND_LABELS[e['kind']]}")
+                             f"{KIND_SHORT[e['kind']]}")
         body.append("")
     body += _audit_section(proto, r.out)
     others = _other_sections(proto, scores, preds, flags)
