@@ -206,31 +206,56 @@ def test_a_yaml_boolean_in_a_filter_is_shown_as_written(tmp_path):
         prepare_evaluation(p)
 
 
-# ------------------------------------------------- a paper number's measured cause
-# lines 8-12 after BASE: expected, results, features, classifier, value; 13 and 14 the lines under test
+# ------------------------------------------------- a paper number's cause and its kind
+# lines 8-12 after BASE: expected, results, features, classifier, value; 13 on the lines under test
 RESULT = "expected:\n  results:\n    - features: [test-mean]\n      classifier: test-logreg\n      value: 50\n"
 
 
 @pytest.mark.parametrize("extra,expected", [
-    ("      cause: folds share subjects\n",
-     "protocols/x.yaml:13: expected.results[0].cause: a cause needs measured_by: the touchbench command"),
+    # the former form: a cause as text, with measured_by beside it
+    ("      cause: folds share subjects\n      measured_by: touchbench run p.yaml\n",
+     "protocols/x.yaml:13: expected.results[0].cause: a cause is a mapping with its kind: {kind: measured"),
     ("      measured_by: touchbench run p.yaml\n",
-     "protocols/x.yaml:13: expected.results[0].measured_by: measured_by needs a cause"),
-    ("      cause: folds share subjects\n      measured_by: python x.py\n",
-     "protocols/x.yaml:14: expected.results[0].measured_by: measured_by is a touchbench command (starting "
+     "protocols/x.yaml:13: expected.results[0].measured_by: measured_by is now a measured cause's command"),
+    ("      cause: {text: folds share subjects}\n",
+     "protocols/x.yaml:13: expected.results[0].cause.kind: a cause needs its kind: one of measured, ruled_out, "
+     "unexplained"),
+    ("      cause: {kind: guessed}\n",
+     "protocols/x.yaml:13: expected.results[0].cause.kind: Input should be 'measured', 'ruled_out' or 'unexplained'"),
+    ("      cause: {kind: measured, text: folds share subjects, command: touchbench run p.yaml}\n",
+     "protocols/x.yaml:13: expected.results[0].cause.output: a measured cause needs output: what that command "
+     "printed or gave"),
+    ("      cause: {kind: measured, text: folds, output: '60.0'}\n",
+     "protocols/x.yaml:13: expected.results[0].cause.command: a measured cause needs command"),
+    ("      cause: {kind: measured, text: folds, command: python x.py, output: '60.0'}\n",
+     "protocols/x.yaml:13: expected.results[0].cause.command: a command is a touchbench command (starting "
      "'touchbench '), got 'python x.py'"),
-    ("      cause: ''\n      measured_by: touchbench run p.yaml\n",
-     "protocols/x.yaml:13: expected.results[0].cause: String should have at least 1 character"),
+    ("      cause: {kind: ruled_out, text: the features}\n",
+     "protocols/x.yaml:13: expected.results[0].cause.ruled_out: a ruled_out cause lists what was excluded"),
+    ("      cause: {kind: unexplained, command: touchbench run p.yaml}\n",
+     "protocols/x.yaml:13: expected.results[0].cause.command: command belongs to a measured cause; this cause is "
+     "unexplained"),
+    ("      cause: {kind: ruled_out, ruled_out: [{tried: grouped folds, gave: '60.0'}]}\n",
+     "protocols/x.yaml:13: expected.results[0].cause.ruled_out[0].command: give one of command"),
+    ("      cause:\n        kind: ruled_out\n        ruled_out:\n          - {tried: a, command: run x, gave: b}\n",
+     "protocols/x.yaml:16: expected.results[0].cause.ruled_out[0].command: a command is a touchbench command"),
 ])
-def test_a_cause_comes_with_the_command_that_measured_it(extra, expected):
+def test_a_cause_says_its_kind_and_what_backs_it(extra, expected):
     msg = error(BASE + RESULT + extra)
     assert msg.startswith(expected), msg
     assert "\n" not in msg
 
 
-def test_a_measured_cause_is_kept():
-    p = parse_protocol(BASE + RESULT + "      cause: folds share subjects\n      measured_by: touchbench run p.yaml\n",
-                       "protocols/x.yaml")
-    r = p.expected.results[0]
-    assert (r.cause, r.measured_by) == ("folds share subjects", "touchbench run p.yaml")
+def test_a_cause_of_each_kind_is_kept():
+    measured = "      cause: {kind: measured, text: folds, command: touchbench run p.yaml, output: '60.0'}\n"
+    r = parse_protocol(BASE + RESULT + measured, "protocols/x.yaml").expected.results[0]
+    assert (r.cause.kind, r.cause.text, r.cause.command, r.cause.output) == (
+        "measured", "folds", "touchbench run p.yaml", "60.0")
+    ruled = ("      cause: {kind: ruled_out, text: the features, ruled_out: [{tried: grouped folds, "
+             "command: touchbench run g.yaml, gave: '44.3'}, {tried: Weka, source: docs/research/w.md, gave: '49.0'}]}\n")
+    r = parse_protocol(BASE + RESULT + ruled, "protocols/x.yaml").expected.results[0]
+    assert [(t.tried, t.command, t.source, t.gave) for t in r.cause.ruled_out] == [
+        ("grouped folds", "touchbench run g.yaml", None, "44.3"), ("Weka", None, "docs/research/w.md", "49.0")]
+    r = parse_protocol(BASE + RESULT + "      cause: {kind: unexplained}\n", "protocols/x.yaml").expected.results[0]
+    assert (r.cause.kind, r.cause.text, r.cause.ruled_out) == ("unexplained", None, [])
     assert parse_protocol(BASE + RESULT, "protocols/x.yaml").expected.results[0].cause is None

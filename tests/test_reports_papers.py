@@ -351,46 +351,98 @@ def test_report_shows_the_cnn_leakage_audit_and_which_variant_reaches_the_paper(
 
 
 def _cause_protocol(tmp_path: Path, dataset: str) -> Path:
+    # five paper numbers: SD within; BMH a measured cause; MSD a cause ruled out to one open; SMMHH unexplained
+    # with what was tried; LBPTOP no cause at all
     return _write(tmp_path / "gaus-causes.yaml", f"""
 name: gaus-causes
 dataset: {dataset}
 scheme: {{name: kfold, k: 2}}
-features: [[sd], [bmh], [msd]]
+features: [[sd], [bmh], [msd], [smmhh], [lbptop]]
 classifiers: [gaus-rf]
 expected:
   tolerance: 5
   results:
     - {{features: [sd], classifier: gaus-rf, value: 100, source: "T5 SD"}}
     - {{features: [bmh], classifier: gaus-rf, value: 100, source: "T5 BMH",
-       cause: "folds | subjects", measured_by: "touchbench run readings.yaml"}}
-    - {{features: [msd], classifier: gaus-rf, value: 100, source: "T5 MSD"}}
+       cause: {{kind: measured, text: "folds | subjects", command: "touchbench run readings.yaml", output: "100.0"}}}}
+    - {{features: [msd], classifier: gaus-rf, value: 100, source: "T5 MSD",
+       cause: {{kind: ruled_out, text: "the feature values remain",
+               ruled_out: [{{tried: "grouped folds", command: "touchbench run g.yaml", gave: "60.0"}},
+                           {{tried: "Weka's forest", source: "docs/research/w.md", gave: "49.0"}}]}}}}
+    - {{features: [smmhh], classifier: gaus-rf, value: 100, source: "T5 SMMHH",
+       cause: {{kind: unexplained, ruled_out: [{{tried: "1000 trees", command: "touchbench run e.yaml", gave: "68.2"}}]}}}}
+    - {{features: [lbptop], classifier: gaus-rf, value: 100, source: "T5 LBPTOP"}}
 """)
 
 
-def test_report_gives_each_paper_number_its_cause(tmp_path):
+def _cause_run(out: Path, dataset: str) -> Path:
     caps = pd.DataFrame({"capture_id": ["a", "b", "c", "d"], "subject": ["s1", "s1", "s2", "s2"],
                          "gesture": ["pat", "rub", "pat", "rub"]})
     folds = {"f1": ["a", "b"], "f2": ["c", "d"]}
     half = {"f1": ["a"], "f2": ["c"]}  # 1 of 2 wrong in each fold: 50 %
-    methods = [FakeMethod("sd", "gaus-rf"), FakeMethod("bmh", "gaus-rf", wrong=half),
-               FakeMethod("msd", "gaus-rf", wrong=half)]
-    real = write_fake_run(tmp_path / "real", caps, folds, methods, dataset="haart-challenge")
-    run = ProtocolRun(path=_cause_protocol(tmp_path, "haart-challenge"), name="gaus-causes", out=real, changes=[])
+    methods = [FakeMethod("sd", "gaus-rf")] + [FakeMethod(f, "gaus-rf", wrong=half)
+                                               for f in ("bmh", "msd", "smmhh", "lbptop")]
+    return write_fake_run(out, caps, folds, methods, dataset=dataset)
+
+
+def test_report_gives_each_paper_number_its_cause_and_its_kind(tmp_path):
+    run = ProtocolRun(path=_cause_protocol(tmp_path, "haart-challenge"), name="gaus-causes",
+                      out=_cause_run(tmp_path / "real", "haart-challenge"), changes=[])
     text = write_report([run], PROFILES["full"], tmp_path / "R.md").read_text()
     assert "| tolerance | within | cause |" in text
     assert "| T5 SD | sd | gaus-rf | 100.00 | 100.00 | +0.00 | 5 | yes | reproduced |" in text
-    assert ("| T5 BMH | bmh | gaus-rf | 100.00 | 50.00 | -50.00 | 5 | **NO** | folds \\| subjects "
-            "(measured by `touchbench run readings.yaml`) |") in text
-    assert "| T5 MSD | msd | gaus-rf | 100.00 | 50.00 | -50.00 | 5 | **NO** | not explained |" in text
+    miss = "| 100.00 | 50.00 | -50.00 | 5 | **NO** |"
+    assert (f"| T5 BMH | bmh | gaus-rf {miss} **measured:** folds \\| subjects; `touchbench run readings.yaml` "
+            "gave: 100.0 |") in text
+    assert (f"| T5 MSD | msd | gaus-rf {miss} **ruled out:** cause open, the feature values remain; ruled out: "
+            "grouped folds (`touchbench run g.yaml`: 60.0); Weka's forest (docs/research/w.md: 49.0) |") in text
+    assert (f"| T5 SMMHH | smmhh | gaus-rf {miss} **unexplained:** ruled out: 1000 trees "
+            "(`touchbench run e.yaml`: 68.2) |") in text
+    assert f"| T5 LBPTOP | lbptop | gaus-rf {miss} **unexplained:** no cause known |" in text
+    # 4 numbers outside tolerance: BMH measured, MSD ruled out, SMMHH and LBPTOP unexplained
+    assert "**Causes of the 4 accuracies outside tolerance:** 1 measured (" in text
+    assert "), 1 ruled out (" in text and "), 2 unexplained (" in text
+    assert "paper 100.00 %, -50.00 points (tolerance 5); cause open, candidates ruled out" in text
+
     (tmp_path / "scene").mkdir()
-    scene = write_fake_run(tmp_path / "scene" / "res", caps, folds, methods, dataset="scene:tiny")
-    run = ProtocolRun(path=_cause_protocol(tmp_path / "scene", "scene:tiny"), name="gaus-causes", out=scene,
-                      changes=[])
+    run = ProtocolRun(path=_cause_protocol(tmp_path / "scene", "scene:tiny"), name="gaus-causes",
+                      out=_cause_run(tmp_path / "scene" / "res", "scene:tiny"), changes=[])
     text = write_report([run], PROFILES["full"], tmp_path / "S.md").read_text()
-    # on a scene: within is reproduced on it; a measured cause is given; else the synthetic data
+    # on a scene: within is reproduced on it; a cause keeps its kind; an unexplained number names the scene
     assert "| T5 SD | sd | gaus-rf | 100.00 | 100.00 | +0.00 | 5 | yes | reproduced on scene tiny |" in text
-    assert "**NO** | folds \\| subjects (measured by `touchbench run readings.yaml`) |" in text
-    assert "| T5 MSD | msd | gaus-rf | 100.00 | 50.00 | -50.00 | 5 | **NO** | synthetic data (scene tiny) |" in text
+    assert "**NO** | **measured:** folds \\| subjects; `touchbench run readings.yaml` gave: 100.0 |" in text
+    assert (f"| T5 SMMHH | smmhh | gaus-rf {miss} **unexplained:** synthetic data of scene tiny; ruled out: "
+            "1000 trees (`touchbench run e.yaml`: 68.2) |") in text
+    assert f"| T5 LBPTOP | lbptop | gaus-rf {miss} **unexplained:** synthetic data of scene tiny |" in text
+
+
+def _cause_cells(text: str) -> list[tuple[str, str]]:
+    """(within, cause) of every row of the report's accuracy tables."""
+    cells = []
+    for line in text.splitlines():
+        parts = [c.strip() for c in re.split(r"(?<!\\)\|", line)[1:-1]]
+        if len(parts) == 9 and parts[7] in ("yes", "**NO**", "not run"):
+            cells.append((parts[7], parts[8]))
+    return cells
+
+
+@pytest.mark.parametrize("data", ["haart-challenge", "scene:tiny"])
+def test_every_cause_outside_tolerance_is_printed_with_its_kind(tmp_path, data):
+    run = ProtocolRun(path=_cause_protocol(tmp_path, data), name="gaus-causes", out=_cause_run(tmp_path / "res", data),
+                      changes=[])
+    cells = _cause_cells(write_report([run], PROFILES["full"], tmp_path / "R.md").read_text())
+    assert [w for w, _ in cells] == ["yes"] + ["**NO**"] * 4
+    for within, cause in cells:
+        if within == "**NO**":
+            assert re.match(r"\*\*(measured|ruled out|unexplained):\*\* ", cause), cause
+        else:
+            assert not re.search(r"measured|ruled out|unexplained", cause), cause
+    # a measured cause carries its command and what it gave; each thing ruled out its command or source
+    measured = [c for _, c in cells if c.startswith("**measured:**")]
+    assert measured and all(re.search(r"`touchbench [^`]+` gave: \S", c) for c in measured)
+    tried = [t for _, c in cells if "ruled out: " in c for t in c.split("ruled out: ", 1)[1].split("; ")]
+    assert len(tried) == 3
+    assert all(re.fullmatch(r"[^(]+ \((`touchbench [^`]+`|docs/[\w/.-]+): [^)]+\)", t) for t in tried), tried
 
 
 def test_report_counts_apart_the_tables_a_scene_value_was_calibrated_on(tmp_path):
@@ -401,43 +453,48 @@ def test_report_counts_apart_the_tables_a_scene_value_was_calibrated_on(tmp_path
     (tmp_path / "cal").mkdir()
     scene_file = tmp_path / "cal" / "tiny-cal.yaml"
     scene_file.write_text(yaml.safe_dump(raw))
-    caps = pd.DataFrame({"capture_id": ["a", "b", "c", "d"], "subject": ["s1", "s1", "s2", "s2"],
-                         "gesture": ["pat", "rub", "pat", "rub"]})
-    folds = {"f1": ["a", "b"], "f2": ["c", "d"]}
-    half = {"f1": ["a"], "f2": ["c"]}
-    methods = [FakeMethod("sd", "gaus-rf"), FakeMethod("bmh", "gaus-rf", wrong=half),
-               FakeMethod("msd", "gaus-rf", wrong=half)]
     runs = []
     for name in ("gaus-causes", "gaus-other"):
         d = tmp_path / name
         d.mkdir()
         proto = _cause_protocol(d, f"scene:{scene_file}")
         proto.write_text(proto.read_text().replace("name: gaus-causes", f"name: {name}"))
-        out = write_fake_run(d / "res", caps, folds, methods, dataset=f"scene:{scene_file}")
+        out = _cause_run(d / "res", f"scene:{scene_file}")
         runs.append(ProtocolRun(path=proto, name=name, out=out, changes=[]))
     text = write_report(runs, PROFILES["full"], tmp_path / "R.md").read_text()
-    # 1 of 3 within on each table; only the other table counts as one no value was calibrated on
-    assert text.count(f"| scene:{scene_file} | 1 / 3 |") == 2
+    # 1 of 5 within on each table; only the other table counts as one no value was calibrated on
+    assert text.count(f"| scene:{scene_file} | 1 / 5 |") == 2
     assert f"| {scene_file} `population.repetition.sd` |" in text
-    assert "Gaus et al. 2015 2 of 6" in text
-    assert "On the tables no scene value was calibrated on, 1 of 3" in text
+    assert "Gaus et al. 2015 2 of 10" in text
+    assert "On the tables no scene value was calibrated on, 1 of 5" in text
+    # the causes of both tables' 8 numbers outside tolerance: 2 measured, 2 ruled out, 4 unexplained
+    assert "**Causes of the 8 accuracies outside tolerance:** 2 measured (" in text
+    assert "), 2 ruled out (" in text and "), 4 unexplained (" in text
 
 
 @pytest.mark.parametrize("path", paper_protocols(), ids=lambda p: p.stem)
-def test_every_measured_cause_reruns_a_protocol_of_the_repository(path):
-    expected = load_protocol(path, deep=False).expected
-    for r in expected.results if expected else []:
-        if r.measured_by is None:
+def test_every_command_of_a_cause_reruns_a_protocol_of_the_repository(path):
+    """A measured cause's command, and each command and source of what was ruled out, exist: the
+    command reruns a protocol of the repository (or this protocol's own leakage audit), the source
+    is a file of the repository."""
+    proto = load_protocol(path, deep=False)
+    for r in proto.expected.results if proto.expected else []:
+        if r.cause is None:
             continue
-        words = r.measured_by.split()
-        if words[:2] == ["touchbench", "audit"]:  # the protocol's own leakage audit, shown beside it in REPORT.md
-            assert words[2] == path.stem and load_protocol(path, deep=False).audit is not None, r.measured_by
-            continue
-        assert words[:2] == ["touchbench", "run"], r.measured_by
-        measured = load_protocol(REPO_ROOT / words[2], deep=False)  # the reading's file exists and is valid
-        assert measured.name.startswith(path.stem.split("-")[0]), (path.name, words[2])
-        notes = re.findall(r"docs/research/[\w./-]+\.md", r.cause)
-        assert notes and all((REPO_ROOT / n).is_file() for n in notes), f"{path.name}: {r.cause}"
+        commands = [r.cause.command] if r.cause.kind == "measured" else []
+        commands += [t.command for t in r.cause.ruled_out if t.command is not None]
+        for command in commands:
+            words = command.split()
+            if words[:2] == ["touchbench", "audit"]:  # the protocol's own leakage audit, shown beside it in REPORT.md
+                assert words[2] == path.stem and proto.audit is not None, command
+                continue
+            assert words[:2] == ["touchbench", "run"], command
+            measured = load_protocol(REPO_ROOT / words[2], deep=False)  # the reading's file exists and is valid
+            assert measured.name.startswith(path.stem.split("-")[0]), (path.name, words[2])
+        for t in r.cause.ruled_out:
+            assert t.source is None or (REPO_ROOT / t.source).is_file(), (path.name, t.source)
+        notes = re.findall(r"docs/research/[\w./-]+\.md", r.cause.text or "")
+        assert all((REPO_ROOT / n).is_file() for n in notes), f"{path.name}: {r.cause.text}"
 
 
 @pytest.mark.parametrize("path", sorted((REPO_ROOT / "docs" / "research" / "gaus-readings").glob("*.yaml")),
@@ -504,9 +561,9 @@ def test_report_says_which_audit_variant_matches_the_cnn_confusion(tmp_path):
     assert "Table 3 (252 captures, 36 per gesture; diagonal = 80.2 %) is matched by `window-kfold`.**" in sec
 
 
-def test_report_tests_whether_the_sweeps_best_is_distinguishable(tmp_path):
-    from scipy import stats
-
+def _sweep_report(tmp_path: Path, l30: list[int]) -> str:
+    """REPORT.md of Fig. 5's sweep over 4 subjects of 10 captures: per subject L=5 gets 5 wrong, L=20
+    0, 1, 0, 1, and L=30 ``l30``."""
     caps = pd.DataFrame({"capture_id": [f"c{i:02d}" for i in range(40)],
                          "subject": [f"s{i // 10}" for i in range(40)],
                          "gesture": [HAART[i % 7] for i in range(40)]})
@@ -518,11 +575,18 @@ def test_report_tests_whether_the_sweeps_best_is_distinguishable(tmp_path):
     out = write_fake_run(tmp_path / "cnn-fig5-frame-sweep-haart", caps, folds, [
         FakeMethod("raw-window", "cnn(L=5)", classifier_name="cnn", wrong=wrong([5, 5, 5, 5])),
         FakeMethod("raw-window", "cnn(L=20)", classifier_name="cnn", wrong=wrong([0, 1, 0, 1])),
-        FakeMethod("raw-window", "cnn(L=30)", classifier_name="cnn", wrong=wrong([1, 1, 2, 1])),
+        FakeMethod("raw-window", "cnn(L=30)", classifier_name="cnn", wrong=wrong(l30)),
     ], dataset="haart", scheme={"name": "loso"}, protocol="cnn-fig5-frame-sweep-haart")
     run = ProtocolRun(path=PAPERS / "cnn-fig5-frame-sweep-haart.yaml", name="cnn-fig5-frame-sweep-haart",
                       out=out, changes=[])
     text = write_report([run], PROFILES["full"], tmp_path / "R.md").read_text()
+    return text
+
+
+def test_report_tests_whether_the_sweeps_best_is_distinguishable(tmp_path):
+    from scipy import stats
+
+    text = _sweep_report(tmp_path, [1, 1, 2, 1])
     # L=20 - L=30 per fold: 0.1, 0, 0.2, 0 (mean 0.075, sd sqrt(0.0275 / 3)); 10 tested of 30 trained on:
     # se = sqrt(1/4 + 1/3) sd; t = 1.0256 on 3 df
     sd = np.sqrt(0.0275 / 3)
@@ -536,6 +600,20 @@ def test_report_tests_whether_the_sweeps_best_is_distinguishable(tmp_path):
     assert "Distinguishable from cnn(L=5)." in text
     assert (f"**Best cnn(L=20) (ours) vs the paper's cnn(L=30): not distinguishable on 4 folds "
             f"(p = {p30:.3f}, Holm-adjusted {max(p30, 2 * p5):.3f}; difference +7.5 points).**") in text
+
+
+@pytest.mark.parametrize("l30,verdict", [
+    # L=20 wrong 0, 1, 0, 1 of 10 per fold; L=30 the same: identical scores
+    ([0, 1, 0, 1], "indistinguishable: identical scores on 4 folds"),
+    # L=30 one more wrong on every fold: L=20 - L=30 is 0.1 on each fold, sd 0, no t
+    ([1, 2, 1, 2], "no variance: every one of the 4 folds differs by the same amount (difference +10.0 points); "
+                   "the t-test is undefined"),
+])
+def test_the_sweeps_best_against_the_papers_without_variance_is_said_in_words(tmp_path, l30, verdict):
+    text = _sweep_report(tmp_path, l30)
+    assert "nan" not in text
+    assert f"**Best cnn(L=20) (ours) vs the paper's cnn(L=30): {verdict}.**" in text
+    assert ("Indistinguishable, identical scores on every fold: cnn(L=30)." in text) == (l30 == [0, 1, 0, 1])
 
 
 def test_quick_profile_audits_with_its_cheaper_window_folds_and_make_asks_for_the_audit(tmp_path):

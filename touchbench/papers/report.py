@@ -1,8 +1,8 @@
 """``REPORT.md`` of the paper reproduction: for every table and figure of the
 four papers, the paper's number, ours, within tolerance or not, and the cause
-of every difference (reproduced, a measured cause with the command that
-measured it, or the synthetic data of a scene); the counts lead, apart for
-the tables a scene value was calibrated on."""
+of every difference with its kind (measured, ruled out or unexplained:
+:mod:`.causes`); the counts lead, apart for the tables a scene value was
+calibrated on, and the kinds of the causes of the numbers outside tolerance."""
 
 from __future__ import annotations
 
@@ -26,11 +26,12 @@ from ..protocols.expected import ExpectedBest, ExpectedConfusion, ExpectedDeviat
 from ..protocols.loading import load_protocol
 from ..reports.audit import audit_markdown
 from ..reports.rendering import write_text
-from ..reports.stats import corrected_resampled_t, holm
+from ..reports.stats import NO_VARIANCE, ZERO_DIFFERENCE, corrected_resampled_t, holm
 from ..results.manifest import git_revision
 from ..results.store import PREDICTED, TRUE, read_results_table
 from ..results.summary import check_expected
 from ..scenes import load_scene
+from .causes import KIND_SHORT, cause_cell, kind_counts
 from .profiles import Profile, apply_profile
 
 __all__ = ["PAPERS", "ProtocolRun", "audit_dir", "write_report"]
@@ -204,14 +205,18 @@ def _best_distinguishable(ok: pd.DataFrame, best: str, paper_best: str, order: l
                           alpha: float = 0.05) -> list[str]:
     """Whether the best configuration is distinguishable from each other one on the folds they share,
     as the leaderboard tests fold-paired results: the corrected resampled t-test of the fold
-    differences (Nadeau & Bengio), Holm-adjusted over the comparisons with the best."""
+    differences (Nadeau & Bengio), Holm-adjusted over the comparisons with the best. Where the test
+    is undefined the line says why: identical scores on every fold (indistinguishable), the same
+    difference on every fold (no variance), fewer than two shared folds."""
     acc = ok.pivot_table(index="fold", columns="classifier", values="accuracy", aggfunc="mean")
     ratio = ok.assign(r=ok["n_test"] / ok["n_train"]).groupby("fold")["r"].mean()
     others = [k for k in order if k != best]
-    tests = []
+    tests, identical = [], []
     for k in others:
         both = acc[[best, k]].dropna()
-        tests.append(corrected_resampled_t(both[best] - both[k], float(ratio.loc[both.index].mean())))
+        d = both[best] - both[k]
+        identical.append(len(d) > 0 and bool((d.abs() <= ZERO_DIFFERENCE).all()))
+        tests.append(corrected_resampled_t(d, float(ratio.loc[both.index].mean())))
     if not tests:
         return []
     adjusted = holm([t.pvalue for t in tests])
@@ -219,13 +224,27 @@ def _best_distinguishable(ok: pd.DataFrame, best: str, paper_best: str, order: l
     lines = [f"Is the best distinguishable (corrected resampled t-test over the folds, Holm-adjusted over the "
              f"{len(others)} comparisons with the best, alpha {alpha:g})? Distinguishable from "
              + (", ".join(apart) if apart else "none of the others") + "."]
+    same = [k for k, i in zip(others, identical) if i]
+    if same:
+        lines[0] += " Indistinguishable, identical scores on every fold: " + ", ".join(same) + "."
     if paper_best in others:
         i = others.index(paper_best)
-        verdict = "distinguishable" if adjusted[i] < alpha else "not distinguishable"
-        lines += ["", f"**Best {best} (ours) vs the paper's {paper_best}: {verdict} on {tests[i].n} folds "
-                     f"(p = {tests[i].pvalue:.3f}, Holm-adjusted {adjusted[i]:.3f}; difference "
-                     f"{100 * tests[i].mean_difference:+.1f} points).**"]
+        lines += ["", f"**Best {best} (ours) vs the paper's {paper_best}: "
+                      f"{_verdict(tests[i], adjusted[i], identical[i], alpha)}.**"]
     return lines
+
+
+def _verdict(test, adjusted: float, identical: bool, alpha: float) -> str:
+    """One comparison of two configurations over their shared folds, in words, defined for every input."""
+    diff = f"difference {100 * test.mean_difference:+.1f} points"
+    if identical:
+        return f"indistinguishable: identical scores on {test.n} folds"
+    if test.note == NO_VARIANCE:
+        return f"no variance: every one of the {test.n} folds differs by the same amount ({diff}); the t-test is undefined"
+    if not math.isfinite(test.pvalue):
+        return f"not tested: {test.n} shared fold{'' if test.n == 1 else 's'}, the t-test needs two"
+    verdict = "distinguishable" if adjusted < alpha else "not distinguishable"
+    return f"{verdict} on {test.n} folds (p = {test.pvalue:.3f}, Holm-adjusted {adjusted:.3f}; {diff})"
 
 
 def _other_sections(proto, scores: pd.DataFrame, preds: pd.DataFrame | None, flags: list[str]) -> list[list[str]]:
@@ -243,24 +262,12 @@ def _expected_rows(proto, scores: pd.DataFrame, preds: pd.DataFrame | None) -> l
     if proto.expected is None:
         return []
     rows = check_expected(proto.expected, scores, preds, proto.features_label_of)
+    parsed = parse_dataset_ref(proto.dataset.name)
+    scene = parsed.value if parsed.kind == "scene" else None
     for r, e in zip(rows, proto.expected.results):
         r["cell"] = e.source or ""
-        r["cause"] = _cause(r, e, proto.dataset.name)
+        r["kind"], r["cause"] = cause_cell(r["within"], e.cause, scene)
     return rows
-
-
-def _cause(row: dict[str, Any], result, ref: str) -> str:
-    """The report's cause of one paper number: reproduced (on a scene, says which), the measured cause
-    the protocol gives (with the command that measured it), or, for a scene, the synthetic data."""
-    parsed = parse_dataset_ref(ref)
-    scene = parsed.value if parsed.kind == "scene" else None
-    if row["within"] is None:
-        return "not run"
-    if row["within"]:
-        return f"reproduced on scene {scene}" if scene else "reproduced"
-    if result.cause is not None:
-        return f"{result.cause} (measured by `{result.measured_by}`)".replace("|", "\\|")
-    return f"synthetic data (scene {scene})" if scene else "not explained"
 
 
 def _calibrated_on(ref: str, name: str) -> list[str]:
@@ -285,6 +292,7 @@ class _Section:
     seconds: float = 0.0
     status: str = "ran"
     calibrated: list[str] = field(default_factory=list)  # the scene values calibrated on this table
+    kinds: list[str] = field(default_factory=list)  # the kind of cause of each number outside tolerance
 
 
 def audit_dir(out: Path) -> Path:
@@ -393,8 +401,10 @@ def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
                 sec.compared += 1
                 sec.within += bool(e["within"])
             if e["within"] is False:
+                sec.kinds.append(e["kind"])
                 flags.append(f"{e['cell']} (`{r.name}`): ours {e['observed']:.2f} %, paper "
-                             f"{e['expected']:.2f} %, {e['difference']:+.2f} points (tolerance {e['tolerance']:g})")
+                             f"{e['expected']:.2f} %, {e['difference']:+.2f} points (tolerance {e['tolerance']:g}); "
+                             f"{KIND_SHORT[e['kind']]}")
         body.append("")
     body += _audit_section(proto, r.out)
     others = _other_sections(proto, scores, preds, flags)
@@ -417,6 +427,7 @@ class _Tally:
     flags_synth: list[str] = field(default_factory=list)
     problems: list[str] = field(default_factory=list)
     counts: dict[str, list[int]] = field(default_factory=dict)  # all, real, free, each paper: [within, compared]
+    kinds: list[str] = field(default_factory=list)  # the kind of cause of each accuracy outside tolerance
     compute: float = 0.0
 
     def count(self, key: str, sec: _Section) -> None:
@@ -428,6 +439,7 @@ class _Tally:
         self.body += sec.lines
         (self.flags_real if sec.real else self.flags_synth).extend(sec.flags)
         self.problems += sec.problems
+        self.kinds += sec.kinds
         self.compute += sec.seconds
         for key, counted in (("all", True), ("real", sec.real), ("free", not sec.calibrated),
                              (short, True)):
@@ -501,11 +513,20 @@ def _summary(t: _Tally) -> list[str]:
         f"data {t.of('real')}. On the tables no scene value was calibrated on, {t.of('free')}: a value a paper "
         "leaves unstated (how distinct two people are, how much one person's captures vary) is chosen on one "
         "named table and must then hold on the others (`docs/scenes.md` gives every scene property and where "
-        "its value comes from; `docs/research/scene-calibration.md` the candidates measured). Each number's "
-        "cause is in its table: reproduced, a measured cause with the command that measured it, or, on a "
-        "synthetic scene, the synthetic data.",
+        "its value comes from; `docs/research/scene-calibration.md` the candidates measured).",
+        "",
+        _kinds_line(t.kinds),
         "",
     ]
+
+
+def _kinds_line(kinds: list[str]) -> str:
+    """The summary of the causes of the accuracies outside tolerance, counted by kind."""
+    c = kind_counts(kinds)
+    return (f"**Causes of the {len(kinds)} accuracies outside tolerance:** {c['measured']} measured (the "
+            f"command that isolates the cause, and what it gave), {c['ruled_out']} ruled out (the cause is open; "
+            f"what was excluded, each with its command or source), {c['unexplained']} unexplained (no cause "
+            "known; on a synthetic scene, the scene's data). Each number's cause is in its table's cause column.")
 
 
 def _caps(profile: Profile) -> list[str]:

@@ -11,12 +11,83 @@ from .entries import _Model
 from .errors import _ErrorAt
 
 
+CAUSE_KINDS = ("measured", "ruled_out", "unexplained")
+
+
+def _touchbench_command(loc: tuple, command: str | None) -> None:
+    if command is not None and not command.startswith("touchbench "):
+        raise _ErrorAt(loc, f"a command is a touchbench command (starting 'touchbench '), got {command!r}")
+
+
+class RuledOut(_Model):
+    """One candidate cause tried and excluded: what was tried, where to see it (the ``touchbench``
+    command that runs it, or else the ``source`` that reports it, such as a note under
+    ``docs/research/``) and what it gave."""
+
+    tried: str = Field(min_length=1)
+    command: str | None = Field(default=None, min_length=1)
+    source: str | None = Field(default=None, min_length=1)
+    gave: str = Field(min_length=1)
+
+    @model_validator(mode="after")
+    def _where(self) -> "RuledOut":
+        if (self.command is None) == (self.source is None):
+            raise _ErrorAt(("command",), "give one of command (the touchbench command that tried it) or source "
+                                         "(where it is reported)")
+        _touchbench_command(("command",), self.command)
+        return self
+
+
+class Cause(_Model):
+    """Why ours differs from a paper's number, and how well that is known (``kind``):
+
+    - ``measured``: ``text`` is the cause, ``command`` the ``touchbench`` command that isolates it
+      and ``output`` what it gave;
+    - ``ruled_out``: the cause is open; ``ruled_out`` lists the candidates excluded (at least
+      one), ``text`` what is left;
+    - ``unexplained``: no cause known; ``text`` and ``ruled_out`` may say what is.
+    """
+
+    kind: Literal["measured", "ruled_out", "unexplained"]
+    text: str | None = Field(default=None, min_length=1)
+    command: str | None = Field(default=None, min_length=1)
+    output: str | None = Field(default=None, min_length=1)
+    ruled_out: list[RuledOut] = Field(default_factory=list)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _kind_given(cls, v: Any) -> Any:
+        if isinstance(v, dict) and "kind" not in v:
+            raise _ErrorAt(("kind",), f"a cause needs its kind: one of {', '.join(CAUSE_KINDS)}")
+        return v
+
+    @model_validator(mode="after")
+    def _complete(self) -> "Cause":
+        if self.kind == "measured":
+            for name in ("text", "command", "output"):
+                if getattr(self, name) is None:
+                    raise _ErrorAt((name,), f"a measured cause needs {name}: " + _MEASURED[name])
+            _touchbench_command(("command",), self.command)
+            return self
+        for name in ("command", "output"):
+            if getattr(self, name) is not None:
+                raise _ErrorAt((name,), f"{name} belongs to a measured cause; this cause is {self.kind}: list "
+                                        "each thing tried under ruled_out, with its own command or source")
+        if self.kind == "ruled_out" and not self.ruled_out:
+            raise _ErrorAt(("ruled_out",), "a ruled_out cause lists what was excluded: "
+                                           "ruled_out: [{tried, command or source, gave}]")
+        return self
+
+
+_MEASURED = {"text": "what the cause is", "command": "the touchbench command that isolates it",
+             "output": "what that command printed or gave"}
+
+
 class ExpectedResult(_Model):
     """One number from a paper: a feature combination x classifier, in percent.
 
-    ``cause`` says why ours differs from the paper's number, as measured, and
-    ``measured_by`` the ``touchbench`` command that measured it: the two come
-    together (a cause nobody can rerun is not a measured one).
+    ``cause`` says why ours differs from the paper's number and of which kind
+    that knowledge is (:class:`Cause`): measured, ruled out or unexplained.
     """
 
     features: list[str] = Field(min_length=1)
@@ -26,8 +97,7 @@ class ExpectedResult(_Model):
     tolerance: float | None = Field(default=None, ge=0)
     group: str | None = None
     source: str | None = None
-    cause: str | None = Field(default=None, min_length=1)
-    measured_by: str | None = Field(default=None, min_length=1)
+    cause: Cause | None = None
 
     @field_validator("features", mode="before")
     @classmethod
@@ -36,16 +106,19 @@ class ExpectedResult(_Model):
             return v.split("+")
         return v
 
-    @model_validator(mode="after")
-    def _measured(self) -> "ExpectedResult":
-        if self.cause is not None and self.measured_by is None:
-            raise _ErrorAt(("cause",), "a cause needs measured_by: the touchbench command that measured it")
-        if self.measured_by is not None and self.cause is None:
-            raise _ErrorAt(("measured_by",), "measured_by needs a cause: what the command measured")
-        if self.measured_by is not None and not self.measured_by.startswith("touchbench "):
-            raise _ErrorAt(("measured_by",), f"measured_by is a touchbench command (starting 'touchbench '), "
-                                             f"got {self.measured_by!r}")
-        return self
+    @model_validator(mode="before")
+    @classmethod
+    def _cause_form(cls, v: Any) -> Any:
+        if not isinstance(v, dict):
+            return v
+        if isinstance(v.get("cause"), str):
+            raise _ErrorAt(("cause",), "a cause is a mapping with its kind: {kind: measured, text, command, "
+                                       "output}, {kind: ruled_out, ruled_out: [...]} or {kind: unexplained} "
+                                       "(a cause as text, with measured_by, is the former form)")
+        if "measured_by" in v:
+            raise _ErrorAt(("measured_by",), "measured_by is now a measured cause's command: "
+                                             "cause: {kind: measured, text, command, output}")
+        return v
 
 
 def _count(n: int, noun: str) -> str:

@@ -128,6 +128,7 @@ __all__ = [
     "Friedman",
     "MetaAnalysis",
     "NO_VARIANCE",
+    "ZERO_DIFFERENCE",
     "PairedTest",
     "RANK_DIGITS",
     "TEST_NAMES",

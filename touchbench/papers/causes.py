@@ -1,0 +1,61 @@
+"""The cause column of REPORT.md: for each paper number, reproduced or, for a number outside
+tolerance, its cause with the kind of knowledge behind it (the protocol's ``cause``, see
+:class:`touchbench.protocols.expected.Cause`): measured (the command that isolates it and what it
+gave), ruled out (the cause is open; what was excluded, each with its command or source and what
+it gave) or unexplained (no cause known; a number without a cause in its protocol, and on a
+synthetic scene the scene's data named)."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+from ..protocols.expected import CAUSE_KINDS, Cause, RuledOut
+
+__all__ = ["KIND_LABELS", "KIND_SHORT", "cause_cell", "kind_counts"]
+
+#: How the report names each kind of cause (the cause column's first word).
+KIND_LABELS = {"measured": "measured", "ruled_out": "ruled out", "unexplained": "unexplained"}
+#: Each kind in a few words, for the list of the differences.
+KIND_SHORT = {"measured": "cause measured", "ruled_out": "cause open, candidates ruled out",
+              "unexplained": "cause unexplained"}
+
+
+def _tried(r: RuledOut) -> str:
+    where = f"`{r.command}`" if r.command is not None else r.source
+    return f"{r.tried} ({where}: {r.gave})"
+
+
+def _text(cause: Cause | None, scene: str | None) -> str:
+    if cause is None:
+        return f"synthetic data of scene {scene}" if scene else "no cause known"
+    if cause.kind == "measured":
+        return f"{cause.text}; `{cause.command}` gave: {cause.output}"
+    parts = []
+    if cause.kind == "ruled_out":
+        parts.append("cause open" + (f", {cause.text}" if cause.text else ""))
+    elif cause.text:
+        parts.append(cause.text)
+    if scene and cause.kind == "unexplained":
+        parts.append(f"synthetic data of scene {scene}")
+    if cause.ruled_out:
+        parts.append("ruled out: " + "; ".join(_tried(r) for r in cause.ruled_out))
+    return "; ".join(parts) or "no cause known"
+
+
+def cause_cell(within: bool | None, cause: Cause | None, scene: str | None) -> tuple[str | None, str]:
+    """The kind (``None`` unless the number is outside tolerance) and the cause column's text of one
+    paper number; ``scene`` is the scene's name where the data are synthetic."""
+    if within is None:
+        return None, "not run"
+    if within:
+        return None, f"reproduced on scene {scene}" if scene else "reproduced"
+    kind = "unexplained" if cause is None else cause.kind
+    text = f"**{KIND_LABELS[kind]}:** {_text(cause, scene)}"
+    return kind, text.replace("|", "\\|")
+
+
+def kind_counts(kinds: list[str | None]) -> Counter:
+    """How many numbers outside tolerance have each kind of cause (every kind present, 0 if none)."""
+    c = Counter({k: 0 for k in CAUSE_KINDS})
+    c.update(k for k in kinds if k is not None)
+    return c
