@@ -40,7 +40,11 @@ window indices) trains on every window as its own sample with the capture's
 label (the paper's "benefit I": more training samples) and/or classifies
 every window of a test capture and combines them by a capture-level
 ``vote``: ``"soft"`` averages the windows' softmax outputs, ``"hard"``
-takes the majority label (ties broken by the soft average).
+takes the majority label (ties broken by the soft average). The paper
+says nothing of labelling a test capture by more than its first window:
+``test_windows="all"`` with ``vote="soft"`` (the ``cnn-all-windows``
+entry of the paper protocol ``cnn-table2-loso-haart``) is our reading of
+its subsamples as test samples of one capture, trained as the paper says.
 
 Network (Table 1)
 -----------------
