@@ -145,3 +145,58 @@ CHECK_PARAMS = dict(grid=(1, 1), L=1, max_epochs=10, learning_rate=1e-2, validat
 @parametrize_with_checks([make_classifier("cnn", random_state=0, **CHECK_PARAMS)])
 def test_sklearn_estimator_checks(estimator, check):
     check(estimator)
+
+
+def test_soft_vote_is_the_mean_of_hand_made_window_probabilities(monkeypatch):
+    est = HaartCNNClassifier(test_windows="all", vote="soft")
+    est.classes_ = np.array(["pat", "rub", "stroke"])
+    # 2 captures x 3 windows x 3 classes, each window's softmax made up
+    p = np.array([[[0.6, 0.3, 0.1], [0.1, 0.5, 0.4], [0.2, 0.5, 0.3]],
+                  [[0.4, 0.35, 0.25], [0.4, 0.35, 0.25], [0.0, 0.9, 0.1]]])
+    monkeypatch.setattr(HaartCNNClassifier, "_window_proba", lambda self, X: p)
+    # by hand: (0.6 + 0.1 + 0.2) / 3 = 0.3, (0.3 + 0.5 + 0.5) / 3 = 1.3 / 3, (0.1 + 0.4 + 0.3) / 3 = 0.8 / 3;
+    # (0.4 + 0.4 + 0.0) / 3 = 0.8 / 3, (0.35 + 0.35 + 0.9) / 3 = 1.6 / 3, (0.25 + 0.25 + 0.1) / 3 = 0.2
+    by_hand = np.array([[0.3, 1.3 / 3, 0.8 / 3], [0.8 / 3, 1.6 / 3, 0.2]])
+    assert np.allclose(est.predict_proba(None), by_hand)
+    # the argmax follows the mean: "rub" for both, though two of the second capture's windows say "pat"
+    assert est.predict(None).tolist() == ["rub", "rub"]
+    est.set_params(vote="hard")  # the majority of the windows' labels: "rub" (2 of 3), then "pat" (2 of 3)
+    assert est.predict(None).tolist() == ["rub", "pat"]
+
+
+def test_training_on_a_score_keeps_the_epoch_of_the_highest_one():
+    from touchbench.classifiers.torch_fit import train
+
+    torch.manual_seed(0)
+    net = torch.nn.Linear(3, 2)
+    opt = torch.optim.SGD(net.parameters(), lr=0.1)
+    x, y = torch.randn(8, 3), torch.tensor([0, 1] * 4)
+    made_up = iter([0.2, 0.5, 0.5, 0.4, 0.3, 0.9])  # a test accuracy per epoch
+    weights = []
+
+    def score(n):
+        weights.append(n.weight.detach().clone())
+        return next(made_up)
+
+    history, best = train(torch, net, opt, x, y, np.random.default_rng(0), max_epochs=6, batch_size=4,
+                          patience=2, score=score)
+    # epoch 2 scores 0.5; epochs 3 (0.5, not higher) and 4 (0.4) make 2 without a higher one: stop after epoch 4
+    assert [h["score"] for h in history] == [0.2, 0.5, 0.5, 0.4]
+    assert best == 2
+    assert torch.equal(net.weight, weights[1])  # epoch 2's weights restored
+
+
+def test_stopped_on_test_keeps_the_epoch_of_the_best_test_accuracy():
+    X, y, g = _toy(n_per_class=20, seed=1)
+    rng = np.random.default_rng(3)
+    X = X + rng.normal(0, 4.0, size=X.shape)  # a hard task: the test accuracy moves from epoch to epoch
+    test = g == "s0"
+    est = make_classifier("cnn", random_state=0, **{**SMALL, "max_epochs": 12, "learning_rate": 3e-3},
+                          patience=100, validation_fraction=0.5)
+    est.fit(X[~test], y[~test], groups=g[~test], test_set=(X[test], y[test]))
+    scores = [h["score"] for h in est.history_]
+    assert len(scores) == 12 and est.validation_size_ == 0  # no validation split: the test data stop it
+    assert len(set(scores)) > 1
+    assert est.best_epoch_ == 1 + int(np.argmax(scores))  # the first epoch of the highest test accuracy
+    # the kept network labels the test captures with that accuracy (computed here from its labels)
+    assert np.mean(est.predict(X[test]) == y[test]) == pytest.approx(max(scores))

@@ -394,7 +394,7 @@ def test_audit_says_how_many_tasks_each_variant_runs_before_it_starts(tmp_path):
             "tuned-on-test 8 (4 folds x 2 methods)") in line
     assert r.stderr.index(line) < r.stderr.index("audit: ")  # before the audit ran (its files listed last)
     help_text = " ".join(CliRunner().invoke(main, ["audit", "--help"]).output.split())
-    assert "up to five runs of the protocol's methods" in help_text and "printed before any runs" in help_text
+    assert "up to six runs of the protocol's methods" in help_text and "printed before any runs" in help_text
 
 
 @pytest.mark.parametrize("value", ["nonsense=1,2", "c=1,2"])

@@ -33,7 +33,11 @@ def test_expected_numbers_of_the_paper_protocols():
     assert values == {"sd": 36.17, "bmh": 22.67, "msd": 54.82, "smmhh": 65.66, "lbptop": 53.01,
                       "sd+bmh+msd+smmhh+lbptop": 76.65}  # Gaus et al. 2015, Table 5, RF
     cnn = load_protocol(PAPERS_DIR / "cnn-table2-loso-haart.yaml")
-    assert [r.value for r in cnn.expected.results] == [83.2]  # Al-mashhadani et al. 2021, Table 2
+    # Al-mashhadani et al. 2021, Table 2, beside the first window (the paper's) and all 30 windows, soft vote
+    assert [(r.classifier, r.value) for r in cnn.expected.results] == [("cnn", 83.2), ("cnn-all-windows", 83.2)]
+    assert [(c.label, c.params) for c in cnn.classifier_entries()] == [
+        ("cnn", {"L": 30}), ("cnn-all-windows", {"L": 30, "test_windows": "all", "vote": "soft"})]
+    assert "stopped-on-test" in cnn.audit.variants  # early stopping on the held-out subject, audited as a leak
     sweep = load_protocol(PAPERS_DIR / "cnn-fig5-frame-sweep-haart.yaml")
     assert [c.params["L"] for c in sweep.classifier_entries()] == list(range(5, 55, 5))
     assert sweep.scheme.params == {"subjects": ["s01", "s03", "s05", "s07"]}

@@ -339,6 +339,7 @@ def test_report_shows_the_cnn_leakage_audit_and_which_variant_reaches_the_paper(
     run = ProtocolRun(path=PAPERS / "cnn-table2-loso-haart.yaml", name="cnn-table2-loso-haart", out=out, changes=[])
     text = write_report([run], PROFILES["full"], tmp_path / "R.md").read_text()
     assert "Leakage audit not run: `touchbench papers reproduce --audit`" in text
+    assert "Run: 1 tasks over 1 fold (0 failed)" in text  # one method, the one fold written above
     # an audit as measured: honest 42 %, windows 81 % (within 5 points of 83.2), captures 50 %
     table = pd.DataFrame({"method": ["raw-window / cnn"] * 3, "variant": ["honest", "capture-kfold", "window-kfold"],
                           "accuracy": [0.42, 0.50, 0.81], "inflation_pp": [0.0, 8.0, 39.0], "leaky": [False, True, True]})
@@ -348,6 +349,12 @@ def test_report_shows_the_cnn_leakage_audit_and_which_variant_reaches_the_paper(
     assert "| raw-window / cnn | 42.0 | 50.0 (+8.0) | 81.0 (+39.0) | 83.2 ± 5 | window-kfold |" in text
     assert ("**raw-window / cnn: the paper's 83.2 % (tolerance 5) is reproduced by `window-kfold`; the honest "
             "figure is 42.0 %.**") in text
+    # the folds each variant ran: the honest one's two subjects; the others' folders hold no results here
+    write_fake_run(tmp_path / "cnn-table2-loso-haart-audit" / "honest", caps,
+                   {"subject=s0": ["c0", "c2"], "subject=s1": ["c1", "c3"]}, [FakeMethod("raw-window", "cnn")],
+                   dataset="haart", scheme={"name": "loso"}, protocol="cnn-table2-loso-haart-honest")
+    text = write_report([run], PROFILES["full"], tmp_path / "R.md").read_text()
+    assert "Folds run: honest 2, capture-kfold not run, window-kfold not run." in text
 
 
 def _cause_protocol(tmp_path: Path, dataset: str) -> Path:

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 from sklearn.utils.validation import check_memory
 
+from ..core.errors import TouchbenchError
 from ..core.introspect import accepts, sensor_problem
 from ..features.base import feature_set_refusal, learns_from_data, make_feature_set, stack_features
 from .base import make_classifier
@@ -95,15 +96,24 @@ def labels_are_argmax(est: Any) -> bool:
 
 
 def fit_on_codes(name: str, params: dict[str, Any], seed: int | None, X: Any, y: Any, groups: Any = None,
-                 **build: Any) -> FittedEstimator:
+                 test_set: tuple[Any, Any] | None = None, **build: Any) -> FittedEstimator:
     """Build the registered estimator ``name`` (``random_state=seed``, ``params``, and ``build``
     keywords such as the sensor) and fit it on ``X`` and the codes of ``y`` (:func:`label_codes`);
-    ``groups`` go to an estimator whose ``fit`` takes them."""
+    ``groups`` go to an estimator whose ``fit`` takes them. ``test_set``, ``(X_test, y_test)``: the
+    leak of the audit's stopped-on-test variant, the test rows and their labels' codes (-1 for a
+    label the training rows lack) given to the ``fit`` of an estimator that takes them (another is
+    refused)."""
     classes, codes = label_codes(y)
     if len(classes) < 2:
         return FittedEstimator(classes, None)
     est = make_classifier(name, random_state=seed, **build, **params)
-    fit_kw = {"groups": np.asarray(groups)} if groups is not None and accepts(est.fit, "groups") else {}
+    fit_kw: dict[str, Any] = {"groups": np.asarray(groups)} if groups is not None and accepts(est.fit, "groups") else {}
+    if test_set is not None:
+        if not accepts(est.fit, "test_set"):
+            raise TouchbenchError(f"{name!r} cannot stop early on the test data: its fit takes no test_set")
+        y_test = np.asarray(test_set[1])
+        known = np.isin(y_test, classes)
+        fit_kw["test_set"] = (test_set[0], np.where(known, np.searchsorted(classes, y_test), -1))
     est.fit(X, codes, **fit_kw)
     return FittedEstimator(classes, est)
 

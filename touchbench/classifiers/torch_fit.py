@@ -15,7 +15,11 @@ works without it. Shared by the CNN of Al-mashhadani et al. 2021
   stopping after ``patience`` epochs without improvement; else the
   training loss, as Keras' ``ModelCheckpoint(monitor="loss")``), with an
   optional halving of the learning rate on a plateau of that loss (Keras'
-  ``ReduceLROnPlateau``).
+  ``ReduceLROnPlateau``). Given a ``score`` (a function of the network, e.g.
+  its accuracy on some labelled rows), the epoch with the highest score is
+  kept instead (the first of equal ones), and ``patience`` counts epochs
+  without a higher one: the leakage audit's early stopping on the test
+  subject (``cnn`` with ``test_set``).
 
 On the CPU a given seed and thread count give bit-identical weights.
 """
@@ -109,10 +113,11 @@ class Plateau:
 
 
 def train(torch, net, opt, xt, yt, rng: np.random.Generator, *, max_epochs: int, batch_size: int,
-          xv=None, yv=None, patience: int | None = None, plateau: Plateau | None = None, verbose: int = 0):
+          xv=None, yv=None, patience: int | None = None, plateau: Plateau | None = None, verbose: int = 0,
+          score=None):
     """Train ``net`` in place (see the module docstring); returns ``(history, best_epoch)``.
 
-    ``history`` holds one ``{"epoch", "train_loss"[, "val_loss"], "lr"}`` per
+    ``history`` holds one ``{"epoch", "train_loss"[, "val_loss"][, "score"], "lr"}`` per
     epoch. The best weights are restored before returning.
     """
     loss_fn = torch.nn.CrossEntropyLoss()
@@ -141,7 +146,11 @@ def train(torch, net, opt, xt, yt, rng: np.random.Generator, *, max_epochs: int,
             net.eval()
             with torch.no_grad():
                 monitored = rec["val_loss"] = float(loss_fn(net(xv), yv))
-        if validate or plateau is not None:
+        if score is not None:
+            net.eval()
+            rec["score"] = float(score(net))
+            monitored = -rec["score"]  # the highest score is the lowest monitored value
+        if validate or plateau is not None or score is not None:
             if monitored < best_loss:
                 best_loss, best_epoch, stale = monitored, epoch, 0
                 best_state = copy.deepcopy(net.state_dict())
@@ -152,7 +161,7 @@ def train(torch, net, opt, xt, yt, rng: np.random.Generator, *, max_epochs: int,
         history.append(rec)
         if verbose:
             print(rec, flush=True)
-        if validate and patience is not None and stale >= int(patience):
+        if (validate or score is not None) and patience is not None and stale >= int(patience):
             break
     if best_state is not None:
         net.load_state_dict(best_state)

@@ -41,7 +41,8 @@ def _window_seconds(ctx, param, value: float) -> float:
 @click.argument("protocol")
 @click.option("--evaluation", default=None, metavar="NAME", help="The evaluation to audit, of a protocol with several.")
 @click.option("--variant", "variants", multiple=True,
-              type=click.Choice(["honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test"]),
+              type=click.Choice(["honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test",
+                                 "stopped-on-test"]),
               help="Variants to run (repeatable) [default: every applicable one].")
 @click.option("--k", default=10, show_default=True, type=click.IntRange(min=2), help="Folds of the k-fold variants.")
 @click.option("--window-seconds", default=2.0, show_default=True, type=float, callback=_window_seconds,
@@ -58,13 +59,15 @@ def audit(protocol: str, evaluation: str | None, variants: tuple[str, ...], k: i
           address: str | None) -> None:
     """Run PROTOCOL's methods under the honest scheme (subjects kept apart, nothing chosen on test data)
     and under each applicable leaky variant (k-fold over captures ignoring subjects, k-fold over windows
-    cut from the captures, the subject's id as a feature, a parameter chosen by its test accuracy), and
+    cut from the captures, the subject's id as a feature, a parameter chosen by its test accuracy, a
+    network's training epoch chosen by its test accuracy), and
     report the inflation of each: a table, audit.md, audit.html and a figure in the results folder. Every
     variant is a protocol of its own in its folder; finished tasks are reused.
 
-    Cost: up to five runs of the protocol's methods, one per variant: honest (the protocol's own
-    folds, or one per subject), capture-kfold, window-kfold and subject-id (--k folds each) and
-    tuned-on-test (the honest folds, once per --tune value). The number of tasks of each variant is
+    Cost: up to six runs of the protocol's methods, one per variant: honest (the protocol's own
+    folds, or one per subject), capture-kfold, window-kfold and subject-id (--k folds each),
+    tuned-on-test (the honest folds, once per --tune value) and stopped-on-test (the honest folds, the
+    methods that train by epochs). The number of tasks of each variant is
     printed before any runs; the smallest real-data protocol (haart-loso-msd-rf, one method: 4
     variants x 10 folds = 40 tasks) took 11 minutes on two cores."""
     from ..engine.audit import VARIANTS, plan_audit, run_audit, tunable_params

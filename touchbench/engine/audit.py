@@ -20,6 +20,10 @@ on the same data, under
                     features (methods with a feature matrix only)
 ``tuned-on-test``   the honest scheme, a parameter grid (``tune``), only the
                     value with the best mean test accuracy reported
+``stopped-on-test`` the honest scheme, each method that trains by epochs
+                    (the ``cnn``) given the test fold with its labels: no
+                    validation split, the epoch of the best test accuracy
+                    kept (early stopping on the held-out subject)
 ==================  ==========================================================
 
 Each variant is a protocol of its own (written beside its results as
@@ -67,7 +71,7 @@ import pandas as pd
 
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError
-from ..methods import CAPTURES, METHODS
+from ..methods import CAPTURES, METHODS, stops_on_test
 from ..methods.base import takes_captures
 from ..protocols.derive import derive, protocol_data
 from ..protocols.schema import Protocol
@@ -77,7 +81,7 @@ from .runner import plan_protocol, run_plan
 
 __all__ = ["VARIANTS", "Audit", "AuditPlan", "audit_protocols", "plan_audit", "run_audit", "tunable_params"]
 
-VARIANTS = ("honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test")
+VARIANTS = ("honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test", "stopped-on-test")
 
 
 @dataclass
@@ -181,6 +185,16 @@ def _tuned_entries(data: dict[str, Any], tune: dict[str, list[Any]]) -> dict[str
     return data if hit else None
 
 
+def _stopped_entries(data: dict[str, Any]) -> dict[str, Any] | None:
+    """The entries whose estimator can stop on test data marked ``stopped_on_test`` (None: there is none)."""
+    hit = False
+    for spec in _entry_specs(data):
+        if stops_on_test(spec.get("estimator") or spec.get("name") or ""):
+            spec["stopped_on_test"] = True
+            hit = True
+    return data if hit else None
+
+
 def audit_protocols(protocol: Protocol, *, k: int = 10, window_seconds: float = 2.0,
                     tune: dict[str, list[Any]] | None = None, variants: tuple[str, ...] = VARIANTS,
                     window_folds: int | None = None) -> tuple[dict[str, Protocol], list[str]]:
@@ -224,6 +238,12 @@ def audit_protocols(protocol: Protocol, *, k: int = 10, window_seconds: float = 
             out["tuned-on-test"] = dict(tuned, scheme=honest_scheme)
         else:
             notes.append("tuned-on-test: give a parameter grid (--tune PARAM=V1,V2,...) that a method takes")
+    if "stopped-on-test" in variants:
+        stopped = _stopped_entries(copy.deepcopy(base))
+        if stopped is not None:
+            out["stopped-on-test"] = dict(stopped, scheme=honest_scheme)
+        else:
+            notes.append("stopped-on-test: no method that trains by epochs (such as cnn) to stop on the test data")
     protos = {}
     for variant, data in out.items():
         data["name"] = f"{name}-{variant}"

@@ -43,7 +43,7 @@ from ..core.paths import cache_dir
 from ..core.suggest import did_you_mean
 from ..datasets.model import SensorSpec, TouchDataset
 from ..features.base import feature_set_refusal, learns_from_data
-from ..methods import METHODS, Method, expand_candidates, method_spec
+from ..methods import METHODS, Method, expand_candidates, method_spec, stops_on_test
 from ..protocols.entries import expand_grid
 from ..protocols.schema import Protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
@@ -399,6 +399,8 @@ def _task_identity(place: _FoldPlace, m: Method, comps: Components) -> dict[str,
     }
     if m.subject_id_feature:  # only then: the ids of every other task stay as they were
         identity["subject_id_feature"] = True
+    if m.stopped_on_test:
+        identity["stopped_on_test"] = True
     if fold.live is not None:  # a stream fold: its streams and recogniser
         identity["live"] = fold.live.digest()
     return identity
@@ -453,6 +455,9 @@ def plan_tasks(prepared: Prepared, protocol: Protocol, methods: list[Method], co
         if m.subject_id_feature and not m.spec.feature_sets:
             raise protocol.error_at(("methods",), f"{m.label!r}: subject_id_feature needs a feature matrix; "
                                                   f"{m.spec.estimator!r} takes the captures themselves")
+        if m.stopped_on_test and not stops_on_test(m.spec.estimator):
+            raise protocol.error_at(("classifiers",), f"{m.label!r}: stopped_on_test needs an estimator that stops "
+                                                      f"on test data; {m.spec.estimator!r} does not")
     scheme_json = _scheme_json(protocol)
     leak = protocol.splitter(0).leakage()
     tasks: list[Task] = []

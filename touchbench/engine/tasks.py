@@ -278,8 +278,9 @@ def _capture_outcome(task: Task, ctx: RunContext, row: dict[str, Any], notes: li
     groups = ds.meta["subject"].to_numpy()[fold.train]
     t0 = time.perf_counter()
     spec = task.method.spec
+    test_set = (X_te, y_test) if task.method.stopped_on_test else None  # the audit's leak: stopped on test
     fitted_est = fit_estimator(spec.estimator, spec.estimator_params, task.seed, X_tr, y_train, groups,
-                               sensor=ds.sensor)
+                               test_set=test_set, sensor=ds.sensor)
     row["fit_seconds"] = time.perf_counter() - t0 if fitted_est.estimator is not None else 0.0
     row["n_classes_train"] = int(len(fitted_est.classes))
     est = fitted_est.estimator

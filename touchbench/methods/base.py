@@ -17,11 +17,12 @@ from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
 from ..core.registry import Registry
 
-__all__ = ["ADAPTED", "CAPTURES", "METHODS", "Method", "MethodSpec", "SUBJECT_ID_LEAK", "TUNED_ON_TEST_LEAK",
-           "expand_candidates", "method_spec", "resolve_entry"]
+__all__ = ["ADAPTED", "CAPTURES", "METHODS", "Method", "MethodSpec", "STOPPED_ON_TEST_LEAK", "SUBJECT_ID_LEAK",
+           "TUNED_ON_TEST_LEAK", "expand_candidates", "method_spec", "resolve_entry", "stops_on_test"]
 
 SUBJECT_ID_LEAK = "the subject's id is a feature"
 TUNED_ON_TEST_LEAK = "a parameter chosen by its test accuracy"
+STOPPED_ON_TEST_LEAK = "the training epoch chosen by its test accuracy"
 #: what a method whose estimator adapts to the test session uses (the results' ``adaptation`` column)
 ADAPTED = "unlabelled test captures, per subject"
 
@@ -66,8 +67,10 @@ class Method:
       input (the protocol's feature combination, the method's own feature
       sets, or ``captures`` for an estimator that takes the captures);
     - the leaky variants: ``subject_id_feature`` (the subject one-hot
-      appended to the features) and ``tuned_on_test`` (the label of the
-      entry whose grid value is chosen by its test accuracy, "" otherwise).
+      appended to the features), ``tuned_on_test`` (the label of the
+      entry whose grid value is chosen by its test accuracy, "" otherwise)
+      and ``stopped_on_test`` (the estimator stops training at the epoch
+      of its best accuracy on the test fold, which its ``fit`` is given).
 
     :attr:`key` is the method's content (never a display label): its
     :attr:`method_id` and, with the evaluation and the fold, its tasks'
@@ -81,6 +84,7 @@ class Method:
     features_label: str = ""
     subject_id_feature: bool = False
     tuned_on_test: str = ""
+    stopped_on_test: bool = False
     #: the frame count the protocol stated for the captures a registered method takes as recorded
     input_frames: int | None = None
 
@@ -91,6 +95,8 @@ class Method:
                                "estimator": [self.spec.estimator, dict(self.spec.estimator_params)]}
         if self.subject_id_feature:
             key["subject_id_feature"] = True
+        if self.stopped_on_test:
+            key["stopped_on_test"] = True
         return key
 
     @property
@@ -108,7 +114,8 @@ class Method:
     def leakage(self) -> list[str]:
         """What this method lets the test data inform (empty for an honest method)."""
         return [why for why, on in ((SUBJECT_ID_LEAK, self.subject_id_feature),
-                                    (TUNED_ON_TEST_LEAK, bool(self.tuned_on_test))) if on]
+                                    (TUNED_ON_TEST_LEAK, bool(self.tuned_on_test)),
+                                    (STOPPED_ON_TEST_LEAK, self.stopped_on_test)) if on]
 
 
 def features_label(spec: MethodSpec, combination_label: str) -> str:
@@ -153,6 +160,12 @@ CAPTURES = "raw-window"
 def takes_captures(estimator: str) -> bool:
     """Whether the registered classifier ``estimator`` takes captures (tag ``input="captures"``)."""
     return estimator in CLASSIFIERS and CLASSIFIERS.entry(estimator).tags.get("input") == "captures"
+
+
+def stops_on_test(estimator: str) -> bool:
+    """Whether the registered classifier ``estimator`` can stop training on the test data's accuracy
+    (tag ``stops_on_test``: its ``fit`` takes a ``test_set``; the audit's stopped-on-test variant)."""
+    return estimator in CLASSIFIERS and bool(CLASSIFIERS.entry(estimator).tags.get("stops_on_test"))
 
 
 def expand_candidates(classifier: str, params: dict[str, Any]) -> dict[str, Any]:

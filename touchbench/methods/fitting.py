@@ -30,11 +30,14 @@ def encode_labels(y: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def fit_estimator(name: str, params: dict[str, Any], seed: int | None, X: np.ndarray, y: Any,
-                  groups: Any = None, **build: Any) -> FittedEstimator:
+                  groups: Any = None, test_set: tuple[Any, Any] | None = None, **build: Any) -> FittedEstimator:
     """Build the registered estimator ``name`` (``random_state=seed``, ``params``,
     and ``build`` keywords such as the sensor) and fit it on ``X``, ``y`` (labels as text; the
-    subjects ``groups`` as text to an estimator that takes them)."""
-    return fit_on_codes(name, params, seed, X, _as_text(y), None if groups is None else _as_text(groups), **build)
+    subjects ``groups`` as text to an estimator that takes them; ``test_set``, the test rows and
+    labels of a method stopped on test, labels as text)."""
+    test = None if test_set is None else (test_set[0], _as_text(test_set[1]))
+    return fit_on_codes(name, params, seed, X, _as_text(y), None if groups is None else _as_text(groups),
+                        test_set=test, **build)
 
 
 def fit_method(spec: MethodSpec, seed: int | None, captures: Any, y: Any, groups: Any = None,

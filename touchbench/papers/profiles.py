@@ -65,8 +65,9 @@ PROFILES: dict[str, Profile] = {
         "quick",
         "fewer trees and epochs and 10 folds instead of 100, so that every protocol runs on two cores in "
         "under 20 minutes; real HAART data and the synthetic scenes are used whole (the papers' numbers of "
-        "people and repetitions); with --audit, the CNN's window variant (24,900 windows) runs the first 2 of "
-        "its 10 folds",
+        "people and repetitions); leave-one-subject-out keeps every subject's fold (ten on HAART); with --audit, "
+        "the CNN's window variant (24,900 windows) runs the first 2 of its 10 folds, its other variants all "
+        "their folds",
         classifier_caps={
             "gaus-rf": {"n_estimators": 100},
             "gaus-boost": {"n_trees": 100, "n_estimators": 10},

@@ -314,6 +314,7 @@ def _audit_section(proto, out: Path) -> list[str]:
     lines = ["", f"Leakage audit (`{_rel(audit_dir(out))}`): the same method under the honest scheme and each "
                  "leaky variant, measured:", ""]
     lines += audit_markdown(table, doc.get("published"), title="", notes=doc.get("notes")).splitlines()[2:]
+    lines += [_audit_folds(audit_dir(out), list(dict.fromkeys(table["variant"]))), ""]
     for method, pub in (doc.get("published") or {}).items():
         g = table[table["method"] == method]
         hits = [v for v, a in zip(g["variant"], g["accuracy"]) if abs(100 * a - pub["value"]) <= pub["tolerance"]]
@@ -324,6 +325,15 @@ def _audit_section(proto, out: Path) -> list[str]:
     for check in (proto.expected.confusions if proto.expected is not None else []):
         lines += ["", *_audit_confusion(check, audit_dir(out), list(dict.fromkeys(table["variant"])))]
     return lines + [""]
+
+
+def _audit_folds(folder: Path, variants: list[str]) -> str:
+    """How many folds each audit variant ran (its ``scores.parquet`` in ``folder/<variant>/``)."""
+    parts = []
+    for v in variants:
+        scores = _read(folder / v)[0]
+        parts.append(f"{v} {'not run' if scores is None else int(scores['fold'].nunique())}")
+    return "Folds run: " + ", ".join(parts) + "."
 
 
 def _audit_confusion(check: ExpectedConfusion, folder: Path, variants: list[str]) -> list[str]:
@@ -380,7 +390,9 @@ def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
         return sec
     sec.seconds = sum(float(x.get("seconds") or 0) for x in man.get("sessions", []))
     n_fail = int((scores["status"] != "ok").sum())
-    body.append(f"Run: {len(scores)} tasks ({n_fail} failed), {sec.seconds / 60:.1f} min of run time on "
+    n_folds = int(scores["fold"].nunique())
+    body.append(f"Run: {len(scores)} tasks over {n_folds} fold{'' if n_folds == 1 else 's'} ({n_fail} failed), "
+                f"{sec.seconds / 60:.1f} min of run time on "
                 f"{(man.get('platform') or {}).get('cpu_count', '?')} CPUs.")
     if n_fail:
         err = str(scores[scores["status"] != "ok"]["error"].iloc[0]).splitlines()[0]

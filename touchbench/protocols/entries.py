@@ -93,6 +93,8 @@ class ClassifierSpec(_Model):
     #: leaky variant: of the grid in ``params``, only the value with the best mean test accuracy
     #: is reported (see :class:`MethodRef`)
     tuned_on_test: bool = False
+    #: leaky variant: training stopped at the epoch of the best test accuracy (see :class:`MethodRef`)
+    stopped_on_test: bool = False
 
     @field_validator("name")
     @classmethod
@@ -129,6 +131,9 @@ class MethodRef(_Model):
     #: leaky variant: of the grid in ``params``, only the value with the best mean test accuracy is
     #: reported (a parameter chosen on the test folds, as Al-mashhadani et al. chose the frame length)
     tuned_on_test: bool = False
+    #: leaky variant: the estimator is given the test fold with its labels and keeps the training epoch
+    #: of its best test accuracy (early stopping on the held-out subject); the ``cnn`` can
+    stopped_on_test: bool = False
 
     @model_validator(mode="after")
     def _variants(self) -> "MethodRef":
@@ -192,3 +197,5 @@ class ClassifierEntry(BaseModel):
     subject_id_feature: bool = False
     #: the entry whose grid is chosen on test accuracy (its label without the grid), "" otherwise
     tuned_on_test: str = ""
+    #: training stopped at the epoch of the best test accuracy (see :class:`MethodRef`)
+    stopped_on_test: bool = False

@@ -337,7 +337,8 @@ class Protocol(_Model):
                 base = spec.label or spec.name
                 label = _label(base, p, grid_keys) if grid_keys else base
                 out.append(ClassifierEntry(label=label, name=spec.name, params=p, tuned_on_test=(
-                    f"{base} ({', '.join(grid_keys)} chosen on test)" if spec.tuned_on_test else "")))
+                    f"{base} ({', '.join(grid_keys)} chosen on test)" if spec.tuned_on_test else ""),
+                    stopped_on_test=spec.stopped_on_test))
         labels = [c.label for c in out]
         for c in out:
             if labels.count(c.label) > 1:
@@ -367,7 +368,7 @@ class Protocol(_Model):
                 out.append((i, combo, ClassifierEntry(label=_label(base, p, grid_keys) if grid_keys else base,
                                                       name=name, params=p, subject_id_feature=m.subject_id_feature,
                                                       tuned_on_test=f"{base} ({', '.join(grid_keys)} chosen on test)"
-                                                      if m.tuned_on_test else "")))
+                                                      if m.tuned_on_test else "", stopped_on_test=m.stopped_on_test)))
         return out
 
     def _entry_pairs(self) -> list[tuple[FeatureCombination, ClassifierEntry, tuple]]:
@@ -395,7 +396,8 @@ class Protocol(_Model):
         frames = dict(combo.sets[0][1]).get("frames") if clf.name in METHODS else None
         return Method(label=clf.label, spec=spec, name=clf.name, params=dict(clf.params),
                       features_label=features_label(spec, combo.label), subject_id_feature=clf.subject_id_feature,
-                      tuned_on_test=clf.tuned_on_test, input_frames=None if frames is None else int(frames))
+                      tuned_on_test=clf.tuned_on_test, stopped_on_test=clf.stopped_on_test,
+                      input_frames=None if frames is None else int(frames))
 
     def features_label_of(self, names: list[str]) -> str:
         """The features label reports give the methods of the combination ``names`` (an

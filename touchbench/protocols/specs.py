@@ -164,8 +164,10 @@ class AuditSpec(_Model):
     """How ``touchbench audit`` and ``papers reproduce --audit`` audit this protocol: the leaky
     variants to run, the folds of the k-fold ones, the window of window-kfold, the grid tuned on test."""
 
-    variants: list[Literal["honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test"]] = Field(
-        default_factory=lambda: ["honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test"])
+    variants: list[Literal["honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test",
+                           "stopped-on-test"]] = Field(
+        default_factory=lambda: ["honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test",
+                                 "stopped-on-test"])
     k: int = Field(default=10, ge=2)
     window_seconds: float = Field(default=2.0, gt=0)
     tune: dict[str, list[Any]] = Field(default_factory=dict)

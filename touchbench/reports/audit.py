@@ -24,7 +24,8 @@ LEGEND = ("Accuracy: mean over folds. Inflation: a leaky variant's accuracy minu
           "points. honest: subjects kept apart, nothing chosen on test data. capture-kfold: k-fold over captures "
           "ignoring subjects. window-kfold: k-fold over windows cut from the captures (windows of one capture on "
           "both sides). subject-id: capture-kfold with the subject's id as a feature. tuned-on-test: a parameter "
-          "chosen by its mean test accuracy.")
+          "chosen by its mean test accuracy. stopped-on-test: training stopped at the epoch of the best test "
+          "accuracy (early stopping on the held-out subject).")
 
 
 def _pct(v: float) -> str:
