@@ -166,6 +166,26 @@ def test_cross_dataset_trains_on_one_dataset_and_tests_on_the_other(tmp_path):
     assert res.scores["leakage"].tolist() == [""] * 5
 
 
+def test_multi_source_trains_on_one_dataset_and_the_others_other_subjects(tmp_path):
+    train = _data(tmp_path, "train.parquet", subjects=("a1", "a2"), seed=1)
+    test = _data(tmp_path, "test.parquet", subjects=("b1", "b2", "b3"), seed=2)
+    p = _protocol(tmp_path, f"dataset: {train}\nscheme: {{name: multi-source, test: {test}}}\n"
+                            "features: [[test-mean]]\nclassifiers: [test-logreg]\n")
+    plan = plan_run(parse_protocol(p.read_text(), p))
+    meta = plan.dataset.meta
+    origin, subject = meta["origin"].to_numpy(), meta["subject"].to_numpy()
+    # one fold (and one seed) per subject of the second dataset: not a single test set
+    assert [t.fold.name for t in plan.tasks] == ["subject=b1", "subject=b2", "subject=b3"]
+    for t, held in zip(plan.tasks, ("b1", "b2", "b3")):
+        assert set(subject[t.fold.test]) == {held} and len(t.fold.test) == 3 * 2
+        # all 12 captures of the first dataset and the 2 x 6 of the second's other subjects
+        assert len(t.fold.train) == 2 * 3 * 2 + 2 * 3 * 2 and held not in set(subject[t.fold.train])
+        assert set(origin[t.fold.train]) == {"train", "test"}
+    assert sorted(np.concatenate([t.fold.test for t in plan.tasks]).tolist()) == np.flatnonzero(origin == "test").tolist()
+    res = run_protocol(p, out=tmp_path / "out", progress=False)
+    assert res.scores["leakage"].tolist() == [""] * 3
+
+
 def test_early_prepares_the_data_as_its_base_does(tmp_path):
     train = _data(tmp_path, "train.parquet", subjects=("a1", "a2"), seed=1)
     test = _data(tmp_path, "test.parquet", subjects=("b1",), seed=2)

@@ -29,6 +29,8 @@ schemes by importing every module of this package):
                             subject: windows of one capture on both sides).
 ``cross-dataset``           train on one dataset, test on another (adapted to
                             the training sensor when declared).
+``multi-source``            train on one dataset and the other subjects of
+                            another, test each subject of the other in turn.
 ``early``                   any scheme above, with test captures (optionally
                             training captures too) cut to their first N frames
                             or S seconds, N swept over a list (Al-mashhadani

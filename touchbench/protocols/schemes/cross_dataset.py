@@ -1,5 +1,6 @@
 """The ``cross-dataset`` scheme: train on the protocol's dataset, test on another (adapted to the
-training sensor when declared).
+training sensor when declared); the ``multi-source`` scheme: the same datasets, with the other
+dataset's subjects left out one at a time and its other subjects in training.
 """
 
 from __future__ import annotations
@@ -105,6 +106,13 @@ class CrossDataset(Splitter):
         return out
 
     def _split(self, meta: pd.DataFrame) -> list[Fold]:
+        train, test = self._sides(meta)
+        name = "train->test"
+        return [Fold(name, train, test, group=name)]
+
+    def _sides(self, meta: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+        """The positions of the training and the test dataset's captures; a test capture whose frames
+        are a training capture's is refused, and subject names in both datasets are noted."""
         require_columns(meta, self.name, ORIGIN, FRAMES_SHA)
         origin = str_col(meta, ORIGIN)
         train, test = np.flatnonzero(origin == "train"), np.flatnonzero(origin == "test")
@@ -113,16 +121,55 @@ class CrossDataset(Splitter):
         again = [i for i in test.tolist() if sha[i] in seen]
         if again:
             ids = meta["capture_id"].astype(str).to_numpy()[again]
-            raise SplitError(f"scheme 'cross-dataset': {len(again)} test capture(s) have the frames of a training "
+            raise SplitError(f"scheme {self.name!r}: {len(again)} test capture(s) have the frames of a training "
                              f"capture ({', '.join(ids[:5].tolist())}{'...' if len(again) > 5 else ''}): the same "
                              f"recordings are in both datasets; filter them out of one")
         subj = str_col(meta, "subject")
         shared = sorted(set(subj[train]) & set(subj[test]), key=natural_key)
         if shared:
             self.notes_.append(f"subject name(s) {shared} are in both datasets (the same people, or a clash of names)")
-        name = "train->test"
-        return [Fold(name, train, test, group=name)]
+        return train, test
 
+
+@SPLITTERS.register(
+    "multi-source",
+    description="train on the protocol's dataset and the other subjects of another, test each of its subjects",
+    paper="",
+)
+class MultiSource(CrossDataset):
+    """Multi-source training: one fold per subject of ``test`` (a dataset reference, as for
+    ``cross-dataset``, with its ``adapters``), training on every capture of the protocol's dataset and
+    on the test dataset's other subjects, testing on that subject. What a second study's own people
+    add to a model trained on the first: beside ``cross-dataset`` (the first study alone) and
+    ``loso`` inside the second study (the second alone). Every test capture is tested once.
+    """
+
+    name = "multi-source"
+    single_test_set = False
+
+    @classmethod
+    def heading(cls, params: dict[str, Any], dataset: str) -> str | None:
+        """``multi-source: trained on DATASET and TEST's other subjects, tested on each subject of TEST``."""
+        plain = super().heading(params, dataset)
+        if plain is None:
+            return None
+        test = plain.rsplit(", tested on ", 1)[1]
+        return f"multi-source: trained on {dataset} and the other subjects of {test}, tested on each subject of {test}"
+
+    def apart_column(self) -> str | None:
+        return "subject"
+
+    def _split(self, meta: pd.DataFrame) -> list[Fold]:
+        train, test = self._sides(meta)
+        subj = str_col(meta, "subject")
+        held = sorted(set(subj[test].tolist()), key=natural_key)
+        if len(held) < 2:
+            raise SplitError(f"scheme 'multi-source' needs at least 2 subjects in the test dataset; it has {held}")
+        folds = []
+        for v in held:
+            out = test[subj[test] == v]
+            folds.append(Fold(f"subject={v}", np.concatenate([train, test[subj[test] != v]]), out, group=v))
+        return folds
 
 def _with_origin(ds: TouchDataset, origin: str, checksums: list[str], name: str) -> TouchDataset:
     meta = ds.meta.copy()
