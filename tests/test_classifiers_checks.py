@@ -40,6 +40,8 @@ NOT_APPLICABLE = {
     "flagg-rf": dict.fromkeys(_EQUIV, _BOOTSTRAP),
     "zhou-bagged-trees": dict.fromkeys(_EQUIV, _BOOTSTRAP),
     "gaus-boost": {_EQUIV[0]: "its weak learners are bootstrapped random forests: " + _BOOTSTRAP},
+    "gaus-boost-oob": dict.fromkeys(_EQUIV, "each weak learner is fitted on a resample drawn by the weights: "
+                                           + _BOOTSTRAP),
     "xgboost": {_EQUIV[0]: "row subsampling (subsample=0.8) draws rows, so weights are not repeats"},
     "jung-svm": {_EQUIV[0]: "libsvm rescales C per sample, which is not equivalent to repeating rows "
                             "(scikit-learn marks SVC likewise)"},

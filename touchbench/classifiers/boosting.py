@@ -100,6 +100,9 @@ class SAMMEClassifier(ClassifierMixin, BaseEstimator):
     def _validate(self):
         if self.weak_error not in ("train", "oob"):
             raise ValueError(f"weak_error must be 'train' or 'oob', got {self.weak_error!r}")
+        self._validate_counts()
+
+    def _validate_counts(self):
         if not (isinstance(self.n_estimators, (int, np.integer)) and self.n_estimators >= 1):
             raise ValueError(f"n_estimators must be a positive integer, got {self.n_estimators!r}")
         if not self.learning_rate > 0:
@@ -119,26 +122,10 @@ class SAMMEClassifier(ClassifierMixin, BaseEstimator):
         self.estimators_, weights, errors = [], [], []
         self.stop_reason_ = "n_estimators"
         for it in range(self.n_estimators):
-            est = self._weak_learner()
-            params = est.get_params(deep=False)
-            upd = {}
-            if "random_state" in params:
-                upd["random_state"] = int(rng.randint(MAX_SEED))
-            if "n_jobs" in params:
-                upd["n_jobs"] = self.n_jobs
-            if self.weak_error == "oob":
-                if "oob_score" not in params:
-                    raise ValueError("weak_error='oob' needs a bagged weak learner with oob_score")
-                upd["oob_score"] = True
-            est.set_params(**upd)
-            with warnings.catch_warnings():  # "Some inputs do not have OOB scores": handled below
-                warnings.filterwarnings("ignore", message="Some inputs do not have OOB scores")
-                est.fit(X, yi, sample_weight=w * n)
-            pred = self._weak_predictions(est, X)
-            miss = pred != yi
-            err = float(np.sum(w[miss]))
-            if err <= 0.0 or err >= 1.0 - 1.0 / k:
-                self.stop_reason_ = "perfect_fit" if err <= 0.0 else "too_weak"
+            est, miss, err = self._fit_weak(X, yi, w, rng)
+            stop = self._stop_reason(err, k)
+            if stop is not None:
+                self.stop_reason_ = stop
                 if it == 0:  # Weka: "If we're the first we have to use it"
                     self.estimators_.append(est)
                     weights.append(1.0)
@@ -154,6 +141,39 @@ class SAMMEClassifier(ClassifierMixin, BaseEstimator):
         self.estimator_errors_ = np.asarray(errors)
         self.n_iterations_ = len(self.estimators_)
         return self
+
+    @staticmethod
+    def _stop_reason(err: float, k: int) -> str | None:
+        """Weka's stopping rule in SAMME's form: a perfect fit, or an error at or above ``1 - 1/K``."""
+        if err <= 0.0:
+            return "perfect_fit"
+        if err >= 1.0 - 1.0 / k:
+            return "too_weak"
+        return None
+
+    def _seeded(self, est, rng):
+        """``est`` with the next seed of ``rng`` and ``n_jobs``, where it takes them."""
+        params = est.get_params(deep=False)
+        upd = {}
+        if "random_state" in params:
+            upd["random_state"] = int(rng.randint(MAX_SEED))
+        if "n_jobs" in params:
+            upd["n_jobs"] = self.n_jobs
+        return est.set_params(**upd)
+
+    def _fit_weak(self, X, yi, w, rng):
+        """One weak learner fitted on the weighted training set: the learner, which rows it
+        misclassifies, and its weighted error (on the training set, or out of bag)."""
+        est = self._seeded(self._weak_learner(), rng)
+        if self.weak_error == "oob":
+            if "oob_score" not in est.get_params(deep=False):
+                raise ValueError("weak_error='oob' needs a bagged weak learner with oob_score")
+            est.set_params(oob_score=True)
+        with warnings.catch_warnings():  # "Some inputs do not have OOB scores": handled below
+            warnings.filterwarnings("ignore", message="Some inputs do not have OOB scores")
+            est.fit(X, yi, sample_weight=w * X.shape[0])
+        miss = self._weak_predictions(est, X) != yi
+        return est, miss, float(np.sum(w[miss]))
 
     def _weak_predictions(self, est, X):
         """Each row's prediction by the learner: on the training set, or out of
@@ -215,3 +235,79 @@ class GausBoostingClassifier(SAMMEClassifier):
         return WekaRandomForestClassifier(
             n_estimators=self.n_trees, max_features=self.max_features, criterion=self.criterion
         )
+
+
+#: Weka AdaBoostM1's ``MAX_NUM_RESAMPLING_ITERATIONS``: draws of a resample before a zero error is accepted
+MAX_REDRAWS = 10
+
+
+class ResampledBoostingClassifier(GausBoostingClassifier):
+    """SAMME boosting of forests, each fitted on a weighted resample and weighed by its out-of-bag error.
+
+    Gaus et al. 2015 (Sec. 3.3.2: SAMME, "similar to Adaboost, but the
+    difference is in how the error rate is computed"; Sec. 4: random forests
+    as weak learners, 500 iterations, Weka) boost forests that fit their
+    training set perfectly, so Weka's AdaBoostM1 loop stops after the first
+    forest (module docstring). This variant keeps boosting; it is not what
+    the paper ran. Its interpretations, one by one:
+
+    1. the weak learner is fitted, unweighted, on a resample of the
+       training set: ``n`` rows drawn with replacement, with probabilities
+       the current boosting weights (Weka AdaBoostM1's resampling option
+       ``-Q``, ``Instances.resampleWithWeights``);
+    2. its weighted error is measured on the rows the resample left out
+       (out of bag): ``err = sum(w[oob & miss]) / sum(w[oob])``. Weka's
+       ``-Q`` measures it on the whole training set, which a forest fits
+       perfectly; this is the one departure from Weka;
+    3. a zero error, or a resample leaving out no row of positive weight, is
+       drawn again, at most ``MAX_REDRAWS`` (10) times in all, as Weka's
+       ``-Q`` does for a zero error; then Weka's stopping rule applies (stop
+       at ``err == 0``, ``stop_reason_`` ``"perfect_fit"``, or with no row out
+       of bag, ``"no_out_of_bag"``; the first learner is kept, with weight 1);
+    4. SAMME's weight ``alpha = log((1 - err) / err) + log(K - 1)`` and its
+       limit ``err >= 1 - 1/K`` (stop, ``"too_weak"``), as ``gaus-boost``;
+    5. the reweighting multiplies by ``exp(alpha)`` the weight of every
+       training row the learner misclassifies, in bag or out (Weka's
+       ``setWeights`` classifies every training row); a forest misclassifies
+       few of its in-bag rows, so mostly the out-of-bag misses gain weight.
+
+    Parameters are ``gaus-boost``'s but ``weak_error`` (always out of bag,
+    as above).
+    """
+
+    def __init__(self, n_estimators=500, n_trees=1000, max_features="weka", criterion="entropy",
+                 learning_rate=1.0, random_state=None, n_jobs=1):
+        self.n_estimators = n_estimators
+        self.n_trees = n_trees
+        self.max_features = max_features
+        self.criterion = criterion
+        self.learning_rate = learning_rate
+        self.random_state = random_state
+        self.n_jobs = n_jobs
+
+    def _validate(self):
+        self._validate_counts()
+
+    @staticmethod
+    def _stop_reason(err: float, k: int) -> str | None:
+        if math.isnan(err):
+            return "no_out_of_bag"
+        return SAMMEClassifier._stop_reason(err, k)
+
+    def _fit_weak(self, X, yi, w, rng):
+        """The learner fitted on a resample drawn by ``w`` (redrawn while its out-of-bag error is zero
+        or unmeasurable, at most ``MAX_REDRAWS`` draws), its misses on every row, its out-of-bag error
+        (NaN when no row of positive weight was out of bag)."""
+        n = X.shape[0]
+        for _ in range(MAX_REDRAWS):
+            bag = rng.choice(n, size=n, replace=True, p=w)
+            out = np.ones(n, dtype=bool)
+            out[bag] = False
+            est = self._seeded(self._weak_learner(), rng)
+            est.fit(X[bag], yi[bag])
+            miss = est.predict(X) != yi
+            w_out = float(np.sum(w[out]))
+            err = float(np.sum(w[out & miss]) / w_out) if w_out > 0.0 else math.nan
+            if err > 0.0:
+                break
+        return est, miss, err

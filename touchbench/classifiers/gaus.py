@@ -18,13 +18,17 @@ learners, read as SAMME (Zhu et al. 2009) inside Weka's AdaBoostM1 loop
 (see :mod:`touchbench.classifiers.boosting` for the algorithm and for the
 finding that a forest fitting the training set perfectly stops the loop at
 the first iteration, so the default ``gaus-boost`` is one 1000-tree forest).
+``gaus-boost-oob`` is the variant that keeps boosting (not the paper's): each
+forest fitted on a resample drawn by the boosting weights and weighed by its
+error on the captures the resample left out (its class docstring lists the
+interpretations).
 """
 
 from __future__ import annotations
 
 from ._util import WekaRandomForestClassifier, build
 from .base import CLASSIFIERS
-from .boosting import GausBoostingClassifier
+from .boosting import GausBoostingClassifier, ResampledBoostingClassifier
 
 SOURCE = "Gaus et al. 2015, section 4; Weka defaults otherwise"
 
@@ -62,3 +66,19 @@ def gaus_boost(random_state=None, **params):
     """Gaus et al.'s boosting; ``weak_error="oob"`` is the non-paper variant
     that keeps boosting when forests fit the training set perfectly."""
     return build(GausBoostingClassifier, BOOST_DEFAULTS, random_state, params, name="gaus-boost")
+
+
+OOB_BOOST_DEFAULTS = {k: v for k, v in BOOST_DEFAULTS.items() if k != "weak_error"}
+
+
+@CLASSIFIERS.register(
+    "gaus-boost-oob",
+    description="SAMME boosting of 1000-tree forests on weighted resamples, each weighed by its "
+                "out-of-bag error (keeps boosting; not the paper's)",
+    source=SOURCE + "; SAMME in Weka AdaBoostM1's resampling loop, the error out of bag",
+    defaults=OOB_BOOST_DEFAULTS,
+    extra=None, cheap_params=dict(n_estimators=3, n_trees=3))
+def gaus_boost_oob(random_state=None, **params):
+    """Boosting that keeps boosting when forests fit their training set perfectly (see
+    :class:`touchbench.classifiers.boosting.ResampledBoostingClassifier`)."""
+    return build(ResampledBoostingClassifier, OOB_BOOST_DEFAULTS, random_state, params, name="gaus-boost-oob")

@@ -141,3 +141,28 @@ def show(name: str) -> None:
     click.echo(f"parameters: {inspect.signature(cls.__init__)}".replace("(self, ", "("))
     click.echo("")
     click.echo(inspect.getdoc(cls) or "")
+
+
+@features.command("condition", epilog=example(
+    "touchbench features condition zhou-table6-descriptors-tpm",
+    "touchbench features condition gaus-table5-haart --fold f0 --json"))
+@click.argument("protocol")
+@click.option("--evaluation", default=None, help="The evaluation to measure, for a protocol with several.")
+@click.option("--fold", default=None, help="The training part of this fold of the protocol's scheme only.")
+@json_option
+def condition(protocol: str, evaluation: str | None, fold: str | None, as_json: bool) -> None:
+    """The condition number of the pooled within-class covariance (the matrix LDA inverts) of each
+    feature combination of PROTOCOL, on the captures `touchbench train` fits on (float64; inf when
+    singular)."""
+    from ..deploy.conditioning import within_class_conditioning
+
+    rows = within_class_conditioning(protocol, evaluation=evaluation, fold=fold)
+    for r in rows:
+        r["singular"] = r["condition"] == float("inf")
+    if as_json:
+        echo_json(rows)
+        return
+    click.echo(f"{rows[0]['selection']}: {rows[0]['captures']} captures, {rows[0]['classes']} classes")
+    for r in rows:
+        cond = "inf (singular)" if r["singular"] else f"{r['condition']:.4g}"
+        click.echo(f"{r['features']}: {r['columns']} columns, rank {r['rank']}, condition number {cond}")
