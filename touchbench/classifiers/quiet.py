@@ -1,0 +1,272 @@
+"""A pipeline read over windows of its training length, with a no-contact class decided by the noise floor.
+
+``quiet-gated`` takes the captures as recorded (registry tag
+``input="captures"``) with a pipeline, ``features`` -> ``estimator`` (with
+``params``, written as ``shift-augmented``'s), and changes two things about
+how that pipeline meets captures of another recording set-up
+(docs/research/study-transfer.md has the measurements behind both):
+
+1. **Windows of the training length.** A test capture longer than every
+   training capture is cut into windows of the training captures' median
+   length ``L`` (starts ``0, s, 2 s, ...`` with ``s = max(1, round(stride *
+   L))``, and a last window ending at the capture's last frame); the
+   pipeline's probabilities are averaged over its windows. A capture no
+   longer than the longest training capture is read whole, as the plain
+   pipeline reads it, so a benchmark whose captures share one length is
+   unchanged by this step. Why: features summarising a capture (spectra,
+   order statistics, a 5 % baseline) change with its length and with what
+   a long recording holds besides the gesture (start transients, a level
+   step), the way time-series classifiers trained on fixed-length series
+   are applied to longer ones by sliding windows and pooled decisions
+   (e.g. Bagnall et al. 2017, "The great time series classification bake
+   off", the interval methods; an interpretation, not their procedure).
+
+2. **A no-contact gate.** The training class with no contact is found
+   from the data: the one class whose median ``above10_frames`` of
+   ``contact-evidence`` (the fraction of frames with a reading more than 10
+   noise floors above the capture's rest level,
+   :mod:`touchbench.features.contact`) is at most ``quiet_frames``
+   (default 0.05; HAART's ``notouch``: 0.00, its other classes 0.26 and
+   above). When exactly one class qualifies, a logistic regression
+   (standardised ``sign(v) log(1 + |v|)`` of the 19 ``contact-evidence``
+   features, balanced class weights, ``C = gate_c``) is trained to tell it
+   from the rest; a capture's gate probability ``g`` is the median over its
+   windows. The decision (``predict``) is that class when ``g > 0.5``,
+   else the pipeline's most probable other class; ``predict_proba`` gives
+   the class ``g`` and each other class ``(1 - g)`` times the pipeline's
+   probability renormalised over the other classes (its argmax may differ
+   from ``predict`` when ``g <= 0.5`` and the other classes are spread; the
+   decision is ``predict``'s). With no such class (SocialTouch, CoST: every
+   gesture is a touch), or ``gate=False``, the probabilities are the
+   pipeline's. Why: contact measured against the capture's own noise floor
+   transfers between set-ups where the pipeline's level-free sets, which
+   read the shape of the noise, do not (Gaus et al. 2015, Sec. 3.2.1,
+   separate "no touch" by level; contact-evidence's docstring).
+
+Parameters ``gate`` and ``windows`` switch each part off (the ablations of
+the research note). Refused: no sensor (contact-evidence needs the value
+range), a channel sensor (no rest level of cells), and what the pipeline's
+parts refuse.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.linear_model import LogisticRegression
+from sklearn.pipeline import make_pipeline
+from sklearn.preprocessing import StandardScaler
+from sklearn.utils.multiclass import check_classification_targets
+from sklearn.utils.validation import check_is_fitted
+
+from ..core.errors import TouchbenchError
+from ..features.base import check_captures, feature_set_refusal
+from ..features.contact import ContactEvidence
+from ._util import build, seed_int
+from .base import CLASSIFIERS, ParamError, check_nested_params
+from .fitting import feature_specs, fit_pipeline, pipeline_refusal, proba_over
+
+NAME = "quiet-gated"
+SOURCE = ("touchbench (docs/research/study-transfer.md): windows of the training length and a no-contact gate "
+          "on contact above the capture's noise floor (touchbench.features.contact)")
+GATE_SET = "contact-evidence"
+#: the contact-evidence column the no-contact class is found by
+QUIET_COLUMN = "above10_frames"
+
+
+def window_starts(frames: int, length: int, step: int) -> list[int]:
+    """First frames of the windows of ``length`` frames over a capture of ``frames`` frames, ``step``
+    apart, the last ending at the capture's last frame; ``[0]`` when the capture is no longer than one."""
+    if frames <= length:
+        return [0]
+    starts = list(range(0, frames - length + 1, max(1, int(step))))
+    if starts[-1] != frames - length:
+        starts.append(frames - length)
+    return starts
+
+
+def quiet_class(codes: np.ndarray, contact_frames: np.ndarray, most: float) -> int | None:
+    """The one class (a value of ``codes``) whose captures' median ``contact_frames`` is at most
+    ``most``; None when no class or more than one qualifies, or only one class is present."""
+    classes = np.unique(codes)
+    if len(classes) < 2:
+        return None
+    quiet = [c for c in classes if float(np.median(contact_frames[codes == c])) <= most]
+    return quiet[0].item() if len(quiet) == 1 else None
+
+
+def log_signed(X: np.ndarray) -> np.ndarray:
+    """``sign(v) log(1 + |v|)`` of every value: ratios of many noise floors brought to one scale."""
+    X = np.asarray(X, dtype=np.float64)
+    return np.sign(X) * np.log1p(np.abs(X))
+
+
+def gated_proba(base: np.ndarray, gate: np.ndarray, column: int) -> np.ndarray:
+    """Rows of ``base`` (probabilities over classes) with the class ``column`` given the gate's
+    probability ``gate`` and every other class ``1 - gate`` times its share of the others (an even
+    share when the pipeline gives the others nothing)."""
+    base = np.asarray(base, dtype=np.float64)
+    g = np.asarray(gate, dtype=np.float64)
+    others = base.copy()
+    others[:, column] = 0.0
+    total = others.sum(axis=1, keepdims=True)
+    even = np.full_like(others, 1.0 / max(base.shape[1] - 1, 1))
+    even[:, column] = 0.0
+    share = np.where(total > 0, others / np.where(total > 0, total, 1.0), even)
+    out = (1.0 - g)[:, None] * share
+    out[:, column] = g
+    return out
+
+
+def check_params(params: dict[str, Any]) -> None:
+    """``gate_c`` above 0, ``quiet_frames`` in [0, 1), ``stride`` in (0, 1], and the pipeline's
+    estimator's own checks of its ``params``."""
+    checks = (("gate_c", lambda v: v > 0, "a number above 0"),
+              ("quiet_frames", lambda v: 0 <= v < 1, "a fraction in [0, 1)"),
+              ("stride", lambda v: 0 < v <= 1, "a fraction of the window in (0, 1]"))
+    for key, ok, what in checks:
+        v = params.get(key)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not ok(float(v)):
+            raise ParamError((key,), f"{key} must be {what}, got {v!r}")
+    check_nested_params(params.get("estimator"), dict(params.get("params") or {}), ("params",))
+
+
+class QuietGated(ClassifierMixin, BaseEstimator):
+    """A pipeline over windows of its training length with a no-contact gate (module docstring).
+
+    Parameters
+    ----------
+    features, estimator, params : the pipeline (feature sets -> registered estimator with its parameters).
+    gate : train and use the no-contact gate when the training data has a no-contact class.
+    windows : cut captures longer than every training capture into windows of the training length.
+    gate_c : the gate's inverse L2 penalty.
+    quiet_frames : the most a class's median ``above10_frames`` may be for it to be the no-contact class.
+    stride : the step between windows, as a fraction of the window.
+    sensor : the data's SensorSpec (the run engine passes it); required.
+    random_state : seeds the pipeline's estimator.
+    """
+
+    def __init__(self, features=("touch-rhythm",), estimator="touch-extra-trees", params=None, gate=True,
+                 windows=True, gate_c=0.1, quiet_frames=0.05, stride=0.25, sensor=None, random_state=None):
+        self.features = features
+        self.estimator = estimator
+        self.params = params
+        self.gate = gate
+        self.windows = windows
+        self.gate_c = gate_c
+        self.quiet_frames = quiet_frames
+        self.stride = stride
+        self.sensor = sensor
+        self.random_state = random_state
+
+    def _pipeline(self) -> tuple[list[tuple[str, dict[str, Any]]], str, dict[str, Any]]:
+        return feature_specs(self.features), str(self.estimator), dict(self.params or {})
+
+    def check_sensor(self, sensor: Any, min_frames: int | None = None) -> str | None:
+        """Why the gate's contact-evidence or the pipeline cannot serve ``sensor``, or None."""
+        return (feature_set_refusal(GATE_SET, {}, sensor, min_frames)
+                or pipeline_refusal(*self._pipeline(), sensor, min_frames))
+
+    def _checked(self, X: Any) -> list[np.ndarray]:
+        captures = check_captures(X, name=NAME)
+        if self.sensor is None:
+            raise TouchbenchError(f"{NAME}: needs the sensor (the gate's contact-evidence reads levels on its "
+                                  "value range): pass sensor=SensorSpec(...)")
+        problem = self.check_sensor(self.sensor, min(len(c) for c in captures) if captures else None)
+        if problem:
+            raise TouchbenchError(f"{NAME} cannot serve sensor {self.sensor.describe()}: {problem}")
+        return captures
+
+    def _evidence(self, captures: list[np.ndarray]) -> np.ndarray:
+        return np.asarray(ContactEvidence(sensor=self.sensor).transform(captures), dtype=np.float64)
+
+    def fit(self, X: Sequence[np.ndarray], y: Any, groups: Any = None) -> "QuietGated":
+        """Fit the pipeline on the captures as given; find the no-contact class and fit its gate."""
+        check_params(self.get_params(deep=False))
+        captures = self._checked(X)
+        y = np.asarray(y)
+        check_classification_targets(y)
+        if len(y) != len(captures):
+            raise TouchbenchError(f"{NAME}: {len(y)} labels for {len(captures)} captures")
+        self.classes_ = np.unique(y)
+        lengths = [len(c) for c in captures]
+        self.window_, self.longest_ = int(np.median(lengths)), int(max(lengths))
+        sets, est, params = self._pipeline()
+        self.method_ = fit_pipeline(sets, est, params, seed_int(self.random_state), captures, y, groups,
+                                    sensor=self.sensor)
+        self.quiet_, self.gate_ = None, None
+        if self.gate:
+            G = self._evidence(captures)
+            column = ContactEvidence(sensor=self.sensor).feature_names(tuple(self.sensor.grid)).index(QUIET_COLUMN)
+            codes = np.searchsorted(self.classes_, y)
+            q = quiet_class(codes, G[:, column], float(self.quiet_frames))
+            if q is not None:
+                self.quiet_ = self.classes_[q]
+                self.gate_ = make_pipeline(StandardScaler(), LogisticRegression(
+                    C=float(self.gate_c), class_weight="balanced", max_iter=5000)).fit(log_signed(G), codes == q)
+        return self
+
+    def _windows(self, captures: list[np.ndarray]) -> tuple[list[np.ndarray], np.ndarray]:
+        """Every capture's windows (module docstring) and the capture each comes from."""
+        out, owner = [], []
+        step = max(1, round(float(self.stride) * self.window_))
+        for i, c in enumerate(captures):
+            if not self.windows or len(c) <= self.longest_:
+                out.append(c)
+                owner.append(i)
+                continue
+            for a in window_starts(len(c), self.window_, step):
+                out.append(c[a:a + self.window_])
+                owner.append(i)
+        return out, np.asarray(owner, dtype=np.intp)
+
+    def _parts(self, X: Any) -> tuple[np.ndarray, np.ndarray | None]:
+        """The pipeline's probabilities averaged over each capture's windows, and the gate's median."""
+        check_is_fitted(self)
+        captures = check_captures(X, name=NAME)
+        wins, owner = self._windows(captures)
+        pw = proba_over(self.method_.fitted, self.method_.transform(wins), self.classes_)
+        counts = np.bincount(owner, minlength=len(captures)).astype(np.float64)
+        base = np.zeros((len(captures), len(self.classes_)))
+        np.add.at(base, owner, pw)
+        base /= counts[:, None]
+        if self.gate_ is None:
+            return base, None
+        gw = self.gate_.predict_proba(log_signed(self._evidence(wins)))[:, 1]
+        gate = np.array([np.median(gw[owner == i]) for i in range(len(captures))])
+        return base, gate
+
+    def predict_proba(self, X: Sequence[np.ndarray]) -> np.ndarray:
+        """Probabilities over ``classes_`` (module docstring)."""
+        base, gate = self._parts(X)
+        if gate is None:
+            return base
+        return gated_proba(base, gate, int(np.searchsorted(self.classes_, self.quiet_)))
+
+    def predict(self, X: Sequence[np.ndarray]) -> np.ndarray:
+        """The no-contact class where the gate's probability is above 0.5, else the pipeline's most
+        probable other class (its most probable class when there is no gate)."""
+        base, gate = self._parts(X)
+        if gate is None:
+            return self.classes_[np.argmax(base, axis=1)]
+        column = int(np.searchsorted(self.classes_, self.quiet_))
+        others = base.copy()
+        others[:, column] = -1.0
+        return np.where(gate > 0.5, self.quiet_, self.classes_[np.argmax(others, axis=1)])
+
+
+DEFAULTS = {"features": ("touch-rhythm",), "estimator": "touch-extra-trees", "params": {}, "gate": True,
+            "windows": True, "gate_c": 0.1, "quiet_frames": 0.05, "stride": 0.25}
+
+
+@CLASSIFIERS.register(
+    NAME,
+    description="a pipeline read over windows of its training length, with the class of no contact decided by a "
+                "gate on contact above the capture's noise floor (contact-evidence)",
+    source=SOURCE, defaults=DEFAULTS, extra=None, input="captures", check_params=check_params,
+    cheap_params=dict(features=["contact-evidence"], estimator="zhou-tree"),
+)
+def quiet_gated(random_state=None, sensor=None, **params):
+    return build(QuietGated, DEFAULTS, random_state, {**params, "sensor": sensor}, name=NAME)
