@@ -11,9 +11,11 @@ how that pipeline meets captures of another recording set-up
    length ``L`` (starts ``0, s, 2 s, ...`` with ``s = max(1, round(stride *
    L))``, and a last window ending at the capture's last frame); the
    pipeline's probabilities are averaged over its windows. A capture no
-   longer than the longest training capture is read whole, as the plain
-   pipeline reads it, so a benchmark whose captures share one length is
-   unchanged by this step. Why: features summarising a capture (spectra,
+   longer than the longest training capture is read whole by the pipeline,
+   as the plain pipeline reads it, so a benchmark whose captures share one
+   length is unchanged by this step. The gate (below) reads every capture
+   longer than ``L`` as such windows, in training and in test, so it always
+   judges stretches of one length. Why: features summarising a capture (spectra,
    order statistics, a 5 % baseline) change with its length and with what
    a long recording holds besides the gesture (start transients, a level
    step), the way time-series classifiers trained on fixed-length series
@@ -30,8 +32,9 @@ how that pipeline meets captures of another recording set-up
    above). When exactly one class qualifies, a logistic regression
    (standardised ``sign(v) log(1 + |v|)`` of the 19 ``contact-evidence``
    features, balanced class weights, ``C = gate_c``) is trained to tell it
-   from the rest; a capture's gate probability ``g`` is the median over its
-   windows. The decision (``predict``) is that class when ``g > 0.5``,
+   from the rest, on the training captures' windows (each window labelled
+   as its capture); a capture's gate probability ``g`` is the median over
+   its windows. The decision (``predict``) is that class when ``g > 0.5``,
    else the pipeline's most probable other class; ``predict_proba`` gives
    the class ``g`` and each other class ``(1 - g)`` times the pipeline's
    probability renormalised over the other classes (its argmax may differ
@@ -198,22 +201,29 @@ class QuietGated(ClassifierMixin, BaseEstimator):
                                     sensor=self.sensor)
         self.quiet_, self.gate_ = None, None
         if self.gate:
-            G = self._evidence(captures)
-            column = ContactEvidence(sensor=self.sensor).feature_names(tuple(self.sensor.grid)).index(QUIET_COLUMN)
-            codes = np.searchsorted(self.classes_, y)
-            q = quiet_class(codes, G[:, column], float(self.quiet_frames))
-            if q is not None:
-                self.quiet_ = self.classes_[q]
-                self.gate_ = make_pipeline(StandardScaler(), LogisticRegression(
-                    C=float(self.gate_c), class_weight="balanced", max_iter=5000)).fit(log_signed(G), codes == q)
+            self._fit_gate(captures, np.searchsorted(self.classes_, y))
         return self
 
-    def _windows(self, captures: list[np.ndarray]) -> tuple[list[np.ndarray], np.ndarray]:
-        """Every capture's windows (module docstring) and the capture each comes from."""
+    def _fit_gate(self, captures: list[np.ndarray], codes: np.ndarray) -> None:
+        """Find the class without contact and fit its gate on the training captures' windows."""
+        G = self._evidence(captures)
+        column = ContactEvidence(sensor=self.sensor).feature_names(tuple(self.sensor.grid)).index(QUIET_COLUMN)
+        q = quiet_class(codes, G[:, column], float(self.quiet_frames))
+        if q is None:
+            return
+        wins, owner = self._windows(captures, self.window_)
+        self.quiet_ = self.classes_[q]
+        self.gate_ = make_pipeline(StandardScaler(), LogisticRegression(
+            C=float(self.gate_c), class_weight="balanced", max_iter=5000)).fit(
+                log_signed(self._evidence(wins)), codes[owner] == q)
+
+    def _windows(self, captures: list[np.ndarray], beyond: int) -> tuple[list[np.ndarray], np.ndarray]:
+        """Every capture's windows (module docstring), cutting those longer than ``beyond`` frames,
+        and the capture each comes from."""
         out, owner = [], []
         step = max(1, round(float(self.stride) * self.window_))
         for i, c in enumerate(captures):
-            if not self.windows or len(c) <= self.longest_:
+            if not self.windows or len(c) <= beyond:
                 out.append(c)
                 owner.append(i)
                 continue
@@ -226,7 +236,7 @@ class QuietGated(ClassifierMixin, BaseEstimator):
         """The pipeline's probabilities averaged over each capture's windows, and the gate's median."""
         check_is_fitted(self)
         captures = check_captures(X, name=NAME)
-        wins, owner = self._windows(captures)
+        wins, owner = self._windows(captures, self.longest_)
         pw = proba_over(self.method_.fitted, self.method_.transform(wins), self.classes_)
         counts = np.bincount(owner, minlength=len(captures)).astype(np.float64)
         base = np.zeros((len(captures), len(self.classes_)))
@@ -234,6 +244,7 @@ class QuietGated(ClassifierMixin, BaseEstimator):
         base /= counts[:, None]
         if self.gate_ is None:
             return base, None
+        wins, owner = self._windows(captures, self.window_)
         gw = self.gate_.predict_proba(log_signed(self._evidence(wins)))[:, 1]
         gate = np.array([np.median(gw[owner == i]) for i in range(len(captures))])
         return base, gate
