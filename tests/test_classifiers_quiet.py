@@ -165,3 +165,13 @@ def test_the_gate_is_trained_on_the_windows_of_training_captures_longer_than_the
     est = _gated(stride=0.5).fit(caps + [long], np.append(y, "none"))
     assert (est.window_, est.longest_) == (40, 90)
     assert est.gate_[0].n_samples_seen_ == 18 + 4
+
+
+def test_training_on_windows_cuts_the_captures_at_least_twice_the_window_long():
+    caps, y = _data()  # 18 captures of 40 frames: the window is 40 frames
+    rng = np.random.default_rng(8)
+    more = [_pressed(rng, "tap", 90), _pressed(rng, "tap", 79)]  # 90 >= 80: 4 windows; 79 < 80: whole
+    est = _gated(gate=False, stride=0.5, train_windows=True).fit(caps + more, np.append(y, ["tap", "tap"]))
+    assert (est.window_, est.longest_, est.n_training_) == (40, 79, 18 + 4 + 1)
+    plain = _gated(gate=False, stride=0.5).fit(caps + more, np.append(y, ["tap", "tap"]))
+    assert (plain.window_, plain.longest_, plain.n_training_) == (40, 90, 20)

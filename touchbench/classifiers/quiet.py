@@ -46,6 +46,14 @@ how that pipeline meets captures of another recording set-up
    read the shape of the noise, do not (Gaus et al. 2015, Sec. 3.2.1,
    separate "no touch" by level; contact-evidence's docstring).
 
+3. **Training on windows** (``train_windows``, off by default): training
+   captures at least ``2 L`` long are cut into the same windows, each a
+   training capture of its own (its label and subject repeated), so the
+   pipeline learns from stretches of the length it reads; the longest
+   training capture is then that of the windows. Off by default because it
+   changes what the pipeline is trained on wherever lengths vary
+   (SocialTouch's captures last 10 to 125 frames).
+
 Parameters ``gate`` and ``windows`` switch each part off (the ablations of
 the research note). Refused: no sensor (contact-evidence needs the value
 range), a channel sensor (no rest level of cells), and what the pipeline's
@@ -144,6 +152,7 @@ class QuietGated(ClassifierMixin, BaseEstimator):
     features, estimator, params : the pipeline (feature sets -> registered estimator with its parameters).
     gate : train and use the no-contact gate when the training data has a no-contact class.
     windows : cut captures longer than every training capture into windows of the training length.
+    train_windows : train the pipeline on windows of the training captures at least twice the window long.
     gate_c : the gate's inverse L2 penalty.
     quiet_frames : the most a class's median ``above10_frames`` may be for it to be the no-contact class.
     stride : the step between windows, as a fraction of the window.
@@ -152,12 +161,14 @@ class QuietGated(ClassifierMixin, BaseEstimator):
     """
 
     def __init__(self, features=("touch-rhythm",), estimator="touch-extra-trees", params=None, gate=True,
-                 windows=True, gate_c=0.1, quiet_frames=0.05, stride=0.25, sensor=None, random_state=None):
+                 windows=True, train_windows=False, gate_c=0.1, quiet_frames=0.05, stride=0.25, sensor=None,
+                 random_state=None):
         self.features = features
         self.estimator = estimator
         self.params = params
         self.gate = gate
         self.windows = windows
+        self.train_windows = train_windows
         self.gate_c = gate_c
         self.quiet_frames = quiet_frames
         self.stride = stride
@@ -194,11 +205,13 @@ class QuietGated(ClassifierMixin, BaseEstimator):
         if len(y) != len(captures):
             raise TouchbenchError(f"{NAME}: {len(y)} labels for {len(captures)} captures")
         self.classes_ = np.unique(y)
-        lengths = [len(c) for c in captures]
-        self.window_, self.longest_ = int(np.median(lengths)), int(max(lengths))
+        self.window_ = int(np.median([len(c) for c in captures]))
+        train, owner = self._windows(captures, 2 * self.window_ - 1) if self.train_windows else (
+            captures, np.arange(len(captures)))
+        self.longest_, self.n_training_ = int(max(len(c) for c in train)), len(train)
         sets, est, params = self._pipeline()
-        self.method_ = fit_pipeline(sets, est, params, seed_int(self.random_state), captures, y, groups,
-                                    sensor=self.sensor)
+        self.method_ = fit_pipeline(sets, est, params, seed_int(self.random_state), train, y[owner],
+                                    None if groups is None else np.asarray(groups)[owner], sensor=self.sensor)
         self.quiet_, self.gate_ = None, None
         if self.gate:
             self._fit_gate(captures, np.searchsorted(self.classes_, y))
@@ -269,7 +282,7 @@ class QuietGated(ClassifierMixin, BaseEstimator):
 
 
 DEFAULTS = {"features": ("touch-rhythm",), "estimator": "touch-extra-trees", "params": {}, "gate": True,
-            "windows": True, "gate_c": 0.1, "quiet_frames": 0.05, "stride": 0.25}
+            "windows": True, "train_windows": False, "gate_c": 0.1, "quiet_frames": 0.05, "stride": 0.25}
 
 
 @CLASSIFIERS.register(
