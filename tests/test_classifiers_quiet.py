@@ -15,7 +15,7 @@ import pytest
 from touchbench.classifiers import make_classifier
 from touchbench.classifiers.base import ParamError
 from touchbench.classifiers.fitting import fit_pipeline, proba_over
-from touchbench.classifiers.quiet import gated_proba, log_signed, quiet_class, window_starts
+from touchbench.classifiers.quiet import gate_decides, gated_proba, log_signed, quiet_class, window_starts
 from touchbench.core.errors import TouchbenchError
 from touchbench.datasets.model import SensorSpec
 from touchbench.methods import FeaturePipeline, method_spec
@@ -53,6 +53,26 @@ def test_the_gate_gets_its_class_and_the_others_share_the_rest_in_the_pipelines_
     got = gated_proba(base, np.array([0.6, 0.2]), 0)
     np.testing.assert_allclose(got, [[0.6, 0.25, 0.15], [0.2, 0.4, 0.4]])
     np.testing.assert_allclose(got.sum(axis=1), 1.0)
+
+
+def test_the_gate_decides_only_above_one_half_where_no_touch_class_is_sure():
+    base = np.array([[0.1, 0.6, 0.3],    # class 1 at 0.6 >= 0.5: the pipeline is sure of a touch
+                     [0.2, 0.4, 0.4],    # no other class reaches 0.5
+                     [0.0, 0.45, 0.55]])  # class 2 at 0.55: sure
+    np.testing.assert_array_equal(gate_decides(base, np.array([0.9, 0.9, 0.9]), 0, 0.5), [False, True, False])
+    np.testing.assert_array_equal(gate_decides(base, np.array([0.5, 0.5, 0.5]), 0, 0.5), [False, False, False])
+    np.testing.assert_array_equal(gate_decides(base, np.array([0.9, 0.9, 0.9]), 0, 0.6), [False, True, True])
+
+
+def test_probabilities_where_the_gate_decides_and_where_it_does_not():
+    caps, y = _data()
+    est = _gated().fit(caps, y)  # classes hold, none, tap: the quiet class is column 1
+    base = np.array([[0.2, 0.2, 0.6], [0.3, 0.4, 0.3]])
+    est._parts = lambda X: (base, np.array([0.8, 0.8]))
+    # row 0: tap is sure (0.6): the others renormalised, none 0: hold 0.2 / 0.8, tap 0.6 / 0.8
+    # row 1: the gate decides: none 0.8, hold and tap (1 - 0.8) x 0.3 / 0.6 each
+    np.testing.assert_allclose(est.predict_proba([None, None]), [[0.25, 0.0, 0.75], [0.1, 0.8, 0.1]])
+    assert list(est.predict([None, None])) == ["tap", "none"]
 
 
 # ------------------------------------------------------------------ the classifier on hand-made captures
@@ -135,8 +155,8 @@ def test_the_gate_of_a_longer_capture_is_the_median_over_its_windows():
     long = _quiet(rng, 90)
     long[:10, 0, 0] += 300
     g = est.gate_.predict_proba(log_signed(est._evidence([long[a:a + 40] for a in (0, 20, 40, 50)])))[:, 1]
-    got = est.predict_proba([long])[0, 1]
-    assert got == pytest.approx(float(np.median(g)))
+    _, got = est._parts([long])
+    assert got[0] == pytest.approx(float(np.median(g)))
 
 
 def test_no_sensor_and_bad_parameters_are_refused():
@@ -144,6 +164,7 @@ def test_no_sensor_and_bad_parameters_are_refused():
     with pytest.raises(TouchbenchError, match="needs the sensor"):
         make_classifier("quiet-gated", random_state=0, sensor=None).fit(caps, y)
     for params, message in (({"gate_c": 0}, "gate_c must be a number above 0"),
+                            ({"sure": 0}, "sure must be a probability"),
                             ({"quiet_frames": 1.0}, "quiet_frames must be a fraction"),
                             ({"stride": 0}, "stride must be a fraction")):
         with pytest.raises(ParamError, match=message):
