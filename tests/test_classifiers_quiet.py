@@ -141,6 +141,9 @@ def test_a_longer_capture_is_the_mean_over_windows_of_the_training_length():
     windows = [long[a:a + 40] for a in (0, 20, 40, 50)]
     each = proba_over(est.method_.fitted, est.method_.transform(windows), est.classes_)
     np.testing.assert_allclose(est.predict_proba([long])[0], each.mean(axis=0))
+    shorter = long[:79]  # 79 < 2 x 40: read whole, as the plain pipeline reads it
+    np.testing.assert_allclose(est.predict_proba([shorter])[0],
+                               proba_over(est.method_.fitted, est.method_.transform([shorter]), est.classes_)[0])
     whole = _gated(gate=False, windows=False).fit(caps, y)
     np.testing.assert_allclose(whole.predict_proba([long])[0],
                                proba_over(whole.method_.fitted, whole.method_.transform([long]), whole.classes_)[0])

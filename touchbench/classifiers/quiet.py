@@ -6,14 +6,15 @@
 how that pipeline meets captures of another recording set-up
 (docs/research/study-transfer.md has the measurements behind both):
 
-1. **Windows of the training length.** A test capture longer than every
-   training capture is cut into windows of the training captures' median
+1. **Windows of the training length.** A test capture at least twice as
+   long as the longest training capture is cut into windows of the training captures' median
    length ``L`` (starts ``0, s, 2 s, ...`` with ``s = max(1, round(stride *
    L))``, and a last window ending at the capture's last frame); the
-   pipeline's probabilities are averaged over its windows. A capture no
-   longer than the longest training capture is read whole by the pipeline,
-   as the plain pipeline reads it, so a benchmark whose captures share one
-   length is unchanged by this step. The gate (below) reads every capture
+   pipeline's probabilities are averaged over its windows. A shorter
+   capture is read whole by the pipeline, as the plain pipeline reads it,
+   so a benchmark whose captures share one length, or vary less than
+   twofold between training and test (SocialTouch's longest test captures
+   against its training ones), is unchanged by this step. The gate (below) reads every capture
    longer than ``L`` as such windows, in training and in test, so it always
    judges stretches of one length. Why: features summarising a capture (spectra,
    order statistics, a 5 % baseline) change with its length and with what
@@ -166,7 +167,7 @@ class QuietGated(ClassifierMixin, BaseEstimator):
     ----------
     features, estimator, params : the pipeline (feature sets -> registered estimator with its parameters).
     gate : train and use the no-contact gate when the training data has a no-contact class.
-    windows : cut captures longer than every training capture into windows of the training length.
+    windows : cut captures at least twice the longest training capture into windows of the training length.
     train_windows : train the pipeline on windows of the training captures at least twice the window long.
     gate_c : the gate's inverse L2 penalty.
     quiet_frames : the most a class's median ``above10_frames`` may be for it to be the no-contact class.
@@ -269,7 +270,7 @@ class QuietGated(ClassifierMixin, BaseEstimator):
         """The pipeline's probabilities averaged over each capture's windows, and the gate's median."""
         check_is_fitted(self)
         captures = check_captures(X, name=NAME)
-        wins, owner = self._windows(captures, self.longest_)
+        wins, owner = self._windows(captures, 2 * self.longest_ - 1)
         pw = proba_over(self.method_.fitted, self.method_.transform(wins), self.classes_)
         counts = np.bincount(owner, minlength=len(captures)).astype(np.float64)
         base = np.zeros((len(captures), len(self.classes_)))

@@ -9,10 +9,11 @@ feature sets as a touch), and its long recordings hold start transients
 and a level step that no 8-s training capture has.
 
 - ``touch-et-quiet``: ``touch-et-fast``'s pipeline (touch-rhythm -> extra-trees of 100 trees) inside
-  ``quiet-gated`` (:mod:`touchbench.classifiers.quiet`): a capture longer than every training capture is
-  read as windows of the training length (probabilities averaged), and the training class without contact
-  (found from ``contact-evidence``: HAART's ``notouch``) is decided by a logistic regression on contact
-  above the capture's own noise floor; on captures of one length with no such class it is touch-et-fast.
+  ``quiet-gated`` (:mod:`touchbench.classifiers.quiet`): a capture at least twice as long as every
+  training capture is read as windows of the training length (probabilities averaged), and the training
+  class without contact (found from ``contact-evidence``: HAART's ``notouch``) is decided by a logistic
+  regression on contact above the capture's own noise floor where the pipeline is not sure of a touch;
+  on captures of one length with no such class it is touch-et-fast.
 
 Parameters given to the method go to ``quiet-gated`` (``gate``, ``windows``, ``gate_c``, ``stride``...;
 ``params`` replaces the extra-trees' parameters).
