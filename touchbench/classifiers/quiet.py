@@ -76,7 +76,6 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.linear_model import LogisticRegression
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
-from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted
 
 from ..core.errors import TouchbenchError
@@ -84,7 +83,7 @@ from ..features.base import check_captures, feature_set_refusal
 from ..features.contact import ContactEvidence
 from ._util import build, seed_int
 from .base import CLASSIFIERS, ParamError, check_nested_params
-from .fitting import feature_specs, fit_pipeline, pipeline_refusal, proba_over
+from .fitting import capture_labels, feature_specs, fit_pipeline, pipeline_refusal, proba_over
 
 NAME = "quiet-gated"
 SOURCE = ("touchbench (docs/research/study-transfer.md): windows of the training length and a no-contact gate "
@@ -221,10 +220,7 @@ class QuietGated(ClassifierMixin, BaseEstimator):
         """Fit the pipeline on the captures as given; find the no-contact class and fit its gate."""
         check_params(self.get_params(deep=False))
         captures = self._checked(X)
-        y = np.asarray(y)
-        check_classification_targets(y)
-        if len(y) != len(captures):
-            raise TouchbenchError(f"{NAME}: {len(y)} labels for {len(captures)} captures")
+        y = capture_labels(y, captures, NAME)
         self.classes_ = np.unique(y)
         self.window_ = int(np.median([len(c) for c in captures]))
         train, owner = self._windows(captures, 2 * self.window_ - 1) if self.train_windows else (
