@@ -5,6 +5,8 @@
     python benchmarks/study_transfer.py loso-with-haart --method touch-et-quiet --seeds 1
     python benchmarks/study_transfer.py haart-loso --method touch-et-quiet --folds 10
     python benchmarks/study_transfer.py socialtouch-loso --method touch-et-quiet
+    python benchmarks/study_transfer.py levels
+    python benchmarks/study_transfer.py windows --method touch-et-fast
 
 - ``haart-to-study``: trained on all of HAART (the registered ``haart``: 830 captures, the middle 8 s of
   each 10-s recording), tested on the study's recordings, their first 20 s (``haart-raw``, window
@@ -16,6 +18,9 @@
 - ``haart-loso``: leave one HAART subject out, the first ``--folds`` subjects (s01, s02...); the mean
   over folds of each fold's accuracy.
 - ``socialtouch-loso``: the same on the registered ``socialtouch`` (its three subjects).
+- ``levels``: the notouch captures' level, per-cell noise and peak above baseline, per dataset and condition.
+- ``windows``: the method (default touch-et-quiet; give ``--method touch-et-fast``) trained on HAART, tested
+  on three windows of the study's recordings.
 
 Everything is fitted through ``touchbench.methods.FeaturePipeline`` (the fit path of the run engine's
 tasks), one thread; seeds are 0, 1, ... The study folder is ``--study`` (default the shared data).
@@ -31,7 +36,10 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXP
 import argparse  # noqa: E402
 import json  # noqa: E402
 
+from collections import Counter  # noqa: E402
+
 import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
 
 from touchbench.catalog import load_dataset  # noqa: E402
 from touchbench.datasets.haart_raw import read_haart_raw  # noqa: E402
@@ -93,9 +101,45 @@ def loso(args, haart, _study):
     print(f"{args.method} {args.params}: {haart.name} LOSO, {len(accs)} folds, mean {np.mean(accs):.2f}")
 
 
+def levels(args, haart, study):
+    """Median over the notouch captures of: the frame level (mean over cells), each cell's sd over the
+    frames (median over cells), the largest pressure above each cell's 5 % baseline (95th percentile
+    over frames), per dataset and condition; the study read whole (first 20 s) and as HAART's window."""
+    mid = [c[54:486] for c in study.captures]
+    for label, caps, meta, cond in (("HAART", haart.captures, haart.meta, "cover"),
+                                    ("study, first 20 s", study.captures, study.meta, ["cover", "motion"]),
+                                    ("study, frames 55..486", mid, study.meta, ["cover", "motion"])):
+        rows = []
+        for c, (_, r) in zip(caps, meta.iterrows()):
+            if r.gesture != "notouch":
+                continue
+            x = np.asarray(c, dtype=np.float64).reshape(len(c), -1)
+            k = int(0.05 * (len(x) - 1))
+            p = x - np.partition(x, k, axis=0)[k]
+            rows.append({"cond": "/".join(str(r[k_]) for k_ in np.atleast_1d(cond)), "level": np.median(x.mean(1)),
+                         "cell_sd": np.median(x.std(0)), "peak95": np.percentile(p.max(1), 95)})
+        t = pd.DataFrame(rows)
+        print(f"{label}: all {t[['level', 'cell_sd', 'peak95']].median().round(2).to_dict()} (n={len(t)})")
+        print(t.groupby("cond")[["level", "cell_sd", "peak95"]].median().round(2).to_string())
+
+
+def windows(args, haart, study):
+    """The method trained on HAART, tested on the study's first 20 s, on HAART's window of its first
+    10 s (frames 55..486) and the same window of its second 10 s: accuracy, notouch recall and what
+    notouch is called, seed 0."""
+    y = study.meta.gesture.values
+    m = _fit(args, 0, haart.captures, haart.meta.gesture.values, haart.meta.subject.values, haart.sensor)
+    for label, caps in (("first 20 s", study.captures), ("frames 55..486", [c[54:486] for c in study.captures]),
+                        ("frames 595..1026", [c[594:1026] if len(c) >= 1026 else c[54:486] for c in study.captures])):
+        pred = m.predict(caps)
+        _line(label, pred, y)
+        print("   notouch called:", dict(Counter(pred[y == "notouch"].tolist())))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("mode", choices=["haart-to-study", "loso-with-haart", "haart-loso", "socialtouch-loso"])
+    ap.add_argument("mode", choices=["haart-to-study", "loso-with-haart", "haart-loso", "socialtouch-loso", "levels",
+                                      "windows"])
     ap.add_argument("--method", default="touch-et-quiet")
     ap.add_argument("--params", default="{}", help="JSON: parameters given to the method")
     ap.add_argument("--seeds", type=int, default=5)
@@ -106,7 +150,7 @@ def main() -> None:
     study = None if args.mode.endswith("-loso") else read_haart_raw(
         args.study, pattern=PATTERN, recording_window="whole", recording_seconds=20)
     {"haart-to-study": haart_to_study, "loso-with-haart": loso_with_haart, "haart-loso": loso,
-     "socialtouch-loso": loso}[args.mode](
+     "socialtouch-loso": loso, "levels": levels, "windows": windows}[args.mode](
         args, haart, study)
 
 
