@@ -199,3 +199,13 @@ def test_training_on_windows_cuts_the_captures_at_least_twice_the_window_long():
     assert (est.window_, est.longest_, est.n_training_) == (40, 79, 18 + 4 + 1)
     plain = _gated(gate=False, stride=0.5).fit(caps + more, np.append(y, ["tap", "tap"]))
     assert (plain.window_, plain.longest_, plain.n_training_) == (40, 90, 20)
+
+
+def test_touch_et_quiet_win_is_touch_et_quiet_trained_on_windows():
+    quiet, win = method_spec("touch-et-quiet"), method_spec("touch-et-quiet-win")
+    assert win.estimator_params == {**quiet.estimator_params, "train_windows": True}
+    caps, y = _data()
+    long = _pressed(np.random.default_rng(10), "hold", 100)  # 100 >= 2 x 40: cut into windows 10 frames apart
+    pipe = FeaturePipeline(method_spec("touch-et-quiet-win", params={"n_estimators": 20}), random_state=0,
+                           sensor=SENSOR).fit(caps + [long], np.append(y, "hold"))
+    assert pipe.method_.estimator.n_training_ == 18 + 7  # windows of 40 frames at 0, 10, 20, ..., 60
