@@ -2,27 +2,29 @@
 
 ``quiet-gated`` takes the captures as recorded (registry tag
 ``input="captures"``) with a pipeline, ``features`` -> ``estimator`` (with
-``params``, written as ``shift-augmented``'s), and changes two things about
-how that pipeline meets captures of another recording set-up
-(docs/research/study-transfer.md has the measurements behind both):
+``params``, written as ``shift-augmented``'s), and changes how that
+pipeline meets captures of another recording set-up
+(docs/research/study-transfer.md has the measurements behind each part):
 
 1. **Windows of the training length.** A test capture at least twice as
-   long as the longest training capture is cut into windows of the training captures' median
-   length ``L`` (starts ``0, s, 2 s, ...`` with ``s = max(1, round(stride *
-   L))``, and a last window ending at the capture's last frame); the
-   pipeline's probabilities are averaged over its windows. A shorter
-   capture is read whole by the pipeline, as the plain pipeline reads it,
-   so a benchmark whose captures share one length, or vary less than
-   twofold between training and test (SocialTouch's longest test captures
-   against its training ones), is unchanged by this step. The gate (below) reads every capture
-   longer than ``L`` as such windows, in training and in test, so it always
-   judges stretches of one length. Why: features summarising a capture (spectra,
-   order statistics, a 5 % baseline) change with its length and with what
-   a long recording holds besides the gesture (start transients, a level
-   step), the way time-series classifiers trained on fixed-length series
-   are applied to longer ones by sliding windows and pooled decisions
-   (e.g. Bagnall et al. 2017, "The great time series classification bake
-   off", the interval methods; an interpretation, not their procedure).
+   long as the longest training capture is cut into windows of the
+   training captures' median length ``L`` (starts ``0, s, 2 s, ...`` with
+   ``s = max(1, round(stride * L))``, and a last window ending at the
+   capture's last frame); the pipeline's probabilities are averaged over
+   its windows. A shorter capture is read whole by the pipeline, as the
+   plain pipeline reads it, so a benchmark whose captures share one
+   length, or vary less than twofold between training and test
+   (SocialTouch's longest test captures against its training ones), is
+   unchanged by this step. The gate (below) reads every capture longer
+   than ``L`` as such windows, in training and in test, so it always
+   judges stretches of one length. Why: features summarising a capture
+   (spectra, order statistics, a 5 % baseline) change with its length and
+   with what a long recording holds besides the gesture (start
+   transients, a level step), the way time-series classifiers trained on
+   fixed-length series are applied to longer ones by sliding windows and
+   pooled decisions (e.g. Bagnall et al. 2017, "The great time series
+   classification bake off", the interval methods; an interpretation, not
+   their procedure).
 
 2. **A no-contact gate.** The training class with no contact is found
    from the data: the one class whose median ``above10_frames`` of
@@ -48,7 +50,8 @@ how that pipeline meets captures of another recording set-up
    gate from overruling a confident pipeline: on HAART (leave one subject
    out) the gate alone took 30 of 711 touches for no touch, 2 points of
    accuracy; with ``sure = 0.5`` the loss is 0.1 point and the second
-   study's ``notouch`` recall is unchanged (docs/research/study-transfer.md). Why: contact measured against the capture's own noise floor
+   study's ``notouch`` recall is unchanged (docs/research/study-transfer.md).
+   Why a gate: contact measured against the capture's own noise floor
    transfers between set-ups where the pipeline's level-free sets, which
    read the shape of the noise, do not (Gaus et al. 2015, Sec. 3.2.1,
    separate "no touch" by level; contact-evidence's docstring).
@@ -57,9 +60,10 @@ how that pipeline meets captures of another recording set-up
    captures at least ``2 L`` long are cut into the same windows, each a
    training capture of its own (its label and subject repeated), so the
    pipeline learns from stretches of the length it reads; the longest
-   training capture is then that of the windows. Off by default because it
-   changes what the pipeline is trained on wherever lengths vary
-   (SocialTouch's captures last 10 to 125 frames).
+   training capture is then the longest the pipeline was trained on. Off
+   by default because it changes what the pipeline is trained on wherever
+   lengths vary (90 % of SocialTouch's captures last 10 to 87 frames, the
+   longest 239).
 
 Parameters ``gate`` and ``windows`` switch each part off (the ablations of
 the research note). Refused: no sensor (contact-evidence needs the value
