@@ -100,7 +100,6 @@ from typing import Any, Sequence
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
-from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted
 
 from ..core.errors import TouchbenchError
@@ -110,7 +109,7 @@ from ..features.contact import MIN_NOISE, heights, noise_floor
 from ..scenes.sensor import adc, add_noise
 from ._util import build, seed_int
 from .base import CLASSIFIERS, ParamError, check_nested_params
-from .fitting import feature_specs, fit_pipeline, pipeline_refusal, proba_over
+from .fitting import capture_labels, feature_specs, fit_pipeline, pipeline_refusal, proba_over
 
 NAME = "shift-augmented"
 #: bytes a copy costs beyond its values (its array's header), at least
@@ -336,10 +335,7 @@ class ShiftAugmented(ClassifierMixin, BaseEstimator):
     def fit(self, X: Sequence[np.ndarray], y: Any, groups: Any = None) -> "ShiftAugmented":
         """Fit the pipeline on the captures and their copies (labels and ``groups`` repeated)."""
         captures = self._checked(X)
-        y = np.asarray(y)
-        check_classification_targets(y)
-        if len(y) != len(captures):
-            raise TouchbenchError(f"{NAME}: {len(y)} labels for {len(captures)} captures")
+        y = capture_labels(y, captures, NAME)
         self.classes_ = np.unique(y)
         train = self._augment(captures)
         reps = int(self.copies) + 1

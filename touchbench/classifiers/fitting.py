@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_memory
 
 from ..core.errors import TouchbenchError
@@ -32,8 +33,8 @@ from ..core.introspect import accepts, sensor_problem
 from ..features.base import feature_set_refusal, learns_from_data, make_feature_set, stack_features
 from .base import make_classifier
 
-__all__ = ["FittedEstimator", "FittedMethod", "feature_specs", "fit_on_codes", "fit_pipeline", "label_codes",
-           "labels_are_argmax", "pipeline_refusal", "proba_over"]
+__all__ = ["FittedEstimator", "FittedMethod", "capture_labels", "feature_specs", "fit_on_codes", "fit_pipeline",
+           "label_codes", "labels_are_argmax", "pipeline_refusal", "proba_over"]
 
 
 def label_codes(y: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -218,6 +219,16 @@ def fit_pipeline(feature_sets: Any, estimator: str, params: dict[str, Any], seed
     t1 = time.perf_counter()
     fitted = fit_on_codes(estimator, params, seed, X, y, groups, sensor=sensor)
     return FittedMethod(sets, fitted, t1 - t0, time.perf_counter() - t1)
+
+
+def capture_labels(y: Any, captures: list, name: str) -> np.ndarray:
+    """``y`` as an array of classification targets, one per capture (a classifier that takes the
+    captures, ``name``, refuses another count)."""
+    y = np.asarray(y)
+    check_classification_targets(y)
+    if len(y) != len(captures):
+        raise TouchbenchError(f"{name}: {len(y)} labels for {len(captures)} captures")
+    return y
 
 
 def feature_specs(entries: Any) -> list[tuple[str, dict[str, Any]]]:
