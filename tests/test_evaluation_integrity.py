@@ -277,6 +277,35 @@ evaluations:
     assert "held out %" in header and cells[0][header.index("accuracy % (±sd)")].endswith("†")
 
 
+def test_design_blocks_give_each_method_its_own_held_out_captures(tmp_path):
+    data = _data(tmp_path)
+    p = _protocol(tmp_path, f"""dataset: {data}
+scheme: loso
+features: [[test-mean]]
+classifiers: [test-logreg, test-forest]
+design:
+  - {{subjects: [s1, s2], methods: [test-logreg], note: chosen on two subjects}}
+  - {{subjects: [s1, s2, s3, s4], methods: [test-forest], note: chosen on every subject}}
+""", name="blocks")
+    res = run_protocol(p, out=tmp_path / "blocks", progress=False)
+    lb = build_leaderboards(load_results([tmp_path / "blocks"]))[0]
+    rows = lb.rows.set_index("classifier")
+    acc = res.scores.set_index(["classifier", "fold"])["accuracy"]
+    # test-logreg: held out on s3 and s4, the mean of those two folds
+    assert rows.loc["test-logreg", "held_out_accuracy"] == pytest.approx(
+        (acc["test-logreg", "subject=s3"] + acc["test-logreg", "subject=s4"]) / 2)
+    # test-forest was designed on every subject: no held-out capture, and its figure is marked
+    assert rows.loc["test-forest", "n_held_out"] == 0 and np.isnan(rows.loc["test-forest", "held_out_accuracy"])
+    assert bool(rows.loc["test-forest", "designed"]) and bool(rows.loc["test-logreg", "designed"])
+    for bad, why in (("- {subjects: [s1]}\n  - {subjects: [s2], methods: [test-forest]}", "each name their methods"),
+                     ("- {subjects: [s1], methods: [test-forest]}\n  - {subjects: [s2], methods: [test-forest]}",
+                      "in two design blocks")):
+        q = _protocol(tmp_path, f"dataset: {data}\nscheme: loso\nfeatures: [[test-mean]]\nclassifiers: [test-forest]\n"
+                                f"design:\n  {bad}\n", name="bad")
+        with pytest.raises(ProtocolError, match=why):
+            parse_protocol(q.read_text(), q)
+
+
 def test_evaluation_errors_name_the_evaluation_field(tmp_path):
     data = _data(tmp_path)
     p = _protocol(tmp_path, f"""dataset: {data}

@@ -49,6 +49,7 @@ from ..datasets.model import TouchDataset
 from ..protocols.checks import require_extras
 from ..protocols.loading import load_protocol
 from ..protocols.schema import Protocol
+from ..protocols.specs import design_blocks
 from ..core.paths import results_root
 from ..results.ledger import LEDGER_NAME, check_final, end_look, merge_ledgers, old_ledgers, record_look, start_look
 from ..results.manifest import now_iso, update_manifest
@@ -238,18 +239,30 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
                            ledger=ledger, methods=only)
 
 
-def _design_captures(plan: Plan) -> list[str] | None:
-    """The ids of the captures the protocol's ``design`` names (None without one)."""
-    design = plan.protocol.design
-    if design is None:
+def _design_captures(plan: Plan) -> list[str] | list[list[str]] | None:
+    """The ids of the captures the protocol's ``design`` names (None without one); a list of blocks
+    gives a list per block, in its order."""
+    blocks = design_blocks(plan.protocol.design)
+    if not blocks:
         return None
     meta = plan.dataset.meta
-    keep = np.ones(len(meta), dtype=bool)
-    for col, values in design.filters().items():
-        if col not in meta.columns:
-            raise plan.protocol.error_at(("design",), f"the dataset has no metadata column {col!r}")
-        keep &= meta[col].astype(str).isin(values).to_numpy()
-    return meta["capture_id"].astype(str)[keep].tolist()
+    per_block = []
+    for i, block in enumerate(blocks):
+        keep = np.ones(len(meta), dtype=bool)
+        loc = ("design", i) if isinstance(plan.protocol.design, list) else ("design",)
+        for col, values in block.filters().items():
+            if col not in meta.columns:
+                raise plan.protocol.error_at(loc, f"the dataset has no metadata column {col!r}")
+            keep &= meta[col].astype(str).isin(values).to_numpy()
+        per_block.append(meta["capture_id"].astype(str)[keep].tolist())
+    return per_block if isinstance(plan.protocol.design, list) else per_block[0]
+
+
+def _design_json(design: Any) -> Any:
+    """The manifest's ``design``: a block's fields, a list of them, or None."""
+    if isinstance(design, list):
+        return [b.model_dump(mode="json") for b in design]
+    return design.model_dump(mode="json") if design is not None else None
 
 
 def _report_block(plan: Plan) -> dict[str, Any] | None:
@@ -365,7 +378,7 @@ def _manifest_blocks(plan: Plan, out: Path) -> dict[str, Any]:
                   "text": protocol.text, "text_hash": protocol.text_hash, "content_hash": protocol.content_hash,
                   "seed": protocol.seed, "repetitions": protocol.repetitions, "scheme": protocol.scheme.name,
                   "evaluation": protocol.evaluation,
-                  "design": protocol.design.model_dump(mode="json") if protocol.design is not None else None},
+                  "design": _design_json(protocol.design)},
         dataset={"ref": protocol.dataset.name, "resolved": plan.dataset_ref, "hash": plan.dataset.content_hash,
                  "source_hash": plan.source_hash, "captures": len(plan.dataset),
                  "filters": protocol.dataset.filters, "exclude": protocol.dataset.exclude,

@@ -110,7 +110,7 @@ from .seeding import derive_seed
 from .schemes import DEFAULT_SEEDS, Splitter, make_splitter
 from .schemes.base import scheme_class
 from .specs import (EVALUATION_FIELDS, AuditSpec, DatasetSpec, DesignSpec, EvaluationSpec, ReportSpec, SchemeSpec,
-                    _folder_name)
+                    _folder_name, _one_block_a_method)
 
 __all__ = ["Protocol", "resolve_dataset_ref"]
 
@@ -134,7 +134,8 @@ class Protocol(_Model):
     evaluations: list[EvaluationSpec] = Field(default_factory=list)
     #: the evaluation this protocol is (set on the protocols :meth:`evaluation_protocols` gives)
     evaluation: str = ""
-    design: DesignSpec | None = None
+    #: the data methods were designed on: one block, or a list of blocks each naming its methods
+    design: DesignSpec | list[DesignSpec] | None = None
     #: the leaderboard's extra columns: recall of named classes, accuracy per metadata value
     report: ReportSpec | None = None
     #: the leakage audit of this protocol's methods (see :mod:`touchbench.engine.audit`)
@@ -184,6 +185,7 @@ class Protocol(_Model):
         return v
 
     _name_ok = field_validator("name")(_folder_name)
+    _design_ok = field_validator("design")(_one_block_a_method)
 
     @model_validator(mode="before")
     @classmethod

@@ -111,6 +111,28 @@ class DesignSpec(_Model):
         return {**({"subject": list(self.subjects)} if self.subjects else {}), **self.rows}
 
 
+def design_blocks(design: "DesignSpec | list[DesignSpec] | None") -> list[DesignSpec]:
+    """A protocol's ``design`` as a list of blocks: methods designed on different data (one block
+    per kind of design data) are declared as a list, one method in one block at most."""
+    if design is None:
+        return []
+    return list(design) if isinstance(design, list) else [design]
+
+
+def _one_block_a_method(design: "DesignSpec | list[DesignSpec] | None") -> "DesignSpec | list[DesignSpec] | None":
+    blocks = design_blocks(design)
+    if len(blocks) > 1:
+        if any(not b.methods for b in blocks):
+            raise ValueError("several design blocks each name their methods (methods: [...])")
+        seen: set[str] = set()
+        for b in blocks:
+            twice = sorted(seen & set(b.methods))
+            if twice:
+                raise ValueError(f"method(s) {twice} are in two design blocks: one block a method")
+            seen |= set(b.methods)
+    return design
+
+
 class ReportSpec(_Model):
     """Columns the leaderboard adds to the evaluation's table (:mod:`touchbench.reports.breakdown`):
     the recall of each class of ``recall`` (a value of the target), and the accuracy on the test
@@ -144,8 +166,10 @@ class EvaluationSpec(_Model):
     scheme: SchemeSpec
     target: str | None = None
     repetitions: int | None = Field(default=None, ge=1)
-    design: DesignSpec | None = None
+    design: DesignSpec | list[DesignSpec] | None = None
     report: ReportSpec | None = None
+
+    _design_ok = field_validator("design")(_one_block_a_method)
 
     @model_validator(mode="before")
     @classmethod

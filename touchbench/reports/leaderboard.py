@@ -253,33 +253,47 @@ def table_heading(sources: list[dict], scheme: str) -> str:
 
 @dataclass
 class _Design:
-    """The captures the table's methods were designed on (None: no source says), the methods so
-    designed (empty: all of them) and what each source's design data was."""
+    """The captures the table's methods were designed on, per block of design data: each block's
+    captures and the methods it names (empty: all of them), and what each block's data was. No block:
+    no source says."""
 
-    captures: set[str] | None
-    methods: set[str]
+    blocks: list[tuple[set[str], set[str]]]
     what: list[str]
+
+    @property
+    def captures(self) -> set[str] | None:
+        """Every design capture of the table (None: no source declares design data)."""
+        return set().union(*(c for c, _ in self.blocks)) if self.blocks else None
 
     @classmethod
     def of(cls, sources: list[dict]) -> "_Design":
-        """The design recorded by the sources of a table."""
-        designs = [s for s in sources if s.get("design_captures") is not None]
-        captures = {c for s in designs for c in s["design_captures"]} if designs else None
-        methods = {m for s in designs for m in (s.get("design") or {}).get("methods", [])}
-        what = []
-        for s in designs:
-            d = s.get("design") or {}
-            named = ", ".join(f"{k} {', '.join(v)}" for k, v in ({"subject": d.get("subjects")} | (d.get("rows") or {})).items() if v)
-            what.append(f"{named}" + (f" ({d['note']})" if d.get("note") else ""))
-        return cls(captures, methods, what)
+        """The design recorded by the sources of a table: one block, or a list of blocks."""
+        blocks, what = [], []
+        for s in sources:
+            if s.get("design_captures") is None:
+                continue
+            designs, captures = s.get("design") or {}, s["design_captures"]
+            if isinstance(designs, dict):
+                designs, captures = [designs], [captures]
+            for d, c in zip(designs, captures):
+                blocks.append((set(c), set(d.get("methods", []))))
+                named = ", ".join(f"{k} {', '.join(v)}" for k, v in ({"subject": d.get("subjects")} | (d.get("rows") or {})).items() if v)
+                what.append(f"{named}" + (f" ({d['note']})" if d.get("note") else ""))
+        return cls(blocks, what)
+
+    def _of_row(self, row: dict[str, Any]) -> set[str] | None:
+        """The captures the row's method was designed on (None: no block names it)."""
+        names = {row["classifier"], method_label(row)}
+        mine = [c for c, methods in self.blocks if not methods or names & methods]
+        return set().union(*mine) if mine else None
 
     def row_fields(self, preds: pd.DataFrame | None, mid: str, row: dict[str, Any]) -> dict[str, Any]:
-        """A method's accuracy on the test captures outside the design data, and whether it was designed on them."""
-        if self.captures is None:
+        """A method's accuracy on the test captures outside its design data, and whether it was designed on them."""
+        if not self.blocks:
             return {}
-        held_out, n_held_out, tests_design = _held_out(preds, mid, self.captures)
-        designed = tests_design and (not self.methods or bool({row["classifier"], method_label(row)} & self.methods))
-        return {"held_out_accuracy": held_out, "n_held_out": n_held_out, "designed": designed}
+        mine = self._of_row(row)
+        held_out, n_held_out, tests_design = _held_out(preds, mid, mine if mine is not None else self.captures)
+        return {"held_out_accuracy": held_out, "n_held_out": n_held_out, "designed": mine is not None and tests_design}
 
     def row_notes(self, rows: list[dict[str, Any]]) -> list[str]:
         """One note per source's design data: which methods it flatters, if any."""

@@ -1,12 +1,12 @@
 """The figures of docs/research/study-transfer.md: HAART against the design half of the organisers' second study.
 
-    python benchmarks/study_transfer.py haart-to-study --method touch-et-quiet --seeds 5
-    python benchmarks/study_transfer.py haart-to-study --method touch-et-quiet --params '{"gate": false}'
-    python benchmarks/study_transfer.py loso-with-haart --method touch-et-quiet --seeds 1
-    python benchmarks/study_transfer.py haart-loso --method touch-et-quiet --folds 10
-    python benchmarks/study_transfer.py socialtouch-loso --method touch-et-quiet
-    python benchmarks/study_transfer.py levels
-    python benchmarks/study_transfer.py windows --method touch-et-fast
+    python docs/research/study_transfer.py haart-to-study --method touch-et-quiet --seeds 5
+    python docs/research/study_transfer.py haart-to-study --method touch-et-quiet --params '{"gate": false}'
+    python docs/research/study_transfer.py loso-with-haart --method touch-et-quiet --seeds 1
+    python docs/research/study_transfer.py haart-loso --method touch-et-quiet --folds 10
+    python docs/research/study_transfer.py socialtouch-loso --method touch-et-quiet
+    python docs/research/study_transfer.py levels
+    python docs/research/study_transfer.py windows --method touch-et-fast
 
 - ``haart-to-study``: trained on all of HAART (the registered ``haart``: 830 captures, the middle 8 s of
   each 10-s recording), tested on the study's recordings, their first 20 s (``haart-raw``, window
