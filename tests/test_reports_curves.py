@@ -309,3 +309,19 @@ def test_one_test_set_calibration_gain_by_bootstrap(tmp_path):
     gain = ((1 - (1 - 10 / 40)) + (1 - (1 - 10 / 35))) / 2  # 1 minus each draw's accuracy at k=0, averaged
     assert g["gain"] == pytest.approx(gain) and g["ci_method"] == "bootstrap" and g["n_units"] == 1
     assert 0 < g["ci_low"] < gain < g["ci_high"] < 1
+
+
+def test_the_tables_per_capture_columns_read_the_reference_point_only(runs, tmp_path):
+    """Held-out accuracy (and every column read from the predictions) is the reference point's, not a
+    pool of every point of the curve."""
+    import shutil
+    d = tmp_path / "learn"
+    shutil.copytree(runs / "learn", d)
+    manifest = json.loads((d / "manifest.json").read_text())
+    manifest["protocol"]["design"] = {"subjects": ["s1"], "methods": [], "rows": {}, "note": ""}
+    manifest["protocol"]["design_captures"] = BASE["subject=s1"]
+    (d / "manifest.json").write_text(json.dumps(manifest))
+    rows = _board(d).rows.set_index("features")
+    # the full point n=3 misses 1, 2, 1, 2 of 10 in s1..s4: held out (s2..s4) = mean(0.8, 0.9, 0.8)
+    assert rows.loc["msd", "held_out_accuracy"] == pytest.approx((0.8 + 0.9 + 0.8) / 3)
+    assert rows.loc["msd", "n_held_out"] == 30

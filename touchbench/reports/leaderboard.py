@@ -202,6 +202,8 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
     folds = fold_values(ok) if len(ok) else pd.DataFrame(columns=["table_key", "method_id", "fold_key", *METRICS, "n_test",
                                                                   "n_train", "fold", "fold_group"])
     preds = rs.predictions[rs.predictions["table_key"] == key] if rs.predictions is not None else None
+    if preds is not None and "task_id" in preds and (s_all["curve"] != "").any():  # a curve: its reference point
+        preds = preds[preds["task_id"].isin(set(s_all["task_id"]))]
     machines = dict(zip(s_all["machine"], s_all["machine_desc"]))
     sources = [rs.source(p) for p in dict.fromkeys(s_all["source"])] if "source" in s_all else []
     design = _Design.of(sources)
