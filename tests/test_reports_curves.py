@@ -184,7 +184,7 @@ def test_calibration_terminal_and_markdown(runs):
     print_terminal([lb], console)
     text = console.export_text()
     assert "gain over k=0" in text and "+13.7" in text and "+31.3" in text
-    assert "msd / rf: 55.0 % with no labelled capture of the test subject" in text
+    assert "msd / rf: 55.0 % with no labelled capture from the test data" in text
     md = to_markdown([lb])
     assert "calibration curve" in md and "| k=0 | k=1 | k=3 |" in md
     doc = json.loads(to_json([lb]))["tables"][0]["curve"]
@@ -254,7 +254,7 @@ def test_sizes_read_as_subjects_shares_or_captures():
     assert [size_label(counts, s) for s in counts.sizes] == ["50 %", "n=2", "n=8"]
     assert size_words(counts, 1.0) == "1 subject" and size_words(shares, 1.0) == "100 % of the training subjects"
     assert [size_label(calib, s) for s in calib.sizes] == ["k=0", "k=1", "k=5"]
-    assert size_words(calib, 0.0) == "no labelled capture of the test subject"
+    assert size_words(calib, 0.0) == "no labelled capture from the test data"
     assert size_words(calib, 5.0) == "5 labelled captures per class"
 
 

@@ -42,7 +42,7 @@ def size_words(curve: Curve, size: float) -> str:
     """A size in words: ``4 subjects``, ``50 % of the training subjects``, ``2 labelled captures per class``."""
     if curve.axis == "calibration":
         if size == 0:
-            return "no labelled capture of the test subject"
+            return "no labelled capture from the test data"
         return f"{size:g} labelled capture{'' if size == 1 else 's'} per class"
     if curve.full_varies and size == curve.sizes[-1]:
         return "every training subject"
@@ -117,7 +117,7 @@ def gain_cells(curve: Curve, names: dict[str, str], sep: str = " ") -> tuple[lis
 
 def _axis_words(curve: Curve) -> str:
     if curve.axis == "calibration":
-        return "against k labelled captures per class of the test subject added to training"
+        return "against k labelled captures per class from the test data added to training"
     return "against the number of training subjects n"
 
 
@@ -125,7 +125,7 @@ def curve_titles(title: str, curve: Curve) -> tuple[str, str]:
     """The titles of the curve's table and of its gains' table, after the leaderboard's ``title``."""
     what = "calibration curve" if curve.axis == "calibration" else "learning curve"
     return (f"{title} — {what}: accuracy % on the held-out captures {_axis_words(curve)}",
-            "gain over k=0 (no labelled capture of the test subject), percentage points")
+            "gain over k=0 (no labelled capture from the test data), percentage points")
 
 
 def curve_legend(curve: Curve) -> str:
@@ -182,7 +182,7 @@ def reach_lines(curve: Curve, names: dict[str, str]) -> list[str]:
 def reference_note(curve: Curve) -> str:
     """The note of a curve's leaderboard: which point its table ranks."""
     if curve.axis == "calibration":
-        at = "k=0 (no labelled capture of the test subject)" if 0.0 in curve.sizes else size_label(curve, curve.sizes[-1])
+        at = "k=0 (no labelled capture from the test data)" if 0.0 in curve.sizes else size_label(curve, curve.sizes[-1])
         return f"a calibration curve: this table ranks the methods at {at}; the curve and the gains of each k follow"
     full = "" if curve.full_varies else f"{size_label(curve, curve.sizes[-1])}, "
     return f"a learning curve: this table ranks the methods at its full point ({full}every training subject); the curve follows"

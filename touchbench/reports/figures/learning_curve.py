@@ -21,7 +21,7 @@ def _axis(lb: Leaderboard) -> tuple[str, str]:
     """The x axis's label and what the title says the curve is against."""
     curve = lb.curve
     if curve.axis == "calibration":
-        return "labelled captures per class (k)", "k labelled captures per class of the test subject"
+        return "labelled captures per class (k)", "k labelled captures per class from the test data"
     if size_label(curve, curve.sizes[-1]).endswith("%"):
         return "training subjects (%)", "the share of the training subjects"
     return "training subjects (n)", "n training subjects"
