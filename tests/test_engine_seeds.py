@@ -104,3 +104,33 @@ def test_train_without_fold_reproduces_the_runs_first_repetition(data, tmp_path)
     assert accuracy == float(scores.loc[scores["repetition"] == 0, "accuracy"].iloc[0])
     for c in ("pat", "rub", "stroke"):  # the same model: the same probabilities, not only the same labels
         np.testing.assert_allclose(ours.loc[first.index, f"proba_{c}"], first[f"proba_{c}"], rtol=0, atol=1e-12)
+
+
+def test_train_without_fold_reproduces_a_transfers_first_repetition(data, tmp_path):
+    """The same on a cross-dataset transfer: trained on one dataset, tested on another."""
+    ds, _ = data
+    subject = ds.meta["subject"].to_numpy()
+    ds.subset(np.flatnonzero(subject != "s4")).to_parquet(tmp_path / "train.parquet")
+    s4 = ds.subset(np.flatnonzero(subject == "s4"))
+    s4.to_parquet(tmp_path / "test.parquet")
+    proto = tmp_path / "t.yaml"
+    proto.write_text(BASE.format(data=tmp_path / "train.parquet",
+                                 scheme=f"{{name: cross-dataset, test: {tmp_path / 'test.parquet'}}}") + "repetitions: 2\n")
+    run_protocol(proto, tmp_path / "results")
+    scores = pd.read_parquet(tmp_path / "results" / "scores.parquet")
+    preds = pd.read_parquet(tmp_path / "results" / "predictions.parquet")
+    res = CliRunner().invoke(cli, ["train", str(proto), "-m", "msd/rf15", "-o", str(tmp_path / "m.joblib")],
+                             catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    res = CliRunner().invoke(cli, ["predict", str(tmp_path / "m.joblib"), str(tmp_path / "test.parquet"),
+                                   "--out", str(tmp_path / "p.csv")], catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    ours = pd.read_csv(tmp_path / "p.csv").set_index("capture_id")
+    first = preds[preds["repetition"] == 0].assign(capture_id=lambda p: p["capture_id"].str.removeprefix("test:"))
+    first = first.set_index("capture_id")
+    assert len(ours) == len(first) == 9
+    truth = s4.meta.set_index("capture_id").loc[ours.index, "gesture"].astype(str)
+    assert float((ours["predicted_label"].astype(str) == truth).mean()) == float(
+        scores.loc[scores["repetition"] == 0, "accuracy"].iloc[0])
+    for c in ("pat", "rub", "stroke"):
+        np.testing.assert_allclose(ours.loc[first.index, f"proba_{c}"], first[f"proba_{c}"], rtol=0, atol=1e-12)
