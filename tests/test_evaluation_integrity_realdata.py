@@ -39,6 +39,7 @@ dataset: {{name: haart-challenge, filters: {{split: [train]}}}}
 scheme:
   name: cross-dataset
   test: {{name: {study}, format: haart-raw, options: {{recording_window: challenge}}}}
+repetitions: 1  # one seed: what is checked here is which captures train and test
 methods:
   - {{features: [zhou-basic], estimator: zhou-lda}}
 """)
