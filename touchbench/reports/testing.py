@@ -146,7 +146,17 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
                 "gesture": caps.loc[ids, "gesture"].astype(str).to_numpy(), TRUE: true, PREDICTED: pred.astype(str),
                 "correct": true == pred.astype(str), "leakage": "",
             }))
-    scores = pd.DataFrame(score_rows)
+    return _write_files(out, pd.DataFrame(score_rows), pred_frames, methods, len(caps), dict(
+        dataset=dataset, dataset_hash=dataset_hash, scheme=scheme, target=target, seed=seed, run_id=run_id,
+        protocol=protocol, platform=platform, frame_rate=frame_rate, finished_at=finished_at, seconds=seconds))
+
+
+def _write_files(out: Path, scores: pd.DataFrame, pred_frames: list[pd.DataFrame], methods: list[FakeMethod],
+                 n_captures: int, run: dict[str, Any]) -> Path:
+    """The results files and the manifest of a fake run (``run``: :func:`write_fake_run`'s keywords)."""
+    dataset, dataset_hash, scheme, target = run["dataset"], run["dataset_hash"], run["scheme"], run["target"]
+    seed, run_id, protocol, platform = run["seed"], run["run_id"], run["protocol"], run["platform"]
+    frame_rate, finished_at, seconds = run["frame_rate"], run["finished_at"], run["seconds"]
     preds = pd.concat(pred_frames, ignore_index=True) if pred_frames else pd.DataFrame()
     write_results_table(out / "scores.parquet", scores)
     write_results_table(out / "predictions.parquet", preds)
@@ -159,7 +169,7 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
         "touchbench_version": "test", "results_schema": SCHEMA_VERSION, "platform": platform or DEFAULT_PLATFORM, "packages": {"python": "3.11"},
         "run": {"run_id": run_id, "results_dir": str(out)},
         "protocol": {"name": protocol, "text": text, "seed": seed, "scheme": scheme if isinstance(scheme, str) else scheme["name"]},
-        "dataset": {"ref": dataset, "hash": dataset_hash, "captures": len(caps),
+        "dataset": {"ref": dataset, "hash": dataset_hash, "captures": n_captures,
                     "sensor": {"name": "fake", "grid": [8, 8], "frame_rate": frame_rate}},
         "started_at": finished_at, "finished_at": finished_at,
         "sessions": [{"started_at": finished_at, "finished_at": finished_at, "seconds": seconds}],
