@@ -68,11 +68,17 @@ class CrossDataset(Splitter):
     def heading(cls, params: dict[str, Any], dataset: str) -> str | None:
         """``cross-dataset: trained on DATASET, tested on TEST``: the test dataset by its name, or a
         folder's or file's own name (never its path, options or filters)."""
+        test = cls._test_name(params)
+        return None if test is None else f"cross-dataset: trained on {dataset}, tested on {test}"
+
+    @staticmethod
+    def _test_name(params: dict[str, Any]) -> str | None:
+        """The test dataset's name for a title, or a folder's or file's own name (never its path)."""
         test = named(params, "test").get("test")
         name = test.get("name") if isinstance(test, dict) else None
         if not isinstance(name, str) or not name.strip("/"):
             return None
-        return f"cross-dataset: trained on {dataset}, tested on {PurePath(name.rstrip('/')).name or name}"
+        return PurePath(name.rstrip("/")).name or name
 
     def keeps_subjects_apart(self) -> bool:
         return True

@@ -32,10 +32,9 @@ class MultiSource(CrossDataset):
     @classmethod
     def heading(cls, params: dict[str, Any], dataset: str) -> str | None:
         """``multi-source: trained on DATASET and TEST's other subjects, tested on each subject of TEST``."""
-        plain = super().heading(params, dataset)
-        if plain is None:
+        test = cls._test_name(params)
+        if test is None:
             return None
-        test = plain.rsplit(", tested on ", 1)[1]
         return f"multi-source: trained on {dataset} and the other subjects of {test}, tested on each subject of {test}"
 
     def apart_column(self) -> str | None:
