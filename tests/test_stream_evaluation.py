@@ -59,6 +59,8 @@ def test_the_stream_evaluation_scores_every_stream_and_rule(live_run):
         live = json.loads(row["live"])
         assert [r["name"] for r in live["rules"]] == ["max", "majority", "hmm"]
         (stream,) = live["streams"]
+        # a forest's probabilities are graded, and no rule here skips the classifier
+        assert live["probabilities"] is True
         assert stream["source"] == "spliced" and row["fold"].endswith(stream["subject"])
         # three gestures of 8 s (432 frames at 54 Hz) and four idle stretches of 27..81 frames
         assert 3 * 432 + 4 * 27 <= stream["frames"] <= 3 * 432 + 4 * 81
@@ -67,6 +69,7 @@ def test_the_stream_evaluation_scores_every_stream_and_rule(live_run):
             assert 0.0 <= s["frame_accuracy"] <= 1.0 and "frame_idle_baseline_accuracy" in s
             # every hop of 0.2 s (11 frames) from the first full 0.5 s window (27 frames)
             assert r["n_decisions"] == (stream["frames"] - 27) // 11 + 1
+            assert r["classified_fraction"] == 1.0 and r["live_classified_fraction"] == 1.0
 
 
 def test_the_evaluation_decides_what_touchbench_stream_prints(live_run, tmp_path):

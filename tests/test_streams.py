@@ -143,6 +143,8 @@ def test_gate_decides_idle_without_the_classifier_and_needs_its_level():
     d2 = rec.push(np.array([[10.0]]))  # peak 0.1 < 0.3: idle, no classifier call
     d3 = rec.push(np.array([[80.0]]))  # peak 0.8: the best non-idle class, b
     assert d1 is None and d2.label == "idle" and d3.label == "b" and calls == [1]
+    # the decision says whether the classifier ran for it (a stream table's CPU note reads it)
+    assert d2.classified is False and d3.classified is True
     auto = GateRule(idle="idle")
     with pytest.raises(TouchbenchError, match="fit the rule first"):
         WindowRecognizer(proba, CLASSES, SENSOR, [0.2], rule=auto)
@@ -226,5 +228,7 @@ def test_a_batched_replay_decides_what_stepping_frame_by_frame_decides():
     by_frame = [out for f in frames if (out := stepped.step(f)) is not None]
     batched = WindowRecognizer(proba, CLASSES, SENSOR, [0.3, 0.6], hop_s=0.2, rule=rules()).replay(frames, batch=4)
     for k in range(5):
-        assert [(d.frame, d.label) for d in batched[k]] == [(o[k].frame, o[k].label) for o in by_frame]
+        assert [(d.frame, d.label, d.classified) for d in batched[k]] == \
+            [(o[k].frame, o[k].label, o[k].classified) for o in by_frame]
+    assert all(d.classified for d in batched[0])  # max never skips the classifier
     assert len(batched[0]) == (len(frames) - 3) // 2 + 1  # every 2 frames from the first 3-frame window

@@ -60,7 +60,8 @@ def _stream_tables(res) -> list[str]:
         lines.append(f"{live_sources(lb.live)}, {int(lb.live['streams'].iloc[0])} test streams:")
         lines.append(f"{'method':24s} {'rule':30s} {'frame%':>6s} {'idle-only%':>10s} {'@1s%':>5s} {'FA/min':>6s}")
         for _, r in lb.live.iterrows():
-            lines.append(f"{str(r['method'])[:24]:24s} {str(r['rule'])[:30]:30s} {_pct(r['frame_accuracy']):>6s} "
+            rule = str(r["rule"])[:20] + " (default)" if bool(r.get("default", False)) else str(r["rule"])[:30]
+            lines.append(f"{str(r['method'])[:24]:24s} {rule:30s} {_pct(r['frame_accuracy']):>6s} "
                          f"{_pct(r['idle_baseline']):>10s} {_pct(r['accuracy_at_1s']):>5s} "
                          f"{r['false_activations_per_idle_minute']:6.1f}")
     return lines

@@ -66,7 +66,7 @@ from .pareto import pareto_cost, pareto_front
 from .results import ResultSet, load_results, scheme_label
 from .seeds import compare_pair, seed_fields
 from .stats import fold_interval, holm, rank_values, wilson_interval
-from .stream_table import live_rows, live_sources
+from .stream_table import live_sources, live_table
 
 __all__ = [
     "Leaderboard",
@@ -222,13 +222,15 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
     _add_tests_against_best(df, folds, preds, alpha)
     notes += _mark_pareto_fronts(df)
     _add_closing_notes(df, notes)
+    live, live_notes = live_table(ok)
+    notes += live_notes
     fr = s_all["frame_rate"].dropna()
     return Leaderboard(
         key=key, dataset=str(first["dataset"]), dataset_hash=str(first["dataset_hash"]), target=str(first["target"]),
         scheme=str(first["scheme_label"]), rows=df, folds=folds, machines=machines, reference_machine=ref,
         pooled_machines=pool_machines, alpha=alpha, frame_rate=float(fr.iloc[0]) if len(fr) else math.nan, notes=notes,
         looks=looks_here, has_design=design.captures is not None, heading=table_heading(sources, str(first["scheme_label"])),
-        adaptation=_mode(s_all["adaptation"]), live=live_rows(ok), breakdown=report.columns if report is not None else [],
+        adaptation=_mode(s_all["adaptation"]), live=live, breakdown=report.columns if report is not None else [],
     )
 
 

@@ -164,8 +164,12 @@ RANK_LEGEND = ("Rank: within each table by mean accuracy (1 = best; ties share t
 
 
 def _records(lb: Leaderboard) -> list[dict[str, Any]]:
+    return _clean_records(lb.rows)
+
+
+def _clean_records(rows: pd.DataFrame) -> list[dict[str, Any]]:
     recs = []
-    for r in lb.rows.to_dict(orient="records"):
+    for r in rows.to_dict(orient="records"):
         clean = {}
         for k, v in r.items():
             if isinstance(v, (np.floating, float)):
@@ -188,18 +192,25 @@ def to_json(lbs: list[Leaderboard]) -> str:
             "pooled_machines": lb.pooled_machines, "notes": lb.notes, "rows": _records(lb),
             "leaky": lb.is_leaky, "looks": None if lb.looks is None else vars(lb.looks),
             "adaptation": lb.adaptation, "curve": curve_json(lb.curve, method_names(lb.rows)),
+            "live": None if lb.live is None else _clean_records(lb.live),
         })
     return json.dumps({"tables": tables}, indent=2) + "\n"
 
 
 def to_csv(lbs: list[Leaderboard]) -> str:
     """Every table's rows, a method named by its readable name (its id, and the data's hash, only in
-    the JSON document)."""
+    the JSON document); a stream evaluation's table: its stream table's rows (one per method and rule,
+    ``default`` marking the default rule)."""
     frames = []
     for lb in lbs:
-        d = lb.rows.copy()
-        d.insert(1, "method", d["method_id"].map(method_names(lb.rows)))
-        d = d.drop(columns="method_id")
+        if lb.live is not None:  # a stream evaluation: its stream table's rows, as the other formats show
+            d = lb.live.drop(columns="method_id")
+            for col in ("same_as", "sources"):
+                d[col] = d[col].map("; ".join)
+        else:
+            d = lb.rows.copy()
+            d.insert(1, "method", d["method_id"].map(method_names(lb.rows)))
+            d = d.drop(columns="method_id")
         d.insert(0, "scheme", lb.scheme)
         d.insert(0, "target", lb.target)
         d.insert(0, "variant", lb.variant)

@@ -27,6 +27,24 @@ test subject is for captures.
 
 Ward, Lukowicz & Gellersen's event errors (insertions, deletions,
 fragmentations, merges) are summed over streams in the JSON output.
+
+What keeps the table from misleading (:func:`live_table`, its notes):
+
+- the default rule, the one ``touchbench stream`` decides with for a model
+  trained on the evaluation (the payload's ``default_rule``; without it
+  :data:`touchbench.streams.rules.DEFAULT_RULE`), is marked ``(default)`` in
+  the rule cell (column ``default`` in CSV and JSON); a note says when it is
+  not among the rules compared;
+- a method without graded probabilities (the payload's ``probabilities``
+  false: a one-hot per window) shows one row per set of rules that decided
+  alike on every stream (the default rule's, else the first's; the others in
+  ``same_as``), with a note naming the method, the rules and why;
+- a ``CPU ms`` cell is marked ``‡`` when under half of the decisions timed
+  ran the classifier (a gate decided idle, or a rule waited for frames): a
+  note gives the share and the 99th percentile;
+- a note says when the hop, or the shortest window, is longer than the
+  median gesture event of the scored streams (the payload's ``truth``), with
+  the figures.
 """
 
 from __future__ import annotations
@@ -40,10 +58,11 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..streams.rules import RULES
+from ..streams.rules import DEFAULT_RULE, RULES
 from .labels import method_label
 
-__all__ = ["LIVE_COLUMNS", "LIVE_ESSENTIAL", "LIVE_LEGEND", "LIVE_PRIORITY", "live_cells", "live_markdown", "live_rows", "live_sources", "rule_label"]
+__all__ = ["LIVE_COLUMNS", "LIVE_ESSENTIAL", "LIVE_LEGEND", "LIVE_PRIORITY", "default_rule_index", "live_cells",
+           "live_markdown", "live_rows", "live_sources", "live_table", "rule_label"]
 
 TIMES = ("0.3", "1", "2")
 EVENT_ERRORS = ("event_deleted", "event_fragmented", "event_merged", "return_inserted", "return_merging",
@@ -91,28 +110,194 @@ def _one_rule(results: list[dict[str, Any]]) -> dict[str, Any]:
                                                        col("idle_seconds").sum() / 60.0)
     for k in EVENT_ERRORS:
         out[k] = int(np.nansum(col(k)))
-    cpu = np.array([r.get("decision_cpu_ms_p50", math.nan) for r in results], dtype=np.float64)
-    out["decision_cpu_ms"] = float(np.nanmedian(cpu)) if np.isfinite(cpu).any() else math.nan
+    out.update(_cpu(results))
     replay_cpu = sum(float(r.get("cpu_s", 0.0)) for r in results)
     out["x_real_time"] = _pooled(col("seconds").sum(), replay_cpu)
     return out
 
 
+def _median(results: list[dict[str, Any]], key: str, how: Any = np.nanmedian) -> float:
+    v = np.array([r.get(key, math.nan) for r in results], dtype=np.float64)
+    return float(how(v)) if np.isfinite(v).any() else math.nan
+
+
+def _cpu(results: list[dict[str, Any]]) -> dict[str, float]:
+    """A decision's CPU over the streams (the median of each stream's median and 99th percentile) and
+    the share of decisions that ran the classifier (the mean over streams; NaN for older results)."""
+    return {"decision_cpu_ms": _median(results, "decision_cpu_ms_p50"),
+            "decision_cpu_ms_p99": _median(results, "decision_cpu_ms_p99"),
+            "classified_fraction": _median(results, "classified_fraction", np.nanmean),
+            "live_classified_fraction": _median(results, "live_classified_fraction", np.nanmean)}
+
+
 def live_rows(ok: pd.DataFrame) -> pd.DataFrame | None:
     """One row per method and rule of a table's finished stream tasks (None: no stream task)."""
+    return live_table(ok)[0]
+
+
+def live_table(ok: pd.DataFrame) -> tuple[pd.DataFrame | None, list[str]]:
+    """The rows of a table's finished stream tasks (one per method and rule shown; None: no stream
+    task) and the notes that go with them (module docstring)."""
     if "live" not in ok.columns or not (ok["live"].astype(str) != "").any():
-        return None
-    rows = []
+        return None, []
+    rows: list[dict[str, Any]] = []
+    notes: list[str] = []
+    first: list[dict[str, Any]] = []
     for mid, g in ok[ok["live"].astype(str) != ""].groupby("method_id", sort=False):
         payloads = [json.loads(x) for x in g["live"]]
+        first = first or payloads
+        method = method_label(g.iloc[0])
         rules = payloads[0]["rules"]
-        for k, rule in enumerate(rules):
+        default = default_rule_index(payloads[0])
+        if default is None:
+            notes.append(f"the default rule ({rule_label(_default_declaration(payloads[0]))}), which touchbench "
+                         "stream decides with for a model trained on this evaluation, is not among the rules "
+                         "compared")
+        alike = _alike_rules(payloads, default) if payloads[0].get("probabilities") is False else \
+            {k: [] for k in range(len(rules))}
+        for k, same in alike.items():
             results = [s["results"][k] for p in payloads for s in p["streams"]]
-            row = {"method_id": mid, "method": method_label(g.iloc[0]), "rule": rule_label(rule),
-                   "sources": sorted({s["source"] for p in payloads for s in p["streams"]}), **_one_rule(results)}
-            rows.append(row)
+            rows.append({"method_id": mid, "method": method, "rule": rule_label(rules[k]), "default": k == default,
+                         "same_as": [rule_label(rules[j]) for j in same],
+                         "probabilities": payloads[0].get("probabilities"),
+                         "sources": sorted({s["source"] for p in payloads for s in p["streams"]}),
+                         **_one_rule(results)})
+        notes += _alike_note(method, rules, alike)
     df = pd.DataFrame(rows)
-    return df.sort_values("frame_accuracy", ascending=False, kind="stable", na_position="last").reset_index(drop=True)
+    df = df.sort_values("frame_accuracy", ascending=False, kind="stable", na_position="last").reset_index(drop=True)
+    notes += _cpu_notes(df) + duration_notes(first)
+    return df, list(dict.fromkeys(notes))
+
+
+def _default_declaration(payload: dict[str, Any]) -> dict[str, Any]:
+    d = payload.get("default_rule")
+    return dict(d) if isinstance(d, dict) else {"name": d} if isinstance(d, str) else dict(DEFAULT_RULE)
+
+
+def _rule_params(decl: dict[str, Any], idle: str) -> tuple[str, dict[str, Any]]:
+    """A rule's name and every parameter (its defaults filled in; a gate's level ``auto`` as the level it
+    fitted, when it did; the evaluation's idle class where the rule takes one and was not given it)."""
+    d = dict(decl)
+    name = str(d.pop("name", ""))
+    try:
+        sig = inspect.signature(RULES.get(name)).parameters
+    except Exception:  # a rule this version does not know: its parameters as given
+        sig = {}
+    full = {k: p.default for k, p in sig.items() if p.default is not inspect.Parameter.empty}
+    if "idle" in sig:
+        full["idle"] = idle
+    full.update(d)
+    fitted = full.pop("fitted_level", None)
+    if full.get("level") == "auto" and fitted is not None:
+        full["level"] = fitted
+    return name, {k: float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+                  for k, v in full.items()}
+
+
+def default_rule_index(payload: dict[str, Any]) -> int | None:
+    """The index, among the payload's rules, of the rule ``touchbench stream`` decides with for a model
+    trained on the evaluation (the payload's ``default_rule``, else :data:`DEFAULT_RULE`): the rule with
+    the same name and parameters, a gate's fitted level read for ``auto``; failing that, one that
+    differs only by its level where the evaluation fitted the level (a model fits its own); None when
+    no rule matches."""
+    idle = str(payload.get("idle", ""))
+    name, want = _rule_params(_default_declaration(payload), idle)
+    have = [(_rule_params(r, idle), r.get("level") == "auto") for r in payload.get("rules", [])]
+    for loose in (False, True):
+        for k, ((n, params), auto) in enumerate(have):
+            drop = ("level",) if loose and auto else ()
+            if n == name and {a: b for a, b in params.items() if a not in drop} == \
+                    {a: b for a, b in want.items() if a not in drop}:
+                return k
+    return None
+
+
+def _alike_rules(payloads: list[dict[str, Any]], default: int | None) -> dict[int, list[int]]:
+    """The rules to show (indices, in order), each with the rules that made exactly its decisions on every
+    stream: the default rule shown for its set, else the set's first."""
+    n = len(payloads[0]["rules"])
+    decisions = [[s["results"][k]["decisions"] for p in payloads for s in p["streams"]] for k in range(n)]
+    order = ([default] if default is not None else []) + [k for k in range(n) if k != default]
+    shown: dict[int, list[int]] = {}
+    for k in order:
+        same = next((j for j in shown if decisions[j] == decisions[k]), None)
+        if same is None:
+            shown[k] = []
+        else:
+            shown[same].append(k)
+    return {k: sorted(shown[k]) for k in sorted(shown)}
+
+
+def _alike_note(method: str, rules: list[dict[str, Any]], alike: dict[int, list[int]]) -> list[str]:
+    pairs = [(rule_label(rules[k]), [rule_label(rules[j]) for j in same]) for k, same in alike.items() if same]
+    if not pairs:
+        return []
+    said = "; ".join(f"{', '.join(same)} as {shown}" for shown, same in pairs)
+    return [f"{method} gives no graded probabilities (every window it classified had probability 1 for one "
+            f"class), so a threshold or an HMM reads the same answer as max does: rules that decided exactly "
+            f"alike on every stream are shown once ({said})"]
+
+
+#: under this share of timed decisions running the classifier, a CPU cell is marked and noted
+CLASSIFIED_NOTE_BELOW = 0.5
+
+
+def _classified(r: Any) -> float:
+    """The share of the timed decisions that ran the classifier (of all decisions for a result that has
+    only that); NaN for older results."""
+    v = r.get("live_classified_fraction", math.nan)
+    return float(v) if np.isfinite(v) else float(r.get("classified_fraction", math.nan))
+
+
+def _skips(r: Any) -> bool:
+    f = _classified(r)
+    return bool(np.isfinite(f) and f < CLASSIFIED_NOTE_BELOW)
+
+
+def _cpu_notes(rows: pd.DataFrame) -> list[str]:
+    out = []
+    for _, r in rows.iterrows():
+        if _skips(r):
+            out.append(f"CPU ms of {r['method']} · {r['rule']} (‡) is mostly skipped decisions: "
+                       f"{_pct(_classified(r))} % of the timed decisions ran the classifier (the others were "
+                       f"decided from the frames alone, without features or classifier); median "
+                       f"{_num(r['decision_cpu_ms'])} ms, 99th percentile {_num(r['decision_cpu_ms_p99'])} ms "
+                       f"(medians over streams), the latter closer to a decision that classifies")
+    return out
+
+
+def gesture_durations(payloads: list[dict[str, Any]]) -> np.ndarray:
+    """The durations (s) of the gesture events of the payloads' streams: each run of one true label other
+    than the idle class (the payload's ``truth``, run-length)."""
+    out = []
+    for p in payloads:
+        rate, idle = float(p["frame_rate"]), str(p["idle"])
+        for s in p["streams"]:
+            runs = s["truth"]
+            for k, (a, label) in enumerate(runs):
+                b = runs[k + 1][0] if k + 1 < len(runs) else s["frames"]
+                if str(label) != idle:
+                    out.append((int(b) - int(a)) / rate)
+    return np.asarray(out, dtype=np.float64)
+
+
+def duration_notes(payloads: list[dict[str, Any]]) -> list[str]:
+    """A note when the hop, or the shortest window, is longer than the median gesture event of the
+    scored streams (the streams of ``payloads``, one method's tasks), with the figures."""
+    d = gesture_durations(payloads)
+    if not d.size:
+        return []
+    med = float(np.median(d))
+    hop = float(payloads[0]["hop_s"])
+    window = float(min(payloads[0]["windows_s"]))
+    out = []
+    for what, v, why in (("the hop", hop, "a gesture can begin and end between two decisions"),
+                         ("the shortest window", window, "every window that sees such a gesture also sees "
+                          "what came before it")):
+        if v > med:
+            out.append(f"{what} ({v:g} s) is longer than the median gesture event of the scored streams "
+                       f"({med:.2f} s; {int(np.sum(d < v))} of {d.size} events are shorter than {v:g} s): {why}")
+    return out
 
 
 def rule_label(rule: dict[str, Any]) -> str:
@@ -147,11 +332,13 @@ def live_cells(rows: pd.DataFrame) -> tuple[list[str], list[list[str]]]:
     cells = []
     for _, r in rows.iterrows():
         ci = "—" if not np.isfinite(r["ci_low"]) else f"{_pct(r['ci_low'])}–{_pct(r['ci_high'])}"
-        cells.append([r["method"], r["rule"], str(r["streams"]), _pct(r["frame_accuracy"]), ci,
+        rule = f"{r['rule']} (default)" if bool(r.get("default", False)) else str(r["rule"])
+        cpu = _num(r["decision_cpu_ms"]) + (" ‡" if _skips(r) else "")
+        cells.append([r["method"], rule, str(r["streams"]), _pct(r["frame_accuracy"]), ci,
                       _pct(r["idle_baseline"]), _pct(r["balanced_accuracy"]), _pct(r["gesture_recall"]),
                       _pct(r["idle_recall"]), *(_pct(r[f"accuracy_at_{t}s"]) for t in TIMES),
                       _num(r["time_to_decision_median_s"]), _pct(r["never_decided"]),
-                      _num(r["false_activations_per_idle_minute"], 1), _num(r["decision_cpu_ms"]),
+                      _num(r["false_activations_per_idle_minute"], 1), cpu,
                       _num(r["x_real_time"], 0)])
     return list(LIVE_COLUMNS), cells
 
@@ -162,7 +349,10 @@ LIVE_LEGEND = ("Stream table: each test stream replayed frame by frame (the unit
                "gesture events decided correctly t s after onset; decide s: median time from onset to the first "
                "correct decision; never %: events never decided; FA/min: false activations per minute of idle; "
                "CPU ms: median CPU time of a decision made live, one frame at a time, on one thread; x real time: "
-               "stream time over the CPU time of the evaluation's replay (windows classified in batches).")
+               "stream time over the CPU time of the evaluation's replay (windows classified in batches). "
+               "(default): the rule touchbench stream decides with for a model trained on this evaluation; "
+               "‡: under half of the timed decisions ran the classifier, so the CPU is mostly that of "
+               "decisions skipped (see the note).")
 
 
 #: the columns a narrow terminal keeps; the others follow, in this order, while the table fits

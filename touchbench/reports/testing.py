@@ -47,7 +47,8 @@ class FakeMethod(dict):
     confusion (overrides ``wrong``); timings per fold (constant or a list):
     ``latency_cpu_ms`` as ``latency_ms`` unless given; ``load_avg``: the
     machine's load average while it ran (on the platform's ``cpu_count`` CPUs); ``adaptation``:
-    what the method adapted to at test time (the results' column; "" for a plain method).
+    what the method adapted to at test time (the results' column; "" for a plain method); ``live``: fold
+    name -> the stream task's payload (the scores' ``live`` column, :mod:`touchbench.engine.live`).
     """
 
     def __init__(self, features: str, classifier: str, *, classifier_name: str | None = None,
@@ -56,7 +57,8 @@ class FakeMethod(dict):
                  latency_cpu_ms: float | Sequence[float] | None = None, load_avg: float = 0.0,
                  fit_seconds: float | Sequence[float] = 0.5, feature_seconds_per_capture: float | Sequence[float] = 1e-3,
                  early_frames: int | None = None, failed_folds: Sequence[str] = (),
-                 predicted: dict[str, str] | None = None, adaptation: str = ""):
+                 predicted: dict[str, str] | None = None, adaptation: str = "",
+                 live: dict[str, dict[str, Any]] | None = None):
         super().__init__(
             features=features, classifier=classifier, classifier_name=classifier_name or classifier,
             classifier_params=classifier_params or {},
@@ -66,6 +68,7 @@ class FakeMethod(dict):
             fit_seconds=fit_seconds,
             feature_seconds_per_capture=feature_seconds_per_capture, early_frames=early_frames,
             failed_folds=list(failed_folds), predicted=dict(predicted or {}), adaptation=adaptation,
+            live=dict(live or {}),
         )
 
 
@@ -137,7 +140,8 @@ def write_fake_run(out: str | Path, captures: pd.DataFrame, folds: dict[str, Seq
                         feature_seconds_per_capture=_per_fold(m["feature_seconds_per_capture"], f_i),
                         feature_fit_seconds=0.0, fit_seconds=_per_fold(m["fit_seconds"], f_i), predict_seconds=0.01,
                         latency_ms=_per_fold(m["latency_ms"], f_i), latency_cpu_ms=_per_fold(m["latency_cpu_ms"], f_i),
-                        load_avg=m["load_avg"], usable_cpus=(platform or DEFAULT_PLATFORM).get("cpu_count"))
+                        load_avg=m["load_avg"], usable_cpus=(platform or DEFAULT_PLATFORM).get("cpu_count"),
+                        live=json.dumps(m["live"][fold]) if fold in m["live"] else "")
             score_rows.append(base)
             pred_frames.append(pd.DataFrame({
                 "run_id": run_id, "task_id": task_id, "repetition": repetition, "fold": fold_name, "fold_group": group,

@@ -80,6 +80,7 @@ class Decision:
     latency_ms: float
     cpu_ms: float = float("nan")  # CPU time of this thread for the decision (features, classifier, rule)
     windows: list[dict[str, Any]] = field(default_factory=list)  # per window: length, best class, probability
+    classified: bool = True  # whether the classifier ran for it (False: a gate, or a rule waiting for frames)
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), default=float)
@@ -246,7 +247,7 @@ class WindowRecognizer:
                         best=str(self.classes[best]) if p[best] > 0 else label,
                         window_s=None if k is None else full[k][0],
                         latency_ms=1000.0 * (time.perf_counter() - arrived) if math.isfinite(arrived) else math.nan,
-                        cpu_ms=cpu, windows=per)
+                        cpu_ms=cpu, windows=per, classified=gated is None)
 
 
 def decide_all(recognizer: WindowRecognizer, frames: Iterable[tuple[np.ndarray, float]]) -> Iterator[Decision]:

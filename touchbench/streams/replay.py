@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -85,13 +85,15 @@ class Replayed:
     """One stream's replay with one rule: its decisions; each decision's CPU ms as the replay spent it
     (its share of its windows' batch, and the rule); the CPU ms of the first :data:`LIVE_SAMPLE`
     decisions made one frame at a time, as ``touchbench stream`` makes them; the replay's CPU and wall
-    seconds (every rule's, the probabilities computed once)."""
+    seconds (every rule's, the probabilities computed once); whether each of those timed decisions ran
+    the classifier (a gate deciding idle, or a rule waiting for frames, skips it)."""
 
     decisions: list[Decision]
     decision_cpu_ms: np.ndarray
     live_cpu_ms: np.ndarray
     cpu_s: float
     wall_s: float
+    live_classified: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
 
 def replay(frames: np.ndarray, proba: Callable[[list[np.ndarray]], np.ndarray], classes: Sequence[str], sensor: Any,
@@ -106,12 +108,13 @@ def replay(frames: np.ndarray, proba: Callable[[list[np.ndarray]], np.ndarray], 
     c_start, w_start = time.thread_time_ns(), time.perf_counter()
     decided = recogniser().replay(frames)
     cpu_s, wall_s = (time.thread_time_ns() - c_start) / 1e9, time.perf_counter() - w_start
-    live: list[list[float]] = [[] for _ in rules]
+    live: list[list[Decision]] = [[] for _ in rules]
     rec = recogniser()
     for frame in frames:
         for k, d in enumerate(rec.step(frame) or ()):
-            live[k].append(d.cpu_ms)
+            live[k].append(d)
         if len(live[0]) >= LIVE_SAMPLE:
             break
-    return [Replayed(ds, np.array([d.cpu_ms for d in ds], dtype=np.float64), np.array(lv, dtype=np.float64),
-                     cpu_s, wall_s) for ds, lv in zip(decided, live)]
+    return [Replayed(ds, np.array([d.cpu_ms for d in ds], dtype=np.float64),
+                     np.array([d.cpu_ms for d in lv], dtype=np.float64), cpu_s, wall_s,
+                     np.array([d.classified for d in lv], dtype=bool)) for ds, lv in zip(decided, live)]
