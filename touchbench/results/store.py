@@ -65,11 +65,13 @@ PLAN_COLUMNS = (
     "task_id", "protocol", "dataset", "dataset_hash", "target", "scheme", "repetition", "fold", "fold_group",
     "early_frames", "features", "feature_sets", "feature_params", "classifier", "classifier_name",
     "classifier_params", "seed", "n_train", "n_test", "leakage", "selection", "adaptation",
-    "curve", "curve_size", "curve_draw",
+    "curve", "curve_size", "curve_draw", "curve_added", "curve_added_min",
 )
 #: plan columns that results written before touchbench recorded them lack, with the value they read as
-#: (no method of those versions adapted to the test data, and no task was a point of a curve)
-LATER_PLANNED = {"adaptation": "", "curve": "", "curve_size": np.nan, "curve_draw": 0}
+#: (no method of those versions adapted to the test data, and no task was a point of a curve; the
+#: calibration captures really added were not recorded)
+LATER_PLANNED = {"adaptation": "", "curve": "", "curve_size": np.nan, "curve_draw": 0, "curve_added": np.nan,
+                 "curve_added_min": np.nan}
 #: what running a task measures, each with its value before (or without) a measurement
 MEASURED = {
     "status": "ok", "error": "", "accuracy": np.nan, "balanced_accuracy": np.nan, "macro_f1": np.nan,
@@ -89,7 +91,7 @@ SCORE_COLUMNS = [
     "accuracy", "balanced_accuracy", "macro_f1",
     "feature_seconds_per_capture", "feature_fit_seconds", "fit_seconds", "predict_seconds", "latency_ms",
     "latency_cpu_ms", "load_avg", "usable_cpus", "status", "error", "notes", "finished_at", "leakage", "selection",
-    "adaptation", "curve", "curve_size", "curve_draw", "live",
+    "adaptation", "curve", "curve_size", "curve_draw", "curve_added", "curve_added_min", "live",
 ]
 
 
