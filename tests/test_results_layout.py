@@ -74,6 +74,8 @@ def test_a_rerun_upgrades_a_folder_of_the_first_layout(engine_env, tmp_path):
     # the whole folder as the first layout left it: fragments, merged files and manifest
     for f in (out / "fragments").glob("*.parquet"):
         _write_old(pd.read_parquet(f).rename(columns=old_names), f)
+    for f in (out / "fragments").glob("*.sha256"):  # that layout recorded no fragment checksums
+        f.unlink()
     _write_old(preds.rename(columns=old_names), out / "predictions.parquet")
     _write_old(pd.read_parquet(out / "scores.parquet"), out / "scores.parquet")
     conf = pd.read_parquet(out / "confusion.parquet").rename(columns=old_names)

@@ -207,13 +207,49 @@ def test_calibration_draws_differ_and_are_seeded():
 def test_calibration_short_class_gives_all_but_one_and_says_so():
     meta = grid(["s1", "s2"], ["pat", "rub"], per=3)
     meta = meta.drop(index=meta.index[(meta["subject"] == "s1") & (meta["gesture"] == "rub")][:1]).reset_index(drop=True)
-    folds = make_splitter("calibration", base={"name": "loso", "subjects": ["s1"]}, per_class=[3]).folds(meta)
-    f3 = next(f for f in folds if f.curve.size == 3 and f.curve.draw == 0)
+    folds = make_splitter("calibration", base={"name": "loso", "subjects": ["s1"]}, per_class=[2]).folds(meta)
+    f2 = next(f for f in folds if f.curve.size == 2 and f.curve.draw == 0)
     y = meta["gesture"].to_numpy()
-    # s1 has 3 pat (k = 3 would leave none: 2 go to training) and 2 rub (1 goes): 1 pat and 1 rub scored
-    assert sorted(y[f3.test]) == ["pat", "rub"]
-    assert sorted(y[np.setdiff1d(f3.train, np.flatnonzero(meta["subject"] == "s2"))]) == ["pat", "pat", "rub"]
-    assert any("s1/pat (3), s1/rub (2)" in n and "all but one" in n for n in f3.notes)
+    # s1 has 3 pat (2 go to training) and 2 rub (k = 2 would leave none: 1 goes): 1 pat and 1 rub scored
+    assert sorted(y[f2.test]) == ["pat", "rub"]
+    assert sorted(y[np.setdiff1d(f2.train, np.flatnonzero(meta["subject"] == "s2"))]) == ["pat", "pat", "rub"]
+    assert any("s1/rub (2)" in n and "s1/pat" not in n and "all but one" in n for n in f2.notes)
+
+
+def test_calibration_records_the_captures_a_capped_point_really_added():
+    # s1: 3 pat (at most 2 can train), 2 rub (at most 1): k = 2 adds 2 pat and 1 rub, mean 1.5, least 1;
+    # k = 1 adds one of each
+    meta = grid(["s1", "s2"], ["pat", "rub"], per=3)
+    meta = meta.drop(index=meta.index[(meta["subject"] == "s1") & (meta["gesture"] == "rub")][:1]).reset_index(drop=True)
+    sp = make_splitter("calibration", base={"name": "loso", "subjects": ["s1"]}, per_class=[1, 2], draws=1)
+    points = {f.curve.size: f.curve for f in sp.folds(meta)}
+    assert (points[0].added, points[0].added_min) == (0.0, 0.0)
+    assert (points[1].added, points[1].added_min) == (1.0, 1.0)
+    assert (points[2].added, points[2].added_min) == (1.5, 1.0)
+    [capped] = [n for n in sp.notes_ if "capped" in n]
+    assert "k = 2 is capped" in capped and "1 of 2 test subject/class pair(s)" in capped and "1.5" in capped
+
+
+@pytest.mark.parametrize("per_class,unit,words", [
+    ([5], "subject", ["per_class: k = 5", "unit: subject", "more than 2 capture(s)"]),  # 2 per subject and class
+    ([1, 3], "subject", ["per_class: k = 3", "at most 1 per class"]),
+    ([1], "capture_id", ["per_class: k = 1", "unit: capture_id"]),  # one capture per pool: none can train
+])
+def test_calibration_refuses_a_point_no_test_unit_can_give(per_class, unit, words):
+    meta = grid(["s1", "s2", "s3"], ["pat", "rub"], per=2)
+    with pytest.raises(SplitError) as e:
+        make_splitter("calibration", base="loso", per_class=per_class, unit=unit).folds(meta)
+    assert all(w in str(e.value) for w in words), str(e.value)
+
+
+@pytest.mark.parametrize("value,message", [
+    ("1e9", "whole number"), (1e9, "whole number"), (2.5, "whole number"), (True, "whole number"),
+    (1_000_000_000, "at most 10000"),
+])
+def test_calibration_refuses_per_class_that_is_not_a_sensible_whole_number(value, message):
+    with pytest.raises(ValidationError, match=message) as e:
+        make_splitter("calibration", base="loso", per_class=[1, value])
+    assert "per_class" in str(e.value)
 
 
 def test_calibration_per_unit_column():
@@ -277,6 +313,8 @@ seed: 3
     ("  name: calibration\n  base: loso\n  per_class: [-2]", "curve.yaml:6: scheme.per_class: every number of captures per class must be at least 0 (got -2)"),
     ("  name: calibration\n  base: {name: loso, colum: session}\n  per_class: [1]",
      "curve.yaml:5: scheme.base.colum: unknown field"),
+    ("  name: calibration\n  base: loso\n  per_class: [1e9]",
+     "curve.yaml:6: scheme.per_class: every number of captures per class must be a whole number"),
 ])
 def test_protocol_errors_name_the_field(tmp_path, engine_env, scheme, expected):
     ds = curve_dataset({"t": {"x": 2}, "a": {"x": 2}, "b": {"y": 2}})
@@ -343,6 +381,28 @@ def test_calibration_accuracy_grows_with_k_on_the_same_scored_captures(tmp_path,
     for d in (0, 1):
         ids = [set(preds.loc[preds["fold"] == f"k{k}#{d}/subject=t", "capture_id"]) for k in (0, 1)]
         assert ids[0] == ids[1] and len(ids[0]) == 8
+
+
+def test_a_capped_calibration_point_is_labelled_by_what_it_added(tmp_path, engine_env):
+    # t holds 2 captures of x, y, z (1 can train each) and 4 of w (3 can): k = 3 adds 1, 1, 1, 3 captures,
+    # 1.5 per class on average, at least 1
+    from touchbench.reports.curve_table import size_label, size_words
+    from touchbench.reports.leaderboard import build_leaderboards
+    from touchbench.reports.results import load_results
+    ds = curve_dataset({"t": {"x": 2, "y": 2, "z": 2, "w": 4}, "a": {"x": 2}, "b": {"y": 2}, "c": {"z": 2}})
+    data = tmp_path / "data.parquet"
+    ds.to_parquet(data)
+    p = parse_protocol(PROTOCOL.format(data=data, scheme="  name: calibration\n  base: {name: loso, subjects: [t]}\n"
+                                       "  per_class: [1, 3]\n  draws: 1"), tmp_path / "calib.yaml")
+    res = run_protocol(p, out=tmp_path / "calib", progress=False)
+    s = res.scores.set_index("curve_size")
+    assert s.loc[3.0, "curve_added"] == 1.5 and s.loc[3.0, "curve_added_min"] == 1.0
+    assert s.loc[1.0, "curve_added"] == 1.0 and s.loc[0.0, "curve_added"] == 0.0
+    assert any("k = 3 is capped" in n for n in res.notes)  # what `touchbench run` prints
+    [lb] = build_leaderboards(load_results([tmp_path / "calib"]))
+    assert [size_label(lb.curve, k) for k in lb.curve.sizes] == ["k=0", "k=1", "k≈1.5 (3 asked)"]
+    assert size_words(lb.curve, 3.0).startswith("1.5 labelled captures per class on average (at least 1)")
+    assert any(n.startswith("calibration: k=3 asked") and "1.5" in n for n in lb.notes)
 
 
 # ----------------------------------------------------------------- what the schemes declare

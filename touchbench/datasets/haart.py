@@ -42,10 +42,11 @@ import pandas as pd
 from ..core.errors import DataError
 from ..core.paths import data_dir as default_data_dir, data_dir_help
 from .cache import cached_dataset
+from .checksums import verify_checksums
 from .model import SensorSpec, TouchDataset
 from .registry import DATASETS
 
-READER_VERSION = "haart-raw-1"
+READER_VERSION = "haart-raw-2"  # 2: the checksums' provenance
 
 HAART_SENSOR = SensorSpec(name="haart", grid=(8, 8), frame_rate=54.0, value_range=(0.0, 1023.0))
 GESTURES = ("constant", "notouch", "pat", "rub", "scratch", "stroke", "tickle")
@@ -266,25 +267,9 @@ def find_placeholders(raw: Path, recs: list[Recording], digests: dict[tuple, str
     return sorted(out, key=lambda d: d["file"])
 
 
-def verify_checksums(sums: Path, files: list[tuple[str, Path, str]]) -> None:
-    """Check each ``(name, path, sha256)`` against the SHA-256 file ``sums`` (``sha256  ./name`` lines,
-    names relative to the folder of recordings, without ``.gz``): a mismatch is refused naming the
-    file; a name it does not list, or no ``sums`` file, is not checked."""
-    if not sums.is_file():
-        return
-    expected = {}
-    for line in sums.read_text().splitlines():
-        parts = line.split()
-        if len(parts) == 2:
-            expected[parts[1].removeprefix("./")] = parts[0]
-    for name, path, digest in files:
-        if name in expected and expected[name] != digest:
-            raise DataError("content does not match SHA256SUMS (corrupted copy?)", path)
-
-
-def _verify_checksums(raw: Path, recs: list[Recording], digests: dict[tuple, str]) -> None:
-    verify_checksums(raw.parent / "SHA256SUMS",
-                     [(f"{r.path.parent.name}/{r.path.name}".removesuffix(".gz"), r.path, digests[r.key]) for r in recs])
+def _verify_checksums(raw: Path, recs: list[Recording], digests: dict[tuple, str]) -> dict[str, str]:
+    return verify_checksums(raw.parent / "SHA256SUMS", [(f"{r.path.parent.name}/{r.path.name}".removesuffix(".gz"),
+                                                         r.path, digests[r.key]) for r in recs], raw)
 
 
 def _source_files(raw: Path) -> list[Path]:
@@ -295,19 +280,20 @@ def _source_files(raw: Path) -> list[Path]:
     return files
 
 
-def _read_all(raw: Path) -> tuple[list[Recording], dict[tuple, np.ndarray], list[dict]]:
+def _read_all(raw: Path) -> tuple[list[Recording], dict[tuple, np.ndarray], list[dict], dict[str, str]]:
+    """The recordings under ``raw``, their arrays, the placeholder copies and the checksums' provenance."""
     recs = find_recordings(raw)
     arrays, digests = {}, {}
     for r in recs:
         data = read_bytes(r.path)
         digests[r.key] = hashlib.sha256(data).hexdigest()
         arrays[r.key] = parse_recording(data, r.path)
-    _verify_checksums(raw, recs, digests)
-    return recs, arrays, find_placeholders(raw, recs, digests)
+    checked = _verify_checksums(raw, recs, digests)
+    return recs, arrays, find_placeholders(raw, recs, digests), checked
 
 
 def build_haart(raw: Path) -> TouchDataset:
-    recs, arrays, placeholders = _read_all(raw)
+    recs, arrays, placeholders, checked = _read_all(raw)
     dropped = {p["capture_id"] for p in placeholders}
     train, test = set(CHALLENGE_TRAIN), set(CHALLENGE_TEST)
     kept = [r for r in recs if r.capture_id not in dropped]
@@ -329,6 +315,7 @@ def build_haart(raw: Path) -> TouchDataset:
         "placeholders": placeholders,
         "note": f"the {len(placeholders)} placeholder copies are left out",
         "window": "corrected: frames 55..486 (1-based), rows/cols 2..9",
+        **checked,
     }
     return ds
 
@@ -347,7 +334,7 @@ def challenge_meta(recs: list[Recording]) -> pd.DataFrame:
 
 
 def build_haart_challenge(raw: Path) -> TouchDataset:
-    recs, arrays, placeholders = _read_all(raw)
+    recs, arrays, placeholders, checked = _read_all(raw)
     order = {p: i for i, p in enumerate(CHALLENGE_TRAIN + CHALLENGE_TEST)}
     chosen = sorted(
         (r for r in recs if r.participant in order and r.key not in CHALLENGE_EXCLUDED),
@@ -358,6 +345,7 @@ def build_haart_challenge(raw: Path) -> TouchDataset:
         "placeholders": placeholders,
         "window": "organisers' (bug included): frame i = lines 8i+55..8i+62 of the row-trimmed stream",
         "note": "includes s02 none-fur-constant (a copy of s02 none-fur-notouch) and lacks s09's, as released",
+        **checked,
     }
     return ds
 

@@ -82,10 +82,11 @@ from pathlib import Path
 import pandas as pd
 
 from ..core.errors import DataError, TouchbenchError
+from .checksums import verify_checksums
 from .formats import FormatOption, OptionValueError, check_frame_rate, parse_frame_rate, register_format
 from .haart import (
     GESTURES, HAART_SENSOR, RAW_SIDE, STUDY, challenge_window, find_placeholders, frame_window, parse_recording,
-    read_bytes, verify_checksums,
+    read_bytes,
 )
 from .model import TouchDataset
 
@@ -331,9 +332,9 @@ def read_haart_raw(
     recs = find_raw_recordings(folder, rx)
     strict = win.kind == "challenge" or (recording_seconds is None and win.haart_protocol)
     arrays, digests, trims = _read_arrays(folder, recs, win, rate, rec_s, strict)
-    if checksums is not None:
-        verify_checksums(Path(checksums), [(str(r.path.relative_to(folder)).removesuffix(".gz"), r.path,
-                                            digests[r.key]) for r in recs])
+    checked = {} if checksums is None else verify_checksums(
+        Path(checksums), [(str(r.path.relative_to(folder)).removesuffix(".gz"), r.path, digests[r.key]) for r in recs],
+        folder)
     placeholders = find_placeholders(folder, recs, digests)
     dropped = {p["capture_id"] for p in placeholders}
     windows = [(r, _capture(arrays[r.key], win, rate, r.path, leave_out)) for r in recs if r.capture_id not in dropped]
@@ -356,6 +357,7 @@ def read_haart_raw(
         "cut": [f"{f}: {n} lines, the first {round(rec_s * rate) * RAW_SIDE} used" for f, _, n in trims.cut] or "none",
         "left_out": left_out or "none",
         "placeholders": placeholders,
+        **checked,
     }
     return ds
 

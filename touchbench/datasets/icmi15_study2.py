@@ -52,7 +52,7 @@ from .registry import DATASETS
 __all__ = ["NAME", "PATTERN", "WINDOWS", "load_icmi15_study2", "parse_window"]
 
 NAME = "icmi15-study2"
-READER_VERSION = "icmi15-study2-1"
+READER_VERSION = "icmi15-study2-2"  # 2: the checksums' provenance
 PATTERN = (r"(?P<study>150505)-(?P<participant>\d+)(?P<cover>cover|none)(?P<motion>dynamic|static)"
            r"(?P<gesture>" + "|".join(GESTURES) + r")")
 #: the window option's forms (``parse_window``)
@@ -108,9 +108,8 @@ def conditions_summary(recs: list[RawRecording]) -> dict[str, object]:
 def build_icmi15_study2(raw: Path, window: str = "haart") -> TouchDataset:
     """The study read from ``raw`` with ``window`` (module docstring)."""
     options = parse_window(window)
-    sums = raw.parent / "SHA256SUMS"
     ds = read_haart_raw(raw, pattern=PATTERN, short_recordings="leave-out", name=NAME,
-                        checksums=sums if sums.is_file() else None, **options)
+                        checksums=raw.parent / "SHA256SUMS", **options)
     prov = {"window option": f"{window} (of {', '.join(WINDOWS)})", **conditions_summary(_recordings(raw)),
             **ds.provenance, "readme": README_NOTE}
     ds.provenance = prov

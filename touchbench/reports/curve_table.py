@@ -18,7 +18,7 @@ from .curves import Curve
 from .labels import _pct
 
 __all__ = ["GAIN_SIZES", "curve_cells", "curve_essential", "curve_html", "curve_json", "curve_legend",
-           "curve_markdown", "curve_titles", "gain_cells", "reach_lines", "reference_note", "size_label", "size_words"]
+           "curve_markdown", "capped_notes", "curve_titles", "gain_cells", "reach_lines", "reference_note", "size_label", "size_words"]
 
 #: the calibration sizes (labelled captures per class) whose gains over none the sentences name
 GAIN_SIZES = (1.0, 3.0)
@@ -29,10 +29,20 @@ def _shares(curve: Curve) -> bool:
     return curve.axis == "subjects" and max(curve.sizes) <= 1 and min(curve.sizes) < 1
 
 
+def _added(curve: Curve, size: float) -> tuple[float, float] | None:
+    """The captures per class a capped calibration point really added (mean, least), else None."""
+    return curve.capped().get(size)
+
+
 def size_label(curve: Curve, size: float) -> str:
-    """A size as a column header: ``n=4`` (subjects), ``50 %`` (a share of them), ``k=2`` (calibration)."""
+    """A size as a column header: ``n=4`` (subjects), ``50 %`` (a share of them), ``k=2`` (calibration;
+    a capped point by the captures it added: ``k=1 (5 asked)``, ``k≈3.5 (5 asked)``)."""
     if curve.axis == "calibration":
-        return f"k={size:g}"
+        added = _added(curve, size)
+        if added is None:
+            return f"k={size:g}"
+        mean = added[0]
+        return f"k={mean:g} ({size:g} asked)" if mean == round(mean) else f"k≈{mean:.3g} ({size:g} asked)"
     if curve.full_varies and size == curve.sizes[-1]:
         return "all"
     return f"{100 * size:g} %" if size < 1 or _shares(curve) else f"n={size:g}"
@@ -43,6 +53,12 @@ def size_words(curve: Curve, size: float) -> str:
     if curve.axis == "calibration":
         if size == 0:
             return "no labelled capture from the test data"
+        added = _added(curve, size)
+        if added is not None:
+            mean, least = added
+            return (f"{mean:.3g} labelled capture{'' if mean == 1 else 's'} per class "
+                    f"{'' if mean == least else f'on average (at least {least:g}) '}where {size:g} were asked "
+                    "(the test data held no more)")
         return f"{size:g} labelled capture{'' if size == 1 else 's'} per class"
     if curve.full_varies and size == curve.sizes[-1]:
         return "every training subject"
@@ -179,6 +195,13 @@ def reach_lines(curve: Curve, names: dict[str, str]) -> list[str]:
     return out
 
 
+def capped_notes(curve: Curve) -> list[str]:
+    """One note per capped calibration point: the captures asked and those really added."""
+    return [f"calibration: k={k:g} asked, but some test pools held no more than {k:g} captures of a class (one is "
+            f"always scored): {mean:.3g} labelled captures per class were added on average, at least {least:g}; "
+            "the point is labelled by what it added" for k, (mean, least) in sorted(curve.capped().items())]
+
+
 def reference_note(curve: Curve) -> str:
     """The note of a curve's leaderboard: which point its table ranks."""
     if curve.axis == "calibration":
@@ -241,4 +264,5 @@ def curve_json(curve: Curve | None, names: dict[str, str]) -> dict[str, Any] | N
         return None
     return {"axis": curve.axis, "sizes": [float(s) for s in curve.sizes], "fraction": curve.fraction,
             "points": _records(curve.points, names), "gains": _records(curve.gains, names),
-            "reach": _records(curve.reach, names)}
+            "reach": _records(curve.reach, names),
+            "added": [{"size": float(k), "mean": a[0], "least": a[1]} for k, a in sorted(curve.added.items())]}

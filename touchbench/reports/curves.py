@@ -33,6 +33,9 @@ The statistics (float64):
   the full accuracy: on a subjects curve the full point's (the largest
   ``n``); on a calibration curve the largest ``k`` swept's (``k = 0``, no
   label of the test subject, is the baseline the gains are measured from);
+- ``added`` (calibration): the labelled captures per class each asked ``k`` really added, the mean
+  and the least over the test side's (unit, class) pools (a pool with no more than ``k`` captures
+  gives all but one); a capped point is labelled by them, never by the ``k`` asked alone;
 - ``gains`` (calibration): each ``k`` over ``k = 0``, paired over base
   folds: per base fold the draws' mean at ``k`` minus that at ``k = 0``,
   the mean of those differences and their Student t interval (not clipped);
@@ -47,7 +50,7 @@ calibration curve.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -81,6 +84,13 @@ class Curve:
     #: a subjects curve whose base folds have different numbers of training subjects: the largest size
     #: is each base fold's full point ("all")
     full_varies: bool = False
+    #: calibration: per size asked (k), the labelled captures per class its tasks really added, the
+    #: mean and the least over the (unit, class) pools and tasks; sizes without a record are left out
+    added: dict[float, tuple[float, float]] = field(default_factory=dict)
+
+    def capped(self) -> dict[float, tuple[float, float]]:
+        """The calibration points whose tasks added fewer captures than asked (size -> mean, least)."""
+        return {k: a for k, a in self.added.items() if a[0] < k - 1e-9}
 
     @property
     def units(self) -> int:
@@ -257,6 +267,19 @@ def _curve_tasks(ok: pd.DataFrame, preds: pd.DataFrame | None) -> tuple[pd.DataF
     return g, preds, bool(varies)
 
 
+def _added(g: pd.DataFrame) -> dict[float, tuple[float, float]]:
+    """Per calibration size, the mean and least of the captures per class its tasks recorded adding
+    (``curve_added``, ``curve_added_min``; results of versions that did not record them: none)."""
+    if "curve_added" not in g or "curve_added_min" not in g:
+        return {}
+    out = {}
+    for size, gs in g.groupby("curve_size"):
+        mean, least = gs["curve_added"].astype(np.float64), gs["curve_added_min"].astype(np.float64)
+        if mean.notna().all() and least.notna().all():
+            out[float(size)] = (float(mean.mean()), float(least.min()))
+    return out
+
+
 def curve_of(ok: pd.DataFrame, preds: pd.DataFrame | None, fraction: float = DEFAULT_FRACTION) -> Curve | None:
     """The curve of one table's finished tasks ``ok`` (``preds``: their predictions; None when the
     table's tasks are on no curve)."""
@@ -279,4 +302,5 @@ def curve_of(ok: pd.DataFrame, preds: pd.DataFrame | None, fraction: float = DEF
     return Curve(axis=axis, sizes=sorted(set(g["curve_size"])), points=pd.DataFrame(points),
                  gains=pd.DataFrame(gains, columns=["method_id", "size", "gain", "ci_low", "ci_high", "ci_method",
                                                     "n_units"]),
-                 reach=reach_df.reset_index(drop=True), fraction=fraction, full_varies=varies and axis == "subjects")
+                 reach=reach_df.reset_index(drop=True), fraction=fraction, full_varies=varies and axis == "subjects",
+                 added=_added(g) if axis == "calibration" else {})

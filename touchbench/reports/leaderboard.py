@@ -58,7 +58,7 @@ from ..core.errors import TouchbenchError
 from ..results.ledger import Looks
 from ..results.store import NOT_RECORDED
 from .breakdown import Breakdown
-from .curve_table import reference_note
+from .curve_table import capped_notes, reference_note
 from .curves import DEFAULT_FRACTION, Curve, curve_of, reference_rows
 from .labels import method_label
 from .paired import _latest
@@ -504,7 +504,8 @@ def build_leaderboards(rs: ResultSet, *, alpha: float = 0.05, pool_machines: boo
         out.append(_build_one(rs, key, ok, alpha, pool_machines, machine))
         preds = rs.predictions[rs.predictions["table_key"] == key] if rs.predictions is not None else None
         out[-1].curve = curve_of(ok[ok["table_key"] == key], preds, fraction)
-        out[-1].notes[:0] = [reference_note(out[-1].curve)] if out[-1].curve is not None else []
+        if out[-1].curve is not None:
+            out[-1].notes[:0] = [reference_note(out[-1].curve), *capped_notes(out[-1].curve)]
     out.sort(key=lambda lb: bool(lb.adaptation))  # the plain tables first, each adapted one after them
     seen: dict[tuple[str, str, str], list[str]] = {}
     for lb in out:  # one dataset name, different data: "data 2", "data 3"... in the order met

@@ -253,6 +253,8 @@ def _result_dirs(paths: Iterable[str | Path]) -> list[Path]:
 def _read_scores(d: Path) -> tuple[pd.DataFrame, ResultStore | None]:
     """The scores of results directory ``d`` and, when it holds fragments alone, the store that merged them."""
     store = None
+    if _fragments_only(d):  # fragments that are not what their tasks wrote are refused, naming them
+        ResultStore(d).verify_fragments()
     try:
         if _fragments_only(d):  # merge on read (touchbench.results.store)
             store = ResultStore(d)
@@ -359,6 +361,9 @@ def _changed(d: Path, manifest: dict[str, Any], store: ResultStore | None) -> li
     not those its run wrote (:func:`touchbench.results.checksums.changed_since_run`); none for a
     run read from its task fragments (``store``), whose merged files are not read."""
     changed = [] if store is not None else changed_since_run(d, manifest)
+    if store is None and not (d / "manifest.json").is_file():
+        changed.append(f"{d}: manifest.json is missing: these results cannot be verified against the files "
+                       "their run wrote")
     for warning in changed:
         log.warning("%s", warning)
     return changed

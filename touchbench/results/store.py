@@ -22,8 +22,10 @@ and the report describes the protocol as it is now.
 Trust nothing on disk: a scores fragment counts as a finished task only when
 it is readable, names the task of its file name, and (for a task that
 succeeded) its predictions fragment is readable with one row per test
-capture; anything else is a damaged task, run again (:meth:`finished` says
-which and why). The manifest records the SHA-256 of each merged file as it
+capture, and its fragments match the checksums written when it finished
+(:mod:`touchbench.results.fragments`); anything else is a damaged task, run
+again (:meth:`finished` says which and why). A merge refuses a task whose
+scores disagree with its predictions. The manifest records the SHA-256 of each merged file as it
 was written (:meth:`merged_checksums`); a merged file that no longer matches
 is rebuilt from the fragments (:meth:`merged_problems`).
 
@@ -50,6 +52,7 @@ from ..core.errors import TouchbenchError
 from ..evaluation.metrics import scorer_values
 from .locking import hold
 from .checksums import changed_files, file_checksums
+from .fragments import FragmentError, check_scores_agree, checksum_path, checksum_problem, write_checksums
 
 
 __all__ = ["PREDICTED", "PROBA_PREFIX", "SCHEMA_VERSION", "TRUE", "OtherResultsError", "ResultStore", "TaskWriter", "atomic_write_bytes",
@@ -65,11 +68,13 @@ PLAN_COLUMNS = (
     "task_id", "protocol", "dataset", "dataset_hash", "target", "scheme", "repetition", "fold", "fold_group",
     "early_frames", "features", "feature_sets", "feature_params", "classifier", "classifier_name",
     "classifier_params", "seed", "n_train", "n_test", "leakage", "selection", "adaptation",
-    "curve", "curve_size", "curve_draw",
+    "curve", "curve_size", "curve_draw", "curve_added", "curve_added_min",
 )
 #: plan columns that results written before touchbench recorded them lack, with the value they read as
-#: (no method of those versions adapted to the test data, and no task was a point of a curve)
-LATER_PLANNED = {"adaptation": "", "curve": "", "curve_size": np.nan, "curve_draw": 0}
+#: (no method of those versions adapted to the test data, and no task was a point of a curve; the
+#: calibration captures really added were not recorded)
+LATER_PLANNED = {"adaptation": "", "curve": "", "curve_size": np.nan, "curve_draw": 0, "curve_added": np.nan,
+                 "curve_added_min": np.nan}
 #: what running a task measures, each with its value before (or without) a measurement
 MEASURED = {
     "status": "ok", "error": "", "accuracy": np.nan, "balanced_accuracy": np.nan, "macro_f1": np.nan,
@@ -89,7 +94,7 @@ SCORE_COLUMNS = [
     "accuracy", "balanced_accuracy", "macro_f1",
     "feature_seconds_per_capture", "feature_fit_seconds", "fit_seconds", "predict_seconds", "latency_ms",
     "latency_cpu_ms", "load_avg", "usable_cpus", "status", "error", "notes", "finished_at", "leakage", "selection",
-    "adaptation", "curve", "curve_size", "curve_draw", "live",
+    "adaptation", "curve", "curve_size", "curve_draw", "curve_added", "curve_added_min", "live",
 ]
 
 
@@ -327,7 +332,13 @@ class ResultStore:
         return out
 
     def _fragment_problem(self, tid: str, path: Path) -> str | tuple[str]:
-        """The reason a task's fragments cannot be trusted, or ``(status,)``."""
+        """The reason a task's fragments cannot be trusted, or ``(status,)``: what is wrong with their
+        content first, then whether they are those its task wrote (:func:`checksum_problem`)."""
+        problem = self._content_problem(tid, path)
+        return problem if isinstance(problem, str) else (checksum_problem(self.fragments, tid) or problem)
+
+    def _content_problem(self, tid: str, path: Path) -> str | tuple[str]:
+        """The reason a task's fragments cannot be read as its results, or ``(status,)``."""
         try:
             row = pq.read_table(path, columns=["task_id", "status", "n_test"]).to_pylist()
         except Exception as e:  # noqa: BLE001 - pyarrow raises several types for a damaged file
@@ -394,6 +405,18 @@ class ResultStore:
             self._written.pop(tid, None)
             self.scores_fragment(tid).unlink(missing_ok=True)
             self.predictions_fragment(tid).unlink(missing_ok=True)
+            checksum_path(self.fragments, tid).unlink(missing_ok=True)
+
+    def verify_fragments(self) -> None:
+        """Refuse (:class:`FragmentError`, naming it) a fragment that does not match the checksum its
+        task wrote, or a task whose scores disagree with its predictions: before reading an
+        interrupted run's fragments as its results."""
+        for tid in self._ids(None, ".scores.parquet"):
+            problem = checksum_problem(self.fragments, tid)
+            if problem:
+                raise FragmentError(f"{self.scores_fragment(tid)}: {problem}: these are not the results its task "
+                                    "wrote; run the protocol again to compute it anew")
+        check_scores_agree(self.read_scores(), self.read_predictions(), self.fragments)
 
     # ----------------------------------------------------------- writing
     def write_task(self, task_id: str, score: dict[str, Any], predictions: pd.DataFrame | None) -> None:
@@ -407,6 +430,7 @@ class ResultStore:
             self.predictions_fragment(task_id).unlink(missing_ok=True)
         scores = pd.DataFrame([score])
         write_results_table(self.scores_fragment(task_id), scores)
+        write_checksums(self.fragments, task_id)
         self._written[task_id] = (scores, kept)
 
     # ----------------------------------------------------------- reading (merge on read)
@@ -456,6 +480,7 @@ class ResultStore:
         done = [t for t in task_ids if t in finished]
         scores = self.read_scores(done)
         preds = self.read_predictions(done)
+        check_scores_agree(scores, preds, self.fragments)
         for df in (scores, preds):
             for k, v in stamp.items():
                 if k in df.columns or df is scores:

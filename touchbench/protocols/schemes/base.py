@@ -82,18 +82,25 @@ class CurvePoint:
     """Where a fold sits on a data curve: ``axis`` ``"subjects"`` (trained on ``size`` of the base
     fold's training subjects, a number, or a fraction when below 1) or ``"calibration"`` (``size``
     labelled captures per class of the test side joined the training data); ``draw`` numbers the
-    random draws of those subjects or captures (0 when there is one)."""
+    random draws of those subjects or captures (0 when there is one). On a calibration curve
+    ``added`` and ``added_min`` are the labelled captures per class that really joined the training
+    data: the mean and the least over the test side's (unit, class) pools (a pool short of ``size``
+    captures gives fewer); NaN where not recorded."""
 
     axis: str
     size: float
     draw: int = 0
+    added: float = field(default=float("nan"), compare=False)
+    added_min: float = field(default=float("nan"), compare=False)
 
 
 def curve_columns(point: CurvePoint | None) -> dict[str, Any]:
-    """The scores columns of a task at ``point`` (``curve`` "" and ``curve_size`` NaN off a curve)."""
+    """The scores columns of a task at ``point`` (``curve`` "" and ``curve_size`` NaN off a curve;
+    ``curve_added`` / ``curve_added_min`` NaN but on a calibration curve)."""
     if point is None:
-        return {"curve": "", "curve_size": np.nan, "curve_draw": 0}
-    return {"curve": point.axis, "curve_size": np.float64(point.size), "curve_draw": int(point.draw)}
+        return {"curve": "", "curve_size": np.nan, "curve_draw": 0, "curve_added": np.nan, "curve_added_min": np.nan}
+    return {"curve": point.axis, "curve_size": np.float64(point.size), "curve_draw": int(point.draw),
+            "curve_added": np.float64(point.added), "curve_added_min": np.float64(point.added_min)}
 
 
 @dataclass(frozen=True)

@@ -18,6 +18,7 @@ measures a model calibrated to its user, not accuracy on new people.
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -27,9 +28,23 @@ from .base import (CURVE_SCHEMES, SPLITTERS, CurveParams, CurvePoint, Fold, Spli
                    require_columns, sorted_values, str_col)
 
 
+#: the most labelled captures per class a point may ask of a test unit (a protocol asking more is a typo)
+MAX_PER_CLASS = 10_000
+
+
 class _CalibrationParams(CurveParams):
     per_class: list[int] = Field(min_length=1)
     unit: str = Field(default="subject", min_length=1)
+
+    @field_validator("per_class", mode="before")
+    @classmethod
+    def _whole(cls, v: Any) -> Any:
+        for x in v if isinstance(v, list) else ():
+            if isinstance(x, bool) or not isinstance(x, int):
+                raise ValueError(f"every number of captures per class must be a whole number such as 2 (got {x!r})")
+            if x > MAX_PER_CLASS:
+                raise ValueError(f"every number of captures per class must be at most {MAX_PER_CLASS} (got {x})")
+        return v
 
     @field_validator("per_class")
     @classmethod
@@ -78,7 +93,7 @@ class Calibration(WrappingSplitter):
         p = self.params
         require_columns(meta, self.name, p.unit)
         y, units = self._y(meta), str_col(meta, p.unit)
-        out = []
+        out, takes = [], []
         for f in base_folds:
             missing = int(sum(u is None for u in units[f.test].tolist()))
             if missing:
@@ -86,17 +101,43 @@ class Calibration(WrappingSplitter):
                                  f"{p.unit!r} value to draw calibration captures per")
             for d in range(p.draws):
                 pools, short = self._pools(f, y, units, d)
+                takes += [len(pool) for pool in pools] if d == 0 else []
                 test = np.setdiff1d(f.test, np.concatenate([f.test[:0], *pools]))
                 for k in p.per_class:
                     calib = np.concatenate([f.train[:0], *(pool[:k] for pool in pools)])
+                    added = np.minimum(k, [len(pool) for pool in pools], dtype=np.float64)
                     note = (f"calibration: {k} labelled capture(s) per class of each test {p.unit} in training",) if k else ()
+                    point = CurvePoint("calibration", float(k), d, float(added.mean()) if len(added) else np.nan,
+                                       float(added.min()) if len(added) else np.nan)
                     out.append(replace(f, name=f"k{k}#{d}/{f.name}", train=np.union1d(f.train, calib), test=test,
-                                       curve=CurvePoint("calibration", float(k), d), notes=f.notes + note + short))
+                                       curve=point, notes=f.notes + note + short))
+        self.notes_ += self._capped(np.asarray(takes, dtype=np.int64))
         self.notes_.append(f"calibration: k = {', '.join(map(str, p.per_class))} labelled captures per class of each "
                            f"test {p.unit} join the training data ({p.draws} random draws); every k of a fold and draw "
                            f"scores the same captures (the test captures less the k = {p.per_class[-1]} pool); with "
                            "k > 0 training holds captures of the test subject: a calibrated model, not a new user")
         return out
+
+    def _capped(self, takes: np.ndarray) -> list[str]:
+        """Refuse a point no (unit, class) pool of any fold can give (``takes``: each pool's size), and
+        a note per point some pools give fewer captures than asked (its mean and least)."""
+        p, most = self.params, int(takes.max()) if takes.size else 0
+        over = [k for k in p.per_class if k > most]
+        if over:
+            raise SplitError(
+                f"scheme 'calibration': per_class: k = {', '.join(map(str, over))} cannot be given by any test "
+                f"{p.unit}: no {p.unit}/class pair of the test captures holds more than {most + 1 if takes.size else 0} "
+                f"capture(s), and one of each is always scored, so at most {most} per class can join training "
+                f"(unit: {p.unit}); lower per_class or choose a unit with more captures per class")
+        notes = []
+        for k in p.per_class[1:]:
+            added = np.minimum(k, takes)
+            if (added < k).any():
+                notes.append(f"calibration: k = {k} is capped: {int((added < k).sum())} of {takes.size} test "
+                             f"{p.unit}/class pair(s) hold no more than {k} captures, so {added.mean():.3g} labelled "
+                             f"captures per class join training on average (at least {int(added.min())}); the tables "
+                             "label the point by the captures it added")
+        return notes
 
     def _pools(self, fold: Fold, y: np.ndarray, units: np.ndarray, draw: int) -> tuple[list[np.ndarray], tuple[str, ...]]:
         """The calibration pool of each (unit, class) of ``fold``'s test captures in ``draw``, each in
