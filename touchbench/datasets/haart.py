@@ -266,17 +266,23 @@ def find_placeholders(raw: Path, recs: list[Recording], digests: dict[tuple, str
     return sorted(out, key=lambda d: d["file"])
 
 
+def read_checksums(sums: Path) -> dict[str, str]:
+    """The SHA-256 file ``sums`` (``sha256  ./name`` lines) as name -> digest, names without ``./``."""
+    expected = {}
+    for line in sums.read_text().splitlines():
+        parts = line.split()
+        if len(parts) == 2:
+            expected[parts[1].removeprefix("./")] = parts[0]
+    return expected
+
+
 def verify_checksums(sums: Path, files: list[tuple[str, Path, str]]) -> None:
     """Check each ``(name, path, sha256)`` against the SHA-256 file ``sums`` (``sha256  ./name`` lines,
     names relative to the folder of recordings, without ``.gz``): a mismatch is refused naming the
     file; a name it does not list, or no ``sums`` file, is not checked."""
     if not sums.is_file():
         return
-    expected = {}
-    for line in sums.read_text().splitlines():
-        parts = line.split()
-        if len(parts) == 2:
-            expected[parts[1].removeprefix("./")] = parts[0]
+    expected = read_checksums(sums)
     for name, path, digest in files:
         if name in expected and expected[name] != digest:
             raise DataError("content does not match SHA256SUMS (corrupted copy?)", path)
