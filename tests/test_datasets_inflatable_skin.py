@@ -10,8 +10,10 @@ import json
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
 from touchbench.catalog import load_dataset
+from touchbench.cli.main import cli
 from touchbench.core.errors import DataError
 from touchbench.datasets.inflatable_skin import load_inflatable_skin
 from touchbench.streams.timeline import recorded_streams
@@ -71,6 +73,19 @@ def test_each_run_of_one_label_is_a_capture_with_its_recording_and_first_frame(s
     assert ds.captures[1][0, 1, 2] == 10.5 and ds.captures[1].dtype == np.float32
     assert "ASSUMPTION" in ds.provenance["frame rate"] and "leave one session out" in ds.provenance["subjects"]
     assert "mdethmers/Social-Touch-Research, commit 0ea7cf5" in ds.provenance["source"]
+
+
+def test_data_info_says_the_frame_rate_is_assumed_and_what_the_folder_holds(skin, tmp_path):
+    r = CliRunner().invoke(cli, ["data", "info", "inflatable-skin", "--data-dir", str(skin), "--cache-dir",
+                                 str(tmp_path / "c")])
+    assert r.exit_code == 0, r.output
+    assert "10 Hz is an ASSUMPTION: the files carry no frame times" in r.output
+    assert "2025-01-01-1: 2 recordings: Unknown_20250101100000, hug_20250101101500" in r.output
+    # frames per label: idle 3 + 1, Tap 3, hug 2; segments: 4 in the first recording, 2 in the other
+    assert "  idle: 4\n  Tap: 3\n  hug: 2" in r.output
+    assert "segments      6 (runs of one label; 2..4 per recording)" in r.output
+    assert "Unknown_20250101100000: 6 frames, 4 segments" in r.output
+    assert "SHA256SUMS: all 2 recordings it lists are here and match; none absent" in r.output
 
 
 def test_sessions_split_by_day_and_by_more_than_an_hour_between_recordings(tmp_path):
