@@ -1,6 +1,6 @@
 """Shared fixtures. Real-data tests use ``real_haart_dir`` and
-``real_socialtouch_dir`` (``real_icmi15_study2``): they fail (not skip) when CI=true and
-../shared/data/haart (or ../shared/data/socialtouch, icmi15-study2) is missing. Plugin tests use
+``real_socialtouch_dir`` (``real_icmi15_study2``, ``real_inflatable_skin_dir``): they fail (not skip) when
+CI=true and ../shared/data/haart (or ../shared/data/socialtouch, icmi15-study2, inflatable-skin) is missing. Plugin tests use
 ``example_plugin``: it fails (not skips) when CI=true and the example plugin
 (examples/touchbench-plugin-example, installed by ``make setup``) is not
 installed."""
@@ -32,6 +32,13 @@ def _icmi15_study2_dir():
     d = data_dir() / "icmi15-study2"
     if not (d / "raw").is_dir():
         _missing(f"real icmi15-study2 data not found at {d} (set TOUCHBENCH_DATA_DIR)")
+    return d
+
+
+def _inflatable_skin_dir():
+    d = data_dir() / "inflatable-skin"
+    if not (d / "raw").is_dir():
+        _missing(f"real inflatable-skin data not found at {d} (set TOUCHBENCH_DATA_DIR)")
     return d
 
 
@@ -96,6 +103,12 @@ def real_icmi15_study2(tb_cache):
 
     _icmi15_study2_dir()
     return load_dataset("icmi15-study2", cache_dir=tb_cache)
+
+
+@pytest.fixture(scope="session")
+def real_inflatable_skin_dir():
+    """The inflatable robot skin's recordings (fails under CI=true when the data is missing)."""
+    return _inflatable_skin_dir()
 
 
 @pytest.fixture(scope="session")

@@ -187,7 +187,8 @@ def test_generic_reader_bad_input(tmp_path):
     assert e.value.line == 7
     df = _long()
     df.to_csv(p, index=False)
-    with pytest.raises(DataError, match="cannot tell the 16 cell columns"):
+    with pytest.raises(DataError, match=r"the grid 4x4 \(--grid\) has 16 cells, but the table has 15 cell columns "
+                                        r"\(px0..px14\)"):
         read_table_dataset(p, (4, 4), 30.0, value_range=(0, 255))
     df.loc[3, "px2"] = np.nan
     df.to_csv(p, index=False)

@@ -158,6 +158,38 @@ def test_cell_name_patterns(tmp_path):
         FORMATS.get("table").read(tmp_path / "px.csv", grid=GRID, cells="pixel{n}", frame_rate=1.0)
 
 
+def test_a_grid_that_does_not_fit_the_cell_columns_is_refused_with_the_layout_found(tmp_path):
+    # cells named by row and column: r1c1..r2c3 lay out 2 rows x 3 columns (GRID), found without --cells
+    named = _wide().rename(columns={f"ch{i}": f"r{i // 3 + 1}c{i % 3 + 1}" for i in range(6)})
+    named.to_csv(tmp_path / "rc.csv", index=False)
+    r = convert(tmp_path / "rc.csv", tmp_path / "rc.parquet", "--format", "table", "--value-range", "0..4095",
+                *COLUMNS)
+    assert r.exit_code == 0, r.output
+    ds = TouchDataset.from_parquet(tmp_path / "rc.parquet")
+    assert ds.sensor.grid == GRID
+    for k, v in _expected().items():
+        np.testing.assert_array_equal(_by_id(ds)[k], v)
+    for cells in ((), ("--cells", "r{row}c{col}")):
+        r = convert(tmp_path / "rc.csv", tmp_path / "t.parquet", "--format", "table", "--grid", "3x2", *cells, *COLUMNS)
+        assert r.exit_code == 3 and "rc.csv:1: the grid 3x2 (--grid) looks transposed: the table's cells are laid out " \
+            "as 2 rows x 3 columns (2x3)" in r.output, r.output
+    # another cell count: 2 x 4 = 8 cells against the 6 columns, both counts and the grid said
+    r = convert(tmp_path / "rc.csv", tmp_path / "t.parquet", "--format", "table", "--grid", "2x4", *COLUMNS)
+    assert r.exit_code == 3 and "the grid 2x4 (--grid) has 8 cells, but the table has 6 cell columns (r1c1..r2c3, " \
+        "laid out as 2 rows x 3 columns)" in r.output, r.output
+    # one index per cell: a count that differs is said the same way (a transposed grid cannot be seen there)
+    _wide().to_csv(tmp_path / "ch.csv", index=False)
+    r = convert(tmp_path / "ch.csv", tmp_path / "t.parquet", "--format", "table", "--grid", "3x3", *COLUMNS)
+    assert r.exit_code == 3 and "the grid 3x3 (--grid) has 9 cells, but the table has 6 cell columns (ch0..ch5)" \
+        in r.output, r.output
+    # a true long table's row and col columns show the layout too
+    _long(_wide()).to_csv(tmp_path / "cells.csv", index=False)
+    r = convert(tmp_path / "cells.csv", tmp_path / "t.parquet", "--format", "table", "--grid", "3x2", *COLUMNS)
+    assert r.exit_code == 3 and "the grid 3x2 (--grid) looks transposed: the table's cells are laid out as 2 rows x " \
+        "3 columns (2x3)" in r.output, r.output
+    assert not (tmp_path / "t.parquet").exists()
+
+
 def test_value_ranges_given_or_inferred():
     # worked out from the rule: whole numbers from 0 -> 2^k - 1 for the smallest ADC width that holds them
     assert infer_value_range(0, 255, True)[0] == (0.0, 255.0)
@@ -215,7 +247,8 @@ def test_column_and_unit_errors(tmp_path):
         table.read(tmp_path / "w.csv", grid=GRID, capture_columns=("take",), subject_column="person")
     with pytest.raises(DataError, match="no subject column"):
         table.read(tmp_path / "w.csv", grid=GRID, capture_columns=("capture",), time_unit="s")
-    with pytest.raises(DataError, match="6 cell columns for a 2 x 2 grid"):
+    with pytest.raises(DataError, match=r"the grid 2x2 \(--grid\) has 4 cells, but the table has 6 cell columns "
+                                        r"\(ch0..ch5\)"):
         table.read(tmp_path / "w.csv", grid=(2, 2), frame_rate=50.0, cells="ch{i}", capture_columns=("capture",),
                    subject_column="person", time_unit="s")
     r = convert(tmp_path / "w.csv", tmp_path / "o.parquet", "--format", "table", "--grid", "2-3")

@@ -11,9 +11,10 @@ Two layouts, told apart by the columns (``layout``: ``auto``, ``wide`` or
     smallest index says), or ``r{row}c{col}`` (row and column indices,
     each counting from 0 or 1; the grid is then read from the names). By
     default the one group of columns named by a common prefix and a
-    number (``cell1``.., ``ch1``.., ``pixel0``..) is taken, or the one
-    group named ``<prefix><row><sep><col>``-like by a ``{row}``/``{col}``
-    pattern the user gives.
+    number (``cell1``.., ``ch1``.., ``pixel0``..) or by a prefix, a row
+    number, a separator and a column number (``r0c0``.., ``cell_1_1``..:
+    the grid is read from the names) whose size is the grid's cell count
+    is taken.
 ``long`` (one row per cell, a true long table)
     the same capture, subject, gesture, frame and time columns, a value
     column (``value_column``, default ``value``) and the cell's position:
@@ -48,7 +49,10 @@ key found in two files is refused.
 What the file cannot say, the user gives or touchbench works out, saying so:
 
 - the grid (``grid``, ``HxW``): needed unless the cell names or the row and
-  column indices give it;
+  column indices give it; a grid given whose cell count is not the table's
+  is refused with both counts, and one that is the transpose of the layout
+  the names or indices show is refused as transposed (one index per cell
+  cannot show a layout);
 - the frame rate (``frame_rate``): given, or estimated from the time
   column as 1 / the median step between consecutive frames over all
   captures (robust to dropped frames), with a warning that shows the
@@ -83,12 +87,13 @@ from .formats import (
     FormatOption, check_frame_rate, check_value_range, parse_frame_rate, parse_grid, parse_value_range, register_format,
 )
 from .model import TIME_COLUMN, SensorSpec, TouchDataset, time_step_summary
-from .table_long import agree_grid, capture_key, from_zero_or_one, long_to_frames
+from .table_cells import cell_columns, numbered_groups, pattern_regex
+from .table_long import agree_grid, capture_key, count_mismatch, long_to_frames
 from .tables import find_column, numeric, read_table
 
 log = logging.getLogger("touchbench.datasets")
 
-__all__ = ["TableLayout", "cell_columns", "read_table_dataset", "parse_value_range"]
+__all__ = ["TableLayout", "read_table_dataset", "parse_value_range"]
 
 TIME_NAMES = ("time_ms", "timestamp_ms", "time", "timestamp", "time_s", "t")
 FRAME_NAMES = ("frame", "frame_id", "frameid", "frame_index", "sequence")
@@ -118,70 +123,7 @@ class TableLayout:
         if self.time_unit is not None and self.time_unit not in TIME_UNITS:
             raise TouchbenchError(f"time unit must be one of {', '.join(TIME_UNITS)}, got {self.time_unit!r}")
         if self.cells is not None and "{" in self.cells:
-            _pattern_regex(self.cells)  # a bad pattern is refused before any file is read
-
-
-# ---------------------------------------------------------------- cell columns
-def _pattern_regex(pattern: str) -> tuple[re.Pattern, tuple[str, ...]]:
-    fields = tuple(re.findall(r"\{(i|row|col)\}", pattern))
-    if sorted(fields) not in (["i"], ["col", "row"]):
-        raise TouchbenchError(f"cell pattern {pattern!r}: use {{i}} (one index) or {{row}} and {{col}}, "
-                              "such as pixel{i} or r{row}c{col}")
-    parts = re.split(r"\{(?:i|row|col)\}", pattern)
-    rx = "".join(re.escape(p) + (r"(\d+)" if k < len(fields) else "") for k, p in enumerate(parts))
-    return re.compile(rx), fields
-
-
-def _numbered_groups(df: pd.DataFrame) -> dict[str, list[tuple[int, str]]]:
-    """Columns named by a common prefix and a number: prefix -> ``[(number, column), ...]``."""
-    groups: dict[str, list[tuple[int, str]]] = {}
-    for c in df.columns:
-        m = re.fullmatch(r"(.*?)(\d+)", c)
-        if m:
-            groups.setdefault(m.group(1), []).append((int(m.group(2)), c))
-    return groups
-
-
-def cell_columns(df: pd.DataFrame, n_cells: int | None, path: Path,
-                 pattern: str | None = None) -> tuple[list[str], tuple[int, int] | None]:
-    """The cell columns in row-major order, and the grid their names give (``None`` for one index).
-
-    Without ``pattern``: the one group of columns named by a common prefix and a number whose size
-    is ``n_cells`` (or the only such group when the grid is not known)."""
-    if pattern is None:
-        groups = _numbered_groups(df)
-        fits = [sorted(v) for v in groups.values() if len(v) > 1 and (n_cells is None or len(v) == n_cells)]
-        if len(fits) != 1:
-            want = f"the {n_cells} cell columns" if n_cells else "the cell columns"
-            raise DataError(
-                f"cannot tell {want} apart (name them with a pattern such as --cells 'pixel{{i}}'); numbered "
-                f"column groups: { {k: len(v) for k, v in groups.items()} }", path, 1)
-        idx = from_zero_or_one(np.array([i for i, _ in fits[0]]), "the cell columns", path)
-        if not np.array_equal(idx, np.arange(len(idx))):
-            raise DataError(f"cell columns {fits[0][0][1]}..{fits[0][-1][1]} skip a number", path, 1)
-        return [c for _, c in fits[0]], None
-    rx, fields = _pattern_regex(pattern)
-    found = [(tuple(int(g) for g in m.groups()), c) for c in df.columns if (m := rx.fullmatch(c))]
-    if not found:
-        raise DataError(f"no column matches the cell pattern {pattern!r} (columns: {list(df.columns)[:8]}...)", path, 1)
-    if fields == ("i",):
-        idx = from_zero_or_one(np.array([k[0] for k, _ in found]), "the cell columns", path)
-        order = np.argsort(idx, kind="stable")
-        if not np.array_equal(idx[order], np.arange(len(found))):
-            raise DataError(f"the columns matching {pattern!r} skip a number or give one twice", path, 1)
-        return [found[i][1] for i in order], None
-    pos = np.array([k for k, _ in found])
-    if fields == ("col", "row"):
-        pos = pos[:, ::-1]
-    r = from_zero_or_one(pos[:, 0], "the rows of the cell columns", path)
-    c = from_zero_or_one(pos[:, 1], "the columns of the cell columns", path)
-    shape = (int(r.max()) + 1, int(c.max()) + 1)
-    flat = r * shape[1] + c
-    if len(set(flat.tolist())) != len(found) or len(found) != shape[0] * shape[1]:
-        raise DataError(f"the columns matching {pattern!r} do not fill a {shape[0]} x {shape[1]} grid "
-                        f"({len(found)} columns)", path, 1)
-    order = np.argsort(flat)
-    return [found[i][1] for i in order], shape
+            pattern_regex(self.cells)  # a bad pattern is refused before any file is read
 
 
 # ---------------------------------------------------------------- one file
@@ -235,8 +177,9 @@ def _optional_column(df: pd.DataFrame, given: str | None, names: Sequence[str], 
     return next((lower[n] for n in names if n in lower), None)
 
 
-def _read_file(path: Path, lay: TableLayout, grid: tuple[int, int] | None, value_range, allow_empty: bool):
-    """One file's frames and the grid its columns give (or ``grid``)."""
+def _read_file(path: Path, lay: TableLayout, grid: tuple[int, int] | None, value_range, allow_empty: bool,
+               grid_from: str = "--grid"):
+    """One file's frames and the grid its columns give (or ``grid``, from ``grid_from``)."""
     df = read_table(path, allow_empty=allow_empty, text_columns=(*lay.capture, lay.subject, lay.gesture))
     cap = [find_column(df, (c,), path, "capture") for c in lay.capture]
     subj = find_column(df, (lay.subject,), path, "subject")
@@ -247,25 +190,26 @@ def _read_file(path: Path, lay: TableLayout, grid: tuple[int, int] | None, value
     value = _optional_column(df, lay.value, ("value",), path, "value")
     layout = lay.layout
     if layout == "auto":
-        numbered = any(len(g) > 1 for g in _numbered_groups(df).values())
+        numbered = any(len(g) > 1 for g in numbered_groups(df).values())
         layout = "long" if value is not None and lay.cells is None and not numbered else "wide"
     if layout == "long" and value is None:
         raise DataError("a long table needs a value column (--value-column; found none named 'value')", path, 1)
     lo, hi = value_range if value_range is not None else (None, None)
     taken = {*cap, frame, time}
     if layout == "wide":
-        n = grid[0] * grid[1] if grid is not None else None
-        cells, named_grid = cell_columns(df, n, path, lay.cells)
-        grid = agree_grid(grid, named_grid, path)
+        cells, named_grid = cell_columns(df, grid, path, lay.cells, grid_from)
+        grid = agree_grid(grid, named_grid, path, grid_from)
         if grid is None:
             raise DataError(f"{len(cells)} cell columns: give the grid (--grid HxW), their names do not say it", path, 1)
         if len(cells) != grid[0] * grid[1]:
-            raise DataError(f"{len(cells)} cell columns for a {grid[0]} x {grid[1]} grid ({grid[0] * grid[1]} cells)", path, 1)
+            raise DataError(count_mismatch(grid, len(cells), f"cell columns ({cells[0]}..{cells[-1]})", grid_from),
+                            path, 1)
         values = numeric(df, cells, path, lo=lo, hi=hi)
         lines = np.arange(len(df)) + 2
         taken |= set(cells)
     else:
-        values, lines, df, grid = long_to_frames(df, cap, frame, time, value, lay.cells, grid, path, lo, hi)
+        values, lines, df, grid = long_to_frames(df, cap, frame, time, value, lay.cells, grid, path, lo, hi,
+                                                  grid_from)
         taken |= {value, *(lay.cells.split(",") if lay.cells else ()), "row", "col", "cell"}
     meta_cols = [c for c in df.columns if c not in taken or c in (subj, gest)]
     if frame is not None:
@@ -355,12 +299,15 @@ def _files(path: Path) -> list[Path]:
 
 
 def _read_files(files: list[Path], columns: TableLayout, grid: tuple[int, int] | None,
-                value_range: tuple[float, float] | None) -> tuple[list, tuple[int, int] | None]:
-    """Each file's frames and frame and time columns, and the grid they agree on."""
+                value_range: tuple[float, float] | None, grid_from: str = "--grid") -> tuple[list, tuple[int, int] | None]:
+    """Each file's frames and frame and time columns, and the grid they agree on (``--grid``, or the
+    first file's whose cells give one)."""
     per_file, found_grid = [], grid
     for f in files:
-        fr, g, frame_col, time_col = _read_file(f, columns, found_grid, value_range, allow_empty=len(files) > 1)
-        found_grid = agree_grid(found_grid, g, f)
+        fr, g, frame_col, time_col = _read_file(f, columns, found_grid, value_range, len(files) > 1, grid_from)
+        if found_grid is None and g is not None:
+            grid_from = f"{f.name}'s cells"
+        found_grid = agree_grid(found_grid, g, f, grid_from)
         per_file.append((f, fr, frame_col, time_col))
     return per_file, found_grid
 
@@ -437,12 +384,14 @@ def read_table_dataset(
     columns: TableLayout = TableLayout(),
     value_range: tuple[float, float] | None = None,
     sensor_name: str = "custom",
+    grid_from: str = "--grid",
 ) -> TouchDataset:
-    """Read a table file or a folder of them (module docstring) into a dataset."""
+    """Read a table file or a folder of them (module docstring) into a dataset; ``grid_from`` says
+    where ``grid`` came from, in messages."""
     path = Path(path)
     frame_rate = None if frame_rate is None else check_frame_rate(frame_rate)
     value_range = None if value_range is None else check_value_range(*value_range)
-    per_file, found_grid = _read_files(_files(path), columns, grid, value_range)
+    per_file, found_grid = _read_files(_files(path), columns, grid, value_range, grid_from)
     caps, meta_rows, times, whole = _gather_captures(path, per_file, columns.frame_labels)
     if not caps:
         raise DataError("no data rows", path)
@@ -496,14 +445,15 @@ def read_table_format(
                             ("time", time_column), ("time_unit", time_unit), ("cells", cells),
                             ("value", value_column), ("layout", layout),
                             ("frame_labels", frame_labels is not None or None)) if v is not None}
-    sensor_name = "custom"
+    sensor_name, grid_from = "custom", "--grid"
     if like is not None:
+        grid_from = "--grid" if grid else f"the model's sensor {like.name!r}"
         grid = grid or like.grid
         value_range = value_range or like.value_range
         sensor_name = like.name
     try:
         return read_table_dataset(path, grid, frame_rate, name=name, columns=TableLayout(**kw),
-                                  value_range=value_range, sensor_name=sensor_name)
+                                  value_range=value_range, sensor_name=sensor_name, grid_from=grid_from)
     except TouchbenchError as e:
         if like is not None and frame_rate is None and "frame rate" in str(e):
             raise TouchbenchError(f"{e} (the model was trained at {like.frame_rate:g})") from None

@@ -12,7 +12,7 @@ import pandas as pd
 from ..core.errors import DataError, TouchbenchError
 from .tables import find_column, numeric
 
-__all__ = ["agree_grid", "capture_key", "from_zero_or_one", "long_to_frames"]
+__all__ = ["agree_grid", "capture_key", "count_mismatch", "from_zero_or_one", "long_to_frames"]
 
 
 def from_zero_or_one(idx: np.ndarray, what: str, path: Path) -> np.ndarray:
@@ -22,15 +22,32 @@ def from_zero_or_one(idx: np.ndarray, what: str, path: Path) -> np.ndarray:
     return idx - lo
 
 
-def agree_grid(given: tuple[int, int] | None, found: tuple[int, int] | None, path: Path) -> tuple[int, int] | None:
+def count_mismatch(grid: tuple[int, int], n_cells: int, what: str, grid_from: str = "--grid") -> str:
+    """The message for a grid whose cell count is not the table's: both counts and the grid."""
+    h, w = grid
+    return f"the grid {h}x{w} ({grid_from}) has {h * w} cells, but the table has {n_cells} {what}"
+
+
+def agree_grid(given: tuple[int, int] | None, found: tuple[int, int] | None, path: Path,
+               grid_from: str = "--grid") -> tuple[int, int] | None:
+    """The grid: ``given`` (from ``grid_from``) or ``found`` (the layout the cells' names or positions
+    show); both and different is refused: a transposed grid is said to be one, another cell count
+    says both counts."""
     if given is not None and found is not None and tuple(given) != tuple(found):
-        raise DataError(f"the cells give a {found[0]} x {found[1]} grid, not the {given[0]} x {given[1]} given", path, 1)
+        (gh, gw), (fh, fw) = given, found
+        laid = f"laid out as {fh} rows x {fw} columns ({fh}x{fw})"
+        if (gh, gw) == (fw, fh):
+            raise DataError(f"the grid {gh}x{gw} ({grid_from}) looks transposed: the table's cells are {laid}", path, 1)
+        if gh * gw != fh * fw:
+            raise DataError(count_mismatch(given, fh * fw, f"cells, {laid}", grid_from), path, 1)
+        raise DataError(f"the table's cells are {laid}, not the grid {gh}x{gw} ({grid_from})", path, 1)
     return tuple(found or given) if (found or given) else None
 
 
-def long_to_frames(df, cap, frame, time, value, cells, grid, path, lo, hi):
+def long_to_frames(df, cap, frame, time, value, cells, grid, path, lo, hi, grid_from="--grid"):
     """A long table's rows gathered into frames: values ``(frames, H*W)``, each frame's first line,
-    the frames' rows of ``df`` (for the other columns), the grid."""
+    the frames' rows of ``df`` (for the other columns), the grid (``grid``, from ``grid_from``, must be
+    the one the row and column positions give)."""
     names = cells.split(",") if cells else None
     if names is None:
         names = ["row", "col"] if {"row", "col"} <= {c.lower() for c in df.columns} else ["cell"]
@@ -39,7 +56,7 @@ def long_to_frames(df, cap, frame, time, value, cells, grid, path, lo, hi):
     if len(pos_cols) == 2:
         r = from_zero_or_one(pos[:, 0], f"the values of {pos_cols[0]!r}", path)
         c = from_zero_or_one(pos[:, 1], f"the values of {pos_cols[1]!r}", path)
-        grid = agree_grid(grid, (int(r.max()) + 1, int(c.max()) + 1), path)
+        grid = agree_grid(grid, (int(r.max()) + 1, int(c.max()) + 1), path, grid_from)
         k = r * grid[1] + c
     elif len(pos_cols) == 1:
         if grid is None:

@@ -62,8 +62,9 @@ from ..core.errors import DataError, TouchbenchError
 from ..core.memory import memory_limit
 from ..core.threads import single_thread
 from ..datasets.formats import FORMATS
-from ..datasets.generic import cell_columns
 from ..datasets.model import TouchDataset
+from ..datasets.table_cells import cell_columns
+from ..datasets.table_long import agree_grid
 from ..datasets.tables import numeric, read_table
 from ..streams.recognizer import Decision, WindowRecognizer, decide_all
 from ..streams.rules import DecisionRule, make_rule
@@ -288,7 +289,8 @@ def load_replay(path: str | Path, model: TrainedModel, capture: str | None = Non
     if df.shape[1] == n:
         cols = list(df.columns)
     else:
-        cols, _ = cell_columns(df, n, path)  # the table format's own rule for cell columns
+        cols, laid = cell_columns(df, model.sensor.grid, path, grid_from=f"the model's sensor {model.sensor.name!r}")
+        agree_grid(model.sensor.grid, laid, path, f"the model's sensor {model.sensor.name!r}")  # a transposed table
     lo, hi = model.sensor.value_range
     values = numeric(df, cols, path, lo=lo, hi=hi, integer=dtype.kind in "iu")
     return values.reshape(len(df), h, w).astype(dtype), model.sensor.frame_rate, f"{path.name}: {len(df)} frames"
