@@ -33,7 +33,7 @@ from ..core.introspect import accepts, sensor_problem
 from ..features.base import feature_set_refusal, learns_from_data, make_feature_set, stack_features
 from .base import make_classifier
 
-__all__ = ["FittedEstimator", "FittedMethod", "capture_labels", "feature_specs", "fit_on_codes", "fit_pipeline",
+__all__ = ["FittedEstimator", "FittedMethod", "capture_labels", "feature_specs", "fit_features", "fit_on_codes", "fit_pipeline",
            "label_codes", "labels_are_argmax", "pipeline_refusal", "proba_over"]
 
 
@@ -109,6 +109,8 @@ def fit_on_codes(name: str, params: dict[str, Any], seed: int | None, X: Any, y:
         return FittedEstimator(classes, None)
     est = make_classifier(name, random_state=seed, **build, **params)
     fit_kw: dict[str, Any] = {"groups": np.asarray(groups)} if groups is not None and accepts(est.fit, "groups") else {}
+    if accepts(est.fit, "class_names"):  # an estimator that names a class in its parameters (two-stage's idle)
+        fit_kw["class_names"] = classes
     if test_set is not None:
         if not accepts(est.fit, "test_set"):
             raise TouchbenchError(f"{name!r} cannot stop early on the test data: its fit takes no test_set")
@@ -205,8 +207,18 @@ def fit_pipeline(feature_sets: Any, estimator: str, params: dict[str, Any], seed
     caches what a feature set that learns nothing (``fold_dependent = False``) computes from its
     captures: fitting again on the same captures reads its matrix back instead of computing it.
     """
-    cached = check_memory(os.fspath(memory) if isinstance(memory, os.PathLike) else memory).cache(_fitted_set)
     t0 = time.perf_counter()
+    sets, X = fit_features(feature_sets, captures, y, sensor, memory)
+    t1 = time.perf_counter()
+    fitted = fit_on_codes(estimator, params, seed, X, y, groups, sensor=sensor)
+    return FittedMethod(sets, fitted, t1 - t0, time.perf_counter() - t1)
+
+
+def fit_features(feature_sets: Any, captures: Any, y: Any, sensor: Any = None, memory: Any = None,
+                 ) -> tuple[list[Any], Any]:
+    """The feature sets ``[(name, params)...]`` fitted on ``captures`` and their stacked matrix (the
+    captures themselves without feature sets); ``memory`` as :func:`fit_pipeline`'s."""
+    cached = check_memory(os.fspath(memory) if isinstance(memory, os.PathLike) else memory).cache(_fitted_set)
     sets, blocks = [], []
     for name, set_params in feature_sets:
         if learns_from_data(name):
@@ -215,10 +227,7 @@ def fit_pipeline(feature_sets: Any, estimator: str, params: dict[str, Any], seed
             fs, X_s = cached(name, set_params, sensor, captures, None)
         sets.append(fs)
         blocks.append(X_s)
-    X = np.hstack(blocks) if blocks else list(captures)
-    t1 = time.perf_counter()
-    fitted = fit_on_codes(estimator, params, seed, X, y, groups, sensor=sensor)
-    return FittedMethod(sets, fitted, t1 - t0, time.perf_counter() - t1)
+    return sets, (np.hstack(blocks) if blocks else list(captures))
 
 
 def capture_labels(y: Any, captures: list, name: str) -> np.ndarray:

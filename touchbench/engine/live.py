@@ -2,8 +2,14 @@
 score each replay frame by frame.
 
 The task (a fold of the ``stream`` scheme and a method) fits the method on
-the fold's training captures, or on windows cut from them
-(:func:`touchbench.streams.replay.training_samples`), fits each declared
+the fold's training captures, on windows cut from them
+(:func:`touchbench.streams.replay.training_samples`), or on windows cut from
+the training side's streams (:func:`touchbench.streams.replay.stream_samples`);
+an estimator that takes the idle class (``idle``: the two-stage recogniser)
+gets the scheme's when its entry does not name one. When the fold has inner
+folds (``choose_rule``), the same is done on each inner fold and its
+streams replayed with every rule, and the rule is chosen there
+(:func:`choose_rule`). It fits each declared
 decision rule on the same training captures (the gate's ``level: auto``),
 then replays each test stream through the recogniser ``touchbench stream``
 runs (:func:`touchbench.streams.replay.replay`: the windows due at every hop
@@ -42,41 +48,65 @@ from __future__ import annotations
 import json
 import time
 from collections import Counter
-from typing import Any
+from dataclasses import replace
+from typing import Any, Sequence
 
 import numpy as np
 
+from ..classifiers.base import CLASSIFIERS
 from ..evaluation.stream_scores import score_stream
+from ..methods.base import MethodSpec
 from ..methods.fitting import fit_method
 from ..protocols.schemes.stream import rule_specs
-from ..streams.replay import LiveSpec, training_samples
+from ..streams.replay import LiveSpec, stream_samples, training_samples
 from ..streams.replay import replay as replay_stream
 from ..streams.rules import make_rule
-from ..streams.timeline import decisions_per_frame, label_runs, rest_value, stream_frames
+from ..streams.timeline import Stream, decisions_per_frame, label_runs, rest_value, stream_frames
 
-__all__ = ["UNDECIDED", "graded_probabilities", "live_outcome"]
+__all__ = ["UNDECIDED", "choose_rule", "pick_rule", "fit_live", "fitted_rules", "graded_probabilities", "live_outcome", "with_idle"]
 
 #: the label of the frames before a stream's first decision (scored as idle)
 UNDECIDED = "undecided"
 
 
+def with_idle(spec: MethodSpec, idle: str) -> MethodSpec:
+    """``spec`` with the stream's idle class given to an estimator that takes one (``idle`` among its
+    registered defaults) and was not given one."""
+    defaults = CLASSIFIERS.entry(spec.estimator).tags.get("defaults") or {}
+    if "idle" not in defaults or spec.estimator_params.get("idle") is not None:
+        return spec
+    return replace(spec, estimator_params={**spec.estimator_params, "idle": idle})
+
+
+def fit_live(spec: MethodSpec, seed: int | None, ds: Any, y: np.ndarray, rows: Any, live: LiveSpec,
+             train_streams: Sequence[Stream]) -> Any:
+    """The method fitted on the training ``rows`` as the fold trains it (``live.train_on``)."""
+    groups = ds.meta["subject"].astype(str).to_numpy()
+    if live.train_on == "streams":
+        made = [(*stream_frames(ds.captures, y, s, live.idle, rest_value(ds.sensor)), s.subject) for s in train_streams]
+        X, yy, gg = stream_samples(made, live, ds.sensor.frame_rate)
+    else:
+        X, yy, gg = training_samples([ds.captures[i] for i in rows], y[rows], groups[rows], live,
+                                     ds.sensor.frame_rate)
+    return fit_method(with_idle(spec, live.idle), seed, X, yy, gg, sensor=ds.sensor)
+
+
+def fitted_rules(live: LiveSpec, ds: Any, y: np.ndarray, rows: Any) -> list:
+    """Every declared rule, fitted on the training ``rows``' captures (the gate's level)."""
+    return [make_rule(r).fit([ds.captures[i] for i in rows], y[rows], ds.sensor) for r in rule_specs(live)]
+
+
 def live_outcome(task: Any, ds: Any, y: np.ndarray) -> tuple[dict[str, Any], np.ndarray, str]:
     """Fit, replay and score one stream task: ``(row values, each test capture's label, live JSON)``."""
     fold, live = task.fold, task.fold.live
-    groups = ds.meta["subject"].astype(str).to_numpy()
-    train_caps = [ds.captures[i] for i in fold.train]
-    X, yy, gg = training_samples(train_caps, y[fold.train], groups[fold.train], live, ds.sensor.frame_rate)
     t0 = time.perf_counter()
-    fitted = fit_method(task.method.spec, task.seed, X, yy, gg, sensor=ds.sensor)
+    fitted = fit_live(task.method.spec, task.seed, ds, y, fold.train, live, live.train_streams)
     row: dict[str, Any] = {"fit_seconds": time.perf_counter() - t0, "n_classes_train": int(len(fitted.classes))}
-    rules = [make_rule(r).fit(train_caps, y[fold.train], ds.sensor) for r in rule_specs(live)]
-    classes = [str(c) for c in fitted.classes]
+    rules = fitted_rules(live, ds, y, fold.train)
     streams, first_rule, graded = [], [], []
     for s in live.streams:
-        frames, truth = stream_frames(ds.captures, y, s, live.idle, rest_value(ds.sensor))
-        replays = replay_stream(frames, fitted.window_proba, classes, ds.sensor, live, rules)
-        graded.append(graded_probabilities(replays))
-        per_rule = [_scored(rp, truth, ds.sensor.frame_rate, live) for rp in replays]
+        per_rule, truth, g = _replayed(fitted, rules, ds, y, s, live, timed=True)
+        graded.append(g)
         first_rule.append((s, per_rule[0].pop("_decided")))
         for r in per_rule[1:]:
             r.pop("_decided")
@@ -85,6 +115,9 @@ def live_outcome(task: Any, ds: Any, y: np.ndarray) -> tuple[dict[str, Any], np.
     payload = {"rules": [r.describe() for r in rules], "idle": live.idle, "frame_rate": float(ds.sensor.frame_rate),
                "windows_s": list(live.windows_s), "hop_s": live.hop_s, "train_on": live.train_on,
                "probabilities": True if True in graded else False if False in graded else None, "streams": streams}
+    if live.inner:
+        payload["choice"] = choose_rule(task.method.spec, task.seed, ds, y, live)
+        payload["default_rule"] = payload["rules"][payload["choice"]["rule"]]
     labels = _segment_labels(fold.test, first_rule, {UNDECIDED, live.none_label}, live.idle)
     return row, labels, json.dumps(payload, default=float)
 
@@ -113,6 +146,50 @@ def graded_probabilities(replays: list[Any]) -> bool | None:
 def _fraction(flags: Any) -> float:
     a = np.asarray(flags, dtype=np.float64)
     return float(a.mean()) if a.size else float("nan")
+
+
+def _replayed(fitted: Any, rules: list, ds: Any, y: np.ndarray, s: Stream, live: LiveSpec,
+              timed: bool) -> tuple[list[dict[str, Any]], np.ndarray, bool | None]:
+    """One stream replayed with every rule and scored: one result per rule, the stream's truth, and
+    whether the probabilities were graded (:func:`graded_probabilities`)."""
+    frames, truth = stream_frames(ds.captures, y, s, live.idle, rest_value(ds.sensor))
+    classes = [str(c) for c in fitted.classes]
+    replays = replay_stream(frames, fitted.window_proba, classes, ds.sensor, live, rules, timed=timed)
+    return [_scored(rp, truth, ds.sensor.frame_rate, live) for rp in replays], truth, graded_probabilities(replays)
+
+
+def pick_rule(accuracy: np.ndarray, false_per_min: np.ndarray, most: float) -> int:
+    """The index of the rule with the best ``accuracy`` among those with ``false_per_min`` at most
+    ``most``; when none is, the one with the fewest false activations (ties: the first). A NaN
+    accuracy never wins over a number."""
+    acc = np.where(np.isfinite(accuracy), accuracy, -np.inf)
+    ok = np.flatnonzero(np.asarray(false_per_min) <= most)
+    return int(ok[np.argmax(acc[ok])]) if ok.size else int(np.argmin(false_per_min))
+
+
+def choose_rule(spec: MethodSpec, seed: int | None, ds: Any, y: np.ndarray, live: LiveSpec) -> dict[str, Any]:
+    """The rule chosen on the fold's training side alone: for each inner fold the method is fitted on
+    its training rows and its held-out streams replayed with every rule; per rule, the mean frame
+    accuracy and the false activations per idle minute (pooled) over those streams. The choice is the
+    best mean frame accuracy among the rules at most ``live.max_false_per_min``, else the rule with
+    the fewest false activations (ties: the first declared)."""
+    n = len(live.rules)
+    acc: list[list[float]] = [[] for _ in range(n)]
+    false, idle_min = np.zeros(n), 0.0
+    for inner in live.inner:
+        fitted = fit_live(spec, seed, ds, y, np.asarray(inner.train, dtype=np.int64), live, inner.train_streams)
+        rules = fitted_rules(live, ds, y, np.asarray(inner.train, dtype=np.int64))
+        for s in inner.streams:
+            per_rule, _, _ = _replayed(fitted, rules, ds, y, s, live, timed=False)
+            for k, r in enumerate(per_rule):
+                acc[k].append(r["scores"]["frame_accuracy"])
+                false[k] += r["scores"]["false_activations"]
+            idle_min += per_rule[0]["scores"]["idle_seconds"] / 60.0
+    mean_acc = np.array([float(np.mean(a)) if a else float("nan") for a in acc])
+    fa = false / idle_min if idle_min > 0 else np.zeros(n)
+    k = pick_rule(mean_acc, fa, live.max_false_per_min)
+    return {"rule": k, "inner_folds": len(live.inner), "frame_accuracy": mean_acc.tolist(),
+            "false_per_idle_min": fa.tolist(), "max_false_per_min": live.max_false_per_min}
 
 
 def _scored(rp: Any, truth: np.ndarray, frame_rate: float, live: LiveSpec) -> dict[str, Any]:

@@ -50,6 +50,7 @@ What keeps the table from misleading (:func:`live_table`, its notes):
 from __future__ import annotations
 
 import inspect
+from collections import Counter
 import json
 import math
 from typing import Any
@@ -148,8 +149,9 @@ def live_table(ok: pd.DataFrame) -> tuple[pd.DataFrame | None, list[str]]:
         first = first or payloads
         method = method_label(g.iloc[0])
         rules = payloads[0]["rules"]
-        default = default_rule_index(payloads[0])
-        if default is None:
+        chosen = all("choice" in p for p in payloads)
+        default = None if chosen else default_rule_index(payloads[0])
+        if default is None and not chosen:
             notes.append(f"the default rule ({rule_label(_default_declaration(payloads[0]))}), which touchbench "
                          "stream decides with for a model trained on this evaluation, is not among the rules "
                          "compared")
@@ -163,10 +165,35 @@ def live_table(ok: pd.DataFrame) -> tuple[pd.DataFrame | None, list[str]]:
                          "sources": sorted({s["source"] for p in payloads for s in p["streams"]}),
                          **_one_rule(results)})
         notes += _alike_note(method, rules, alike)
+        if chosen:
+            rows.append(_chosen_row(mid, method, payloads))
+            notes.append(_chosen_note(method, payloads))
     df = pd.DataFrame(rows)
     df = df.sort_values("frame_accuracy", ascending=False, kind="stable", na_position="last").reset_index(drop=True)
     notes += _cpu_notes(df) + duration_notes(first)
     return df, list(dict.fromkeys(notes))
+
+
+#: the rule cell of the row holding, per fold, the rule its inner folds chose
+CHOSEN = "inner choice"
+
+
+def _chosen_row(mid: Any, method: str, payloads: list[dict[str, Any]]) -> dict[str, Any]:
+    """The row of the rule chosen inside each fold on its training side (``choose_rule``): each fold's
+    streams scored with that fold's choice. It is the default: ``touchbench train`` chooses the same way."""
+    results = [s["results"][p["choice"]["rule"]] for p in payloads for s in p["streams"]]
+    return {"method_id": mid, "method": method, "rule": CHOSEN, "default": True, "same_as": [],
+            "probabilities": payloads[0].get("probabilities"),
+            "sources": sorted({s["source"] for p in payloads for s in p["streams"]}), **_one_rule(results)}
+
+
+def _chosen_note(method: str, payloads: list[dict[str, Any]]) -> str:
+    picks = Counter(rule_label(p["rules"][p["choice"]["rule"]]) for p in payloads)
+    c = payloads[0]["choice"]
+    return (f"{method}, {CHOSEN}: each fold's rule chosen on its training subjects alone ({c['inner_folds']} inner "
+            f"folds: the best mean frame accuracy among the rules with at most {c['max_false_per_min']:g} false "
+            f"activations per idle minute), never on its test streams; chosen: "
+            + ", ".join(f"{k} ({v} fold{'s' if v > 1 else ''})" for k, v in picks.most_common()))
 
 
 def _default_declaration(payload: dict[str, Any]) -> dict[str, Any]:

@@ -131,6 +131,7 @@ class WindowRecognizer:
             raise TouchbenchError("give at least one decision rule")
         for r in rules:
             r.start(self.classes, none_label, self.frame_rate, sensor)
+            r.set_hop(self.hop)
         self.rules = rules
         self.dtype = np.dtype(dtype)
         self.grid = sensor.grid

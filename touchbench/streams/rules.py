@@ -21,6 +21,9 @@ that ``gates`` may decide before any classifier runs, from the frames alone.
   (ties: the most recent of the tied labels), smoothing one-hop flickers.
 - ``onset`` (:mod:`touchbench.streams.onset`): the gate, and windows
   aligned to the touch's onset instead of sliding ones.
+- ``touch`` (:mod:`touchbench.streams.hysteresis`): two decisions, a touch
+  begun and ended with hysteresis on ``1 - P(idle)``, and the gesture most
+  probable over the touch so far.
 - ``hmm``: forward filtering over the classes (a hidden Markov model whose
   state stays with probability ``1 - switch`` per hop and moves to any other
   class uniformly; the classifier's probabilities are the emissions, the
@@ -64,6 +67,10 @@ class DecisionRule:
         self.none_label = none_label
         self.frame_rate = frame_rate
         self.sensor = sensor
+
+    def set_hop(self, hop_frames: int) -> None:
+        """The recogniser's hop in frames, given after :meth:`start` (a rule that counts decisions in
+        seconds converts them)."""
 
     def gate(self, frames: np.ndarray) -> str | None:
         """A label decided from ``frames`` (the newest frames, the longest window's) alone, or None."""

@@ -15,6 +15,22 @@ gestures with pauses of rest between them), ``recorded`` (a user's
 recordings labelled frame by frame). ``rules`` lists the decision rules to compare
 (:mod:`touchbench.streams.rules`): one task per fold and method trains once
 and replays every rule.
+
+``train_on`` says what the method is trained on: ``windows`` (of the
+recogniser's lengths cut from the training captures, each labelled as its
+capture), ``captures`` (whole), or ``streams`` (the training side made into
+streams the same way as the test side, spliced with the same seeded recipe
+or recorded, and cut into the windows the recogniser meets at every
+``train_hop_s``, default the hop, each labelled with the truth of its last
+frame: windows across onsets, transitions and real idle stretches).
+
+``choose_rule: true`` chooses the rule inside each fold: the training
+subjects (or sessions) are left out one at a time (``inner_folds`` groups
+of them when given), the method is trained on the others and their streams
+replayed with every rule; the rule with the best mean frame accuracy among
+those averaging at most ``max_false_per_min`` false activations per idle
+minute (else the fewest false activations) is the fold's choice, reported
+as a row of its own (the test subjects are never looked at to choose).
 """
 
 from __future__ import annotations
@@ -29,7 +45,7 @@ from pydantic import Field, field_validator, model_validator
 
 from ...core.errors import TouchbenchError
 from ...core.hashing import canonical_json
-from ...streams.replay import LiveSpec
+from ...streams.replay import InnerFold, LiveSpec
 from ...streams.rules import make_rule
 from ...streams.timeline import recorded_streams, spliced_streams
 from .base import SPLITTERS, DataContext, Fold, SplitError, WrappingParams, WrappingSplitter, check_base, named
@@ -52,8 +68,11 @@ class _StreamParams(WrappingParams):
     per_stream: int | None = Field(default=None, ge=1)
     windows_s: list[float] = Field(default=[0.5, 1.0], min_length=1)
     hop_s: float = Field(default=0.1, gt=0)
-    train_on: Literal["windows", "captures"] = "windows"
-    train_hop_s: float | None = Field(default=None, gt=0)
+    train_on: Literal["windows", "captures", "streams"] = "windows"
+    train_hop_s: float | None = Field(default=None, gt=0, allow_inf_nan=False)
+    choose_rule: bool = False
+    inner_folds: int | None = Field(default=None, ge=2)
+    max_false_per_min: float = Field(default=5.0, ge=0, allow_inf_nan=False)
     rules: list[dict[str, Any]] = Field(default=[{"name": "max", "threshold": 0.5}], min_length=1)
     none_label: str = "none"
 
@@ -148,28 +167,62 @@ class Stream(WrappingSplitter):
         for f in base_folds:
             streams = self._streams(meta, n_frames, f)
             test = np.unique(np.concatenate([s.captures for s in streams]))
-            out.append(replace(f, test=test, live=self._live(streams)))
+            out.append(replace(f, test=test, live=self._live(streams, meta, n_frames, f)))
         return out
 
     def _streams(self, meta: pd.DataFrame, n_frames: np.ndarray, fold: Fold) -> list:
-        p = self.params
-        if p.source == "recorded":
-            return recorded_streams(meta, n_frames, fold.test)
-        rate = float(meta[FRAME_RATE].iloc[0])
-        gap = (max(1, int(round(p.gap_s[0] * rate))), max(1, int(round(p.gap_s[1] * rate))))
-        rng = np.random.default_rng([self.random_state, *fold.name.encode()])
-        source = str(meta[SOURCE].iloc[0]) if SOURCE in meta.columns else "spliced"
-        streams = spliced_streams(meta, n_frames, fold.test, self.target, p.idle, gap, rng, source=source,
-                                  per_stream=p.per_stream)
+        streams = self._streams_of(meta, n_frames, fold.test, fold.name)
         if not streams:
             raise SplitError(f"scheme 'stream': fold {fold.name!r} has no test subject to make a stream of")
         return streams
 
-    def _live(self, streams: list) -> LiveSpec:
+    def _streams_of(self, meta: pd.DataFrame, n_frames: np.ndarray, rows: np.ndarray, key: str) -> list:
+        """The streams of ``rows``: recorded, or spliced with a generator seeded by ``key``."""
+        p = self.params
+        if p.source == "recorded":
+            return recorded_streams(meta, n_frames, rows)
+        rate = float(meta[FRAME_RATE].iloc[0])
+        gap = (max(1, int(round(p.gap_s[0] * rate))), max(1, int(round(p.gap_s[1] * rate))))
+        rng = np.random.default_rng([self.random_state, *key.encode()])
+        source = str(meta[SOURCE].iloc[0]) if SOURCE in meta.columns else "spliced"
+        return spliced_streams(meta, n_frames, rows, self.target, p.idle, gap, rng, source=source,
+                               per_stream=p.per_stream)
+
+    def _training_streams(self, meta: pd.DataFrame, n_frames: np.ndarray, rows: np.ndarray, key: str) -> tuple:
+        """The training rows as streams, when the method trains on streams (else none)."""
+        if self.params.train_on != "streams":
+            return ()
+        return tuple(self._streams_of(meta, n_frames, rows, f"train:{key}"))
+
+    def _inner(self, meta: pd.DataFrame, n_frames: np.ndarray, fold: Fold) -> tuple[InnerFold, ...]:
+        """The inner folds choosing the rule: the fold's training subjects left out one at a time, or
+        in ``inner_folds`` groups (sorted subjects dealt in turn); none without ``choose_rule``."""
+        p = self.params
+        if not p.choose_rule:
+            return ()
+        train = np.asarray(fold.train, dtype=np.int64)
+        subjects = meta["subject"].astype(str).to_numpy()[train]
+        names = sorted(set(subjects))
+        if len(names) < 2:
+            raise SplitError(f"scheme 'stream': choose_rule needs two training subjects or more in fold "
+                             f"{fold.name!r} (it has {len(names)})")
+        k = len(names) if p.inner_folds is None else min(p.inner_folds, len(names))
+        out = []
+        for g in range(k):
+            held = {n for j, n in enumerate(names) if j % k == g}
+            test, rest = train[np.isin(subjects, list(held))], train[~np.isin(subjects, list(held))]
+            key = f"{fold.name}/inner{g}"
+            out.append(InnerFold(tuple(int(i) for i in rest), tuple(self._streams_of(meta, n_frames, test, key)),
+                                 self._training_streams(meta, n_frames, rest, key)))
+        return tuple(out)
+
+    def _live(self, streams: list, meta: pd.DataFrame, n_frames: np.ndarray, fold: Fold) -> LiveSpec:
         p = self.params
         return LiveSpec(streams=tuple(streams), idle=p.idle, windows_s=tuple(p.windows_s), hop_s=p.hop_s,
                         train_on=p.train_on, train_hop_s=p.train_hop_s,
-                        rules=tuple(canonical_json(r) for r in p.rules), none_label=p.none_label)
+                        rules=tuple(canonical_json(r) for r in p.rules), none_label=p.none_label,
+                        train_streams=self._training_streams(meta, n_frames, fold.train, fold.name),
+                        inner=self._inner(meta, n_frames, fold), max_false_per_min=p.max_false_per_min)
 
 
 def rule_specs(live: LiveSpec) -> list[dict[str, Any]]:

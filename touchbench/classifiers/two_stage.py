@@ -1,0 +1,184 @@
+"""Two stages for live recognition: is something touching, and which gesture is it.
+
+``two-stage`` takes the captures (registry tag ``input="captures"``) and one
+pipeline, ``features`` -> ``estimator`` (with ``params``, spelled as
+``quiet-gated``'s), and fits it twice on the same feature matrix (the
+features are computed once):
+
+1. **A touch detector**: the estimator (with ``detector_params`` over
+   ``params``) trained on every sample as ``idle`` or a touch (any other
+   class), so it learns the sensor's real rest, noise and drift from the
+   idle samples it is given. Trained on windows cut from recorded or
+   spliced streams (the ``stream`` scheme's ``train_on: streams``), the idle
+   samples are the stretches of rest between touches and the frames after a
+   release, the touch samples include the first frames of each touch.
+2. **A gesture classifier**: the estimator trained on the touch samples
+   alone, so its probabilities are over the gestures only and are never
+   spent on telling rest from touch.
+
+``predict_proba`` gives ``P(idle) = 1 - P(touch)`` and ``P(g) = P(touch) *
+P(g | touch)`` for every gesture ``g``: one probability row over every
+class, as any method gives, so every decision rule and every scheme takes
+it. The ``touch`` rule (:mod:`touchbench.streams.hysteresis`) reads the two
+stages apart: a touch begins and ends with hysteresis on ``P(touch)``, and
+the gesture is the one most probable over the touch so far.
+
+Why (docs/research/live-recognition.md): one classifier over idle and
+gestures spends its capacity on the gestures and takes a drifting, noisy
+rest for a light touch; on recordings of a robot skin made frame by frame,
+the product's methods misread one idle frame in four. The factorisation is
+the usual one of activity spotting (a detector of "something happens", then
+a classifier of what: Ward, Lukowicz & Gellersen 2011's segment and event
+view of continuous recognition; an interpretation, not their method).
+
+``idle`` names the idle class; the ``stream`` scheme gives its own when the
+method's entry does not (``touchbench.engine.live.with_idle``). Refused: no
+idle class given, a training set without idle samples or without touch
+samples, and what the pipeline's parts refuse.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.utils.validation import check_is_fitted
+
+from ..core.errors import TouchbenchError
+from ..features.base import check_captures
+from ._util import build, seed_int
+from .base import CLASSIFIERS, ParamError, check_nested_params
+from .fitting import FittedMethod, capture_labels, feature_specs, fit_features, fit_on_codes, pipeline_refusal
+
+NAME = "two-stage"
+SOURCE = "touchbench (docs/research/live-recognition.md): a touch detector and a gesture classifier on one feature matrix"
+#: the detector's label for every class other than idle
+TOUCH = "touch"
+
+
+def check_params(params: dict[str, Any]) -> None:
+    """``idle`` a class name or None, and the estimator's own checks of ``params`` and of ``params``
+    with ``detector_params`` over them."""
+    idle = params.get("idle")
+    if idle is not None and (not isinstance(idle, str) or not idle):
+        raise ParamError(("idle",), f"idle must name the idle class, got {idle!r}")
+    det = params.get("detector_params") or {}
+    if not isinstance(det, dict):
+        raise ParamError(("detector_params",), f"detector_params must be a mapping, got {det!r}")
+    check_nested_params(params.get("estimator"), dict(params.get("params") or {}), ("params",))
+    check_nested_params(params.get("estimator"), {**dict(params.get("params") or {}), **det}, ("detector_params",))
+
+
+class TwoStage(ClassifierMixin, BaseEstimator):
+    """A touch detector and a gesture classifier over one feature matrix (module docstring).
+
+    Parameters
+    ----------
+    features, estimator, params : the pipeline (feature sets -> registered estimator with its parameters).
+    idle : the idle class (no touch); required when fitting.
+    detector_params : the detector's estimator parameters, over ``params``.
+    sensor : the data's SensorSpec (the run engine passes it).
+    random_state : seeds both estimators.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from touchbench.datasets.model import SensorSpec
+    >>> rng = np.random.default_rng(0)
+    >>> rest = [rng.integers(0, 3, (20, 4, 4)).astype(np.uint8) for _ in range(6)]
+    >>> ramp = np.minimum(np.arange(20) * 25, 200).astype(np.uint8)  # a press: up, then held
+    >>> press = [ramp[:, None, None] * np.ones((1, 4, 4), np.uint8) for _ in range(6)]
+    >>> pats = [np.tile(np.array([0, 200], np.uint8).repeat(2), 5)[:, None, None] * np.ones((1, 4, 4), np.uint8)
+    ...         for _ in range(6)]
+    >>> clf = TwoStage(features=["touch-rhythm"], estimator="touch-extra-trees", params={"n_estimators": 10},
+    ...                idle="rest", sensor=SensorSpec("toy", (4, 4), 20.0, (0, 255)), random_state=0)
+    >>> clf = clf.fit(rest + press + pats, ["rest"] * 6 + ["press"] * 6 + ["pat"] * 6)
+    >>> clf.classes_.tolist()
+    ['pat', 'press', 'rest']
+    >>> clf.predict([rest[0], press[0]]).tolist()
+    ['rest', 'press']
+    """
+
+    #: ``predict`` is ``classes_`` at the argmax of ``predict_proba`` (the run engine asks once for both)
+    labels_are_argmax_proba = True
+
+    def __init__(self, features=("touch-rhythm",), estimator="touch-extra-trees", params=None, idle=None,
+                 detector_params=None, sensor=None, random_state=None):
+        self.features = features
+        self.estimator = estimator
+        self.params = params
+        self.idle = idle
+        self.detector_params = detector_params
+        self.sensor = sensor
+        self.random_state = random_state
+
+    def check_sensor(self, sensor: Any, min_frames: int | None = None) -> str | None:
+        """Why the pipeline cannot serve ``sensor``, or None."""
+        return pipeline_refusal(feature_specs(self.features), str(self.estimator), dict(self.params or {}), sensor,
+                                min_frames)
+
+    def fit(self, X: Sequence[np.ndarray], y: Any, groups: Any = None, class_names: Any = None) -> "TwoStage":
+        """Fit the feature sets once, the detector on every sample (idle or touch) and the gesture
+        classifier on the touch samples. ``class_names``: the name of each code of ``y`` when ``y``
+        holds codes (the run engine's fit path gives them), so that ``idle`` names a class."""
+        check_params(self.get_params(deep=False))
+        captures = check_captures(X, name=NAME)
+        y = capture_labels(y, captures, NAME)
+        if self.idle is None:
+            raise TouchbenchError(f"{NAME}: name the idle class (params: {{idle: notouch}}); a stream evaluation "
+                                  "gives its own")
+        names = np.asarray(class_names).astype(str) if class_names is not None else None
+        touch = (names[y.astype(np.int64)] if names is not None else y.astype(str)) != self.idle
+        self.idle_ = y[~touch][0] if (~touch).any() else None
+        if touch.all() or not touch.any():
+            raise TouchbenchError(f"{NAME}: the training samples need both the idle class {self.idle!r} and "
+                                  f"touches (got {int((~touch).sum())} idle of {len(y)})")
+        self.classes_ = np.unique(y)
+        sets, F = fit_features(feature_specs(self.features), captures, y, self.sensor)
+        g = None if groups is None else np.asarray(groups)
+        params, seed = dict(self.params or {}), seed_int(self.random_state)
+        det = fit_on_codes(str(self.estimator), {**params, **dict(self.detector_params or {})}, seed, F,
+                           np.where(touch, TOUCH, "~idle"), g, sensor=self.sensor)
+        gest = fit_on_codes(str(self.estimator), params, seed, F[touch] if isinstance(F, np.ndarray) else
+                            [F[i] for i in np.flatnonzero(touch)], y[touch], None if g is None else g[touch],
+                            sensor=self.sensor)
+        self.detector_, self.gestures_ = FittedMethod(sets, det), FittedMethod(sets, gest)
+        return self
+
+    def touch_proba(self, F: Any) -> np.ndarray:
+        """``P(touch)`` of feature rows ``F`` (the detector's)."""
+        P = self.detector_.proba_rows(F)
+        return P[:, list(self.detector_.classes).index(TOUCH)] if TOUCH in self.detector_.classes else \
+            np.zeros(len(P))
+
+    def predict_proba(self, X: Sequence[np.ndarray]) -> np.ndarray:
+        """Rows over ``classes_``: ``1 - P(touch)`` for idle, ``P(touch) P(g | touch)`` for each gesture."""
+        check_is_fitted(self)
+        F = self.detector_.transform(check_captures(X, name=NAME))
+        t = self.touch_proba(F)
+        out = np.zeros((len(t), len(self.classes_)))
+        out[:, int(np.searchsorted(self.classes_, self.idle_))] = 1.0 - t
+        G = self.gestures_.proba_rows(F)
+        cols = np.searchsorted(self.classes_, self.gestures_.classes)
+        out[:, cols] = t[:, None] * G
+        return out
+
+    def predict(self, X: Sequence[np.ndarray]) -> np.ndarray:
+        """The argmax of :meth:`predict_proba`."""
+        return self.classes_[np.argmax(self.predict_proba(X), axis=1)]
+
+
+DEFAULTS = {"features": ("touch-rhythm",), "estimator": "touch-extra-trees", "params": {}, "idle": None,
+            "detector_params": {}}
+
+
+@CLASSIFIERS.register(
+    NAME,
+    description="a touch detector (idle or not) and a gesture classifier trained on the touches alone, over one "
+                "feature matrix; P(g) = P(touch) P(g | touch)",
+    source=SOURCE, defaults=DEFAULTS, extra=None, input="captures", check_params=check_params,
+    cheap_params=dict(estimator="zhou-tree"),
+)
+def two_stage(random_state=None, sensor=None, **params):
+    return build(TwoStage, DEFAULTS, random_state, {**params, "sensor": sensor}, name=NAME)
