@@ -147,7 +147,8 @@ def predict(model_path, data, fmt, out, whole, trust, **options) -> None:
               help="Window length (repeatable or comma-separated: several at once) [default: the model's].")
 @click.option("--hop", type=float, default=0.5, show_default=True, help="Seconds between decisions.")
 @click.option("--threshold", type=float, default=0.5, show_default=True,
-              help="Under this best probability the decision is 'none' (none of the above).")
+              help="Under this best probability the decision is 'none' (none of the above), for the max rule "
+                   "that decides when neither --rule nor the model file names one.")
 @click.option("--combine", type=click.Choice(["max", "mean"]), default="max", show_default=True,
               help="Several windows: the most confident one decides (max) or their mean probabilities.")
 @click.option("--none-label", default="none", show_default=True)
@@ -185,7 +186,8 @@ def stream(model_path, source, windows, hop, threshold, combine, none_label, rul
     reported (with its line number; the first 10, then counted) and skipped; a malformed file is refused
     before its replay. Exits with status 3 when no decision could be made."""
     if source == "-" and (fmt != "auto" or recording is not None):
-        raise click.UsageError("standard input is read as one frame per line; --format and --recording are for files")
+        given = "--format" if fmt != "auto" else "--recording"
+        raise click.UsageError(f"standard input is read as one frame per line; {given} is for files")
     model = _load_model(model_path, trust)
     chosen, origin = choose_rule(model, _rule(rule), threshold)
     rec = SlidingRecognizer(model, _floats(windows, "--window"), hop_s=hop, threshold=threshold,
