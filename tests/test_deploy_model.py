@@ -142,6 +142,29 @@ def test_method_choice_and_bad_model_file(setup, tmp_path):
     assert not (tmp_path / "m.joblib").exists()
 
 
+def test_run_and_train_read_a_method_name_the_same_way(setup, tmp_path):
+    ds, data, proto = setup
+    # FEATURES/LABEL names one of the two methods (msd/rf15, msd+bmh/rf15): run runs its 3 folds only
+    res = invoke("run", proto, "--method", "msd+bmh/rf15", "--out", tmp_path / "res", "--no-progress")
+    assert res.exit_code == 0, res.output
+    scores = pd.read_parquet(tmp_path / "res" / "scores.parquet")
+    assert sorted(scores["fold"]) == ["subject=s1", "subject=s2", "subject=s3"]
+    assert set(scores["features"]) == {"msd+bmh"}
+    assert invoke("train", proto, "-m", "msd+bmh/rf15", "-o", tmp_path / "m.joblib").exit_code == 0
+    assert TrainedModel.load(tmp_path / "m.joblib").method == "msd+bmh/rf15"
+    # a label alone: run runs every method with it; train needs it to name one
+    res = invoke("run", proto, "--method", "rf15", "--out", tmp_path / "res2", "--no-progress")
+    assert res.exit_code == 0, res.output
+    assert set(pd.read_parquet(tmp_path / "res2" / "scores.parquet")["features"]) == {"msd", "msd+bmh"}
+    res = invoke("train", proto, "-m", "rf15", "-o", tmp_path / "m2.joblib")
+    assert res.exit_code == 3 and "'rf15' names 2 methods" in res.output
+    # a misspelling: both refuse it with the same nearest name
+    for args in (["run", proto, "--method", "msd/rf51", "--out", tmp_path / "res3"],
+                 ["train", proto, "-m", "msd/rf51", "-o", tmp_path / "m3.joblib"]):
+        res = CliRunner().invoke(cli, [str(a) for a in args])
+        assert res.exit_code in (2, 3) and "did you mean 'msd/rf15'" in res.output, res.output
+
+
 def test_stream_from_stdin_and_from_a_replayed_file(setup, tmp_path):
     ds, data, proto = setup
     res = invoke("train", proto, "-m", "msd/rf15", "-o", tmp_path / "m.joblib", "--window", "1", "--train-hop", "0.5")
@@ -309,3 +332,25 @@ def test_help_and_model_description_say_what_the_options_do(setup, tmp_path):
     text = " ".join(invoke("stream", "--help").output.split())
     assert "format haart-raw: Frames per second (default 54, the HAART sensor's); format table: Frames per second (default: estimated from the time column" in text
     assert "frame (the number of frames received when the decision was made, counting from 1)" in text
+
+
+def test_stream_refuses_a_bad_rule_or_speed_and_caps_the_skipped_lines(setup, tmp_path):
+    ds, data, proto = setup
+    assert invoke("train", proto, "-m", "msd/rf15", "-o", tmp_path / "m.joblib", "--window", "1").exit_code == 0
+    model = tmp_path / "m.joblib"
+    res = CliRunner().invoke(cli, ["stream", str(model), "-", "--rule", "[1, 2]"], input="")
+    assert res.exit_code == 2 and "Invalid value for --rule" in res.output and "Traceback" not in res.output
+    for speed in ("nan", "inf", "0", "-2"):
+        res = CliRunner().invoke(cli, ["stream", str(model), str(data), "--speed", speed])
+        assert res.exit_code == 2 and "Invalid value for --speed" in res.output, speed
+    # a model trained outside a stream protocol holds no fitted gate: one error saying what to do
+    res = CliRunner().invoke(cli, ["stream", str(model), "-", "--rule", "gate"], input="")
+    assert res.exit_code == 3 and res.output.count("\n") == 1
+    assert "needs a level fitted on training captures" in res.output and "train the model on a stream protocol" in res.output
+    # 25 lines of garbage: the first 10 reported, the other 15 counted in one line; no decision is an error
+    res = CliRunner().invoke(cli, ["stream", str(model), "-"], input="garbage\n" * 25)
+    assert res.exit_code == 3
+    assert [line for line in res.stderr.splitlines() if line.startswith("skipped: <stdin>:")] == \
+        [f"skipped: <stdin>:{n}: a frame has 1 values, the model's 4 x 4 sensor needs 16" for n in range(1, 11)]
+    assert "skipped: 15 more malformed lines, not shown" in res.stderr
+    assert "error: no decision: 0 frames read from standard input (25 malformed lines skipped)" in res.stderr

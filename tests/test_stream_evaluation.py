@@ -171,3 +171,66 @@ def test_a_per_frame_labelled_table_is_evaluated_as_streams_and_shown_in_a_strea
     got = dict(zip(header, cells))
     assert got["rule"] == "max" and got["streams"] == "3" and got["idle-only %"] == "60.0"
     assert 0.0 <= float(got["frame %"]) <= 100.0
+
+
+ALL_RULES = """\
+name: live-recorded-rules
+dataset:
+  name: {data}
+  format: table
+  options: {{capture_columns: [recording], frame_labels: label, grid: [4, 4], frame_rate: 10, value_range: [0, 100]}}
+target: gesture
+scheme:
+  name: stream
+  base: loso
+  source: recorded
+  idle: idle
+  windows_s: [0.5, 1.0]
+  hop_s: 0.2
+  rules: [{{name: max, threshold: 0.4}}, {{name: majority, n: 3}}, {{name: hmm, switch: 0.05}},
+          {{name: gate, idle: idle}}, {{name: onset, idle: idle}}]
+methods: [touch-et-fast]
+seed: 0
+"""
+
+
+def test_stream_by_recording_name_decides_what_the_evaluation_decided_with_every_rule(tmp_path, monkeypatch):
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    _recordings_csv(tmp_path / "rec.csv")
+    (tmp_path / "p.yaml").write_text(ALL_RULES.format(data=tmp_path / "rec.csv"))
+    res = CliRunner().invoke(cli, ["run", str(tmp_path / "p.yaml"), "--out", str(tmp_path / "res"), "--jobs", "1",
+                                   "--no-progress"], catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    live = json.loads(pd.read_parquet(tmp_path / "res" / "scores.parquet").set_index("fold").loc["subject=p2", "live"])
+    (stream,) = live["streams"]
+    assert stream["name"] == "rec-p2" and stream["frames"] == 50
+    model = tmp_path / "m.joblib"
+    res = CliRunner().invoke(cli, ["train", str(tmp_path / "p.yaml"), "--fold", "p2", "--out", str(model)],
+                             catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    manifest = json.loads((tmp_path / "m.joblib.json").read_text())
+    # every declared rule, in order; the gate's and onset's level the one the evaluation fitted on fold p2
+    stored = manifest["stream_rules"]
+    assert [r["name"] for r in stored] == ["max", "majority", "hmm", "gate", "onset"]
+    for r, fitted in zip(stored[3:], live["rules"][3:]):
+        assert r == {"name": r["name"], "idle": "idle", "level": fitted["fitted_level"]}
+    assert manifest["stream_rule"] == {"name": "hmm", "switch": 0.01}
+    assert manifest["stream_rule_source"] == "the toolkit's default rule"
+    table = ["--format", "table", "--capture-columns", "recording", "--frame-labels", "label", "--grid", "4x4",
+             "--frame-rate", "10", "--value-range", "0..100"]
+    for k, rule in enumerate(["max", "majority", "{name: hmm, switch: 0.05}", "gate", "onset"]):
+        res = CliRunner().invoke(cli, ["stream", str(model), str(tmp_path / "rec.csv"), *table, "--recording",
+                                       "rec-p2", "--rule", rule, "--hop", "0.2", "--no-realtime", "--jsonl"],
+                                 catch_exceptions=False)
+        assert res.exit_code == 0, res.output
+        assert "the model file's fitted rule of that name" in res.stderr
+        printed = [json.loads(line) for line in res.stdout.splitlines() if line.startswith("{")]
+        decided = decisions_per_frame([d["frame"] for d in printed], [d["label"] for d in printed], 50, "undecided")
+        result = stream["results"][k]
+        assert len(printed) == result["n_decisions"], rule
+        assert decided.tolist() == _expand(result["decisions"], 50).tolist(), rule
+    res = CliRunner().invoke(cli, ["stream", str(model), str(tmp_path / "rec.csv"), *table, "--recording", "rec-p9"])
+    assert res.exit_code == 3 and "no recording 'rec-p9'; did you mean" in res.output and "rec-p2" in res.output
+    res = CliRunner().invoke(cli, ["stream", str(model), str(tmp_path / "rec.csv"), *table, "--recording", "rec-p2",
+                                   "--no-realtime"], catch_exceptions=False)
+    assert "the model file's default rule (the toolkit's default rule)" in res.stderr

@@ -101,8 +101,9 @@ def run_summary(res, plan) -> dict:
               help="When another run holds the results directory, wait this long for it before giving up.")
 @click.option("--evaluation", "evaluations", multiple=True, metavar="NAME",
               help="Run only this evaluation of a protocol with several (repeatable) [default: all].")
-@click.option("--method", "methods", multiple=True, metavar="LABEL",
-              help="Run only this method's tasks (its label in the leaderboard; repeatable) [default: all]; "
+@click.option("--method", "methods", multiple=True, metavar="METHOD",
+              help="Run only this method's tasks: FEATURES/METHOD as the results name it, e.g. msd+sd/gaus-rf, or "
+                   "a method's label alone (every method with that label; repeatable) [default: all]; "
                    "the tables hold every finished task of the protocol.")
 @click.option("--final", is_flag=True,
               help="The run you report: refused when this test set already had a final run with other methods.")
@@ -117,7 +118,9 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
     folder). Finished tasks are skipped, so an interrupted run resumes where it stopped. Every run
     that scores a test set is recorded in the ledger of the results root (ledger.jsonl), which the
     leaderboard reads. Exits with status 1 when a task failed."""
-    from ..engine.planning import method_labels
+    from ..core.suggest import did_you_mean
+    from ..engine.planning import names_a_method, plan_method_list
+    from ..methods import method_name
     from ..engine.runner import plan_protocol
     from ..protocols.errors import UnknownEvaluation
     from ..protocols.loading import load_protocol
@@ -132,17 +135,16 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
     except UnknownEvaluation as e:
         raise click.BadParameter(str(e), param_hint="--evaluation") from None
     plans = plan_protocol(proto, out, evaluations=evaluations, methods=methods)  # all checked before any runs
-    if methods:
-        labels = {m for plan, _ in plans for m in method_labels(plan)}
-        unknown = [m for m in methods if m not in labels]
-        if unknown:
-            raise click.BadParameter(f"{unknown[0]!r} is not a method of {proto.name} "
-                                     f"({', '.join(sorted(labels))})", param_hint="--method")
+    unknown = [m for m in methods if not any(names_a_method(plan, m) for plan, _ in plans)]
+    if unknown:
+        known = sorted({method_name(m) for plan, _ in plans for m in plan_method_list(plan)})
+        raise click.BadParameter(f"{unknown[0]!r} is not a method of {proto.name}"
+                                 f"{did_you_mean(unknown[0], known, cutoff=0.4)} (FEATURES/LABEL or a label alone: "
+                                 f"{', '.join(known)})", param_hint="--method")
     failed = 0
     summaries = []
     for plan, out_dir in plans:
-        labels = set(method_labels(plan))
-        present = [m for m in methods if m in labels]
+        present = [m for m in methods if names_a_method(plan, m)]
         if methods and not present:  # left out of this evaluation (its sensor refused them)
             continue
         res = _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait, final, force_final,

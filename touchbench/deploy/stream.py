@@ -33,6 +33,20 @@ gesture types". Here:
   reached the recogniser more than one frame period after their scheduled
   time are counted as ``late`` (the recogniser did not keep up).
 
+Rules (:func:`choose_rule`): a model trained on a stream protocol holds
+every rule the protocol declares, fitted on its training captures
+(``stream_rules``: the gate's and onset's ``level: auto`` written in as
+``level``), and the default one (``stream_rule``, with
+``stream_rule_source``). Without ``--rule`` the default decides (or ``max``
+with ``--threshold`` for a model that records none); ``--rule NAME`` or a
+mapping takes the first stored rule with that name and the mapping's fields,
+else the rule as given, refused when it still needs a fitted level. The
+start-up note says which rule decides and where it came from.
+
+A recorded dataset's recording (``--recording``, :func:`replay_recording`)
+is its segments put back in order by the functions a stream evaluation uses
+(:mod:`touchbench.streams.timeline`), so the same frames are replayed.
+
 A model that adapts to each session from its unlabelled captures
 (``touch-et-adapt``, :attr:`.model.TrainedModel.adapts_to_session`) is
 refused: a stream's frames arrive one at a time, with no session to adapt
@@ -60,6 +74,7 @@ import pyarrow.parquet as pq
 
 from ..core.errors import DataError, TouchbenchError
 from ..core.memory import memory_limit
+from ..core.suggest import did_you_mean
 from ..core.threads import single_thread
 from ..datasets.formats import FORMATS
 from ..datasets.model import TouchDataset
@@ -67,17 +82,21 @@ from ..datasets.table_cells import cell_columns
 from ..datasets.table_long import agree_grid
 from ..datasets.tables import numeric, read_table
 from ..streams.recognizer import Decision, WindowRecognizer, decide_all
-from ..streams.rules import DecisionRule, make_rule
+from ..streams.timeline import recorded_streams, rest_value, stream_frames
+from ..streams.rules import RULES, DecisionRule, make_rule, needs_fitting
 from .model import TrainedModel
+from .predict import read_data
 
 __all__ = [
     "Decision",
     "SlidingRecognizer",
     "StreamSummary",
     "buffer_limit",
+    "choose_rule",
     "load_replay",
     "replay",
     "replay_dataset",
+    "replay_recording",
     "run_stream",
     "text_frames",
 ]
@@ -117,7 +136,7 @@ class SlidingRecognizer(WindowRecognizer):
 
     def __init__(self, model: TrainedModel, windows_s: Iterable[float] | None = None, hop_s: float = 0.5,
                  threshold: float = 0.5, combine: str = "max", none_label: str = "none", fast: bool = True,
-                 rule: DecisionRule | None = None):
+                 rule: DecisionRule | None = None, rule_origin: str = "--rule given"):
         if model.adapts_to_session:
             raise TouchbenchError(f"{model.method}: this model adapts to each session from that session's "
                                   "captures (touchbench predict does it on a file); a stream has no session "
@@ -125,15 +144,15 @@ class SlidingRecognizer(WindowRecognizer):
         self.model = model
         if windows_s is None:
             windows_s = model.windows or [model.manifest["capture_frames"]["median"] / float(model.sensor.frame_rate)]
-        recorded = model.manifest.get("stream_rule")
-        if rule is None and recorded:
-            rule = make_rule(recorded)  # the rule the model was trained with (touchbench train on a stream evaluation)
+        self.rule_origin = rule_origin
+        if rule is None:
+            rule, self.rule_origin = choose_rule(model, None, threshold)
         super().__init__(lambda caps: model.predict_proba(caps, fast=fast), model.classes, model.sensor, windows_s,
                          dtype=model.manifest.get("capture_dtype", "<f8"), hop_s=hop_s, threshold=threshold,
                          combine=combine, none_label=none_label, rule=rule, buffer_check=_check_buffer)
 
     def notes(self) -> list[str]:
-        out = [f"deciding with the rule {self.rules[0].describe()}"]
+        out = [f"deciding with the rule {self.rules[0].describe()}: {self.rule_origin}"]
         trained = self.model.windows
         if trained is None:
             med = self.model.manifest["capture_frames"]["median"]
@@ -144,6 +163,51 @@ class SlidingRecognizer(WindowRecognizer):
             out.append(f"the model was trained on windows of {', '.join(f'{w:g}' for w in trained)} s, "
                        f"streaming with {', '.join(f'{w:g}' for w in self.windows_s)} s")
         return out
+
+
+def choose_rule(model: TrainedModel, spec: dict[str, Any] | str | None,
+                threshold: float = 0.5) -> tuple[DecisionRule, str]:
+    """The decision rule for ``--rule spec`` and where it came from (module docstring, "Rules").
+
+    None: the model file's default rule (``stream_rule``, with its ``stream_rule_source``), or ``max``
+    with ``threshold`` for a model that records none. A name or a mapping: the first of the model's
+    stored fitted rules (``stream_rules``, then ``stream_rule``) with that name and every field the
+    mapping gives, else the rule as given; a rule still needing a level fitted on training captures
+    (the gate's and onset's ``level: auto``) is refused, naming ``--rule``."""
+    default = model.manifest.get("stream_rule")
+    if spec is None:
+        if not default:
+            return make_rule(None, threshold), "max with --threshold (the model file records no rule)"
+        source = model.manifest.get("stream_rule_source", "recorded by touchbench train")
+        return make_rule(default), f"the model file's default rule ({source})"
+    given = {"name": spec} if isinstance(spec, str) else spec
+    if not isinstance(given, dict):
+        raise TouchbenchError(f"--rule: a decision rule is a name or a mapping such as {{name: majority, n: 5}}, "
+                              f"got {spec!r}")
+    stored = [*model.manifest.get("stream_rules", []), *([default] if default else [])]
+    wanted = {k: v for k, v in given.items() if not (k == "level" and v == "auto")}  # auto: the fitted level
+    match = next((r for r in stored if all(k in r and r[k] == v for k, v in wanted.items())), None)
+    if match is not None:
+        return make_rule(match), "the model file's fitted rule of that name (--rule)"
+    name = given.get("name")
+    try:
+        rule, problem = make_rule(given, threshold), None
+    except TouchbenchError as e:
+        rule, problem = None, str(e)
+    if rule is not None and not needs_fitting(rule):
+        return rule, "--rule given on the command line"
+    learns = isinstance(name, str) and name in RULES and RULES.get(name).fit is not DecisionRule.fit
+    if rule is None and not learns:
+        raise TouchbenchError(f"--rule: {problem}")
+    same = [r for r in stored if r.get("name") == name]
+    has = (f"its fitted {name} rules: {'; '.join(map(str, same))}" if same
+           else f"the model file holds no fitted {name} rule")
+    raise TouchbenchError(
+        f"--rule {name}: needs a level fitted on training captures and {has}"
+        + (f" ({problem})" if problem else "")
+        + "; train the model on a stream protocol that declares this rule (touchbench train), or give the "
+          "level in --rule, e.g. '{name: gate, idle: IDLE, level: 0.1}'")
+    return rule, "--rule given on the command line"
 
 
 def buffer_limit() -> int:
@@ -239,7 +303,7 @@ def _is_number(v: str) -> bool:
 
 
 def load_replay(path: str | Path, model: TrainedModel, capture: str | None = None,
-                fmt: str = "auto", **options) -> tuple[np.ndarray, float, str]:
+                fmt: str = "auto", recording: str | None = None, **options) -> tuple[np.ndarray, float, str]:
     """Frames of a recorded file: ``(frames (T, H, W), frame rate, description)``.
 
     ``fmt`` is a registered file format (:mod:`touchbench.datasets.formats`),
@@ -257,7 +321,14 @@ def load_replay(path: str | Path, model: TrainedModel, capture: str | None = Non
       numbered cell columns of the long format), rows of ``capture`` only
       when a ``capture_id`` column exists; a CSV whose first line is numbers
       has no header. Replayed at the model's frame rate.
+
+    ``recording``: the recording of that name of a dataset whose captures are
+    segments of recordings (a registered dataset name, a touchbench Parquet,
+    or a file read with ``fmt``, such as the ``table`` format's
+    ``frame_labels``): :func:`replay_recording`.
     """
+    if recording is not None:
+        return _replay_recording_of(str(path), model, capture, fmt, recording, options)
     path = Path(path)
     if fmt != "auto":
         return _replay_format(path, model, capture, fmt, options)
@@ -299,20 +370,60 @@ def load_replay(path: str | Path, model: TrainedModel, capture: str | None = Non
 def _replay_format(path: Path, model: TrainedModel, capture: str | None, fmt: str,
                    options: dict[str, Any]) -> tuple[np.ndarray, float, str]:
     """:func:`load_replay` of a file in the registered format ``fmt``."""
+    ds, note = _read_format(path, model, fmt, options)
+    frames, rate, what = replay_dataset(ds, model, capture, path)
+    return frames, rate, what + note
+
+
+def _replay_recording_of(source: str, model: TrainedModel, capture: str | None, fmt: str, recording: str,
+                         options: dict[str, Any]) -> tuple[np.ndarray, float, str]:
+    """:func:`load_replay` of one recording of ``source`` (a dataset name or file)."""
+    if capture is not None:
+        raise TouchbenchError("--capture and --recording: give one")
+    if fmt != "auto":
+        ds, note = _read_format(Path(source), model, fmt, options)
+    else:
+        ds, note = read_data(source, "auto", model, **options), ""
+    frames, rate, what = replay_recording(ds, model, recording, source)
+    return frames, rate, what + note
+
+
+def _read_format(path: Path, model: TrainedModel, fmt: str, options: dict[str, Any]) -> tuple[TouchDataset, str]:
+    """The dataset of a file in the registered format ``fmt``, and a note when it was read at the
+    model's frame rate (the file does not say its own)."""
     form = FORMATS.get(fmt)
     if not form.replay:
         raise TouchbenchError(f"the {fmt} format cannot be replayed frame by frame")
     takes_rate = any(o.name == "frame_rate" for o in form.options)
     try:
-        ds = form.read(path, like=model.sensor, **options)
+        return form.read(path, like=model.sensor, **options), ""
     except TouchbenchError as e:
         if not takes_rate or options.get("frame_rate") is not None or "give --frame-rate" not in str(e):
             raise
         rate = model.sensor.frame_rate
         ds = form.read(path, like=model.sensor, **{**options, "frame_rate": rate})
-        frames, rate, what = replay_dataset(ds, model, capture, path)
-        return frames, rate, f"{what} (the file does not say its frame rate: the model's, {rate:g} Hz)"
-    return replay_dataset(ds, model, capture, path)
+        return ds, f" (the file does not say its frame rate: the model's, {rate:g} Hz)"
+
+
+def replay_recording(ds: TouchDataset, model: TrainedModel, name: str, where: str) -> tuple[np.ndarray, float, str]:
+    """The frames of recording ``name`` of ``ds`` (captures that are segments of recordings: metadata
+    ``recording`` and ``start_frame``), its segments put back in order as a stream evaluation puts
+    them (:func:`touchbench.streams.timeline.recorded_streams`, ``stream_frames``)."""
+    model.check_sensor(ds.sensor, where)
+    meta = ds.meta
+    if "recording" not in meta.columns or "start_frame" not in meta.columns:
+        raise DataError("--recording needs captures that are segments of recordings (metadata recording and "
+                        "start_frame: a table read with frame labels); this dataset has none", where)
+    recs = meta["recording"].astype(str).to_numpy()
+    names = sorted(set(recs))
+    if name not in names:
+        shown = ", ".join(names[:10]) + (f", ... ({len(names)} in all)" if len(names) > 10 else "")
+        raise DataError(f"--recording: no recording {name!r}{did_you_mean(name, names)} (recordings: {shown})", where)
+    (stream,) = recorded_streams(meta, np.asarray(ds.n_frames, dtype=np.int64), np.flatnonzero(recs == name))
+    target = model.manifest.get("target", "gesture")
+    labels = meta[target].astype(str).to_numpy() if target in meta.columns else np.full(len(ds), "", dtype=object)
+    frames, _ = stream_frames(ds.captures, labels, stream, "", rest_value(ds.sensor))
+    return frames, ds.sensor.frame_rate, f"{Path(where).name}: recording {name} ({len(stream.segments)} segments)"
 
 
 def replay_dataset(ds: TouchDataset, model: TrainedModel, capture: str | None, path: Path) -> tuple[np.ndarray, float, str]:

@@ -27,10 +27,12 @@ and scores its accuracy. For the training side of several folds it is
 
 A stream evaluation (the ``stream`` scheme) trains on windows of its
 recogniser's lengths, cut every ``train_hop_s``, as its tasks do; ``windows``
-and ``train_hop`` given here replace them. Its model file also records the
-decision rule ``touchbench stream`` uses by default
-(:data:`touchbench.streams.rules.DEFAULT_RULE` with the evaluation's idle
-class, its level fitted on the same training captures).
+and ``train_hop`` given here replace them. Its model file also records every
+decision rule the evaluation declares, fitted on the same training captures
+as its tasks fit them (``stream_rules``: the gate's and onset's ``level:
+auto`` written in as ``level``), and the rule ``touchbench stream`` uses by
+default (``stream_rule``, :func:`default_stream_rule`, with
+``stream_rule_source``, where it came from).
 """
 
 from __future__ import annotations
@@ -42,19 +44,20 @@ import numpy as np
 import pandas as pd
 
 from ..core.errors import TouchbenchError
-from ..core.suggest import did_you_mean
 from ..engine.planning import Prepared, fold_seed, prepare_evaluation, serving_protocol, training_side
-from ..methods import Method
+from ..methods import Method, method_name, named_methods
 from ..protocols.library import find_protocol
 from ..protocols.checks import require_extras
 from ..protocols.loading import load_protocol
 from ..protocols.schema import Protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
 from ..protocols.schemes import Fold
-from ..streams.rules import stream_rule
+from ..protocols.schemes.stream import rule_specs
+from ..streams.replay import LiveSpec
+from ..streams.rules import fitted_declaration, stream_rule
 from .model import TrainedModel, fit_model
 
-__all__ = ["parse_selection", "select", "train_from_protocol"]
+__all__ = ["default_stream_rule", "parse_selection", "select", "stream_rules_manifest", "train_from_protocol"]
 
 
 def parse_selection(items: Sequence[str], option: str) -> dict[str, list[str]]:
@@ -86,21 +89,20 @@ def select(meta: pd.DataFrame, where: dict[str, list[str]], exclude: dict[str, l
 
 
 def _choose(proto: Protocol, method: str | None) -> Method:
-    """The protocol's method named ``FEATURES/METHOD`` or by a unique label (optional when it has one)."""
+    """The protocol's method named ``FEATURES/METHOD`` or by a unique label
+    (:func:`touchbench.methods.named_methods`; optional when the protocol has one)."""
     methods = proto.evaluated_methods()
-    names = [f"{m.features_label}/{m.label}" for m in methods]
+    names = [method_name(m) for m in methods]
     if method is None:
         if len(methods) == 1:
             return methods[0]
         raise TouchbenchError(f"protocol {proto.name!r} has {len(methods)} methods; choose one with --method "
                               f"({', '.join(names)})")
-    if method in names:
-        return methods[names.index(method)]
-    by_label = [m for m in methods if m.label == method]
-    if len(by_label) == 1:
-        return by_label[0]
-    hint = did_you_mean(method, names, cutoff=0.4)
-    raise TouchbenchError(f"protocol {proto.name!r} has no method {method!r}{hint} (methods: {', '.join(names)})")
+    hit = named_methods(methods, method, f"protocol {proto.name!r}")
+    if len(hit) > 1:
+        raise TouchbenchError(f"{method!r} names {len(hit)} methods of protocol {proto.name!r}; choose one with "
+                              f"--method ({', '.join(method_name(m) for m in hit)})")
+    return hit[0]
 
 
 def _evaluation(proto: Protocol, name: str | None) -> Protocol:
@@ -188,6 +190,24 @@ def train_from_protocol(
     model = fit_model(train, m.spec, seed=default_seed if seed is None else seed, target=proto.target,
                       windows=windows, train_hop=train_hop, features_label=m.features_label, label=m.label,
                       selection="; ".join(parts), source=source)
-    if live is not None:  # the rule `touchbench stream` decides with, fitted on the same captures
-        model.manifest["stream_rule"] = stream_rule(live.idle, train.captures, train.meta[proto.target], train.sensor)
+    if live is not None:  # the rules `touchbench stream` decides with, fitted on the same captures
+        model.manifest.update(stream_rules_manifest(live, train.captures, train.meta[proto.target], train.sensor))
     return model
+
+
+def default_stream_rule(live: LiveSpec, captures: Sequence[np.ndarray], labels: Sequence[str],
+                        sensor: Any) -> tuple[dict[str, Any], str]:
+    """The rule ``touchbench stream`` decides with by default for a model trained on the stream
+    evaluation ``live`` (its training ``captures`` and ``labels``), fitted, and a short sentence of
+    where it came from: the toolkit's :data:`touchbench.streams.rules.DEFAULT_RULE`."""
+    return stream_rule(live.idle, captures, labels, sensor), "the toolkit's default rule"
+
+
+def stream_rules_manifest(live: LiveSpec, captures: Sequence[np.ndarray], labels: Sequence[str],
+                          sensor: Any) -> dict[str, Any]:
+    """A stream model's manifest keys: ``stream_rules`` (every rule the evaluation declares, fitted on
+    the training captures as its tasks fit them: declarations with the fitted ``level`` written in),
+    ``stream_rule`` (the default, :func:`default_stream_rule`) and ``stream_rule_source``."""
+    default, why = default_stream_rule(live, captures, labels, sensor)
+    return {"stream_rules": [fitted_declaration(r, captures, labels, sensor) for r in rule_specs(live)],
+            "stream_rule": default, "stream_rule_source": why}

@@ -43,7 +43,7 @@ from ..core.paths import cache_dir
 from ..core.suggest import did_you_mean
 from ..datasets.model import SensorSpec, TouchDataset
 from ..features.base import feature_set_refusal, learns_from_data
-from ..methods import METHODS, Method, expand_candidates, method_spec, stops_on_test
+from ..methods import METHODS, Method, expand_candidates, method_name, method_spec, named_methods, stops_on_test
 from ..protocols.entries import expand_grid
 from ..protocols.schema import Protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
@@ -56,7 +56,7 @@ from .evaluation_data import apply_filters, evaluation_dataset, load_spec
 from .identity import MAX_MODULES, Identity, classifier_identity, feature_set_identity
 from .tasks import SetSpec, Task, make_feature_set
 
-__all__ = ["Components", "Plan", "Prepared", "check_methods", "default_cache_root", "fold_seed", "method_labels", "plan_methods", "plan_run", "plan_tasks", "plan_test_set",
+__all__ = ["Components", "Plan", "Prepared", "check_methods", "default_cache_root", "fold_seed", "method_labels", "names_a_method", "plan_method_list", "plan_methods", "plan_run", "plan_tasks", "plan_test_set",
            "prepare_evaluation", "sensor_refusals", "serving_protocol", "training_side"]
 
 
@@ -506,25 +506,39 @@ def plan_test_set(plan: Plan) -> str:
 
 
 def plan_methods(plan: Plan, only: set[str] | None = None) -> list[str]:
-    """The methods a plan evaluates (those whose method label is in ``only``, when given), as
+    """The methods a plan evaluates (those whose :func:`method_name` is in ``only``, when given), as
     ``features / method`` labels."""
     return sorted({f"{t.method.features_label} / {t.method.label}" for t in plan.tasks
-                   if only is None or t.method.label in only})
+                   if only is None or method_name(t.method) in only})
 
 
 def method_labels(plan: Plan) -> list[str]:
-    """The method labels (``--method``'s values) of ``plan``'s tasks, in plan order."""
+    """The method labels of ``plan``'s tasks, in plan order."""
     return list(dict.fromkeys(t.method.label for t in plan.tasks))
 
 
+def plan_method_list(plan: Plan, named: Sequence[str] | None = None) -> list[Method]:
+    """The methods of ``plan``'s tasks, each once, in plan order (only those the texts ``named`` name,
+    when given: :func:`touchbench.methods.named_methods`)."""
+    methods = list({method_name(t.method): t.method for t in plan.tasks}.values())
+    if named is None:
+        return methods
+    where = plan.protocol.name + (f" / {plan.protocol.evaluation}" if plan.protocol.evaluation else "")
+    chosen = {method_name(m) for text in named for m in named_methods(methods, text, where)}
+    return [m for m in methods if method_name(m) in chosen]
+
+
+def names_a_method(plan: Plan, text: str) -> bool:
+    """Whether ``text`` names a method of ``plan`` (:func:`touchbench.methods.named_methods`)."""
+    try:
+        named_methods(plan_method_list(plan), text, plan.protocol.name)
+    except TouchbenchError:
+        return False
+    return True
+
+
 def check_methods(plan: Plan, methods: Sequence[str] | None) -> set[str] | None:
-    """The method labels ``methods`` names in ``plan`` (None: all); an unknown one is refused naming the known."""
-    if not methods:
-        return None
-    known = method_labels(plan)
-    unknown = [m for m in methods if m not in known]
-    if unknown:
-        raise TouchbenchError(f"{unknown[0]!r} is not a method of {plan.protocol.name}"
-                              + (f" / {plan.protocol.evaluation}" if plan.protocol.evaluation else "")
-                              + f" (its methods: {', '.join(known)})")
-    return set(methods)
+    """The full names (:func:`touchbench.methods.method_name`) of the methods ``methods`` names in
+    ``plan`` (None: all), each read by :func:`touchbench.methods.named_methods`; an unknown one is
+    refused naming the known."""
+    return {method_name(m) for m in plan_method_list(plan, methods)} if methods else None

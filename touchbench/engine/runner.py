@@ -46,6 +46,7 @@ from rich.progress import (
 
 from ..core.errors import TouchbenchError
 from ..datasets.model import TouchDataset
+from ..methods import method_name
 from ..protocols.checks import require_extras
 from ..protocols.loading import load_protocol
 from ..protocols.schema import Protocol
@@ -58,7 +59,7 @@ from ..results.store import (PREDICTED, SCHEMA_VERSION, TRUE, ResultStore, TaskW
 from ..results.summary import check_expected, summarize
 from .backends import check_jobs, is_local_backend, local_jobs, parallel
 from .cache import FeatureCache, crop_captures
-from .planning import Plan, check_methods, method_labels, plan_methods, plan_run, plan_test_set
+from .planning import Plan, check_methods, names_a_method, plan_method_list, plan_methods, plan_run, plan_test_set
 from .tasks import RunContext, Task, execute_task, make_feature_set
 
 __all__ = ["RunResult", "default_ledger", "default_results_dir", "plan_protocol", "results_dirs", "run_plan",
@@ -211,7 +212,8 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
              ledger: str | Path | None = None, methods: Sequence[str] | None = None) -> RunResult:
     """Execute the pending tasks of ``plan`` and write the reports (see the module docstring).
 
-    ``methods`` (classifier or method labels of the plan) runs only their tasks: the tables
+    ``methods`` (method names of the plan, ``FEATURES/LABEL`` or a label alone:
+    :func:`touchbench.methods.named_methods`) runs only their tasks: the tables
     still hold every finished task of the plan, the others stay pending (a slow method can
     wait, a new one can join a finished run).
 
@@ -320,7 +322,7 @@ def _jobs_for_backend(jobs: int) -> int:
 
 def _selected(plan: Plan, methods: set[str] | None) -> list[Task]:
     """The tasks of the methods this run is about (all of them without ``methods``)."""
-    return [t for t in plan.tasks if methods is None or t.method.label in methods]
+    return [t for t in plan.tasks if methods is None or method_name(t.method) in methods]
 
 
 def _noop_result(plan: Plan, store: ResultStore, selected: list[str], notes: list[str], t_start: float) -> RunResult:
@@ -491,8 +493,9 @@ def plan_protocol(protocol: Protocol, out: str | Path | None = None, *, cache_ro
     pairs = [(sub, folder) for sub, folder in results_dirs(protocol, out)
              if not evaluations or sub.evaluation in evaluations]
     plans = [(plan_run(sub, cache_root=cache_root, dataset=dataset), folder) for sub, folder in pairs]
-    planned = {m for plan, _ in plans for m in method_labels(plan)}
-    require_extras(protocol, planned & set(methods) if methods else planned)
+    chosen = {m.label for plan, _ in plans
+              for m in plan_method_list(plan, [t for t in methods if names_a_method(plan, t)] if methods else None)}
+    require_extras(protocol, chosen)
     return plans
 
 
@@ -509,8 +512,7 @@ def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None,
         protocol = load_protocol(protocol)
     out_list = []
     for plan, folder in plan_protocol(protocol, out, cache_root=cache_root, dataset=dataset, methods=methods):
-        labels = set(method_labels(plan))
-        present = [m for m in methods or () if m in labels]
+        present = [m for m in methods or () if names_a_method(plan, m)]
         out_list.append(run_plan(plan, folder, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
                                  worker_setup=worker_setup, wait=wait, fail_fast=fail_fast, final=final,
                                  force_final=force_final, ledger=ledger, methods=present or methods))

@@ -13,10 +13,11 @@ subjects to estimators that take ``groups``, a training set of one class):
 the engine's tasks, ``touchbench train`` and the nested search all fit there.
 """
 
-from .base import (CAPTURES, METHODS, Method, MethodSpec, expand_candidates, features_label, method_spec, resolve_entry,
-                   stops_on_test)
+from .base import (CAPTURES, METHODS, Method, MethodSpec, expand_candidates, features_label, method_name, method_spec,
+                   named_methods, resolve_entry, stops_on_test)
 from .fitting import FittedEstimator, FittedMethod, fit_estimator, fit_method
 from .pipeline import FeaturePipeline
 
 __all__ = ["CAPTURES", "METHODS", "FeaturePipeline", "FittedEstimator", "FittedMethod", "Method", "MethodSpec", "expand_candidates",
-           "features_label", "fit_estimator", "fit_method", "method_spec", "resolve_entry", "stops_on_test"]
+           "features_label", "fit_estimator", "fit_method", "method_name", "method_spec", "named_methods", "resolve_entry",
+           "stops_on_test"]

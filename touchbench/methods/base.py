@@ -9,16 +9,18 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Sequence
 
 from ..classifiers import CLASSIFIERS
 from ..classifiers.adapt import uses_unlabelled_test
 from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
 from ..core.registry import Registry
+from ..core.suggest import did_you_mean
 
 __all__ = ["ADAPTED", "CAPTURES", "METHODS", "Method", "MethodSpec", "STOPPED_ON_TEST_LEAK", "SUBJECT_ID_LEAK",
-           "TUNED_ON_TEST_LEAK", "expand_candidates", "method_spec", "resolve_entry", "stops_on_test"]
+           "TUNED_ON_TEST_LEAK", "expand_candidates", "method_name", "method_spec", "named_methods", "resolve_entry",
+           "stops_on_test"]
 
 SUBJECT_ID_LEAK = "the subject's id is a feature"
 TUNED_ON_TEST_LEAK = "a parameter chosen by its test accuracy"
@@ -116,6 +118,25 @@ class Method:
         return [why for why, on in ((SUBJECT_ID_LEAK, self.subject_id_feature),
                                     (TUNED_ON_TEST_LEAK, bool(self.tuned_on_test)),
                                     (STOPPED_ON_TEST_LEAK, self.stopped_on_test)) if on]
+
+
+def method_name(method: Method) -> str:
+    """The full name of a method, ``FEATURES/LABEL`` as the results name it (``msd+sd/gaus-rf``)."""
+    return f"{method.features_label}/{method.label}"
+
+
+def named_methods(methods: Sequence[Method], text: str, where: str) -> list[Method]:
+    """The methods of ``methods`` that ``text`` names: ``FEATURES/LABEL`` (:func:`method_name`, spaces
+    around the ``/`` allowed) names one; a label alone names every method with that label (one when it
+    is unique). The one reading of a method's name (``run --method``, ``train -m``); nothing named is a
+    :class:`TouchbenchError` naming ``where`` (the protocol) with the nearest names."""
+    full = "/".join(part.strip() for part in str(text).rsplit("/", 1)) if "/" in str(text) else str(text).strip()
+    hit = [m for m in methods if method_name(m) == full] or [m for m in methods if m.label == full]
+    if hit:
+        return hit
+    names = list(dict.fromkeys(method_name(m) for m in methods))
+    hint = did_you_mean(full, [*names, *dict.fromkeys(m.label for m in methods)], cutoff=0.4)
+    raise TouchbenchError(f"{where} has no method {text!r}{hint} (methods: {', '.join(names)})")
 
 
 def features_label(spec: MethodSpec, combination_label: str) -> str:

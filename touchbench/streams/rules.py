@@ -39,6 +39,7 @@ which learns the offset's level from the training captures).
 
 from __future__ import annotations
 
+import inspect
 from collections import Counter, deque
 from typing import Any, Sequence
 
@@ -47,7 +48,8 @@ import numpy as np
 from ..core.errors import TouchbenchError
 from ..core.registry import Registry
 
-__all__ = ["DEFAULT_RULE", "RULES", "DecisionRule", "GateRule", "MaxRule", "frame_contact", "make_rule", "peak_contact", "stream_rule"]
+__all__ = ["DEFAULT_RULE", "RULES", "DecisionRule", "GateRule", "MaxRule", "fitted_declaration", "frame_contact", "make_rule",
+           "needs_fitting", "peak_contact", "stream_rule"]
 
 RULES: Registry = Registry("decision rule", package="touchbench.streams")
 
@@ -92,6 +94,8 @@ def make_rule(spec: dict[str, Any] | str | None, threshold: float = 0.5) -> Deci
     """A rule from its declaration (``{name: ..., params}`` or a name; None: ``max`` with ``threshold``)."""
     if spec is None:
         return MaxRule(threshold=threshold)
+    if not isinstance(spec, (str, dict)):
+        raise TouchbenchError(f"a decision rule is a name or a mapping such as {{name: majority, n: 5}}, got {spec!r}")
     d = {"name": spec} if isinstance(spec, str) else dict(spec)
     name = d.pop("name", None)
     if not isinstance(name, str):
@@ -99,7 +103,18 @@ def make_rule(spec: dict[str, Any] | str | None, threshold: float = 0.5) -> Deci
     try:
         return RULES.create(name, **d)
     except TypeError as e:
-        raise TouchbenchError(f"decision rule {name!r}: {e}") from None
+        raise TouchbenchError(f"decision rule {name!r}: {_parameter_problem(RULES.get(name), d) or e}") from None
+
+
+def _parameter_problem(cls: Any, given: dict[str, Any]) -> str:
+    """What is wrong with ``given`` as ``cls``'s parameters, in words: a missing field or an unknown one."""
+    params = dict(inspect.signature(cls).parameters)
+    missing = [k for k, p in params.items() if p.default is inspect.Parameter.empty and k not in given]
+    unknown = [k for k in given if k not in params]
+    fields = ", ".join(params)
+    if missing:
+        return f"needs {', '.join(missing)} (its fields: {fields})"
+    return f"has no field {', '.join(map(str, unknown))} (its fields: {fields})" if unknown else ""
 
 
 #: the rule ``touchbench stream`` decides with when a model file records one (``touchbench train`` on a
@@ -111,13 +126,26 @@ DEFAULT_RULE: dict[str, Any] = {"name": "hmm", "switch": 0.01}
 
 def stream_rule(idle: str, captures: Sequence[np.ndarray], labels: Sequence[str], sensor: Any) -> dict[str, Any]:
     """:data:`DEFAULT_RULE` for a model whose idle class is ``idle``, fitted on its training
-    ``captures``: its declaration with the fitted level written in (``make_rule`` builds it again)."""
+    ``captures`` (:func:`fitted_declaration`)."""
     spec = dict(DEFAULT_RULE)
     if spec["name"] in ("gate", "onset"):
         spec["idle"] = idle
-    rule = make_rule(spec).fit(captures, labels, sensor)
-    fitted = getattr(rule, "fitted_level", None)
-    return {**spec, "level": fitted} if fitted is not None else spec
+    return fitted_declaration(spec, captures, labels, sensor)
+
+
+def fitted_declaration(spec: dict[str, Any] | str, captures: Sequence[np.ndarray], labels: Sequence[str],
+                       sensor: Any) -> dict[str, Any]:
+    """The declaration ``spec`` fitted on training ``captures``: the same declaration with the fitted
+    level written in as ``level`` (the gate's and onset's ``level: auto``), which ``make_rule`` builds
+    again into a rule deciding as the fitted one."""
+    d = {"name": spec} if isinstance(spec, str) else dict(spec)
+    fitted = getattr(make_rule(d).fit(captures, labels, sensor), "fitted_level", None)
+    return {**d, "level": fitted} if fitted is not None else d
+
+
+def needs_fitting(rule: DecisionRule) -> bool:
+    """Whether ``rule`` still needs a level chosen on training captures (``level: auto``, not fitted)."""
+    return getattr(rule, "level", None) == "auto" and not hasattr(rule, "fitted_level")
 
 
 def _threshold(value: Any) -> float:
