@@ -70,6 +70,7 @@ from ..classifiers.fitting import FittedEstimator, FittedMethod
 from ..methods import MethodSpec
 from ..methods.fitting import fit_method
 from .safe_format import dump_parts, load_parts
+from ..datasets.windows import seconds_to_frames
 from ..streams.replay import window_samples
 
 __all__ = [
@@ -401,8 +402,11 @@ def fit_model(
     label: str | None = None,
     selection: str = "all captures",
     source: dict[str, Any] | None = None,
+    samples: tuple[Sequence[np.ndarray], np.ndarray, np.ndarray] | None = None,
 ) -> TrainedModel:
-    """Fit the method ``spec`` on every capture of ``dataset``.
+    """Fit the method ``spec`` on every capture of ``dataset``, or on ``samples`` (windows, their
+    labels and groups) cut from it elsewhere (a stream evaluation's windows cut from its training
+    streams: ``windows`` and ``train_hop`` then say their lengths and hop).
 
     ``windows`` (seconds): train on windows of these lengths cut from the
     captures every ``train_hop`` seconds (default: half of each window),
@@ -415,10 +419,16 @@ def fit_model(
         raise TouchbenchError(f"dataset {dataset.name!r}: no captures to train on")
     if target not in dataset.meta.columns:
         raise TouchbenchError(f"dataset {dataset.name!r} has no {target!r} column to train on")
-    samples, src, lengths, hops = _training_samples(dataset, windows, train_hop)
-    y = dataset.meta[target].to_numpy()[src]
+    if samples is None:
+        cut, src, lengths, hops = _training_samples(dataset, windows, train_hop)
+        samples = (cut, dataset.meta[target].to_numpy()[src], dataset.meta["subject"].to_numpy()[src])
+    else:
+        rate = dataset.sensor.frame_rate
+        lengths = [seconds_to_frames(w, rate, "--window") for w in windows or ()]
+        hops = [seconds_to_frames(train_hop, rate, "--train-hop") if train_hop else max(1, L // 2) for L in lengths]
     with single_thread():  # the run engine's own fit path: label codes, subjects as groups, one class
-        fitted = fit_method(spec, seed, samples, y, dataset.meta["subject"].to_numpy()[src], dataset.sensor)
+        fitted = fit_method(spec, seed, samples[0], samples[1], samples[2], dataset.sensor)
+    samples = samples[0]
     manifest = {
         "format": MODEL_FORMAT,
         "format_version": MODEL_VERSION,

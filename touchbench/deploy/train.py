@@ -38,12 +38,13 @@ default (``stream_rule``, :func:`default_stream_rule`, with
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 import pandas as pd
 
 from ..core.errors import TouchbenchError
+from ..engine.live import choose_rule, live_samples, with_idle
 from ..engine.planning import Prepared, fold_seed, prepare_evaluation, serving_protocol, training_side
 from ..methods import Method, method_name, named_methods
 from ..protocols.library import find_protocol
@@ -170,9 +171,6 @@ def train_from_protocol(
             parts.append(f"the training side of {proto.scheme.name} ({len(ds) - len(idx)} test captures left out)")
         elif not parts:
             parts.append("all captures")
-    live = prepared.folds[0][0].live  # a stream evaluation trains as its tasks do, unless told otherwise
-    if live is not None and windows is None and live.train_on == "windows":
-        windows, train_hop = list(live.windows_s), live.train_hop_s if train_hop is None else train_hop
     if where or exclude:
         idx = idx[select(ds.meta.iloc[idx].reset_index(drop=True), where or {}, exclude or {})]
         parts += [f"where {k}={','.join(v)}" for k, v in (where or {}).items()]
@@ -186,28 +184,64 @@ def train_from_protocol(
                      "evaluation": proto.evaluation},
         "fold": fold, "where": where or {}, "exclude": exclude or {},
     }
+    seed = default_seed if seed is None else seed
+    live = prepared.folds[0][0].live  # a stream evaluation trains as its tasks do, unless told otherwise
+    if live is None:
+        return fit_model(ds.subset(idx), m.spec, seed=seed, target=proto.target, windows=windows,
+                         train_hop=train_hop, features_label=m.features_label, label=m.label,
+                         selection="; ".join(parts), source=source)
+    return _stream_model(proto, prepared, m, idx, fold or "train", seed, windows, train_hop,
+                         dict(features_label=m.features_label, label=m.label, selection="; ".join(parts),
+                              source=source))
+
+
+def _stream_model(proto: Protocol, prepared: Prepared, m: Method, idx: np.ndarray, key: str, seed: int,
+                  windows: Sequence[float] | None, train_hop: float | None, named: dict[str, Any]) -> TrainedModel:
+    """A model of a stream evaluation, trained on ``idx`` as a fold named ``key`` trains (its windows, or
+    windows of its training streams; the estimator given the idle class), with every declared rule
+    fitted and the default rule chosen (:func:`default_stream_rule`) in its manifest. ``windows`` and
+    ``train_hop`` given here replace the evaluation's windows cut from captures."""
+    ds = prepared.dataset
+    live = proto.splitter().training_spec(ds.meta, idx, key)
+    y = ds.meta[proto.target].astype(str).to_numpy()
+    spec, samples = with_idle(m.spec, live.idle), None
+    if windows is None and live.train_on == "streams":
+        samples = live_samples(ds, y, idx, live, live.train_streams)
+        windows, train_hop = list(live.windows_s), live.train_hop_s or live.hop_s
+    elif windows is None and live.train_on == "windows":
+        windows, train_hop = list(live.windows_s), live.train_hop_s if train_hop is None else train_hop
     train = ds.subset(idx)
-    model = fit_model(train, m.spec, seed=default_seed if seed is None else seed, target=proto.target,
-                      windows=windows, train_hop=train_hop, features_label=m.features_label, label=m.label,
-                      selection="; ".join(parts), source=source)
-    if live is not None:  # the rules `touchbench stream` decides with, fitted on the same captures
-        model.manifest.update(stream_rules_manifest(live, train.captures, train.meta[proto.target], train.sensor))
+    model = fit_model(train, spec, seed=seed, target=proto.target, windows=windows, train_hop=train_hop,
+                      samples=samples, **named)
+    default, why = default_stream_rule(live, train.captures, train.meta[proto.target], train.sensor,
+                                       chosen=(lambda: choose_rule(m.spec, seed, ds, y, live)) if live.inner else None)
+    model.manifest.update(stream_rules_manifest(live, train.captures, train.meta[proto.target], train.sensor,
+                                                (default, why)))
     return model
 
 
-def default_stream_rule(live: LiveSpec, captures: Sequence[np.ndarray], labels: Sequence[str],
-                        sensor: Any) -> tuple[dict[str, Any], str]:
+def default_stream_rule(live: LiveSpec, captures: Sequence[np.ndarray], labels: Sequence[str], sensor: Any,
+                        chosen: Callable[[], dict[str, Any]] | None = None) -> tuple[dict[str, Any], str]:
     """The rule ``touchbench stream`` decides with by default for a model trained on the stream
     evaluation ``live`` (its training ``captures`` and ``labels``), fitted, and a short sentence of
-    where it came from: the toolkit's :data:`touchbench.streams.rules.DEFAULT_RULE`."""
-    return stream_rule(live.idle, captures, labels, sensor), "the toolkit's default rule"
+    where it came from: with ``choose_rule`` (``chosen`` runs :func:`touchbench.engine.live.choose_rule`
+    on the model's own training side), the rule its inner folds chose, so the default is chosen on the
+    sensor it will serve; else the toolkit's :data:`touchbench.streams.rules.DEFAULT_RULE`."""
+    if chosen is None:
+        return stream_rule(live.idle, captures, labels, sensor), "the toolkit's default rule"
+    c = chosen()
+    k = c["rule"]
+    why = (f"chosen by {c['inner_folds']} inner folds over the model's training subjects: the best mean frame "
+           f"accuracy ({100 * c['frame_accuracy'][k]:.1f} %) among the rules with at most "
+           f"{c['max_false_per_min']:g} false activations per idle minute ({c['false_per_idle_min'][k]:.1f})")
+    return fitted_declaration(rule_specs(live)[k], captures, labels, sensor), why
 
 
-def stream_rules_manifest(live: LiveSpec, captures: Sequence[np.ndarray], labels: Sequence[str],
-                          sensor: Any) -> dict[str, Any]:
+def stream_rules_manifest(live: LiveSpec, captures: Sequence[np.ndarray], labels: Sequence[str], sensor: Any,
+                          default: tuple[dict[str, Any], str] | None = None) -> dict[str, Any]:
     """A stream model's manifest keys: ``stream_rules`` (every rule the evaluation declares, fitted on
     the training captures as its tasks fit them: declarations with the fitted ``level`` written in),
-    ``stream_rule`` (the default, :func:`default_stream_rule`) and ``stream_rule_source``."""
-    default, why = default_stream_rule(live, captures, labels, sensor)
+    ``stream_rule`` (the default, :func:`default_stream_rule` unless given) and ``stream_rule_source``."""
+    rule, why = default if default is not None else default_stream_rule(live, captures, labels, sensor)
     return {"stream_rules": [fitted_declaration(r, captures, labels, sensor) for r in rule_specs(live)],
-            "stream_rule": default, "stream_rule_source": why}
+            "stream_rule": rule, "stream_rule_source": why}

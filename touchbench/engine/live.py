@@ -63,7 +63,7 @@ from ..streams.replay import replay as replay_stream
 from ..streams.rules import make_rule
 from ..streams.timeline import Stream, decisions_per_frame, label_runs, rest_value, stream_frames
 
-__all__ = ["UNDECIDED", "choose_rule", "pick_rule", "fit_live", "fitted_rules", "graded_probabilities", "live_outcome", "with_idle"]
+__all__ = ["UNDECIDED", "choose_rule", "pick_rule", "fit_live", "fitted_rules", "graded_probabilities", "live_outcome", "live_samples", "with_idle"]
 
 #: the label of the frames before a stream's first decision (scored as idle)
 UNDECIDED = "undecided"
@@ -78,16 +78,21 @@ def with_idle(spec: MethodSpec, idle: str) -> MethodSpec:
     return replace(spec, estimator_params={**spec.estimator_params, "idle": idle})
 
 
-def fit_live(spec: MethodSpec, seed: int | None, ds: Any, y: np.ndarray, rows: Any, live: LiveSpec,
-             train_streams: Sequence[Stream]) -> Any:
-    """The method fitted on the training ``rows`` as the fold trains it (``live.train_on``)."""
+def live_samples(ds: Any, y: np.ndarray, rows: Any, live: LiveSpec, train_streams: Sequence[Stream],
+                 ) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+    """The samples a fold trains on (``live.train_on``), with their labels and groups: from the training
+    ``rows``' captures, or from ``train_streams``."""
     groups = ds.meta["subject"].astype(str).to_numpy()
     if live.train_on == "streams":
         made = [(*stream_frames(ds.captures, y, s, live.idle, rest_value(ds.sensor)), s.subject) for s in train_streams]
-        X, yy, gg = stream_samples(made, live, ds.sensor.frame_rate)
-    else:
-        X, yy, gg = training_samples([ds.captures[i] for i in rows], y[rows], groups[rows], live,
-                                     ds.sensor.frame_rate)
+        return stream_samples(made, live, ds.sensor.frame_rate)
+    return training_samples([ds.captures[i] for i in rows], y[rows], groups[rows], live, ds.sensor.frame_rate)
+
+
+def fit_live(spec: MethodSpec, seed: int | None, ds: Any, y: np.ndarray, rows: Any, live: LiveSpec,
+             train_streams: Sequence[Stream]) -> Any:
+    """The method fitted on the training ``rows`` as the fold trains it (:func:`live_samples`)."""
+    X, yy, gg = live_samples(ds, y, rows, live, train_streams)
     return fit_method(with_idle(spec, live.idle), seed, X, yy, gg, sensor=ds.sensor)
 
 

@@ -216,6 +216,13 @@ class Stream(WrappingSplitter):
                                  self._training_streams(meta, n_frames, rest, key)))
         return tuple(out)
 
+    def training_spec(self, meta: pd.DataFrame, rows: np.ndarray, key: str) -> LiveSpec:
+        """The settings to train a model on ``rows`` of the prepared metadata as a fold named ``key``
+        trains (its training streams and, with ``choose_rule``, its inner folds; no test stream):
+        ``touchbench train`` on a stream evaluation."""
+        fold = Fold(key, np.asarray(rows, dtype=np.int64), np.zeros(0, dtype=np.int64))
+        return self._live([], meta, meta[N_FRAMES].to_numpy(np.int64), fold)
+
     def _live(self, streams: list, meta: pd.DataFrame, n_frames: np.ndarray, fold: Fold) -> LiveSpec:
         p = self.params
         return LiveSpec(streams=tuple(streams), idle=p.idle, windows_s=tuple(p.windows_s), hop_s=p.hop_s,
