@@ -99,7 +99,8 @@ def expected_size(name: str, sensor: SensorSpec, frames: int) -> int:
 REFUSED: dict[tuple[str, str], str] = {
     **{(n, "1x16"): r"is a channel sensor \(c0, .*not cells of a pressure surface"
        for n in ("sd", "bmh", "smmhh", "contact-evidence", "touch-et-contact", "touch-et-adapt",
-                 "shift-augmented", "touch-et-shift", "touch-rocket-fusion", "quiet-gated", "touch-et-quiet", "touch-et-quiet-win")},
+                 "shift-augmented", "touch-et-shift", "touch-rocket-fusion", "quiet-gated", "touch-et-quiet", "touch-et-quiet-win",
+                 "two-stage", "touch-live", "touch-live-fast")},
     ("touch-windows", "19x24"): r"2-s windows \(24 frames at 12 Hz\) are longer than the shortest capture \(3 frames\)",
     ("touch-et-win", "19x24"): r"2-s windows \(24 frames at 12 Hz\) are longer than the shortest capture \(3 frames\)",
     ("cnn", "19x24"): r"L=30 windows need captures of at least 30 frames.*the shortest has 3",

@@ -152,13 +152,17 @@ def test_the_rule_is_chosen_on_inner_folds_of_the_training_subjects_alone():
 
 
 def _captures(seed=0):
+    """8 captures of each of three classes, 30 frames of 4 x 4 cells: rest (readings 0..2), a press (rest,
+    then a ramp up to 200 held) and a pat (rest, then 200 on and off every 2 frames), on 2 x 2 cells."""
     rng = np.random.default_rng(seed)
-    rest = [rng.integers(0, 3, (20, 4, 4)).astype(np.float32) for _ in range(8)]
-    ramp = np.minimum(np.arange(20) * 25, 200).astype(np.float32)
-    press = [ramp[:, None, None] * np.ones((1, 4, 4), np.float32) + rng.integers(0, 3, (20, 4, 4)) for _ in range(8)]
-    pat = np.tile(np.array([0, 200], np.float32).repeat(2), 5)
-    pats = [pat[:, None, None] * np.ones((1, 4, 4), np.float32) + rng.integers(0, 3, (20, 4, 4)) for _ in range(8)]
-    return rest + press + pats, np.array(["rest"] * 8 + ["press"] * 8 + ["pat"] * 8, dtype=object)
+    ones = np.zeros((1, 4, 4), np.float32)
+    ones[:, 1:3, 1:3] = 1.0
+    press = np.r_[np.zeros(10), np.minimum(np.arange(1, 21) * 25, 200)].astype(np.float32)
+    pat = np.r_[np.zeros(10), np.tile([0, 0, 200, 200], 5)].astype(np.float32)
+    out = [rng.integers(0, 3, (30, 4, 4)).astype(np.float32) for _ in range(8)]
+    out += [press[:, None, None] * ones + rng.integers(0, 3, (30, 4, 4)) for _ in range(8)]
+    out += [pat[:, None, None] * ones + rng.integers(0, 3, (30, 4, 4)) for _ in range(8)]
+    return out, np.array(["rest"] * 8 + ["press"] * 8 + ["pat"] * 8, dtype=object)
 
 
 def test_two_stage_probabilities_are_p_touch_times_the_gesture_classifiers():
@@ -176,18 +180,26 @@ def test_two_stage_probabilities_are_p_touch_times_the_gesture_classifiers():
     F = est.detector_.transform(test)
     t = est.touch_proba(F)
     np.testing.assert_allclose(P[:, 2], 1.0 - t)  # P(idle) = 1 - P(touch)
-    G = est.gestures_.proba_rows(F)  # the gesture classifier's, over its own classes (pat, press)
+    G = est.method_.proba_rows(F)  # the gesture classifier's, over its own classes (pat, press)
     np.testing.assert_allclose(P[:, :2], t[:, None] * G)
     np.testing.assert_allclose(P.sum(axis=1), 1.0)
     assert (P.argmax(axis=1) == np.repeat([2, 1, 0], 8)).mean() >= 0.9  # the toy classes are easy
 
 
-def test_two_stage_refuses_without_an_idle_class_or_without_idle_samples():
+def test_two_stage_finds_the_class_without_contact_or_refuses_a_named_one_it_lacks():
     from touchbench.classifiers.fitting import fit_pipeline
 
     caps, y = _captures()
     sensor = SensorSpec("toy", (4, 4), 20.0, (0, 255))
-    with pytest.raises(TouchbenchError, match="name the idle class"):
-        fit_pipeline([], "two-stage", {"features": ["touch-rhythm"]}, 0, caps, y, None, sensor)
-    with pytest.raises(TouchbenchError, match="need both the idle class 'rest' and touches"):
-        fit_pipeline([], "two-stage", {"features": ["touch-rhythm"], "idle": "rest"}, 0, caps[8:], y[8:], None, sensor)
+    # no idle named: 'rest' (readings 0..2, never 10 noise floors above rest) is the one class without contact
+    fm = fit_pipeline([], "two-stage", {"features": ["touch-rhythm"], "params": {"n_estimators": 5}}, 0, caps, y,
+                      None, sensor)
+    assert fm.estimator.selection_note_ == "two-stage: idle class 'rest' found from the data (the one class without contact)"
+    assert fm.estimator.detector_ is not None
+    # the touches alone: no class without contact, the pipeline alone (P(touch) = 1)
+    fm = fit_pipeline([], "two-stage", {"features": ["touch-rhythm"], "params": {"n_estimators": 5}}, 0, caps[8:],
+                      y[8:], None, sensor)
+    assert fm.estimator.detector_ is None and "the pipeline alone" in fm.estimator.selection_note_
+    np.testing.assert_allclose(fm.window_proba(caps[8:10]).sum(axis=1), 1.0)
+    with pytest.raises(TouchbenchError, match="the idle class 'idle' is not among the training samples' classes"):
+        fit_pipeline([], "two-stage", {"features": ["touch-rhythm"], "idle": "idle"}, 0, caps, y, None, sensor)

@@ -32,9 +32,14 @@ a classifier of what: Ward, Lukowicz & Gellersen 2011's segment and event
 view of continuous recognition; an interpretation, not their method).
 
 ``idle`` names the idle class; the ``stream`` scheme gives its own when the
-method's entry does not (``touchbench.engine.live.with_idle``). Refused: no
-idle class given, a training set without idle samples or without touch
-samples, and what the pipeline's parts refuse.
+method's entry does not (``touchbench.engine.live.with_idle``). Without
+one, the class without contact is found from the data as ``quiet-gated``
+finds it (:func:`touchbench.classifiers.quiet.quiet_class`: the one class
+whose median ``above10_frames`` of ``contact-evidence`` is at most 0.05;
+HAART's ``notouch``); with no such class (every class a touch) it is the
+pipeline alone, and ``selection_note_`` (a task's notes) says which. Refused:
+an idle class named that the training samples lack, and what the pipeline's
+parts refuse.
 """
 
 from __future__ import annotations
@@ -46,15 +51,19 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.validation import check_is_fitted
 
 from ..core.errors import TouchbenchError
-from ..features.base import check_captures
+from ..features.base import check_captures, feature_set_refusal
+from ..features.contact import ContactEvidence
 from ._util import build, seed_int
 from .base import CLASSIFIERS, ParamError, check_nested_params
+from .quiet import GATE_SET, QUIET_COLUMN, quiet_class
 from .fitting import FittedMethod, capture_labels, feature_specs, fit_features, fit_on_codes, pipeline_refusal
 
 NAME = "two-stage"
 SOURCE = "touchbench (docs/research/live-recognition.md): a touch detector and a gesture classifier on one feature matrix"
 #: the detector's label for every class other than idle
 TOUCH = "touch"
+#: the most a class's median ``above10_frames`` may be for it to be the class without contact (quiet-gated's)
+QUIET_FRAMES = 0.05
 
 
 def check_params(params: dict[str, Any]) -> None:
@@ -114,9 +123,11 @@ class TwoStage(ClassifierMixin, BaseEstimator):
         self.random_state = random_state
 
     def check_sensor(self, sensor: Any, min_frames: int | None = None) -> str | None:
-        """Why the pipeline cannot serve ``sensor``, or None."""
-        return pipeline_refusal(feature_specs(self.features), str(self.estimator), dict(self.params or {}), sensor,
-                                min_frames)
+        """Why the pipeline cannot serve ``sensor``, or, with no idle class named, why contact-evidence (which
+        finds it) cannot; None when both serve."""
+        found = None if self.idle is not None else feature_set_refusal(GATE_SET, {}, sensor, min_frames)
+        return found or pipeline_refusal(feature_specs(self.features), str(self.estimator), dict(self.params or {}),
+                                         sensor, min_frames)
 
     def fit(self, X: Sequence[np.ndarray], y: Any, groups: Any = None, class_names: Any = None) -> "TwoStage":
         """Fit the feature sets once, the detector on every sample (idle or touch) and the gesture
@@ -125,29 +136,49 @@ class TwoStage(ClassifierMixin, BaseEstimator):
         check_params(self.get_params(deep=False))
         captures = check_captures(X, name=NAME)
         y = capture_labels(y, captures, NAME)
-        if self.idle is None:
-            raise TouchbenchError(f"{NAME}: name the idle class (params: {{idle: notouch}}); a stream evaluation "
-                                  "gives its own")
-        names = np.asarray(class_names).astype(str) if class_names is not None else None
-        touch = (names[y.astype(np.int64)] if names is not None else y.astype(str)) != self.idle
-        self.idle_ = y[~touch][0] if (~touch).any() else None
-        if touch.all() or not touch.any():
-            raise TouchbenchError(f"{NAME}: the training samples need both the idle class {self.idle!r} and "
-                                  f"touches (got {int((~touch).sum())} idle of {len(y)})")
         self.classes_ = np.unique(y)
+        touch = self._touches(captures, y, class_names)
         sets, F = fit_features(feature_specs(self.features), captures, y, self.sensor)
         g = None if groups is None else np.asarray(groups)
         params, seed = dict(self.params or {}), seed_int(self.random_state)
-        det = fit_on_codes(str(self.estimator), {**params, **dict(self.detector_params or {})}, seed, F,
-                           np.where(touch, TOUCH, "~idle"), g, sensor=self.sensor)
-        gest = fit_on_codes(str(self.estimator), params, seed, F[touch] if isinstance(F, np.ndarray) else
-                            [F[i] for i in np.flatnonzero(touch)], y[touch], None if g is None else g[touch],
+        det = None if touch is None else fit_on_codes(
+            str(self.estimator), {**params, **dict(self.detector_params or {})}, seed, F,
+            np.where(touch, TOUCH, "~idle"), g, sensor=self.sensor)
+        keep = np.ones(len(y), dtype=bool) if touch is None else touch
+        gest = fit_on_codes(str(self.estimator), params, seed, F[keep] if isinstance(F, np.ndarray) else
+                            [F[i] for i in np.flatnonzero(keep)], y[keep], None if g is None else g[keep],
                             sensor=self.sensor)
-        self.detector_, self.gestures_ = FittedMethod(sets, det), FittedMethod(sets, gest)
+        self.detector_ = None if det is None else FittedMethod(sets, det)
+        self.method_ = FittedMethod(sets, gest)
         return self
 
+    def _touches(self, captures: list[np.ndarray], y: np.ndarray, class_names: Any) -> np.ndarray | None:
+        """Which samples are touches (None: no idle class, the pipeline alone); sets ``idle_`` (the idle
+        class as ``y`` writes it) and ``selection_note_``."""
+        names = np.asarray(class_names).astype(str) if class_names is not None else y.astype(str)
+        as_named = names[y.astype(np.int64)] if class_names is not None else names
+        if self.idle is not None:
+            if not (as_named == self.idle).any():
+                raise TouchbenchError(f"{NAME}: the idle class {self.idle!r} is not among the training samples' "
+                                      f"classes ({', '.join(sorted(set(as_named)))})")
+            idle = self.idle
+            how = "named"
+        else:
+            codes = np.searchsorted(self.classes_, y)
+            G = np.asarray(ContactEvidence(sensor=self.sensor).transform(captures), dtype=np.float64)
+            column = ContactEvidence(sensor=self.sensor).feature_names(tuple(self.sensor.grid)).index(QUIET_COLUMN)
+            q = quiet_class(codes, G[:, column], QUIET_FRAMES)
+            idle = None if q is None else str(np.unique(as_named)[q]) if class_names is None else str(names[self.classes_[q]])
+            how = "found from the data (the one class without contact)"
+        self.idle_ = None if idle is None else y[as_named == idle][0]
+        self.selection_note_ = (f"{NAME}: idle class {idle!r} {how}" if idle is not None else
+                                f"{NAME}: no class without contact in the training samples: the pipeline alone")
+        return None if idle is None else as_named != idle
+
     def touch_proba(self, F: Any) -> np.ndarray:
-        """``P(touch)`` of feature rows ``F`` (the detector's)."""
+        """``P(touch)`` of feature rows ``F`` (the detector's; 1 without an idle class)."""
+        if self.detector_ is None:
+            return np.ones(len(F))
         P = self.detector_.proba_rows(F)
         return P[:, list(self.detector_.classes).index(TOUCH)] if TOUCH in self.detector_.classes else \
             np.zeros(len(P))
@@ -155,12 +186,13 @@ class TwoStage(ClassifierMixin, BaseEstimator):
     def predict_proba(self, X: Sequence[np.ndarray]) -> np.ndarray:
         """Rows over ``classes_``: ``1 - P(touch)`` for idle, ``P(touch) P(g | touch)`` for each gesture."""
         check_is_fitted(self)
-        F = self.detector_.transform(check_captures(X, name=NAME))
+        F = self.method_.transform(check_captures(X, name=NAME))
         t = self.touch_proba(F)
         out = np.zeros((len(t), len(self.classes_)))
-        out[:, int(np.searchsorted(self.classes_, self.idle_))] = 1.0 - t
-        G = self.gestures_.proba_rows(F)
-        cols = np.searchsorted(self.classes_, self.gestures_.classes)
+        if self.idle_ is not None:
+            out[:, int(np.searchsorted(self.classes_, self.idle_))] = 1.0 - t
+        G = self.method_.proba_rows(F)
+        cols = np.searchsorted(self.classes_, self.method_.classes)
         out[:, cols] = t[:, None] * G
         return out
 

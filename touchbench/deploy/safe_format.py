@@ -72,6 +72,7 @@ TRUSTED_TYPES: tuple[str, ...] = (
     "touchbench.classifiers.search.NestedSelection",
     "touchbench.classifiers.touch.NestedTunedExtraTrees",
     "touchbench.classifiers.touch.SelectedExtraTrees",
+    "touchbench.classifiers.two_stage.TwoStage",
     "touchbench.classifiers.xgb.XGBoostClassifier",
     "touchbench.classifiers.zhou.MatlabKNNClassifier",
     "touchbench.classifiers.zhou.MatlabSVMClassifier",
