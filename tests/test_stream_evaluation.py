@@ -234,3 +234,60 @@ def test_stream_by_recording_name_decides_what_the_evaluation_decided_with_every
     res = CliRunner().invoke(cli, ["stream", str(model), str(tmp_path / "rec.csv"), *table, "--recording", "rec-p2",
                                    "--no-realtime"], catch_exceptions=False)
     assert "the model file's default rule (the toolkit's default rule)" in res.stderr
+
+
+CHOSEN = """\
+name: live-recorded-chosen
+dataset:
+  name: {data}
+  format: table
+  options: {{capture_columns: [recording], frame_labels: label, grid: [4, 4], frame_rate: 10, value_range: [0, 100]}}
+target: gesture
+scheme:
+  name: stream
+  base: loso
+  source: recorded
+  idle: idle
+  windows_s: [0.5, 1.0]
+  hop_s: 0.2
+  train_on: streams
+  choose_rule: true
+  rules: [{{name: max, threshold: 0.9}}, {{name: touch, idle: idle, begin: 0.6, end: 0.4}}]
+methods:
+  - {{name: touch-live-fast, params: {{params: {{n_estimators: 10}}}}}}
+seed: 0
+"""
+
+
+def test_a_live_method_trained_on_streams_keeps_the_rule_its_inner_folds_chose(tmp_path, monkeypatch):
+    """The rule chosen inside a fold (on its training subjects) is the one `train --fold` writes into the
+    model file, and `stream` with that default decides what the evaluation decided with it."""
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    _recordings_csv(tmp_path / "rec.csv")
+    (tmp_path / "p.yaml").write_text(CHOSEN.format(data=tmp_path / "rec.csv"))
+    res = CliRunner().invoke(cli, ["run", str(tmp_path / "p.yaml"), "--out", str(tmp_path / "res"), "--jobs", "1",
+                                   "--no-progress"], catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    assert "inner choice (default)" in res.output
+    live = json.loads(pd.read_parquet(tmp_path / "res" / "scores.parquet").set_index("fold").loc["subject=p2", "live"])
+    choice = live["choice"]
+    assert choice["inner_folds"] == 2 and len(choice["frame_accuracy"]) == 2  # p1 and p3 left out in turn
+    assert live["train_on"] == "streams"
+    k = choice["rule"]
+    res = CliRunner().invoke(cli, ["train", str(tmp_path / "p.yaml"), "--fold", "p2", "--out", str(tmp_path / "m.joblib")],
+                             catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    manifest = json.loads((tmp_path / "m.joblib.json").read_text())
+    assert manifest["stream_rule"]["name"] == live["rules"][k]["name"]
+    assert manifest["stream_rule_source"].startswith("chosen by 2 inner folds over the model's training subjects")
+    assert manifest["classifier"]["params"]["idle"] == "idle"  # the scheme's idle class, given to two-stage
+    table = ["--format", "table", "--capture-columns", "recording", "--frame-labels", "label", "--grid", "4x4",
+             "--frame-rate", "10", "--value-range", "0..100"]
+    res = CliRunner().invoke(cli, ["stream", str(tmp_path / "m.joblib"), str(tmp_path / "rec.csv"), *table,
+                                   "--recording", "rec-p2", "--hop", "0.2", "--no-realtime", "--jsonl"],
+                             catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    assert "chosen by 2 inner folds" in res.stderr
+    printed = [json.loads(line) for line in res.stdout.splitlines() if line.startswith("{")]
+    decided = decisions_per_frame([d["frame"] for d in printed], [d["label"] for d in printed], 50, "undecided")
+    assert decided.tolist() == _expand(live["streams"][0]["results"][k]["decisions"], 50).tolist()
