@@ -97,3 +97,15 @@ def test_msd_and_sd_unchanged_by_the_sort(real_haart):
     series = np.stack(caps).reshape(len(caps), caps[0].shape[0], 64).astype(np.float64)
     q = np.quantile(series, [0.25, 0.5, 0.75], axis=1, method="hazen")
     assert_array_equal(x[:, 3:6], np.moveaxis(q, 0, 1))
+
+
+def test_touch_windows_agree_with_the_reference_sets(real_haart):
+    """touch-windows: mean and sd over its windows of the three reference sets (ties in a spectrum's
+    peak among them: the fast code must find the same peak)."""
+    caps = real_haart.captures[:20]
+    tw = FEATURES.create("touch-windows", sensor=real_haart.sensor).fit(caps)
+    starts, length = tw.window_starts(caps[0].shape[0])
+    refs = [cls(sensor=real_haart.sensor) for cls in (RefTouchRhythm, RefCellRhythm, RefContactMotion)]
+    per_window = np.stack([np.hstack([r.fit(w).transform(w) for r in refs])
+                           for w in ([c[s:s + length] for c in caps] for s in starts)])
+    assert_allclose(tw.transform(caps), np.hstack([per_window.mean(axis=0), per_window.std(axis=0)]), **TOL)

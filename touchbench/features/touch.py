@@ -232,9 +232,8 @@ def spectrum(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
     hann, f = _hann_freqs(t, float(fs))
     d = x - x.mean(axis=-1, keepdims=True)
     d[x.max(axis=-1) == x.min(axis=-1)] = 0.0  # a constant series has no spectrum (exactly)
-    d *= hann
-    z = np.fft.rfft(d, axis=-1)[..., 1:]
-    return z.real * z.real + z.imag * z.imag, f
+    p = np.abs(np.fft.rfft(d * hann, axis=-1)) ** 2
+    return p[..., 1:], f
 
 
 def spectral_summary(p: np.ndarray, f: np.ndarray) -> dict[str, np.ndarray]:
