@@ -10,7 +10,11 @@ A set whose parameters must be stated gets the value that fits the data
 Runs on one core: BLAS/OpenMP threads are set to 1 before numpy loads and
 the process is pinned to one CPU (``--cpu``). Each set extracts features
 from all captures ``--runs`` times (after a short warm-up); the table gives
-the median (and min) wall-clock and CPU microseconds per capture. tsfresh
+the median (and min) wall-clock and CPU microseconds per capture, and the
+CPU time over the floor: one numpy pass over a capture's frames
+(``frames.astype(float64).sum(axis=(1, 2))`` per capture, timed the same way
+in the same run), so a figure stays comparable on a loaded machine; the load
+average is printed beside them. tsfresh
 (benchmark-only dependency, the ``bench`` extra: ``pip install tsfresh``)
 runs ``extract_features`` with ``MinimalFCParameters`` on a long table with
 one column per cell (64 series per capture), ``n_jobs=0``; building that
@@ -65,6 +69,12 @@ def time_runs(fn, runs: int) -> tuple[list[float], list[float]]:
     return wall, cpu
 
 
+def floor_us(caps, runs: int) -> float:
+    """Median CPU microseconds per capture of one numpy pass over its frames (the floor)."""
+    _, cpu = time_runs(lambda: [c.astype(np.float64).sum(axis=(1, 2)) for c in caps], max(runs, 3))
+    return statistics.median(cpu) / len(caps) * 1e6
+
+
 def tsfresh_frame(captures):
     import pandas as pd
 
@@ -108,7 +118,11 @@ def main(argv=None) -> int:
 
     names = args.sets or FEATURES.names()
     rows = {}
-    print(f"\n{'set':14s} {'size':>6s} {'median us/cap':>14s} {'min us/cap':>11s} {'cpu us/cap':>11s} {'s for all':>10s}")
+    floor = floor_us(caps, args.runs)
+    print(f"floor (one numpy pass over a capture's frames): {floor:.1f} us CPU per capture; "
+          f"load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+    print(f"\n{'set':14s} {'size':>6s} {'median us/cap':>14s} {'min us/cap':>11s} {'cpu us/cap':>11s} {'x floor':>8s} "
+          f"{'s for all':>10s}")
     for name in names:
         fs = FEATURES.create(name, sensor=ds.sensor, **stated_params(name, caps))
         fs.fit_transform(caps[:20])  # warm-up (imports, caches)
@@ -123,11 +137,13 @@ def main(argv=None) -> int:
             "runs_seconds": wall,
         }
         r = rows[name]
+        r["cpu_over_floor"] = r["median_cpu_us_per_capture"] / floor
         print(f"{name:14s} {r['size']:6d} {r['median_us_per_capture']:14.1f} {r['min_us_per_capture']:11.1f} "
-              f"{r['median_cpu_us_per_capture']:11.1f} {med:10.2f}", flush=True)
+              f"{r['median_cpu_us_per_capture']:11.1f} {r['cpu_over_floor']:8.1f} {med:10.2f}", flush=True)
     rss_features = peak_rss_mb()
 
-    result = {"dataset": args.dataset, "captures": n, "runs": args.runs, "sets": rows, "peak_rss_mb_features": rss_features}
+    result = {"dataset": args.dataset, "captures": n, "runs": args.runs, "sets": rows, "peak_rss_mb_features": rss_features,
+              "floor_cpu_us_per_capture": floor, "load_average": list(os.getloadavg())}
 
     ts = None
     if not args.no_tsfresh:

@@ -79,6 +79,7 @@ import numpy as np
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError
+from .numerics import sort_last
 
 #: multiples of the noise floor above the rest level at which contact is counted
 NOISE_UNITS: tuple[int, ...] = (3, 10, 30)
@@ -152,13 +153,15 @@ class ContactEvidence(FeatureSet):
     def _heights(self, stack: np.ndarray) -> tuple[np.ndarray, float]:
         """``(N, T, H, W)`` -> heights above the sensor's zero ``(N, T, C)`` float64 and the full scale."""
         lo, hi = self._range()
-        flipped = self.sensor is not None and not self.sensor.higher_is_more_pressure
-        return heights(stack, (lo, hi), flipped), hi - lo
+        return heights(stack, (lo, hi), self._flipped()), hi - lo
+
+    def _flipped(self) -> bool:
+        return self.sensor is not None and not self.sensor.higher_is_more_pressure
 
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         u, full = self._heights(stack)
         n, t, c = u.shape
-        flat = np.sort(u.reshape(n, t * c), axis=1)
+        flat = sorted_heights(stack, self._range(), self._flipped())
         cell_mean = u.mean(axis=1)
         level = [flat.mean(axis=1), flat[:, round(0.5 * (t * c - 1))], flat[:, round(0.95 * (t * c - 1))],
                  flat[:, -1], cell_mean.min(axis=1), cell_mean.max(axis=1)]
@@ -181,6 +184,15 @@ def heights(stack: np.ndarray, value_range: tuple[float, float], flipped: bool =
     n, t, h, w = np.shape(stack)
     x = np.asarray(stack, dtype=np.float64).reshape(n, t, h * w)
     return hi - x if flipped else x - lo
+
+
+def sorted_heights(stack: np.ndarray, value_range: tuple[float, float], flipped: bool = False) -> np.ndarray:
+    """Each capture's heights (:func:`heights`) sorted, ``(N, T * H * W)``: the readings are sorted
+    first (by radix sort for integers of up to 16 bits) and mapped after, the same values as sorting
+    the heights, since a height is a monotone function of the reading."""
+    n = np.shape(stack)[0]
+    srt = heights(sort_last(np.asarray(stack).reshape(n, -1)).reshape(n, 1, -1, 1), value_range, flipped).reshape(n, -1)
+    return srt[:, ::-1] if flipped else srt
 
 
 def noise_floor(u: np.ndarray, floor: float) -> tuple[np.ndarray, np.ndarray]:

@@ -8,7 +8,7 @@ import numpy as np
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureSet, cell_names
 from .gaus_common import GAUS_PAPER
-from .numerics import as_f64, hazen_quantiles, moments, total_variation
+from .numerics import as_f64, hazen_quantiles, moments, sort_last, total_variation
 
 MSD_STATS = ("min", "max", "mean", "q1", "median", "q3", "area", "tv", "iqr", "var", "skew", "kurt")
 
@@ -21,7 +21,7 @@ def cell_series(stack: np.ndarray) -> np.ndarray:
 
 def sorted_f64(series: np.ndarray) -> np.ndarray:
     """Sort along the last axis in the native dtype (faster for integers), then float64."""
-    return as_f64(np.sort(series, axis=-1))
+    return as_f64(sort_last(series))
 
 
 @FEATURES.register("msd", description="12 statistics of every cell's time series")

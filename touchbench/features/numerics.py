@@ -40,6 +40,14 @@ def as_f64(a: np.ndarray) -> np.ndarray:
     return np.asarray(a, dtype=np.float64)
 
 
+def sort_last(x: np.ndarray) -> np.ndarray:
+    """``numpy.sort`` along the last axis, by radix sort for integers of up to 16 bits (numpy's
+    ``kind="stable"`` for them; several times faster than its quicksort there). The sorted values are
+    the same whatever the algorithm."""
+    small_int = x.dtype.kind in "biu" and x.dtype.itemsize <= 2
+    return np.sort(x, axis=-1, kind="stable" if small_int else None)
+
+
 def moments(x: np.ndarray, *, ddof_scale: int = 0, presorted: bool = False, overwrite: bool = False) -> dict[str, np.ndarray]:
     """Sum, mean, variance (ddof=1), skewness, kurtosis, min, max and range along the last axis.
 

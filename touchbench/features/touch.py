@@ -69,6 +69,8 @@ Interpretations and limits shared by the sets:
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from ..datasets.model import SensorSpec
@@ -91,6 +93,45 @@ _EPS = 1e-12
 
 def _band_name(lo: float, hi: float) -> str:
     return f"{lo:g}-{hi:g}Hz" if np.isfinite(hi) else f"{lo:g}Hz+"
+
+
+@functools.lru_cache(maxsize=128)
+def _band_slices(n_freq: int, f0: float, bands: tuple[tuple[float, float], ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Start and end (exclusive) indices of each band in the frequencies ``f0 * (1..n_freq)`` (those of
+    :func:`spectrum`); an empty band is (0, 0)."""
+    f = f0 * np.arange(1, n_freq + 1, dtype=np.float64)
+    starts, ends = np.zeros(len(bands), dtype=np.intp), np.zeros(len(bands), dtype=np.intp)
+    for i, (lo, hi) in enumerate(bands):
+        m = np.flatnonzero((f > lo) & (f <= hi))
+        if m.size:
+            starts[i], ends[i] = m[0], m[-1] + 1
+    return starts, ends
+
+
+def band_sums(p: np.ndarray, f: np.ndarray, bands: tuple[tuple[float, float], ...]) -> np.ndarray:
+    """Sums of ``p`` (..., F) over the frequencies ``f`` (those of :func:`spectrum`) in each band
+    (lo, hi] -> (..., len(bands)); 0 for a band without frequencies.
+
+    Read off one cumulative sum in frequency order, so a capture's value never depends on how many
+    captures share its batch (numpy's plain ``sum`` may change its summation order with the array's
+    shape). The cumulative sum never decreases (``p >= 0``), so no band sum is negative.
+    """
+    if not f.size:
+        return np.zeros(p.shape[:-1] + (len(bands),))
+    starts, ends = _band_slices(f.size, float(f[0]), tuple(bands))
+    c = np.zeros(p.shape[:-1] + (p.shape[-1] + 1,))
+    np.cumsum(p, axis=-1, out=c[..., 1:])
+    return c[..., ends] - c[..., starts]
+
+
+@functools.lru_cache(maxsize=128)
+def _hann_freqs(t: int, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """The Hann window of ``t`` frames and the positive rfft frequencies (read-only, cached)."""
+    hann = np.hanning(t) if t > 1 else np.ones(1)
+    f = np.fft.rfftfreq(t, 1.0 / fs)[1:]
+    hann.flags.writeable = False
+    f.flags.writeable = False
+    return hann, f
 
 
 class _TouchBase(FeatureSet):
@@ -158,6 +199,12 @@ def pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Captures shorter than ``MIN_FRAMES`` are padded by repeating the last
     frame first (T' = max(T, MIN_FRAMES)).
     """
+    s, base, _ = _pressure(stack)
+    return s, base
+
+
+def _pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`pressure`, plus the padded values themselves ``(N, T', H*W)`` float64."""
     n, t, h, w = stack.shape
     c = np.asarray(stack, dtype=np.float64).reshape(n, t, h * w)
     if t < MIN_FRAMES:
@@ -167,34 +214,26 @@ def pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     base = np.partition(c, k, axis=1)[:, k]
     s = c - base[:, None, :]
     np.maximum(s, 0.0, out=s)
-    return s, base
+    return s, base, c
 
 
-def _hann(t: int) -> np.ndarray:
-    return np.hanning(t) if t > 1 else np.ones(1)
+def _gradient(x: np.ndarray) -> np.ndarray:
+    """``numpy.gradient`` along the last axis (unit spacing, first-order edges; at least 2 samples)."""
+    g = np.empty_like(x)
+    g[..., 1:-1] = (x[..., 2:] - x[..., :-2]) / 2.0
+    g[..., 0] = x[..., 1] - x[..., 0]
+    g[..., -1] = x[..., -1] - x[..., -2]
+    return g
 
 
 def spectrum(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
     """Power spectrum (DC removed) of the mean-removed, Hann-windowed series along axis -1; frequencies."""
     t = x.shape[-1]
+    hann, f = _hann_freqs(t, float(fs))
     d = x - x.mean(axis=-1, keepdims=True)
     d[x.max(axis=-1) == x.min(axis=-1)] = 0.0  # a constant series has no spectrum (exactly)
-    p = np.abs(np.fft.rfft(d * _hann(t), axis=-1)) ** 2
-    f = np.fft.rfftfreq(t, 1.0 / fs)
-    return p[..., 1:], f[1:]
-
-
-def band_sum(p: np.ndarray, f: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """Sum of ``p`` over the frequencies in (lo, hi], along the last axis.
-
-    Summed in frequency order (a cumulative sum), so a capture's value never
-    depends on how many captures share its batch: numpy's plain ``sum``
-    may change its summation order with the array's shape.
-    """
-    m = np.flatnonzero((f > lo) & (f <= hi))
-    if m.size == 0:
-        return np.zeros(p.shape[:-1])
-    return np.cumsum(p[..., m[0]:m[-1] + 1], axis=-1)[..., -1]
+    p = np.abs(np.fft.rfft(d * hann, axis=-1)) ** 2
+    return p[..., 1:], f
 
 
 def spectral_summary(p: np.ndarray, f: np.ndarray) -> dict[str, np.ndarray]:
@@ -202,16 +241,13 @@ def spectral_summary(p: np.ndarray, f: np.ndarray) -> dict[str, np.ndarray]:
     tot = p.sum(axis=-1)
     none = tot <= 0
     safe = np.where(none, 1.0, tot)
-    out: dict[str, np.ndarray] = {}
-    for lo, hi in BANDS:
-        out[f"band{_band_name(lo, hi)}"] = np.where(none, 0.0, band_sum(p, f, lo, hi) / safe)
-    if p.shape[-1]:
-        out["fpeak"] = np.where(none, 0.0, f[np.argmax(p, axis=-1)])
-    else:
-        out["fpeak"] = np.zeros(p.shape[:-1])
-    out["fcent"] = np.where(none, 0.0, (p * f).sum(axis=-1) / safe)
+    fr = band_sums(p, f, BANDS) / safe[..., None]
+    fr[none] = 0.0
+    out: dict[str, np.ndarray] = {f"band{_band_name(lo, hi)}": fr[..., i] for i, (lo, hi) in enumerate(BANDS)}
+    out["fpeak"] = np.where(none, 0.0, f[np.argmax(p, axis=-1)]) if p.shape[-1] else np.zeros(p.shape[:-1])
+    out["fcent"] = np.where(none, 0.0, np.einsum("...i,i->...", p, f) / safe)
     q = p / safe[..., None]
-    ent = -(q * np.log(np.where(q > 0, q, 1.0))).sum(axis=-1)
+    ent = -np.einsum("...i,...i->...", q, np.log(np.where(q > 0, q, 1.0)))
     out["fent"] = np.where(none, 0.0, ent / np.log(max(p.shape[-1], 2)))
     out["logpow"] = np.log1p(np.where(none, 0.0, tot))
     return out
@@ -221,17 +257,19 @@ def _series_stats(s: np.ndarray, fs: float) -> dict[str, np.ndarray]:
     """Statistics of series ``s`` (N, K, T) -> dict of (N, K) arrays (see the module docstring)."""
     t = s.shape[-1]
     srt = np.sort(s, axis=-1)
-    mo = moments(srt.copy(), presorted=True, overwrite=True)
+    order = srt[..., [int(round(q / 100 * (t - 1))) for q in QUANTS] + [t - 1]]
+    mo = moments(srt, presorted=True, overwrite=True)
     mu = mo["mean"]
     d = s - mu[..., None]
-    sd = np.sqrt(np.einsum("...i,...i->...", d, d) / t)
+    ac0 = np.einsum("...i,...i->...", d, d)
+    sd = np.sqrt(ac0 / t)
     out: dict[str, np.ndarray] = {"mean": mu, "std": sd}
-    for q in QUANTS:
-        out[f"p{q}"] = srt[..., int(round(q / 100 * (t - 1)))]
-    out["max"] = srt[..., -1]
+    for i, q in enumerate(QUANTS):
+        out[f"p{q}"] = order[..., i]
+    out["max"] = order[..., -1]
     out["skew"] = mo["skew"]
     out["kurt"] = mo["kurt"]
-    dd = np.diff(s, axis=-1)
+    dd = s[..., 1:] - s[..., :-1]
     mad1 = np.abs(dd).mean(axis=-1)
     out["mad1"] = mad1
     out["dstd"] = dd.std(axis=-1)
@@ -240,17 +278,16 @@ def _series_stats(s: np.ndarray, fs: float) -> dict[str, np.ndarray]:
     out["madn"] = np.where(flat, 0.0, mad1 / np.where(flat, 1.0, sd))
     above = d > 0
     out["mcr"] = np.where(flat, 0.0, (above[..., 1:] != above[..., :-1]).mean(axis=-1))
-    p, f = spectrum(s, fs)
-    for k, v in spectral_summary(p, f).items():
-        out[k] = v
-    ac0 = np.einsum("...i,...i->...", d, d)
+    out.update(spectral_summary(*spectrum(s, fs)))
     safe = np.where(flat, 1.0, ac0)
-    for lag in AC_LAGS:
+    ac = np.zeros(ac0.shape + (len(AC_LAGS),))
+    for i, lag in enumerate(AC_LAGS):
         if lag < t:
-            ac = np.einsum("...i,...i->...", d[..., lag:], d[..., :-lag]) / safe
-        else:
-            ac = np.zeros_like(ac0)
-        out[f"ac{lag}"] = np.where(flat, 0.0, ac)
+            ac[..., i] = np.einsum("...i,...i->...", d[..., lag:], d[..., :-lag])
+    ac /= safe[..., None]
+    ac[flat] = 0.0
+    for i, lag in enumerate(AC_LAGS):
+        out[f"ac{lag}"] = ac[..., i]
     return out
 
 
@@ -262,9 +299,23 @@ _STAT_NAMES: list[str] = (
 )
 
 
+@functools.lru_cache(maxsize=64)
 def _grid_coords(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
-    yy, xx = np.meshgrid(np.arange(h, dtype=np.float64), np.arange(w, dtype=np.float64), indexing="ij")
-    return yy.ravel(), xx.ravel()
+    """Row and column of every cell, row-major (read-only, cached)."""
+    yy = np.repeat(np.arange(h, dtype=np.float64), w)
+    xx = np.tile(np.arange(w, dtype=np.float64), h)
+    yy.flags.writeable = False
+    xx.flags.writeable = False
+    return yy, xx
+
+
+@functools.lru_cache(maxsize=64)
+def _moment_coords(h: int, w: int) -> np.ndarray:
+    """``(4, H*W)``: row, column, row squared, column squared of every cell (read-only, cached)."""
+    yy, xx = _grid_coords(h, w)
+    out = np.stack([yy, xx, yy * yy, xx * xx])
+    out.flags.writeable = False
+    return out
 
 
 @FEATURES.register("touch-rhythm", description="rhythm, level and movement statistics of 11 frame-level series (touchbench)")
@@ -312,50 +363,47 @@ class TouchRhythm(_TouchBase):
         names += ["grad_rel", "tdiff_rel"]
         return names
 
+    def n_features(self, grid: tuple[int, int]) -> int:
+        return len(SERIES) * len(_STAT_NAMES) + 7 + 3 * (len(CELL_RANKS) + 1) + 2
+
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         n, _, h, w = stack.shape
-        s, base = pressure(stack)
+        s, base, c = _pressure(stack)
         t = s.shape[1]
-        fs = self._fs()
-        c = np.asarray(stack, dtype=np.float64).reshape(n, -1, h * w)
-        if c.shape[1] < t:
-            c = np.concatenate([c, np.repeat(c[:, -1:], t - c.shape[1], axis=1)], axis=1)
         P = c.sum(axis=2)
         ps = s.sum(axis=2)
         M = c.max(axis=2)
         peak = s.max(axis=(1, 2))
         thr = np.maximum(self.AREA_REL * peak, self._floor(self.AREA_FLOOR))
-        A = (s > thr[:, None, None]).sum(axis=2).astype(np.float64)
-        yy, xx = _grid_coords(h, w)
+        A = np.count_nonzero(s > thr[:, None, None], axis=2).astype(np.float64)
         empty = ps <= 0
-        safe = np.where(empty, 1.0, ps)
-        cy = np.where(empty, (h - 1) / 2.0, np.einsum("ntc,c->nt", s, yy) / safe)
-        cx = np.where(empty, (w - 1) / 2.0, np.einsum("ntc,c->nt", s, xx) / safe)
-        sy = np.sqrt(np.maximum(np.where(empty, 0.0, np.einsum("ntc,c->nt", s, yy * yy) / safe - cy * cy), 0.0))
-        sx = np.sqrt(np.maximum(np.where(empty, 0.0, np.einsum("ntc,c->nt", s, xx * xx) / safe - cx * cx), 0.0))
-        vy = np.gradient(cy, axis=1)
-        vx = np.gradient(cx, axis=1)
-        speed = np.hypot(vx, vy) * (ps > thr[:, None])
+        # pressure-weighted row, column and their squares: one pass over the cells
+        mom = np.einsum("ntc,kc->nkt", s, _moment_coords(h, w)) / np.where(empty, 1.0, ps)[:, None, :]
+        cyx = np.where(empty[:, None, :], np.array([(h - 1) / 2.0, (w - 1) / 2.0])[:, None], mom[:, :2])
+        syx = np.sqrt(np.maximum(np.where(empty[:, None, :], 0.0, mom[:, 2:] - cyx * cyx), 0.0))
+        v = _gradient(cyx)
+        speed = np.hypot(v[:, 1], v[:, 0]) * (ps > thr[:, None])
         mean_ps = ps.mean(axis=1, keepdims=True)
         pn = np.where(mean_ps > 0, ps / np.where(mean_ps > 0, mean_ps, 1.0), 0.0)
-        dP = np.abs(np.diff(P, axis=1, prepend=P[:, :1]))
-        series = np.stack([P, np.log1p(ps), pn, M, A, cy, cx, sy, sx, speed, dP], axis=1)
-        st = _series_stats(series, fs)
-        cols = [st[k] for k in _STAT_NAMES]  # each (N, 11)
-        block = np.stack(cols, axis=2).reshape(n, -1)  # series-major, matching feature_names
-        extra = [base.mean(axis=1), base.max(axis=1), peak, np.log1p(peak)]
+        dP = np.zeros_like(P)
+        np.abs(P[:, 1:] - P[:, :-1], out=dP[:, 1:])
+        series = np.stack([P, np.log1p(ps), pn, M, A, cyx[:, 0], cyx[:, 1], syx[:, 0], syx[:, 1], speed, dP], axis=1)
+        st = _series_stats(series, self._fs())
+        block = np.stack([st[k] for k in _STAT_NAMES], axis=2).reshape(n, -1)  # series-major, matching feature_names
         pmax = ps.max(axis=1, keepdims=True)
-        extra.append(np.where(pmax[:, 0] > 0, (ps > 0.2 * pmax).mean(axis=1), 0.0))
-        extra.append(np.hypot(np.diff(cx, axis=1), np.diff(cy, axis=1)).sum(axis=1))
-        extra.append(np.hypot(cx[:, -1] - cx[:, 0], cy[:, -1] - cy[:, 0]))
-        ncell = h * w
-        ranks = [int(round(r * (ncell - 1))) for r in CELL_RANKS]
-        cm = np.sort(s.mean(axis=1), axis=1)
-        cs = np.sort(s.std(axis=1), axis=1)
-        ds_ = np.abs(np.diff(s, axis=1))
-        cd = np.sort(ds_.mean(axis=1), axis=1)
-        for v in (cm, cs, cd):
-            extra += [v[:, r] for r in ranks] + [v.sum(axis=1)]
+        step = np.diff(cyx, axis=2)
+        extra = [base.mean(axis=1), base.max(axis=1), peak, np.log1p(peak),
+                 np.where(pmax[:, 0] > 0, (ps > 0.2 * pmax).mean(axis=1), 0.0),
+                 np.hypot(step[:, 1], step[:, 0]).sum(axis=1),
+                 np.hypot(cyx[:, 1, -1] - cyx[:, 1, 0], cyx[:, 0, -1] - cyx[:, 0, 0])]
+        ranks = [int(round(r * (h * w - 1))) for r in CELL_RANKS]
+        cell_mean = s.sum(axis=1) / t
+        dev = s - cell_mean[:, None, :]
+        ds_ = np.abs(s[:, 1:] - s[:, :-1])
+        cells = np.sort(np.stack([cell_mean, np.sqrt((dev * dev).sum(axis=1) / t), ds_.sum(axis=1) / (t - 1)], axis=1), axis=2)
+        at = cells[:, :, ranks]
+        for k in range(3):
+            extra += [at[:, k, i] for i in range(len(ranks))] + [cells[:, k].sum(axis=1)]
         g = s.reshape(n, t, h, w)
         grad = np.abs(np.diff(g, axis=3)).sum(axis=(2, 3)) + np.abs(np.diff(g, axis=2)).sum(axis=(2, 3))
         mp = ps.mean(axis=1)
@@ -410,10 +458,8 @@ class CellRhythm(_TouchBase):
         none = tot <= 0
         wc = np.where(none[:, None], 0.0, pw / np.where(none, 1.0, tot)[:, None])
         cellpow = np.where(pw > 0, pw, 1.0)
-        feats = []
-        for lo, hi in BANDS:
-            feats.append((band_sum(p, f, lo, hi) / cellpow * wc).sum(axis=1))
-        fc = (p * f).sum(axis=2) / cellpow
+        feats = list(np.einsum("ncb,nc->bn", band_sums(p, f, BANDS), wc / cellpow))
+        fc = np.einsum("ncf,f->nc", p, f) / cellpow
         feats.append((fc * wc).sum(axis=1))
         fp = f[np.argmax(p, axis=2)] if p.shape[2] else np.zeros(pw.shape)
         feats.append((fp * wc).sum(axis=1))
@@ -490,52 +536,41 @@ class ContactMotion(_TouchBase):
         n, _, h, w = stack.shape
         s, _ = pressure(stack)
         t = s.shape[1]
-        fs = self._fs()
-        fmax = s.max(axis=2)
-        peak = np.sort(fmax, axis=1)[:, int(round(0.95 * (t - 1)))]
-        yy, xx = _grid_coords(h, w)
-        rank = lambda a, q: np.sort(a, axis=1)[:, int(round(q * (a.shape[1] - 1)))]  # noqa: E731
-        floor = self._floor(self.CONTACT_FLOOR)
-        feats = []
-        for r in THRESHOLDS:
-            thr = np.maximum(r * peak, floor)
-            wt = np.maximum(s - thr[:, None, None], 0.0)
-            ws = wt.sum(axis=2)
-            act = ws > 0
-            safe = np.where(act, ws, 1.0)
-            cy = np.einsum("ntc,c->nt", wt, yy) / safe
-            cx = np.einsum("ntc,c->nt", wt, xx) / safe
-            nact = act.sum(axis=1)
-            any_act = nact > 0
-            my = np.where(any_act, (cy * act).sum(axis=1) / np.maximum(nact, 1), (h - 1) / 2.0)
-            mx = np.where(any_act, (cx * act).sum(axis=1) / np.maximum(nact, 1), (w - 1) / 2.0)
-            cy = np.where(act, cy, my[:, None])
-            cx = np.where(act, cx, mx[:, None])
-            area = (wt > 0).sum(axis=2).astype(np.float64)
-            both = act[:, 1:] & act[:, :-1]
-            vy = np.diff(cy, axis=1)
-            vx = np.diff(cx, axis=1)
-            sp = np.hypot(vx, vy) * both
-            nb = np.maximum(both.sum(axis=1), 1)
-            ry = rank(cy, 0.95) - rank(cy, 0.05)
-            rx = rank(cx, 0.95) - rank(cx, 0.05)
-            major_y = (ry >= rx)[:, None]
-            vmaj = np.where(major_y, vy, vx) * both
-            sg = np.sign(vmaj)
-            nz = (sg != 0).sum(axis=1)
-            rev = ((sg[:, 1:] * sg[:, :-1]) < 0).sum(axis=1)
-            feats += [act.mean(axis=1), (np.diff(act.astype(np.int8), axis=1) == 1).sum(axis=1).astype(np.float64),
-                      area.sum(axis=1) / np.maximum(nact, 1), area.max(axis=1), sp.sum(axis=1) / nb, rank(sp, 0.9),
-                      ry, rx, sp.sum(axis=1), np.where(nz > 0, rev / np.maximum(nz, 1), 0.0)]
-            pos = np.where(major_y, cy, cx)
-            pp, f = spectrum(pos, fs)
-            summ = _local_bands(pp, f, self.POS_BANDS)
-            feats += [summ["fpeak"], summ["fcent"]] + summ["bands"]
-            pa, f = spectrum(act.astype(np.float64), fs)
-            summ = _local_bands(pa, f, ())
-            feats += [summ["fpeak"], summ["fcent"]]
-        feats.append(np.log1p(peak))
-        return np.column_stack(feats)
+        peak = np.sort(s.max(axis=2), axis=1)[:, int(round(0.95 * (t - 1)))]
+        # every threshold at once: axis 1 of the arrays below is the threshold
+        thr = np.maximum(np.multiply.outer(peak, THRESHOLDS), self._floor(self.CONTACT_FLOOR))
+        wt = np.maximum(s[:, None] - thr[:, :, None, None], 0.0)  # (N, R, T, C)
+        ws = wt.sum(axis=3)
+        act = ws > 0
+        cyx = np.einsum("nrtc,kc->nrkt", wt, _moment_coords(h, w)[:2]) / np.where(act, ws, 1.0)[:, :, None]
+        nact = act.sum(axis=2)
+        centre = np.array([(h - 1) / 2.0, (w - 1) / 2.0])
+        mean_pos = np.where((nact > 0)[..., None], (cyx * act[:, :, None]).sum(axis=3) / np.maximum(nact, 1)[..., None], centre)
+        cyx = np.where(act[:, :, None], cyx, mean_pos[..., None])  # (N, R, 2, T)
+        area = np.count_nonzero(wt > 0, axis=3).astype(np.float64)
+        both = act[..., 1:] & act[..., :-1]
+        v = np.diff(cyx, axis=3)
+        sp = np.hypot(v[:, :, 1], v[:, :, 0]) * both
+        srt = np.sort(cyx, axis=3)
+        rng = srt[..., int(round(0.95 * (t - 1)))] - srt[..., int(round(0.05 * (t - 1)))]  # (N, R, 2): row, column
+        major_y = rng[..., 0] >= rng[..., 1]
+        vmaj = np.where(major_y[..., None], v[:, :, 0], v[:, :, 1]) * both
+        sg = np.sign(vmaj)
+        nz = (sg != 0).sum(axis=2)
+        rev = ((sg[..., 1:] * sg[..., :-1]) < 0).sum(axis=2)
+        nonzero_act = np.maximum(nact, 1)
+        spsum = sp.sum(axis=2)
+        pp, f = spectrum(np.where(major_y[..., None], cyx[:, :, 0], cyx[:, :, 1]), self._fs())
+        pos = _local_bands(pp, f, self.POS_BANDS)
+        pa, f = spectrum(act.astype(np.float64), self._fs())
+        onoff = _local_bands(pa, f, ())
+        cols = [act.mean(axis=2), (act[..., 1:] & ~act[..., :-1]).sum(axis=2).astype(np.float64),
+                area.sum(axis=2) / nonzero_act, area.max(axis=2), spsum / np.maximum(both.sum(axis=2), 1),
+                np.sort(sp, axis=2)[..., int(round(0.9 * (t - 2)))], rng[..., 0], rng[..., 1], spsum,
+                np.where(nz > 0, rev / np.maximum(nz, 1), 0.0), pos["fpeak"], pos["fcent"]]
+        cols += pos["bands"] + [onoff["fpeak"], onoff["fcent"]]
+        per_threshold = np.stack(cols, axis=2)  # (N, R, 18), threshold-major like feature_names
+        return np.hstack([per_threshold.reshape(n, -1), np.log1p(peak)[:, None]])
 
 
 def _local_bands(p: np.ndarray, f: np.ndarray, bands) -> dict:
@@ -543,11 +578,9 @@ def _local_bands(p: np.ndarray, f: np.ndarray, bands) -> dict:
     none = tot <= 0
     safe = np.where(none, 1.0, tot)
     fpeak = np.where(none, 0.0, f[np.argmax(p, axis=-1)]) if p.shape[-1] else np.zeros(p.shape[:-1])
-    fcent = np.where(none, 0.0, (p * f).sum(axis=-1) / safe)
-    out = []
-    for lo, hi in bands:
-        out.append(np.where(none, 0.0, band_sum(p, f, lo, hi) / safe))
-    return {"fpeak": fpeak, "fcent": fcent, "bands": out}
+    fcent = np.where(none, 0.0, np.einsum("...i,i->...", p, f) / safe)
+    fr = np.where(none[..., None], 0.0, band_sums(p, f, tuple(bands)) / safe[..., None])
+    return {"fpeak": fpeak, "fcent": fcent, "bands": [fr[..., i] for i in range(len(bands))]}
 
 
 __all__ = ["TouchRhythm", "CellRhythm", "ContactMotion", "pressure", "spectrum", "spectral_summary",

@@ -1,0 +1,111 @@
+"""The faster feature sets give the values of their slower reference computation.
+
+touch-rhythm, cell-rhythm, contact-motion and contact-evidence against the
+one-statistic-at-a-time code they replaced (tests/features_reference.py);
+the radix sort of 8- and 16-bit readings (msd, sd's median, contact-evidence's
+levels) against numpy's default sort and ``numpy.median``. On real HAART
+captures (the real-data pattern: fails under CI=true without the data), on
+short windows of a 19 x 27 skin (the live case) and on synthetic captures of
+several dtypes, lengths (padded ones included) and grids. Agreement within
+1e-9, relative or absolute: the fast code sums in another order.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from features_reference import RefCellRhythm, RefContactEvidence, RefContactMotion, RefTouchRhythm
+from numpy.testing import assert_allclose, assert_array_equal
+
+from touchbench.datasets.model import SensorSpec
+from touchbench.features.base import FEATURES
+from touchbench.features.contact import ContactEvidence
+from touchbench.features.gaus_sd import median_rows
+from touchbench.features.numerics import sort_last
+from touchbench.features.touch import CellRhythm, ContactMotion, TouchRhythm
+
+PAIRS = [(TouchRhythm, RefTouchRhythm), (CellRhythm, RefCellRhythm), (ContactMotion, RefContactMotion),
+         (ContactEvidence, RefContactEvidence)]
+SKIN = SensorSpec(name="skin", grid=(19, 27), frame_rate=10.0, value_range=(0.0, 255.0))
+FLIPPED = SensorSpec(name="flipped", grid=(5, 7), frame_rate=20.0, value_range=(0.0, 1023.0), higher_is_more_pressure=False)
+TOL = {"rtol": 1e-9, "atol": 1e-9}
+
+
+def both(fast_cls, ref_cls, caps, sensor):
+    fast = fast_cls(sensor=sensor).fit(caps).transform(caps)
+    ref = ref_cls(sensor=sensor).fit(caps).transform(caps)
+    return fast, ref
+
+
+def synthetic(seed: int, t: int, grid: tuple[int, int], dtype) -> list[np.ndarray]:
+    """Captures with a moving blob, sparse taps, noise, a constant one and an empty one."""
+    rng = np.random.default_rng(seed)
+    h, w = grid
+    yy, xx = np.mgrid[0:h, 0:w]
+    caps = []
+    for k in range(4):
+        cy = h / 2 + (h / 3) * np.sin(np.arange(t) * (0.3 + 0.2 * k))
+        cx = w / 2 + (w / 3) * np.cos(np.arange(t) * (0.2 + 0.1 * k))
+        blob = 200 * np.exp(-((yy[None] - cy[:, None, None]) ** 2 + (xx[None] - cx[:, None, None]) ** 2) / 3.0)
+        taps = (rng.random((t, h, w)) < 0.05) * rng.integers(0, 250, (t, h, w))
+        caps.append(blob * (rng.random(t) < 0.7)[:, None, None] + taps + rng.integers(0, 4, (t, h, w)))
+    caps += [np.full((t, h, w), 7.0), np.zeros((t, h, w))]
+    return [np.clip(c, 0, 255).astype(dtype) for c in caps]
+
+
+@pytest.mark.parametrize("fast_cls, ref_cls", PAIRS)
+def test_real_haart_captures_agree_with_the_reference(real_haart, fast_cls, ref_cls):
+    caps = real_haart.captures[::83]  # ten captures spread over subjects, gestures and substrates
+    fast, ref = both(fast_cls, ref_cls, caps, real_haart.sensor)
+    assert_allclose(fast, ref, **TOL)
+
+
+@pytest.mark.parametrize("fast_cls, ref_cls", PAIRS)
+@pytest.mark.parametrize("t", [5, 10])
+@pytest.mark.parametrize("dtype", [np.uint8, np.float32])
+def test_short_skin_windows_agree_with_the_reference(fast_cls, ref_cls, t, dtype):
+    caps = synthetic(t, t, SKIN.grid, dtype)
+    fast, ref = both(fast_cls, ref_cls, caps, SKIN)
+    assert_allclose(fast, ref, **TOL)
+
+
+@pytest.mark.parametrize("fast_cls, ref_cls", PAIRS)
+@pytest.mark.parametrize("t, grid, dtype, sensor", [
+    (64, (8, 8), np.uint16, SensorSpec(name="haart", grid=(8, 8), frame_rate=54.0)),
+    (31, (5, 7), np.float64, FLIPPED),
+    (1, (3, 4), np.int16, SensorSpec(name="tiny", grid=(3, 4), frame_rate=12.0, value_range=(0.0, 255.0))),
+])
+def test_synthetic_captures_agree_with_the_reference(fast_cls, ref_cls, t, grid, dtype, sensor):
+    caps = synthetic(t, t, grid, dtype)
+    fast, ref = both(fast_cls, ref_cls, caps, sensor)
+    assert_allclose(fast, ref, **TOL)
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.int8, np.uint16, np.int16, np.int32, np.float32, np.float64, np.bool_])
+def test_radix_sort_gives_numpys_sorted_values(dtype):
+    rng = np.random.default_rng(3)
+    x = rng.integers(-300, 1024, (3, 5, 41)).astype(dtype)
+    assert_array_equal(sort_last(x), np.sort(x, axis=-1))
+    assert_array_equal(median_rows(x.reshape(3, -1)), np.median(x.reshape(3, -1).astype(np.float64), axis=1))
+
+
+def test_msd_and_sd_unchanged_by_the_sort(real_haart):
+    """msd's quartiles and sd's median come from the radix sort: the values of numpy's default sort."""
+    caps = real_haart.captures[:12]
+    msd = FEATURES.create("msd", sensor=real_haart.sensor).fit(caps)
+    x = msd.transform(caps).reshape(len(caps), 12, 64)
+    series = np.stack(caps).reshape(len(caps), caps[0].shape[0], 64).astype(np.float64)
+    q = np.quantile(series, [0.25, 0.5, 0.75], axis=1, method="hazen")
+    assert_array_equal(x[:, 3:6], np.moveaxis(q, 0, 1))
+
+
+def test_touch_windows_agree_with_the_reference_sets(real_haart):
+    """touch-windows: mean and sd over its windows of the three reference sets (ties in a spectrum's
+    peak among them: the fast code must find the same peak)."""
+    caps = real_haart.captures[:20]
+    tw = FEATURES.create("touch-windows", sensor=real_haart.sensor).fit(caps)
+    starts, length = tw.window_starts(caps[0].shape[0])
+    refs = [cls(sensor=real_haart.sensor) for cls in (RefTouchRhythm, RefCellRhythm, RefContactMotion)]
+    per_window = np.stack([np.hstack([r.fit(w).transform(w) for r in refs])
+                           for w in ([c[s:s + length] for c in caps] for s in starts)])
+    assert_allclose(tw.transform(caps), np.hstack([per_window.mean(axis=0), per_window.std(axis=0)]), **TOL)
