@@ -86,7 +86,7 @@ TOUCH_ALL := $(RUNS)/touch-all
 # the shipped reference results (`touchbench reference list`; `leaderboard --reference NAME`):
 # each protocol run afresh, then saved into the package under its own name (explicitly: `reference save`
 # writes into the user's folder of references by default, and replaces one only with --force)
-REFERENCES ?= tiny demo-haart haart-loso-msd-rf stream-haart stream-scene stream-table
+REFERENCES ?= tiny demo-haart haart-loso-msd-rf stream-haart stream-scene stream-table stream-skin
 reference-results: setup
 	@for p in $(REFERENCES); do \
 	    rm -rf $(RUNS)/reference/$$p && \
