@@ -23,6 +23,8 @@ from pathlib import Path
 
 import platformdirs
 
+from .errors import DataError
+
 REPO_ROOT = Path(__file__).resolve().parent.parent.parent
 #: the folder, under the current directory, that holds the results folders the commands write by default
 RESULTS_DIR = "results"
@@ -55,6 +57,19 @@ def data_dir_help(dataset: str) -> str:
                   + " (TOUCHBENCH_DATA_DIR is not set)")
     return (f"touchbench looked for the {dataset} data {looked}; set TOUCHBENCH_DATA_DIR to the folder that "
             f"holds {dataset}/, or give the {dataset} folder itself (data_dir, --data-dir)")
+
+
+def raw_folder(dataset: str, given: str | Path | None, label: str | None = None) -> Path:
+    """The folder of a shared dataset's recordings: ``given`` (a data_dir, --data-dir) or the data folder's
+    ``dataset``, its ``raw/`` when it has one; a missing one is a DataError saying where touchbench looked
+    (``label``: how the message names the dataset, default ``dataset``)."""
+    base = Path(given) if given is not None else data_dir() / dataset
+    raw = base / "raw" if (base / "raw").is_dir() else base
+    if not raw.is_dir():
+        name = label or dataset
+        where = data_dir_help(dataset) if given is None else f"the data_dir given holds no {name} recordings"
+        raise DataError(f"{name} raw folder not found: {where}", raw)
+    return raw
 
 
 def cache_dir() -> Path:

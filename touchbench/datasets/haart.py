@@ -40,7 +40,7 @@ import numpy as np
 import pandas as pd
 
 from ..core.errors import DataError
-from ..core.paths import data_dir as default_data_dir, data_dir_help
+from ..core.paths import raw_folder
 from .cache import cached_dataset
 from .checksums import verify_checksums
 from .model import SensorSpec, TouchDataset
@@ -99,13 +99,6 @@ class Recording:
         return f"{self.subject}-{self.substrate}-{self.cover}-{self.gesture}"
 
 
-def _raw_dir(data_dir: str | Path | None) -> Path:
-    base = Path(data_dir) if data_dir is not None else default_data_dir() / "haart"
-    raw = base / "raw" if (base / "raw").is_dir() else base
-    if not raw.is_dir():
-        where = data_dir_help("haart") if data_dir is None else "the data_dir given holds no HAART recordings"
-        raise DataError(f"HAART raw folder not found: {where}", raw)
-    return raw
 
 
 def find_recordings(raw: Path) -> list[Recording]:
@@ -352,7 +345,7 @@ def build_haart_challenge(raw: Path) -> TouchDataset:
 
 @DATASETS.register("haart", description="real HAART: 830 captures, corrected middle 8 s, 8x8 at 54 Hz", real=True)
 def load_haart(cache_dir=None, data_dir=None, refresh: bool = False) -> TouchDataset:
-    raw = _raw_dir(data_dir)
+    raw = raw_folder("haart", data_dir, "HAART")
     return cached_dataset("haart", READER_VERSION, _source_files(raw), lambda: build_haart(raw), cache_dir, refresh)
 
 
@@ -362,7 +355,7 @@ def load_haart(cache_dir=None, data_dir=None, refresh: bool = False) -> TouchDat
     real=True,
 )
 def load_haart_challenge(cache_dir=None, data_dir=None, refresh: bool = False) -> TouchDataset:
-    raw = _raw_dir(data_dir)
+    raw = raw_folder("haart", data_dir, "HAART")
     return cached_dataset(
         "haart-challenge", READER_VERSION, _source_files(raw), lambda: build_haart_challenge(raw), cache_dir, refresh
     )

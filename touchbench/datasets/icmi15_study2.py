@@ -42,7 +42,7 @@ from collections import Counter
 from pathlib import Path
 
 from ..core.errors import DataError
-from ..core.paths import data_dir as default_data_dir, data_dir_help
+from ..core.paths import raw_folder
 from .cache import cached_dataset
 from .haart import GESTURES
 from .haart_raw import RawRecording, compile_pattern, find_raw_recordings, read_haart_raw
@@ -77,13 +77,6 @@ def parse_window(text: str) -> dict[str, object]:
     raise DataError(f"window {text!r}: expected {', '.join(WINDOWS)} (SECONDS a number above 0)")
 
 
-def _raw_dir(data_dir: str | Path | None) -> Path:
-    base = Path(data_dir) if data_dir is not None else default_data_dir() / NAME
-    raw = base / "raw" if (base / "raw").is_dir() else base
-    if not raw.is_dir():
-        where = data_dir_help(NAME) if data_dir is None else f"the data_dir given holds no {NAME} recordings"
-        raise DataError(f"{NAME} raw folder not found: {where}", raw)
-    return raw
 
 
 def _recordings(raw: Path) -> list[RawRecording]:
@@ -121,7 +114,7 @@ def build_icmi15_study2(raw: Path, window: str = "haart") -> TouchDataset:
 def load_icmi15_study2(cache_dir=None, data_dir=None, refresh: bool = False, window: str = "haart") -> TouchDataset:
     """The study (module docstring); ``window``: ``haart``, ``first:SECONDS`` or ``middle:SECONDS``."""
     parse_window(window)  # refused before anything is read
-    raw = _raw_dir(data_dir)
+    raw = raw_folder(NAME, data_dir)
     key = window.strip().lower()
     return cached_dataset(f"{NAME}-{key.replace(':', '-')}" if key != "haart" else NAME, READER_VERSION,
                           _source_files(raw), lambda: build_icmi15_study2(raw, key), cache_dir, refresh)

@@ -65,7 +65,7 @@ import numpy as np
 import pandas as pd
 
 from ..core.errors import DataError
-from ..core.paths import data_dir as default_data_dir, data_dir_help
+from ..core.paths import raw_folder
 from .cache import cached_dataset
 from .checksums import verify_checksums
 from .model import SensorSpec, TouchDataset
@@ -108,13 +108,6 @@ class Recording:
         return self.path.name.removesuffix(".gz")
 
 
-def _raw_dir(data_dir: str | Path | None) -> Path:
-    base = Path(data_dir) if data_dir is not None else default_data_dir() / NAME
-    raw = base / "raw" if (base / "raw").is_dir() else base
-    if not raw.is_dir():
-        where = data_dir_help(NAME) if data_dir is None else f"the data_dir given holds no {NAME} recordings"
-        raise DataError(f"{NAME} raw folder not found: {where}", raw)
-    return raw
 
 
 def find_recordings(raw: Path) -> list[Recording]:
@@ -289,6 +282,6 @@ def _source_files(raw: Path) -> list[Path]:
                                      "into runs of one label; 10 Hz assumed", real=True)
 def load_inflatable_skin(cache_dir=None, data_dir=None, refresh: bool = False) -> TouchDataset:
     """The recordings (module docstring) as segments, from ``inflatable-skin/`` of the shared data."""
-    raw = _raw_dir(data_dir)
+    raw = raw_folder(NAME, data_dir)
     return cached_dataset(NAME, READER_VERSION, _source_files(raw), lambda: build_inflatable_skin(raw), cache_dir,
                           refresh)
