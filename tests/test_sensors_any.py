@@ -89,6 +89,7 @@ def expected_size(name: str, sensor: SensorSpec, frames: int) -> int:
         **own,
         "touch-windows": 2 * sum(own.values()),
         "contact-evidence": 6 + 3 * 3 + 4,  # 6 levels, 3 counts at each of 3 noise units, 4 ratios
+        "live-summary": 9 * 7 + 1,  # 9 frame-level series x 7 statistics, and the window in seconds
         "example-pressure-stats": 4,  # the example plugin: mean, sd, min, max of the per-frame mean pressure
     }
     assert name in sizes, f"feature set {name!r}: add its size for any grid to this test"
@@ -100,7 +101,7 @@ REFUSED: dict[tuple[str, str], str] = {
     **{(n, "1x16"): r"is a channel sensor \(c0, .*not cells of a pressure surface"
        for n in ("sd", "bmh", "smmhh", "contact-evidence", "touch-et-contact", "touch-et-adapt",
                  "shift-augmented", "touch-et-shift", "touch-rocket-fusion", "quiet-gated", "touch-et-quiet", "touch-et-quiet-win",
-                 "two-stage", "touch-live", "touch-live-fast")},
+                 "two-stage", "touch-live", "touch-live-fast", "live-summary")},
     ("touch-windows", "19x24"): r"2-s windows \(24 frames at 12 Hz\) are longer than the shortest capture \(3 frames\)",
     ("touch-et-win", "19x24"): r"2-s windows \(24 frames at 12 Hz\) are longer than the shortest capture \(3 frames\)",
     ("cnn", "19x24"): r"L=30 windows need captures of at least 30 frames.*the shortest has 3",

@@ -78,6 +78,7 @@ TRUSTED_TYPES: tuple[str, ...] = (
     "touchbench.classifiers.zhou.MatlabSVMClassifier",
     # touchbench: feature sets
     "touchbench.features.contact.ContactEvidence",
+    "touchbench.features.live_summary.LiveSummary",
     "touchbench.features.flagg.FlaggStats",
     "touchbench.features.gaus_bmh.BinaryMotionHistory",
     "touchbench.features.gaus_lbptop.LBPTOP",

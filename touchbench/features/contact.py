@@ -75,6 +75,8 @@ pressure of cells on one full scale).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..datasets.model import SensorSpec
@@ -90,9 +92,47 @@ MAD_TO_SD = 1.4826
 QUIET_SHARE = 0.25
 
 
+class FullScaleSet(FeatureSet):
+    """A set that reads pressure on the sensor's full scale: ``value_range`` (from Python) or the
+    sensor's; refused without either, and for a channel sensor (its channels are not cells of one
+    pressure surface). Subclasses set ``name`` and keep ``value_range`` and ``sensor`` as parameters."""
+
+    name = "a full-scale set"
+    value_range: Any = None
+    sensor: Any = None
+
+    def _range(self) -> tuple[float, float]:
+        if self.value_range is not None:
+            try:
+                lo, hi = (float(v) for v in self.value_range)
+            except (TypeError, ValueError):
+                lo, hi = np.nan, np.nan
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+                raise FeatureInputError(f"{self.name}: value_range must be (low, high) with low < high, "
+                                        f"got {self.value_range!r}")
+            return lo, hi
+        if self.sensor is None:
+            raise SensorNeededError(f"{self.name}: needs the sensor's value range (its levels are fractions "
+                                    "of full scale): pass sensor=SensorSpec(...) or value_range=(low, high)")
+        lo, hi = self.sensor.value_range
+        return float(lo), float(hi)
+
+    def _check_params(self) -> None:
+        sensor = self.sensor
+        if sensor is not None and getattr(sensor, "channels", None) is not None:
+            raise FeatureInputError(
+                f"{self.name}: sensor {sensor.describe()} is a channel sensor ({', '.join(sensor.channels)}): its "
+                "channels are not cells of a pressure surface, so a level on one full scale and quiet cells have no "
+                "meaning there")
+        self._range()
+
+    def _flipped(self) -> bool:
+        return self.sensor is not None and not self.sensor.higher_is_more_pressure
+
+
 @FEATURES.register("contact-evidence",
                    description="level as a fraction of full scale and contact above the capture's noise floor (touchbench)")
-class ContactEvidence(FeatureSet):
+class ContactEvidence(FullScaleSet):
     """``contact-evidence``: level, contact above noise, peak and spread over noise (module docstring).
 
     Parameters: ``value_range`` (replaces the sensor's, from Python),
@@ -106,6 +146,7 @@ class ContactEvidence(FeatureSet):
     mean less pressure is read from the top of its range.
     """
 
+    name = "contact-evidence"
     paper = "touchbench (docs/research/contact-features.md), after Gaus et al. 2015 section 3.2.1 and Zhou et al. 2017 section 4.1"
     cost = "cheap"
     fold_dependent = False
@@ -116,33 +157,11 @@ class ContactEvidence(FeatureSet):
         self.min_noise = min_noise
         self.sensor = sensor
 
-    def _range(self) -> tuple[float, float]:
-        if self.value_range is not None:
-            try:
-                lo, hi = (float(v) for v in self.value_range)
-            except (TypeError, ValueError):
-                lo, hi = np.nan, np.nan
-            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
-                raise FeatureInputError(f"contact-evidence: value_range must be (low, high) with low < high, "
-                                        f"got {self.value_range!r}")
-            return lo, hi
-        if self.sensor is None:
-            raise SensorNeededError("contact-evidence: needs the sensor's value range (its levels are fractions "
-                                    "of full scale): pass sensor=SensorSpec(...) or value_range=(low, high)")
-        lo, hi = self.sensor.value_range
-        return float(lo), float(hi)
-
     def _check_params(self) -> None:
         m = self.min_noise
         if isinstance(m, bool) or not isinstance(m, (int, float)) or not (0 < m < 1):
             raise FeatureInputError(f"contact-evidence: min_noise must be a fraction of full scale in (0, 1), got {m!r}")
-        sensor = self.sensor
-        if sensor is not None and getattr(sensor, "channels", None) is not None:
-            raise FeatureInputError(
-                f"contact-evidence: sensor {sensor.describe()} is a channel sensor ({', '.join(sensor.channels)}): its "
-                "channels are not cells of a pressure surface, so a level on one full scale and quiet cells have no "
-                "meaning there")
-        self._range()
+        super()._check_params()
 
     def feature_names(self, grid: tuple[int, int]) -> list[str]:
         names = ["level_mean", "level_p50", "level_p95", "level_max", "cellmean_min", "cellmean_max"]
@@ -155,8 +174,6 @@ class ContactEvidence(FeatureSet):
         lo, hi = self._range()
         return heights(stack, (lo, hi), self._flipped()), hi - lo
 
-    def _flipped(self) -> bool:
-        return self.sensor is not None and not self.sensor.higher_is_more_pressure
 
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         u, full = self._heights(stack)

@@ -13,7 +13,9 @@ evaluation they are best trained on windows cut from the training streams
 and the frames around onsets and releases.
 
 - ``touch-live``: touch-rhythm and contact-motion -> extra-trees of 100 trees, both stages;
-- ``touch-live-fast``: touch-rhythm -> extra-trees of 50 trees, both stages (the latency-bound entry).
+- ``touch-live-fast``: live-summary (nine frame-level series of the window, summarised:
+  :mod:`touchbench.features.live_summary`) -> extra-trees of 100 trees, both stages (the latency-bound
+  entry: a few hundred microseconds of features a window where touch-rhythm takes milliseconds).
 
 Parameters given to the method go to ``two-stage`` (``idle``, ``detector_params``; ``params``
 replaces the extra-trees' parameters).
@@ -29,7 +31,7 @@ _LIVE = {
     "touch-live": ("touchbench, live: a touch detector and a gesture classifier (touch-rhythm + contact-motion -> "
                    "extra-trees 100 each)", ["touch-rhythm", "contact-motion"], 100),
     "touch-live-fast": ("touchbench, live and latency-bound: a touch detector and a gesture classifier "
-                        "(touch-rhythm -> extra-trees 50 each)", ["touch-rhythm"], 50),
+                        "(live-summary -> extra-trees 100 each)", ["live-summary"], 100),
 }
 for _name, (_desc, _sets, _trees) in _LIVE.items():
     _params = {"features": _sets, "estimator": "touch-extra-trees", "params": {"n_estimators": _trees}, "idle": None}
