@@ -239,6 +239,16 @@ RESULT = "expected:\n  results:\n    - features: [test-mean]\n      classifier: 
      "protocols/x.yaml:13: expected.results[0].cause.ruled_out[0].command: give one of command"),
     ("      cause:\n        kind: ruled_out\n        ruled_out:\n          - {tried: a, command: run x, gave: b}\n",
      "protocols/x.yaml:16: expected.results[0].cause.ruled_out[0].command: a command is a touchbench command"),
+    ("      cause: {kind: measured, text: folds, command: 'touchbench run p.yaml; rm -rf x', output: '60.0'}\n",
+     "protocols/x.yaml:13: expected.results[0].cause.command: a command is one touchbench command, without shell "
+     "operators: 'touchbench run p.yaml; rm -rf x' has ';'"),
+    ("      cause: {kind: measured, text: f, command: 'touchbench run p.yaml && echo $(id)', output: '6'}\n",
+     "protocols/x.yaml:13: expected.results[0].cause.command: a command is one touchbench command, without shell "
+     "operators: 'touchbench run p.yaml && echo $(id)' has '&&' '$('"),
+    ("      cause:\n        kind: ruled_out\n        ruled_out:\n"
+     "          - {tried: a, command: 'touchbench run x | tee `y` > z < w || q', gave: b}\n",
+     "protocols/x.yaml:16: expected.results[0].cause.ruled_out[0].command: a command is one touchbench command, "
+     "without shell operators: 'touchbench run x | tee `y` > z < w || q' has '||' '|' '`' '>' '<'"),
 ])
 def test_a_cause_says_its_kind_and_what_backs_it(extra, expected):
     msg = error(BASE + RESULT + extra)
