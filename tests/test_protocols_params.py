@@ -82,6 +82,20 @@ def test_shift_values_and_nested_values_are_refused_naming_their_line(tmp_path, 
     assert validate(tmp_path, entry).startswith(start)
 
 
+@pytest.mark.parametrize("value", ["1e-09", "{grid: [0.001, 1e-09]}"])
+def test_a_number_yaml_read_as_a_string_says_so(tmp_path, value):
+    out = validate(tmp_path, f"  - name: touch-et-adapt\n    params:\n      sd_floor: {value}\n")
+    assert out == ("p.yaml:7: methods[0].params.sd_floor: session-centred: sd_floor must be a positive number (the "
+                   "smallest standard deviation a feature is divided by), got '1e-09' (YAML read '1e-09' as a "
+                   "string, not a number: YAML 1.1 reads an exponent as a number only after a dot and with a sign; "
+                   "write 1.0e-09)")
+
+
+def test_a_quoted_number_is_not_said_to_be_read_as_a_string(tmp_path):
+    out = validate(tmp_path, "  - name: touch-et-adapt\n    params:\n      sd_floor: '1e-09'\n")
+    assert out.endswith("got '1e-09'")
+
+
 @needs_peers
 def test_good_values_pass(tmp_path):
     path = tmp_path / "p.yaml"
