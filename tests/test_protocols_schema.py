@@ -269,3 +269,26 @@ def test_a_cause_of_each_kind_is_kept():
     r = parse_protocol(BASE + RESULT + "      cause: {kind: unexplained}\n", "protocols/x.yaml").expected.results[0]
     assert (r.cause.kind, r.cause.text, r.cause.ruled_out) == ("unexplained", None, [])
     assert parse_protocol(BASE + RESULT, "protocols/x.yaml").expected.results[0].cause is None
+
+
+# ------------------------------------------------- the same method twice: at the second entry's line
+@pytest.mark.parametrize("text,expected", [
+    ("name: t\ndataset: data.parquet\nscheme: loso\nmethods:\n  - touch-et\n  - touch-xgb\n  - touch-et\n",
+     "protocols/x.yaml:7: methods[2]: this entry describes the same method as methods[0] ('touch-et')"),
+    (BASE + "  - test-logreg\n",
+     "protocols/x.yaml:8: classifiers[1]: this entry describes the same method as classifiers[0] ('test-logreg')"),
+    (BASE.replace("  - [test-mean]\n", "  - [test-mean]\n  - [test-mean]\n"),
+     "protocols/x.yaml:6: features[1]: this entry describes the same method as features[0] ('test-logreg')"),
+    # the same method under another label is still the same tasks
+    ("name: t\ndataset: data.parquet\nscheme: loso\nmethods:\n  - touch-et\n  - {name: touch-et, label: again}\n",
+     "protocols/x.yaml:6: methods[1]: this entry describes the same method as methods[0] ('again')"),
+])
+def test_the_same_method_twice_is_refused_at_the_second_entry(text, expected):
+    msg = error(text)
+    assert msg.startswith(expected) and msg.endswith("so the same tasks: list each method once"), msg
+
+
+def test_methods_that_differ_in_a_parameter_are_kept():
+    p = parse_protocol("name: t\ndataset: data.parquet\nscheme: loso\nmethods:\n  - touch-xgb\n"
+                       "  - {name: touch-et, params: {n_estimators: {grid: [10, 20]}}}\n", "protocols/x.yaml")
+    assert len(p.evaluated_methods()) == 3
