@@ -292,3 +292,22 @@ def test_methods_that_differ_in_a_parameter_are_kept():
     p = parse_protocol("name: t\ndataset: data.parquet\nscheme: loso\nmethods:\n  - touch-xgb\n"
                        "  - {name: touch-et, params: {n_estimators: {grid: [10, 20]}}}\n", "protocols/x.yaml")
     assert len(p.evaluated_methods()) == 3
+
+
+# ------------------------------------------------- a design block names methods the protocol evaluates
+@pytest.mark.parametrize("design,expected", [
+    ("design:\n  subjects: [s1]\n  methods: [test-logreg, test-lgoreg]\n",
+     "protocols/x.yaml:10: design.methods[1]: design names method 'test-lgoreg', which this protocol does not "
+     "evaluate; did you mean 'test-logreg'"),
+    ("design:\n  - {subjects: [s1], methods: [test-logreg]}\n  - {subjects: [s2], methods: [forest]}\n",
+     "protocols/x.yaml:10: design[1].methods[0]: design names method 'forest', which this protocol does not evaluate"),
+])
+def test_a_design_naming_a_method_not_evaluated_is_refused(design, expected):
+    msg = error(BASE + design)
+    assert msg.startswith(expected), msg
+
+
+def test_a_design_names_a_method_by_its_label_or_its_full_name():
+    for name in ("test-logreg", "test-mean / test-logreg"):
+        p = parse_protocol(BASE + f"design:\n  subjects: [s1]\n  methods: ['{name}']\n", "protocols/x.yaml")
+        assert p.design.methods == [name]

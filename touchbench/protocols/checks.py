@@ -384,6 +384,30 @@ def _duplicate_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
     return issues
 
 
+def _design_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
+    """A ``design`` block naming a method the protocol does not evaluate (the leaderboard's design
+    note would say something false), at the name's line, with the nearest names. A method is named
+    as the leaderboard names it: its label, or ``features / label``."""
+    names: set[str] = set()
+    for c, k, loc in protocol._entry_pairs():
+        try:
+            m = protocol._method(c, k, loc)
+        except TouchbenchError:
+            return []  # refused by its own check
+        names |= {m.label, f"{m.features_label} / {m.label}"}
+    issues = []
+    for at, design in [(("design",), protocol.design)] + [
+            (("evaluations", i, "design"), ev.design) for i, ev in enumerate(protocol.evaluations)]:
+        blocks = design if isinstance(design, list) else [] if design is None else [design]
+        for b, block in enumerate(blocks):
+            where = at + ((b,) if isinstance(design, list) else ()) + ("methods",)
+            for j, name in enumerate(block.methods):
+                if name not in names:
+                    issues.append((where + (j,), f"design names method {name!r}, which this protocol does not "
+                                                 f"evaluate{did_you_mean(name, sorted(names))}"))
+    return issues
+
+
 def _expected_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
     if protocol.expected is None:
         return []

@@ -14,6 +14,7 @@ from pydantic import ValidationError
 from ..core.yamlsafe import MAX_BYTES, load_bounded, node_lines, yaml_problem
 from .checks import (
     _classifier_issues,
+    _design_issues,
     _duplicate_issues,
     _evaluation_issues,
     _expected_issues,
@@ -61,7 +62,7 @@ def parse_protocol(text: str, path: str | Path | None = None, *, deep: bool = Tr
         issues += _classifier_issues(proto)
     issues += _evaluation_issues(proto, subs, clean_so_far=not issues)
     if not issues:
-        issues += _duplicate_issues(proto)
+        issues += _duplicate_issues(proto) + _design_issues(proto)
     if not issues:
         issues += _expected_issues(proto)
     if issues:
