@@ -15,14 +15,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from sklearn.naive_bayes import GaussianNB
+from click.testing import CliRunner
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from touchbench.classifiers import CLASSIFIERS, make_classifier
+from touchbench.cli.main import cli
 from touchbench.classifiers.adapt import SD_FLOOR, NotAdaptedError, SessionCentred, uses_unlabelled_test
 from touchbench.core.errors import TouchbenchError
 from touchbench.datasets.model import SensorSpec
 from touchbench.deploy.model import fit_model
-from touchbench.deploy.predict import adaptation_text, predict_dataset
+from touchbench.deploy.predict import adaptation_text, adaptation_warning, predict_dataset
 from touchbench.deploy.stream import SlidingRecognizer
 from touchbench.engine.testing import random_dataset
 from touchbench.methods import METHODS, method_spec
@@ -194,6 +196,26 @@ def test_predict_adapts_to_each_subject_of_the_file(adapted_model):
         codes = model.estimator.fitted_.predict(centred).astype(np.int64)  # the inner classifier on them
         assert table["predicted_label"].to_numpy()[rows].tolist() == [str(c) for c in model.classes[codes]]
     assert adaptation_text(model, ds).startswith("adapted to the data's unlabelled captures, each of its 2 subjects")
+
+
+def test_a_one_capture_session_is_said_to_be_centred_to_zeros(adapted_model, tmp_path):
+    model, ds = adapted_model
+    subjects = ds.meta["subject"].astype(str).to_numpy()
+    one = ds.subset([int(np.flatnonzero(subjects == "s1")[0]), *np.flatnonzero(subjects == "s2")])
+    assert adaptation_warning(model, ds) is None  # every subject has several captures
+    said = adaptation_warning(model, one)
+    assert said.startswith("1 of the data's 2 subject(s) have one capture only (s1): one capture cannot give a "
+                           "session's statistics, so the model centres it to zeros")
+    # what it says, by hand: the one capture centred on its own mean is a row of zeros
+    X = model.transform(one.captures[:1])
+    assert np.all(X - X.mean(axis=0) == 0)
+    # a model fitted here (the fixture's, once it predicted, holds a compiled forest its file would name)
+    model_path = fit_model(ds, method_spec("touch-et-adapt", params={"n_estimators": 5}), seed=0).save(
+        tmp_path / "m.joblib")
+    one.to_parquet(tmp_path / "one.parquet")
+    r = CliRunner().invoke(cli, ["predict", str(model_path), str(tmp_path / "one.parquet")])
+    assert r.exit_code == 0, r.output
+    assert "warning: 1 of the data's 2 subject(s) have one capture only (s1)" in r.stderr
 
 
 def test_stream_refuses_an_adapted_model(adapted_model):

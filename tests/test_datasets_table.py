@@ -355,6 +355,30 @@ def test_frame_rate_and_value_range_must_be_finite_and_positive(tmp_path, option
     assert not (tmp_path / "o.parquet").exists()
 
 
+@pytest.mark.parametrize("value", ["0...255", "0..255..", ".5..1", "0..", "0 255", "0..2..3"])
+def test_a_malformed_value_range_is_refused_naming_the_option(tmp_path, value):
+    path = _table(tmp_path, "a,s1,pat,1,1,2,3,4")
+    r = convert(path, tmp_path / "o.parquet", "--format", "table", "--grid", "2x2", "--frame-rate", "10",
+                "--value-range", value)
+    assert r.exit_code == 2 and "Invalid value for '--value-range': expected LO..HI such as 0..4095" in r.output
+    assert f"got {value!r}" in r.output
+    assert not (tmp_path / "o.parquet").exists()
+
+
+def test_a_value_range_the_data_use_a_vanishing_part_of_is_refused(tmp_path):
+    # values 1..200 in 0..1e308: a share of 199 / 1e308 = 2e-306
+    path = _table(tmp_path, "a,s1,pat,1,1,2,3,200")
+    r = convert(path, tmp_path / "o.parquet", "--format", "table", "--grid", "2x2", "--frame-rate", "10",
+                "--value-range", "0..1e308")
+    assert r.exit_code != 0 and "Traceback" not in r.output, r.output
+    assert "--value-range 0..1e+308: the data's values span only 1..200, 2e-306 of that range" in r.output
+    assert not (tmp_path / "o.parquet").exists()
+    # a millionth is still used: values 1..200 in 0..1.99e8 pass
+    r = convert(path, tmp_path / "o.parquet", "--format", "table", "--grid", "2x2", "--frame-rate", "10",
+                "--value-range", "0..1.99e8")
+    assert r.exit_code == 0, r.output
+
+
 def test_frame_rate_and_value_range_from_python_are_checked_alike(tmp_path):
     path = _table(tmp_path, "a,s1,pat,1,1,2,3,4")
     with pytest.raises(TouchbenchError, match="--frame-rate must be a finite number of frames per second above 0"):

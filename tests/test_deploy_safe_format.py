@@ -15,6 +15,7 @@ import hashlib
 import importlib.util
 import io
 import json
+import logging
 import pickle
 
 import joblib
@@ -176,3 +177,57 @@ FEATURE_PARAMS = {"bmh": {"preset": "haart"}, "raw-window": {"frames": 40, "shor
 @pytest.mark.parametrize("name", [n for n in FEATURES.names() if FEATURES.entry(n).plugin is None])
 def test_every_feature_set_round_trips(tmp_path, data, name):
     _round_trip(tmp_path, data, MethodSpec(name, ((name, FEATURE_PARAMS.get(name, {})),), "zhou-lda"))
+
+
+_EVENTS: list[str] = []
+
+
+class _Recorder:
+    """Building it (skops gives it its attributes) records that it was built."""
+
+    def __init__(self):
+        self.n = 1
+
+    def __setstate__(self, state):
+        _EVENTS.append("built")
+        self.__dict__.update(state)
+
+
+class _Listener(logging.Handler):
+    def emit(self, record):
+        _EVENTS.append(record.getMessage())
+
+
+def _untrusted_file(tmp_path, saved):
+    model, _ = saved
+    manifest = json.loads(json.dumps(model.manifest, default=str))
+    body = dump_parts({"feature_sets": [_Recorder()], "estimator": None, "classes": ["a"]})
+    path = tmp_path / "other.joblib"
+    path.write_bytes(_file(body, manifest, 4))
+    return path
+
+
+def test_an_untrusted_file_without_trust_names_the_file_the_types_and_the_option(tmp_path, data, saved):
+    path = _untrusted_file(tmp_path, saved)
+    data.to_parquet(tmp_path / "d.parquet")
+    _EVENTS.clear()
+    res = CliRunner().invoke(cli, ["predict", str(path), str(tmp_path / "d.parquet")])
+    assert res.exit_code == 3 and isinstance(res.exception, SystemExit), res.output
+    assert res.output.startswith(f"error: {path}: the model file names 1 type(s) outside touchbench's trusted list: "
+                                 "test_deploy_safe_format._Recorder; nothing was built")
+    assert "read it with --trust" in res.output and _EVENTS == []
+
+
+def test_trust_names_the_untrusted_types_before_building_them(tmp_path, saved):
+    path = _untrusted_file(tmp_path, saved)
+    listener = _Listener()
+    logger = logging.getLogger("touchbench.deploy")
+    logger.addHandler(listener)
+    _EVENTS.clear()
+    try:
+        with pytest.raises(DataError, match="parts disagree"):  # a crafted file: its parts are not a model
+            TrainedModel.load(path, trust=True)
+    finally:
+        logger.removeHandler(listener)
+    assert _EVENTS == [f"{path}: --trust: building 1 type(s) outside touchbench's trusted list: "
+                       "test_deploy_safe_format._Recorder", "built"]

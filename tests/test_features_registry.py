@@ -66,7 +66,7 @@ def test_sklearn_api():
 
 
 def test_cli_features_list_and_show():
-    r = CliRunner().invoke(cli, ["features", "list", "--grid", "8x8", "--rate", "54", "--value-range", "0..1023"], terminal_width=200)
+    r = CliRunner().invoke(cli, ["features", "list", "--grid", "8x8", "--frame-rate", "54", "--value-range", "0..1023"], terminal_width=200)
     assert r.exit_code == 0, r.output
     for name, size in EXPECTED_8X8.items():
         if name in STATED:  # its size depends on a parameter that must be stated: shown as '-'
@@ -81,10 +81,26 @@ def test_cli_features_list_and_show():
 
 
 
+def test_cli_features_list_frame_rate_is_spelled_as_the_readers_spell_it():
+    """``--frame-rate HZ``, as every reader's option; the former ``--rate`` still works, hidden from the
+    help, with a warning that gives the new spelling."""
+    args = ["features", "list", "--grid", "8x8", "--value-range", "0..1023", "--json"]
+    new = CliRunner().invoke(cli, args + ["--frame-rate", "54"])
+    assert new.exit_code == 0 and "deprecated" not in new.stderr, new.output
+    assert {r["name"]: r["size"] for r in json.loads(new.stdout)}["msd"] == EXPECTED_8X8["msd"]
+    old = CliRunner().invoke(cli, args + ["--rate", "54"])
+    assert old.exit_code == 0 and json.loads(old.stdout) == json.loads(new.stdout), old.output
+    assert "--rate is deprecated" in old.stderr and "--frame-rate 54" in old.stderr
+    both = CliRunner().invoke(cli, args + ["--frame-rate", "54", "--rate", "54"])
+    assert both.exit_code == 2 and "give the frame rate once" in both.output
+    help_text = CliRunner().invoke(cli, ["features", "list", "--help"]).output
+    assert "--frame-rate" in help_text and "--rate " not in help_text
+
+
 def test_cli_features_list_value_range_is_spelled_as_the_readers_spell_it():
     """``--value-range LO..HI``, as every reader's option; the former ``--range LO HI`` still works
     for one release, with a warning that gives the new spelling."""
-    args = ["features", "list", "--grid", "8x8", "--rate", "54", "--json"]
+    args = ["features", "list", "--grid", "8x8", "--frame-rate", "54", "--json"]
     new = CliRunner().invoke(cli, args + ["--value-range", "0..1023"])
     assert new.exit_code == 0, new.output
     sizes = {r["name"]: r["size"] for r in json.loads(new.stdout)}

@@ -82,6 +82,47 @@ def test_shift_values_and_nested_values_are_refused_naming_their_line(tmp_path, 
     assert validate(tmp_path, entry).startswith(start)
 
 
+@pytest.mark.parametrize("value", ["1e-09", "{grid: [0.001, 1e-09]}"])
+def test_a_number_yaml_read_as_a_string_says_so(tmp_path, value):
+    out = validate(tmp_path, f"  - name: touch-et-adapt\n    params:\n      sd_floor: {value}\n")
+    assert out == ("p.yaml:7: methods[0].params.sd_floor: session-centred: sd_floor must be a positive number (the "
+                   "smallest standard deviation a feature is divided by), got '1e-09' (YAML read '1e-09' as a "
+                   "string, not a number: YAML 1.1 reads an exponent as a number only after a dot and with a sign; "
+                   "write 1.0e-09)")
+
+
+def test_a_quoted_number_is_not_said_to_be_read_as_a_string(tmp_path):
+    out = validate(tmp_path, "  - name: touch-et-adapt\n    params:\n      sd_floor: '1e-09'\n")
+    assert out.endswith("got '1e-09'")
+
+
+@pytest.mark.parametrize("entry,start", [
+    ("  - name: fusion\n    params:\n      parts: [touch-et]\n",
+     "p.yaml:7: methods[0].params.parts: fusion needs at least 2 parts (the methods whose probabilities it sums), "
+     "got 1"),
+    ("  - name: touch-et-adapt\n    params:\n      params: {n_estimators: 1000000000000}\n",
+     "p.yaml:7: methods[0].params.params.n_estimators: touch-extra-trees: n_estimators must be a whole number from "
+     "1 to 100,000 (trees or boosting rounds), got 1000000000000"),
+    ("  - name: touch-et\n    params:\n      n_estimators: 0\n",
+     "p.yaml:7: methods[0].params.n_estimators: touch-extra-trees: n_estimators must be a whole number from 1"),
+    ("  - name: touch-rocket-fusion\n    params:\n      inner_folds: 1000000000000000000\n",
+     "p.yaml:7: methods[0].params.inner_folds: fusion: inner_folds must be a whole number from 2 to 1,000"),
+    ("  - name: touch-select\n    params:\n      inner_folds: 1\n",
+     "p.yaml:7: methods[0].params.inner_folds: nested-select: inner_folds must be a whole number from 2 to 1,000"),
+])
+def test_absurd_counts_and_a_one_part_fusion_are_refused_at_their_line(tmp_path, entry, start):
+    assert validate(tmp_path, entry).startswith(start)
+
+
+def test_counts_at_their_bounds_pass(tmp_path):
+    path = tmp_path / "p.yaml"
+    path.write_text(HEAD + "  - {name: touch-et, params: {n_estimators: 100000}}\n"
+                    "  - {name: touch-select, params: {inner_folds: 1000}}\n  - {name: touch-select, params: "
+                    "{inner_folds: 2}}\n  - {name: touch-et-fast, params: {n_estimators: 1}}\n")
+    r = CliRunner().invoke(cli, ["protocols", "validate", "--schema-only", str(path)])
+    assert r.exit_code == 0, r.output
+
+
 @needs_peers
 def test_good_values_pass(tmp_path):
     path = tmp_path / "p.yaml"

@@ -239,6 +239,16 @@ RESULT = "expected:\n  results:\n    - features: [test-mean]\n      classifier: 
      "protocols/x.yaml:13: expected.results[0].cause.ruled_out[0].command: give one of command"),
     ("      cause:\n        kind: ruled_out\n        ruled_out:\n          - {tried: a, command: run x, gave: b}\n",
      "protocols/x.yaml:16: expected.results[0].cause.ruled_out[0].command: a command is a touchbench command"),
+    ("      cause: {kind: measured, text: folds, command: 'touchbench run p.yaml; rm -rf x', output: '60.0'}\n",
+     "protocols/x.yaml:13: expected.results[0].cause.command: a command is one touchbench command, without shell "
+     "operators: 'touchbench run p.yaml; rm -rf x' has ';'"),
+    ("      cause: {kind: measured, text: f, command: 'touchbench run p.yaml && echo $(id)', output: '6'}\n",
+     "protocols/x.yaml:13: expected.results[0].cause.command: a command is one touchbench command, without shell "
+     "operators: 'touchbench run p.yaml && echo $(id)' has '&&' '$('"),
+    ("      cause:\n        kind: ruled_out\n        ruled_out:\n"
+     "          - {tried: a, command: 'touchbench run x | tee `y` > z < w || q', gave: b}\n",
+     "protocols/x.yaml:16: expected.results[0].cause.ruled_out[0].command: a command is one touchbench command, "
+     "without shell operators: 'touchbench run x | tee `y` > z < w || q' has '||' '|' '`' '>' '<'"),
 ])
 def test_a_cause_says_its_kind_and_what_backs_it(extra, expected):
     msg = error(BASE + RESULT + extra)
@@ -259,3 +269,45 @@ def test_a_cause_of_each_kind_is_kept():
     r = parse_protocol(BASE + RESULT + "      cause: {kind: unexplained}\n", "protocols/x.yaml").expected.results[0]
     assert (r.cause.kind, r.cause.text, r.cause.ruled_out) == ("unexplained", None, [])
     assert parse_protocol(BASE + RESULT, "protocols/x.yaml").expected.results[0].cause is None
+
+
+# ------------------------------------------------- the same method twice: at the second entry's line
+@pytest.mark.parametrize("text,expected", [
+    ("name: t\ndataset: data.parquet\nscheme: loso\nmethods:\n  - touch-et\n  - touch-xgb\n  - touch-et\n",
+     "protocols/x.yaml:7: methods[2]: this entry describes the same method as methods[0] ('touch-et')"),
+    (BASE + "  - test-logreg\n",
+     "protocols/x.yaml:8: classifiers[1]: this entry describes the same method as classifiers[0] ('test-logreg')"),
+    (BASE.replace("  - [test-mean]\n", "  - [test-mean]\n  - [test-mean]\n"),
+     "protocols/x.yaml:6: features[1]: this entry describes the same method as features[0] ('test-logreg')"),
+    # the same method under another label is still the same tasks
+    ("name: t\ndataset: data.parquet\nscheme: loso\nmethods:\n  - touch-et\n  - {name: touch-et, label: again}\n",
+     "protocols/x.yaml:6: methods[1]: this entry describes the same method as methods[0] ('again')"),
+])
+def test_the_same_method_twice_is_refused_at_the_second_entry(text, expected):
+    msg = error(text)
+    assert msg.startswith(expected) and msg.endswith("so the same tasks: list each method once"), msg
+
+
+def test_methods_that_differ_in_a_parameter_are_kept():
+    p = parse_protocol("name: t\ndataset: data.parquet\nscheme: loso\nmethods:\n  - touch-xgb\n"
+                       "  - {name: touch-et, params: {n_estimators: {grid: [10, 20]}}}\n", "protocols/x.yaml")
+    assert len(p.evaluated_methods()) == 3
+
+
+# ------------------------------------------------- a design block names methods the protocol evaluates
+@pytest.mark.parametrize("design,expected", [
+    ("design:\n  subjects: [s1]\n  methods: [test-logreg, test-lgoreg]\n",
+     "protocols/x.yaml:10: design.methods[1]: design names method 'test-lgoreg', which this protocol does not "
+     "evaluate; did you mean 'test-logreg'"),
+    ("design:\n  - {subjects: [s1], methods: [test-logreg]}\n  - {subjects: [s2], methods: [forest]}\n",
+     "protocols/x.yaml:10: design[1].methods[0]: design names method 'forest', which this protocol does not evaluate"),
+])
+def test_a_design_naming_a_method_not_evaluated_is_refused(design, expected):
+    msg = error(BASE + design)
+    assert msg.startswith(expected), msg
+
+
+def test_a_design_names_a_method_by_its_label_or_its_full_name():
+    for name in ("test-logreg", "test-mean / test-logreg"):
+        p = parse_protocol(BASE + f"design:\n  subjects: [s1]\n  methods: ['{name}']\n", "protocols/x.yaml")
+        assert p.design.methods == [name]

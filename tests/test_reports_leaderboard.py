@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pandas as pd
@@ -455,6 +456,42 @@ def test_a_terminal_of_any_width_shows_every_number_whole_and_shortens_a_long_la
         assert max(len(x) for x in lines) <= width
     else:  # the numbers alone are wider: the table is, and the terminal wraps its lines
         assert max(len(x) for x in table) > width
+
+
+def test_shorten_column_keeps_the_part_that_tells_labels_apart():
+    from touchbench.reports.rendering import shorten_column
+
+    labels = [f"touch-extra-trees-with-a-long-name (max_features={k})" for k in ("0.1", "0.3", "sqrt")]
+    # the shared start goes: "…" and the last 19 characters, which hold where they differ
+    assert shorten_column(labels, 20) == ["…(max_features=0.1)", "…(max_features=0.3)", "…(max_features=sqrt)"]
+    # narrower than the part that differs: from where it differs, its start and end around "…"
+    assert shorten_column(labels, 6) == ["…=0.1)", "…=0.3)", "…sqrt)"]  # the last 5 fit
+    assert shorten_column(labels, 100) == labels  # room enough: nothing cut
+    # no shared start: the start and the end around "…", as one label alone
+    assert shorten_column(["abcdefghij", "xyz"], 5) == ["ab…ij", "xyz"]
+
+
+@pytest.mark.parametrize("width", [20, 30, 40])
+def test_many_methods_at_a_narrow_terminal_keep_what_tells_them_apart(tmp_path, width):
+    from rich.console import Console
+
+    from touchbench.reports.rendering import print_terminal
+
+    n = 60
+    write_fake_run(tmp_path / "r", CAPS, FOLDS, [
+        FakeMethod("msd", f"touch-extra-trees-variant-{k:03d} with the paper's settings", classifier_name="gaus-rf",
+                   classifier_params={"variant": k}, wrong=_wrong(A_WRONG)) for k in range(n)])
+    [lb] = build_leaderboards(load_results([tmp_path / "r"]))
+    console = Console(record=True, width=width)
+    print_terminal([lb], console)
+    table = [x for x in console.export_text().splitlines() if x.startswith("│")]
+    method_cells = [x.strip("│").split("│")[1].strip() for x in table]
+    shown = [c for c in method_cells if "…" in c]
+    assert len(shown) == n, "\n".join(table)  # every label shortened, each on one line
+    # the labels differ only in their middle: each cell keeps its own number, 60 different cells
+    # (the labels' common start, "msd / touch-extra-trees-variant-0", elided: "…14 wi…tings")
+    found = sorted(int(re.match(r"…(\d+)", c).group(1)) for c in shown)
+    assert len(set(shown)) == n and found == list(range(n)), shown
 
 
 def test_a_method_that_brings_its_own_input_is_named_by_its_label_everywhere():

@@ -294,3 +294,31 @@ def test_a_failed_replacement_leaves_the_old_reference_whole(refs, shipped, tmp_
     assert r.exit_code == 3 and isinstance(r.exception, SystemExit), r.output
     assert r.output.startswith(f"error: {refs / 'mine'}: cannot write: {reason}") and r.output.count("\n") == 1
     assert _files(refs) == before and sorted(p.name for p in refs.iterdir()) == ["mine"]
+
+
+@pytest.mark.parametrize("text, said", [
+    ("{not json", "not JSON"), ("", "not JSON"), ("[1, 2]", "a JSON list where a mapping"),
+    ('{"evaluations": {"a": 1}}', "'evaluations' must be a list of mappings"),
+    ('{"evaluations": [{"folder": "x"}]}', "'evaluations' must be a list of mappings"),
+])
+def test_a_damaged_reference_index_is_one_error_naming_it(refs, shipped, tmp_path, text, said):
+    saved = _run(tmp_path, "saved")
+    (refs / "mine").mkdir(parents=True)
+    (refs / "mine" / "reference.json").write_text(text)
+    for args in (["reference", "list"], ["leaderboard", saved, "--reference", "mine"]):
+        r = _invoke(*args)
+        assert r.exit_code == 3 and isinstance(r.exception, SystemExit), r.output
+        assert r.output.startswith(f"error: {refs / 'mine' / 'reference.json'}: damaged reference index")
+        assert said in r.output and "Traceback" not in r.output
+
+
+def test_a_folder_of_references_that_is_a_file_is_named(engine_env, shipped, tmp_path, monkeypatch):
+    store = tmp_path / "refs.txt"
+    store.write_text("not a folder")
+    monkeypatch.setenv("TOUCHBENCH_REFERENCE_DIR", str(store))
+    for args in (["reference", "save", _run(tmp_path, "saved"), "--name", "mine"], ["reference", "list"]):
+        r = _invoke(*args)
+        assert r.exit_code == 3, r.output
+        assert f"{store}: the folder of references ($TOUCHBENCH_REFERENCE_DIR" in r.output
+        assert "is a file, not a folder" in r.output and "File exists" not in r.output
+    assert store.read_text() == "not a folder"

@@ -131,6 +131,23 @@ def test_numbers_that_would_overflow_are_refused_at_validation(tmp_path, old, ne
     assert re.match(rf"small\.yaml:{line}: invalid scene: (\w+: )?{field}: ", refusal(tmp_path, old, new))
 
 
+@pytest.mark.parametrize("written,fixed", [("1.0e300", "1.0e+300"), ("7e0", "7.0e+0"), ("-2E-3", "-2.0E-3")])
+def test_a_number_yaml_reads_as_text_says_so_and_how_to_write_it(tmp_path, written, fixed):
+    message = refusal(tmp_path, "rub: {force_n: 7,", f"rub: {{force_n: {written},")
+    assert message == (f"small.yaml:19: invalid scene: gestures: gestures.rub.force_n: must be a number, got "
+                       f"'{written}': YAML read '{written}' as a string, not a number: YAML 1.1 reads an exponent "
+                       f"as a number only after a dot and with a sign; write {fixed.replace('E', 'e')}")
+
+
+@pytest.mark.parametrize("seed", ["-1", "-1000000"])
+def test_a_negative_seed_is_refused_naming_the_field(tmp_path, seed):
+    message = refusal(tmp_path, "seed: 1", f"seed: {seed}")
+    assert message.startswith("small.yaml:3: invalid scene: seed: ") and "greater than or equal to 0" in message
+    r = CliRunner().invoke(cli, ["scenes", "generate", str(scene_file(tmp_path)), "--seed", "-1",
+                                 "--out", str(tmp_path / "o.parquet")])
+    assert r.exit_code == 2 and "Invalid value for '--seed'" in r.output and "Traceback" not in r.output
+
+
 def test_counts_that_overflow_in_the_electronics_are_refused_before_writing(tmp_path):
     # a force of 1e300 N is finite, but no float32 reading of it is
     path = scene_file(tmp_path, "rub: {force_n: 7,", "rub: {force_n: 1.0e+300,")
@@ -145,6 +162,7 @@ def test_memory_limit_is_a_quarter_of_the_available_memory(monkeypatch):
 
     monkeypatch.setattr(memory, "_meminfo_available", lambda: 8 * 2**30)
     monkeypatch.setattr(memory, "_cgroup_room", lambda: None)
+    monkeypatch.setattr(memory, "_address_space_room", lambda: None)
     assert memory.memory_limit() == 2 * 2**30 and memory.memory_limit(2**20) == 2**20
     monkeypatch.setattr(memory, "_cgroup_room", lambda: 2 * 2**30)  # a container's limit below the machine's
     assert memory.available_memory() == 2 * 2**30 and memory.memory_limit() == 2**29
@@ -152,6 +170,46 @@ def test_memory_limit_is_a_quarter_of_the_available_memory(monkeypatch):
     monkeypatch.setattr(memory, "_free_pages", lambda: None)
     monkeypatch.setattr(memory, "_cgroup_room", lambda: None)
     assert memory.available_memory() is None and memory.memory_limit() == memory.FALLBACK_BYTES
+
+
+def test_an_address_space_limit_is_room_left_under_it(monkeypatch):
+    import resource
+
+    import touchbench.core.memory as memory
+
+    monkeypatch.setattr(memory, "_meminfo_available", lambda: 64 * 2**30)
+    monkeypatch.setattr(memory, "_cgroup_room", lambda: None)
+    monkeypatch.setattr(resource, "getrlimit", lambda which: (6 * 2**30, resource.RLIM_INFINITY))
+    monkeypatch.setattr(memory, "_virtual_size", lambda: 2 * 2**30)
+    assert memory.available_memory() == 4 * 2**30 and memory.memory_limit() == 2**30  # (6 - 2) GiB / 4
+    monkeypatch.setattr(memory, "_virtual_size", lambda: 7 * 2**30)  # already past it
+    assert memory.available_memory() == 0
+    monkeypatch.setattr(resource, "getrlimit", lambda which: (resource.RLIM_INFINITY, resource.RLIM_INFINITY))
+    assert memory.available_memory() == 64 * 2**30
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="ulimit -v and /proc/self/status: Linux")
+def test_a_scene_over_ulimit_v_is_refused_up_front(tmp_path):
+    """Under `ulimit -v` (the process's virtual size plus 1 GiB) a scene of 6000 subjects, 6000 / 4
+    times the small one's 475,136 bytes (about 680 MiB), is over a quarter of the room and refused
+    when it is read, naming its field, rather than ending in a MemoryError while it is made."""
+    path = scene_file(tmp_path, "subjects: 4", "subjects: 6000")
+    code = (
+        "import resource\n"
+        "from touchbench.core.errors import DataError\n"
+        "from touchbench.core.memory import _virtual_size\n"
+        "from touchbench.scenes import load_scene\n"
+        "resource.setrlimit(resource.RLIMIT_AS, (_virtual_size() + 2**30, resource.RLIM_INFINITY))\n"
+        "try:\n"
+        f"    load_scene({str(path)!r})\n"
+        "    print('loaded')\n"
+        "except DataError as e:\n"
+        "    print(e)\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+                       env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parent.parent)})
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith(f"{path}:15: invalid scene: population.subjects: the scene would make 48,000 "
+                               "captures"), r.stdout
 
 
 def test_the_real_memory_is_read():

@@ -21,6 +21,12 @@ candidates a ``candidates=`` tag names, written out; an inner estimator that
 the check itself hands to :func:`check_nested_params`), so a protocol's
 validation refuses the value with its file, line and field, before anything
 runs; the classifier calls the same function when it is fitted.
+
+Counts every classifier shares are bounded here, whatever the classifier
+(:data:`COUNT_BOUNDS`): ``n_estimators`` a whole number 1..100000 and
+``inner_folds`` None or 2..1000 (the inner splits never use more folds than
+training subjects), so ``n_estimators: 1e12`` is refused at validation rather
+than running for ever.
 """
 
 from __future__ import annotations
@@ -56,12 +62,28 @@ class ParamError(TouchbenchError):
         super().__init__(message)
 
 
+#: parameter -> (smallest, largest, what it counts): bounds every classifier that takes it shares
+COUNT_BOUNDS = {"n_estimators": (1, 100_000, "trees or boosting rounds"),
+                "inner_folds": (2, 1000, "inner folds of whole subjects, or None for one per training subject")}
+
+
+def _check_counts(name: str, params: dict[str, Any]) -> None:
+    for key, (low, high, what) in COUNT_BOUNDS.items():
+        value = params.get(key)
+        if key not in params or (value is None and key == "inner_folds"):
+            continue
+        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+            raise ParamError(key, f"{name}: {key} must be a whole number from {low} to {high:,} ({what}), "
+                                  f"got {value!r}")
+
+
 def check_classifier_params(name: str, params: dict[str, Any]) -> None:
     """Refuse a value of ``params`` the registered classifier ``name`` cannot run with (module
     docstring): its ``check_params`` over its defaults, then each candidate of its ``candidates=``
     parameter that is written out (``{features, estimator, params}``), as a nested classifier."""
     entry = CLASSIFIERS.entry(name)
     full = {**(entry.tags.get("defaults") or {}), **params}
+    _check_counts(name, full)
     check = entry.tags.get("check_params")
     if check is not None:
         check(full)

@@ -120,9 +120,13 @@ def weight_grid(weights: Any, k: int) -> np.ndarray:
 
 
 def check_params(params: dict[str, Any]) -> None:
-    """The weights against the number of parts (the parts' own values: their classifiers' checks)."""
+    """Two parts or more, and the weights against their number (the parts' own values: their
+    classifiers' checks)."""
     parts = params.get("parts")
-    if isinstance(parts, (list, tuple)) and len(parts) >= 2:
+    if isinstance(parts, (list, tuple)) and len(parts) < 2:
+        raise ParamError("parts", f"fusion needs at least 2 parts (the methods whose probabilities it sums), got "
+                                  f"{len(parts)}")
+    if isinstance(parts, (list, tuple)):
         weight_grid(params.get("weights"), len(parts))
 
 

@@ -15,7 +15,9 @@ import yaml
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError
 from ..deploy.model import TrainedModel
-from ..deploy.predict import accuracy_text, adaptation_text, predict_dataset, read_data, write_table
+from ..deploy.predict import (
+    accuracy_text, adaptation_text, adaptation_warning, predict_dataset, read_data, write_table,
+)
 from ..deploy.stream import (
     SlidingRecognizer,
     choose_rule,
@@ -128,6 +130,9 @@ def predict(model_path, data, fmt, out, whole, trust, **options) -> None:
     adapted = adaptation_text(model, ds)
     if adapted:
         click.echo(f"note: {adapted}", err=True)
+    alone = adaptation_warning(model, ds)
+    if alone:
+        click.echo(f"warning: {alone}", err=True)
     if out:
         write_table(table, out)
         click.echo(f"{out}: {len(table)} captures labelled", err=True)

@@ -63,7 +63,7 @@ def feature_table(sensor: SensorSpec | None = None) -> list[dict]:
     return rows
 
 
-@click.group(epilog=example("touchbench features list --grid 8x8 --rate 54 --value-range 0..1023", "touchbench features show msd"))
+@click.group(epilog=example("touchbench features list --grid 8x8 --frame-rate 54 --value-range 0..1023", "touchbench features show msd"))
 def features() -> None:
     """Feature sets: scikit-learn transformers over captures."""
 
@@ -86,27 +86,42 @@ def _value_range(text: str | None, old: tuple[float, float] | None) -> tuple[flo
         raise click.BadParameter(str(e), param_hint="--value-range") from None
 
 
-@features.command("list", epilog=example("touchbench features list --grid 19x24 --rate 12 --value-range 0..255 --json"))
+def _frame_rate(rate: float | None, old: float | None) -> float | None:
+    """The sensor's frame rate from ``--frame-rate`` (every reader's spelling), or from ``--rate``, its
+    former spelling, with a warning."""
+    if old is None:
+        return rate
+    if rate is not None:
+        raise click.UsageError("give the frame rate once: --frame-rate HZ (--rate is its former spelling)")
+    log.warning(f"--rate is deprecated and goes in the next release: write --frame-rate {old:g}")
+    return old
+
+
+@features.command("list", epilog=example("touchbench features list --grid 19x24 --frame-rate 12 --value-range 0..255 --json"))
 @json_option
 @click.option("--grid", "grid", default=None, help="sensor grid (HxW) to compute the output sizes for")
-@click.option("--rate", "rate", type=float, default=None, help="sensor frame rate (Hz), with --grid")
+@click.option("--frame-rate", "rate", type=float, default=None, metavar="HZ",
+              help="sensor frame rate (Hz), with --grid (as the readers' --frame-rate)")
+@click.option("--rate", "old_rate", type=float, default=None, hidden=True,
+              help="former spelling of --frame-rate")
 @click.option("--value-range", "value_range", default=None, metavar="LO..HI",
               help="sensor value range, e.g. 0..1023 (as data convert's --value-range), with --grid")
 @click.option("--range", "old_range", type=(float, float), default=None, hidden=True,
               help="deprecated spelling of --value-range: LO HI")
-def list_(as_json: bool, grid: str | None, rate: float | None, value_range: str | None,
+def list_(as_json: bool, grid: str | None, rate: float | None, old_rate: float | None, value_range: str | None,
           old_range: tuple[float, float] | None) -> None:
     """Every feature set with its paper, output size and cost tag (sizes for the sensor
-    given by --grid, --rate and --value-range; '-' where a set needs parameters stated or
+    given by --grid, --frame-rate and --value-range; '-' where a set needs parameters stated or
     refuses that sensor)."""
     from rich.console import Console
     from rich.table import Table
 
     value_range = _value_range(value_range, old_range)
+    rate = _frame_rate(rate, old_rate)
     sensor = None
     if grid is not None or rate is not None or value_range is not None:
         if grid is None or rate is None or value_range is None:
-            raise click.UsageError("give --grid, --rate and --value-range together (the sensor the sizes are computed for)")
+            raise click.UsageError("give --grid, --frame-rate and --value-range together (the sensor the sizes are computed for)")
         from ..datasets.model import SensorSpec
 
         try:
@@ -114,7 +129,7 @@ def list_(as_json: bool, grid: str | None, rate: float | None, value_range: str 
         except ValueError as e:
             raise click.BadParameter(str(e)) from None
     title = ("feature sets (output size for " + sensor.describe().replace("'--grid' ", "") + ", default parameters)"
-             if sensor is not None else "feature sets (output sizes: give --grid, --rate and --value-range)")
+             if sensor is not None else "feature sets (output sizes: give --grid, --frame-rate and --value-range)")
     rows = feature_table(sensor) if sensor is not None else cached_rows("features", feature_table, ("touchbench.features",))
     if as_json:
         echo_json(rows)

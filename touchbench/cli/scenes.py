@@ -56,7 +56,7 @@ def list_(as_json: bool) -> None:
 @scenes.command("generate", epilog=example("touchbench scenes generate tiny --out tiny.parquet --seed 1"))
 @click.argument("name")
 @click.option("--out", "out", type=click.Path(dir_okay=False), required=True, help="Parquet file to write")
-@click.option("--seed", type=int, default=None, help="seed (default: the scene's own)")
+@click.option("--seed", type=click.IntRange(min=0), default=None, help="seed (default: the scene's own)")
 @click.option("--set", "sets", multiple=True, metavar="KEY=VALUE", help="override a scene field, e.g. protocol.repetitions=2")
 def generate(name: str, out: str, seed: int | None, sets: tuple[str, ...]) -> None:
     """Generate scene NAME (a shipped name or a YAML file) into a dataset
@@ -82,7 +82,7 @@ def generate(name: str, out: str, seed: int | None, sets: tuple[str, ...]) -> No
 
 @scenes.command("calibrate", epilog=example("touchbench scenes calibrate haart-like"))
 @click.argument("name")
-@click.option("--seed", type=int, default=None, help="seed (default: the scene's own)")
+@click.option("--seed", type=click.IntRange(min=0), default=None, help="seed (default: the scene's own)")
 @click.option("--real", default=None, help="real dataset to hold it against (default: the scene's calibrate_against)")
 @click.option("--features", "feature_sets", default=None, help="comma-separated feature sets (default: the Gaus sets available)")
 @click.option("--trees", type=int, default=100, show_default=True, help="random forest size")

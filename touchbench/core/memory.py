@@ -7,7 +7,10 @@ The available memory is the smallest that the system says: ``MemAvailable`` of
 (``os.sysconf``), and the room left under the process's control group limit (cgroup v2
 ``memory.max`` less ``memory.current``, v1 ``memory.limit_in_bytes`` less
 ``memory.usage_in_bytes``), where there is one: a container's limit is usually far below the
-machine's memory, and a process that runs into it stalls rather than fails.
+machine's memory, and a process that runs into it stalls rather than fails; and the room left
+under the process's address-space limit (``ulimit -v``, ``RLIMIT_AS``: the soft limit less the
+process's virtual size, ``VmSize`` of ``/proc/self/status``), where there is one: past it an
+allocation fails with a MemoryError.
 """
 
 from __future__ import annotations
@@ -61,13 +64,39 @@ def _cgroup_room() -> int | None:
     return None
 
 
+def _virtual_size() -> int | None:
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmSize:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def _address_space_room() -> int | None:
+    """The bytes the process may still map under its address-space limit (``RLIMIT_AS``), None
+    where there is no limit (or no ``resource`` module: Windows)."""
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    except (ImportError, AttributeError, OSError, ValueError):
+        return None
+    if soft == resource.RLIM_INFINITY or soft < 0:
+        return None
+    used = _virtual_size()
+    return max(0, soft - (used or 0))
+
+
 def available_memory() -> int | None:
     """Bytes of memory available to this process now (module docstring), None where the system
     does not say."""
     system = _meminfo_available()
     if system is None:
         system = _free_pages()
-    known = [v for v in (system, _cgroup_room()) if v is not None]
+    known = [v for v in (system, _cgroup_room(), _address_space_room()) if v is not None]
     return min(known) if known else None
 
 

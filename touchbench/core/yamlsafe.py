@@ -20,18 +20,20 @@ Every refusal is a :class:`yaml.MarkedYAMLError` whose ``problem_mark`` is
 the line it is about; :func:`yaml_problem` turns one into ``line, message``.
 :func:`node_lines` maps every field of a composed document to its line, and
 :func:`best_line` finds the line of a field (or of the nearest field above it
-that the file writes).
+that the file writes). :func:`number_as_text` says why a number written with an exponent
+but no dot or no sign (``1e-09``, ``1.0e300``) is a string: YAML 1.1 reads it so.
 """
 
 from __future__ import annotations
 
+import re
 from typing import Any, Iterator
 
 import yaml
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
 __all__ = ["MAX_ALIASES", "MAX_BYTES", "MAX_DEPTH", "MAX_NODES", "BoundedLoader", "YamlLimitError", "best_line", "load_bounded",
-           "node_lines", "safe_load", "yaml_nodes", "yaml_problem"]
+           "node_lines", "number_as_text", "safe_load", "yaml_nodes", "yaml_problem"]
 
 MAX_BYTES = 256 * 1024  # the longest shipped protocol is under 10 kB
 MAX_ALIASES = 100
@@ -181,3 +183,20 @@ def best_line(lines: dict[tuple, int], loc: tuple) -> int | None:
         else:
             break
     return best
+
+
+#: a number with an exponent that YAML 1.1 reads as a string: no dot in the mantissa, or no sign
+#: in the exponent (``1e-09``, ``1.0e300``, ``5E3``)
+_EXPONENT = re.compile(r"([-+]?)(\d+)(?:\.(\d*))?[eE]([-+]?)(\d+)")
+
+
+def number_as_text(value: Any) -> str | None:
+    """Why ``value``, a string written as a number with an exponent, is not a number, and how to
+    write it so that YAML reads a number; None for any other value."""
+    m = _EXPONENT.fullmatch(value.strip()) if isinstance(value, str) else None
+    if m is None:
+        return None
+    sign, whole, frac, exp_sign, exp = m.groups()
+    fixed = f"{sign}{whole}.{frac or '0'}e{exp_sign or '+'}{exp}"
+    return (f"YAML read {value!r} as a string, not a number: YAML 1.1 reads an exponent as a number only "
+            f"after a dot and with a sign; write {fixed}")

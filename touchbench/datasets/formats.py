@@ -11,6 +11,7 @@ lists them. Adding a format is adding a module that registers it.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
@@ -163,11 +164,33 @@ def parse_frame_rate(text: str) -> float:
     return check_frame_rate(text)
 
 
-def parse_value_range(text: str) -> tuple[float, float]:
-    """``"LO..HI"`` (or ``LO,HI``) -> ``(lo, hi)``: finite, ``lo < hi``."""
-    parts = str(text).replace(",", "..").split("..")
-    try:
-        lo, hi = (float(x) for x in parts)
-    except ValueError:
-        raise ValueError(f"expected LO..HI such as 0..4095, got {text!r}") from None
-    return check_value_range(lo, hi)
+#: a value range as written: two numbers, each with a digit before any dot (so ``0...255`` is no
+#: range, rather than 0..0.255), between ``..`` or ``,``
+_NUMBER = r"([-+]?(?:\d+(?:\.\d+)?(?:[eE][-+]?\d+)?|inf|infinity|nan))"  # inf, nan: refused as not finite
+_RANGE = re.compile(rf"\s*{_NUMBER}\s*(?:\.\.|,)\s*{_NUMBER}\s*", re.IGNORECASE)
+#: a value range of which the data use less than this share is refused (:func:`check_range_used`)
+RANGE_USED_AT_LEAST = 1e-6
+
+
+def parse_value_range(text: str, option: str = "--value-range") -> tuple[float, float]:
+    """``"LO..HI"`` (or ``LO,HI``) -> ``(lo, hi)``: finite, ``lo < hi`` (an error naming ``option``);
+    anything else (``0...255``, ``.5..1``) is refused (the command line names the option)."""
+    m = _RANGE.fullmatch(str(text))
+    if m is None:
+        raise OptionValueError(f"expected LO..HI such as 0..4095 or -1.5..1.5 (two numbers, each with a digit "
+                               f"before any dot, between '..'), got {text!r}")
+    return check_value_range(float(m.group(1)), float(m.group(2)), option)
+
+
+def check_range_used(data_lo: float, data_hi: float, value_range: tuple[float, float],
+                     option: str = "--value-range") -> None:
+    """Refuse a value range of which the data's values use a vanishing part (under
+    :data:`RANGE_USED_AT_LEAST` of it): features scaled by the range would be constant. Data of
+    one value throughout are not refused here (nothing tells their range)."""
+    lo, hi = value_range
+    used = (data_hi - data_lo) / (hi - lo)
+    if 0 < used < RANGE_USED_AT_LEAST:
+        raise OptionValueError(
+            f"{option} {lo:g}..{hi:g}: the data's values span only {data_lo:g}..{data_hi:g}, {used:.2g} of that "
+            "range, so the features scaled by it would be constant: give the sensor's own range (or leave "
+            f"{option} out to infer it)")

@@ -84,7 +84,7 @@ import pandas as pd
 
 from ..core.errors import DataError, TouchbenchError
 from .formats import (
-    FormatOption, check_frame_rate, check_value_range, parse_frame_rate, parse_grid, parse_value_range, register_format,
+    FormatOption, check_frame_rate, check_range_used, check_value_range, parse_frame_rate, parse_grid, parse_value_range, register_format,
 )
 from .model import TIME_COLUMN, SensorSpec, TouchDataset, time_step_summary
 from .table_cells import cell_columns, numbered_groups, pattern_regex
@@ -399,6 +399,8 @@ def read_table_dataset(
         raise DataError("some files have a time column and others not", path)
     if value_range is None:
         value_range = _inferred_value_range(path, caps, whole)
+    else:
+        check_range_used(min(float(c.min()) for c in caps), max(float(c.max()) for c in caps), value_range)
     if frame_rate is None:
         frame_rate = _estimated_frame_rate(path, times)
     if found_grid is None:

@@ -10,10 +10,10 @@ recordings in ``raw/``, named ``150505-<participant><cover><motion><gesture>``
 (``.csv``, plain or gzipped); ``SHA256SUMS`` beside ``raw/`` is checked.
 
 **Participants.** Whatever participants the folder holds are read: nothing
-here names or counts them. The data folder's own README (read-only) says it
-holds participants 2 to 9 (223 recordings); that is out of date. The copy
+here names or counts them (``data info`` lists those found). The copy
 touchbench is developed on holds 224 recordings of the eight participants
-2, 4, 6, 8, 10, 12, 14 and 16 (28 each); the whole study has 16. A subject
+2, 4, 6, 8, 10, 12, 14 and 16 (28 each), as the data folder's README says;
+the whole study has 16. A subject
 is ``150505-s<NN>`` (the study's prefix: never one of HAART's ``sNN``, who
 are other people). Metadata columns: ``cover`` (cover / none), ``motion``
 (dynamic / static), ``gesture``, ``study``, ``participant``, ``source``.
@@ -52,14 +52,11 @@ from .registry import DATASETS
 __all__ = ["NAME", "PATTERN", "WINDOWS", "load_icmi15_study2", "parse_window"]
 
 NAME = "icmi15-study2"
-READER_VERSION = "icmi15-study2-2"  # 2: the checksums' provenance
+READER_VERSION = "icmi15-study2-3"  # 2: the checksums' provenance; 3: no fixed note on the README
 PATTERN = (r"(?P<study>150505)-(?P<participant>\d+)(?P<cover>cover|none)(?P<motion>dynamic|static)"
            r"(?P<gesture>" + "|".join(GESTURES) + r")")
 #: the window option's forms (``parse_window``)
 WINDOWS = ("haart", "first:SECONDS", "middle:SECONDS")
-#: what the README of the data folder says, and why touchbench does not rely on it
-README_NOTE = ("the data folder's README says participants 2 to 9 and 223 recordings: out of date; the "
-               "participants and recordings listed here are those the folder holds")
 
 
 def parse_window(text: str) -> dict[str, object]:
@@ -104,7 +101,7 @@ def build_icmi15_study2(raw: Path, window: str = "haart") -> TouchDataset:
     ds = read_haart_raw(raw, pattern=PATTERN, short_recordings="leave-out", name=NAME,
                         checksums=raw.parent / "SHA256SUMS", **options)
     prov = {"window option": f"{window} (of {', '.join(WINDOWS)})", **conditions_summary(_recordings(raw)),
-            **ds.provenance, "readme": README_NOTE}
+            **ds.provenance}
     ds.provenance = prov
     return ds
 

@@ -19,7 +19,8 @@ A model that adapts to each session from its unlabelled captures
 adapted to the captures of the data it is given before labelling them:
 each subject's captures as a session where the data has a ``subject``
 column, else all of them as one (:func:`adaptation_sessions`); the command
-says so (:func:`adaptation_text`).
+says so (:func:`adaptation_text`), and warns of a session of one capture, which it
+centres to zeros (:func:`adaptation_warning`).
 
 A model file records a checksum of every capture it was trained on: the
 ``trained_on`` column says which captures of the data the model has seen
@@ -56,7 +57,7 @@ from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
 from .model import TrainedModel
 from .windows import cut_windows
 
-__all__ = ["TRAINED_ON", "accuracy_text", "adaptation_sessions", "adaptation_text", "predict_dataset", "read_data",
+__all__ = ["TRAINED_ON", "accuracy_text", "adaptation_sessions", "adaptation_text", "adaptation_warning", "predict_dataset", "read_data",
            "write_table"]
 
 #: the column that says whether the model was trained on a capture
@@ -126,6 +127,23 @@ def adaptation_text(model: TrainedModel, ds: TouchDataset) -> str | None:
     n = len(np.unique(sessions))
     return (f"adapted to the data's unlabelled captures, each of its {n} subject{'s' if n > 1 else ''} as a "
             "session: these labels used the test captures themselves, not only the model")
+
+
+def adaptation_warning(model: TrainedModel, ds: TouchDataset) -> str | None:
+    """For a model that adapts to sessions: the sessions of one capture only, which it centres to
+    zeros (one capture cannot give a session's statistics), so that every such capture gets the
+    same label whatever it holds; None when there is none (or the model does not adapt)."""
+    sessions = adaptation_sessions(model, ds)
+    if sessions is None:
+        return None
+    names, counts = np.unique(sessions, return_counts=True)
+    alone = [str(n) for n, c in zip(names, counts) if c == 1]
+    if not alone:
+        return None
+    shown = ", ".join(alone[:5]) + (f" and {len(alone) - 5} more" if len(alone) > 5 else "")
+    return (f"{len(alone)} of the data's {len(names)} subject(s) have one capture only ({shown}): one capture cannot "
+            "give a session's statistics, so the model centres it to zeros and labels every such capture alike, "
+            "whatever it holds; give the model several captures of each subject")
 
 
 def _label(model: TrainedModel, X: np.ndarray, sessions: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:

@@ -6,7 +6,9 @@ of every object. Reading rebuilds objects only of the types skops trusts by
 default (scikit-learn's estimators, numpy, scipy, Python's containers) and of
 :data:`TRUSTED_TYPES`, the types touchbench's methods are made of, listed by
 name; a file naming any other type is refused before anything is built
-(:func:`load_parts`), unless the user trusts the file (``--trust``).
+(:func:`load_parts`), naming the file and the types, unless the user trusts the
+file (``--trust``); then the types it builds beyond the list are named in a
+warning (logger ``touchbench.deploy``) before anything is built.
 
 Why these types are safe to rebuild: skops makes an object of a listed class
 without calling its constructor, then gives it its saved attributes
@@ -28,12 +30,15 @@ numpy arrays instead.
 
 from __future__ import annotations
 
+import logging
 from typing import Any, Iterator
 from zipfile import ZIP_DEFLATED
 
 import numpy as np
 
 from ..core.errors import DataError
+
+log = logging.getLogger("touchbench.deploy")
 
 __all__ = ["TRUSTED_TYPES", "check_trees", "dump_parts", "load_parts", "untrusted_types"]
 
@@ -132,8 +137,13 @@ def load_parts(body: bytes, path: Any, trust: bool = False) -> Any:
     except Exception as e:  # noqa: BLE001 - not a skops file: a damaged zip, a schema skops does not know
         raise DataError(f"the model's fitted parts are not readable ({type(e).__name__}: {e})", path) from None
     if unknown and not trust:
-        raise DataError(f"the model file names types touchbench does not load from a file: {', '.join(unknown)}; "
-                        "load it only if you trust who made it, with --trust", path)
+        raise DataError(f"the model file names {len(unknown)} type(s) outside touchbench's trusted list: "
+                        f"{', '.join(unknown)}; nothing was built. Building them can run their code: only if you "
+                        "trust who made the file, read it with --trust (`touchbench predict MODEL DATA --trust`, "
+                        "`TrainedModel.load(path, trust=True)`)", path)
+    if unknown:
+        log.warning("%s: --trust: building %d type(s) outside touchbench's trusted list: %s",
+                    path, len(unknown), ", ".join(unknown))
     try:
         payload = loads(body, trusted=[*TRUSTED_TYPES, *unknown])
     except Exception as e:  # noqa: BLE001 - a module missing here, a class changed since...

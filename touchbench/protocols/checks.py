@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import copy
 import inspect
+import itertools
 import math
 import re
 from typing import Any, Collection
@@ -354,6 +355,57 @@ def require_extras(protocol: Protocol, labels: Collection[str] | None = None) ->
                                 f"({', '.join(missing)} missing): pip install 'touchbench[{extra}]'"))
     if issues:
         raise _make_error(protocol.path, protocol._lines, issues, protocol._booleans)
+
+
+def _duplicate_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
+    """Two entries that describe the same method (what a task's identity takes of it: its content,
+    name and parameters), refused at the second one's field: a repeated classifier entry at its
+    own, a repeated feature combination at its own, a repeated ``methods:`` entry at its own."""
+    combo_at = [j for j, combo in enumerate(protocol.features)
+                for _ in itertools.product(*[expand_grid(r.params) for r in combo])]
+    n_clf = sum(len(expand_grid(spec.params)) for spec in protocol.classifiers)
+    seen: dict[str, tuple[tuple, int | None]] = {}
+    issues = []
+    for n, (c, k, loc) in enumerate(protocol._entry_pairs()):
+        combo = combo_at[n // n_clf] if loc[0] == "classifiers" and n_clf and n // n_clf < len(combo_at) else None
+        try:
+            m = protocol._method(c, k, loc)
+        except TouchbenchError:
+            continue  # refused by its own check
+        ident = canonical_json([m.key, m.name, m.params])
+        if ident not in seen:
+            seen[ident] = (loc, combo)
+            continue
+        first, first_combo = seen[ident]
+        at = ("features", combo) if loc == first and combo is not None else loc
+        was = ("features", first_combo) if at[0] == "features" else first
+        issues.append((at, f"this entry describes the same method as {_loc_str(was)} ({m.label!r}), so the "
+                           "same tasks: list each method once"))
+    return issues
+
+
+def _design_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
+    """A ``design`` block naming a method the protocol does not evaluate (the leaderboard's design
+    note would say something false), at the name's line, with the nearest names. A method is named
+    as the leaderboard names it: its label, or ``features / label``."""
+    names: set[str] = set()
+    for c, k, loc in protocol._entry_pairs():
+        try:
+            m = protocol._method(c, k, loc)
+        except TouchbenchError:
+            return []  # refused by its own check
+        names |= {m.label, f"{m.features_label} / {m.label}"}
+    issues = []
+    for at, design in [(("design",), protocol.design)] + [
+            (("evaluations", i, "design"), ev.design) for i, ev in enumerate(protocol.evaluations)]:
+        blocks = design if isinstance(design, list) else [] if design is None else [design]
+        for b, block in enumerate(blocks):
+            where = at + ((b,) if isinstance(design, list) else ()) + ("methods",)
+            for j, name in enumerate(block.methods):
+                if name not in names:
+                    issues.append((where + (j,), f"design names method {name!r}, which this protocol does not "
+                                                 f"evaluate{did_you_mean(name, sorted(names))}"))
+    return issues
 
 
 def _expected_issues(protocol: Protocol) -> list[tuple[tuple, str]]:

@@ -12,7 +12,7 @@ from pydantic import BaseModel, ValidationError
 
 from ..core.errors import TouchbenchError
 from ..core.suggest import did_you_mean
-from ..core.yamlsafe import best_line, yaml_nodes
+from ..core.yamlsafe import best_line, number_as_text, yaml_nodes
 
 __all__ = ["ProtocolError", "UnknownEvaluation"]
 
@@ -41,15 +41,25 @@ class _ErrorAt(ValueError):
 # ----------------------------------------------------------------- YAML with lines
 # (the walk over a composed document and the line of a field: core.yamlsafe)
 def _boolean_map(root: yaml.Node | None) -> dict[tuple, str]:
-    """Path -> what was written, for every value YAML read as a boolean (``no``, ``on``, ``yes``...)."""
+    """Path -> what was written, for every value YAML read otherwise than it looks: as a boolean
+    (``no``, ``on``, ``yes``...), or as a string where a number with an exponent is written
+    (``1e-09``: :func:`touchbench.core.yamlsafe.number_as_text`)."""
     return {path: node.value for path, node, _ in yaml_nodes(root)
-            if isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:bool"}
+            if isinstance(node, yaml.ScalarNode) and (
+                node.tag == "tag:yaml.org,2002:bool"
+                or (node.tag == "tag:yaml.org,2002:str" and node.style is None and number_as_text(node.value)))}
 
 
-def _boolean_hint(loc: tuple, booleans: dict[tuple, str]) -> str:
-    """For an issue at ``loc`` on (or just above) a value YAML read as a boolean: what was written, quoted."""
+def _boolean_hint(loc: tuple, booleans: dict[tuple, str], msg: str = "") -> str:
+    """For an issue at ``loc`` on (or just above) a value YAML read as a boolean: what was written,
+    quoted; on (or above, such as a grid's point) a number YAML read as a string and the message
+    shows: why, and how to write it."""
     for at, text in booleans.items():
-        if at == loc or (loc and at[:-1] == loc):
+        number = number_as_text(text)
+        if number is not None:
+            if at[:len(loc)] == loc and repr(text) in msg:
+                return f" ({number})"
+        elif at == loc or (loc and at[:-1] == loc):
             return (f" ({text!r} was read as a YAML boolean, {text.lower() in _TRUE}: quote it, \"{text}\", "
                     "where a name or text is meant)")
     return ""
@@ -74,7 +84,7 @@ def _make_error(path: Path | None, lines: dict[tuple, int], issues: list[tuple[t
     where = str(path) if path is not None else "<protocol>"
     rows, out = [], []
     for loc, msg in issues:
-        msg += _boolean_hint(loc, booleans or {})
+        msg += _boolean_hint(loc, booleans or {}, msg)
         line = best_line(lines, loc) if loc else None
         loc_s = _loc_str(loc)
         rows.append((where, line, loc_s, msg))

@@ -12,11 +12,20 @@ from .errors import _ErrorAt
 
 
 CAUSE_KINDS = ("measured", "ruled_out", "unexplained")
+#: what a shell reads as more than one command's arguments: a cause's command is one touchbench command
+SHELL_METACHARACTERS = (";", "&&", "||", "|", "$(", "`", ">", "<")
 
 
 def _touchbench_command(loc: tuple, command: str | None) -> None:
-    if command is not None and not command.startswith("touchbench "):
+    if command is None:
+        return
+    if not command.startswith("touchbench "):
         raise _ErrorAt(loc, f"a command is a touchbench command (starting 'touchbench '), got {command!r}")
+    found = [m for m in SHELL_METACHARACTERS if m in command]
+    if found:
+        raise _ErrorAt(loc, f"a command is one touchbench command, without shell operators: {command!r} has "
+                            f"{' '.join(repr(m) for m in found)}; give the one command (its output goes in output "
+                            "or gave)")
 
 
 class RuledOut(_Model):

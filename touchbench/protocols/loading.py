@@ -14,6 +14,8 @@ from pydantic import ValidationError
 from ..core.yamlsafe import MAX_BYTES, load_bounded, node_lines, yaml_problem
 from .checks import (
     _classifier_issues,
+    _design_issues,
+    _duplicate_issues,
     _evaluation_issues,
     _expected_issues,
     _feature_issues,
@@ -59,6 +61,8 @@ def parse_protocol(text: str, path: str | Path | None = None, *, deep: bool = Tr
     if deep:
         issues += _classifier_issues(proto)
     issues += _evaluation_issues(proto, subs, clean_so_far=not issues)
+    if not issues:
+        issues += _duplicate_issues(proto) + _design_issues(proto)
     if not issues:
         issues += _expected_issues(proto)
     if issues:

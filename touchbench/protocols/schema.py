@@ -374,19 +374,16 @@ class Protocol(_Model):
         return out
 
     def _entry_pairs(self) -> list[tuple[FeatureCombination, ClassifierEntry, tuple]]:
-        """Every (combination, classifier entry) pair as the protocol spells it, with its field:
-        the ``features`` x ``classifiers`` cross product, then ``methods:`` (grids expanded)."""
-        out = [(c, k, ("classifiers", self._classifier_index(k.name)))
-               for c in self.combinations() for k in self.classifier_entries()]
+        """Every (combination, classifier entry) pair as the protocol spells it, with its field (the
+        classifier entry's own index): the ``features`` x ``classifiers`` cross product, then
+        ``methods:`` (grids expanded)."""
+        at = [i for i, spec in enumerate(self.classifiers) for _ in expand_grid(spec.params)]  # each entry's own
+        out = [(c, k, ("classifiers", i)) for c in self.combinations() for k, i in zip(self.classifier_entries(), at)]
         return out + [(c, k, ("methods", i)) for i, c, k in self._method_entries()]
 
     def evaluated_methods(self) -> list[Method]:
         """Every method the protocol evaluates, each spelling read into a :class:`Method`."""
         return [self._method(c, k, loc) for c, k, loc in self._entry_pairs()]
-
-    def _classifier_index(self, name: str) -> int:
-        """The index in ``classifiers:`` of the first entry named ``name`` (for error locations)."""
-        return next((i for i, s in enumerate(self.classifiers) if s.name == name), 0)
 
     def _method(self, combo: FeatureCombination, clf: ClassifierEntry, loc: tuple) -> Method:
         """The method of one (combination, classifier entry) pair; a pairing that means nothing

@@ -97,9 +97,17 @@ def _is_shipped(folder: Path) -> bool:
     return folder.resolve() == SHIPPED.resolve()
 
 
+def _check_folder(root: Path, setting: str) -> Path:
+    """``root`` when it is a folder or does not exist yet; a file there is refused naming ``setting``."""
+    if root.exists() and not root.is_dir():
+        raise ReferenceError(f"{root}: the folder of references ({setting}) is a file, not a folder: "
+                             "set it to a folder (it is made if missing)")
+    return root
+
+
 def _search_path() -> list[tuple[str, Path]]:
     """(origin, folder) in the order a name is looked for: the user's references, then the shipped ones."""
-    user = user_reference_dir()
+    user = _check_folder(user_reference_dir(), "$TOUCHBENCH_REFERENCE_DIR or reference/ in the user's data directory")
     return ([] if _is_shipped(user) else [("user", user)]) + [("shipped", SHIPPED)]
 
 
@@ -124,6 +132,26 @@ def reference_names() -> list[str]:
     return list(names)
 
 
+def _read_index(index: Path) -> dict[str, Any]:
+    """A reference's ``reference.json``, checked: a mapping whose ``evaluations`` is a list of
+    mappings with a ``folder`` and a ``test_set``; anything else is refused naming the file."""
+    fix = "save the reference again (`touchbench reference save RESULTS --name NAME --force`) or remove its folder"
+    try:
+        data = json.loads(index.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise ReferenceError(f"{index}: damaged reference index, not JSON ({e}): {fix}") from None
+    if not isinstance(data, dict):
+        raise ReferenceError(f"{index}: damaged reference index: a JSON {type(data).__name__} where a mapping "
+                             f"(protocol, evaluations, ...) is expected: {fix}")
+    evaluations = data.get("evaluations", [])
+    if not isinstance(evaluations, list) or not all(
+            isinstance(e, dict) and isinstance(e.get("folder"), str) and isinstance(e.get("test_set"), str)
+            for e in evaluations):
+        raise ReferenceError(f"{index}: damaged reference index: 'evaluations' must be a list of mappings "
+                             f"with a 'folder' and a 'test_set': {fix}")
+    return data
+
+
 def find_reference(name: str) -> Reference:
     """The reference ``name`` (the user's before a shipped one); a name that is not saved is refused
     with the names that are."""
@@ -131,7 +159,7 @@ def find_reference(name: str) -> Reference:
     for origin, root in _search_path():
         index = root / name / INDEX
         if index.is_file():
-            return Reference(name, index.parent, json.loads(index.read_text(encoding="utf-8")), origin)
+            return Reference(name, index.parent, _read_index(index), origin)
     known = reference_names()
     raise ReferenceError(f"no reference results named {name!r}{did_you_mean(name, known)}; "
                          f"saved: {', '.join(known) or 'none'}")
@@ -232,7 +260,8 @@ def save_reference(results: str | Path, name: str, dest: str | Path | None = Non
     reference of that name is replaced whole, and only with ``force``; the replacement is atomic
     (written beside it, then renamed), so a failure leaves the old one as it was."""
     check_reference_name(name)
-    root = Path(dest) if dest is not None else user_reference_dir()
+    root = _check_folder(Path(dest) if dest is not None else user_reference_dir(),
+                         "--to" if dest is not None else "$TOUCHBENCH_REFERENCE_DIR")
     out = _destination(root, name, force)
     src = Path(results)
     entries = [_evaluation_entry(d, src) for d in find_result_dirs(src)]

@@ -272,6 +272,32 @@ def shorten(text: str, width: int) -> str:
     return head + "…" + tail
 
 
+def _shared_prefix(a: str, b: str) -> int:
+    n = 0
+    for x, y in zip(a, b):
+        if x != y:
+            break
+        n += 1
+    return n
+
+
+def shorten_column(texts: list[str], width: int) -> list[str]:
+    """Each of ``texts`` (a column's cells) in at most ``width`` terminal cells, keeping the part
+    that tells them apart: the start every text of the column shares is elided first ("…" then
+    the rest, as much of its end as fits), then :func:`shorten` cuts the rest around "…". Labels
+    that differ only after a long common start (a grid's parameters) stay apart when shortened."""
+    order = sorted(set(texts))
+    common = _shared_prefix(order[0], order[-1]) if len(order) > 1 else 0
+    out = []
+    for t in texts:
+        if cell_len(t) <= width or common == 0 or width < 2:
+            out.append(shorten(t, width))
+            continue
+        start = min(common, max(len(t) - (width - 1), 0))  # from where they differ at the latest
+        out.append("…" + shorten(t[start:].lstrip(), width - 1))
+    return out
+
+
 def _table_width(widths: dict[str, int], shown: Iterable[str]) -> int:
     """The characters a rich table takes with columns ``shown`` at ``widths`` (:func:`fitting_columns`)."""
     return 1 + sum(widths[h] + 3 for h in shown)
@@ -324,9 +350,13 @@ def _fitted_table(title: str, header: list[str], cells: list[list[str]], text_ce
     t = Table(title=escape(title), show_lines=False)  # a name like "[b5830b]" is text, not markup
     for i in keep:
         t.add_column(escape(header[i]), no_wrap=True, overflow="ignore", width=widths[names[i]])
-    for c, row_text in zip(cells, text_cells):
-        t.add_row(*(escape("\n".join(shorten(x, widths[names[i]]) if i in row_text or names[i] in TERMINAL_TEXT
-                                      else x for x in c[i].split("\n"))) for i in keep))
+    short: dict[tuple[int, str], str] = {}
+    for i in keep:  # each text column shortened as a whole: the part that tells its cells apart is kept
+        lines = [x for c, row_text in zip(cells, text_cells) if i in row_text or names[i] in TERMINAL_TEXT
+                 for x in c[i].split("\n")]
+        short.update(((i, x), y) for x, y in zip(lines, shorten_column(lines, widths[names[i]])))
+    for c in cells:
+        t.add_row(*(escape("\n".join(short.get((i, x), x) for x in c[i].split("\n"))) for i in keep))
     return t
 
 

@@ -54,6 +54,8 @@ from typing import Any
 
 import numpy as np
 
+from ..core.yamlsafe import number_as_text
+
 PRIMITIVES = ("fingertip", "fingertips", "palm", "hand", "wrap", "pinch", "none")
 
 
@@ -120,7 +122,8 @@ class GestureParams:
         if name == "rate_hz" and value is None:
             return
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ValueError(f"must be a number, got {value!r}")
+            why = number_as_text(value)
+            raise ValueError(f"must be a number, got {value!r}" + (f": {why}" if why else ""))
         if not math.isfinite(value):
             raise ValueError(f"must be a finite number, got {value!r}")
         if name in ("knead_depth", "wobble") and not 0 <= value <= 1:

@@ -331,7 +331,7 @@ class Calibration(_Strict):
 class SceneSpec(_Strict):
     name: str
     description: str
-    seed: int = 0
+    seed: int = Field(default=0, ge=0, description="the seed of every random draw (a whole number >= 0)")
     effects: list[Effect]
     sensor: SensorModel
     population: Population
