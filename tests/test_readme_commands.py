@@ -60,9 +60,10 @@ def test_readme_commands_on_shipped_files_run_as_written(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     commands = shipped_commands((ROOT / "README.md").read_text(encoding="utf-8"), tracked_paths())
     picked = [(" ".join(c), paths) for c, paths in commands]
-    assert [c[1:4] for c, _ in commands] == [["data", "convert", "docs/formats/study"]], (
+    assert [c[1:4] for c, _ in commands] == [["data", "convert", "docs/formats/study"],
+                                             ["data", "convert", "docs/formats/my-skin.csv"]], (
         f"the README's commands that name a path git tracks (picked for this test): {picked}; "
-        "only the shipped study recording is expected: a new README command on a shipped file "
+        "only the shipped study recording and the own-sensor example are expected: a new README command on a shipped file "
         "belongs in this list, with what it should write checked below")
     for cmd, paths in commands:
         for p in paths:
