@@ -102,3 +102,20 @@ def test_the_demo_without_the_data_says_it_ran_the_synthetic_scene(tmp_path, mon
     assert f"looked for the haart data in {tmp_path / 'nowhere' / 'haart'}" in before
     assert "These results are of the synthetic scene 'tiny', not of real data" in after
     assert "Set TOUCHBENCH_DATA_DIR to the folder that holds haart/" in after
+
+
+def test_the_demo_prints_its_numbers_once(tmp_path, monkeypatch):
+    """The demo's run prints no summary of its own: each method's accuracy is in the leaderboard's
+    row for it alone."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("TOUCHBENCH_DATA_DIR", str(tmp_path / "nowhere"))
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    r = CliRunner().invoke(cli, ["demo", "--jobs", "1"], env={"COLUMNS": "250"})
+    assert r.exit_code == 0, r.output
+    lines = r.output.splitlines()
+    scores = pd.read_parquet(tmp_path / "results" / "tiny" / "scores.parquet")
+    for (feats, clf), acc in scores.groupby(["features", "classifier"])["accuracy"].mean().items():
+        rows = [ln for ln in lines if re.search(rf"│ {re.escape(f'{feats} / {clf}')} +│", ln)]
+        assert len(rows) == 1 and f"{100 * acc:.1f}" in rows[0], r.output
+        # every line that gives this accuracy is a row of the leaderboard's table
+        assert all("│" in ln for ln in lines if f" {100 * acc:.1f} " in ln), r.output

@@ -38,7 +38,8 @@ def test_bring_your_own_sensor_runs_as_written(tmp_path, monkeypatch):
     monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
     text = section("Bring your own sensor")
     (protocol,), (shell,) = blocks(text, "yaml"), blocks(text, "bash")
-    shutil.copy(EXAMPLES / "my-skin.csv", tmp_path)
+    (tmp_path / "docs" / "formats").mkdir(parents=True)  # the README names the shipped file by its path
+    shutil.copy(EXAMPLES / "my-skin.csv", tmp_path / "docs" / "formats")
     Path("my-skin.yaml").write_text(protocol)
     commands = _commands(shell)
     assert [c[1:3] for c in commands] == [["data", "convert"], ["data", "info"], ["protocols", "validate"],
@@ -49,7 +50,7 @@ def test_bring_your_own_sensor_runs_as_written(tmp_path, monkeypatch):
     assert "frame rate estimated from the time column: 20 Hz" in outputs[0]
     ds = TouchDataset.from_parquet(tmp_path / "my-skin.parquet")
     assert ds.sensor.grid == (6, 6) and ds.sensor.value_range == (0.0, 255.0) and len(ds) == 24
-    csv = pd.read_csv(tmp_path / "my-skin.csv")
+    csv = pd.read_csv(EXAMPLES / "my-skin.csv")
     first = csv[csv["take"] == "p1-pat-0"]
     np.testing.assert_array_equal(ds.captures[0].reshape(len(first), 36),
                                   first[[f"r{r}c{c}" for r in range(6) for c in range(6)]].to_numpy())

@@ -60,21 +60,20 @@ def _svg(path):
 
 
 # ----------------------------------------------------------------- names
-def test_file_names_are_unique_readable_and_hash_free_for_a_parquet_dataset(runs, tmp_path):
+def test_file_names_are_unique_readable_and_hash_free_named_by_the_results_folder(runs, tmp_path):
     rs = load_results([runs / "a"])
     [lb] = build_leaderboards(rs)
     made = plot_table(rs, lb, tmp_path, methods=list(lb.rows["method_id"][:2]))
     files = [p for paths in made.values() for p in paths]
     assert len(files) == len({p.name for p in files}) == 3 * len(made)  # pdf, svg, png each, none overwritten
     stems = sorted({p.name.rsplit(".", 1)[0] for p in files})
-    assert stems == ["my-recordings-loso-confusion-msd-rf",
-                     "my-recordings-loso-confusion-sd-rf", "my-recordings-loso-pareto", "my-recordings-loso-subjects"]
+    # the results folder is "a": the figures are named by it, not by the dataset and scheme
+    assert stems == ["a-confusion-msd-rf", "a-confusion-sd-rf", "a-pareto", "a-subjects"]
     assert lb.title == "my-recordings.parquet — loso" and "dddd" not in lb.title
     taken = set()
     plot_table(rs, lb, tmp_path / "two", kinds=("pareto",), taken=taken)
     again = plot_table(rs, lb, tmp_path / "two", kinds=("pareto",), taken=taken)  # a second table of that name
-    assert [p.name for p in again["pareto"]] == ["my-recordings-loso-2-pareto.pdf", "my-recordings-loso-2-pareto.svg",
-                                                 "my-recordings-loso-2-pareto.png"]
+    assert [p.name for p in again["pareto"]] == ["a-2-pareto.pdf", "a-2-pareto.svg", "a-2-pareto.png"]
 
 
 def test_two_datasets_of_one_name_are_told_apart_in_titles(runs, tmp_path):

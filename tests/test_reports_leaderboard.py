@@ -410,6 +410,30 @@ def test_a_single_fold_table_keeps_names_and_wilson_intervals_whole_at_80_column
         assert f"{100 * k / 36:.1f}" in line and f"{100 * ci.low:.1f}–{100 * ci.high:.1f}" in line
 
 
+def test_a_terminal_legend_explains_the_columns_it_shows_and_what_the_pareto_mark_is_on(tmp_path):
+    from rich.console import Console
+
+    from touchbench.reports.rendering import print_terminal
+
+    one = {"challenge": CAPS["capture_id"].tolist()}
+    write_fake_run(tmp_path / "r", CAPS, one, [
+        FakeMethod("sd+bmh+msd", "gaus-rf", wrong={"challenge": CAPS["capture_id"].tolist()[:6]}, latency_ms=9.0),
+        FakeMethod("bmh", "gaus-rf", wrong={"challenge": CAPS["capture_id"].tolist()[:12]}, latency_ms=1.0),
+    ], scheme={"name": "challenge"})
+    lbs = build_leaderboards(load_results([tmp_path / "r"]))
+    texts = {}
+    for width in (80, 250):
+        console = Console(record=True, width=width)
+        print_terminal(lbs, console)
+        texts[width] = " ".join(console.export_text().split())
+    # 80 columns: no latency nor Pareto column, so no sentence on them
+    assert "★" not in texts[80] and "latency" not in texts[80].split("Note:")[0].lower()
+    # wide: both columns, and the mark says the time it is computed on, which no column shows
+    assert "★ = on the Pareto front of accuracy against the CPU time of labelling one capture" in texts[250]
+    assert "latency_cpu_ms in the CSV and JSON output, not a column here" in texts[250]
+    assert "Latency: median over folds of the wall-clock time" in texts[250]
+
+
 LONG_LABEL = "head" + "x" * 242 + "tail"  # 250 characters
 
 

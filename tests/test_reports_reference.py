@@ -322,3 +322,39 @@ def test_a_folder_of_references_that_is_a_file_is_named(engine_env, shipped, tmp
         assert f"{store}: the folder of references ($TOUCHBENCH_REFERENCE_DIR" in r.output
         assert "is a file, not a folder" in r.output and "File exists" not in r.output
     assert store.read_text() == "not a folder"
+
+
+def _tables(r) -> list[set[str]]:
+    assert r.exit_code == 0, r.output
+    return [{row["classifier"] for row in t["rows"]} for t in json.loads(r.stdout)["tables"]]
+
+
+def test_two_evaluations_on_the_same_captures_stay_two(refs, tmp_path):
+    """Two evaluations of one dataset test the same captures (one content hash) under two schemes:
+    the reference keeps both, and a run of one of them is placed beside that evaluation's rows
+    (one table, the user's scheme), never the other's (a table of their own)."""
+    data = tmp_path / "same.parquet"
+    random_dataset(subjects=("s1", "s2", "s3"), per_cell=2, seed=4).to_parquet(data)
+    text = (f"name: two\ndataset: {data}\nfeatures: [[test-mean]]\nclassifiers: [test-logreg]\nseed: 1\n"
+            "evaluations:\n  - {name: first, scheme: loso}\n  - {name: second, scheme: {name: kfold, k: 2}}\n")
+    run_protocol(parse_protocol(text, tmp_path / "two.yaml"), out=tmp_path / "saved", progress=False)
+    assert _invoke("reference", "save", tmp_path / "saved", "--name", "two", "--to", refs).exit_code == 0
+    assert "2 evaluation(s)" in _invoke("reference", "list").output
+    beside = {"test-logreg", "test-logreg (reference two)"}
+    for evaluation in ("first", "second"):
+        assert _tables(_invoke("leaderboard", tmp_path / "saved" / evaluation, "--reference", "two",
+                               "--json")) == [beside], evaluation
+    # an index saved before the evaluation's name was recorded: the folder names it
+    index = json.loads((refs / "two" / "reference.json").read_text())
+    for e in index["evaluations"]:
+        del e["evaluation"]
+    (refs / "two" / "reference.json").write_text(json.dumps(index))
+    for evaluation in ("first", "second"):
+        assert _tables(_invoke("leaderboard", tmp_path / "saved" / evaluation, "--reference", "two",
+                               "--json")) == [beside], evaluation
+
+
+def test_the_shipped_touch_all_reference_lists_its_seven_evaluations(refs):
+    r = _invoke("reference", "list")
+    line = next(x for x in r.output.splitlines() if x.startswith("touch-all "))
+    assert line.endswith("7 evaluation(s)")

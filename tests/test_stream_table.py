@@ -205,3 +205,37 @@ def test_stream_trade_keeps_rules_apart_and_its_legend_outside_the_panels(tmp_pa
     assert "max (default)" not in [t.get_text() for t in legend.get_texts()]
     assert "hmm switch=0.01 (default)" in [t.get_text() for t in legend.get_texts()]
     fig.savefig(tmp_path / f"trade-{size}.png", dpi=100)
+
+
+STREAM_SCHEME = {"name": "stream", "choose_rule": True, "hop_s": 0.1, "windows_s": [1.0, 2.0], "train_on": "streams"}
+
+
+def test_stream_figures_are_named_by_the_results_folder(tmp_path):
+    """File names come from the results folders (one plot call over two of one name stays unique),
+    never from the scheme's parameters."""
+    pytest.importorskip("matplotlib")
+    from click.testing import CliRunner
+
+    from touchbench.cli.main import cli
+
+    for where, data_hash in (("a", "d"), ("b", "e")):
+        write_fake_run(tmp_path / where / "stream-skin", CAPS, FOLDS, [_method("forest", [MAX, MAJ], [right, late])],
+                       scheme=STREAM_SCHEME, frame_rate=RATE, dataset=f"skin-{where}", dataset_hash=data_hash * 64)
+    r = CliRunner().invoke(cli, ["plot", str(tmp_path / "a" / "stream-skin"), str(tmp_path / "b" / "stream-skin"),
+                                 "--kind", "stream-trade", "--format", "png", "--out", str(tmp_path / "pl")])
+    assert r.exit_code == 0, r.output
+    assert sorted(p.name for p in (tmp_path / "pl").iterdir()) == ["stream-skin-2-stream-trade.png",
+                                                                   "stream-skin-stream-trade.png"]
+
+
+def test_results_of_two_machines_without_latencies_name_no_machine_none(tmp_path):
+    other = {"platform": "Linux-other-x86_64", "machine": "x86_64", "processor": "other", "python": "3.11",
+             "cpu_count": 4, "cpu_model": "Other CPU"}
+    for name, platform in (("one", None), ("two", other)):
+        write_fake_run(tmp_path / name, CAPS, FOLDS,
+                       [FakeMethod("captures", name, latency_ms=float("nan"),
+                                   live={f: _payload(f, [MAX], [right]) for f in FOLDS})],
+                       scheme={"name": "stream"}, frame_rate=RATE, platform=platform, run_id=name)
+    [lb] = build_leaderboards(load_results([tmp_path / "one", tmp_path / "two"]))
+    [note] = [n for n in lb.notes if n.startswith("results from several machines")]
+    assert "None" not in note and "No method of this table has a latency per capture" in note

@@ -263,7 +263,7 @@ def parse_reference(text: str) -> tuple[str, float]:
               metavar="LABEL=PERCENT",
               help="A reference accuracy drawn as a dashed line on the Pareto plots, e.g. 'Gaus 2015=66.5' (repeatable).")
 @click.option("--name", default=None, metavar="STEM",
-              help="File names STEM-<kind>.<format> instead of <dataset>-<scheme>-<kind> (one table only, and "
+              help="File names STEM-<kind>.<format> instead of <results folder>-<kind> (one table only, and "
                    "STEM-adapted-<kind> for its methods adapted to each test session).")
 @_fraction_option
 @_with_table_options

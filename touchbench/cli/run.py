@@ -108,11 +108,14 @@ def run_summary(res, plan) -> dict:
 @click.option("--final", is_flag=True,
               help="The run you report: refused when this test set already had a final run with other methods.")
 @click.option("--force-final", is_flag=True, help="With --final: run even so (recorded in the ledger).")
+@click.option("--summary/--no-summary", default=True, hidden=True,
+              help="Print each evaluation's summary of accuracies (`touchbench demo` prints the leaderboard instead).")
 @json_option
 @backend_options
 def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bool, fail_fast: bool,
         progress: bool | None, wait: float, evaluations: tuple[str, ...], methods: tuple[str, ...], final: bool,
-        force_final: bool, as_json: bool, backend: str, scheduler: str | None, address: str | None) -> None:
+        force_final: bool, summary: bool, as_json: bool, backend: str, scheduler: str | None,
+        address: str | None) -> None:
     """Evaluate PROTOCOL (a file, or the name of a shipped protocol or of one in your folders): every feature
     combination x classifier under its scheme (under each of its evaluations, each into its own
     folder). Finished tasks are skipped, so an interrupted run resumes where it stopped. Every run
@@ -148,7 +151,7 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
         if methods and not present:  # left out of this evaluation (its sensor refused them)
             continue
         res = _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait, final, force_final,
-                       as_json, backend, scheduler, address, present)
+                       as_json or not summary, backend, scheduler, address, present)
         summaries.append(run_summary(res, plan))
         failed += res.n_failed
         if res.stopped_early:
@@ -159,9 +162,10 @@ def run(protocol: str, jobs: int, out: str | None, force: bool, retry_failed: bo
         sys.exit(exitcodes.TASKS_FAILED)
 
 
-def _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait, final, force_final, as_json,
+def _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait, final, force_final, quiet,
              backend, scheduler, address, methods=()):
-    """Run one evaluation's plan and report it (messages on stderr, the summary on stdout)."""
+    """Run one evaluation's plan and report it (messages on stderr, the summary on stdout unless
+    ``quiet``: --json, or --no-summary)."""
     from ..engine.runner import run_plan
 
     proto = plan.protocol
@@ -194,7 +198,7 @@ def _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait
         log.info(f"ran {res.n_ran} task(s), skipped {res.n_skipped} finished, {res.n_failed} failed, "
                  f"in {res.seconds:.1f} s")
     live = _stream_tables(res) if any(t.fold.live is not None for t in plan.tasks) else []
-    if not as_json:
+    if not quiet:
         click.echo("\n".join(live) if live else format_summary(res.summary, res.expected))
     if res.stopped_early:
         log.warning("stopped at the first failed task (--fail-fast); run again without it to finish the others")

@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -111,6 +112,8 @@ class Leaderboard:
     breakdown: list[str] = field(default_factory=list)
     #: the table's data curve, its rows at the curve's reference point (:mod:`.curves`); None off a curve
     curve: Curve | None = None
+    #: the results folder the table comes from (:func:`results_name`), for file names; "" when unknown
+    name: str = ""
 
     @property
     def title(self) -> str:
@@ -231,7 +234,18 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
         pooled_machines=pool_machines, alpha=alpha, frame_rate=float(fr.iloc[0]) if len(fr) else math.nan, notes=notes,
         looks=looks_here, has_design=design.captures is not None, heading=table_heading(sources, str(first["scheme_label"])),
         adaptation=_mode(s_all["adaptation"]), live=live, breakdown=report.columns if report is not None else [],
+        name=results_name(sources),
     )
+
+
+def results_name(sources: list[dict]) -> str:
+    """The name of the results folder a table comes from (the first of its sources): the folder's
+    name (``results/stream-skin``: ``stream-skin``), with its run's for one evaluation of several
+    (``results/touch-all/loso``: ``touch-all-loso``); "" without sources."""
+    if not sources or not sources[0].get("path"):
+        return ""
+    path = Path(str(sources[0]["path"]))
+    return f"{path.parent.name}-{path.name}" if sources[0].get("evaluation") and path.parent.name else path.name
 
 
 #: in a title, a scheme's parameter value longer than this (a file-name pattern...) is written "…"
@@ -344,8 +358,9 @@ def _machines_notes(machines: dict[str, str], ref: str | None, pool_machines: bo
     if len(machines) > 1 and not pool_machines:
         return [
             "results from several machines: " + "; ".join(f"{k} = {v}" for k, v in sorted(machines.items()))
-            + f". Timings are shown for {ref} where measured there, otherwise for the machine named in "
-              "'timing machine'; the Pareto front is computed per machine."]
+            + (f". Timings are shown for {ref} where measured there, otherwise for the machine named in "
+               "'timing machine'; the Pareto front is computed per machine." if ref is not None else
+               ". No method of this table has a latency per capture, so no machine's timings are chosen.")]
     if len(machines) > 1:
         return ["timings of several machines are pooled (asked with --pool-machines): "
                 + "; ".join(f"{k} = {v}" for k, v in sorted(machines.items()))]

@@ -7,7 +7,9 @@ A reference is a finished run's results, saved under a name by
 (one row per test capture and method, without the class probabilities, so
 that a comparison on one test set can pair the captures) and ``manifest.json`` (the touchbench version, the
 machine, the package versions and the test set's content hash), and a
-``reference.json`` that lists them (each evaluation's folder, dataset, test-set hash and methods).
+``reference.json`` that lists them (each evaluation's folder, evaluation name, dataset, test-set
+hash and methods; an index without the evaluation name, saved before it was recorded, is read as
+naming each evaluation by its folder).
 
 Where they live: the user's references in the user's folder of references
 (:func:`touchbench.core.paths.user_reference_dir`: ``$TOUCHBENCH_REFERENCE_DIR``,
@@ -28,8 +30,11 @@ only with ``force``, and only a folder that is a reference.
 methods beside the user's, as other methods ("<label> (reference NAME)"),
 only for the evaluations whose test set has the same content (the SHA-256 of
 its captures' frames and labels that the ledger records): the same captures,
-whatever the protocol or the reader called them. It refuses when no
-evaluation of the results matches, and says which matched. The folds are
+whatever the protocol or the reader called them. Where several of the
+reference's evaluations test the same captures (two splits of one dataset),
+the one of the results' evaluation name is placed beside them (all of them
+when none has it). It refuses when no evaluation of the results matches,
+and says which matched. The folds are
 paired as for any two runs: by the test captures of each fold.
 """
 
@@ -76,9 +81,16 @@ class Reference:
     index: dict[str, Any]
     origin: str = "shipped"  # "user" or "shipped"
 
-    def evaluations(self) -> dict[str, str]:
-        """Test-set content hash -> the evaluation's folder (relative to the reference)."""
-        return {e["test_set"]: e["folder"] for e in self.index.get("evaluations", [])}
+    def evaluations(self) -> list[dict[str, str]]:
+        """One entry per saved evaluation: its ``folder`` (relative to the reference), ``evaluation``
+        (the protocol's evaluation name; "" for a protocol of one) and ``test_set`` (content hash).
+        Two evaluations may test the same captures (another split of one dataset): each keeps its
+        own entry. An index saved before the evaluation's name was recorded gives the folder's name
+        when it saved several (a run's evaluations are folders of their names)."""
+        saved = self.index.get("evaluations", [])
+        return [{"folder": e["folder"], "test_set": e["test_set"],
+                 "evaluation": e.get("evaluation", Path(e["folder"]).name if len(saved) > 1 else "")}
+                for e in saved]
 
     def describe(self) -> str:
         i = self.index
@@ -189,6 +201,7 @@ def _evaluation_entry(folder: Path, root: Path) -> dict[str, Any]:
     rel = folder.relative_to(root).as_posix() if folder != root else (m.get("protocol") or {}).get("name", "run")
     methods = sorted(set(pd.read_parquet(folder / "scores.parquet", columns=["classifier"])["classifier"].astype(str)))
     return {"folder": rel, "source": folder, "test_set": _test_set(m),
+            "evaluation": (m.get("protocol") or {}).get("evaluation") or "",
             "dataset": (m.get("dataset") or {}).get("ref"), "methods": methods, "manifest": m}
 
 
@@ -240,7 +253,8 @@ def _index(name: str, entries: list[dict[str, Any]]) -> dict[str, Any]:
             "touchbench_version": first.get("touchbench_version"),
             "git_revision": (first.get("git") or {}).get("revision"), "machine": _machine(first),
             "created": first.get("finished_at"),
-            "evaluations": [{k: e[k] for k in ("folder", "test_set", "dataset", "methods")} for e in entries]}
+            "evaluations": [{k: e[k] for k in ("folder", "evaluation", "test_set", "dataset", "methods")}
+                            for e in entries]}
 
 
 def _write_reference(out: Path, name: str, entries: list[dict[str, Any]]) -> None:
@@ -271,8 +285,16 @@ def save_reference(results: str | Path, name: str, dest: str | Path | None = Non
     return out
 
 
-def _user_test_sets(rs: ResultSet) -> set[str]:
-    return {s["test_set"] for s in rs.sources if s.get("test_set")}
+def _matching(ref: Reference, rs: ResultSet) -> list[dict[str, str]]:
+    """The reference's evaluations to place beside ``rs``: those whose test set is one of ``rs``'s
+    evaluations'; where several of them test those captures, the one of the same evaluation name
+    (all of them when none has it)."""
+    chosen: dict[str, dict[str, str]] = {}
+    for src in rs.sources:
+        same = [e for e in ref.evaluations() if src.get("test_set") and e["test_set"] == src["test_set"]]
+        named = [e for e in same if e["evaluation"] == (src.get("evaluation") or "")]
+        chosen.update((e["folder"], e) for e in (named if len(same) > 1 and named else same))
+    return list(chosen.values())
 
 
 def _as_reference(rs: ResultSet, name: str) -> ResultSet:
@@ -292,20 +314,20 @@ def add_reference(rs: ResultSet, name: str) -> tuple[ResultSet, list[str]]:
     """``rs`` with the reference ``name``'s methods added where a test set matches, and the lines
     that say what was added; refused when no evaluation of ``rs`` has a test set of the reference."""
     ref = find_reference(name)
-    mine = _user_test_sets(rs)
-    matched = {t: f for t, f in ref.evaluations().items() if t in mine}
+    n = len(ref.evaluations())
+    matched = sorted(e["folder"] for e in _matching(ref, rs))
     if not matched:
         raise ReferenceError(
-            f"{ref.describe()}: none of its {len(ref.evaluations())} test set(s) has the content of the "
+            f"{ref.describe()}: none of its {n} test set(s) has the content of the "
             "results given (other captures, labels or frames), so their accuracies are not comparable; "
             "run the reference's protocol on the same data")
-    extra = _as_reference(load_results([ref.path / f for f in matched.values()]), name)
+    extra = _as_reference(load_results([ref.path / f for f in matched]), name)
     combined = ResultSet(
         scores=pd.concat([rs.scores, extra.scores], ignore_index=True, sort=False),
         predictions=_concat_optional([rs.predictions, extra.predictions]),
         sources=rs.sources + extra.sources)
-    lines = [f"beside {ref.describe()}: the test set of {', '.join(sorted(matched.values()))} has the same "
-             f"content as these results' ({len(matched)} of {len(ref.evaluations())} evaluation(s))"]
+    lines = [f"beside {ref.describe()}: the test set of {', '.join(matched)} has the same "
+             f"content as these results' ({len(matched)} of {n} evaluation(s))"]
     return combined, lines
 
 

@@ -104,15 +104,27 @@ def _versus_best_cell(r: pd.Series, failed_all: bool, sep: str = " ") -> str:
             f"({TEST_SHORT.get(r['test'], r['test'])}, n={r['n_pairs']} {r['paired_by']}s)")
 
 
-def legend(lb: Leaderboard) -> str:
+#: what the timing columns hold, each said in the legend where its column is shown
+_TIMINGS = {"latency ms": "latency: median over folds of the wall-clock time to compute the features of one "
+                          "capture and predict it",
+            "fit s": "fit: median seconds per fold", "features ms": "features: median ms per capture"}
+
+
+def legend(lb: Leaderboard, shown: Iterable[str] | None = None) -> str:
+    """The sentences that explain the table's columns and marks; ``shown``: the headers a terminal
+    shows (None: every column), so that a narrow terminal's legend explains only what it prints."""
+    shown = None if shown is None else set(shown)
+    timings = "; ".join(t for h, t in _TIMINGS.items() if shown is None or h in shown)
+    timings = f"{timings[:1].upper()}{timings[1:]}. " if timings else ""
+    pareto = shown is None or "Pareto" in shown
     return (f"Accuracy: mean over folds (± sample sd; for a single fold evaluated with several seeds, the sd over "
-            f"the seeds); interval: Student t over folds (Wilson over captures for a "
-            f"single fold). Latency: median over folds of the time to compute the features of one capture and "
-            f"predict it; fit: median seconds per fold; features: median ms per capture. Δ: mean paired difference "
+            f"the seeds); interval: Student t over folds (Wilson over captures for a single fold). "
+            + timings + "Δ: mean paired difference "
             f"to the best method in percentage points; p: McNemar's exact test on the test captures (one test set) "
-            f"or the corrected resampled t-test over folds, Holm-adjusted over the table; * = differs at α={lb.alpha:g}. ★ = on the accuracy / "
-            f"latency Pareto front (latency as the CPU time of labelling one capture, which the machine's load "
-            f"changes far less than the wall-clock latency shown)."
+            f"or the corrected resampled t-test over folds, Holm-adjusted over the table; * = differs at α={lb.alpha:g}."
+            + (" ★ = on the Pareto front of accuracy against the CPU time of labelling one capture (latency_cpu_ms "
+               "in the CSV and JSON output, not a column here; the latency column is wall-clock time, which the "
+               "machine's load changes far more)." if pareto else "")
             + (" † = the method was designed on part of this data (see the note); held out: accuracy on the "
                "test captures outside the design data (mean over folds)." if lb.has_design else "")
             + legend_note(lb.rows)
@@ -360,9 +372,10 @@ def _fitted_table(title: str, header: list[str], cells: list[list[str]], text_ce
     return t
 
 
-def _terminal_table(lb: Leaderboard, width: int) -> Table:
+def _terminal_table(lb: Leaderboard, width: int) -> tuple[Table, list[str]]:
     """The table of ``lb`` as a terminal of ``width`` characters shows it (:func:`terminal_layout`):
-    a number and its note on one line where the whole table fits so, else on two."""
+    a number and its note on one line where the whole table fits so, else on two; and the headers
+    of the columns it shows."""
     failed = [r["n_folds"] == 0 and r["n_failed"] > 0 for _, r in lb.rows.iterrows()]
     for sep in (" ", "\n"):
         header, cells = display_rows(lb, sep)
@@ -373,7 +386,8 @@ def _terminal_table(lb: Leaderboard, width: int) -> Table:
         whole = all(widths[header[i]] >= cell_len(c[i]) for c in cells for i in keep)
         if whole and _table_width(widths, [header[i] for i in keep]) <= width:
             break  # fits with nothing shortened
-    return _fitted_table(lb.title, heads, cells, text_cells, width, TERMINAL_ESSENTIAL, TERMINAL_PRIORITY)
+    table = _fitted_table(lb.title, heads, cells, text_cells, width, TERMINAL_ESSENTIAL, TERMINAL_PRIORITY)
+    return table, [header[i] for i in keep]
 
 
 def _print_fitted(console: Console, table: Table) -> None:
@@ -431,8 +445,13 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
     verdict of every method; a wider one adds columns (``TERMINAL_PRIORITY``)."""
     console = console or Console(width=_terminal_width())
     for lb in lbs:
-        _print_fitted(console, _terminal_table(lb, console.width) if lb.live is None else _terminal_live(lb, console.width))
-        console.print(escape(legend(lb) if lb.live is None else LIVE_LEGEND), style="dim")
+        if lb.live is None:
+            table, shown = _terminal_table(lb, console.width)
+            _print_fitted(console, table)
+            console.print(escape(legend(lb, shown)), style="dim")  # the columns shown, no other
+        else:
+            _print_fitted(console, _terminal_live(lb, console.width))
+            console.print(escape(LIVE_LEGEND), style="dim")
         for n in lb.notes:
             console.print(escape(f"Note: {n}"), style="yellow")
         console.print()

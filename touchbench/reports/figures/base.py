@@ -5,7 +5,8 @@ A figure kind is one module of this package registering one function with
 ``@FIGURES.register(NAME, description="one line", order=N)``:
 ``draw(rs, lb, base, options) -> list[Path]`` draws the kind's figures of
 the table ``lb`` (results ``rs``) and writes each through :func:`save`;
-``base`` is the figure's path without suffix, ``<out>/<table stem>-<kind>``,
+``base`` is the figure's path without suffix, ``<out>/<table stem>-<kind>``
+(the stem: the results folder's name, :func:`figure_stem`),
 and a kind drawing several figures (``confusion``: one per method) names
 them ``base-<name>``. It returns the files written, none when the kind does
 not apply to the table. ``options`` (:class:`FigureOptions`) carries what
@@ -17,9 +18,9 @@ HTML report, ``plot``'s output).
 Figures are drawn with matplotlib (Agg backend), paper-ready: each written
 as PDF, SVG and 300-dpi PNG (``FORMATS``), at a column or a text width
 (``SIZES``: 3.5 and 7 inches) with every font at least ``MIN_FONT_PT``
-(7 pt) at that size. Titles and file names come from the dataset, scheme
-and method names (never a hash); names that would collide get ``-2``,
-``-3``...
+(7 pt) at that size. Titles come from the dataset, scheme and method names,
+file names from the results folder's and the methods' (never a hash);
+names that would collide get ``-2``, ``-3``...
 """
 
 from __future__ import annotations
@@ -40,8 +41,8 @@ if TYPE_CHECKING:
     from ..leaderboard import Leaderboard
     from ..results import ResultSet
 
-__all__ = ["FIGURES", "FORMATS", "MIN_FONT_PT", "SIZES", "FigureOptions", "figure_width", "has_predictions", "kinds_in_order",
-           "label_offsets", "plot_table", "pyplot", "save", "short_label", "slug", "unique_stem", "wrap"]
+__all__ = ["FIGURES", "FORMATS", "MIN_FONT_PT", "SIZES", "FigureOptions", "figure_stem", "figure_width", "has_predictions",
+           "kinds_in_order", "label_offsets", "plot_table", "pyplot", "save", "short_label", "slug", "unique_stem", "wrap"]
 
 #: figure widths in inches: one column of a two-column paper, the text width
 SIZES = {"column": 3.5, "text": 7.0}
@@ -114,6 +115,19 @@ def slug(lb: Leaderboard) -> str:
     (and ``adapted`` for the table of methods adapted to the test sessions)."""
     dataset = Path(lb.dataset).stem if lb.dataset.endswith((".parquet", ".csv", ".gz")) else lb.dataset
     parts = [dataset, lb.scheme] + ([f"target-{lb.target}"] if lb.target != "gesture" else [])
+    parts += [lb.variant] if getattr(lb, "variant", "") else []
+    parts += ["adapted"] if getattr(lb, "adaptation", "") else []
+    return clean("-".join(parts))[:80] or "table"
+
+
+def figure_stem(lb: Leaderboard) -> str:
+    """A figure's file stem for the table: the results folder it comes from (``lb.name``:
+    ``stream-skin``, ``touch-all-loso``), with the table's target, variant and ``adapted`` where
+    they apply; :func:`slug` when the table does not say its folder. Short and stable: never built
+    from a scheme's parameters."""
+    if not getattr(lb, "name", ""):
+        return slug(lb)
+    parts = [lb.name] + ([f"target-{lb.target}"] if lb.target != "gesture" else [])
     parts += [lb.variant] if getattr(lb, "variant", "") else []
     parts += ["adapted"] if getattr(lb, "adaptation", "") else []
     return clean("-".join(parts))[:80] or "table"
@@ -222,7 +236,7 @@ def plot_table(rs: ResultSet, lb: Leaderboard, out_dir: Path, kinds: Sequence[st
     ``kinds``: names of ``FIGURES`` (default: every kind), drawn in the
     kinds' order. ``references`` go to ``pareto`` (reference accuracies in
     %). Files are named ``<name>-<kind>`` (``name`` defaults to
-    :func:`slug`: the table's dataset, scheme and target), a kind drawing
+    :func:`figure_stem`: the results folder's name), a kind drawing
     several figures ``<name>-<kind>-<figure>`` (confusion matrices
     ``<name>-confusion-<features>-<classifier>``); the keys of the result
     are these names without ``<name>-``. ``taken`` (shared over the tables
@@ -238,7 +252,7 @@ def plot_table(rs: ResultSet, lb: Leaderboard, out_dir: Path, kinds: Sequence[st
     options = FigureOptions(size=size, formats=tuple(formats), references=tuple(references or ()),
                             methods=None if methods is None else tuple(methods))
     taken = set() if taken is None else taken
-    s = unique_stem(clean(name) if name else slug(lb), taken)
+    s = unique_stem(clean(name) if name else figure_stem(lb), taken)
     made: dict[str, list[Path]] = {}
     for entry in kinds_in_order():
         if wanted is None or entry.name in wanted:
