@@ -173,12 +173,14 @@ def test_a_per_frame_labelled_table_is_evaluated_as_streams_and_shown_in_a_strea
     assert 0.0 <= float(got["frame %"]) <= 100.0
 
 
-ALL_RULES = """\
-name: live-recorded-rules
+#: a protocol on ``_recordings_csv``'s table (format with ``{data}``), its name, scheme lines and methods
+#: filled in by :func:`_recorded_protocol`
+RECORDED_TABLE = """\
+name: {name}
 dataset:
-  name: {data}
+  name: {{data}}
   format: table
-  options: {{capture_columns: [recording], frame_labels: label, grid: [4, 4], frame_rate: 10, value_range: [0, 100]}}
+  options: {{{{capture_columns: [recording], frame_labels: label, grid: [4, 4], frame_rate: 10, value_range: [0, 100]}}}}
 target: gesture
 scheme:
   name: stream
@@ -187,11 +189,19 @@ scheme:
   idle: idle
   windows_s: [0.5, 1.0]
   hop_s: 0.2
-  rules: [{{name: max, threshold: 0.4}}, {{name: majority, n: 3}}, {{name: hmm, switch: 0.05}},
-          {{name: gate, idle: idle}}, {{name: onset, idle: idle}}]
-methods: [touch-et-fast]
+{scheme}
+methods: {methods}
 seed: 0
 """
+
+
+def _recorded_protocol(name: str, scheme: str, methods: str) -> str:
+    return RECORDED_TABLE.format(name=name, scheme=scheme, methods=methods)
+
+
+ALL_RULES = _recorded_protocol(
+    "live-recorded-rules", "  rules: [{{name: max, threshold: 0.4}}, {{name: majority, n: 3}}, {{name: hmm, switch: 0.05}},\n"
+    "          {{name: gate, idle: idle}}, {{name: onset, idle: idle}}]", "[touch-et-fast]")
 
 
 def test_stream_by_recording_name_decides_what_the_evaluation_decided_with_every_rule(tmp_path, monkeypatch):
@@ -236,27 +246,10 @@ def test_stream_by_recording_name_decides_what_the_evaluation_decided_with_every
     assert "the model file's default rule (the toolkit's default rule)" in res.stderr
 
 
-CHOSEN = """\
-name: live-recorded-chosen
-dataset:
-  name: {data}
-  format: table
-  options: {{capture_columns: [recording], frame_labels: label, grid: [4, 4], frame_rate: 10, value_range: [0, 100]}}
-target: gesture
-scheme:
-  name: stream
-  base: loso
-  source: recorded
-  idle: idle
-  windows_s: [0.5, 1.0]
-  hop_s: 0.2
-  train_on: streams
-  choose_rule: true
-  rules: [{{name: max, threshold: 0.9}}, {{name: touch, idle: idle, begin: 0.6, end: 0.4}}]
-methods:
-  - {{name: touch-live-fast, params: {{params: {{n_estimators: 10}}}}}}
-seed: 0
-"""
+CHOSEN = _recorded_protocol(
+    "live-recorded-chosen", "  train_on: streams\n  choose_rule: true\n"
+    "  rules: [{{name: max, threshold: 0.9}}, {{name: touch, idle: idle, begin: 0.6, end: 0.4}}]",
+    "\n  - {{name: touch-live-fast, params: {{params: {{n_estimators: 10}}}}}}")
 
 
 def test_a_live_method_trained_on_streams_keeps_the_rule_its_inner_folds_chose(tmp_path, monkeypatch):
