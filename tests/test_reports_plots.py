@@ -108,8 +108,8 @@ def test_cli_leaderboard_compare_plot(runs, tmp_path):
     assert res.exit_code == 0, res.output
     js = json.loads((tmp_path / "lb" / "leaderboard.json").read_text())
     assert len(js["tables"]) == 2
-    res = r.invoke(cli, ["leaderboard", str(runs), "--scheme", "loso"])
-    assert res.exit_code == 0 and "Pareto" in res.output
+    res = r.invoke(cli, ["leaderboard", str(runs), "--scheme", "loso"], env={"COLUMNS": "250"})
+    assert res.exit_code == 0 and "Pareto" in res.output  # a terminal wide enough for the Pareto column
     res = r.invoke(cli, ["compare", str(runs / "loso"), "--a", "msd/rf", "--b", "sd/rf"])
     assert res.exit_code == 0, res.output
     # per-fold differences (sixths): 2, 1, 1, 1: mean 5/24, sample variance 0.25 / 36; each fold tests 6

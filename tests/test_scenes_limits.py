@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
+from helpers import SUBPROCESS_HANG_S
 
 import touchbench.scenes.size as size_module
 from touchbench.core.errors import DataError
@@ -205,7 +206,7 @@ def test_a_scene_over_ulimit_v_is_refused_up_front(tmp_path):
         "    print('loaded')\n"
         "except DataError as e:\n"
         "    print(e)\n")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=SUBPROCESS_HANG_S,
                        env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parent.parent)})
     assert r.returncode == 0, r.stderr
     assert r.stdout.startswith(f"{path}:15: invalid scene: population.subjects: the scene would make 48,000 "
