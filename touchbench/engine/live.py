@@ -33,9 +33,11 @@ What it returns, plain data for the results store:
   (:func:`graded_probabilities`: read from the probabilities of the windows
   it classified in the replays; None when it classified none), so that a
   report can tell rules that could not differ from rules that did not;
-- ``default_rule`` is not written here: when a task's payload carries it, it is
-  the rule declaration ``touchbench stream`` would use for a model trained on
-  the evaluation; without it, :data:`touchbench.streams.rules.DEFAULT_RULE`;
+- with inner folds, ``choice`` (:func:`choose_rule`: the chosen rule's index,
+  each rule's inner mean frame accuracy and false activations per idle
+  minute) and ``default_rule`` (that rule's declaration: what ``touchbench
+  train`` would make a model's default the same way); without them the
+  default is :data:`touchbench.streams.rules.DEFAULT_RULE`;
 - a predictions table with one row per test capture: the first rule's
   decision held over most of the frames where the capture is shown (the
   segment's majority); the row's ``accuracy`` is over those captures, so the
