@@ -19,7 +19,6 @@ regenerating one without taking it off the list fails too.
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import pandas as pd
 import pytest
