@@ -21,7 +21,7 @@ from touchbench.classifiers.fastforest import compile_forest
 from touchbench.classifiers.fitting import FittedEstimator, FittedMethod
 from touchbench.deploy.model import SensorMismatchError, TrainedModel, sensor_differences
 from touchbench.deploy.stream import SlidingRecognizer, replay, run_stream, text_frames
-from touchbench.deploy.windows import cut_windows, seconds_to_frames
+from touchbench.datasets.windows import cut_windows, seconds_to_frames
 from touchbench.streams.recognizer import combine_windows
 from touchbench.core.errors import DataError, TouchbenchError
 

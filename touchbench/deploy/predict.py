@@ -55,7 +55,7 @@ from ..datasets.formats import FORMATS
 from ..datasets.model import TouchDataset
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
 from .model import TrainedModel
-from .windows import cut_windows
+from ..datasets.windows import cut_windows
 
 __all__ = ["TRAINED_ON", "accuracy_text", "adaptation_sessions", "adaptation_text", "adaptation_warning", "predict_dataset", "read_data",
            "write_table"]

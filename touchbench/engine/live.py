@@ -112,11 +112,9 @@ def live_outcome(task: Any, ds: Any, y: np.ndarray) -> tuple[dict[str, Any], np.
     rules = fitted_rules(live, ds, y, fold.train)
     streams, first_rule, graded = [], [], []
     for s in live.streams:
-        per_rule, truth, g = _replayed(fitted, rules, ds, y, s, live, timed=True)
+        per_rule, decided, truth, g = _replayed(fitted, rules, ds, y, s, live, timed=True)
         graded.append(g)
-        first_rule.append((s, per_rule[0].pop("_decided")))
-        for r in per_rule[1:]:
-            r.pop("_decided")
+        first_rule.append((s, decided[0]))
         streams.append({"name": s.name, "subject": s.subject, "session": s.session, "source": s.source,
                         "frames": int(len(truth)), "truth": label_runs(truth), "results": per_rule})
     payload = {"rules": [r.describe() for r in rules], "idle": live.idle, "frame_rate": float(ds.sensor.frame_rate),
@@ -156,13 +154,15 @@ def _fraction(flags: Any) -> float:
 
 
 def _replayed(fitted: Any, rules: list, ds: Any, y: np.ndarray, s: Stream, live: LiveSpec,
-              timed: bool) -> tuple[list[dict[str, Any]], np.ndarray, bool | None]:
-    """One stream replayed with every rule and scored: one result per rule, the stream's truth, and
-    whether the probabilities were graded (:func:`graded_probabilities`)."""
+              timed: bool) -> tuple[list[dict[str, Any]], list[np.ndarray], np.ndarray, bool | None]:
+    """One stream replayed with every rule and scored: one JSON-ready result per rule, each rule's
+    decision per frame beside them, the stream's truth, and whether the probabilities were graded
+    (:func:`graded_probabilities`)."""
     frames, truth = stream_frames(ds.captures, y, s, live.idle, rest_value(ds.sensor))
     classes = [str(c) for c in fitted.classes]
     replays = replay_stream(frames, fitted.window_proba, classes, ds.sensor, live, rules, timed=timed)
-    return [_scored(rp, truth, ds.sensor.frame_rate, live) for rp in replays], truth, graded_probabilities(replays)
+    scored = [_scored(rp, truth, ds.sensor.frame_rate, live) for rp in replays]
+    return [r for r, _ in scored], [d for _, d in scored], truth, graded_probabilities(replays)
 
 
 def pick_rule(accuracy: np.ndarray, false_per_min: np.ndarray, most: float) -> int:
@@ -187,7 +187,7 @@ def choose_rule(spec: MethodSpec, seed: int | None, ds: Any, y: np.ndarray, live
         fitted = fit_live(spec, seed, ds, y, np.asarray(inner.train, dtype=np.int64), live, inner.train_streams)
         rules = fitted_rules(live, ds, y, np.asarray(inner.train, dtype=np.int64))
         for s in inner.streams:
-            per_rule, _, _ = _replayed(fitted, rules, ds, y, s, live, timed=False)
+            per_rule, _, _, _ = _replayed(fitted, rules, ds, y, s, live, timed=False)
             for k, r in enumerate(per_rule):
                 acc[k].append(r["scores"]["frame_accuracy"])
                 false[k] += r["scores"]["false_activations"]
@@ -199,19 +199,19 @@ def choose_rule(spec: MethodSpec, seed: int | None, ds: Any, y: np.ndarray, live
             "false_per_idle_min": fa.tolist(), "max_false_per_min": live.max_false_per_min}
 
 
-def _scored(rp: Any, truth: np.ndarray, frame_rate: float, live: LiveSpec) -> dict[str, Any]:
-    """One stream's replay with one rule, scored: its scores, decisions and CPU."""
+def _scored(rp: Any, truth: np.ndarray, frame_rate: float, live: LiveSpec) -> tuple[dict[str, Any], np.ndarray]:
+    """One stream's replay with one rule, scored: its scores, decisions (run-length) and CPU, and
+    beside them the decision at every frame."""
     decided = decisions_per_frame([d.frame for d in rp.decisions], [d.label for d in rp.decisions], len(truth),
                                   UNDECIDED)
     scores = score_stream(truth, decided, live.idle, frame_rate, undecided=(UNDECIDED, live.none_label))
     live_cpu = rp.live_cpu_ms
-    return {"scores": scores.to_dict(), "decisions": label_runs(decided), "n_decisions": len(rp.decisions),
+    return ({"scores": scores.to_dict(), "decisions": label_runs(decided), "n_decisions": len(rp.decisions),
             "cpu_s": float(rp.decision_cpu_ms.sum()) / 1000.0, "wall_s": rp.wall_s,
             "decision_cpu_ms_p50": float(np.percentile(live_cpu, 50)) if live_cpu.size else float("nan"),
             "decision_cpu_ms_p99": float(np.percentile(live_cpu, 99)) if live_cpu.size else float("nan"),
             "classified_fraction": _fraction([d.classified for d in rp.decisions]),
-            "live_classified_fraction": _fraction(rp.live_classified),
-            "_decided": decided}
+            "live_classified_fraction": _fraction(rp.live_classified)}, decided)
 
 
 def _segment_labels(test: np.ndarray, first_rule: list, idle_like: set[str], idle: str) -> np.ndarray:
