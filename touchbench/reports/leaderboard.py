@@ -114,6 +114,9 @@ class Leaderboard:
     curve: Curve | None = None
     #: the results folder the table comes from (:func:`results_name`), for file names; "" when unknown
     name: str = ""
+    #: the times its Pareto fronts are on (:func:`touchbench.reports.pareto.pareto_cost`: ``latency_cpu_ms``,
+    #: or ``latency_ms`` for a machine whose results have no CPU time); empty when no method was timed
+    pareto_costs: list[str] = field(default_factory=list)
 
     @property
     def title(self) -> str:
@@ -223,7 +226,8 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
         r.update(report.fields(preds, r["method_id"]))
     df = _ranked(_tuned_on_test(pd.DataFrame(rows)))
     _add_tests_against_best(df, folds, preds, alpha)
-    notes += _mark_pareto_fronts(df)
+    pareto_notes, pareto_costs = _mark_pareto_fronts(df)
+    notes += pareto_notes
     _add_closing_notes(df, notes)
     live, live_notes = live_table(ok)
     notes += live_notes
@@ -234,7 +238,7 @@ def _build_one(rs: ResultSet, key: str, ok_all: pd.DataFrame, alpha: float, pool
         pooled_machines=pool_machines, alpha=alpha, frame_rate=float(fr.iloc[0]) if len(fr) else math.nan, notes=notes,
         looks=looks_here, has_design=design.captures is not None, heading=table_heading(sources, str(first["scheme_label"])),
         adaptation=_mode(s_all["adaptation"]), live=live, breakdown=report.columns if report is not None else [],
-        name=results_name(sources),
+        name=results_name(sources), pareto_costs=pareto_costs,
     )
 
 
@@ -476,20 +480,22 @@ def _add_tests_against_best(df: pd.DataFrame, folds: pd.DataFrame, preds: pd.Dat
     df["differs"] = [bool(np.isfinite(p) and p < alpha) for p in adj]
 
 
-def _mark_pareto_fronts(df: pd.DataFrame) -> list[str]:
+def _mark_pareto_fronts(df: pd.DataFrame) -> tuple[list[str], list[str]]:
     """The accuracy / CPU-time Pareto front, per timing machine; a note for a machine whose front
-    falls back to wall-clock latency."""
+    falls back to wall-clock latency; and the times the fronts are on (each once)."""
     df["pareto"] = False
-    notes = []
+    notes, costs = [], []
     for tm, g in df.groupby("timing_machine"):
         cost = pareto_cost(g)
+        if g[cost].notna().any() and cost not in costs:
+            costs.append(cost)
         if cost == "latency_ms" and g["latency_ms"].notna().any():
             notes.append(f"the Pareto front{' of ' + str(tm) if df['timing_machine'].nunique() > 1 else ''} is on "
                          "wall-clock latency, which the machine's load changes: some results have no CPU time "
                          "(written before touchbench measured it)")
         mask = pareto_front(g["accuracy"].to_numpy(), g[cost].to_numpy())
         df.loc[g.index[mask], "pareto"] = True
-    return notes
+    return notes, costs
 
 
 def _add_closing_notes(df: pd.DataFrame, notes: list[str]) -> None:

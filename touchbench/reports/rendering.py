@@ -22,6 +22,7 @@ from .breakdown import breakdown_cells, breakdown_headers, breakdown_legend
 from .curve_table import curve_cells, curve_essential, curve_json, curve_legend, curve_markdown, curve_titles, gain_cells, reach_lines
 from .labels import _label_parts, _name_cell, _num, _p, _pct, method_names
 from .leaderboard import Leaderboard
+from .short_labels import FittedLabels, fit_labels
 from .seeds import CI_NOTES, legend_note, seeds_note
 from .stats import TEST_SHORT
 from .stream_table import LIVE_ESSENTIAL, LIVE_LEGEND, LIVE_PRIORITY, live_cells, live_markdown
@@ -33,12 +34,15 @@ def display_rows(lb: Leaderboard, sep: str = " ") -> tuple[list[str], list[list[
     """Header and formatted cells of a leaderboard (terminal, Markdown, HTML); ``sep`` joins a
     number and the note after it (the seeds, the interval's kind, the test: a terminal may break
     the line there)."""
+    show_cpu = _has_cpu_times(lb.rows)
     header = ["#", "method", "features", "estimator", "folds", "accuracy % (±sd)", "95 % interval",
-              "macro F1 %", "latency ms", "fit s", "features ms", "vs best: Δ pp, p (Holm)", "Pareto"]
+              "macro F1 %", "latency ms"] + (["CPU ms"] if show_cpu else []) + [
+              "fit s", "features ms", "vs best: Δ pp, p (Holm)", "Pareto"]
     header += breakdown_headers(lb.breakdown)
+    machine_at = header.index("vs best: Δ pp, p (Holm)")
     show_machine = len(set(lb.rows["timing_machine"])) > 1
     if show_machine:
-        header.insert(11, "timing machine")
+        header.insert(machine_at, "timing machine")
     show_leak = bool((lb.rows["leakage"] != "").any())
     if lb.has_design:
         header.insert(7, "held out %")
@@ -55,10 +59,10 @@ def display_rows(lb: Leaderboard, sep: str = " ") -> tuple[list[str], list[list[
         vs = _versus_best_cell(r, failed_all, sep)
         row = [str(r["rank"]), _name_cell(r, parts[r["method_id"]]), feats, str(r["classifier_name"]),
                f"{r['n_folds']}" + (f" (+{r['n_failed']} failed)" if r["n_failed"] else ""), acc, ci,
-               _pct(r["macro_f1"]), _num(r["latency_ms"]), _num(r["fit_seconds"]), _num(r["feature_ms"]), vs,
-               "★" if r["pareto"] else ""] + breakdown_cells(r, lb.breakdown)
+               _pct(r["macro_f1"]), _num(r["latency_ms"])] + ([_num(r["latency_cpu_ms"])] if show_cpu else []) + [
+               _num(r["fit_seconds"]), _num(r["feature_ms"]), vs, "★" if r["pareto"] else ""] + breakdown_cells(r, lb.breakdown)
         if show_machine:
-            row.insert(11, str(r["timing_machine"]))
+            row.insert(machine_at, str(r["timing_machine"]))
         if lb.has_design:
             if r.get("designed"):
                 row[5] += " †"
@@ -67,6 +71,11 @@ def display_rows(lb: Leaderboard, sep: str = " ") -> tuple[list[str], list[list[
             row.insert(2, f"LEAKY: {r['leakage']}" if r["leakage"] else "honest")
         cells.append(row)
     return header, cells
+
+
+def _has_cpu_times(rows: pd.DataFrame) -> bool:
+    """Whether a row has a CPU time per capture (results written before touchbench measured it have none)."""
+    return "latency_cpu_ms" in rows and bool(rows["latency_cpu_ms"].notna().any())
 
 
 def _features_cell(r: pd.Series, extra: str, frame_rate: float) -> str:
@@ -107,14 +116,32 @@ def _versus_best_cell(r: pd.Series, failed_all: bool, sep: str = " ") -> str:
 #: what the timing columns hold, each said in the legend where its column is shown
 _TIMINGS = {"latency ms": "latency: median over folds of the wall-clock time to compute the features of one "
                           "capture and predict it",
+            "CPU ms": "CPU: median over folds of the CPU time of labelling one capture (which the machine's load "
+                      "changes far less than wall-clock time)",
             "fit s": "fit: median seconds per fold", "features ms": "features: median ms per capture"}
+#: the column of each time a Pareto front is computed on (:func:`touchbench.reports.pareto.pareto_cost`)
+PARETO_COLUMNS = {"latency_cpu_ms": "CPU ms", "latency_ms": "latency ms"}
+_PARETO_COSTS = {"latency_cpu_ms": "the CPU time of labelling one capture",
+                 "latency_ms": "the wall-clock time of labelling one capture"}
+
+
+def pareto_sentence(lb: Leaderboard, shown: set[str] | None = None) -> str:
+    """What the ★ mark is on: accuracy against the cost column(s) of the table's fronts, each
+    named; one the terminal does not show (``shown``: its headers) is said to be hidden."""
+    costs = lb.pareto_costs or ["latency_cpu_ms"]
+    if shown is not None and any(PARETO_COLUMNS[c] not in shown for c in costs):
+        return (" ★ = Pareto: accuracy vs " + " or ".join(PARETO_COLUMNS[c] for c in costs)
+                + " per capture (column hidden at this width).")
+    return (" ★ = on the Pareto front of accuracy against "
+            + " or ".join(f"{_PARETO_COSTS[c]} (the {PARETO_COLUMNS[c]} column)" for c in costs) + ".")
 
 
 def legend(lb: Leaderboard, shown: Iterable[str] | None = None) -> str:
     """The sentences that explain the table's columns and marks; ``shown``: the headers a terminal
     shows (None: every column), so that a narrow terminal's legend explains only what it prints."""
     shown = None if shown is None else set(shown)
-    timings = "; ".join(t for h, t in _TIMINGS.items() if shown is None or h in shown)
+    timings = "; ".join(t for h, t in _TIMINGS.items()
+                        if (h in shown if shown is not None else h != "CPU ms" or _has_cpu_times(lb.rows)))
     timings = f"{timings[:1].upper()}{timings[1:]}. " if timings else ""
     pareto = shown is None or "Pareto" in shown
     return (f"Accuracy: mean over folds (± sample sd; for a single fold evaluated with several seeds, the sd over "
@@ -122,9 +149,7 @@ def legend(lb: Leaderboard, shown: Iterable[str] | None = None) -> str:
             + timings + "Δ: mean paired difference "
             f"to the best method in percentage points; p: McNemar's exact test on the test captures (one test set) "
             f"or the corrected resampled t-test over folds, Holm-adjusted over the table; * = differs at α={lb.alpha:g}."
-            + (" ★ = on the Pareto front of accuracy against the CPU time of labelling one capture (latency_cpu_ms "
-               "in the CSV and JSON output, not a column here; the latency column is wall-clock time, which the "
-               "machine's load changes far more)." if pareto else "")
+            + (pareto_sentence(lb, shown) if pareto else "")
             + (" † = the method was designed on part of this data (see the note); held out: accuracy on the "
                "test captures outside the design data (mean over folds)." if lb.has_design else "")
             + legend_note(lb.rows)
@@ -235,12 +260,13 @@ def to_csv(lbs: list[Leaderboard]) -> str:
 #: the columns a terminal always shows (the name, the accuracy and its interval, the test's verdict;
 #: which rows are leaky), then the others in the order a wider terminal adds them
 TERMINAL_ESSENTIAL = ("#", "method", "evaluation", "accuracy % (±sd)", "95 % interval", "vs best: Δ pp, p (Holm)")
-TERMINAL_PRIORITY = ("held out %", "features", "estimator", "macro F1 %", "latency ms", "Pareto", "folds",
+#: (the Pareto mark right after the time its front is on: :func:`terminal_priority`)
+TERMINAL_PRIORITY = ("held out %", "features", "estimator", "macro F1 %", "CPU ms", "Pareto", "latency ms", "folds",
                      "timing machine", "fit s", "features ms")
 #: headers broken over two lines in a terminal, so that a header is no wider than its numbers
 _TERMINAL_HEADERS = {"accuracy % (±sd)": "accuracy %\n(±sd)", "95 % interval": "95 %\ninterval",
                      "vs best: Δ pp, p (Holm)": "vs best: Δ pp,\np (Holm)", "macro F1 %": "macro\nF1 %",
-                     "latency ms": "latency\nms", "features ms": "features\nms", "held out %": "held out\n%",
+                     "latency ms": "latency\nms", "CPU ms": "CPU\nms", "features ms": "features\nms", "held out %": "held out\n%",
                      "timing machine": "timing\nmachine"}
 #: the columns of words, not numbers: a narrow terminal shortens them (:func:`shorten`) down to
 #: :data:`TEXT_MIN_WIDTH` characters (or their header's width); a number is never cut nor wrapped
@@ -329,19 +355,21 @@ def _narrowed(widths: dict[str, int], least: dict[str, int], shown: list[str], a
 
 
 def terminal_layout(header: list[str], cells: list[list[str]], text_cells: list[set[int]], available: int,
-                    essential: Iterable[str], priority: Iterable[str] = ()) -> tuple[list[int], dict[str, int]]:
+                    essential: Iterable[str], priority: Iterable[str] = (),
+                    text: Iterable[str] = TERMINAL_TEXT) -> tuple[list[int], dict[str, int]]:
     """The columns (indices into ``header``) a terminal of ``available`` characters shows and their
     widths. Every essential column is shown, then those of ``priority`` while they fit whole
     (:func:`fitting_columns`; a text column counted as at most :data:`TEXT_FIT_WIDTH`); while the table is too wide, its text shrinks (the text columns,
     :data:`TERMINAL_TEXT`, and each row's cells ``text_cells`` names, down to :data:`TEXT_MIN_WIDTH`).
     A number never shrinks: where even the numbers do not fit, the table is wider than ``available``
     (the terminal wraps its lines). A cell's lines are ``\n``-separated; ``header`` holds the
-    header lines as shown."""
+    header lines as shown; ``text``: the text columns (a column of labels already fitted is not)."""
     names = [h.replace("\n", " ") for h in header]
+    text = set(text)
     widths, least = {}, {}
     for i, (h, head) in enumerate(zip(names, header)):
         head_w = max(cell_len(x) for x in head.split("\n"))
-        lines = [(cell_len(x), i in row_text or h in TERMINAL_TEXT) for c, row_text in zip(cells, text_cells)
+        lines = [(cell_len(x), i in row_text or h in text) for c, row_text in zip(cells, text_cells)
                  for x in c[i].split("\n")]
         widths[h] = max([head_w] + [w for w, _ in lines])
         numbers = max([head_w] + [w for w, is_text in lines if not is_text])
@@ -354,17 +382,19 @@ def terminal_layout(header: list[str], cells: list[list[str]], text_cells: list[
 
 
 def _fitted_table(title: str, header: list[str], cells: list[list[str]], text_cells: list[set[int]],
-                  available: int, essential: Iterable[str], priority: Iterable[str] = ()) -> Table:
+                  available: int, essential: Iterable[str], priority: Iterable[str] = (),
+                  text: Iterable[str] = TERMINAL_TEXT) -> Table:
     """A rich table of ``cells`` laid out by :func:`terminal_layout`: its text shortened to the
     widths, no cell wrapped."""
-    keep, widths = terminal_layout(header, cells, text_cells, available, essential, priority)
+    keep, widths = terminal_layout(header, cells, text_cells, available, essential, priority, text)
+    text = set(text)
     names = [h.replace("\n", " ") for h in header]
     t = Table(title=escape(title), show_lines=False)  # a name like "[b5830b]" is text, not markup
     for i in keep:
         t.add_column(escape(header[i]), no_wrap=True, overflow="ignore", width=widths[names[i]])
     short: dict[tuple[int, str], str] = {}
     for i in keep:  # each text column shortened as a whole: the part that tells its cells apart is kept
-        lines = [x for c, row_text in zip(cells, text_cells) if i in row_text or names[i] in TERMINAL_TEXT
+        lines = [x for c, row_text in zip(cells, text_cells) if i in row_text or names[i] in text
                  for x in c[i].split("\n")]
         short.update(((i, x), y) for x, y in zip(lines, shorten_column(lines, widths[names[i]])))
     for c in cells:
@@ -372,22 +402,39 @@ def _fitted_table(title: str, header: list[str], cells: list[list[str]], text_ce
     return t
 
 
-def _terminal_table(lb: Leaderboard, width: int) -> tuple[Table, list[str]]:
+def terminal_priority(lb: Leaderboard) -> tuple[str, ...]:
+    """:data:`TERMINAL_PRIORITY` with the column of each time the table's Pareto fronts are on just
+    before the Pareto column, so that a terminal never shows the mark without the time it is on."""
+    costs = [PARETO_COLUMNS[c] for c in lb.pareto_costs]
+    rest = [h for h in TERMINAL_PRIORITY if h not in costs]
+    at = rest.index("Pareto")
+    return (*rest[:at], *costs, *rest[at:])
+
+
+def _terminal_table(lb: Leaderboard, width: int) -> tuple[Table, list[str], FittedLabels]:
     """The table of ``lb`` as a terminal of ``width`` characters shows it (:func:`terminal_layout`):
-    a number and its note on one line where the whole table fits so, else on two; and the headers
-    of the columns it shows."""
+    a number and its note on one line where the whole table fits so, else on two; the method names
+    fitted to their column (:func:`touchbench.reports.short_labels.fit_labels`: each still told
+    apart), then the columns laid out again with those names; the headers of the columns shown,
+    and the names as fitted."""
     failed = [r["n_folds"] == 0 and r["n_failed"] > 0 for _, r in lb.rows.iterrows()]
+    priority = terminal_priority(lb)
     for sep in (" ", "\n"):
         header, cells = display_rows(lb, sep)
         heads = [_TERMINAL_HEADERS.get(h, h) for h in header]
         vs = header.index("vs best: Δ pp, p (Holm)")
         text_cells = [{vs} if f else set() for f in failed]  # a failed method's error is words
-        keep, widths = terminal_layout(heads, cells, text_cells, width, TERMINAL_ESSENTIAL, TERMINAL_PRIORITY)
+        keep, widths = terminal_layout(heads, cells, text_cells, width, TERMINAL_ESSENTIAL, priority)
         whole = all(widths[header[i]] >= cell_len(c[i]) for c in cells for i in keep)
         if whole and _table_width(widths, [header[i] for i in keep]) <= width:
             break  # fits with nothing shortened
-    table = _fitted_table(lb.title, heads, cells, text_cells, width, TERMINAL_ESSENTIAL, TERMINAL_PRIORITY)
-    return table, [header[i] for i in keep]
+    m = header.index("method")
+    names = fit_labels([c[m] for c in cells], widths["method"])
+    cells = [[*c[:m], name, *c[m + 1:]] for c, name in zip(cells, names.shown)]
+    text = [h for h in TERMINAL_TEXT if h != "method"]  # fitted: never cut again
+    keep, _ = terminal_layout(heads, cells, text_cells, width, TERMINAL_ESSENTIAL, priority, text)
+    table = _fitted_table(lb.title, heads, cells, text_cells, width, TERMINAL_ESSENTIAL, priority, text)
+    return table, [header[i] for i in keep], names
 
 
 def _print_fitted(console: Console, table: Table) -> None:
@@ -446,8 +493,12 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
     console = console or Console(width=_terminal_width())
     for lb in lbs:
         if lb.live is None:
-            table, shown = _terminal_table(lb, console.width)
+            table, shown, names = _terminal_table(lb, console.width)
+            if names.heading() is not None:
+                console.print(escape(names.heading()), style="dim")
             _print_fitted(console, table)
+            if names.legend() is not None:
+                console.print(escape(names.legend()))
             console.print(escape(legend(lb, shown)), style="dim")  # the columns shown, no other
         else:
             _print_fitted(console, _terminal_live(lb, console.width))
