@@ -32,7 +32,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("touchbench.classifiers",),
     ("touchbench.methods",),                         # feature sets -> estimator; the one fit path
     ("touchbench.streams",),                         # live recognition: recogniser, rules, streams, replay
-    ("touchbench.protocols", "touchbench.evaluation"),  # schema, splitters, metrics, calibration
+    ("touchbench.protocols", "touchbench.scoring"),  # schema, splitters; metrics, stream scores, scene fidelity
     ("touchbench.results",),                         # the results store and run manifests
     ("touchbench.engine",),                          # planning and running tasks
     ("touchbench.reports",),                         # leaderboards, plots, HTML

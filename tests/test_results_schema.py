@@ -10,7 +10,7 @@ from sklearn.metrics import f1_score, log_loss, matthews_corrcoef
 
 from touchbench.engine import run_protocol
 from touchbench.engine.testing import random_dataset
-from touchbench.evaluation.metrics import scorer_values
+from touchbench.scoring.metrics import scorer_values
 from touchbench.protocols.errors import ProtocolError
 from touchbench.protocols.loading import parse_protocol
 

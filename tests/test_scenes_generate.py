@@ -153,7 +153,7 @@ def test_fur_like_is_a_channel_sensor():
     assert st[..., 2].mean() > nt[..., 2].mean() + 10 and st[..., 3].mean() > nt[..., 3].mean() + 20
 
 
-def test_cli_list_generate_calibrate(tmp_path):
+def test_cli_list_generate_fidelity(tmp_path):
     from touchbench.cli.main import cli
 
     r = CliRunner().invoke(cli, ["scenes", "list"])
@@ -167,6 +167,6 @@ def test_cli_list_generate_calibrate(tmp_path):
     assert r.exit_code == 3 and "protocol.repetitions" in r.output
     r = CliRunner().invoke(cli, ["scenes", "generate", "nosuch", "--out", str(out)])
     assert r.exit_code == 3 and "unknown scene" in r.output
-    r = CliRunner().invoke(cli, ["scenes", "calibrate", "tiny", "--features", "msd", "--trees", "10"])
+    r = CliRunner().invoke(cli, ["scenes", "fidelity", "tiny", "--features", "msd", "--trees", "10"])
     assert r.exit_code == 0, r.output
     assert "no real counterpart" in r.output and "msd+rf" in r.output

@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from touchbench.core.errors import DataError
-from touchbench.evaluation.stream_scores import SEGMENT_KINDS, score_stream
+from touchbench.scoring.streams import SEGMENT_KINDS, score_stream
 
 RATE = 10.0
 ERRORS = [k for k in SEGMENT_KINDS if k not in ("correct", "correct_idle")]

@@ -16,7 +16,7 @@ from helpers import fake_loso
 from rich.console import Console
 
 from touchbench.engine.live import graded_probabilities
-from touchbench.evaluation.stream_scores import score_stream
+from touchbench.scoring.streams import score_stream
 from touchbench.reports.figures.stream_trade import stream_trade_figure
 from touchbench.reports.leaderboard import build_leaderboards
 from touchbench.reports.rendering import print_terminal, to_csv, to_json, to_markdown

@@ -1,5 +1,5 @@
 """Dataset references: the one parser of what a protocol, ``data info``,
-``predict`` or ``scenes calibrate`` names as a dataset.
+``predict`` or ``scenes fidelity`` names as a dataset.
 
 A reference is one of
 

@@ -1,4 +1,4 @@
-"""``touchbench scenes``: list, generate and calibrate synthetic scenes."""
+"""``touchbench scenes``: list and generate synthetic scenes, and check how faithful they are to real data."""
 
 from __future__ import annotations
 
@@ -80,27 +80,27 @@ def generate(name: str, out: str, seed: int | None, sets: tuple[str, ...]) -> No
     )
 
 
-@scenes.command("calibrate", epilog=example("touchbench scenes calibrate haart-like"))
+@scenes.command("fidelity", epilog=example("touchbench scenes fidelity haart-like"))
 @click.argument("name")
 @click.option("--seed", type=click.IntRange(min=0), default=None, help="seed (default: the scene's own)")
-@click.option("--real", default=None, help="real dataset to hold it against (default: the scene's calibrate_against)")
+@click.option("--real", default=None, help="real dataset to hold it against (default: the scene's real_counterpart)")
 @click.option("--features", "feature_sets", default=None, help="comma-separated feature sets (default: the Gaus sets available)")
 @click.option("--trees", type=int, default=100, show_default=True, help="random forest size")
 @click.option("--no-accuracy", is_flag=True, help="distributions only")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False), default=None, help="also write the figures as JSON")
-def calibrate(name: str, seed: int | None, real: str | None, feature_sets: str | None, trees: int, no_accuracy: bool, json_out: str | None) -> None:
+def fidelity(name: str, seed: int | None, real: str | None, feature_sets: str | None, trees: int, no_accuracy: bool, json_out: str | None) -> None:
     """Hold scene NAME against its real dataset: per-gesture distributions
     of total pressure, contact area and centroid speed, and the accuracy of
     Gaus features + random forest (LOSO and challenge split) on both. A
     scene without a real counterpart gets its separability instead: the
     accuracy of a few methods, person-independent and random 5-fold."""
-    from ..evaluation import calibration as cal
+    from ..scoring import fidelity as cal
     from ..scenes import generate_scene, load_scene
 
     spec = load_scene(name)
     sets = [s.strip() for s in feature_sets.split(",")] if feature_sets else None
-    if real or spec.calibrate_against:
-        rep = cal.calibrate(name, real=real, seed=seed, sets=sets, n_estimators=trees, accuracy_too=not no_accuracy)
+    if real or spec.real_counterpart:
+        rep = cal.check_fidelity(name, real=real, seed=seed, sets=sets, n_estimators=trees, accuracy_too=not no_accuracy)
         click.echo(rep.to_text())
         if json_out:
             payload = {

@@ -1,5 +1,5 @@
 """The conditioning of a protocol's features for LDA: the condition number of the pooled
-within-class covariance (:mod:`touchbench.evaluation.covariance`) of each feature combination
+within-class covariance (:mod:`touchbench.classifiers.covariance`) of each feature combination
 the protocol evaluates, on the captures ``touchbench train`` would fit on (the evaluation's
 training side, or the training part of one fold), features fitted there as a task fits them:
 a feature set that learns nothing is read from the run engine's feature cache when a run computed
@@ -15,7 +15,7 @@ from ..core.errors import TouchbenchError
 from ..engine.cache import FeatureCache
 from ..engine.planning import plan_run, prepare_evaluation, training_side
 from ..engine.tasks import SetSpec
-from ..evaluation.covariance import condition_number, pooled_within_class_covariance
+from ..classifiers.covariance import condition_number, pooled_within_class_covariance
 from ..features.base import make_feature_set
 from ..protocols.library import find_protocol
 from ..protocols.loading import load_protocol

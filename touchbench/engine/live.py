@@ -15,7 +15,7 @@ then replays each test stream through the recogniser ``touchbench stream``
 runs (:func:`touchbench.streams.replay.replay`: the windows due at every hop
 classified in batches, the decisions those of stepping frame by frame) and
 scores the decisions against each frame's truth
-(:func:`touchbench.evaluation.stream_scores.score_stream`; the none label
+(:func:`touchbench.scoring.streams.score_stream`; the none label
 and the frames before the first decision count as idle).
 
 What it returns, plain data for the results store:
@@ -56,7 +56,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..classifiers.base import CLASSIFIERS
-from ..evaluation.stream_scores import score_stream
+from ..scoring.streams import score_stream
 from ..methods.base import MethodSpec
 from ..methods.fitting import fit_method
 from ..protocols.schemes.stream import rule_specs

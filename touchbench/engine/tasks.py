@@ -34,7 +34,7 @@ import pandas as pd
 from ..classifiers.adapt import adapt_each_session
 from ..core.threads import available_cpus, single_thread
 from ..datasets.model import TouchDataset
-from ..evaluation.metrics import metrics
+from ..scoring.metrics import metrics
 from ..features.base import make_feature_set
 from ..methods import FittedMethod, Method
 from ..methods.fitting import FittedEstimator, fit_estimator

@@ -29,7 +29,7 @@ import pandas as pd
 import yaml
 
 from ..core.hashing import canonical_json
-from ..evaluation.metrics import metrics
+from ..scoring.metrics import metrics
 from ..protocols.schemes import CurvePoint, curve_columns
 from ..results.store import PREDICTED, SCHEMA_VERSION, TRUE, confusion_table, task_row, write_results_table
 

@@ -49,7 +49,7 @@ import pyarrow.parquet as pq
 
 from ..core.atomic import atomic_write_bytes, atomic_write_parquet
 from ..core.errors import TouchbenchError
-from ..evaluation.metrics import scorer_values
+from ..scoring.metrics import scorer_values
 from .locking import hold
 from .checksums import changed_files, file_checksums
 from .fragments import FragmentError, check_scores_agree, checksum_path, checksum_problem, write_checksums
@@ -223,7 +223,7 @@ def confusion_table(predictions: pd.DataFrame, pooled: bool = False) -> pd.DataF
 def task_metrics(predictions: pd.DataFrame, names: Sequence[str], notes: list[str] | None = None) -> pd.DataFrame:
     """Each scikit-learn scorer of ``names`` per task (one row per ``task_id``), from the task's
     labels and its stored probabilities (``proba_<class>``: the classes of its training fold)
-    through :func:`touchbench.evaluation.metrics.scorer_values`. A scorer not computed for some
+    through :func:`touchbench.scoring.metrics.scorer_values`. A scorer not computed for some
     tasks gets one note in ``notes``: how many, and the first reason."""
     rows: dict[str, dict[str, float]] = {}
     missed: dict[str, list[str]] = {}

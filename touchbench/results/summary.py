@@ -14,7 +14,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from ..evaluation.metrics import FIXED, metrics
+from ..scoring.metrics import FIXED, metrics
 from .store import PREDICTED, TRUE
 
 __all__ = ["CONFIG_KEYS", "check_expected", "summarize"]

@@ -337,7 +337,7 @@ class SceneSpec(_Strict):
     population: Population
     gestures: dict[str, dict[str, Any] | None]
     protocol: Protocol
-    calibrate_against: str | None = None
+    real_counterpart: str | None = None
     calibrated: dict[str, Calibration] = Field(default_factory=dict)
 
     @field_validator("calibrated")

@@ -1,8 +1,8 @@
 """Hold a scene against real data, and measure how separable a scene is.
 
-Calibration (``touchbench scenes calibrate haart-like``) compares, per
+Fidelity (``touchbench scenes fidelity haart-like``) compares, per
 gesture, the distributions of three capture statistics on the scene and on
-the real dataset it names (``calibrate_against``), and the accuracy of the
+the real dataset it names (``real_counterpart``), and the accuracy of the
 same protocol on both:
 
 - total pressure: the mean over frames of the frame's summed values
@@ -180,7 +180,7 @@ def accuracy(
 
 # ------------------------------------------------------------------ reports
 @dataclass
-class Calibration:
+class Fidelity:
     scene: str
     real: str
     seed: int
@@ -197,7 +197,7 @@ class Calibration:
     def to_text(self) -> str:
         d = self.distributions
         lines = [
-            f"calibration of scene {self.scene!r} (seed {self.seed}) against {self.real!r}",
+            f"fidelity of scene {self.scene!r} (seed {self.seed}) against {self.real!r}",
             "",
             "per-gesture distributions: real quartiles [q25 median q75] vs scene median (ok = within the real IQR)",
         ]
@@ -219,7 +219,7 @@ class Calibration:
         return "\n".join(lines)
 
 
-def calibrate(
+def check_fidelity(
     scene: str,
     real: str | None = None,
     seed: int | None = None,
@@ -228,13 +228,13 @@ def calibrate(
     n_estimators: int = 100,
     threshold: float = 10.0,
     accuracy_too: bool = True,
-) -> Calibration:
+) -> Fidelity:
     """Compare scene ``scene`` with the real dataset it names (or ``real``)."""
 
     spec = load_scene(scene)
-    real_name = real or spec.calibrate_against
+    real_name = real or spec.real_counterpart
     if not real_name:
-        raise TouchbenchError(f"scene {scene!r} names no real dataset to calibrate against (calibrate_against)")
+        raise TouchbenchError(f"scene {scene!r} names no real dataset to hold it against (real_counterpart)")
     seed = spec.seed if seed is None else seed
     synth = generate_scene(scene, seed=seed)
     ref = load_dataset(real_name)
@@ -250,7 +250,7 @@ def calibrate(
         a_real = accuracy(ref, chosen, use, n_estimators, seed=0)
         a_scene = accuracy(synth, chosen, use, n_estimators, seed=0)
         acc = pd.DataFrame({"real": a_real, "scene": a_scene})
-    return Calibration(spec.name, real_name, seed, dist, acc, chosen, n_estimators, notes)
+    return Fidelity(spec.name, real_name, seed, dist, acc, chosen, n_estimators, notes)
 
 
 # a method = (label, feature sets); the classifier is a random forest

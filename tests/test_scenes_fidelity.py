@@ -1,4 +1,4 @@
-"""Calibration of a scene against real data (touchbench.evaluation.calibration)."""
+"""How faithful a scene is to real data (touchbench.scoring.fidelity)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from touchbench.evaluation.calibration import _folds, capture_metrics, compare_distributions
+from touchbench.scoring.fidelity import _folds, capture_metrics, compare_distributions
 
 
 def test_capture_metrics_by_hand():
@@ -64,7 +64,7 @@ def test_haart_like_medians_within_the_real_iqr(real_haart):
     """The calibration target: every per-gesture median of haart-like within the
     real interquartile range (total pressure, contact area, centroid speed)."""
     from touchbench.scenes import generate_scene
-    from touchbench.evaluation.calibration import metric_table
+    from touchbench.scoring.fidelity import metric_table
 
     d = compare_distributions(metric_table(real_haart), metric_table(generate_scene("haart-like")))
     assert len(d) == 21

@@ -13,7 +13,7 @@ from click.testing import CliRunner
 from sklearn.discriminant_analysis import LinearDiscriminantAnalysis
 
 from touchbench.cli.main import cli
-from touchbench.evaluation.covariance import condition_number, pooled_within_class_covariance
+from touchbench.classifiers.covariance import condition_number, pooled_within_class_covariance
 
 # class a: (0, 0), (2, 2): deviations (-1, -1), (1, 1); class b: (0, 1), (0, 3): deviations (0, -1), (0, 1).
 # Scatter [[2, 2], [2, 4]], divided by n - K = 2: [[1, 1], [1, 2]], eigenvalues (3 +- sqrt 5) / 2.

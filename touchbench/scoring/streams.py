@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from touchbench.core.errors import DataError
-from touchbench.evaluation.metrics import metrics
+from touchbench.scoring.metrics import metrics
 
 __all__ = ["SEGMENT_KINDS", "TRUTH_EVENT_KINDS", "RETURN_EVENT_KINDS", "FrameScores", "SegmentErrors",
            "EventErrors", "DecisionTiming", "StreamScores", "prepare", "runs", "frame_scores",
@@ -121,7 +121,7 @@ class FrameScores:
 def frame_scores(t: np.ndarray, d: np.ndarray, idle: str) -> FrameScores:
     """Accuracy (frames whose decision equals the truth / frames) and balanced accuracy (mean
     per-class recall over the classes present in the truth, the idle class included:
-    :func:`touchbench.evaluation.metrics.metrics`), each beside the same score of the idle-only
+    :func:`touchbench.scoring.metrics.metrics`), each beside the same score of the idle-only
     baseline, which answers idle at every frame (its accuracy is the idle share of the frames,
     its balanced accuracy 1 / number of true classes when idle is one of them, else 0).
     Gesture-frame recall: frames with a non-idle truth whose decision equals it / frames with a

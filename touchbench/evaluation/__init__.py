@@ -1,2 +1,0 @@
-"""Evaluation helpers that sit beside the protocols: metrics, scene calibration and
-the scores of a live recognition stream."""
