@@ -20,6 +20,15 @@ from touchbench.core.errors import TouchbenchError
 from touchbench.engine.backends import use_backend
 
 
+@pytest.fixture()
+def ray_logger():
+    """The "ray" logger, its level given back (with ``setLevel``, which clears the loggers' caches) after."""
+    logger = logging.getLogger("ray")
+    level = logger.level
+    yield logger
+    logger.setLevel(level)
+
+
 def stub_ray(monkeypatch, cpus=3.0, init_error=None):
     """A ``ray`` module that records what ``ray.init`` is given; its joblib backend runs in the process."""
     calls = {"init": [], "shutdown": 0}
@@ -27,9 +36,9 @@ def stub_ray(monkeypatch, cpus=3.0, init_error=None):
 
     def init(**kwargs):
         calls["init"].append(kwargs)
+        logging.getLogger("ray").setLevel(kwargs.get("logging_level", logging.INFO))  # first, as ray.init does
         if init_error is not None:
             raise init_error
-        logging.getLogger("ray").setLevel(kwargs.get("logging_level", logging.INFO))  # as ray.init does
         state["up"] = True
 
     def shutdown():
@@ -50,10 +59,9 @@ def stub_ray(monkeypatch, cpus=3.0, init_error=None):
 
 
 @pytest.mark.parametrize("address, where", [(None, {"num_cpus": 2}), ("10.0.0.5:6379", {"address": "10.0.0.5:6379"})])
-def test_ray_init_is_told_to_keep_its_own_lines_quiet(monkeypatch, address, where):
+def test_ray_init_is_told_to_keep_its_own_lines_quiet(monkeypatch, ray_logger, address, where):
     calls = stub_ray(monkeypatch)
-    ray_logger = logging.getLogger("ray")
-    monkeypatch.setattr(ray_logger, "level", logging.WARNING)
+    ray_logger.setLevel(logging.WARNING)
     with use_backend("ray", address, local_workers=2) as info:
         assert (info.name, info.n_jobs) == ("ray", 3)
         assert ray_logger.level == logging.ERROR  # during the run: Ray's INFO and WARNING lines are not shown
@@ -63,22 +71,22 @@ def test_ray_init_is_told_to_keep_its_own_lines_quiet(monkeypatch, address, wher
     assert ray_logger.level == logging.WARNING  # given back after the run
 
 
-def test_a_ray_the_caller_started_keeps_its_settings(monkeypatch):
+def test_a_ray_the_caller_started_keeps_its_settings(monkeypatch, ray_logger):
     calls = stub_ray(monkeypatch)
     sys.modules["ray"].init(num_cpus=1)  # the caller's own Ray, with Ray's default logging
     with use_backend("ray", None, local_workers=2):
         pass
     assert len(calls["init"]) == 1 and calls["shutdown"] == 0
+    assert ray_logger.level == logging.INFO  # what the caller's ray.init set
 
 
-def test_a_connection_error_is_still_reported(monkeypatch):
+def test_a_connection_error_is_still_reported(monkeypatch, ray_logger):
     stub_ray(monkeypatch, init_error=ConnectionError("could not reach 10.0.0.5:6379"))
-    ray_logger = logging.getLogger("ray")
-    monkeypatch.setattr(ray_logger, "level", logging.INFO)
+    ray_logger.setLevel(logging.INFO)
     with pytest.raises(TouchbenchError, match=r"cannot connect to the Ray cluster '10\.0\.0\.5:6379': could not reach"):
         with use_backend("ray", "10.0.0.5:6379", local_workers=2):
             pass
-    assert ray_logger.level == logging.INFO
+    assert ray_logger.level == logging.INFO  # given back after the failed start too
 
 
 # Ray's log format ("2026-11-29 03:34:40,575<TAB>INFO worker.py:2038 -- Started a local Ray instance.")
