@@ -16,7 +16,8 @@ makes joblib send them to a cluster instead of local processes:
     ``ray.util.joblib.register_ray()`` + ``parallel_config(backend="ray")``.
     Parallelism: the cluster's CPUs. Ray's joblib backend cannot stream
     results back as they finish, so :func:`supports_generator` tells the
-    engine to collect them in one list.
+    engine to collect them in one list. Ray's own INFO and WARNING lines are
+    kept out of the run's messages (``_RAY_QUIET``); its errors still show.
 
 Same results as a local run: a task's classifier seed is derived from its
 identity and every task runs single-threaded (``tasks.single_thread``), so
@@ -263,22 +264,32 @@ def _quiet_worker_kills(active: bool) -> Iterator[None]:
         nanny.removeFilter(quiet)
 
 
+# What ray.init is given when touchbench starts or joins a Ray: no dashboard, the workers' output kept in
+# Ray's log files (a failed task's error still comes back as an exception), and the driver's "ray" logger
+# at ERROR: Ray's own INFO and WARNING lines (the local instance started, token authentication, the
+# multiprocessing pool's unsupported 'context') stay out of the run's messages; its errors still show.
+_RAY_QUIET = {"include_dashboard": False, "log_to_driver": False, "configure_logging": True,
+             "logging_level": logging.ERROR}
+
+
 @contextlib.contextmanager
 def _use_ray(address: str | None, local_workers: int) -> Iterator[BackendInfo]:
-    """:func:`use_backend` on Ray: a Ray instance started here (none if one runs) is shut down on exit."""
+    """:func:`use_backend` on Ray: a Ray instance started here (none if one runs) is shut down on exit, and
+    the "ray" logger's level, which ``ray.init`` sets, is given back."""
     try:
         import ray
         from ray.util.joblib import register_ray
     except ImportError:
         raise TouchbenchError("--backend ray needs the dist extra: pip install 'touchbench[dist]'") from None
     started = not ray.is_initialized()
+    ray_logger = logging.getLogger("ray")
+    level = ray_logger.level
     if started:
+        where = {"address": address} if address else {"num_cpus": local_workers}
         try:
-            if address:
-                ray.init(address=address, include_dashboard=False, log_to_driver=False)
-            else:
-                ray.init(num_cpus=local_workers, include_dashboard=False, log_to_driver=False)
+            ray.init(**where, **_RAY_QUIET)
         except (ConnectionError, RuntimeError, ValueError) as e:
+            ray_logger.setLevel(level)
             raise TouchbenchError(f"cannot connect to the Ray cluster {address!r}: {e}") from None
     try:
         register_ray()
@@ -288,6 +299,7 @@ def _use_ray(address: str | None, local_workers: int) -> Iterator[BackendInfo]:
     finally:
         if started:
             ray.shutdown()
+            ray_logger.setLevel(level)
 
 
 @contextlib.contextmanager
