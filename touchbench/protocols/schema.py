@@ -154,6 +154,7 @@ class Protocol(_Model):
     _lines: dict[tuple, int] = PrivateAttr(default_factory=dict)
     _booleans: dict[tuple, str] = PrivateAttr(default_factory=dict)  # what YAML read as booleans, as written
     _subs: list["Protocol"] | None = PrivateAttr(default=None)
+    _splitters: dict[tuple, Splitter] = PrivateAttr(default_factory=dict)  # see splitter()
 
     @field_validator("metrics")
     @classmethod
@@ -416,11 +417,18 @@ class Protocol(_Model):
                                                              f"{best.parameter} = {best.value!r}")
 
     def splitter(self, repetition: int = 0) -> Splitter:
-        """The scheme, seeded for ``repetition``."""
-
+        """The scheme, seeded for ``repetition``: built once per repetition and shared by every layer
+        that asks it something (the checks, the data preparation, the folds, the plan, the leakage
+        label). A scheme's folds depend only on its settings, its seed and the data it is handed
+        (its random draws are seeded at each use, its notes reset by each ``folds``), so sharing it
+        changes no result. Keyed by what builds it, so a copy of the protocol with another scheme,
+        target or seed builds its own."""
         params = self.scheme.params
-        return make_splitter(self.scheme.name, target=self.target,
-                             random_state=derive_seed(self.seed, "split", repetition), **params)
+        seed = derive_seed(self.seed, "split", repetition)
+        key = (self.scheme.name, canonical_json(params), self.target, seed)
+        if key not in self._splitters:
+            self._splitters[key] = make_splitter(self.scheme.name, target=self.target, random_state=seed, **params)
+        return self._splitters[key]
 
 
 def protocol_dataset_ref(protocol: Protocol) -> DatasetRef:
