@@ -157,7 +157,7 @@ def test_rules_are_declared_by_name_and_refuse_bad_values():
     assert make_rule({"name": "hmm", "switch": 0.1}).describe() == {"name": "hmm", "switch": 0.1, "threshold": 0.5}
     with pytest.raises(TouchbenchError, match="decision rule 'max'"):
         make_rule({"name": "max", "n": 3})
-    with pytest.raises(TouchbenchError, match="majority's n"):
+    with pytest.raises(TouchbenchError, match="decision rule 'majority': n: Input should be greater than or equal to 1"):
         make_rule({"name": "majority", "n": 0})
     with pytest.raises(TouchbenchError, match="needs a name"):
         make_rule({"threshold": 0.5})

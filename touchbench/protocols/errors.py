@@ -31,11 +31,13 @@ class ProtocolError(TouchbenchError):
 
 class _ErrorAt(ValueError):
     """Raised by a model validator about one of the model's fields (``loc``
-    below the model), so that the error names that field's line."""
+    below the model), so that the error names that field's line; ``more``: further
+    ``(loc, message)`` problems found with it, each reported at its own line."""
 
-    def __init__(self, loc: tuple, message: str):
+    def __init__(self, loc: tuple, message: str, more: list[tuple[tuple, str]] | None = None):
         super().__init__(message)
         self.loc = loc
+        self.more = more or []
 
 
 # ----------------------------------------------------------------- YAML with lines
@@ -128,6 +130,7 @@ def _pydantic_issues(err: ValidationError, model: type[BaseModel], prefix: tuple
         if msg.startswith("Value error, "):
             msg = msg[len("Value error, "):]
         at = (e.get("ctx") or {}).get("error")
+        more = [(prefix + loc + m_loc, m_msg) for m_loc, m_msg in at.more] if isinstance(at, _ErrorAt) else []
         if isinstance(at, _ErrorAt):
             loc += at.loc
         if kind == "missing":
@@ -141,5 +144,5 @@ def _pydantic_issues(err: ValidationError, model: type[BaseModel], prefix: tuple
             value = e.get("input")
             if isinstance(value, (str, int, float, bool)) or value is None:
                 msg = f"{msg}, got {value!r}"
-        issues.append((prefix + loc, msg))
+        issues += [(prefix + loc, msg), *more]
     return issues

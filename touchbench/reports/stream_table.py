@@ -49,7 +49,6 @@ What keeps the table from misleading (:func:`live_table`, its notes):
 
 from __future__ import annotations
 
-import inspect
 from collections import Counter
 import json
 import math
@@ -59,7 +58,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..streams.rules import DEFAULT_RULE, RULES
+from ..streams.rules import DEFAULT_RULE, RULES, rule_defaults
 from .labels import method_label
 
 __all__ = ["LIVE_COLUMNS", "LIVE_ESSENTIAL", "LIVE_LEGEND", "LIVE_PRIORITY", "default_rule_index", "live_cells",
@@ -206,12 +205,8 @@ def _rule_params(decl: dict[str, Any], idle: str) -> tuple[str, dict[str, Any]]:
     fitted, when it did; the evaluation's idle class where the rule takes one and was not given it)."""
     d = dict(decl)
     name = str(d.pop("name", ""))
-    try:
-        sig = inspect.signature(RULES.get(name)).parameters
-    except Exception:  # a rule this version does not know: its parameters as given
-        sig = {}
-    full = {k: p.default for k, p in sig.items() if p.default is not inspect.Parameter.empty}
-    if "idle" in sig:
+    full = rule_defaults(name)  # a rule this version does not know: its parameters as given
+    if name in RULES and "idle" in RULES.get(name).Params.model_fields:
         full["idle"] = idle
     full.update(d)
     fitted = full.pop("fitted_level", None)
@@ -331,10 +326,7 @@ def rule_label(rule: dict[str, Any]) -> str:
     """A rule as a person reads it: its name and the parameters it was given other than its defaults
     (``majority n=9``; ``max`` for the default threshold); the idle class and the level a gate chose
     on training captures are left out."""
-    try:
-        defaults = {k: p.default for k, p in inspect.signature(RULES.get(str(rule["name"]))).parameters.items()}
-    except Exception:  # a rule this version does not know: every parameter
-        defaults = {}
+    defaults = rule_defaults(str(rule["name"]))  # a rule this version does not know: every parameter
     parts = [f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in rule.items()
              if k not in ("name", "fitted_level", "idle") and defaults.get(k, object()) != v]
     return " ".join([str(rule["name"]), *parts])

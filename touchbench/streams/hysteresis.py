@@ -37,9 +37,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from pydantic import model_validator
 
 from ..core.errors import TouchbenchError
-from .rules import RULES, DecisionRule
+from .rules import RULES, ClassName, DecisionRule, FieldProblem, Fraction, RuleParams, Seconds
 
 __all__ = ["TouchRule"]
 
@@ -47,16 +48,19 @@ __all__ = ["TouchRule"]
 FLOOR = 1e-6
 
 
-def _fraction(name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= float(value) <= 1.0:
-        raise TouchbenchError(f"the touch rule's {name} is a probability in [0, 1], got {value!r}")
-    return float(value)
+class TouchParams(RuleParams):
+    idle: ClassName
+    begin: Fraction = 0.6
+    end: Fraction = 0.4
+    begin_s: Seconds = 0.2
+    end_s: Seconds = 0.3
+    memory: Seconds = 0.0
 
-
-def _seconds(name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= float(value) < 3600.0:
-        raise TouchbenchError(f"the touch rule's {name} is a number of seconds in [0, 3600), got {value!r}")
-    return float(value)
+    @model_validator(mode="after")
+    def _order(self) -> "TouchParams":
+        if self.end > self.begin:
+            raise FieldProblem("end", f"end ({self.end!r}) must not be above begin ({self.begin!r})")
+        return self
 
 
 @RULES.register("touch", description="two decisions: a touch begins and ends with hysteresis on P(touch); the "
@@ -66,26 +70,17 @@ class TouchRule(DecisionRule):
 
     Parameters
     ----------
-    idle : the idle class (no touch).
-    begin, end : a touch begins at ``P(touch) >= begin``, ends at ``P(touch) < end`` (``end <= begin``).
-    begin_s, end_s : for how long (seconds, counted in decisions) each must hold.
-    memory : seconds of the touch whose evidence decides the gesture (0: since the onset).
+    idle : the idle class (no touch; in a stream evaluation, the scheme's ``idle``).
+    begin, end : a touch begins at ``P(touch) >= begin``, ends at ``P(touch) < end``; each in [0, 1],
+        ``end <= begin`` (defaults 0.6 and 0.4).
+    begin_s, end_s : for how long (seconds, counted in decisions) each must hold, in [0, 3600)
+        (defaults 0.2 and 0.3).
+    memory : seconds of the touch whose evidence decides the gesture, in [0, 3600) (default 0: since
+        the onset).
     """
 
     name = "touch"
-
-    def __init__(self, idle: str, begin: float = 0.6, end: float = 0.4, begin_s: float = 0.2, end_s: float = 0.3,
-                 memory: float = 0.0):
-        if not isinstance(idle, str) or not idle:
-            raise TouchbenchError("the touch rule needs the idle class: idle: notouch")
-        self.idle = idle
-        self.begin, self.end = _fraction("begin", begin), _fraction("end", end)
-        if self.end > self.begin:
-            raise TouchbenchError(f"the touch rule's end ({end!r}) must not be above begin ({begin!r})")
-        self.begin_s, self.end_s = _seconds("begin_s", begin_s), _seconds("end_s", end_s)
-        self.memory = _seconds("memory", memory)
-        self.params = {"idle": idle, "begin": self.begin, "end": self.end, "begin_s": self.begin_s,
-                       "end_s": self.end_s, "memory": self.memory}
+    Params = TouchParams
 
     def start(self, classes: np.ndarray, none_label: str, frame_rate: float, sensor: Any = None) -> None:
         super().start(classes, none_label, frame_rate, sensor)

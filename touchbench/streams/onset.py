@@ -30,8 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.errors import TouchbenchError
-from .rules import RULES, GateRule, frame_contact
+from .rules import RULES, GateParams, GateRule, Seconds, frame_contact
 
 __all__ = ["OnsetRule", "contact_run"]
 
@@ -55,17 +54,22 @@ def contact_run(contact: np.ndarray, bridge: int) -> int:
     return int(c.size - start)
 
 
+class OnsetParams(GateParams):
+    bridge_s: Seconds = 0.5
+
+
 @RULES.register("onset", description="windows aligned to the touch's onset (contact gate), not sliding")
 class OnsetRule(GateRule):
-    name = "onset"
+    """The gate, and one window from the touch's onset instead of the sliding ones (module docstring).
 
-    def __init__(self, idle: str, level: float | str = "auto", gate_s: float = 0.25, bridge_s: float = 0.5,
-                 threshold: float = 0.0):
-        super().__init__(idle=idle, level=level, gate_s=gate_s, threshold=threshold)
-        if not (isinstance(bridge_s, (int, float)) and bridge_s >= 0):
-            raise TouchbenchError(f"onset's bridge_s must be a number of seconds >= 0, got {bridge_s!r}")
-        self.bridge_s = float(bridge_s)
-        self.params = {**self.params, "bridge_s": self.bridge_s}
+    Parameters
+    ----------
+    idle, level, gate_s, threshold : the gate's (:class:`touchbench.streams.rules.GateRule`).
+    bridge_s : gaps of contact shorter than this many seconds are bridged, in [0, 3600) (default 0.5).
+    """
+
+    name = "onset"
+    Params = OnsetParams
 
     def window_lengths(self, frames: np.ndarray, lengths: list[int]) -> list[int] | None:
         peak = frame_contact(frames, self.sensor.value_range, self.sensor.higher_is_more_pressure)

@@ -39,27 +39,104 @@ which learns the offset's level from the training captures).
 
 from __future__ import annotations
 
-import inspect
 from collections import Counter, deque
-from typing import Any, Sequence
+from typing import Annotated, Any, ClassVar, Sequence, Union
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, PlainValidator, Strict, ValidationError
 
-from ..core.errors import TouchbenchError
+from ..core.errors import TouchbenchError, UnknownNameError
 from ..core.registry import Registry
+from ..core.suggest import did_you_mean
 
-__all__ = ["DEFAULT_RULE", "RULES", "DecisionRule", "GateRule", "MaxRule", "fitted_declaration", "frame_contact", "make_rule",
-           "needs_fitting", "peak_contact", "stream_rule"]
+__all__ = ["DEFAULT_RULE", "RULES", "DecisionRule", "FieldProblem", "GateRule", "HmmRule", "MajorityRule", "MaxRule", "RuleError",
+           "RuleParams", "fitted_declaration", "frame_contact", "make_rule", "needs_fitting", "peak_contact",
+           "rule_class", "rule_defaults", "rule_params", "stream_rule"]
 
 RULES: Registry = Registry("decision rule", package="touchbench.streams")
+
+
+class RuleParams(BaseModel):
+    """The base of every rule's parameter model: unknown parameters refused, booleans never read as
+    numbers nor strings as numbers (strict types)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class RuleError(TouchbenchError):
+    """A decision rule's declaration that is not valid: ``issues`` lists ``(location in the
+    declaration, message)`` for each problem (a location such as ``("switch",)``)."""
+
+    def __init__(self, message: str, issues: list[tuple[tuple, str]]):
+        super().__init__(message)
+        self.issues = issues
+
+
+class FieldProblem(ValueError):
+    """Raised by a parameter model's validator about one of its fields (``field``), so that the
+    problem is reported at that field."""
+
+    def __init__(self, field: str, message: str):
+        super().__init__(message)
+        self.field = field
+
+
+#: a probability or a fraction, in [0, 1] (an integer 0 or 1 is read as a number; a boolean is refused)
+Fraction = Annotated[float, Strict(), Field(ge=0.0, le=1.0, allow_inf_nan=False)]
+#: a run length in seconds a rule counts (at most an hour: a stream holds far less)
+MAX_RULE_S = 3600.0
+Seconds = Annotated[float, Strict(), Field(ge=0.0, lt=MAX_RULE_S, allow_inf_nan=False)]
+PositiveSeconds = Annotated[float, Strict(), Field(gt=0.0, lt=MAX_RULE_S, allow_inf_nan=False)]
+#: a class name (a boolean such as YAML's ``no`` is refused, not read as a name)
+ClassName = Annotated[str, Strict(), Field(min_length=1)]
+
+
+def _level(v: Any) -> float | str:
+    if v == "auto" and isinstance(v, str):
+        return v
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 <= float(v) <= 1.0:
+        raise ValueError(f"the level is a fraction of the value range in [0, 1], or auto; got {v!r}")
+    return float(v)
+
+
+#: the gate's level: a fraction of the value range in [0, 1], or ``auto`` (chosen on training captures)
+Level = Annotated[Union[float, str], PlainValidator(_level)]
 
 
 class DecisionRule:
     """The interface: :meth:`start` before a stream, :meth:`gate` (a label decided from the frames
     alone, or None) and :meth:`decide` at each hop; :meth:`fit` on training captures, when the rule
-    learns something."""
+    learns something.
 
+    A rule declares its parameters once, as the pydantic model ``Params``; a rule is built from its
+    validated parameters (:meth:`from_params`, what :func:`make_rule` does), or as
+    ``Rule(value, ..., name=value)`` (the model's fields in order), which validates them the same
+    way (:class:`RuleError`). Each parameter is an attribute of the rule, and ``params`` all of them.
+    """
+
+    name: ClassVar[str] = ""
+    Params: ClassVar[type[RuleParams]] = RuleParams
     gates = False
+
+    def __init__(self, *args: Any, **given: Any):
+        fields = list(self.Params.model_fields)
+        if len(args) > len(fields):
+            raise TypeError(f"{type(self).__name__} takes at most {len(fields)} positional parameters ({', '.join(fields)})")
+        _, params = rule_params({**dict(zip(fields, args)), **given, "name": self.name})
+        self._set(params)
+
+    @classmethod
+    def from_params(cls, params: RuleParams) -> "DecisionRule":
+        """The rule with the validated ``params`` (an instance of :attr:`Params`)."""
+        rule = cls.__new__(cls)
+        rule._set(params)
+        return rule
+
+    def _set(self, params: RuleParams) -> None:
+        self.settings = params
+        self.params = params.model_dump()
+        for k, v in self.params.items():
+            setattr(self, k, v)
 
     def fit(self, captures: Sequence[np.ndarray], labels: Sequence[str], sensor: Any) -> "DecisionRule":
         return self
@@ -90,31 +167,66 @@ class DecisionRule:
         return {"name": self.name, **self.params}  # type: ignore[attr-defined]
 
 
+def rule_class(name: Any) -> type["DecisionRule"]:
+    """The registered rule ``name`` (an unknown name: :class:`RuleError` at ``name``, with the nearest)."""
+    if not isinstance(name, str):
+        raise RuleError("a decision rule needs a name: {name: max}", [(("name",), "a decision rule needs a name: "
+                                                                              "{name: max}")])
+    try:
+        return RULES.get(name)
+    except UnknownNameError as e:
+        raise RuleError(str(e), [(("name",), str(e))]) from None
+
+
+def rule_params(spec: dict[str, Any] | str) -> tuple[type["DecisionRule"], RuleParams]:
+    """The rule class and its validated parameters of the declaration ``spec`` (``{name: ...,
+    params}`` or a name); :class:`RuleError` naming every field in the wrong."""
+    if not isinstance(spec, (str, dict)):
+        msg = f"a decision rule is a name or a mapping such as {{name: majority, n: 5}}, got {spec!r}"
+        raise RuleError(msg, [((), msg)])
+    d = {"name": spec} if isinstance(spec, str) else dict(spec)
+    cls = rule_class(d.pop("name", None))
+    try:
+        return cls, cls.Params.model_validate(d)
+    except ValidationError as e:
+        issues = [_issue(err, cls.Params) for err in e.errors()]
+        text = "; ".join(f"{'.'.join(map(str, loc)) or '(rule)'}: {msg}" for loc, msg in issues)
+        raise RuleError(f"decision rule {cls.name!r}: {text}", issues) from None
+
+
+def _issue(err: Any, model: type[RuleParams]) -> tuple[tuple, str]:
+    """One pydantic error as ``(location, message)``: an unknown field with the nearest names, a
+    value shown beside what it should be."""
+    loc, msg = tuple(err["loc"]), str(err["msg"]).removeprefix("Value error, ")
+    at = (err.get("ctx") or {}).get("error")
+    if isinstance(at, FieldProblem):
+        loc += (at.field,)
+    if err["type"] == "extra_forbidden":
+        fields = list(model.model_fields)
+        return loc, f"unknown field{did_you_mean(str(loc[-1]), fields)} (allowed: {', '.join(fields)})"
+    if err["type"] == "missing":
+        return loc, "missing required field"
+    value = err.get("input")
+    if err["type"] != "value_error" and (isinstance(value, (str, int, float, bool)) or value is None):
+        msg = f"{msg}, got {value!r}"
+    return loc, msg
+
+
 def make_rule(spec: dict[str, Any] | str | None, threshold: float = 0.5) -> DecisionRule:
-    """A rule from its declaration (``{name: ..., params}`` or a name; None: ``max`` with ``threshold``)."""
+    """A rule from its declaration (``{name: ..., params}`` or a name; None: ``max`` with ``threshold``),
+    built from its validated parameters (:func:`rule_params`)."""
     if spec is None:
         return MaxRule(threshold=threshold)
-    if not isinstance(spec, (str, dict)):
-        raise TouchbenchError(f"a decision rule is a name or a mapping such as {{name: majority, n: 5}}, got {spec!r}")
-    d = {"name": spec} if isinstance(spec, str) else dict(spec)
-    name = d.pop("name", None)
-    if not isinstance(name, str):
-        raise TouchbenchError("a decision rule needs a name: {name: max}")
-    try:
-        return RULES.create(name, **d)
-    except TypeError as e:
-        raise TouchbenchError(f"decision rule {name!r}: {_parameter_problem(RULES.get(name), d) or e}") from None
+    cls, params = rule_params(spec)
+    return cls.from_params(params)
 
 
-def _parameter_problem(cls: Any, given: dict[str, Any]) -> str:
-    """What is wrong with ``given`` as ``cls``'s parameters, in words: a missing field or an unknown one."""
-    params = dict(inspect.signature(cls).parameters)
-    missing = [k for k, p in params.items() if p.default is inspect.Parameter.empty and k not in given]
-    unknown = [k for k in given if k not in params]
-    fields = ", ".join(params)
-    if missing:
-        return f"needs {', '.join(missing)} (its fields: {fields})"
-    return f"has no field {', '.join(map(str, unknown))} (its fields: {fields})" if unknown else ""
+def rule_defaults(name: str) -> dict[str, Any]:
+    """The parameters of rule ``name`` that have a default, with it ({} for a rule not registered)."""
+    if name not in RULES:
+        return {}
+    fields = RULES.get(name).Params.model_fields
+    return {k: f.default for k, f in fields.items() if not f.is_required()}
 
 
 #: the rule ``touchbench stream`` decides with when a model file records one (``touchbench train`` on a
@@ -148,20 +260,22 @@ def needs_fitting(rule: DecisionRule) -> bool:
     return getattr(rule, "level", None) == "auto" and not hasattr(rule, "fitted_level")
 
 
-def _threshold(value: Any) -> float:
-    t = float(value)
-    if not 0.0 <= t <= 1.0:
-        raise TouchbenchError(f"threshold must be in [0, 1], got {value!r}")
-    return t
+class MaxParams(RuleParams):
+    threshold: Fraction = 0.5
 
 
 @RULES.register("max", description="the most probable class, none under the threshold")
 class MaxRule(DecisionRule):
-    name = "max"
+    """The most probable class, or the none label when its probability is under ``threshold``.
 
-    def __init__(self, threshold: float = 0.5):
-        self.threshold = _threshold(threshold)
-        self.params = {"threshold": self.threshold}
+    Parameters
+    ----------
+    threshold : the least probability of the most probable class to name it, in [0, 1] (default 0.5;
+        0: always the most probable class).
+    """
+
+    name = "max"
+    Params = MaxParams
 
     def decide(self, p: np.ndarray) -> str:
         k = int(np.argmax(p))
@@ -185,22 +299,31 @@ def peak_contact(frames: np.ndarray, value_range: tuple[float, float], higher_is
     return float(c.max()) if c.size else 0.0
 
 
+class GateParams(RuleParams):
+    idle: ClassName
+    level: Level = "auto"
+    gate_s: PositiveSeconds = 0.25
+    threshold: Fraction = 0.0
+
+
 @RULES.register("gate", description="a rest/contact gate decides idle before the classifier; else the best "
                 "non-idle class")
 class GateRule(DecisionRule):
-    name = "gate"
-    gates = True
+    """A rest/contact gate: the idle class without the classifier while the newest ``gate_s``
+    seconds' peak contact is under ``level``; otherwise the most probable class other than idle.
 
-    def __init__(self, idle: str, level: float | str = "auto", gate_s: float = 0.25, threshold: float = 0.0):
-        if not isinstance(idle, str) or not idle:
-            raise TouchbenchError("the gate needs the idle class: idle: notouch")
-        if level != "auto" and not (isinstance(level, (int, float)) and 0.0 <= float(level) <= 1.0):
-            raise TouchbenchError(f"the gate's level is a fraction of the value range in [0, 1] or auto, got {level!r}")
-        if not (isinstance(gate_s, (int, float)) and gate_s > 0):
-            raise TouchbenchError(f"the gate's gate_s must be a positive number of seconds, got {gate_s!r}")
-        self.idle, self.level, self.gate_s = idle, level, float(gate_s)
-        self.threshold = _threshold(threshold)
-        self.params = {"idle": idle, "level": level, "gate_s": self.gate_s, "threshold": self.threshold}
+    Parameters
+    ----------
+    idle : the idle class (in a stream evaluation, the scheme's ``idle``).
+    level : the peak contact, a fraction of the sensor's value range in [0, 1], under which the gate
+        decides idle; ``auto`` (the default): chosen on the training captures (:meth:`fit`).
+    gate_s : the newest seconds whose peak the gate reads, in (0, 3600) (default 0.25).
+    threshold : the least probability of the class named, in [0, 1] (default 0: always one).
+    """
+
+    name = "gate"
+    Params = GateParams
+    gates = True
 
     def fit(self, captures: Sequence[np.ndarray], labels: Sequence[str], sensor: Any) -> "GateRule":
         """``level: auto``: the level that best separates the peak contact of the idle captures'
@@ -259,16 +382,24 @@ def best_level(peaks: np.ndarray, idle: np.ndarray) -> float:
     return float(cands[int(np.argmax(bal))])
 
 
+class MajorityParams(RuleParams):
+    n: Annotated[int, Strict(), Field(ge=1)] = 5
+    threshold: Fraction = 0.5
+
+
 @RULES.register("majority", description="the most frequent of the last n decisions of max (smoothing)")
 class MajorityRule(MaxRule):
-    name = "majority"
+    """The most frequent of the last ``n`` decisions of ``max`` (ties: the most recent of the tied
+    labels).
 
-    def __init__(self, n: int = 5, threshold: float = 0.5):
-        super().__init__(threshold)
-        if not isinstance(n, int) or isinstance(n, bool) or n < 1:
-            raise TouchbenchError(f"majority's n must be a whole number of decisions >= 1, got {n!r}")
-        self.n = n
-        self.params = {"n": n, "threshold": self.threshold}
+    Parameters
+    ----------
+    n : how many of the latest decisions vote, a whole number >= 1 (default 5; 1: ``max`` itself).
+    threshold : ``max``'s threshold, in [0, 1] (default 0.5).
+    """
+
+    name = "majority"
+    Params = MajorityParams
 
     def start(self, classes: np.ndarray, none_label: str, frame_rate: float, sensor: Any = None) -> None:
         super().start(classes, none_label, frame_rate, sensor)
@@ -281,16 +412,26 @@ class MajorityRule(MaxRule):
         return next(label for label in reversed(self._last) if counts[label] == top)
 
 
+class HmmParams(RuleParams):
+    switch: Fraction = 0.05
+    threshold: Fraction = 0.5
+
+
 @RULES.register("hmm", description="forward filtering over the classes with a sticky transition (smoothing)")
 class HmmRule(MaxRule):
-    name = "hmm"
+    """Forward filtering over the classes: a hidden Markov model whose state stays with probability
+    ``1 - switch`` per hop and moves to each other class with ``switch / (C - 1)``; the most probable
+    class of the filtered posterior, or the none label under ``threshold``.
 
-    def __init__(self, switch: float = 0.05, threshold: float = 0.5):
-        super().__init__(threshold)
-        if not (isinstance(switch, (int, float)) and 0.0 <= float(switch) <= 1.0):
-            raise TouchbenchError(f"hmm's switch is a probability per hop in [0, 1], got {switch!r}")
-        self.switch = float(switch)
-        self.params = {"switch": self.switch, "threshold": self.threshold}
+    Parameters
+    ----------
+    switch : the probability per hop of moving to another class, in [0, 1] (default 0.05; 0: the
+        first decision's class is kept as long as every class has some probability).
+    threshold : the least filtered probability of the class named, in [0, 1] (default 0.5).
+    """
+
+    name = "hmm"
+    Params = HmmParams
 
     def start(self, classes: np.ndarray, none_label: str, frame_rate: float, sensor: Any = None) -> None:
         super().start(classes, none_label, frame_rate, sensor)

@@ -14,7 +14,11 @@ points are artificial; a synthetic scene's are named ``scene``: a person's
 gestures with pauses of rest between them), ``recorded`` (a user's
 recordings labelled frame by frame). ``rules`` lists the decision rules to compare
 (:mod:`touchbench.streams.rules`): one task per fold and method trains once
-and replays every rule.
+and replays every rule. Each rule is checked by its parameter model when
+the protocol is read; a rule whose ``idle`` is not the scheme's, or one
+listed twice, is refused. Caps: a window is at most :data:`MAX_WINDOW_S`
+seconds, an idle stretch (``gap_s``) at most :data:`MAX_GAP_S` (a stretch is
+cut from one idle capture, so it is at most that capture's length too).
 
 ``train_on`` says what the method is trained on: ``windows`` (of the
 recogniser's lengths cut from the training captures, each labelled as its
@@ -37,17 +41,17 @@ from __future__ import annotations
 
 import json
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
 import pandas as pd
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, Strict, field_validator, model_validator
 
-from ...core.errors import TouchbenchError
 from ...core.hashing import canonical_json
 from ...streams.replay import InnerFold, LiveSpec
-from ...streams.rules import make_rule
+from ...streams.rules import RuleError, rule_params
 from ...streams.timeline import recorded_streams, spliced_streams
+from ..errors import _ErrorAt
 from .base import SPLITTERS, DataContext, Fold, SplitError, WrappingParams, WrappingSplitter, check_base, named
 
 if TYPE_CHECKING:
@@ -60,19 +64,29 @@ N_FRAMES = "stream_frames"
 FRAME_RATE = "stream_frame_rate"
 SOURCE = "stream_source"
 
+#: the longest window (seconds) the scheme replays: a touch gesture lasts seconds, and a window is
+#: held in memory for every hop of every stream
+MAX_WINDOW_S = 60.0
+#: the longest idle stretch (seconds) between two spliced captures: a stretch is cut from one idle
+#: capture (at most its length) or, for a subject with none, made of the sensor's rest
+MAX_GAP_S = 60.0
+
+#: a number of seconds the scheme reads: a number (a boolean or a string refused), finite
+_Seconds = Annotated[float, Strict(), Field(allow_inf_nan=False)]
+
 
 class _StreamParams(WrappingParams):
     source: Literal["spliced", "recorded"] = "spliced"
     idle: str = Field(min_length=1)
-    gap_s: tuple[float, float] = (1.0, 3.0)
+    gap_s: tuple[_Seconds, _Seconds] = (1.0, 3.0)
     per_stream: int | None = Field(default=None, ge=1)
-    windows_s: list[float] = Field(default=[0.5, 1.0], min_length=1)
-    hop_s: float = Field(default=0.1, gt=0)
+    windows_s: list[Annotated[_Seconds, Field(gt=0, le=MAX_WINDOW_S)]] = Field(default=[0.5, 1.0], min_length=1)
+    hop_s: _Seconds = Field(default=0.1, gt=0)
     train_on: Literal["windows", "captures", "streams"] = "windows"
-    train_hop_s: float | None = Field(default=None, gt=0, allow_inf_nan=False)
+    train_hop_s: _Seconds | None = Field(default=None, gt=0)
     choose_rule: bool = False
     inner_folds: int | None = Field(default=None, ge=2)
-    max_false_per_min: float = Field(default=5.0, ge=0, allow_inf_nan=False)
+    max_false_per_min: _Seconds = Field(default=5.0, ge=0)
     rules: list[dict[str, Any]] = Field(default=[{"name": "max", "threshold": 0.5}], min_length=1)
     none_label: str = "none"
 
@@ -87,29 +101,48 @@ class _StreamParams(WrappingParams):
     @field_validator("windows_s")
     @classmethod
     def _windows(cls, v: list[float]) -> list[float]:
-        if any(not np.isfinite(w) or w <= 0 for w in v):
-            raise ValueError("window lengths must be positive numbers of seconds")
         return sorted(v)
 
-    @field_validator("rules")
+    @field_validator("rules", mode="before")
     @classmethod
-    def _rules(cls, v: list[dict[str, Any]]) -> list[dict[str, Any]]:
-        for k, r in enumerate(v):
+    def _rules(cls, v: Any) -> Any:
+        """Each rule checked by its parameter model; the first rule in the wrong reported at its
+        fields (every problem of it), as the protocol gives them."""
+        for k, r in enumerate(v if isinstance(v, list) else []):
             try:
-                make_rule(r)
-            except TouchbenchError as e:
-                raise ValueError(f"rules[{k}]: {e}") from None
+                rule_params(r)
+            except RuleError as e:
+                (loc, msg), *more = e.issues
+                raise _ErrorAt((k, *loc), msg, [((k, *at), m) for at, m in more]) from None
         return v
 
     @model_validator(mode="after")
     def _check(self) -> "_StreamParams":
         lo, hi = self.gap_s
-        if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo <= hi):
-            raise ValueError("gap_s is [shortest, longest] idle stretch in seconds, 0 < shortest <= longest")
+        if not 0 < lo <= hi:
+            raise _ErrorAt(("gap_s",), "gap_s is [shortest, longest] idle stretch in seconds, 0 < shortest <= longest")
+        if hi > MAX_GAP_S:
+            raise _ErrorAt(("gap_s", 1), f"an idle stretch is at most {MAX_GAP_S:g} s (the scheme's cap), got {hi:g} s")
         check_base(self.base, "stream")
         if self.none_label == self.idle:
             raise ValueError("none_label must differ from the idle class")
+        self._check_rules()
         return self
+
+    def _check_rules(self) -> None:
+        """Refuse a rule whose idle class is not the scheme's, and a rule twice (the same name and
+        parameters, defaults filled in)."""
+        seen: dict[str, int] = {}
+        for k, r in enumerate(self.rules):
+            cls, params = rule_params(r)
+            if "idle" in cls.Params.model_fields and params.idle != self.idle:  # type: ignore[attr-defined]
+                raise _ErrorAt(("rules", k, "idle"), f"the rule's idle class {params.idle!r} is not the scheme's "  # type: ignore[attr-defined]
+                               f"({self.idle!r})")
+            key = canonical_json({"name": cls.name, **params.model_dump()})
+            if key in seen:
+                raise _ErrorAt(("rules", k), f"the same rule as rules[{seen[key]}] ({cls.name}, the same parameters): "
+                               "each rule is replayed once")
+            seen[key] = k
 
 
 @SPLITTERS.register(
