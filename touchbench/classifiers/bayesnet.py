@@ -36,12 +36,14 @@ of missing values (touchbench features have none).
 
 from __future__ import annotations
 
+from numbers import Integral, Real
 import numpy as np
 from scipy.special import gammaln
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils import check_random_state
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
+from sklearn.utils._param_validation import Interval
 
 
 def _xlogx(c: np.ndarray) -> np.ndarray:
@@ -137,6 +139,11 @@ class K2BayesNetClassifier(ClassifierMixin, BaseEstimator):
     cut_points_ : list of arrays, the MDL cut points of each attribute.
     parents_ : list of lists, each attribute's parents (``-1`` is the class).
     """
+
+    #: checked when a protocol is read: a positive Dirichlet alpha, max_parents at least 0 (the
+    #: search stops at the attributes there are, so no upper bound)
+    _parameter_constraints = {"alpha": [Interval(Real, 0, None, closed="neither")],
+                              "max_parents": [Interval(Integral, 0, None, closed="left")]}
 
     def __init__(self, max_parents=1, alpha=0.5, init_as_naive_bayes=True, random_order=False,
                  random_state=None):

@@ -45,6 +45,7 @@ SAMME's limit 1 - 1/7; test accuracy 67.2%); it is not what the paper ran.
 
 from __future__ import annotations
 
+from numbers import Integral, Real
 import math
 import warnings
 
@@ -53,6 +54,7 @@ from sklearn.base import BaseEstimator, ClassifierMixin, clone
 from sklearn.utils import check_random_state
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
+from sklearn.utils._param_validation import Interval
 
 from ._util import MAX_SEED, WekaRandomForestClassifier, check_sample_weight
 
@@ -82,6 +84,9 @@ class SAMMEClassifier(ClassifierMixin, BaseEstimator):
     stop_reason_ : ``"n_estimators"``, ``"perfect_fit"`` (``err == 0``) or
         ``"too_weak"`` (``err >= 1 - 1/K``).
     """
+
+    #: checked when a protocol is read: the rounds' weight is scaled by a positive learning rate
+    _parameter_constraints = {"learning_rate": [Interval(Real, 0, None, closed="neither")]}
 
     def __init__(self, estimator=None, n_estimators=50, weak_error="train", learning_rate=1.0,
                  random_state=None, n_jobs=1):
@@ -219,6 +224,10 @@ class GausBoostingClassifier(SAMMEClassifier):
     module docstring for what happens when a forest fits its training set
     perfectly (the default case: boosting stops after one forest).
     """
+
+    #: n_trees: the trees of each round's forest, each one built and kept, so bounded as n_estimators
+    _parameter_constraints = {**SAMMEClassifier._parameter_constraints,
+                              "n_trees": [Interval(Integral, 1, 100_000, closed="both")]}
 
     def __init__(self, n_estimators=500, n_trees=1000, max_features="weka", criterion="entropy",
                  weak_error="train", learning_rate=1.0, random_state=None, n_jobs=1):

@@ -33,8 +33,10 @@ Weka models of chapters 3 and 4.
 
 from __future__ import annotations
 
+from numbers import Real
 from sklearn.linear_model import LogisticRegression
 from sklearn.pipeline import Pipeline
+from sklearn.utils._param_validation import Interval
 
 from ._util import (
     DelegatingClassifier,
@@ -60,6 +62,12 @@ class WekaLogisticRegression(DelegatingClassifier):
     n_jobs : kept for the registry's uniform interface (L-BFGS multinomial
         fits are single-threaded in scikit-learn).
     """
+
+    #: checked when a protocol is read: a positive ridge (C = 1 / (2 ridge)), and the max_iter and
+    #: tol of the LogisticRegression it builds (its own constraints)
+    _parameter_constraints = {"ridge": [Interval(Real, 0, None, closed="neither")],
+                              "max_iter": LogisticRegression._parameter_constraints["max_iter"],
+                              "tol": LogisticRegression._parameter_constraints["tol"]}
 
     def __init__(self, ridge=1e-8, max_iter=10000, tol=1e-10, n_jobs=1):
         self.ridge = ridge

@@ -33,6 +33,9 @@ SOURCE = "Jung et al. 2014/2016, as cited in Gaus et al. 2015, section 4"
 class StandardizedSVC(DelegatingClassifier):
     """RBF-kernel C-SVC on standardised inputs (see the module docstring)."""
 
+    #: scikit-learn's own constraints of the SVC it builds (checked when a protocol is read)
+    _parameter_constraints = {k: SVC._parameter_constraints[k] for k in ("C", "kernel", "gamma", "tol")}
+
     def __init__(self, C=1.0, kernel="rbf", gamma="scale", standardize=True, probability=False, tol=1e-3,
                  random_state=None):
         self.C = C

@@ -32,11 +32,13 @@ validation set).
 
 from __future__ import annotations
 
+from numbers import Integral, Real
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils import check_random_state
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
+from sklearn.utils._param_validation import Interval
 
 
 def _sigmoid(z: np.ndarray) -> np.ndarray:
@@ -72,6 +74,13 @@ class WekaMLPClassifier(ClassifierMixin, BaseEstimator):
     normalize_attributes : scale inputs to [-1, 1] (Weka's default, on).
     random_state : seeds the initial weights and the one shuffle.
     """
+
+    #: checked when a protocol is read: a positive learning rate, Weka's momentum in [0, 1], and
+    #: max_epochs at most 100,000 (every epoch is a pass over the training set: beyond that a run
+    #: does not end)
+    _parameter_constraints = {"learning_rate": [Interval(Real, 0, None, closed="neither")],
+                              "momentum": [Interval(Real, 0, 1, closed="both")],
+                              "max_epochs": [Interval(Integral, 0, 100_000, closed="both")]}
 
     def __init__(self, hidden_layers="a", learning_rate=0.3, momentum=0.2, max_epochs=500,
                  normalize_attributes=True, random_state=None):

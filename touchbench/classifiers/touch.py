@@ -27,6 +27,7 @@ docs/research/touch-methods.md has the numbers, including what did not help.
 
 from __future__ import annotations
 
+from numbers import Integral
 from typing import Any
 
 import numpy as np
@@ -35,6 +36,7 @@ from sklearn.ensemble import ExtraTreesClassifier
 from sklearn.model_selection import GroupKFold, LeaveOneGroupOut, StratifiedKFold
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
+from sklearn.utils._param_validation import Interval
 
 from ._util import MAX_SEED, build, seed_int
 from .base import CLASSIFIERS
@@ -59,6 +61,11 @@ class SelectedExtraTrees(ClassifierMixin, BaseEstimator):
 
     #: ``predict`` is ``classes_`` at the argmax of ``predict_proba`` (the run engine asks once for both)
     labels_are_argmax_proba = True
+
+    #: checked when a protocol is read: max_features is the ExtraTreesClassifier's (its own
+    #: constraint), keep None or at least 1 column
+    _parameter_constraints = {"max_features": ExtraTreesClassifier._parameter_constraints["max_features"],
+                              "keep": [None, Interval(Integral, 1, None, closed="left")]}
 
     def __init__(self, n_estimators=500, max_features=0.3, keep=None, n_jobs=1, random_state=None):
         self.n_estimators = n_estimators
@@ -117,6 +124,9 @@ class NestedTunedExtraTrees(ClassifierMixin, BaseEstimator):
 
     #: ``predict`` is ``classes_`` at the argmax of ``predict_proba`` (the run engine asks once for both)
     labels_are_argmax_proba = True
+
+    #: checked when a protocol is read: max_groups_loo at least 0 (only compared with the groups)
+    _parameter_constraints = {"max_groups_loo": [Interval(Integral, 0, None, closed="left")]}
 
     def __init__(self, n_estimators=500, grid_max_features=(0.3, "sqrt"), grid_keep=(None, 150),
                  inner_folds=3, max_groups_loo=0, n_jobs=1, random_state=None):

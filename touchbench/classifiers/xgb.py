@@ -17,11 +17,13 @@ and ``n_jobs`` the model is bit-identical across runs on one machine.
 
 from __future__ import annotations
 
+from numbers import Integral, Real
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.preprocessing import LabelEncoder
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
+from sklearn.utils._param_validation import Interval
 
 from ..core.errors import TouchbenchError
 from ._util import build, check_sample_weight, importable, seed_int
@@ -37,6 +39,17 @@ def xgboost_available() -> bool:
 
 class XGBoostClassifier(ClassifierMixin, BaseEstimator):
     """``xgboost.XGBClassifier`` that accepts and returns string labels."""
+
+    #: XGBoost's documented ranges (checked when a protocol is read): eta in [0, 1], max_depth,
+    #: min_child_weight, lambda at least 0, subsample and colsample_bytree in (0, 1]
+    _parameter_constraints = {
+        "learning_rate": [Interval(Real, 0, 1, closed="both")],
+        "max_depth": [Interval(Integral, 0, None, closed="left")],
+        "min_child_weight": [Interval(Real, 0, None, closed="left")],
+        "reg_lambda": [Interval(Real, 0, None, closed="left")],
+        "subsample": [Interval(Real, 0, 1, closed="right")],
+        "colsample_bytree": [Interval(Real, 0, 1, closed="right")],
+    }
 
     def __init__(self, n_estimators=300, max_depth=4, learning_rate=0.1, subsample=0.8, colsample_bytree=0.8,
                  min_child_weight=1.0, reg_lambda=1.0, tree_method="hist", n_jobs=1, random_state=None):

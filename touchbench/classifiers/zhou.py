@@ -52,6 +52,7 @@ LDA up to rounding).
 
 from __future__ import annotations
 
+from numbers import Integral
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.discriminant_analysis import LinearDiscriminantAnalysis
@@ -63,6 +64,7 @@ from sklearn.tree import DecisionTreeClassifier
 from sklearn.utils import check_random_state
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
+from sklearn.utils._param_validation import Interval
 
 from ._util import MAX_SEED, DelegatingClassifier, SampleStandardScaler, build
 from .base import CLASSIFIERS
@@ -148,6 +150,12 @@ class MatlabSVMClassifier(ClassifierMixin, BaseEstimator):
     posterior).
     """
 
+    #: checked when a protocol is read: box_constraint and tol are the binary SVCs' C and tol (their
+    #: own constraints); polynomial_order a positive whole number, as MATLAB's PolynomialOrder
+    _parameter_constraints = {"box_constraint": SVC._parameter_constraints["C"],
+                              "tol": SVC._parameter_constraints["tol"],
+                              "polynomial_order": [Interval(Integral, 1, None, closed="left")]}
+
     def __init__(self, kernel="linear", polynomial_order=2, box_constraint=1.0, kernel_scale="auto",
                  standardize=True, tol=1e-3, random_state=None):
         self.kernel = kernel
@@ -220,6 +228,11 @@ class MatlabKNNClassifier(DelegatingClassifier):
     """Classification Learner's KNN presets: Euclidean distance on
     standardised inputs; ``distance_weight`` ``"equal"`` (Medium KNN),
     ``"squaredinverse"`` (Weighted KNN) or ``"inverse"``."""
+
+    #: checked when a protocol is read: the KNeighborsClassifier's own n_jobs, and its n_neighbors
+    #: bound (at least 1) without its None (a KNN classifier needs a K)
+    _parameter_constraints = {"n_neighbors": [Interval(Integral, 1, None, closed="left")],
+                              "n_jobs": KNeighborsClassifier._parameter_constraints["n_jobs"]}
 
     def __init__(self, n_neighbors=10, distance_weight="equal", standardize=True, n_jobs=1):
         self.n_neighbors = n_neighbors

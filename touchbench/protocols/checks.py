@@ -11,9 +11,11 @@ import inspect
 import itertools
 import math
 import re
+from numbers import Integral, Number, Real
 from typing import Any, Collection
 
 from pydantic import ValidationError
+from sklearn.utils._param_validation import Interval, make_constraint
 
 from ..catalog import dataset_ref_problem, format_ref_problem
 from ..classifiers import CLASSIFIERS, ParamError, check_classifier_params
@@ -293,6 +295,7 @@ def _constraint_failures(est: Any) -> dict[tuple[str, str], str]:
         constraints = getattr(part, "_parameter_constraints", None)
         if not callable(getattr(part, "_validate_params", None)) or not isinstance(constraints, dict):
             continue
+        values = part.get_params(deep=False)
         for k, c in constraints.items():
             probe = copy.copy(part)
             probe._parameter_constraints = {k: c}
@@ -300,7 +303,24 @@ def _constraint_failures(est: Any) -> dict[tuple[str, str], str]:
                 probe._validate_params()
             except (ValueError, TypeError) as e:
                 out[(path, k)] = str(e)
+            else:
+                if isinstance(values.get(k), bool) and _number_only(c, values[k]):
+                    out[(path, k)] = (f"The {k!r} parameter of {type(part).__name__} is a number, got "
+                                      f"{values[k]!r}: a boolean is not read as a number")
     return out
+
+
+#: the types whose instances a boolean is (Python's bool is an int): allowed only as a number
+_NUMBER_TYPES = (int, float, Integral, Real, Number)
+
+
+def _number_only(constraints: Any, value: bool) -> bool:
+    """Whether the boolean ``value`` meets scikit-learn's ``constraints`` only as a number (an
+    ``Interval`` or a numeric type), none of them saying a boolean (``"boolean"``, ``"verbose"``)."""
+    if not isinstance(constraints, list):
+        return False
+    met = [c for c in map(make_constraint, constraints) if c.is_satisfied_by(value)]
+    return bool(met) and all(isinstance(c, Interval) or getattr(c, "type", None) in _NUMBER_TYPES for c in met)
 
 
 def _param_loc(at: tuple, params: dict[str, Any], message: str) -> tuple:
