@@ -36,7 +36,8 @@ from ..reports.audit import write_audit
 from ..reports.rendering import write_text
 from ..results.manifest import LoadSampler, load_average, platform_info
 from .profiles import PROFILES, apply_profile, paper_protocols
-from .report import ProtocolRun, audit_dir, write_report
+from .comparisons import audit_dir
+from .report import ProtocolRun, write_report
 
 __all__ = ["reproduce"]
 
