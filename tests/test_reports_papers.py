@@ -314,7 +314,7 @@ expected:
     try:
         path = reproduce("t", tmp_path / "res", protocols_dir=d, echo=lambda s: None)
         assert "This invocation took" in path.read_text()
-        assert (tmp_path / "res" / "t" / "invocation.json").is_file()
+        assert len((tmp_path / "res" / "t" / "invocations.jsonl").read_text().splitlines()) == 1
         # a second run computes nothing and reports the timing of the run that did
         path = reproduce("t", tmp_path / "res", protocols_dir=d, echo=lambda s: None)
     finally:

@@ -27,6 +27,7 @@ from ..scenes import load_scene
 from .causes import KIND_SHORT, cause_cell, kind_counts
 from .comparisons import audit_section, fmt, other_sections, read_run, rel, seed_spread
 from .profiles import Profile, apply_profile
+from .timing import timing_text
 
 __all__ = ["PAPERS", "ProtocolRun", "write_report"]
 
@@ -263,7 +264,7 @@ def write_report(runs: list[ProtocolRun], profile: Profile, path: Path, *, timin
     head += [
         "",
         f"**Time:** {t.compute / 60:.1f} min of run time summed over the protocols' results (every session that "
-        f"computed them)." + (" " + _timing_text(timing) if timing else ""),
+        f"computed them)." + (" " + timing_text(timing) if timing else ""),
         "",
         "Every number is computed by the protocol named in its section, from the method's parameters as the "
         "protocol file gives them (with the profile's caps); no method is tuned to a paper's number.",
@@ -314,37 +315,3 @@ def _differences(t: _Tally) -> list[str]:
     if t.problems:
         head += ["Not run or failed:", ""] + [f"- {f}" for f in t.problems] + [""]
     return head
-
-
-def _timing_text(t: dict[str, Any]) -> str:
-    who = (f"The invocation that computed them (finished {t.get('finished_at')}, {t.get('tasks_ran')} tasks)"
-           if t.get("reused") else "This invocation")
-    text = f"{who} took {t['wall_seconds'] / 60:.1f} min of wall time, dataset loading and scene generation included"
-    cpus = t.get("cpus") or 1
-    if t.get("cpu_seconds") is not None:
-        text += (f", and {t['cpu_seconds'] / 60:.1f} min of CPU time (user + system, worker processes included): "
-                 f"{t['cpu_seconds'] / 60 / cpus:.1f} min per CPU, the wall time to expect on an otherwise idle "
-                 f"{cpus}-CPU machine")
-    return text + "." + _conditions_text(t, cpus)
-
-
-def _conditions_text(t: dict[str, Any], cpus: int) -> str:
-    """The run's conditions: the load average sampled during the run (else at its ends), peak memory,
-    the machine."""
-    out = ""
-    sampled, load = t.get("load_sampled"), t.get("load") or []
-    if sampled:
-        out += (f" The machine's 1-minute load average, sampled every {sampled['interval_s']:g} s during the run "
-                f"({sampled['n']} samples), was {sampled['min']:.1f} to {sampled['max']:.1f} (median "
-                f"{sampled['median']:.1f})" + (f": above {cpus}, other jobs shared the CPUs." if sampled["max"] > cpus
-                                               else "."))
-    elif len(load) == 2 and None not in load:
-        out += (f" The machine's 1-minute load average was {load[0]:.1f} at the start and {load[1]:.1f} at the end"
-                + (f" (above {cpus}: other jobs shared the CPUs)." if max(load) > cpus else "."))
-    if t.get("peak_rss_mb") is not None:
-        out += f" Peak memory (resident, the largest process): {t['peak_rss_mb']:.0f} MiB."
-    m = t.get("machine") or {}
-    if m:
-        out += (f" Machine: {m.get('cpu_model') or m.get('processor') or m.get('machine')}, {m.get('cpu_count')} CPUs "
-                f"({m.get('usable_cpus')} usable), {m.get('platform')}, Python {m.get('python')}.")
-    return out
