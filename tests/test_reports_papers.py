@@ -736,7 +736,7 @@ def test_the_report_gives_the_load_sampled_during_the_run_peak_memory_and_the_ma
     assert ("load average, sampled every 30 s during the run (21 samples), was 1.8 to 18.2 (median 9.5): above 2, "
             "other jobs shared the CPUs.") in text
     assert "at the start and" not in text
-    assert "Peak memory (resident, the largest process): 2458 MiB." in text
+    assert "Peak memory (resident, the largest process, read after the report was written): 2458 MiB." in text
     assert "Machine: AMD EPYC, 2 CPUs (2 usable), Linux-6, Python 3.11.7." in text
 
 
