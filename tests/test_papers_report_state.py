@@ -17,7 +17,6 @@ from touchbench.core.paths import REPO_ROOT
 from touchbench.papers.causes import cause_cell
 from touchbench.papers.profiles import PROFILES, paper_protocols
 from touchbench.papers.report import PAPERS, ProtocolRun, write_report
-from touchbench.papers.timing import LOG, folder_timing, record_invocation, timing_text
 from touchbench.protocols.expected import Cause
 from touchbench.protocols.library import PAPERS_DIR
 from touchbench.protocols.loading import load_protocol
@@ -200,6 +199,8 @@ def _timing(wall, cpu, peak, tasks, lo, hi, end):
 
 
 def test_the_time_line_covers_every_invocation_into_the_folder(tmp_path):
+    from touchbench.papers.timing import LOG, folder_timing, record_invocation, timing_text
+
     record_invocation(tmp_path, _timing(120.0, 180.0, 400.0, 10, 0.5, 1.5, "2026-01-01T10:00:00+00:00"))
     record_invocation(tmp_path, _timing(240.0, 420.0, 596.0, 5, 1.0, 3.0, "2026-01-01T11:00:00+00:00"))
     assert len((tmp_path / LOG).read_text().splitlines()) == 2
@@ -233,6 +234,7 @@ expected:
 def test_only_invocations_into_one_folder_are_all_counted_and_peak_memory_is_read_after_the_report(
         tmp_path, monkeypatch):
     import touchbench.papers.reproduce as R
+    from touchbench.papers.timing import LOG
 
     d = tmp_path / "papers"
     _tiny_papers(d)
