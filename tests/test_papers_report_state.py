@@ -213,6 +213,10 @@ def test_the_time_line_covers_every_invocation_into_the_folder(tmp_path):
     assert "10.0 min of CPU time" in text and "5.0 min per CPU" in text
     assert "(6 samples), was 0.5 to 3.0: above 2" in text
     assert "the largest of the invocations): 596 MiB." in text
+    # a record an earlier version left (its last full invocation) counts first: 60 s more, 7.0 min in all
+    (tmp_path / "invocation.json").write_text('{"wall_seconds": 60.0, "cpu_seconds": 60.0, "tasks_ran": 3}')
+    t = folder_timing(tmp_path, {"wall_seconds": 1.0, "tasks_ran": 0})
+    assert (t["invocations"], t["wall_seconds"], t["cpu_seconds"], t["tasks_ran"]) == (3, 420.0, 660.0, 18)
 
 
 def _tiny_papers(d: Path) -> None:

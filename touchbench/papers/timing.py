@@ -31,19 +31,20 @@ def record_invocation(folder: Path, timing: dict[str, Any]) -> None:
 
 
 def _entries(folder: Path) -> list[dict[str, Any]]:
-    """The invocations recorded in ``folder`` (unreadable lines skipped), else the legacy record."""
+    """The invocations recorded in ``folder``, in order: the legacy record first (an earlier version's
+    last full invocation, where there is one), then the log's (unreadable lines skipped)."""
     out = []
+    if (folder / _LEGACY).is_file():
+        try:
+            out.append(json.loads((folder / _LEGACY).read_text(encoding="utf-8")))
+        except (OSError, ValueError):
+            pass
     if (folder / LOG).is_file():
         for line in (folder / LOG).read_text(encoding="utf-8").splitlines():
             try:
                 out.append(json.loads(line))
             except ValueError:
                 continue
-    elif (folder / _LEGACY).is_file():
-        try:
-            out.append(json.loads((folder / _LEGACY).read_text(encoding="utf-8")))
-        except (OSError, ValueError):
-            pass
     return [e for e in out if isinstance(e, dict) and "wall_seconds" in e]
 
 
