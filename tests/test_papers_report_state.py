@@ -77,7 +77,9 @@ def test_the_kind_follows_the_rule_and_the_cell_lists_the_excluded_apart():
                     "(`touchbench run a.yaml`: 43.0); note (docs/n.md: 55)")
     # with a tolerance of 15 the far run is within too: nothing is excluded (the model refuses that kind
     # in a protocol; the cell derives the kind from the evidence)
-    assert cause_cell(False, cause, None, 40.0, 15.0)[0] == "unexplained"
+    assert cause_cell(False, cause, None, 40.0, 15.0) == (
+        "unexplained", "**unexplained:** tried: near (`touchbench run a.yaml`: 43.0); far (`touchbench run b.yaml`: "
+                       "52.5); note (docs/n.md: 55)")
 
 
 def _row_of(proto, r):

@@ -29,17 +29,17 @@ def _tried(r: RuledOut) -> str:
     return f"{r.tried} ({where}: {row}{r.gave})"
 
 
-def _text(cause: Cause | None, scene: str | None, value: float, tolerance: float) -> str:
+def _text(kind: str, cause: Cause | None, scene: str | None, value: float, tolerance: float) -> str:
     if cause is None:
         return f"synthetic data of scene {scene}" if scene else "no cause known"
-    if cause.kind == "measured":
+    if kind == "measured":
         return f"{cause.text}; `{cause.command}` gave: {cause.output}"
     parts = []
-    if cause.kind == "ruled_out":
+    if kind == "ruled_out":
         parts.append("cause open" + (f", {cause.text}" if cause.text else ""))
     elif cause.text:
         parts.append(cause.text)
-    if scene and cause.kind == "unexplained":
+    if scene and kind == "unexplained":
         parts.append(f"synthetic data of scene {scene}")
     excluded = [r for r in cause.ruled_out if r.excludes(value, tolerance)]
     others = [r for r in cause.ruled_out if not r.excludes(value, tolerance)]
@@ -61,7 +61,7 @@ def cause_cell(within: bool | None, cause: Cause | None, scene: str | None, valu
     if within:
         return None, f"reproduced on scene {scene}" if scene else "reproduced"
     kind = "unexplained" if cause is None else kind_by_rule(cause, value, tolerance)
-    text = f"**{KIND_LABELS[kind]}:** {_text(cause, scene, value, tolerance)}"
+    text = f"**{KIND_LABELS[kind]}:** {_text(kind, cause, scene, value, tolerance)}"
     return kind, text.replace("|", "\\|")
 
 
