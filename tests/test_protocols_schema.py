@@ -261,11 +261,13 @@ def test_a_cause_of_each_kind_is_kept():
     r = parse_protocol(BASE + RESULT + measured, "protocols/x.yaml").expected.results[0]
     assert (r.cause.kind, r.cause.text, r.cause.command, r.cause.output) == (
         "measured", "folds", "touchbench run p.yaml", "60.0")
+    # ruled out: the grouped folds' run of this row gave 44.3, 5.7 from the paper's 50 (tolerance 3)
     ruled = ("      cause: {kind: ruled_out, text: the features, ruled_out: [{tried: grouped folds, "
-             "command: touchbench run g.yaml, gave: '44.3'}, {tried: Weka, source: docs/research/w.md, gave: '49.0'}]}\n")
+             "command: touchbench run g.yaml, row: 44.3, gave: '44.3'}, {tried: Weka, source: docs/research/w.md, "
+             "gave: '49.0'}]}\n")
     r = parse_protocol(BASE + RESULT + ruled, "protocols/x.yaml").expected.results[0]
-    assert [(t.tried, t.command, t.source, t.gave) for t in r.cause.ruled_out] == [
-        ("grouped folds", "touchbench run g.yaml", None, "44.3"), ("Weka", None, "docs/research/w.md", "49.0")]
+    assert [(t.tried, t.command, t.source, t.row, t.gave) for t in r.cause.ruled_out] == [
+        ("grouped folds", "touchbench run g.yaml", None, 44.3, "44.3"), ("Weka", None, "docs/research/w.md", None, "49.0")]
     r = parse_protocol(BASE + RESULT + "      cause: {kind: unexplained}\n", "protocols/x.yaml").expected.results[0]
     assert (r.cause.kind, r.cause.text, r.cause.ruled_out) == ("unexplained", None, [])
     assert parse_protocol(BASE + RESULT, "protocols/x.yaml").expected.results[0].cause is None

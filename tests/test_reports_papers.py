@@ -314,7 +314,7 @@ expected:
     try:
         path = reproduce("t", tmp_path / "res", protocols_dir=d, echo=lambda s: None)
         assert "This invocation took" in path.read_text()
-        assert (tmp_path / "res" / "t" / "invocation.json").is_file()
+        assert len((tmp_path / "res" / "t" / "invocations.jsonl").read_text().splitlines()) == 1
         # a second run computes nothing and reports the timing of the run that did
         path = reproduce("t", tmp_path / "res", protocols_dir=d, echo=lambda s: None)
     finally:
@@ -358,8 +358,8 @@ def test_report_shows_the_cnn_leakage_audit_and_which_variant_reaches_the_paper(
 
 
 def _cause_protocol(tmp_path: Path, dataset: str) -> Path:
-    # five paper numbers: SD within; BMH a measured cause; MSD a cause ruled out to one open; SMMHH unexplained
-    # with what was tried; LBPTOP no cause at all
+    # five paper numbers: SD within; BMH a measured cause; MSD a cause ruled out to one open (a run of the row
+    # excluded grouped folds); SMMHH unexplained with what was tried (no run of the row); LBPTOP no cause at all
     return _write(tmp_path / "gaus-causes.yaml", f"""
 name: gaus-causes
 dataset: {dataset}
@@ -374,7 +374,7 @@ expected:
        cause: {{kind: measured, text: "folds | subjects", command: "touchbench run readings.yaml", output: "100.0"}}}}
     - {{features: [msd], classifier: gaus-rf, value: 100, source: "T5 MSD",
        cause: {{kind: ruled_out, text: "the feature values remain",
-               ruled_out: [{{tried: "grouped folds", command: "touchbench run g.yaml", gave: "60.0"}},
+               ruled_out: [{{tried: "grouped folds", command: "touchbench run g.yaml", row: 60, gave: "60.0"}},
                            {{tried: "Weka's forest", source: "docs/research/w.md", gave: "49.0"}}]}}}}
     - {{features: [smmhh], classifier: gaus-rf, value: 100, source: "T5 SMMHH",
        cause: {{kind: unexplained, ruled_out: [{{tried: "1000 trees", command: "touchbench run e.yaml", gave: "68.2"}}]}}}}
@@ -402,8 +402,8 @@ def test_report_gives_each_paper_number_its_cause_and_its_kind(tmp_path):
     assert (f"| T5 BMH | bmh | gaus-rf {miss} **measured:** folds \\| subjects; `touchbench run readings.yaml` "
             "gave: 100.0 |") in text
     assert (f"| T5 MSD | msd | gaus-rf {miss} **ruled out:** cause open, the feature values remain; ruled out: "
-            "grouped folds (`touchbench run g.yaml`: 60.0); Weka's forest (docs/research/w.md: 49.0) |") in text
-    assert (f"| T5 SMMHH | smmhh | gaus-rf {miss} **unexplained:** ruled out: 1000 trees "
+            "grouped folds (`touchbench run g.yaml`: 60.0); also tried: Weka's forest (docs/research/w.md: 49.0) |") in text
+    assert (f"| T5 SMMHH | smmhh | gaus-rf {miss} **unexplained:** tried: 1000 trees "
             "(`touchbench run e.yaml`: 68.2) |") in text
     assert f"| T5 LBPTOP | lbptop | gaus-rf {miss} **unexplained:** no cause known |" in text
     # 4 numbers outside tolerance: BMH measured, MSD ruled out, SMMHH and LBPTOP unexplained
@@ -418,7 +418,7 @@ def test_report_gives_each_paper_number_its_cause_and_its_kind(tmp_path):
     # on a scene: within is reproduced on it; a cause keeps its kind; an unexplained number names the scene
     assert "| T5 SD | sd | gaus-rf | 100.00 | 100.00 | +0.00 | 5 | yes | reproduced on scene tiny |" in text
     assert "**NO** | **measured:** folds \\| subjects; `touchbench run readings.yaml` gave: 100.0 |" in text
-    assert (f"| T5 SMMHH | smmhh | gaus-rf {miss} **unexplained:** synthetic data of scene tiny; ruled out: "
+    assert (f"| T5 SMMHH | smmhh | gaus-rf {miss} **unexplained:** synthetic data of scene tiny; tried: "
             "1000 trees (`touchbench run e.yaml`: 68.2) |") in text
     assert f"| T5 LBPTOP | lbptop | gaus-rf {miss} **unexplained:** synthetic data of scene tiny |" in text
 
@@ -447,7 +447,8 @@ def test_every_cause_outside_tolerance_is_printed_with_its_kind(tmp_path, data):
     # a measured cause carries its command and what it gave; each thing ruled out its command or source
     measured = [c for _, c in cells if c.startswith("**measured:**")]
     assert measured and all(re.search(r"`touchbench [^`]+` gave: \S", c) for c in measured)
-    tried = [t for _, c in cells if "ruled out: " in c for t in c.split("ruled out: ", 1)[1].split("; ")]
+    tried = [t for _, c in cells for part in re.split(r"(?:ruled out|tried): ", c)[1:]
+             for t in part.removesuffix("; also ").split("; ")]
     assert len(tried) == 3
     assert all(re.fullmatch(r"[^(]+ \((`touchbench [^`]+`|docs/[\w/.-]+): [^)]+\)", t) for t in tried), tried
 
@@ -735,7 +736,7 @@ def test_the_report_gives_the_load_sampled_during_the_run_peak_memory_and_the_ma
     assert ("load average, sampled every 30 s during the run (21 samples), was 1.8 to 18.2 (median 9.5): above 2, "
             "other jobs shared the CPUs.") in text
     assert "at the start and" not in text
-    assert "Peak memory (resident, the largest process): 2458 MiB." in text
+    assert "Peak memory (resident, the largest process, read after the report was written): 2458 MiB." in text
     assert "Machine: AMD EPYC, 2 CPUs (2 usable), Linux-6, Python 3.11.7." in text
 
 

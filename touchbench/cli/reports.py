@@ -359,7 +359,8 @@ def papers_list(profile: str, as_json: bool) -> None:
                    "whose results an earlier run left in OUT.")
 @jobs_option
 @click.option("--report", "report_path", default=None, type=click.Path(dir_okay=False),
-              help="Where to write the report [default: OUT/REPORT.md].")
+              help="Where to write the report [default: OUT/REPORT.md]; docs/papers-report.md is the committed report "
+                   "of the last full quick-profile run (with its date, commit and load).")
 @click.option("--progress/--no-progress", default=None, help="Progress bars [default: on a terminal only].")
 @click.option("--audit", is_flag=True, help="Also run the leakage audit of the protocols that declare one "
                                            "(OUT/<profile>/<protocol>-audit/); the report shows it.")

@@ -16,9 +16,7 @@ The profiles are in :mod:`touchbench.papers.profiles`, the report in
 from __future__ import annotations
 
 import json
-import math
 import os
-import resource
 import time
 from datetime import datetime, timezone
 from pathlib import Path
@@ -33,10 +31,11 @@ from ..engine.runner import run_protocol
 from ..protocols.loading import load_protocol
 from ..protocols.schema import resolve_dataset_ref
 from ..reports.audit import write_audit
-from ..reports.rendering import write_text
-from ..results.manifest import LoadSampler, load_average, platform_info
+from ..results.manifest import LoadSampler, platform_info
 from .profiles import PROFILES, apply_profile, paper_protocols
-from .report import ProtocolRun, audit_dir, write_report
+from .comparisons import audit_dir
+from .report import ProtocolRun, write_report
+from .timing import cpu_seconds, folder_timing, load_now, peak_rss_mb, record_invocation
 
 __all__ = ["reproduce"]
 
@@ -65,8 +64,8 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
     out = Path(out)
     if jobs in (-1, 0):
         jobs = os.cpu_count() or 1
-    cpu0 = _cpu_seconds()
-    load0 = _load()
+    cpu0 = cpu_seconds()
+    load0 = load_now()
     planned = _planned_protocols(protocols_dir, prof)
     chosen = _chosen(planned, only)
     runs: list[ProtocolRun] = []
@@ -81,15 +80,19 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
             runs.append(r)
         wall = time.perf_counter() - t_all
         _stop_workers()
-    timing = {"wall_seconds": wall, "cpu_seconds": _cpu_seconds() - cpu0, "load": [load0, _load()], "jobs": jobs,
-              "load_sampled": sampler.summary(), "peak_rss_mb": _peak_rss_mb(), "machine": platform_info(),
-              "cpus": os.cpu_count(), "tasks_ran": sum(r.n_ran for r in runs),
-              "protocols": len(runs), "finished_at": datetime.now(timezone.utc).isoformat(timespec="seconds")}
-    timing = _kept_timing(timing, out / profile / "invocation.json", subset=bool(only))
+    timing = {"wall_seconds": wall, "cpu_seconds": cpu_seconds() - cpu0, "load": [load0, load_now()], "jobs": jobs,
+              "load_sampled": sampler.summary(), "machine": platform_info(), "cpus": os.cpu_count(),
+              "tasks_ran": sum(r.n_ran for r in runs), "protocols": len(runs), "only": list(only or []),
+              "finished_at": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     if only:
         runs = _with_earlier_results(runs, planned, out / profile)
     report_path = Path(report) if report is not None else out / "REPORT.md"
-    write_report(runs, prof, report_path, timing=timing)
+    folder = out / profile
+    write_report(runs, prof, report_path, timing=folder_timing(folder, timing))
+    timing["peak_rss_mb"] = peak_rss_mb()  # after the report: its memory counts
+    if timing["tasks_ran"]:
+        record_invocation(folder, timing)
+    write_report(runs, prof, report_path, timing=folder_timing(folder, timing))
     return report_path
 
 
@@ -192,38 +195,6 @@ def _run_one(proto, r: ProtocolRun, dataset, *, echo: Callable[[str], None], job
                       window_seconds=proto.audit.window_seconds, tune=proto.audit.tune,
                       variants=tuple(proto.audit.variants), progress=progress, **audit)
         write_audit(a.table, audit_dir(r.out), a.published, a.notes, title=f"Leakage audit: {proto.name}")
-
-
-def _kept_timing(timing: dict, timing_path: Path, *, subset: bool) -> dict:
-    """The timing the report shows: this invocation's, written to ``timing_path``, when it ran tasks of
-    every protocol; else the one recorded there by the run that computed them (if any)."""
-    if timing["tasks_ran"] and not subset:
-        write_text(timing_path, json.dumps(timing, indent=2) + "\n")
-    elif timing_path.is_file():  # nothing (or only a subset) computed now: report the run that computed them
-        try:
-            timing = {**json.loads(timing_path.read_text()), "reused": True}
-        except (OSError, ValueError):
-            pass
-    return timing
-
-
-def _cpu_seconds() -> float:
-    """User + system CPU seconds of this process and its finished child processes."""
-    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
-
-
-def _peak_rss_mb() -> float:
-    """The largest resident memory of this process or of any of its finished child processes, MiB
-    (Linux reports ``ru_maxrss`` in KiB)."""
-    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return max(me.ru_maxrss, kids.ru_maxrss) / 1024.0
-
-
-def _load() -> float | None:
-    """The load average for the timing record (JSON: None where the system keeps none)."""
-    value = load_average()
-    return None if math.isnan(value) else value
 
 
 def _stop_workers() -> None:

@@ -28,15 +28,27 @@ def _touchbench_command(loc: tuple, command: str | None) -> None:
                             "or gave)")
 
 
+#: The rule that tells a ruled-out cause from an unexplained one, as REPORT.md prints it.
+KIND_RULE = (
+    "A number outside tolerance is *measured* when a command isolates its cause (the command and what it gave); "
+    "*ruled out* when at least one candidate was run on this very row (a touchbench command that runs the row's "
+    "features and classifier with the candidate changed; `row` gives what the row gave) and left the row outside "
+    "tolerance: that candidate is excluded and the cause is open; *unexplained* otherwise: nothing was run on "
+    "this row, or only on other rows, in a note, or with a result within tolerance (a candidate, not excluded).")
+
+
 class RuledOut(_Model):
-    """One candidate cause tried and excluded: what was tried, where to see it (the ``touchbench``
-    command that runs it, or else the ``source`` that reports it, such as a note under
-    ``docs/research/``) and what it gave."""
+    """One candidate cause tried: what was tried, where to see it (the ``touchbench`` command that
+    runs it, or else the ``source`` that reports it, such as a note under ``docs/research/``) and
+    what it gave. ``row``: this row's accuracy (%) in the command's own run of this row with the
+    candidate changed (of several settings, the one nearest the paper's number); a candidate whose
+    ``row`` is outside the row's tolerance is excluded (:data:`KIND_RULE`)."""
 
     tried: str = Field(min_length=1)
     command: str | None = Field(default=None, min_length=1)
     source: str | None = Field(default=None, min_length=1)
     gave: str = Field(min_length=1)
+    row: float | None = None
 
     @model_validator(mode="after")
     def _where(self) -> "RuledOut":
@@ -44,7 +56,15 @@ class RuledOut(_Model):
             raise _ErrorAt(("command",), "give one of command (the touchbench command that tried it) or source "
                                          "(where it is reported)")
         _touchbench_command(("command",), self.command)
+        if self.row is not None and self.command is None:
+            raise _ErrorAt(("row",), "row is what a run of this row gave: it needs the command that ran it "
+                                     "(a source reports, it does not run the row)")
         return self
+
+    def excludes(self, value: float, tolerance: float) -> bool:
+        """Whether this candidate is excluded for a paper number ``value``: a run of the row that left
+        it outside ``tolerance``."""
+        return self.row is not None and abs(self.row - value) > tolerance
 
 
 class Cause(_Model):
@@ -52,9 +72,11 @@ class Cause(_Model):
 
     - ``measured``: ``text`` is the cause, ``command`` the ``touchbench`` command that isolates it
       and ``output`` what it gave;
-    - ``ruled_out``: the cause is open; ``ruled_out`` lists the candidates excluded (at least
-      one), ``text`` what is left;
-    - ``unexplained``: no cause known; ``text`` and ``ruled_out`` may say what is.
+    - ``ruled_out``: the cause is open; ``ruled_out`` lists the candidates tried, at least one of
+      them excluded by a run of this row (:data:`KIND_RULE`, checked by :class:`Expected`), ``text``
+      what is left;
+    - ``unexplained``: no cause known; no candidate excluded by a run of this row; ``text`` and
+      ``ruled_out`` may say what was tried.
     """
 
     kind: Literal["measured", "ruled_out", "unexplained"]
@@ -211,4 +233,30 @@ class Expected(_Model):
     def _not_empty(self) -> "Expected":
         if not (self.results or self.standard_deviations or self.confusions or self.best_parameters):
             raise ValueError("no paper numbers: give results, standard_deviations, confusions or best_parameters")
+        for i, r in enumerate(self.results):
+            _kind_follows_the_rule(i, r, self.tolerance if r.tolerance is None else r.tolerance)
         return self
+
+
+def kind_by_rule(cause: Cause, value: float, tolerance: float) -> str:
+    """The kind :data:`KIND_RULE` gives ``cause`` of a paper number ``value``: measured as declared,
+    else ruled out when a candidate is excluded by a run of the row, else unexplained."""
+    if cause.kind == "measured":
+        return "measured"
+    return "ruled_out" if any(t.excludes(value, tolerance) for t in cause.ruled_out) else "unexplained"
+
+
+def _kind_follows_the_rule(i: int, r: ExpectedResult, tolerance: float) -> None:
+    """A declared kind other than the rule's is refused, naming the field and why."""
+    if r.cause is None:
+        return
+    kind = kind_by_rule(r.cause, r.value, tolerance)
+    if kind == r.cause.kind:
+        return
+    if kind == "ruled_out":
+        why = ("a candidate is excluded by a run of this row (a ruled_out entry whose row is more than "
+               f"{tolerance:g} points from {r.value:g}): the cause is ruled_out")
+    else:
+        why = ("no candidate is excluded by a run of this row (no ruled_out entry with a command and a row "
+               f"more than {tolerance:g} points from {r.value:g}): the cause is unexplained")
+    raise _ErrorAt(("results", i, "cause", "kind"), f"kind {r.cause.kind}, but {why}")

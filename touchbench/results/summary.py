@@ -92,12 +92,10 @@ def check_expected(expected, scores: pd.DataFrame, predictions: pd.DataFrame | N
             sel = by_label if not by_label.empty else sel[sel["classifier_name"] == r.classifier]
         if r.group is not None and not sel.empty:
             sel = sel[sel["fold_group"] == r.group]
-        observed = None
-        if not sel.empty:
-            if expected.aggregate == "pooled" and predictions is not None:
-                observed = 100.0 * _pooled_metric(predictions[predictions["task_id"].isin(sel["task_id"])], metric)
-            else:
-                observed = 100.0 * float(sel[metric].mean())
+        observed = None if sel.empty else _observed(sel, predictions, metric, expected.aggregate)
+        seeds = []  # one value per repetition (seed), where there are several
+        if "repetition" in sel and sel["repetition"].nunique() > 1:
+            seeds = [_observed(g, predictions, metric, expected.aggregate) for _, g in sel.groupby("repetition")]
         out.append({
             "features": named,  # as the results name the method's input
             "classifier": r.classifier,
@@ -110,6 +108,14 @@ def check_expected(expected, scores: pd.DataFrame, predictions: pd.DataFrame | N
             "tolerance": tol,
             "within": None if observed is None else bool(abs(observed - r.value) <= tol),
             "n_folds": int(len(sel)),
+            "seeds": seeds,
             "source": r.source or expected.source,
         })
     return out
+
+
+def _observed(sel: pd.DataFrame, predictions: pd.DataFrame | None, metric: str, aggregate: str) -> float:
+    """The metric of the tasks ``sel`` in percent: pooled over their predictions, or the mean of theirs."""
+    if aggregate == "pooled" and predictions is not None:
+        return 100.0 * _pooled_metric(predictions[predictions["task_id"].isin(sel["task_id"])], metric)
+    return 100.0 * float(sel[metric].mean())
