@@ -35,8 +35,9 @@ their variation. One estimator serves both (float64):
 
 **Degenerate input** (defined, never from resampling noise), in this order:
 
-- a captures or replicates row or column without a scored cell (in ``a`` and
-  ``b`` both) is left out first; no scored cell left: mean and interval NaN;
+- a capture (row) neither matrix scored, and a replicate (column) that
+  scored nothing (paired: in neither matrix), are left out first; no scored
+  cell left: mean and interval NaN;
 - fewer than two captures: the mean, no interval (NaN): resampling one
   capture cannot show how the captures vary, the interval's main part;
 - every resample's statistic is the mean, exactly, when the scored cells of

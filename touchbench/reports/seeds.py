@@ -125,7 +125,8 @@ def seed_fields(g: pd.DataFrame, f: pd.DataFrame, preds: pd.DataFrame | None, me
     """A leaderboard row's fields for a method with several seeds on its one test set (``g``: its
     scores, ``f``: its fold values): the spread of its per-seed accuracies (``n_seeds``,
     ``accuracy_sd``, ``seed_min``, ``seed_max``) and the pigeonhole interval over captures and seeds
-    (``ci_low``, ``ci_high``, ``ci_method``); ``{}`` otherwise (the table keeps its own)."""
+    (``ci_low``, ``ci_high``, ``ci_method``; where it has one: two or more captures); ``{}`` otherwise
+    (the table keeps its own)."""
     if len(f) != 1:
         return {}
     per_seed = g.groupby(["repetition", "seed"])["accuracy"].mean().to_numpy(np.float64)
