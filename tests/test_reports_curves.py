@@ -15,7 +15,7 @@ from scipy import stats
 
 from touchbench.cli.main import cli
 from touchbench.reports.curve_table import size_label, size_words
-from touchbench.reports.curves import Curve, crossed_bootstrap
+from touchbench.reports.curves import Curve
 from touchbench.reports.figures import plot_table
 from touchbench.reports.figures import learning_curve
 from touchbench.reports.figures.confusion import confusion_matrix
@@ -139,16 +139,21 @@ def test_calibration_gains_paired_over_test_folds(runs):
     assert _board(runs / "calib", fraction=0.79).curve.reach.set_index("method_id").loc[msd, "size"] == 1
 
 
-def test_crossed_bootstrap_by_hand():
-    a = np.tile((np.arange(200) % 10 < 7).astype(float), (2, 1))  # two identical draws, 70 % right
-    lo, hi = crossed_bootstrap(a)
-    half = 1.959964 * math.sqrt(0.7 * 0.3 / 200)  # the normal interval of a proportion over 200 captures
-    assert lo == pytest.approx(0.7 - half, abs=0.01) and hi == pytest.approx(0.7 + half, abs=0.01)
-    assert crossed_bootstrap(a, a) == (0.0, 0.0)  # a point against itself: no difference in any resample
-    b = np.vstack([np.arange(200) % 10 < 5, np.arange(200) % 10 < 9]).astype(float)  # draws of 50 % and 90 %
-    lo_b, hi_b = crossed_bootstrap(b)
-    assert hi_b - lo_b > (hi - lo) * 1.5  # the draws' spread widens it
-    assert crossed_bootstrap(a[:, :1]) == pytest.approx((math.nan, math.nan), nan_ok=True)
+def _loop_interval(a, b=None, resamples=4000, seed=11):
+    """A plain-loop pigeonhole bootstrap, written here: per resample the captures (rows) drawn once,
+    each point's draws (columns) on its own, and the mean over the scored cells drawn; the 2.5 and
+    97.5 percentiles of the resamples' means (of ``a``'s minus ``b``'s)."""
+    rng = np.random.default_rng(seed)
+    stats_ = []
+    for _ in range(resamples):
+        rows = rng.integers(0, a.shape[0], a.shape[0])
+        means = []
+        for m in (a,) if b is None else (a, b):
+            cols = rng.integers(0, m.shape[1], m.shape[1])
+            cells = [m[i, j] for i in rows for j in cols if not math.isnan(m[i, j])]
+            means.append(sum(cells) / len(cells))
+        stats_.append(means[0] - (means[1] if b is not None else 0.0))
+    return tuple(np.percentile(stats_, [2.5, 97.5]))
 
 
 def test_one_test_set_bootstraps_draws_and_captures(tmp_path):
@@ -161,6 +166,14 @@ def test_one_test_set_bootstraps_draws_and_captures(tmp_path):
     p = lb.curve.points.set_index("size")
     assert p.loc[1.0, "accuracy"] == pytest.approx(1 - 12 / 40) and p.loc[1.0, "ci_method"] == "bootstrap"
     assert p.loc[1.0, "n_units"] == 1 and p.loc[1.0, "ci_low"] < 0.7 < p.loc[1.0, "ci_high"]
+    # captures x draws, built from the table above: draw 0 wrong on the first 10, draw 1 on the first 14
+    m = np.ones((40, 2))
+    m[:10, 0] = m[:14, 1] = 0.0
+    lo, hi = _loop_interval(m)
+    assert (p.loc[1.0, "ci_low"], p.loc[1.0, "ci_high"]) == pytest.approx((lo, hi), abs=0.015)
+    three = p.loc[3.0]  # one draw: a bootstrap over the captures alone, the normal interval of 36 / 40
+    half = 1.959964 * math.sqrt(0.9 * 0.1 / 40)
+    assert (three["ci_low"], three["ci_high"]) == pytest.approx((0.9 - half, 0.9 + half), abs=0.03)
 
 
 def test_terminal_table_and_sentences(runs):
@@ -309,6 +322,13 @@ def test_one_test_set_calibration_gain_by_bootstrap(tmp_path):
     gain = ((1 - (1 - 10 / 40)) + (1 - (1 - 10 / 35))) / 2  # 1 minus each draw's accuracy at k=0, averaged
     assert g["gain"] == pytest.approx(gain) and g["ci_method"] == "bootstrap" and g["n_units"] == 1
     assert 0 < g["ci_low"] < gain < g["ci_high"] < 1
+    # captures x draws on the union of the captures (draw 1 did not score the first 5): k=1 right
+    # wherever scored, k=0 wrong on each draw's first 10 scored
+    k1, k0 = np.ones((40, 2)), np.ones((40, 2))
+    k1[:5, 1] = k0[:5, 1] = math.nan
+    k0[:10, 0] = k0[5:15, 1] = 0.0
+    lo, hi = _loop_interval(k1, k0)
+    assert (g["ci_low"], g["ci_high"]) == pytest.approx((lo, hi), abs=0.015)
 
 
 def test_the_tables_per_capture_columns_read_the_reference_point_only(runs, tmp_path):

@@ -1,12 +1,14 @@
 """One test set scored with several seeds: the leaderboard's interval and test over captures and seeds
-(Owen's pigeonhole bootstrap, :mod:`touchbench.reports.seeds`).
+(Owen's pigeonhole bootstrap, :mod:`touchbench.reports.bootstrap`, and its test,
+:mod:`touchbench.reports.seeds`).
 
 The key case is built by hand: two methods on 100 test captures and four seeds, A ahead by 20 points
 on seeds 0 and 2 and behind by 10 on seeds 1 and 3. Over the captures alone A is right (on at least
 half of its seeds) on 10 captures B never gets right and the reverse on none, McNemar's p = 2 / 2**10;
 over seeds, the order flips, so the table must not call them different. A second pair, 40 points
 apart on every seed, must be. The bootstrap's variance is checked against its exact value, derived
-here from the multinomial weights' covariance.
+here from the multinomial weights' covariance; its resample distribution on tiny matrices is
+checked in tests/test_reports_bootstrap.py.
 """
 
 from __future__ import annotations
@@ -24,7 +26,8 @@ from touchbench.reports.compare import compare_methods
 from touchbench.reports.leaderboard import build_leaderboards
 from touchbench.reports.rendering import to_markdown
 from touchbench.reports.results import load_results
-from touchbench.reports.seeds import pigeonhole_interval, pigeonhole_means, pigeonhole_test
+from touchbench.reports.bootstrap import pigeonhole
+from touchbench.reports.seeds import FEW_CAPTURES, pigeonhole_test
 from touchbench.reports.testing import FakeMethod, write_fake_run
 
 N = 100
@@ -108,55 +111,37 @@ def _exact_variance(y: np.ndarray) -> float:
 
 def test_pigeonhole_resamples_have_the_exact_mean_and_variance():
     a, b = _flip_matrices()
-    for y in (a, a - b):
-        theta = pigeonhole_means(y, resamples=20000, seed=1)
-        assert theta.dtype == np.float64
+    for theta, y in ((pigeonhole(a, resamples=20000, seed=1).resampled, a),
+                     (pigeonhole(a, b, paired=True, resamples=20000, seed=1).resampled, a - b)):
+        assert theta.dtype == np.float64 and theta.size == 20000
         assert theta.mean() == pytest.approx(y.mean(), abs=4 * math.sqrt(_exact_variance(y) / 20000))
         assert theta.var() == pytest.approx(_exact_variance(y), rel=0.05)  # sd of the estimate: about 1 %
 
 
 def test_the_seeds_widen_the_interval_beyond_the_captures_alone():
     a, _ = _flip_matrices()
-    _, lo, hi = pigeonhole_interval(a)
+    boot = pigeonhole(a)
     # a bootstrap over the captures of the pooled cells alone: rows resampled, every seed kept
     rng = np.random.default_rng(0)
     rows = rng.integers(0, N, size=(4000, N))
     caps_only = np.percentile(a[rows].mean(axis=(1, 2)), [2.5, 97.5])
-    assert hi - lo > 1.3 * (caps_only[1] - caps_only[0])
+    assert boot.high - boot.low > 1.3 * (caps_only[1] - caps_only[0])
 
 
-def test_degenerate_inputs_have_defined_outputs():
-    assert pigeonhole_interval([[1.0]]) == (1.0, 1.0, 1.0)
-    assert pigeonhole_interval(np.full((5, 3), 0.3)) == (0.3, 0.3, 0.3)
+def test_degenerate_inputs_have_defined_tests():
     t = pigeonhole_test(np.ones((6, 3)), np.ones((6, 3)))
     assert (t.pvalue, t.p_greater, t.p_less, t.mean_difference, t.ci_low, t.ci_high) == (1.0, 0.5, 0.5, 0.0, 0.0, 0.0)
     t = pigeonhole_test(np.ones((6, 3)), np.zeros((6, 3)), resamples=999)  # right always against wrong always
     assert t.mean_difference == 1.0 and t.ci_low == t.ci_high == 1.0 and t.pvalue == pytest.approx(2 / 1000)
-    # one seed: a bootstrap over the captures alone, as numpy's own resampling of the rows
+    # one capture: the mean difference, no interval and no p (left out of Holm's family)
+    t = pigeonhole_test([[1.0, 1.0, 0.0]], [[0.0, 0.0, 0.0]])
+    assert t.n == 1 and t.mean_difference == pytest.approx(2 / 3) and math.isnan(t.pvalue)
+    assert math.isnan(t.ci_low) and t.note == FEW_CAPTURES
+    # one seed: a bootstrap over the captures alone, the variance of a proportion's p (1 - p) / n
     one = np.r_[np.ones(30), np.zeros(10)][:, None]
-    theta = pigeonhole_means(one, resamples=5000, seed=3)
-    assert theta.var() == pytest.approx(0.75 * 0.25 / 40, rel=0.08)  # p (1 - p) / n
+    assert pigeonhole(one, resamples=5000, seed=3).resampled.var() == pytest.approx(0.75 * 0.25 / 40, rel=0.08)
     with pytest.raises(ValueError, match="shape"):
         pigeonhole_test(np.ones((3, 2)), np.ones((3, 3)))
-
-
-cells = st.integers(1, 12).flatmap(lambda r: st.integers(1, 5).flatmap(
-    lambda c: arrays(np.float64, (r, c), elements=st.sampled_from([0.0, 1.0]))))
-
-
-@settings(max_examples=40, deadline=None)
-@given(y=cells)
-def test_interval_contains_the_mean(y):
-    mean, lo, hi = pigeonhole_interval(y, resamples=300)
-    assert mean == pytest.approx(float(np.sum(y)) / y.size, abs=1e-12)
-    assert lo <= mean <= hi and 0.0 <= lo and hi <= 1.0
-
-
-@settings(max_examples=30, deadline=None)
-@given(r=st.integers(1, 10), c=st.integers(1, 5), v=st.floats(0, 1))
-def test_zero_variance_gives_a_zero_width_interval(r, c, v):
-    mean, lo, hi = pigeonhole_interval(np.full((r, c), v), resamples=300)
-    assert lo == hi == mean
 
 
 @settings(max_examples=30, deadline=None)
@@ -166,6 +151,9 @@ def test_swapping_the_methods_mirrors_the_test(pair):
     a, b = pair
     ab, ba = pigeonhole_test(a, b, resamples=300), pigeonhole_test(b, a, resamples=300)
     assert ab.mean_difference == pytest.approx(-ba.mean_difference, abs=1e-12)
+    if len(a) < 2:  # one capture: no test either way
+        assert math.isnan(ab.pvalue) and math.isnan(ba.pvalue)
+        return
     assert ab.pvalue == pytest.approx(ba.pvalue) and 0.0 < ab.pvalue <= 1.0
     assert ab.p_greater == pytest.approx(ba.p_less)
     assert ab.ci_low == pytest.approx(-ba.ci_high, abs=1e-12)

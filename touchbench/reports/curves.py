@@ -24,9 +24,10 @@ The statistics (float64):
 - its 95 % interval: Student's t over the base folds' means, clipped to
   [0, 1] (as the leaderboard's interval over folds,
   :func:`touchbench.reports.stats.fold_interval`). With a single base fold
-  (one test set), a percentile bootstrap over the draws and the test
-  captures crossed, the pigeonhole bootstrap of Owen (2007, Annals of
-  Applied Statistics 1(2), 2007): each resample draws the captures and the
+  (one test set), a percentile bootstrap over the test captures and the
+  draws crossed, Owen's pigeonhole bootstrap (2007;
+  :mod:`touchbench.reports.bootstrap`, its degenerate cases there: fewer
+  than two captures, none): each resample draws the captures and the
   draws with replacement, independently, so both the test set's and the
   draws' variation widen it (from the predictions; without them, none);
 - ``reach``: the smallest size whose accuracy is at least ``fraction`` of
@@ -40,7 +41,8 @@ The statistics (float64):
   folds: per base fold the draws' mean at ``k`` minus that at ``k = 0``,
   the mean of those differences and their Student t interval (not clipped);
   one base fold: the pigeonhole bootstrap of the difference, the captures
-  drawn once for both points.
+  drawn once for both points and each point's draws on their own (not
+  ``paired``).
 
 The leaderboard's own table of a curve's tasks is its reference point
 (:func:`reference_rows`): the full point of a subjects curve, ``k = 0`` of a
@@ -57,9 +59,10 @@ import pandas as pd
 from scipy import stats
 
 from ..core.errors import TouchbenchError
-from .stats import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, fold_interval
+from .bootstrap import pigeonhole
+from .stats import fold_interval
 
-__all__ = ["Curve", "DEFAULT_FRACTION", "check_fraction", "crossed_bootstrap", "curve_of", "reference_rows"]
+__all__ = ["Curve", "DEFAULT_FRACTION", "check_fraction", "curve_of", "reference_rows"]
 
 #: the share of its full accuracy a method is asked to reach (``--fraction``)
 DEFAULT_FRACTION = 0.95
@@ -146,49 +149,11 @@ def _unit_means(g: pd.DataFrame) -> pd.Series:
     return g.groupby(["base", "curve_draw"])["accuracy"].mean().groupby(level=0).mean()
 
 
-def crossed_bootstrap(a: np.ndarray, b: np.ndarray | None = None, *, level: float = LEVEL,
-                      resamples: int = BOOTSTRAP_RESAMPLES, seed: int = BOOTSTRAP_SEED) -> tuple[float, float]:
-    """Percentile interval of the mean of ``a`` (draws x captures, each cell 1 right / 0 wrong, or the
-    mean over seeds; NaN: a capture the draw did not score), minus the mean of ``b`` (another point's
-    draws x the same captures) when given: the pigeonhole bootstrap (Owen 2007), captures and each
-    point's draws resampled independently, the captures once for both points; each resample's mean is
-    over the cells scored. NaN with fewer than two captures."""
-    a = np.asarray(a, dtype=np.float64)
-    b = None if b is None else np.asarray(b, dtype=np.float64)
-    if a.shape[1] < 2:
-        return math.nan, math.nan
-    rng = np.random.default_rng(seed)
-    stat = np.concatenate([_crossed_block(rng, a, b, min(BLOCK, resamples - done))
-                           for done in range(0, resamples, BLOCK)])
-    stat = stat[np.isfinite(stat)]  # a resample that drew no scored cell says nothing
-    if stat.size == 0:
-        return math.nan, math.nan
-    tail = 100.0 * (1.0 - level) / 2.0
-    lo, hi = np.percentile(stat, [tail, 100.0 - tail])
-    return float(lo), float(hi)
-
-
-#: resamples drawn at a time (memory: a block of resamples x test captures)
-BLOCK = 1000
-
-
-def _counts(rng: np.random.Generator, rows: int, n: int) -> np.ndarray:
-    """How often each of ``n`` items is drawn (with replacement, ``n`` draws), in each of ``rows`` resamples."""
-    idx = rng.integers(0, n, size=(rows, n)) + n * np.arange(rows)[:, None]
-    return np.bincount(idx.ravel(), minlength=rows * n).reshape(rows, n).astype(np.float64)
-
-
-def _crossed_block(rng: np.random.Generator, a: np.ndarray, b: np.ndarray | None, rows: int) -> np.ndarray:
-    """``rows`` resamples of :func:`crossed_bootstrap`'s statistic."""
-    caps = _counts(rng, rows, a.shape[1])
-
-    def mean(m: np.ndarray) -> np.ndarray:  # over the scored cells the resample drew
-        draws, scored = _counts(rng, rows, m.shape[0]), np.isfinite(m)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return (((draws @ np.where(scored, m, 0.0)) * caps).sum(axis=1)
-                    / ((draws @ scored.astype(np.float64)) * caps).sum(axis=1))
-
-    return mean(a) - (mean(b) if b is not None else 0.0)
+def _interval(a: np.ndarray, b: np.ndarray | None = None) -> tuple[float, float]:
+    """The pigeonhole interval of a point's captures x draws (minus another point's, its draws on their
+    own: not paired; :mod:`touchbench.reports.bootstrap`)."""
+    boot = pigeonhole(a, b, paired=False, level=LEVEL)
+    return boot.low, boot.high
 
 
 def _matrix(preds: pd.DataFrame | None, task_ids: pd.Series) -> pd.DataFrame:
@@ -211,7 +176,7 @@ def _point(g: pd.DataFrame, preds: pd.DataFrame | None) -> dict:
         mean, _, lo, hi = fold_interval(units.to_numpy(np.float64), LEVEL)
         return {**out, "accuracy": mean, "ci_low": lo, "ci_high": hi, "ci_method": "t"}
     m = _matrix(preds, g["task_id"])
-    lo, hi = crossed_bootstrap(m.to_numpy()) if m.shape[1] else (math.nan, math.nan)
+    lo, hi = _interval(m.to_numpy().T) if m.shape[1] else (math.nan, math.nan)
     return {**out, "accuracy": float(units.mean()) if len(units) else math.nan, "ci_low": lo, "ci_high": hi,
             "ci_method": "bootstrap" if np.isfinite(lo) else ""}
 
@@ -229,7 +194,7 @@ def _gain(g: pd.DataFrame, g0: pd.DataFrame, preds: pd.DataFrame | None) -> dict
     m, m0 = _matrix(preds, g["task_id"]), _matrix(preds, g0["task_id"])
     if m.shape[1] and m0.shape[1]:
         caps = m.columns.union(m0.columns)
-        lo, hi = crossed_bootstrap(m.reindex(columns=caps).to_numpy(), m0.reindex(columns=caps).to_numpy())
+        lo, hi = _interval(m.reindex(columns=caps).to_numpy().T, m0.reindex(columns=caps).to_numpy().T)
         out.update(ci_low=lo, ci_high=hi, ci_method="bootstrap" if np.isfinite(lo) else "")
     return out
 

@@ -20,20 +20,12 @@ more seeds on the one test set they share, from the predictions):
 - The figure: the mean of ``Y`` (the mean over seeds of the accuracy),
   with the spread of the per-seed accuracies (min, max, sample sd).
 - **Owen's pigeonhole bootstrap** for a crossed random-effects design
-  (A. B. Owen 2007, "The pigeonhole bootstrap", Annals of Applied
-  Statistics 1(2):386-411, Sec. 2-3): each resample draws the ``R`` rows
-  (captures) with replacement and, independently, the ``C`` columns (seeds)
-  with replacement, and takes the mean of the ``R x C`` cells so chosen
-  (with the draws' counts ``w_r``, ``w_c``: ``w_r' Y w_c / (R C)``). Its
-  variance estimates ``var(mean) = s_A^2 / R + s_B^2 / C + s_E^2 / (R C)``
-  (capture, seed and interaction components), erring on the large side by
-  about the interaction term (Owen 2007, Theorem 2: the pigeonhole bootstrap
-  is mildly conservative), where a bootstrap over the captures alone misses
-  ``s_B^2 / C``. :data:`PIGEONHOLE_RESAMPLES` resamples, seeded
-  (:data:`PIGEONHOLE_SEED`), float64.
-- The interval: the 2.5 and 97.5 percentiles of the resampled means
-  (``ci_method`` ``"pigeonhole"``), of ``Y`` for a method's accuracy, of
-  ``D`` for a difference.
+  (Owen 2007; :mod:`touchbench.reports.bootstrap`, which states the
+  estimator, its constants and its degenerate cases): the captures and the
+  seeds resampled independently. The interval: the 2.5 and 97.5
+  percentiles of the resampled means (``ci_method`` ``"pigeonhole"``), of
+  ``Y`` for a method's accuracy, of ``mean(Y_a) - mean(Y_b)`` for a
+  difference, the ``j``-th seeds of the two drawn together (``paired``).
 - The test of a difference (``test`` ``"pigeonhole"``): one-sided
   ``p_greater = (1 + #{theta* <= 0}) / (B + 1)`` (``a`` better),
   ``p_less = (1 + #{theta* >= 0}) / (B + 1)``, two-sided ``p = min(1, 2
@@ -45,15 +37,12 @@ more seeds on the one test set they share, from the predictions):
   leaderboard's call "differs from the best" on such a table is this test,
   Holm-adjusted over the table as every test is.
 
-**Degenerate input** (defined, never from resampling noise): every cell
-equal (one capture and one seed, a deterministic method right on the same
-captures with every seed and a constant matrix...) gives the interval
-``[mean, mean]`` (width 0); a difference of zero everywhere gives ``p = 1``
-and one-sided p-values 1/2, as McNemar's test without a discordant capture.
-A single seed is a bootstrap over the captures alone (column draws of one
-column change nothing). The interval always holds the observed mean: the
-percentile interval is widened to it in the rare case resampling leaves it
-outside.
+**Degenerate input**: the bootstrap's (every cell equal, or a difference
+of one value everywhere: the interval ``[mean, mean]``; fewer than two
+captures: no interval). A difference of zero everywhere gives ``p = 1``
+and one-sided p-values 1/2, as McNemar's test without a discordant capture;
+one of another single value, ``p = 2 / (B + 1)``; fewer than two captures,
+no p (``note``: :data:`FEW_CAPTURES`), left out of Holm's family.
 """
 
 from __future__ import annotations
@@ -64,89 +53,40 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from .bootstrap import LEVEL, PIGEONHOLE_RESAMPLES, PIGEONHOLE_SEED, pigeonhole
 from .labels import _pct
 from .paired import _compare, _latest
 from .stats import PairedTest, _d_z
 
-__all__ = ["CI_NOTES", "PIGEONHOLE", "PIGEONHOLE_RESAMPLES", "PIGEONHOLE_SEED", "compare_pair", "legend_note",
-           "pigeonhole_interval", "pigeonhole_means", "pigeonhole_test", "seed_fields", "seed_matrix", "seed_test",
-           "seeds_note"]
+__all__ = ["CI_NOTES", "FEW_CAPTURES", "PIGEONHOLE", "compare_pair", "legend_note", "pigeonhole_test",
+           "seed_fields", "seed_matrix", "seed_test", "seeds_note"]
 
 #: the test and interval's name in a table's rows (``test``, ``ci_method``, ``diff_ci_method``)
 PIGEONHOLE = "pigeonhole"
-#: resamples of the pigeonhole bootstrap
-PIGEONHOLE_RESAMPLES = 10000
-#: its seed: the same interval and p on every reading of the results
-PIGEONHOLE_SEED = 0
-_CHUNK = 500  # resamples computed at once (memory: _CHUNK x captures float64)
+#: why a pigeonhole test has no p-value
+FEW_CAPTURES = "fewer than two paired captures"
 
 
-def _matrix(y: Any) -> np.ndarray:
-    x = np.asarray(y, dtype=np.float64)
-    if x.ndim == 1:
-        x = x[:, None]
-    if x.ndim != 2 or x.size == 0:
-        raise ValueError(f"a captures x seeds matrix with at least one cell is needed, not shape {x.shape}")
-    return x
-
-
-def pigeonhole_means(y: Any, resamples: int = PIGEONHOLE_RESAMPLES, seed: int = PIGEONHOLE_SEED) -> np.ndarray:
-    """The means of ``resamples`` pigeonhole resamples of ``y`` (rows: captures, columns: seeds; see
-    the module docstring): rows and columns drawn independently with replacement, float64."""
-    x = _matrix(y)
-    r, c = x.shape
-    rng = np.random.default_rng(seed)
-    out = np.empty(resamples, dtype=np.float64)
-    for start in range(0, resamples, _CHUNK):
-        b = min(_CHUNK, resamples - start)
-        w_r = rng.multinomial(r, np.full(r, 1.0 / r), size=b).astype(np.float64)  # b x R counts
-        w_c = rng.multinomial(c, np.full(c, 1.0 / c), size=b).astype(np.float64)  # b x C counts
-        out[start:start + b] = np.einsum("br,br->b", w_r, w_c @ x.T) / (r * c)
-    return out
-
-
-def _constant(x: np.ndarray) -> bool:
-    return bool(np.ptp(x) == 0.0)
-
-
-def pigeonhole_interval(y: Any, level: float = 0.95, resamples: int = PIGEONHOLE_RESAMPLES,
-                        seed: int = PIGEONHOLE_SEED) -> tuple[float, float, float]:
-    """``(mean, low, high)``: the mean of ``y`` (captures x seeds) and the percentile interval of its
-    pigeonhole resamples; ``[mean, mean]`` when every cell is equal (module docstring)."""
-    x = _matrix(y)
-    if _constant(x):  # the cells' one value, exactly (a sum of equal values may round)
-        v = float(x.flat[0])
-        return v, v, v
-    mean = float(np.mean(x))
-    tail = 100.0 * (1.0 - level) / 2.0
-    lo, hi = np.percentile(pigeonhole_means(x, resamples, seed), [tail, 100.0 - tail])
-    return mean, min(float(lo), mean), max(float(hi), mean)
-
-
-def pigeonhole_test(a: Any, b: Any, level: float = 0.95, resamples: int = PIGEONHOLE_RESAMPLES,
+def pigeonhole_test(a: Any, b: Any, level: float = LEVEL, resamples: int = PIGEONHOLE_RESAMPLES,
                     seed: int = PIGEONHOLE_SEED) -> PairedTest:
     """The paired test of ``a`` against ``b`` (two captures x seeds matrices of correctness, the
-    same captures and seed indices): the pigeonhole bootstrap of ``D = a - b`` (module docstring)."""
-    xa, xb = _matrix(a), _matrix(b)
-    if xa.shape != xb.shape:
-        raise ValueError(f"paired matrices differ in shape: {xa.shape} vs {xb.shape}")
-    d = xa - xb
-    n = d.shape[0]
-    per_capture = d.mean(axis=1)
-    mean, lo, hi = pigeonhole_interval(d, level, resamples, seed)
-    if _constant(d):
-        if mean == 0.0:
-            return PairedTest(PIGEONHOLE, "capture", n, 0.0, math.nan, 1.0, 0.5, 0.5, math.nan, 0.0, 0.0,
-                              PIGEONHOLE, test_ci_low=0.0, test_ci_high=0.0, test_ci_method=PIGEONHOLE)
-        theta = np.full(resamples, mean)
-    else:
-        theta = pigeonhole_means(d, resamples, seed)
-    greater = float((1.0 + np.count_nonzero(theta <= 0.0)) / (resamples + 1.0))
-    less = float((1.0 + np.count_nonzero(theta >= 0.0)) / (resamples + 1.0))
+    same captures and seed indices): the pigeonhole bootstrap of ``mean(a) - mean(b)``, the seeds
+    paired (module docstring)."""
+    boot = pigeonhole(a, b, paired=True, level=level, resamples=resamples, seed=seed)
+    n, mean, lo, hi = boot.captures, boot.mean, boot.low, boot.high
+    if not np.isfinite(lo):
+        return PairedTest(PIGEONHOLE, "capture", n, mean, math.nan, math.nan, note=FEW_CAPTURES)
+    if boot.fixed and mean == 0.0:
+        return PairedTest(PIGEONHOLE, "capture", n, 0.0, math.nan, 1.0, 0.5, 0.5, math.nan, 0.0, 0.0,
+                          PIGEONHOLE, test_ci_low=0.0, test_ci_high=0.0, test_ci_method=PIGEONHOLE)
+    theta = boot.resampled
+    greater = float((1.0 + np.count_nonzero(theta <= 0.0)) / (theta.size + 1.0))
+    less = float((1.0 + np.count_nonzero(theta >= 0.0)) / (theta.size + 1.0))
     sd = float(np.std(theta, ddof=1))
+    d = np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64)
+    per_capture = d.reshape(len(d), -1).mean(axis=1)
     return PairedTest(PIGEONHOLE, "capture", n, mean, mean / sd if sd > 0 else math.nan,
-                      min(1.0, 2.0 * min(greater, less)), greater, less, _d_z(per_capture), lo, hi, PIGEONHOLE,
-                      test_ci_low=lo, test_ci_high=hi, test_ci_method=PIGEONHOLE)
+                      min(1.0, 2.0 * min(greater, less)), greater, less, _d_z(per_capture), lo, hi, PIGEONHOLE, test_ci_low=lo, test_ci_high=hi, test_ci_method=PIGEONHOLE)
 
 
 # ----------------------------------------------------------------- from a table's predictions
@@ -185,7 +125,8 @@ def seed_fields(g: pd.DataFrame, f: pd.DataFrame, preds: pd.DataFrame | None, me
     """A leaderboard row's fields for a method with several seeds on its one test set (``g``: its
     scores, ``f``: its fold values): the spread of its per-seed accuracies (``n_seeds``,
     ``accuracy_sd``, ``seed_min``, ``seed_max``) and the pigeonhole interval over captures and seeds
-    (``ci_low``, ``ci_high``, ``ci_method``); ``{}`` otherwise (the table keeps its own)."""
+    (``ci_low``, ``ci_high``, ``ci_method``; where it has one: two or more captures); ``{}`` otherwise
+    (the table keeps its own)."""
     if len(f) != 1:
         return {}
     per_seed = g.groupby(["repetition", "seed"])["accuracy"].mean().to_numpy(np.float64)
@@ -195,8 +136,9 @@ def seed_fields(g: pd.DataFrame, f: pd.DataFrame, preds: pd.DataFrame | None, me
                            "seed_min": float(per_seed.min()), "seed_max": float(per_seed.max())}
     y = seed_matrix(preds, method, str(f["fold_key"].iloc[0]))
     if len(y) and len(_seeds(y)) >= 2:
-        _, lo, hi = pigeonhole_interval(y[_seeds(y)].to_numpy())
-        out.update(ci_low=lo, ci_high=hi, ci_method=PIGEONHOLE)
+        boot = pigeonhole(y[_seeds(y)].to_numpy())
+        if np.isfinite(boot.low):
+            out.update(ci_low=boot.low, ci_high=boot.high, ci_method=PIGEONHOLE)
     return out
 
 

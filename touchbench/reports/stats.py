@@ -70,7 +70,8 @@ Which test is used when (stated once, used everywhere):
 - **One test set, several seeds** (a scheme with a single test set runs every
   method with several seeds): the interval of a method's accuracy and the
   test of two methods resample the captures and the seeds, Owen's pigeonhole
-  bootstrap for crossed random effects (:mod:`touchbench.reports.seeds`),
+  bootstrap for crossed random effects (the estimator:
+  :mod:`touchbench.reports.bootstrap`; the test: :mod:`touchbench.reports.seeds`),
   instead of Wilson's interval and McNemar's test over the captures alone.
 - **Multiple comparisons.** The p-values of one table (every method against
   the best) are adjusted with Holm's step-down method; a method "differs"
