@@ -303,6 +303,14 @@ def _capture(arr, win: Window, rate: float, path: Path, leave_out: bool = False)
     return frame_window(arr, first, n)
 
 
+def _check_frames(win: Window, rec_s: float | None, rate: float) -> None:
+    """Refuse a window or a recording cut of no frame at ``rate``, naming the option."""
+    for option, seconds in (("recording_window", win.seconds), ("recording_seconds", rec_s)):
+        if seconds is not None and round(seconds * rate) < 1:
+            raise OptionValueError(f"{option}: {seconds:g} s is {round(seconds * rate)} frames at {rate:g} Hz: "
+                                   f"a window is at least one frame ({1 / rate:.3g} s)")
+
+
 def read_haart_raw(
     path: str | Path,
     *,
@@ -327,6 +335,7 @@ def read_haart_raw(
     leave_out = parse_short(short_recordings) == "leave-out"
     if rec_s is None and win.haart_protocol:
         rec_s = RECORDING_SECONDS
+    _check_frames(win, rec_s, rate)
     if win.kind == "challenge" and (rate != HAART_SENSOR.frame_rate or rec_s != RECORDING_SECONDS):
         raise TouchbenchError("--recording-window challenge is the organisers' window of 10-s recordings at 54 Hz only")
     recs = find_raw_recordings(folder, rx)

@@ -44,12 +44,12 @@ from pathlib import Path
 from ..core.errors import DataError
 from ..core.paths import raw_folder
 from .cache import cached_dataset
-from .haart import GESTURES
+from .haart import GESTURES, HAART_SENSOR
 from .haart_raw import RawRecording, compile_pattern, find_raw_recordings, read_haart_raw
 from .model import TouchDataset
 from .registry import DATASETS
 
-__all__ = ["NAME", "PATTERN", "WINDOWS", "load_icmi15_study2", "parse_window"]
+__all__ = ["NAME", "PATTERN", "WINDOWS", "load_icmi15_study2", "parse_window", "window_option_problem"]
 
 NAME = "icmi15-study2"
 READER_VERSION = "icmi15-study2-3"  # 2: the checksums' provenance; 3: no fixed note on the README
@@ -70,8 +70,24 @@ def parse_window(text: str) -> dict[str, object]:
     except ValueError:
         seconds = -1.0
     if kind in ("first", "middle") and 0 < seconds < float("inf"):
+        rate = HAART_SENSOR.frame_rate
+        if round(seconds * rate) < 1:
+            raise DataError(f"window {text!r}: {seconds:g} s is {round(seconds * rate)} frames at {rate:g} Hz: a "
+                            f"window is at least one frame ({1 / rate:.3g} s)")
         return {"recording_window": f"middle:{seconds:g}", "recording_seconds": seconds if kind == "first" else None}
     raise DataError(f"window {text!r}: expected {', '.join(WINDOWS)} (SECONDS a number above 0)")
+
+
+def window_option_problem(options: dict[str, object]) -> tuple[str, str] | None:
+    """The dataset's options as a protocol gives them: ``(option, why)`` for a window that cannot be
+    read (:func:`parse_window`: an unknown form, or a window of no frame), else None."""
+    if "window" not in options:
+        return None
+    try:
+        parse_window(str(options["window"]))
+    except DataError as e:
+        return "window", str(e)
+    return None
 
 
 
@@ -107,7 +123,7 @@ def build_icmi15_study2(raw: Path, window: str = "haart") -> TouchDataset:
 
 
 @DATASETS.register(NAME, description="the HAART organisers' second study: cover x motion, other people; HAART's "
-                                     "window by default", real=True)
+                                     "window by default", real=True, check_options=window_option_problem)
 def load_icmi15_study2(cache_dir=None, data_dir=None, refresh: bool = False, window: str = "haart") -> TouchDataset:
     """The study (module docstring); ``window``: ``haart``, ``first:SECONDS`` or ``middle:SECONDS``."""
     parse_window(window)  # refused before anything is read

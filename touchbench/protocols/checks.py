@@ -24,6 +24,7 @@ from ..core.hashing import canonical_json
 from ..core.suggest import did_you_mean
 from ..core.versions import missing_extra
 from ..datasets.formats import FORMATS
+from ..datasets.registry import DATASETS, LOADER_PLACES, WRITE_LOCATIONS
 from ..features import FEATURES
 from ..features.base import FeatureInputError, SensorNeededError, make_feature_set
 from ..methods import METHODS, expand_candidates
@@ -491,7 +492,25 @@ def _dataset_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
         return [] if problem is None else [(("dataset", "format" if protocol.dataset.format not in FORMATS
                                              else "name"), problem)]
     problem = dataset_ref_problem(ref)
-    return [] if problem is None else [(("dataset", "name"), problem)]
+    if problem is not None:
+        return [(("dataset", "name"), problem)]
+    return _dataset_option_issues(ref.value, protocol.dataset.options) if ref.kind == "registered" else []
+
+
+def _dataset_option_issues(name: str, options: dict[str, Any]) -> list[tuple[tuple, str]]:
+    """A registered dataset's options: names its loader takes (with the nearest), then its own
+    check of their values (its entry's ``check_options`` tag: ``(option, why)`` or None)."""
+    entry = DATASETS.entry(name)
+    names, var_kw = _accepted_params(entry.obj)
+    known = [n for n in names if n not in LOADER_PLACES]
+    issues = [(("dataset", "options", k), f"unknown option {k!r} for dataset {name!r}{did_you_mean(k, known)} "
+                                          f"(accepted: {', '.join(known) or 'none'})")
+              for k in options if not var_kw and k not in known and k not in WRITE_LOCATIONS]
+    check = entry.tags.get("check_options")
+    if issues or check is None:
+        return issues
+    problem = check(options)
+    return [] if problem is None else [(("dataset", "options", problem[0]), problem[1])]
 
 def _evaluation_issues(proto: Protocol, subs: list[Protocol], *, clean_so_far: bool) -> list[tuple[tuple, str]]:
     """Each evaluation's scheme and dataset, and (while nothing else is wrong: ``clean_so_far``
