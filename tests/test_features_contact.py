@@ -98,7 +98,7 @@ def test_refusals_name_the_reason():
         make_feature_set(NAME, {}, None).fit_transform([cap])
     with pytest.raises(TouchbenchError, match=r"value_range must be \(low, high\)"):
         make_feature_set(NAME, {"value_range": (5, 5)}, None).fit_transform([cap])
-    with pytest.raises(TouchbenchError, match=r"min_noise must be a fraction of full scale"):
+    with pytest.raises(TouchbenchError, match=r"The 'min_noise' parameter of contact-evidence must be a float in the range \(0.0, 1.0\)"):
         make_feature_set(NAME, {"min_noise": 0}, SMALL).fit_transform([cap])
     fur = SensorSpec("fur", (1, 4), 50.0, (0, 1023), channels=("x", "y", "pressure", "fur"))
     problem = make_feature_set(NAME, {}, fur).check_sensor(fur)

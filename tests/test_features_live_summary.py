@@ -60,7 +60,7 @@ def test_a_sensor_where_lower_means_more_pressure_reads_from_the_top():
 
 
 def test_live_summary_refuses_what_it_cannot_read():
-    with pytest.raises(FeatureInputError, match="contact must be a fraction"):
+    with pytest.raises(FeatureInputError, match=r"The 'contact' parameter of live-summary must be a float in the range \(0.0, 1.0\)"):
         _features(np.zeros((2, 2, 3)), contact=1.5)
     with pytest.raises(SensorNeededError, match="value range"):
         FEATURES.create("live-summary").fit_transform([np.zeros((2, 2, 3))])

@@ -154,8 +154,8 @@ def test_the_entry_bound_counts_features_classifiers_and_methods():
 @pytest.mark.parametrize("value, shown", [("-5", "-5"), ('"many"', "'many'"), ("1e8", "'1e8'"), ("2.5", "2.5")])
 def test_feature_set_values_are_checked_at_validation(value, shown):
     text = HEAD + f"features:\n  - [{{name: raw-window, params: {{frames: {value}}}}}]\nclassifiers: [zhou-lda]\n"
-    said = (f"p.yaml:4: features[0][0].params.frames: raw-window: frames must be an integer >= 1 "
-            f"and offset an integer >= 0, got {shown}, 0")
+    said = (f"p.yaml:4: features[0][0].params.frames: The 'frames' parameter of raw-window must be an int in the "
+            f"range [1, inf) or None. Got {shown} instead.")
     if value == "1e8":  # YAML 1.1 reads 1e8 as text: the message says so and how to write the number
         said += " (YAML read '1e8' as a string, not a number: YAML 1.1 reads an exponent as a number only after a dot " \
                 "and with a sign; write 1.0e+8)"
@@ -166,13 +166,14 @@ def test_a_set_that_needs_the_sensor_is_left_to_the_plan():
     # sd takes its thresholds from the sensor's preset: nothing to refuse without the sensor
     assert parse_protocol(HEAD + "features: [sd, touch-rhythm, flagg-stats]\nclassifiers: [zhou-lda]\n", "p.yaml").name
     bad = HEAD + "features:\n  - [{name: touch-rhythm, params: {frame_rate: -3}}]\nclassifiers: [zhou-lda]\n"
-    assert refused(bad) == ("p.yaml:4: features[0][0].params.frame_rate: TouchRhythm: frame_rate must be a positive "
-                            "number, got -3")
+    assert refused(bad) == ("p.yaml:4: features[0][0].params.frame_rate: The 'frame_rate' parameter of touch-rhythm "
+                            "must be a float in the range (0.0, inf) or None. Got -3 instead.")
 
 
 def test_inline_method_features_are_checked_too():
     text = HEAD + "methods:\n  - features: [{name: raw-window, params: {frames: 0}}]\n    estimator: zhou-lda\n"
-    assert refused(text).startswith("p.yaml:4: methods[0].features[0].params.frames: raw-window: frames must be")
+    assert refused(text).startswith("p.yaml:4: methods[0].features[0].params.frames: The 'frames' parameter of "
+                                    "raw-window must be an int in the range [1, inf)")
 
 
 def test_scikit_learn_parameter_validation_without_fitting():

@@ -28,6 +28,7 @@ from typing import Any, ClassVar, Sequence
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin, clone
 
+from ..core.constraints import declared_failures
 from ..core.errors import TouchbenchError
 from ..core.introspect import sensor_problem, with_accepted
 from ..core.registry import Registry
@@ -118,14 +119,25 @@ class FeatureSet(TransformerMixin, BaseEstimator):
     paper: ClassVar[str] = ""
     cost: ClassVar[str] = "cheap"
     fold_dependent: ClassVar[bool] = False
+    #: each parameter's domain, declared once (scikit-learn's form: types, ``Interval``, ``StrOptions``,
+    #: ``None``; a boolean is never a number): checked when a protocol is read and before any capture
+    _parameter_constraints: ClassVar[dict] = {}
 
     def fit(self, captures, y=None):
         caps = check_captures(captures, name=type(self).__name__)
         self.grid_ = caps[0].shape[1:] if caps else None
+        self.check_declared()
         self._check_params()
         self._fit(caps, y)
         self.n_features_out_ = self.n_features(self.grid_) if self.grid_ is not None else 0
         return self
+
+    def check_declared(self) -> None:
+        """Refuse a parameter outside its declared domain (``_parameter_constraints``), naming it."""
+        owner = next((e.name for e in FEATURES.registered() if e.obj is type(self)), type(self).__name__)
+        found = declared_failures(self._parameter_constraints, self.get_params(deep=False), owner)
+        if found:
+            raise FeatureInputError(next(iter(found.values())))
 
     def _check_params(self) -> None:
         """Check constructor parameters; raise ``FeatureInputError``. Nothing by default.
@@ -147,6 +159,7 @@ class FeatureSet(TransformerMixin, BaseEstimator):
         if "sensor" in self.get_params(deep=False) and getattr(self, "sensor", None) != sensor:
             probe = clone(self).set_params(sensor=sensor)
         try:
+            probe.check_declared()
             probe._check_params()
         except FeatureInputError as e:
             return str(e)
@@ -169,6 +182,7 @@ class FeatureSet(TransformerMixin, BaseEstimator):
             raise FeatureInputError(f"{type(self).__name__}: fitted on grid {tuple(fitted_grid)}, got captures of grid {tuple(grid)}")
         if self.fold_dependent and fitted_grid is None:
             raise FeatureInputError(f"{type(self).__name__}: call fit before transform (this set learns from the training fold)")
+        self.check_declared()
         self._check_params()
         self._check_grid(tuple(grid))
         n_out = self.n_features(grid)

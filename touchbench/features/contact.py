@@ -75,9 +75,13 @@ pressure of cells on one full scale).
 
 from __future__ import annotations
 
+from numbers import Real
+
 from typing import Any
 
 import numpy as np
+
+from sklearn.utils._param_validation import Interval
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError
@@ -98,6 +102,7 @@ class FullScaleSet(FeatureSet):
     pressure surface). Subclasses set ``name`` and keep ``value_range`` and ``sensor`` as parameters."""
 
     name = "a full-scale set"
+    _parameter_constraints = {"value_range": ["array-like", None]}
     value_range: Any = None
     sensor: Any = None
 
@@ -147,6 +152,7 @@ class ContactEvidence(FullScaleSet):
     """
 
     name = "contact-evidence"
+    _parameter_constraints = {**FullScaleSet._parameter_constraints, "min_noise": [Interval(Real, 0, 1, closed="neither")]}
     paper = "touchbench (docs/research/contact-features.md), after Gaus et al. 2015 section 3.2.1 and Zhou et al. 2017 section 4.1"
     cost = "cheap"
     fold_dependent = False
@@ -156,12 +162,6 @@ class ContactEvidence(FullScaleSet):
         self.value_range = value_range
         self.min_noise = min_noise
         self.sensor = sensor
-
-    def _check_params(self) -> None:
-        m = self.min_noise
-        if isinstance(m, bool) or not isinstance(m, (int, float)) or not (0 < m < 1):
-            raise FeatureInputError(f"contact-evidence: min_noise must be a fraction of full scale in (0, 1), got {m!r}")
-        super()._check_params()
 
     def feature_names(self, grid: tuple[int, int]) -> list[str]:
         names = ["level_mean", "level_p50", "level_p95", "level_max", "cellmean_min", "cellmean_max"]

@@ -3,7 +3,11 @@
 
 from __future__ import annotations
 
+from numbers import Real
+
 import numpy as np
+
+from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError, cell_names
@@ -81,6 +85,10 @@ class FlaggStats(FeatureSet):
     cost = "cheap"
     fold_dependent = False
 
+    _parameter_constraints = {"channels": [StrOptions({"auto", "grid", "cells"})],
+                              "contact_threshold": [Interval(Real, 0, None, closed="left"), None],
+                              "value_range": ["array-like", None]}
+
     def __init__(self, channels: str = "auto", contact_threshold: float | None = None,
                  value_range: tuple[float, float] | None = None, sensor: SensorSpec | None = None):
         self.channels = channels
@@ -89,8 +97,6 @@ class FlaggStats(FeatureSet):
         self.sensor = sensor
 
     def _mode(self) -> str:
-        if self.channels not in ("auto", "grid", "cells"):
-            raise FeatureInputError(f"flagg-stats: channels must be 'auto', 'grid' or 'cells', got {self.channels!r}")
         if self.channels == "auto":
             return "cells" if self.sensor is not None and self.sensor.channels is not None else "grid"
         return self.channels

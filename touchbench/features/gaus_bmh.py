@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+from numbers import Real
+
 from typing import Any
 
 import numpy as np
 
+from sklearn.utils._param_validation import StrOptions
+
 from ..datasets.model import SensorSpec
-from .base import FEATURES, FeatureInputError, FeatureSet, cell_names
+from .base import FEATURES, FeatureSet, cell_names
 from .gaus_common import GAUS_PAPER, resolve_units
 
 # Section 3.2.2: high pressure is value >= maximum - offset.
@@ -53,6 +57,9 @@ class BinaryMotionHistory(FeatureSet):
     cost = "cheap"
     fold_dependent = False
 
+    _parameter_constraints = {"preset": [StrOptions(set(_TABLE)), None], "offset": [Real, None],
+                              "level": [StrOptions({"instance", "frame"})]}
+
     def __init__(self, preset: str | None = None, offset: float | None = None, level: str = "instance", sensor: SensorSpec | None = None):
         self.preset = preset
         self.offset = offset
@@ -61,8 +68,6 @@ class BinaryMotionHistory(FeatureSet):
 
     def _check_params(self) -> None:
         resolve_units("bmh", self.preset, _TABLE, "offset", self.offset, self.sensor, "offset")
-        if self.level not in ("instance", "frame"):
-            raise FeatureInputError(f"bmh: level must be 'instance' or 'frame', got {self.level!r}")
 
     def feature_names(self, grid: tuple[int, int]) -> list[str]:
         return [f"bmh_{c}" for c in cell_names(grid)]

@@ -3,9 +3,13 @@
 
 from __future__ import annotations
 
+from numbers import Integral
+
 from functools import lru_cache
 
 import numpy as np
+
+from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
@@ -80,6 +84,9 @@ class LBPTOP(FeatureSet):
     cost = "moderate"
     fold_dependent = False
 
+    _parameter_constraints = {"radius": ["array-like"], "n_points": [Interval(Integral, 4, 16, closed="both")],
+                              "mapping": [StrOptions({"u2", "none"})]}
+
     def __init__(self, radius: tuple[int, int, int] = (1, 1, 1), n_points: int = 8, mapping: str = "u2", sensor: SensorSpec | None = None):
         self.radius = radius
         self.n_points = n_points
@@ -87,12 +94,8 @@ class LBPTOP(FeatureSet):
         self.sensor = sensor
 
     def _check_params(self) -> None:
-        if len(tuple(self.radius)) != 3 or any(int(r) < 1 for r in self.radius):
+        if len(tuple(self.radius)) != 3 or any(isinstance(r, bool) or int(r) != r or r < 1 for r in self.radius):
             raise FeatureInputError(f"lbptop: radius must be three positive integers (r_x, r_y, r_t), got {self.radius!r}")
-        if not 4 <= int(self.n_points) <= 16:
-            raise FeatureInputError(f"lbptop: n_points must be 4..16, got {self.n_points}")
-        if self.mapping not in ("u2", "none"):
-            raise FeatureInputError(f"lbptop: mapping must be 'u2' or 'none', got {self.mapping!r}")
 
     def _table(self) -> tuple[np.ndarray, int]:
         p = int(self.n_points)

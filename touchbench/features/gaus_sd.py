@@ -3,9 +3,13 @@
 
 from __future__ import annotations
 
+from numbers import Real
+
 from typing import Any
 
 import numpy as np
+
+from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
@@ -158,6 +162,11 @@ class StatisticalDistribution(FeatureSet):
     paper = f"{GAUS_PAPER}.1, Tables 3-4"
     cost = "cheap"
     fold_dependent = False
+
+    _parameter_constraints = {"preset": [StrOptions(set(_TABLE)), None], "bins": [dict, None],
+                              "high_offset": [Real, None], "touched_fixed": [Interval(Real, 0, None, closed="left"),
+                                                                             "boolean", None],
+                              "clip": ["boolean"], "normalize": ["boolean"]}
 
     def __init__(
         self,

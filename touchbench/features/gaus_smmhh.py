@@ -3,9 +3,13 @@
 
 from __future__ import annotations
 
+from numbers import Integral, Real
+
 from typing import Any, Sequence
 
 import numpy as np
+
+from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, cell_names
@@ -141,6 +145,10 @@ class SpatialMultiScaleMHH(FeatureSet):
     cost = "moderate"
     fold_dependent = False
 
+    _parameter_constraints = {"preset": [StrOptions(set(_TABLE)), None], "threshold": [Real, "array-like", None],
+                              "skips": ["array-like"], "max_len": [Interval(Integral, 1, None, closed="left")],
+                              "n_scales": [Interval(Integral, 1, None, closed="left"), None]}
+
     def __init__(
         self,
         preset: str | None = None,
@@ -172,9 +180,7 @@ class SpatialMultiScaleMHH(FeatureSet):
 
     def _check_params(self) -> None:
         self._thresholds(int(self.n_scales) if self.n_scales is not None else None)
-        if (self.n_scales is not None and int(self.n_scales) < 1) or int(self.max_len) < 1:
-            raise FeatureInputError("smmhh: n_scales and max_len must be at least 1")
-        if not self.skips or any(int(s) < 1 for s in self.skips):
+        if not len(self.skips) or any(isinstance(s, bool) or int(s) != s or s < 1 for s in self.skips):
             raise FeatureInputError(f"smmhh: skips must be positive frame offsets, got {self.skips!r}")
 
     def _check_grid(self, grid: tuple[int, int]) -> None:

@@ -41,10 +41,14 @@ scale without one), a channel sensor, a ``contact`` outside (0, 1).
 
 from __future__ import annotations
 
+from numbers import Real
+
 import numpy as np
 
+from sklearn.utils._param_validation import Interval
+
 from ..datasets.model import SensorSpec
-from .base import FEATURES, FeatureInputError, SensorNeededError
+from .base import FEATURES, SensorNeededError
 from .contact import FullScaleSet, heights
 
 __all__ = ["LiveSummary"]
@@ -86,6 +90,8 @@ class LiveSummary(FullScaleSet):
     cost = "cheap"
     fold_dependent = False
 
+    _parameter_constraints = {**FullScaleSet._parameter_constraints, "contact": [Interval(Real, 0, 1, closed="neither")]}
+
     def __init__(self, contact: float = CONTACT, value_range: tuple[float, float] | None = None,
                  sensor: SensorSpec | None = None):
         self.contact = contact
@@ -93,9 +99,6 @@ class LiveSummary(FullScaleSet):
         self.sensor = sensor
 
     def _check_params(self) -> None:
-        c = self.contact
-        if isinstance(c, bool) or not isinstance(c, (int, float)) or not (0 < c < 1):
-            raise FeatureInputError(f"live-summary: contact must be a fraction of full scale in (0, 1), got {c!r}")
         super()._check_params()
         if self.sensor is None:
             raise SensorNeededError("live-summary: needs the sensor's frame rate (a window's length in seconds): "

@@ -3,7 +3,11 @@
 
 from __future__ import annotations
 
+from numbers import Integral
+
 import numpy as np
+
+from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
@@ -55,6 +59,10 @@ class RawWindow(FeatureSet):
     cost = "cheap"
     fold_dependent = False
 
+    _parameter_constraints = {"frames": [Interval(Integral, 1, None, closed="left"), None],
+                              "offset": [Interval(Integral, 0, None, closed="left")],
+                              "shorter": [StrOptions(set(SHORTER_RULES))]}
+
     def __init__(self, frames: int | None = None, offset: int = 0, shorter: str = "refuse", sensor: SensorSpec | None = None):
         self.frames = frames
         self.offset = offset
@@ -65,11 +73,6 @@ class RawWindow(FeatureSet):
         if self.frames is None:
             raise FeatureInputError("raw-window: state the window length: frames=N (every capture becomes N frames; "
                                     "shorter ones are refused or padded as 'shorter' says)")
-        whole = all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in (self.frames, self.offset))
-        if not whole or int(self.frames) < 1 or int(self.offset) < 0:
-            raise FeatureInputError(f"raw-window: frames must be an integer >= 1 and offset an integer >= 0, got {self.frames!r}, {self.offset!r}")
-        if self.shorter not in SHORTER_RULES:
-            raise FeatureInputError(f"raw-window: shorter must be 'refuse' or 'pad', got {self.shorter!r}")
 
     def _window_problem(self, grid: tuple[int, int]) -> str | None:
         """A window of more than ``MAX_WINDOW_VALUES`` values per capture is refused: padded, it would

@@ -69,9 +69,13 @@ Interpretations and limits shared by the sets:
 
 from __future__ import annotations
 
+from numbers import Real
+
 import functools
 
 import numpy as np
+
+from sklearn.utils._param_validation import Interval
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError
@@ -141,6 +145,9 @@ class _TouchBase(FeatureSet):
     cost = "cheap"
     fold_dependent = False
 
+    _parameter_constraints = {"frame_rate": [Interval(Real, 0, None, closed="neither"), None],
+                              "value_range": ["array-like", None]}
+
     def __init__(self, frame_rate: float | None = None, value_range: tuple[float, float] | None = None,
                  sensor: SensorSpec | None = None):
         self.frame_rate = frame_rate
@@ -177,9 +184,6 @@ class _TouchBase(FeatureSet):
         return haart_units * (hi - lo) / FLOOR_SCALE
 
     def _check_params(self) -> None:
-        fs = self.frame_rate
-        if fs is not None and not (isinstance(fs, (int, float)) and np.isfinite(fs) and fs > 0):
-            raise FeatureInputError(f"{type(self).__name__}: frame_rate must be a positive number, got {fs!r}")
         vr = self.value_range
         if vr is not None:
             try:

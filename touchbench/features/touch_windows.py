@@ -36,8 +36,12 @@ Interpretations and limits:
 
 from __future__ import annotations
 
-import numpy as np
+from numbers import Integral, Real
 
+import numpy as np
+from sklearn.utils._param_validation import Interval
+
+from ..core.suggest import did_you_mean
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
 from .touch import _TouchBase
@@ -57,6 +61,11 @@ class TouchWindows(_TouchBase):
     cost = "moderate"
     fold_dependent = False
 
+    #: window_s: also at least one frame at the data's rate (``check_sensor``, or ``frame_rate`` when given)
+    _parameter_constraints = {**_TouchBase._parameter_constraints,
+                              "n_windows": [Interval(Integral, 1, None, closed="left")],
+                              "window_s": [Interval(Real, 0, None, closed="neither")], "sets": ["array-like"]}
+
     def __init__(self, n_windows: int = 4, window_s: float = 2.0, sets: tuple[str, ...] = OWN_SETS,
                  frame_rate: float | None = None, value_range: tuple[float, float] | None = None,
                  sensor: SensorSpec | None = None):
@@ -68,20 +77,22 @@ class TouchWindows(_TouchBase):
         self.sensor = sensor
 
     def _check_params(self) -> None:
+        unknown = [s for s in self.sets if s not in OWN_SETS]
+        if not len(self.sets) or unknown:
+            hint = did_you_mean(unknown[0], OWN_SETS) if unknown else ""
+            raise FeatureInputError(f"touch-windows: sets must name some of {list(OWN_SETS)}, got {self.sets!r}{hint}")
         super()._check_params()
-        k, w = self.n_windows, self.window_s
-        if not (isinstance(k, (int, np.integer)) and k >= 1):
-            raise FeatureInputError(f"TouchWindows: n_windows must be a whole number >= 1, got {k!r}")
-        if not (isinstance(w, (int, float)) and np.isfinite(w) and w > 0):
-            raise FeatureInputError(f"TouchWindows: window_s must be a positive number of seconds, got {w!r}")
-        if not self.sets or any(s not in OWN_SETS for s in self.sets):
-            raise FeatureInputError(f"TouchWindows: sets must name some of {list(OWN_SETS)}, got {self.sets!r}")
+        rate = self._fs()  # the frame rate given, else the sensor's
+        frames = round(float(self.window_s) * rate)
+        if frames < 1:
+            raise FeatureInputError(f"touch-windows: window_s {float(self.window_s):g} s is {frames} frames at {rate:g} "
+                                    f"Hz: a window is at least one frame ({1 / rate:.3g} s)")
 
     def check_sensor(self, sensor: SensorSpec, min_frames: int | None = None) -> str | None:
         problem = super().check_sensor(sensor, min_frames)
         if problem is None and min_frames is not None:
             rate = float(self.frame_rate) if self.frame_rate is not None else float(sensor.frame_rate)
-            length = max(1, round(float(self.window_s) * rate))
+            length = round(float(self.window_s) * rate)
             if length > min_frames:
                 problem = (f"touch-windows: its {float(self.window_s):g}-s windows ({length} frames at {rate:g} Hz) are longer "
                            f"than the shortest capture ({min_frames} frames); set window_s to at most {min_frames / rate:g} s")
@@ -96,7 +107,7 @@ class TouchWindows(_TouchBase):
 
     def window_starts(self, t: int) -> tuple[np.ndarray, int]:
         """Start frames and length of the windows of a ``t``-frame capture."""
-        length = int(min(t, max(1, round(float(self.window_s) * self._fs()))))
+        length = int(min(t, round(float(self.window_s) * self._fs())))
         return np.round(np.linspace(0, t - length, int(self.n_windows))).astype(int), length
 
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:

@@ -48,12 +48,16 @@ Interpretations common to both sets:
 
 from __future__ import annotations
 
+from numbers import Integral, Real
+
 import warnings
 from functools import lru_cache
 from typing import Sequence
 
 import numpy as np
 import pywt
+
+from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
@@ -175,11 +179,12 @@ class _ZhouBase(FeatureSet):
     cost = "moderate"
     fold_dependent = False
     _name = "zhou"
+    #: upsample: the bicubic factor, at most 16 (a frame of 16 x 16 cells becomes 256 x 256 pixels)
+    _parameter_constraints = {"upsample": [Interval(Real, 1, 16, closed="both")], "descriptors": ["array-like"],
+                              "trim": ["boolean"]}
 
     def _common_check(self) -> None:
         _parse_descriptors(self._name, self.descriptors)
-        if not float(self.upsample) >= 1:
-            raise FeatureInputError(f"{self._name}: upsample must be >= 1, got {self.upsample}")
 
     def _floor(self) -> float:
         return float(self.sensor.value_range[0]) if self.sensor is not None else 0.0
@@ -234,6 +239,8 @@ class ZhouBasic(_ZhouBase):
     _name = "zhou-basic"
     paper = f"{ZHOU_PAPER}.1"
 
+    _parameter_constraints = {**_ZhouBase._parameter_constraints, "mean": [StrOptions(set(MEAN_READINGS))]}
+
     def __init__(self, upsample: float = 2, descriptors: Sequence = DESCRIPTORS, trim: bool = True,
                  mean: str = "average", sensor: SensorSpec | None = None):
         self.upsample = upsample
@@ -244,8 +251,6 @@ class ZhouBasic(_ZhouBase):
 
     def _check_params(self) -> None:
         self._common_check()
-        if self.mean not in MEAN_READINGS:
-            raise FeatureInputError(f"{self._name}: mean must be one of {list(MEAN_READINGS)}, got {self.mean!r}")
 
     def feature_names(self, grid: tuple[int, int]) -> list[str]:
         idx = _parse_descriptors(self._name, self.descriptors)
@@ -310,6 +315,9 @@ class ZhouWavelet(_ZhouBase):
     _name = "zhou-wavelet"
     paper = f"{ZHOU_PAPER}.2, Tables 2, 4, 6"
 
+    _parameter_constraints = {**_ZhouBase._parameter_constraints, "levels": [Interval(Integral, 3, None, closed="left")],
+                              "wavelet": [str]}
+
     def __init__(
         self,
         levels: int = 10,
@@ -328,8 +336,6 @@ class ZhouWavelet(_ZhouBase):
 
     def _check_params(self) -> None:
         self._common_check()
-        if int(self.levels) < 3:
-            raise FeatureInputError(f"zhou-wavelet: levels must be >= 3, got {self.levels}")
         try:
             pywt.Wavelet(self.wavelet)
         except ValueError:

@@ -6,19 +6,17 @@ evaluation's dataset and target. Each pass gives ``(field location, message)`` i
 
 from __future__ import annotations
 
-import copy
 import inspect
 import itertools
 import math
 import re
-from numbers import Integral, Number, Real
 from typing import Any, Collection
 
 from pydantic import ValidationError
-from sklearn.utils._param_validation import Interval, make_constraint
 
 from ..catalog import dataset_ref_problem, format_ref_problem
 from ..classifiers import CLASSIFIERS, ParamError, check_classifier_params
+from ..core.constraints import declared_failures
 from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
 from ..core.suggest import did_you_mean
@@ -143,13 +141,16 @@ def _repeated_set_issues(at: tuple, refs: list[FeatureRef]) -> list[tuple[tuple,
 
 
 def _feature_value_issue(name: str, params: dict[str, Any]) -> str | None:
-    """The feature set's own parameter checks (``_check_params``) for every grid value, without a sensor.
+    """The feature set's declared domains (``check_declared``) and own parameter checks
+    (``_check_params``) for every grid value, without a sensor.
 
     A set that leaves a value to the sensor (``SensorNeededError``) is
     asked again by the plan, with the dataset's sensor."""
     for p in expand_grid(params):
         try:
-            make_feature_set(name, p, None)._check_params()
+            fs = make_feature_set(name, p, None)
+            fs.check_declared()
+            fs._check_params()
         except SensorNeededError:
             continue
         except FeatureInputError as e:
@@ -285,7 +286,8 @@ def _constraint_failures(est: Any) -> dict[tuple[str, str], str]:
     """scikit-learn's own parameter validation of ``est`` and of the estimators among its
     parameters, without fitting: ``(path, parameter) -> message`` for each parameter that
     ``_validate_params`` refuses against its ``_parameter_constraints`` (asked one parameter
-    at a time, so that one refusal does not hide the next)."""
+    at a time, so that one refusal does not hide the next; a boolean never read as a number:
+    :func:`touchbench.core.constraints.declared_failures`)."""
     parts: dict[str, Any] = {"": est}
     try:
         parts.update({k: v for k, v in est.get_params(deep=True).items() if hasattr(v, "_parameter_constraints")})
@@ -296,32 +298,9 @@ def _constraint_failures(est: Any) -> dict[tuple[str, str], str]:
         constraints = getattr(part, "_parameter_constraints", None)
         if not callable(getattr(part, "_validate_params", None)) or not isinstance(constraints, dict):
             continue
-        values = part.get_params(deep=False)
-        for k, c in constraints.items():
-            probe = copy.copy(part)
-            probe._parameter_constraints = {k: c}
-            try:
-                probe._validate_params()
-            except (ValueError, TypeError) as e:
-                out[(path, k)] = str(e)
-            else:
-                if isinstance(values.get(k), bool) and _number_only(c, values[k]):
-                    out[(path, k)] = (f"The {k!r} parameter of {type(part).__name__} is a number, got "
-                                      f"{values[k]!r}: a boolean is not read as a number")
+        found = declared_failures(constraints, part.get_params(deep=False), type(part).__name__)
+        out.update({(path, k): m for k, m in found.items()})
     return out
-
-
-#: the types whose instances a boolean is (Python's bool is an int): allowed only as a number
-_NUMBER_TYPES = (int, float, Integral, Real, Number)
-
-
-def _number_only(constraints: Any, value: bool) -> bool:
-    """Whether the boolean ``value`` meets scikit-learn's ``constraints`` only as a number (an
-    ``Interval`` or a numeric type), none of them saying a boolean (``"boolean"``, ``"verbose"``)."""
-    if not isinstance(constraints, list):
-        return False
-    met = [c for c in map(make_constraint, constraints) if c.is_satisfied_by(value)]
-    return bool(met) and all(isinstance(c, Interval) or getattr(c, "type", None) in _NUMBER_TYPES for c in met)
 
 
 def _param_loc(at: tuple, params: dict[str, Any], message: str) -> tuple:

@@ -1,0 +1,51 @@
+"""Declared parameter domains, checked one parameter at a time: scikit-learn's
+``_parameter_constraints`` (``Interval``, ``StrOptions``, types...) of any object, with two rules
+of touchbench's own: a boolean is never read as a number (Python's ``True`` is an ``int``), and a
+string outside a ``StrOptions`` choice is answered with the nearest choice."""
+
+from __future__ import annotations
+
+from numbers import Integral, Number, Real
+from typing import Any
+
+from sklearn.utils._param_validation import Interval, StrOptions, make_constraint, validate_parameter_constraints
+
+from .suggest import did_you_mean
+
+__all__ = ["declared_failures"]
+
+#: the types whose instances a boolean is (Python's bool is an int): allowed only as a number
+_NUMBER_TYPES = (int, float, Integral, Real, Number)
+
+
+def _number_only(constraints: Any, value: bool) -> bool:
+    """Whether the boolean ``value`` meets ``constraints`` only as a number (an ``Interval`` or a
+    numeric type), none of them saying a boolean (``"boolean"``, ``"verbose"``)."""
+    if not isinstance(constraints, list):
+        return False
+    met = [c for c in map(make_constraint, constraints) if c.is_satisfied_by(value)]
+    return bool(met) and all(isinstance(c, Interval) or getattr(c, "type", None) in _NUMBER_TYPES for c in met)
+
+
+def _choices(constraints: Any) -> list[str]:
+    return sorted(o for c in (constraints if isinstance(constraints, list) else []) if isinstance(c, StrOptions)
+                  for o in c.options if isinstance(o, str))
+
+
+def declared_failures(constraints: dict[str, Any], values: dict[str, Any], owner: str) -> dict[str, str]:
+    """``parameter -> message`` for each of ``values`` that its entry of ``constraints`` (scikit-learn's
+    form) refuses; ``owner`` names the object in the message. A parameter without an entry is not asked."""
+    out: dict[str, str] = {}
+    for k, c in constraints.items():
+        if k not in values:
+            continue
+        v = values[k]
+        try:
+            validate_parameter_constraints({k: c}, {k: v}, caller_name=owner)
+        except (ValueError, TypeError) as e:
+            hint = did_you_mean(v, _choices(c)) if isinstance(v, str) else ""
+            out[k] = str(e).rstrip(".") + hint if hint else str(e)
+        else:
+            if isinstance(v, bool) and _number_only(c, v):
+                out[k] = f"The {k!r} parameter of {owner} is a number, got {v!r}: a boolean is not read as a number"
+    return out
