@@ -81,12 +81,12 @@ class TouchWindows(_TouchBase):
         if not len(self.sets) or unknown:
             hint = did_you_mean(unknown[0], OWN_SETS) if unknown else ""
             raise FeatureInputError(f"touch-windows: sets must name some of {list(OWN_SETS)}, got {self.sets!r}{hint}")
-        super()._check_params()
-        rate = self._fs()  # the frame rate given, else the sensor's
-        frames = round(float(self.window_s) * rate)
-        if frames < 1:
+        rate = self.frame_rate if self.frame_rate is not None else getattr(self.sensor, "frame_rate", None)
+        frames = None if rate is None else round(float(self.window_s) * float(rate))
+        if frames is not None and frames < 1:
             raise FeatureInputError(f"touch-windows: window_s {float(self.window_s):g} s is {frames} frames at {rate:g} "
                                     f"Hz: a window is at least one frame ({1 / rate:.3g} s)")
+        super()._check_params()
 
     def check_sensor(self, sensor: SensorSpec, min_frames: int | None = None) -> str | None:
         problem = super().check_sensor(sensor, min_frames)
