@@ -29,7 +29,7 @@ from touchbench.datasets import cache as cache_module
 from touchbench.datasets.cache import cached_dataset
 from touchbench.engine import identity, run_protocol
 from touchbench.engine.testing import random_dataset
-from touchbench.evaluation import metrics as metrics_module
+from touchbench.scoring import metrics as metrics_module
 from touchbench.scoring.metrics import metrics
 from touchbench.results import store as store_module
 from touchbench.results import ledger

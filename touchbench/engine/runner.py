@@ -22,7 +22,6 @@ evaluation of it into its own folder.
 
 from __future__ import annotations
 
-import os
 import sys
 import time
 import warnings
@@ -51,18 +50,15 @@ from ..protocols.checks import require_extras
 from ..protocols.loading import load_protocol
 from ..protocols.schema import Protocol
 from ..protocols.specs import design_blocks
-from ..core.paths import results_root
-from ..results.ledger import LEDGER_NAME, check_final, end_look, merge_ledgers, old_ledgers, record_look, start_look
-from ..results.manifest import now_iso, update_manifest
-from ..results.store import (PREDICTED, SCHEMA_VERSION, TRUE, ResultStore, TaskWriter, check_schema,
-                              read_results_table)
+from ..results.manifest import now_iso
+from ..results.session import Results, open_results
 from ..results.summary import check_expected, summarize
 from .backends import check_jobs, is_local_backend, local_jobs, parallel
 from .cache import FeatureCache, crop_captures
 from .planning import Plan, check_methods, names_a_method, plan_method_list, plan_methods, plan_run, plan_test_set
 from .tasks import RunContext, Task, execute_task, make_feature_set
 
-__all__ = ["RunResult", "default_ledger", "default_results_dir", "plan_protocol", "results_dirs", "run_plan",
+__all__ = ["RunResult", "default_results_dir", "plan_protocol", "results_dirs", "run_plan",
            "run_protocol"]
 
 
@@ -165,45 +161,12 @@ def _dataset_copy(plan: Plan) -> Path:
     return path
 
 
-def _reports_current(store: ResultStore, plan: Plan, notes: list[str]) -> bool:
-    """The merged files are those of this plan, as the last merge wrote them (a damaged or edited
-    one adds a note: they are rebuilt from the fragments)."""
-    m = store.read_manifest()
-    if not m:
-        return False
-    if m.get("run", {}).get("run_id") != plan.run_id or m.get("tasks", {}).get("ids_hash") != plan.ids_hash:
-        return False
-    if m.get("tasks", {}).get("merged") != len(plan.tasks):
-        return False
-    version = check_schema(m.get("results_schema"), store.manifest_path)
-    if version < SCHEMA_VERSION:
-        notes.append(f"the merged files have the layout of results schema {version}: merged again in schema "
-                     f"{SCHEMA_VERSION}")
-        return False
-    problems = store.merged_problems(m.get("tasks", {}).get("merged_files"))
-    if problems:
-        notes.append("; ".join(problems) + ": merged again from the results of each task")
-        return False
-    return True
-
-
 def _damaged_notes(plan: Plan, problems: dict[str, str]) -> list[str]:
     """A note per task of the plan whose saved results could not be trusted (run again)."""
     by_id = {t.task_id: t for t in plan.tasks}
     return [f"the saved results of {t.method.features_label} | {t.method.label}, fold {t.fold.name} (repetition "
             f"{t.repetition}) were not used: {problems[tid]}; run again"
             for tid, t in by_id.items() if tid in problems]
-
-
-def default_ledger(protocol: Protocol, out: str | Path) -> Path:
-    """The ledger of the results root (:func:`touchbench.core.paths.results_root`: the nearest
-    ``results`` folder above ``out``); outside one, of the parent of the protocol's results folder
-    (which holds one folder per evaluation when the protocol has several)."""
-    root = results_root(out)
-    if root is not None:
-        return root / LEDGER_NAME
-    folder = Path(out).parent if protocol.evaluation else Path(out)
-    return folder.parent / LEDGER_NAME
 
 
 def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force: bool = False,
@@ -225,20 +188,18 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
     far are kept and merged, the others are left pending.
 
     A run that scores its test set (a task to run, or ``final``) is recorded
-    in ``ledger`` (default: :func:`default_ledger`) before any task;
+    in ``ledger`` (default: :func:`touchbench.results.session.default_ledger`) before any task;
     ``final`` marks the run to report and is refused when the test set had
     a final run with other methods, unless ``force_final``
     (:func:`touchbench.results.ledger.check_final`).
     """
     out = Path(out) if out is not None else default_results_dir(plan.protocol)
-    store = ResultStore(out)
-    ledger = Path(ledger) if ledger is not None else default_ledger(plan.protocol, out)
     only = check_methods(plan, methods)
-    with store.lock(wait=wait, command=f"touchbench run {plan.protocol.name}"):
-        store.check_owner(plan.protocol.name, plan.protocol.evaluation)
-        return _run_locked(plan, store, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
-                           worker_setup=worker_setup, fail_fast=fail_fast, final=final, force_final=force_final,
-                           ledger=ledger, methods=only)
+    with open_results(out, protocol=plan.protocol.name, evaluation=plan.protocol.evaluation, run_id=plan.run_id,
+                      ids_hash=plan.ids_hash, task_ids=plan.task_ids, ledger=ledger, wait=wait) as store:
+        return _run_held(plan, store, out, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
+                         worker_setup=worker_setup, fail_fast=fail_fast, final=final, force_final=force_final,
+                         methods=only)
 
 
 def _design_captures(plan: Plan) -> list[str] | list[list[str]] | None:
@@ -289,26 +250,6 @@ def _report_block(plan: Plan) -> dict[str, Any] | None:
     return {"recall": list(report.recall), "by": list(report.by), "rows": rows}
 
 
-def _record_look(plan: Plan, store: ResultStore, ledger: Path, final: bool, force_final: bool, n_pending: int,
-                 only: set[str] | None) -> tuple[str, list[str]]:
-    """The plan's test-set hash; the look recorded in the ledger (when the run scores the test set:
-    the session that resumes an interrupted run records that run's look id again)."""
-    root = results_root(store.root)
-    if root is not None and ledger == root / LEDGER_NAME:  # the ledgers of earlier versions, deeper in the root
-        merge_ledgers(ledger, old_ledgers(root))
-    test_set = plan_test_set(plan)
-    methods = plan_methods(plan, only)  # the methods this run scores (``--method``), not every one planned
-    notes = check_final(ledger, test_set, methods, force_final) if final else []
-    if n_pending or final:
-        look, resumed = start_look(store.root, {"run_id": plan.run_id, "final": final,
-                                                "methods": sorted(only) if only is not None else None})
-        record_look(ledger, {"time": now_iso(), "protocol": plan.protocol.name, "evaluation": plan.protocol.evaluation,
-                             "test_set": test_set, "run_id": plan.run_id, "methods": methods, "tasks": n_pending,
-                             "final": final, "forced": bool(notes), "look": look, "resumed": resumed,
-                             "results": str(store.root)})
-    return test_set, notes
-
-
 def _jobs_for_backend(jobs: int) -> int:
     """``jobs`` capped to the CPUs on the local backend (a warning), checked on a cluster."""
     if is_local_backend():
@@ -325,27 +266,27 @@ def _selected(plan: Plan, methods: set[str] | None) -> list[Task]:
     return [t for t in plan.tasks if methods is None or method_name(t.method) in methods]
 
 
-def _noop_result(plan: Plan, store: ResultStore, selected: list[str], notes: list[str], t_start: float) -> RunResult:
+def _noop_result(plan: Plan, store: Results, out: Path, selected: list[str], notes: list[str],
+                 t_start: float) -> RunResult:
     """The result of a run with nothing to do: the merged tables as they are (counts: the tasks of
     the ``selected`` ids)."""
     protocol = plan.protocol
-    scores = read_results_table(store.scores_path)
-    preds = None
-    if protocol.expected is not None:
-        preds = read_results_table(store.predictions_path, columns=["task_id", TRUE, PREDICTED])
+    tables = store.finish(predictions=protocol.expected is not None)
+    scores = tables["scores"]
     failed = scores["task_id"].isin(selected) & (scores["status"] == "failed")
-    return RunResult(out=store.root, run_id=plan.run_id, n_tasks=len(selected), n_ran=0, n_skipped=len(selected),
+    return RunResult(out=out, run_id=plan.run_id, n_tasks=len(selected), n_ran=0, n_skipped=len(selected),
                      n_failed=int(failed.sum()), noop=True,
                      seconds=time.perf_counter() - t_start, scores=scores,
                      summary=summarize(scores, metrics=protocol.metrics),
-                     expected=check_expected(protocol.expected, scores, preds, protocol.features_label_of),
+                     expected=check_expected(protocol.expected, scores, tables["predictions"],
+                                             protocol.features_label_of),
                      notes=notes)
 
 
-def _execute(plan: Plan, store: ResultStore, pending: list[Task], jobs: int, prog: "_Progress", worker_setup,
-             fail_fast: bool, status: dict[str, str]) -> tuple[int, bool]:
-    """Run ``pending``, each result stored as it arrives (its status recorded in ``status``):
-    (tasks run, stopped at a failure)."""
+def _execute(plan: Plan, store: Results, pending: list[Task], jobs: int, prog: "_Progress", worker_setup,
+             fail_fast: bool) -> tuple[int, bool]:
+    """Run ``pending``, each result handed to the store as it arrives (its fragments are written
+    while the next task computes): (tasks run, stopped at a failure)."""
     ds_path = _dataset_copy(plan) if jobs > 1 and len(pending) > 1 else None
     ctx = RunContext(plan.dataset, plan.protocol.target, plan.cache_root, ds_path, setup=worker_setup)
     tid = prog.add(f"{plan.protocol.name}: tasks", len(pending))
@@ -354,20 +295,15 @@ def _execute(plan: Plan, store: ResultStore, pending: list[Task], jobs: int, pro
     else:  # never more workers than tasks
         results = parallel(min(jobs, len(pending)), ordered=False)(delayed(execute_task)(t, ctx) for t in pending)
     n_ran, stopped = 0, False
-    with TaskWriter(store) as writer:  # each task's fragments written while the next one computes
-        for row, preds in results:
-            if preds is not None:
-                preds.insert(0, "run_id", plan.run_id)
-            row["run_id"] = plan.run_id
-            writer.write(row["task_id"], row, preds)
-            status[row["task_id"]] = row["status"]
-            n_ran += 1
-            prog.advance(tid)
-            if fail_fast and row.get("status") == "failed":
-                stopped = True
-                break
-        if hasattr(results, "close"):
-            results.close()  # a generator left early: joblib cancels what it has not started
+    for row, preds in results:
+        store.add(row, preds)
+        n_ran += 1
+        prog.advance(tid)
+        if fail_fast and row.get("status") == "failed":
+            stopped = True
+            break
+    if hasattr(results, "close"):
+        results.close()  # a generator left early: joblib cancels what it has not started
     return n_ran, stopped
 
 
@@ -401,7 +337,6 @@ class _Session:
     force: bool
     selected: list[str]  # the ids of the tasks this run is about
     n_pending: int
-    status: dict[str, str] = field(default_factory=dict)  # task id -> ok / failed, of every finished task
     n_ran: int = 0
     stopped: bool = False
     notes: list[str] = field(default_factory=list)
@@ -412,68 +347,59 @@ class _Session:
                 "seconds": round(time.perf_counter() - self.t_start, 3)}
 
 
-def _merge_and_record(plan: Plan, store: ResultStore, session: _Session, ledger: Path, test_set: str,
-                      final: bool, design_captures: list[str] | None, report: dict[str, Any] | None = None) -> RunResult:
+def _merge_and_record(plan: Plan, store: Results, out: Path, session: _Session,
+                      design_captures: list[str] | None, report: dict[str, Any] | None = None) -> RunResult:
     """Merge every finished task of the plan into the tables and write the manifest."""
-    protocol, out = plan.protocol, store.root
+    protocol = plan.protocol
     stamp = {"run_id": plan.run_id, "protocol": protocol.name, "protocol_hash": protocol.text_hash}
     # what the plan says of each task, over what its fragment says: how it leaks, and how it is named
     # (a label renamed in the protocol changes no task, only the name its rows carry)
     per_task = {col: {t.task_id: t.base_row.get(col, "") for t in plan.tasks}
                 for col in ("leakage", "selection", "adaptation", "features", "classifier")}
-    merged = store.merge(plan.task_ids, stamp, protocol.metrics, session.notes, per_task, session.status)
+    expected: list[dict[str, Any]] = []
+
+    def describe(merged: dict[str, pd.DataFrame]) -> dict[str, Any]:
+        expected[:] = check_expected(protocol.expected, merged["scores"], merged["predictions"],
+                                     protocol.features_label_of)
+        blocks = _manifest_blocks(plan, out)
+        blocks["protocol"].update(design_captures=design_captures, report=report)
+        return {**blocks, "session": session.block(), "expected": expected}
+
+    merged = store.finish(stamp=stamp, metrics=protocol.metrics, per_task=per_task, notes=session.notes,
+                          describe=describe, folds=plan.n_folds, ended=not session.stopped)
     scores = merged["scores"]
-    expected = check_expected(protocol.expected, scores, merged["predictions"], protocol.features_label_of)
-    n_failed = sum(1 for t in plan.task_ids if session.status.get(t) == "failed")
-    manifest = update_manifest(
-        store.read_manifest(), **_manifest_blocks(plan, out), session=session.block(),
-        tasks={"total": len(plan.tasks), "merged": len(scores), "failed": n_failed, "folds": plan.n_folds,
-               "ids_hash": plan.ids_hash, "task_ids": plan.task_ids, "merged_files": store.merged_checksums()},
-        notes=session.notes, expected=expected)
-    manifest["ledger"] = {"path": os.path.relpath(ledger, out), "test_set": test_set, "final": final}
-    manifest["protocol"]["design_captures"] = design_captures
-    manifest["protocol"]["report"] = report
-    store.write_manifest(manifest)
+    selected = scores["task_id"].isin(session.selected)
     return RunResult(out=out, run_id=plan.run_id, n_tasks=len(session.selected), n_ran=session.n_ran,
                      n_skipped=len(session.selected) - session.n_pending,
-                     n_failed=sum(1 for t in session.selected if session.status.get(t) == "failed"), noop=False,
+                     n_failed=int((selected & (scores["status"] == "failed")).sum()), noop=False,
                      seconds=time.perf_counter() - session.t_start, scores=scores,
                      summary=summarize(scores, metrics=protocol.metrics), expected=expected, notes=session.notes,
                      stopped_early=session.stopped)
 
 
-def _run_locked(plan: Plan, store: ResultStore, *, jobs: int, force: bool, retry_failed: bool,
-                progress: bool | None, worker_setup, fail_fast: bool = False, final: bool = False,
-                force_final: bool = False, ledger: Path, methods: set[str] | None = None) -> RunResult:
+def _run_held(plan: Plan, store: Results, out: Path, *, jobs: int, force: bool, retry_failed: bool,
+              progress: bool | None, worker_setup, fail_fast: bool = False, final: bool = False,
+              force_final: bool = False, methods: set[str] | None = None) -> RunResult:
     t_start, started_at = time.perf_counter(), now_iso()
-    store.clean_stale_temporaries()
     jobs = _jobs_for_backend(jobs)
-    if force:
-        store.forget(plan.task_ids)
-    damaged: dict[str, str] = {}
-    finished = store.finished(damaged)
-    notes = list(plan.notes) + _damaged_notes(plan, damaged)
-    selected = _selected(plan, methods)  # only these run; every finished task of the plan is still merged
-    pending = [t for t in selected
-               if t.task_id not in finished or (retry_failed and finished[t.task_id] == "failed")]
     design_captures = _design_captures(plan)  # a design naming an unknown column is refused before any task
     report = _report_block(plan)  # so is a report naming an unknown column or class
-    same_report = ((store.read_manifest() or {}).get("protocol") or {}).get("report") == report  # added later: merge again
-    if not pending and not final and same_report and _reports_current(store, plan, notes):
-        return _noop_result(plan, store, [t.task_id for t in selected], notes, t_start)
-
-    test_set, final_notes = _record_look(plan, store, ledger, final, force_final, len(pending), methods)  # before any task
-    session = _Session(started_at, t_start, jobs, force, [t.task_id for t in selected], len(pending), dict(finished),
-                       notes=notes + final_notes)
+    selected = _selected(plan, methods)  # only these run; every finished task of the plan is still merged
+    todo = store.remaining([t.task_id for t in selected], force=force, retry_failed=retry_failed, report=report,
+                           final=final, force_final=force_final, methods=plan_methods(plan, methods),
+                           only=sorted(methods) if methods is not None else None,
+                           test_set=partial(plan_test_set, plan))  # the look recorded before any task
+    notes = list(plan.notes) + _damaged_notes(plan, todo.damaged) + todo.notes
+    if todo.current:
+        return _noop_result(plan, store, out, [t.task_id for t in selected], notes, t_start)
+    left = set(todo.pending)
+    pending = [t for t in selected if t.task_id in left]
+    session = _Session(started_at, t_start, jobs, force, [t.task_id for t in selected], len(pending), notes=notes)
     with _Progress(sys.stderr.isatty() if progress is None else progress) as prog:
         if pending:
             session.notes += _fill_cache(plan, pending, jobs, prog, worker_setup)
-            session.n_ran, session.stopped = _execute(plan, store, pending, jobs, prog, worker_setup, fail_fast,
-                                                      session.status)
-    result = _merge_and_record(plan, store, session, ledger, test_set, final, design_captures, report)
-    if not session.stopped:  # the run ended: the next one is another look
-        end_look(store.root)
-    return result
+            session.n_ran, session.stopped = _execute(plan, store, pending, jobs, prog, worker_setup, fail_fast)
+    return _merge_and_record(plan, store, out, session, design_captures, report)
 
 
 def results_dirs(protocol: Protocol, out: str | Path | None = None) -> list[tuple[Protocol, Path]]:
