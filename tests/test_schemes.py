@@ -323,10 +323,10 @@ def test_early_repeats_base_folds_per_length_with_crop():
     sp = make_splitter("early", base={"name": "loso"}, frames=[5, 20])
     folds = sp.folds(meta)
     assert [f.name for f in folds] == [f"first{n}f/subject={s}" for n in (5, 20) for s in SUBJECTS[:3]]
-    assert all(f.crop == Crop(frames=n, train=False) for f, n in zip(folds, [5] * 3 + [20] * 3))
+    assert all(f.extra(Crop) == Crop(frames=n, train=False) for f, n in zip(folds, [5] * 3 + [20] * 3))
     assert no_leak(meta, folds)
     s = make_splitter("early", base={"name": "kfold", "k": 3}, seconds=[0.5], crop_train=True).folds(meta)
-    assert len(s) == 3 and s[0].crop.train and s[0].crop.n_frames(54.0) == 27
+    assert len(s) == 3 and s[0].extra(Crop).train and s[0].extra(Crop).n_frames(54.0) == 27
 
 
 def test_early_validates_its_parameters():

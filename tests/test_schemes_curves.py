@@ -20,7 +20,7 @@ from touchbench.engine import run_protocol
 from touchbench.engine.testing import SENSOR
 from touchbench.protocols.errors import ProtocolError
 from touchbench.protocols.loading import parse_protocol
-from touchbench.protocols.schemes import CurvePoint, SplitError, make_splitter
+from touchbench.protocols.schemes import Crop, CurvePoint, SplitError, make_splitter
 
 
 def grid(subjects, gestures, per=1, **extra) -> pd.DataFrame:
@@ -56,15 +56,15 @@ def test_learning_curve_draws_distinct_subsets_of_the_training_subjects_and_keep
         b = base[name]
         held = subjects_of(meta, b.test)
         for n in (1, 2, 3):
-            drawn = [f for f in points if f.curve.size == n]
-            assert [f.curve for f in drawn] == [CurvePoint("subjects", n, d) for d in range(4)]
+            drawn = [f for f in points if f.extra(CurvePoint).size == n]
+            assert [f.extra(CurvePoint) for f in drawn] == [CurvePoint("subjects", n, d) for d in range(4)]
             assert [f.name for f in drawn] == [f"n{n}#{d}/{name}" for d in range(4)]
             sets = [frozenset(subjects_of(meta, f.train)) for f in drawn]
             assert len(set(sets)) == 4 and all(len(s) == n and not s & held for s in sets)
             for f, s in zip(drawn, sets):
                 assert len(f.train) == 4 * n  # every capture of the drawn subjects, nothing else
                 assert np.array_equal(f.test, b.test) and f.group == b.group
-        full = [f for f in points if f.curve == CurvePoint("subjects", 5, 0)]
+        full = [f for f in points if f.extra(CurvePoint) == CurvePoint("subjects", 5, 0)]
         assert len(full) == 1 and np.array_equal(full[0].train, b.train) and np.array_equal(full[0].test, b.test)
         assert full[0].name == f"n5#0/{name}"
 
@@ -75,7 +75,7 @@ def test_learning_curve_draws_subjects_at_random_not_by_position():
     for seed in range(40):
         sp = make_splitter("learning-curve", base={"name": "loso", "subjects": ["s1"]}, subjects=[1], draws=1,
                            random_state=seed)
-        one = next(f for f in sp.folds(meta) if f.curve.size == 1)
+        one = next(f for f in sp.folds(meta) if f.extra(CurvePoint).size == 1)
         seen |= subjects_of(meta, one.train)
     assert seen == {"s2", "s3", "s4", "s5", "s6"}  # the first subjects by position would give only s2
 
@@ -84,20 +84,20 @@ def test_learning_curve_with_fewer_subsets_than_draws_takes_each_once_and_says_s
     meta = grid(["a", "b", "c", "d"], ["pat", "rub"])
     folds = make_splitter("learning-curve", base={"name": "loso", "subjects": ["a"]}, subjects=[1, 2],
                           draws=5).folds(meta)
-    ones = [f for f in folds if f.curve.size == 1]
-    twos = [f for f in folds if f.curve.size == 2]
+    ones = [f for f in folds if f.extra(CurvePoint).size == 1]
+    twos = [f for f in folds if f.extra(CurvePoint).size == 2]
     assert sorted(min(subjects_of(meta, f.train)) for f in ones) == ["b", "c", "d"]  # C(3,1) = 3 < 5
     assert sorted(tuple(sorted(subjects_of(meta, f.train))) for f in twos) == [("b", "c"), ("b", "d"), ("c", "d")]
-    assert [f.curve.draw for f in ones] == [0, 1, 2]
+    assert [f.extra(CurvePoint).draw for f in ones] == [0, 1, 2]
     assert all("only 3 distinct subset(s), fewer than draws=5: each is drawn once" in f.notes[0] for f in ones + twos)
-    full = [f for f in folds if f.curve.size == 3]
+    full = [f for f in folds if f.extra(CurvePoint).size == 3]
     assert len(full) == 1 and full[0].notes == ()
 
 
 def test_learning_curve_fractions_round_half_up_and_end_at_one():
     meta = grid(SIX, ["pat"])  # loso: 5 training subjects
     folds = make_splitter("learning-curve", base="loso", fractions=[0.1, 0.5], draws=2).folds(meta)
-    sizes = {(f.curve.size, len(subjects_of(meta, f.train))) for f in folds}
+    sizes = {(f.extra(CurvePoint).size, len(subjects_of(meta, f.train))) for f in folds}
     # 0.1 x 5 = 0.5 -> 1 (and at least 1), 0.5 x 5 = 2.5 -> 3, the full point 5
     assert sizes == {(0.1, 1), (0.5, 3), (1.0, 5)}
     assert {f.name.split("/")[0] for f in folds} == {"f0.1#0", "f0.1#1", "f0.5#0", "f0.5#1", "f1#0"}
@@ -111,10 +111,10 @@ def test_learning_curve_stratified_spreads_the_subjects_over_the_column():
                        stratify="site")
     folds = sp.folds(meta)
     # training: A = s2, s3, s4 and B = s5, s6. n = 2: one of each, 3 x 2 = 6 subsets (< 8 draws: each once)
-    twos = [sorted(subjects_of(meta, f.train)) for f in folds if f.curve.size == 2]
+    twos = [sorted(subjects_of(meta, f.train)) for f in folds if f.extra(CurvePoint).size == 2]
     assert sorted(map(tuple, twos)) == sorted((a, b) for a in ("s2", "s3", "s4") for b in ("s5", "s6"))
     # n = 3: 2 + 1 or 1 + 2: 3 x 2 + 3 x 1 = 9 subsets (> 8 draws: 8 distinct ones)
-    threes = [subjects_of(meta, f.train) for f in folds if f.curve.size == 3]
+    threes = [subjects_of(meta, f.train) for f in folds if f.extra(CurvePoint).size == 3]
     assert len(threes) == 8 and len({frozenset(s) for s in threes}) == 8
     assert all({site[s] for s in t} == {"A", "B"} for t in threes)
 
@@ -174,7 +174,7 @@ def test_calibration_scores_the_same_captures_for_every_k_and_never_the_calibrat
     y = meta["gesture"].to_numpy()
     for name, b in base.items():
         for d in range(2):
-            points = {f.curve.size: f for f in folds if f.name.endswith("/" + name) and f.curve.draw == d}
+            points = {f.extra(CurvePoint).size: f for f in folds if f.name.endswith("/" + name) and f.extra(CurvePoint).draw == d}
             assert sorted(points) == [0, 1, 3]
             assert [points[k].name for k in (0, 1, 3)] == [f"k0#{d}/{name}", f"k1#{d}/{name}", f"k3#{d}/{name}"]
             scored = points[0].test
@@ -182,7 +182,7 @@ def test_calibration_scores_the_same_captures_for_every_k_and_never_the_calibrat
             assert len(scored) == 2 and set(scored) <= set(b.test) and sorted(y[scored]) == ["pat", "rub"]
             calib = {}
             for k, f in points.items():
-                assert np.array_equal(f.test, scored) and f.curve == CurvePoint("calibration", k, d)
+                assert np.array_equal(f.test, scored) and f.extra(CurvePoint) == CurvePoint("calibration", k, d)
                 extra = np.setdiff1d(f.train, b.train)
                 assert set(b.train) <= set(f.train) and len(f.train) == len(b.train) + 2 * k
                 assert not set(extra) & set(scored) and set(extra) <= set(b.test)
@@ -198,7 +198,7 @@ def test_calibration_draws_differ_and_are_seeded():
 
     def pools(seed):
         folds = make_splitter("calibration", base="loso", per_class=[2], draws=3, random_state=seed).folds(meta)
-        return [tuple(f.train.tolist()) for f in folds if f.curve.size == 2]
+        return [tuple(f.train.tolist()) for f in folds if f.extra(CurvePoint).size == 2]
 
     assert pools(1) == pools(1) and pools(1) != pools(2)
     assert len(set(pools(1))) == len(pools(1))  # 9 draws over 3 folds: C(6,2)^2 = 225 possible pools each
@@ -208,7 +208,7 @@ def test_calibration_short_class_gives_all_but_one_and_says_so():
     meta = grid(["s1", "s2"], ["pat", "rub"], per=3)
     meta = meta.drop(index=meta.index[(meta["subject"] == "s1") & (meta["gesture"] == "rub")][:1]).reset_index(drop=True)
     folds = make_splitter("calibration", base={"name": "loso", "subjects": ["s1"]}, per_class=[2]).folds(meta)
-    f2 = next(f for f in folds if f.curve.size == 2 and f.curve.draw == 0)
+    f2 = next(f for f in folds if f.extra(CurvePoint).size == 2 and f.extra(CurvePoint).draw == 0)
     y = meta["gesture"].to_numpy()
     # s1 has 3 pat (2 go to training) and 2 rub (k = 2 would leave none: 1 goes): 1 pat and 1 rub scored
     assert sorted(y[f2.test]) == ["pat", "rub"]
@@ -222,7 +222,7 @@ def test_calibration_records_the_captures_a_capped_point_really_added():
     meta = grid(["s1", "s2"], ["pat", "rub"], per=3)
     meta = meta.drop(index=meta.index[(meta["subject"] == "s1") & (meta["gesture"] == "rub")][:1]).reset_index(drop=True)
     sp = make_splitter("calibration", base={"name": "loso", "subjects": ["s1"]}, per_class=[1, 2], draws=1)
-    points = {f.curve.size: f.curve for f in sp.folds(meta)}
+    points = {f.extra(CurvePoint).size: f.extra(CurvePoint) for f in sp.folds(meta)}
     assert (points[0].added, points[0].added_min) == (0.0, 0.0)
     assert (points[1].added, points[1].added_min) == (1.0, 1.0)
     assert (points[2].added, points[2].added_min) == (1.5, 1.0)
@@ -256,7 +256,7 @@ def test_calibration_per_unit_column():
     meta = grid(["s1", "s2"], ["pat"], per=2, session=[1, 2])  # s1: 2 captures in each session
     folds = make_splitter("calibration", base={"name": "loso", "subjects": ["s1"]}, per_class=[1], unit="session",
                           draws=1).folds(meta)
-    f1 = next(f for f in folds if f.curve.size == 1)
+    f1 = next(f for f in folds if f.extra(CurvePoint).size == 1)
     extra = np.setdiff1d(f1.train, np.flatnonzero(meta["subject"] == "s2"))
     assert sorted(meta["session"].to_numpy()[extra]) == [1, 2]  # one per session
     assert sorted(meta["session"].to_numpy()[f1.test]) == [1, 2]
@@ -268,7 +268,7 @@ def test_calibration_over_cross_dataset_draws_from_the_test_dataset():
     meta["frames_sha256"] = [f"h{i}" for i in range(len(meta))]
     folds = make_splitter("calibration", base={"name": "cross-dataset", "test": "other"}, per_class=[1],
                           draws=1).folds(meta)
-    f1 = next(f for f in folds if f.curve.size == 1)
+    f1 = next(f for f in folds if f.extra(CurvePoint).size == 1)
     extra = np.setdiff1d(f1.train, np.flatnonzero(meta["origin"] == "train"))
     assert subjects_of(meta, extra) == {"x"} and len(extra) == 2 and len(f1.test) == 2
 
@@ -416,6 +416,6 @@ def test_curve_schemes_are_labelled_without_their_sweep_and_keep_a_wrapped_crop(
     meta = grid(["a", "b", "c"], ["pat", "rub"])
     folds = make_splitter("learning-curve", base={"name": "early", "base": "loso", "frames": [4]},
                           subjects=[1]).folds(meta)
-    assert {f.crop.frames for f in folds} == {4}
-    assert {f.name for f in folds if f.curve.size == 2} == {"n2#0/first4f/subject=a", "n2#0/first4f/subject=b",
+    assert {f.extra(Crop).frames for f in folds} == {4}
+    assert {f.name for f in folds if f.extra(CurvePoint).size == 2} == {"n2#0/first4f/subject=a", "n2#0/first4f/subject=b",
                                                             "n2#0/first4f/subject=c"}

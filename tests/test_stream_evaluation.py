@@ -13,6 +13,7 @@ from touchbench.cli.main import cli
 from touchbench.datasets.model import TouchDataset
 from touchbench.engine.planning import prepare_evaluation
 from touchbench.protocols.loading import load_protocol
+from touchbench.streams.replay import LiveSpec
 from touchbench.streams.timeline import decisions_per_frame, stream_frames
 
 PROTOCOL = """\
@@ -77,7 +78,7 @@ def test_the_evaluation_decides_what_touchbench_stream_prints(live_run, tmp_path
     proto = load_protocol(root / "p.yaml")
     prepared = prepare_evaluation(proto)
     fold = next(f for f in prepared.folds[0] if f.name == "subject=s04")
-    (stream,) = fold.live.streams
+    (stream,) = fold.extra(LiveSpec).streams
     ds = prepared.dataset
     y = ds.meta["gesture"].astype(str).to_numpy()
     frames, truth = stream_frames(ds.captures, y, stream, "notouch", 0)

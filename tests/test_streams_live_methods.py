@@ -140,7 +140,7 @@ def test_the_rule_is_chosen_on_inner_folds_of_the_training_subjects_alone():
     subjects = meta["subject"].to_numpy()
     for fold in sp.folds(meta):
         test_subject = set(subjects[fold.test])
-        inner = fold.live.inner
+        inner = fold.extra(LiveSpec).inner
         assert len(inner) == 2  # the two training subjects, each left out once
         for f in inner:
             held = {s.subject for s in f.streams}
@@ -148,7 +148,7 @@ def test_the_rule_is_chosen_on_inner_folds_of_the_training_subjects_alone():
             assert not (held | trained) & test_subject  # the test subject is never looked at
             assert held and not held & trained
             assert {s.subject for s in f.train_streams} == trained
-        assert {s.subject for s in fold.live.train_streams} == set(subjects[fold.train])
+        assert {s.subject for s in fold.extra(LiveSpec).train_streams} == set(subjects[fold.train])
 
 
 def _captures(seed=0):

@@ -9,6 +9,7 @@ import click
 
 from ..engine.backends import backend_for_run, backend_options
 from ..protocols.library import find_protocol
+from ..streams.replay import LiveSpec
 from . import exitcodes
 from .common import echo_json, example, jobs_option, jobs_value, json_option, log
 
@@ -197,7 +198,7 @@ def _run_one(plan, out_dir, jobs, force, retry_failed, fail_fast, progress, wait
     else:
         log.info(f"ran {res.n_ran} task(s), skipped {res.n_skipped} finished, {res.n_failed} failed, "
                  f"in {res.seconds:.1f} s")
-    live = _stream_tables(res) if any(t.fold.live is not None for t in plan.tasks) else []
+    live = _stream_tables(res) if any(t.fold.extra(LiveSpec) is not None for t in plan.tasks) else []
     if not quiet:
         click.echo("\n".join(live) if live else format_summary(res.summary, res.expected))
     if res.stopped_early:

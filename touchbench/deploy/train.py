@@ -53,7 +53,6 @@ from ..protocols.loading import load_protocol
 from ..protocols.schema import Protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
 from ..protocols.schemes import Fold
-from ..protocols.schemes.stream import rule_specs
 from ..streams.replay import LiveSpec
 from ..streams.rules import fitted_declaration, stream_rule
 from .model import TrainedModel, fit_model
@@ -123,7 +122,7 @@ def _fold(proto: Protocol, prepared: Prepared, fold: str) -> Fold:
     if len(named) != 1:
         raise TouchbenchError(f"scheme {proto.scheme.name!r} of {proto.name!r} has no fold {fold!r} "
                               f"(folds: {', '.join(names)})")
-    if named[0].crop is not None:
+    if named[0].crop_frames(prepared.dataset.sensor.frame_rate) is not None:
         raise TouchbenchError(f"fold {named[0].name!r} crops captures (early recognition); train on whole captures instead")
     return named[0]
 
@@ -132,7 +131,7 @@ def _single_fold(prepared: Prepared) -> Fold | None:
     """The evaluation's one fold (a single test set: its training side is that fold's training part),
     or None when it has several or cuts captures."""
     folds = prepared.folds[0]
-    return folds[0] if len(folds) == 1 and folds[0].crop is None else None
+    return folds[0] if len(folds) == 1 and folds[0].crop_frames(prepared.dataset.sensor.frame_rate) is None else None
 
 
 def train_from_protocol(
@@ -185,7 +184,7 @@ def train_from_protocol(
         "fold": fold, "where": where or {}, "exclude": exclude or {},
     }
     seed = default_seed if seed is None else seed
-    live = prepared.folds[0][0].live  # a stream evaluation trains as its tasks do, unless told otherwise
+    live = prepared.folds[0][0].extra(LiveSpec)  # a stream evaluation trains as its tasks do, unless told otherwise
     if live is None:
         return fit_model(ds.subset(idx), m.spec, seed=seed, target=proto.target, windows=windows,
                          train_hop=train_hop, features_label=m.features_label, label=m.label,
@@ -236,7 +235,7 @@ def default_stream_rule(live: LiveSpec, captures: Sequence[np.ndarray], labels: 
         f"{most:g} false activations per idle minute ({fa:.1f})" if fa <= most else
         f"no rule stayed within {most:g} false activations per idle minute, so the one with the fewest ({fa:.1f}; "
         f"mean frame accuracy {100 * c['frame_accuracy'][k]:.1f} %)")
-    return fitted_declaration(rule_specs(live)[k], captures, labels, sensor), why
+    return fitted_declaration(live.rules[k], captures, labels, sensor), why
 
 
 def stream_rules_manifest(live: LiveSpec, captures: Sequence[np.ndarray], labels: Sequence[str], sensor: Any,
@@ -245,5 +244,5 @@ def stream_rules_manifest(live: LiveSpec, captures: Sequence[np.ndarray], labels
     the training captures as its tasks fit them: declarations with the fitted ``level`` written in),
     ``stream_rule`` (the default, :func:`default_stream_rule` unless given) and ``stream_rule_source``."""
     rule, why = default if default is not None else default_stream_rule(live, captures, labels, sensor)
-    return {"stream_rules": [fitted_declaration(r, captures, labels, sensor) for r in rule_specs(live)],
+    return {"stream_rules": [fitted_declaration(r, captures, labels, sensor) for r in live.rules],
             "stream_rule": rule, "stream_rule_source": why}

@@ -59,7 +59,6 @@ from ..classifiers.base import CLASSIFIERS
 from ..scoring.streams import score_stream
 from ..methods.base import MethodSpec
 from ..methods.fitting import fit_method
-from ..protocols.schemes.stream import rule_specs
 from ..streams.replay import LiveSpec, stream_samples, training_samples
 from ..streams.replay import replay as replay_stream
 from ..streams.rules import make_rule
@@ -100,12 +99,14 @@ def fit_live(spec: MethodSpec, seed: int | None, ds: Any, y: np.ndarray, rows: A
 
 def fitted_rules(live: LiveSpec, ds: Any, y: np.ndarray, rows: Any) -> list:
     """Every declared rule, fitted on the training ``rows``' captures (the gate's level)."""
-    return [make_rule(r).fit([ds.captures[i] for i in rows], y[rows], ds.sensor) for r in rule_specs(live)]
+    return [make_rule(r).fit([ds.captures[i] for i in rows], y[rows], ds.sensor) for r in live.rules]
 
 
 def live_outcome(task: Any, ds: Any, y: np.ndarray) -> tuple[dict[str, Any], np.ndarray, str]:
     """Fit, replay and score one stream task: ``(row values, each test capture's label, live JSON)``."""
-    fold, live = task.fold, task.fold.live
+    fold = task.fold
+    live = fold.extra(LiveSpec)
+    assert live is not None, "a stream task's fold carries its stream settings"
     t0 = time.perf_counter()
     fitted = fit_live(task.method.spec, task.seed, ds, y, fold.train, live, live.train_streams)
     row: dict[str, Any] = {"fit_seconds": time.perf_counter() - t0, "n_classes_train": int(len(fitted.classes))}

@@ -47,7 +47,7 @@ from ..methods import METHODS, Method, expand_candidates, method_name, method_sp
 from ..protocols.entries import expand_grid
 from ..protocols.schema import Protocol, resolve_dataset_ref
 from ..protocols.seeding import derive_seed
-from ..protocols.schemes import Fold, SplitError, curve_columns
+from ..protocols.schemes import Fold, SplitError
 from ..results.ledger import test_set_hash_of
 from ..results.manifest import LEFT_OUT
 from ..results.store import task_row
@@ -80,7 +80,7 @@ class Prepared:
     def crop_frames(self) -> list[int]:
         """The frame counts the folds cut captures to (the early scheme), in fold order."""
         rate = self.dataset.sensor.frame_rate
-        return [f.crop.n_frames(rate) for folds in self.folds for f in folds if f.crop is not None]
+        return [n for folds in self.folds for f in folds if (n := f.crop_frames(rate)) is not None]
 
     @property
     def min_frames(self) -> int:
@@ -374,7 +374,7 @@ class _FoldPlace:
 
     @property
     def crop_frames(self) -> int | None:
-        return self.fold.crop.n_frames(self.dataset.sensor.frame_rate) if self.fold.crop is not None else None
+        return self.fold.crop_frames(self.dataset.sensor.frame_rate)
 
     @property
     def evaluation_key(self) -> str:
@@ -391,7 +391,7 @@ def _task_identity(place: _FoldPlace, m: Method, comps: Components) -> dict[str,
     identity = {
         "dataset": ds.content_hash, "target": place.protocol.target, "scheme": place.scheme_json,
         "repetition": place.repetition, "fold": fold.name, "indices": idx_hash,
-        "crop": [place.crop_frames, bool(fold.crop and fold.crop.train)],
+        "crop": [place.crop_frames, fold.crops_training()],
         "features": [[n, p, comps.set_digest(n, p)] for n, p in m.spec.feature_sets],
         "classifier": [m.name, m.spec.estimator_params, estimator[2]] if m.name == m.spec.estimator
         else [m.name, m.params, estimator],
@@ -401,8 +401,7 @@ def _task_identity(place: _FoldPlace, m: Method, comps: Components) -> dict[str,
         identity["subject_id_feature"] = True
     if m.stopped_on_test:
         identity["stopped_on_test"] = True
-    if fold.live is not None:  # a stream fold: its streams and recogniser
-        identity["live"] = fold.live.digest()
+    identity.update(fold.identity())  # the scheme's extras (a stream fold: its streams and recogniser)
     return identity
 
 
@@ -422,7 +421,7 @@ def _base_row(place: _FoldPlace, m: Method, task_id: str, seed: int) -> dict[str
         "leakage": "; ".join(x for x in [place.scheme_leak, *m.leakage] if x),
         "selection": m.tuned_on_test,
         "adaptation": m.adaptation,
-        **curve_columns(fold.curve),
+        **fold.columns(),
     })
 
 

@@ -123,7 +123,7 @@ def _fill_cache(plan: Plan, pending: list[Task], jobs: int, progress: _Progress,
     cache = FeatureCache(plan.cache_root)
     needed: dict[str, tuple[str, dict, int | None]] = {}
     for t in pending:
-        crop_train = t.fold.crop is not None and t.fold.crop.train
+        crop_train = t.fold.crops_training()
         for s in t.sets:
             if s.fold_dependent:
                 continue

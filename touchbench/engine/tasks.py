@@ -43,6 +43,7 @@ from ..results.manifest import load_average
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
 from .backends import run_setup
 from .cache import FeatureCache, crop_captures
+from ..streams.replay import LiveSpec
 from .live import live_outcome
 
 __all__ = ["RunContext", "SetSpec", "Task", "execute_task"]
@@ -77,7 +78,7 @@ class Task:
     method: Method
     sets: tuple[SetSpec, ...]  # the method's feature sets with their cache keys
     seed: int
-    crop_frames: int | None = None  # resolved from fold.crop with the sensor's frame rate
+    crop_frames: int | None = None  # the fold's crop (``Fold.crop_frames``) at the sensor's frame rate
     measure_latency: bool = True  # the one task per method (and crop) of a run that measures latency
     base_row: dict[str, Any] = field(default_factory=dict)
 
@@ -147,7 +148,7 @@ def _fold_features(task: Task, ctx: RunContext, y_train: np.ndarray):
     """
     ds = ctx.dataset
     fold = task.fold
-    crop_train = fold.crop is not None and fold.crop.train
+    crop_train = fold.crops_training()
     n = task.crop_frames
     if not task.sets:
         return (crop_captures([ds.captures[i] for i in fold.train], n if crop_train else None),
@@ -318,7 +319,7 @@ def execute_task(task: Task, ctx: RunContext) -> tuple[dict[str, Any], pd.DataFr
     try:
         with single_thread(), warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            if fold.live is not None:  # a stream fold: trained once, every test stream replayed
+            if fold.extra(LiveSpec) is not None:  # a stream fold: trained once, every test stream replayed
                 values, y_pred, row["live"] = live_outcome(task, ds, y)
                 row.update(values)
                 row.update(metrics(y_test, y_pred))

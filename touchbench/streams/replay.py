@@ -27,9 +27,11 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from ..core.folds import FoldExtra
+from ..core.hashing import canonical_json
 from ..datasets.windows import cut_windows, seconds_to_frames
 from .recognizer import Decision, WindowRecognizer
-from .rules import DecisionRule
+from .rules import DecisionRule, RuleSpec
 from .timeline import Stream
 
 __all__ = ["InnerFold", "LiveSpec", "Replayed", "replay", "stream_samples", "training_samples", "window_samples"]
@@ -50,8 +52,8 @@ class InnerFold:
 
 
 @dataclass(frozen=True)
-class LiveSpec:
-    """A stream fold's settings and streams (module docstring)."""
+class LiveSpec(FoldExtra):
+    """A stream fold's settings and streams (module docstring): the ``stream`` scheme's fold extra."""
 
     streams: tuple[Stream, ...]
     idle: str
@@ -59,7 +61,7 @@ class LiveSpec:
     hop_s: float
     train_on: str  # "windows", "captures" or "streams"
     train_hop_s: float | None
-    rules: tuple[str, ...]  # each rule's declaration, canonical JSON
+    rules: tuple[RuleSpec, ...]  # each rule's validated declaration
     none_label: str
     train_streams: tuple[Stream, ...] = ()  # the training side as streams (train_on: streams)
     inner: tuple[InnerFold, ...] = ()  # inner folds choosing the rule (none: no choice)
@@ -67,12 +69,16 @@ class LiveSpec:
 
     def digest(self) -> str:
         """What the fold's results depend on beyond its indices (task identities)."""
-        parts = (self.idle, self.windows_s, self.hop_s, self.train_on, self.train_hop_s, self.rules,
+        rules = tuple(canonical_json({"name": r.rule.name, **r.declared}) for r in self.rules)
+        parts = (self.idle, self.windows_s, self.hop_s, self.train_on, self.train_hop_s, rules,
                  self.none_label, tuple(s.digest() for s in self.streams))
         if self.train_streams or self.inner:
             parts += (tuple(s.digest() for s in self.train_streams), tuple(f.digest() for f in self.inner),
                       self.max_false_per_min)
         return hashlib.sha256(repr(parts).encode()).hexdigest()[:16]
+
+    def identity(self) -> dict[str, Any]:
+        return {"live": self.digest()}
 
 
 def window_samples(captures: Sequence[np.ndarray], windows_s: Sequence[float], train_hop_s: float | None,

@@ -40,6 +40,7 @@ which learns the offset's level from the training captures).
 from __future__ import annotations
 
 from collections import Counter, deque
+from dataclasses import dataclass
 from typing import Annotated, Any, ClassVar, Sequence, Union
 
 import numpy as np
@@ -50,8 +51,8 @@ from ..core.registry import Registry
 from ..core.suggest import did_you_mean
 
 __all__ = ["DEFAULT_RULE", "RULES", "DecisionRule", "FieldProblem", "GateRule", "HmmRule", "MajorityRule", "MaxRule", "RuleError",
-           "RuleParams", "fitted_declaration", "frame_contact", "make_rule", "needs_fitting", "peak_contact",
-           "rule_class", "rule_defaults", "rule_params", "stream_rule"]
+           "RuleParams", "RuleSpec", "fitted_declaration", "frame_contact", "make_rule", "needs_fitting", "peak_contact",
+           "rule_class", "rule_defaults", "rule_params", "rule_spec", "stream_rule"]
 
 RULES: Registry = Registry("decision rule", package="touchbench.streams")
 
@@ -178,20 +179,51 @@ def rule_class(name: Any) -> type["DecisionRule"]:
         raise RuleError(str(e), [(("name",), str(e))]) from None
 
 
-def rule_params(spec: dict[str, Any] | str) -> tuple[type["DecisionRule"], RuleParams]:
-    """The rule class and its validated parameters of the declaration ``spec`` (``{name: ...,
-    params}`` or a name); :class:`RuleError` naming every field in the wrong."""
+@dataclass(frozen=True)
+class RuleSpec:
+    """A decision rule's declaration, validated once: its rule class, its parameters (an instance of
+    the class's ``Params``) and the parameters as declared (defaults not filled in: what identifies
+    the declaration, and what a fitted declaration writes back)."""
+
+    rule: type["DecisionRule"]
+    params: RuleParams
+    declared: dict[str, Any]
+
+    @property
+    def name(self) -> str:
+        return self.rule.name
+
+    def declaration(self) -> dict[str, Any]:
+        """The declaration as written: ``{name: ..., parameters given}``."""
+        return {"name": self.rule.name, **self.declared}
+
+    def build(self) -> "DecisionRule":
+        """A new rule with these parameters."""
+        return self.rule.from_params(self.params)
+
+
+def rule_spec(spec: "dict[str, Any] | str | RuleSpec") -> RuleSpec:
+    """The validated declaration ``spec`` (``{name: ..., params}`` or a name); :class:`RuleError`
+    naming every field in the wrong."""
+    if isinstance(spec, RuleSpec):
+        return spec
     if not isinstance(spec, (str, dict)):
         msg = f"a decision rule is a name or a mapping such as {{name: majority, n: 5}}, got {spec!r}"
         raise RuleError(msg, [((), msg)])
     d = {"name": spec} if isinstance(spec, str) else dict(spec)
     cls = rule_class(d.pop("name", None))
     try:
-        return cls, cls.Params.model_validate(d)
+        return RuleSpec(cls, cls.Params.model_validate(d), d)
     except ValidationError as e:
         issues = [_issue(err, cls.Params) for err in e.errors()]
         text = "; ".join(f"{'.'.join(map(str, loc)) or '(rule)'}: {msg}" for loc, msg in issues)
         raise RuleError(f"decision rule {cls.name!r}: {text}", issues) from None
+
+
+def rule_params(spec: dict[str, Any] | str) -> tuple[type["DecisionRule"], RuleParams]:
+    """The rule class and its validated parameters of the declaration ``spec`` (:func:`rule_spec`)."""
+    r = rule_spec(spec)
+    return r.rule, r.params
 
 
 def _issue(err: Any, model: type[RuleParams]) -> tuple[tuple, str]:
@@ -212,13 +244,12 @@ def _issue(err: Any, model: type[RuleParams]) -> tuple[tuple, str]:
     return loc, msg
 
 
-def make_rule(spec: dict[str, Any] | str | None, threshold: float = 0.5) -> DecisionRule:
-    """A rule from its declaration (``{name: ..., params}`` or a name; None: ``max`` with ``threshold``),
-    built from its validated parameters (:func:`rule_params`)."""
+def make_rule(spec: RuleSpec | dict[str, Any] | str | None, threshold: float = 0.5) -> DecisionRule:
+    """A rule from its validated declaration (:class:`RuleSpec`), or from a declaration (``{name: ...,
+    params}`` or a name) validated first (:func:`rule_spec`); None: ``max`` with ``threshold``."""
     if spec is None:
         return MaxRule(threshold=threshold)
-    cls, params = rule_params(spec)
-    return cls.from_params(params)
+    return (spec if isinstance(spec, RuleSpec) else rule_spec(spec)).build()
 
 
 def rule_defaults(name: str) -> dict[str, Any]:
@@ -245,14 +276,14 @@ def stream_rule(idle: str, captures: Sequence[np.ndarray], labels: Sequence[str]
     return fitted_declaration(spec, captures, labels, sensor)
 
 
-def fitted_declaration(spec: dict[str, Any] | str, captures: Sequence[np.ndarray], labels: Sequence[str],
+def fitted_declaration(spec: RuleSpec | dict[str, Any] | str, captures: Sequence[np.ndarray], labels: Sequence[str],
                        sensor: Any) -> dict[str, Any]:
-    """The declaration ``spec`` fitted on training ``captures``: the same declaration with the fitted
-    level written in as ``level`` (the gate's and onset's ``level: auto``), which ``make_rule`` builds
-    again into a rule deciding as the fitted one."""
-    d = {"name": spec} if isinstance(spec, str) else dict(spec)
-    fitted = getattr(make_rule(d).fit(captures, labels, sensor), "fitted_level", None)
-    return {**d, "level": fitted} if fitted is not None else d
+    """The declaration ``spec`` fitted on training ``captures``: the declaration as written with the
+    fitted level written in as ``level`` (the gate's and onset's ``level: auto``), which ``make_rule``
+    builds again into a rule deciding as the fitted one."""
+    r = rule_spec(spec)
+    fitted = getattr(r.build().fit(captures, labels, sensor), "fitted_level", None)
+    return {**r.declaration(), "level": fitted} if fitted is not None else r.declaration()
 
 
 def needs_fitting(rule: DecisionRule) -> bool:

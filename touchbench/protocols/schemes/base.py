@@ -24,14 +24,15 @@ so the same protocol seed gives the same folds.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Annotated, Any, Callable, ClassVar, Iterator
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Annotated, Any, Callable, ClassVar, Iterator, TypeVar
 
 import numpy as np
 import pandas as pd
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
 from ...core.errors import TouchbenchError, UnknownNameError
+from ...core.folds import FoldExtra
 from ...core.registry import Registry
 from ..seeding import derive_seed
 
@@ -54,8 +55,9 @@ class MissingColumnError(SplitError):
 
 
 @dataclass(frozen=True)
-class Crop:
-    """Cut captures to their first ``frames`` frames or first ``seconds`` seconds.
+class Crop(FoldExtra):
+    """Cut captures to their first ``frames`` frames or first ``seconds`` seconds (the ``early``
+    scheme's fold extra).
 
     ``train=False`` (the default) cuts only the test captures: the model is
     trained on whole gestures and asked to recognise one from its beginning.
@@ -78,7 +80,7 @@ class Crop:
 
 
 @dataclass(frozen=True)
-class CurvePoint:
+class CurvePoint(FoldExtra):
     """Where a fold sits on a data curve: ``axis`` ``"subjects"`` (trained on ``size`` of the base
     fold's training subjects, a number, or a fraction when below 1) or ``"calibration"`` (``size``
     labelled captures per class of the test side joined the training data); ``draw`` numbers the
@@ -94,6 +96,7 @@ class CurvePoint:
     added_min: float = field(default=float("nan"), compare=False)
 
 
+
 def curve_columns(point: CurvePoint | None) -> dict[str, Any]:
     """The scores columns of a task at ``point`` (``curve`` "" and ``curve_size`` NaN off a curve;
     ``curve_added`` / ``curve_added_min`` NaN but on a calibration curve)."""
@@ -103,30 +106,61 @@ def curve_columns(point: CurvePoint | None) -> dict[str, Any]:
             "curve_added": np.float64(point.added), "curve_added_min": np.float64(point.added_min)}
 
 
+#: a kind of fold extra
+E = TypeVar("E", bound=FoldExtra)
+
+
 @dataclass(frozen=True)
 class Fold:
     """One train/test split over positional indices of the metadata table.
 
     ``group`` is the scope the fold's scores are reported under (the subject
     of a within-subject fold, the direction of a transfer fold, the party of
-    a person-independent fold, the repeat of a k-fold); ``crop`` is set by the
-    ``early`` scheme; ``live`` by the ``stream`` scheme (its test streams and recogniser,
-    :class:`touchbench.streams.replay.LiveSpec`); ``curve`` by a scheme that sweeps the training
-    data (:class:`CurvePoint`); ``notes`` says how the splitter handled an extreme case.
+    a person-independent fold, the repeat of a k-fold); ``notes`` says how the
+    splitter handled an extreme case; ``extras`` are what schemes attach
+    (:class:`touchbench.core.folds.FoldExtra`, at most one of each type): the
+    ``early`` scheme's :class:`Crop`, a data curve's :class:`CurvePoint`, the
+    ``stream`` scheme's :class:`touchbench.streams.replay.LiveSpec`. The engine
+    reads them through the fold's methods below, never by a scheme's field.
     """
 
     name: str
     train: np.ndarray
     test: np.ndarray
     group: str = ""
-    crop: Crop | None = None
     notes: tuple[str, ...] = field(default=())
-    live: Any = None
-    curve: CurvePoint | None = None
+    extras: tuple[FoldExtra, ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "train", np.asarray(self.train, dtype=np.int64))
         object.__setattr__(self, "test", np.asarray(self.test, dtype=np.int64))
+
+    def with_extra(self, extra: FoldExtra, **changes: Any) -> "Fold":
+        """This fold with ``extra`` (replacing one of its type) and the fields ``changes``."""
+        kept = tuple(e for e in self.extras if type(e) is not type(extra))
+        return replace(self, extras=kept + (extra,), **changes)
+
+    def extra(self, kind: type[E]) -> E | None:
+        """The fold's extra of type ``kind``, or None."""
+        return next((e for e in self.extras if isinstance(e, kind)), None)
+
+    def crop_frames(self, frame_rate: float) -> int | None:
+        """The frames the captures are cut to (None: whole captures)."""
+        crop = self.extra(Crop)
+        return crop.n_frames(frame_rate) if crop is not None else None
+
+    def crops_training(self) -> bool:
+        """Whether the training captures are cut too."""
+        crop = self.extra(Crop)
+        return crop is not None and crop.train
+
+    def identity(self) -> dict[str, Any]:
+        """The extras' entries of the fold's task identities."""
+        return {k: v for e in self.extras for k, v in e.identity().items()}
+
+    def columns(self) -> dict[str, Any]:
+        """The scores columns the fold sets (:func:`curve_columns`: empty off a data curve)."""
+        return curve_columns(self.extra(CurvePoint))
 
 
 @dataclass(frozen=True)
@@ -260,7 +294,7 @@ class CurveParams(WrappingParams):
     draws: int = Field(default=5, ge=1, le=1000)
 
 
-#: the schemes that place their folds on a data curve (``Fold.curve``): a fold sits on one curve, so
+#: the schemes that place their folds on a data curve (a :class:`CurvePoint` extra): a fold sits on one curve, so
 #: neither wraps the other
 CURVE_SCHEMES = ("learning-curve", "calibration")
 
@@ -407,7 +441,7 @@ class Splitter:
                 raise
             raise SplitError(f"{e}: split(X, y, groups) knows only y (the column {self.target!r}) and groups "
                              "(the column 'subject'); pass the metadata table as X") from None
-        cut = [f.name for f in folds if f.crop is not None]
+        cut = [f.name for f in folds if f.extra(Crop) is not None]
         if cut:
             raise SplitError(f"scheme {self.name!r} cuts captures (fold {cut[0]!r}), which index splits cannot "
                              "express; use folds(meta) and cut the captures")

@@ -17,7 +17,6 @@ measures a model calibrated to its user, not accuracy on new people.
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -109,8 +108,8 @@ class Calibration(WrappingSplitter):
                     note = (f"calibration: {k} labelled capture(s) per class of each test {p.unit} in training",) if k else ()
                     point = CurvePoint("calibration", float(k), d, float(added.mean()) if len(added) else np.nan,
                                        float(added.min()) if len(added) else np.nan)
-                    out.append(replace(f, name=f"k{k}#{d}/{f.name}", train=np.union1d(f.train, calib), test=test,
-                                       curve=point, notes=f.notes + note + short))
+                    out.append(f.with_extra(point, name=f"k{k}#{d}/{f.name}", train=np.union1d(f.train, calib), test=test,
+                                         notes=f.notes + note + short))
         self.notes_ += self._capped(np.asarray(takes, dtype=np.int64))
         self.notes_.append(f"calibration: k = {', '.join(map(str, p.per_class))} labelled captures per class of each "
                            f"test {p.unit} join the training data ({p.draws} random draws); every k of a fold and draw "

@@ -4,7 +4,6 @@ to their first N frames or S seconds, N swept over a list (Al-mashhadani et al. 
 
 from __future__ import annotations
 
-from dataclasses import replace
 
 import pandas as pd
 from pydantic import Field, model_validator
@@ -39,7 +38,7 @@ class Early(WrappingSplitter):
 
     ``base`` is another scheme (``{name: loso}`` or ``{name: kfold, k: 5}``);
     its folds are repeated once per value of ``frames`` (or ``seconds``,
-    converted with the sensor's frame rate), with ``Fold.crop`` telling the
+    converted with the sensor's frame rate), with a :class:`Crop` on each fold telling the
     engine to cut the test captures (and, with ``crop_train: true``, the
     training captures) to their first N frames. A capture shorter than N is
     used whole. Accuracy as a function of N measures how recognition grows
@@ -62,4 +61,4 @@ class Early(WrappingSplitter):
             if p.frames is not None
             else [Crop(seconds=float(s), train=p.crop_train) for s in p.seconds]
         )
-        return [replace(f, name=f"first{c.label}/{f.name}", crop=c) for c in crops for f in base_folds]
+        return [f.with_extra(c, name=f"first{c.label}/{f.name}") for c in crops for f in base_folds]

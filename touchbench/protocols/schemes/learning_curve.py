@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -138,8 +137,8 @@ class LearningCurve(WrappingSplitter):
             subsets, note = self._subsets(fold.name, subjects, n, strata)
             for d, chosen in enumerate(subsets):
                 train = fold.train[np.isin(subj[fold.train], chosen)]
-                out.append(replace(fold, name=f"{prefix}{size:g}#{d}/{fold.name}", train=train,
-                                   curve=CurvePoint("subjects", size, d), notes=fold.notes + note))
+                out.append(fold.with_extra(CurvePoint("subjects", size, d), name=f"{prefix}{size:g}#{d}/{fold.name}",
+                                       train=train, notes=fold.notes + note))
         return out
 
     def _subsets(self, fold: str, subjects: list[str], n: int,

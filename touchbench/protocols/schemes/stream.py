@@ -39,17 +39,14 @@ as a row of its own (the test subjects are never looked at to choose).
 
 from __future__ import annotations
 
-import json
-from dataclasses import replace
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
 import pandas as pd
 from pydantic import Field, Strict, field_validator, model_validator
 
-from ...core.hashing import canonical_json
 from ...streams.replay import InnerFold, LiveSpec
-from ...streams.rules import RuleError, rule_params
+from ...streams.rules import RuleError, RuleSpec, rule_spec
 from ...streams.timeline import recorded_streams, spliced_streams
 from ..errors import _ErrorAt
 from .base import SPLITTERS, DataContext, Fold, SplitError, WrappingParams, WrappingSplitter, check_base, named
@@ -87,7 +84,7 @@ class _StreamParams(WrappingParams):
     choose_rule: bool = False
     inner_folds: int | None = Field(default=None, ge=2)
     max_false_per_min: _Seconds = Field(default=5.0, ge=0)
-    rules: list[dict[str, Any]] = Field(default=[{"name": "max", "threshold": 0.5}], min_length=1)
+    rules: list[Any] = Field(default=[{"name": "max", "threshold": 0.5}], min_length=1, validate_default=True)
     none_label: str = "none"
 
     @model_validator(mode="before")
@@ -106,15 +103,18 @@ class _StreamParams(WrappingParams):
     @field_validator("rules", mode="before")
     @classmethod
     def _rules(cls, v: Any) -> Any:
-        """Each rule checked by its parameter model; the first rule in the wrong reported at its
-        fields (every problem of it), as the protocol gives them."""
-        for k, r in enumerate(v if isinstance(v, list) else []):
+        """Each rule validated by its parameter model into a :class:`RuleSpec`; the first rule in the
+        wrong reported at its fields (every problem of it), as the protocol gives them."""
+        if not isinstance(v, list):
+            return v
+        out: list[RuleSpec] = []
+        for k, r in enumerate(v):
             try:
-                rule_params(r)
+                out.append(rule_spec(r))
             except RuleError as e:
                 (loc, msg), *more = e.issues
                 raise _ErrorAt((k, *loc), msg, [((k, *at), m) for at, m in more]) from None
-        return v
+        return out
 
     @model_validator(mode="after")
     def _check(self) -> "_StreamParams":
@@ -132,15 +132,14 @@ class _StreamParams(WrappingParams):
     def _check_rules(self) -> None:
         """Refuse a rule whose idle class is not the scheme's, and a rule twice (the same name and
         parameters, defaults filled in)."""
-        seen: dict[str, int] = {}
+        seen: dict[tuple, int] = {}
         for k, r in enumerate(self.rules):
-            cls, params = rule_params(r)
-            if "idle" in cls.Params.model_fields and params.idle != self.idle:  # type: ignore[attr-defined]
-                raise _ErrorAt(("rules", k, "idle"), f"the rule's idle class {params.idle!r} is not the scheme's "  # type: ignore[attr-defined]
-                               f"({self.idle!r})")
-            key = canonical_json({"name": cls.name, **params.model_dump()})
+            idle = getattr(r.params, "idle", self.idle)
+            if idle != self.idle:
+                raise _ErrorAt(("rules", k, "idle"), f"the rule's idle class {idle!r} is not the scheme's ({self.idle!r})")
+            key = (r.rule, r.params)  # every parameter, defaults filled in
             if key in seen:
-                raise _ErrorAt(("rules", k), f"the same rule as rules[{seen[key]}] ({cls.name}, the same parameters): "
+                raise _ErrorAt(("rules", k), f"the same rule as rules[{seen[key]}] ({r.name}, the same parameters): "
                                "each rule is replayed once")
             seen[key] = k
 
@@ -200,7 +199,7 @@ class Stream(WrappingSplitter):
         for f in base_folds:
             streams = self._streams(meta, n_frames, f)
             test = np.unique(np.concatenate([s.captures for s in streams]))
-            out.append(replace(f, test=test, live=self._live(streams, meta, n_frames, f)))
+            out.append(f.with_extra(self._live(streams, meta, n_frames, f), test=test))
         return out
 
     def _streams(self, meta: pd.DataFrame, n_frames: np.ndarray, fold: Fold) -> list:
@@ -260,11 +259,7 @@ class Stream(WrappingSplitter):
         p = self.params
         return LiveSpec(streams=tuple(streams), idle=p.idle, windows_s=tuple(p.windows_s), hop_s=p.hop_s,
                         train_on=p.train_on, train_hop_s=p.train_hop_s,
-                        rules=tuple(canonical_json(r) for r in p.rules), none_label=p.none_label,
+                        rules=tuple(p.rules), none_label=p.none_label,
                         train_streams=self._training_streams(meta, n_frames, fold.train, fold.name),
                         inner=self._inner(meta, n_frames, fold), max_false_per_min=p.max_false_per_min)
 
-
-def rule_specs(live: LiveSpec) -> list[dict[str, Any]]:
-    """The live spec's rules as declared."""
-    return [json.loads(r) for r in live.rules]
