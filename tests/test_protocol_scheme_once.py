@@ -1,21 +1,22 @@
 """A protocol's scheme is built once per repetition and shared by every layer that asks it something
-(the checks, the data preparation, the folds, the task plan and the leakage label)."""
+(the checks, the data preparation, the folds, the task plan and the leakage label); its parameters are
+validated once, when the protocol is read, and every build takes the validated model."""
 
 from __future__ import annotations
 
-import touchbench.protocols.schema as schema
 from touchbench.engine import run_protocol
+from touchbench.protocols.schemes import SPLITTERS, Splitter
 
 
 def _counting(monkeypatch) -> list[tuple]:
     built: list[tuple] = []
-    real = schema.make_splitter
+    real = Splitter.__dict__["from_params"].__func__
 
-    def counted(name, **kw):
-        built.append((name, kw["random_state"]))
-        return real(name, **kw)
+    def counted(cls, params, target="gesture", random_state=None):
+        built.append((cls.name, random_state))
+        return real(cls, params, target=target, random_state=random_state)
 
-    monkeypatch.setattr(schema, "make_splitter", counted)
+    monkeypatch.setattr(Splitter, "from_params", classmethod(counted))
     return built
 
 
@@ -39,3 +40,49 @@ def test_a_copy_with_another_seed_builds_its_own(tmp_path):
     other = p.model_copy(update={"seed": 7})
     assert other.splitter(0) is not p.splitter(0)
     assert other.splitter(0).random_state != p.splitter(0).random_state
+
+
+STREAM = """\
+name: live-once
+dataset: haart-sample
+scheme:
+  name: stream
+  base: loso
+  idle: notouch
+  gap_s: [0.5, 1.5]
+  per_stream: 1
+  hop_s: 0.2
+  rules: [{name: hmm, switch: 0.01}]
+methods: [touch-et-fast]
+repetitions: 2
+"""
+
+
+def test_a_stream_protocols_scheme_parameters_are_validated_once_per_read_and_run(tmp_path, monkeypatch):
+    params = SPLITTERS.get("stream").Params
+    real = params.model_validate  # BaseModel's, bound to the stream scheme's model
+    validated: list[dict] = []
+
+    def counted(cls, obj, *args, **kw):
+        validated.append(obj)
+        return real(obj, *args, **kw)
+
+    monkeypatch.setattr(params, "model_validate", classmethod(counted))
+    built = _counting(monkeypatch)
+    p = tmp_path / "live.yaml"
+    p.write_text(STREAM)
+    run_protocol(p, out=tmp_path / "results", progress=False, jobs=1)
+    # worked out by hand: reading the protocol validates the scheme's parameters (the checks: 1); the
+    # run builds one scheme per repetition (2) from that model, and the data preparation, the folds,
+    # the plan and the leakage label ask the built ones: 1 validation in all
+    assert len(validated) == 1
+    assert validated[0]["rules"] == [{"name": "hmm", "switch": 0.01}]
+    assert sorted(name for name, _ in built) == ["stream", "stream"]
+
+
+def test_a_scheme_is_not_built_from_another_schemes_parameters():
+    import pytest
+
+    loso = SPLITTERS.get("loso").Params.model_validate({})
+    with pytest.raises(TypeError, match="kfold"):
+        SPLITTERS.get("kfold").from_params(loso)

@@ -356,18 +356,21 @@ def _set_specs(m: Method, comps: Components, ds_hash: str, crop_frames: int | No
     return tuple(out)
 
 
-def _scheme_json(protocol: Protocol) -> str:
-    """The scheme with its parameters, as it enters task identities and seeds."""
-    return canonical_json({"name": protocol.scheme.name, **protocol.scheme.params})
+def _evaluation_key(protocol: Protocol, dataset: TouchDataset) -> str:
+    """The evaluation's content (dataset, target, scheme), for task seeds: computed once per
+    evaluation."""
+    return hashlib.sha256(canonical_json([dataset.content_hash, protocol.target,
+                                          protocol.scheme_json]).encode()).hexdigest()[:16]
 
 
 @dataclass(frozen=True)
 class _FoldPlace:
-    """Where a task sits: the evaluation's content, the repetition and the fold."""
+    """Where a task sits: the evaluation's content (its key: :func:`_evaluation_key`), the
+    repetition and the fold."""
 
     protocol: Protocol
     dataset: TouchDataset
-    scheme_json: str
+    evaluation_key: str
     scheme_leak: str
     repetition: int
     fold: Fold
@@ -376,12 +379,6 @@ class _FoldPlace:
     def crop_frames(self) -> int | None:
         return self.fold.crop_frames(self.dataset.sensor.frame_rate)
 
-    @property
-    def evaluation_key(self) -> str:
-        """The evaluation's content (dataset, target, scheme), for task identities and seeds."""
-        return hashlib.sha256(canonical_json([self.dataset.content_hash, self.protocol.target,
-                                              self.scheme_json]).encode()).hexdigest()[:16]
-
 
 def _task_identity(place: _FoldPlace, m: Method, comps: Components) -> dict[str, Any]:
     """Everything a task's result depends on (hashed into its id)."""
@@ -389,7 +386,7 @@ def _task_identity(place: _FoldPlace, m: Method, comps: Components) -> dict[str,
     idx_hash = hashlib.sha256(fold.train.tobytes() + b"|" + fold.test.tobytes()).hexdigest()[:16]
     estimator = [m.spec.estimator, m.spec.estimator_params, comps.estimator_digest(m)]
     identity = {
-        "dataset": ds.content_hash, "target": place.protocol.target, "scheme": place.scheme_json,
+        "dataset": ds.content_hash, "target": place.protocol.target, "scheme": place.protocol.scheme_json,
         "repetition": place.repetition, "fold": fold.name, "indices": idx_hash,
         "crop": [place.crop_frames, fold.crops_training()],
         "features": [[n, p, comps.set_digest(n, p)] for n, p in m.spec.feature_sets],
@@ -435,7 +432,8 @@ def _task_seed(place: _FoldPlace, m: Method) -> int:
 def fold_seed(prepared: Prepared, m: Method, fold: Fold, repetition: int = 0) -> int:
     """The seed the run engine gives ``m``'s estimator on ``fold`` (``touchbench train --fold``)."""
     protocol = prepared.protocol
-    return _task_seed(_FoldPlace(protocol, prepared.dataset, _scheme_json(protocol), "", repetition, fold), m)
+    key = _evaluation_key(protocol, prepared.dataset)
+    return _task_seed(_FoldPlace(protocol, prepared.dataset, key, "", repetition, fold), m)
 
 
 def _task(place: _FoldPlace, m: Method, comps: Components, measure_latency: bool) -> Task:
@@ -457,13 +455,13 @@ def plan_tasks(prepared: Prepared, protocol: Protocol, methods: list[Method], co
         if m.stopped_on_test and not stops_on_test(m.spec.estimator):
             raise protocol.error_at(("classifiers",), f"{m.label!r}: stopped_on_test needs an estimator that stops "
                                                       f"on test data; {m.spec.estimator!r} does not")
-    scheme_json = _scheme_json(protocol)
+    evaluation = _evaluation_key(protocol, prepared.dataset)
     leak = protocol.splitter(0).leakage()
     tasks: list[Task] = []
     timed: set[tuple] = set()
     for r, folds in enumerate(prepared.folds):
         for fold in folds:
-            place = _FoldPlace(protocol, prepared.dataset, scheme_json, leak, r, fold)
+            place = _FoldPlace(protocol, prepared.dataset, evaluation, leak, r, fold)
             for m in methods:
                 key = (m.method_id, m.label, place.crop_frames)
                 tasks.append(_task(place, m, comps, key not in timed and not m.subject_id_feature))

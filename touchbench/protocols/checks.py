@@ -34,25 +34,40 @@ from .schemes import SPLITTERS, SplitError
 from .specs import EVALUATION_FIELDS
 
 
-def _scheme_issues(spec: dict[str, Any], target: str, prefix: tuple) -> list[tuple[tuple, str]]:
+def _scheme_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
+    """The scheme's parameters, validated once (:meth:`Protocol.scheme_params`: the scheme is built
+    from that model), and the scheme each wraps."""
+    cls = SPLITTERS.get(protocol.scheme.name)  # a known name: the shape checked it
+    try:
+        validated = protocol.scheme_params()
+    except ValidationError as e:
+        return _pydantic_issues(e, cls.Params, ("scheme",))
+    return _base_issues(cls, getattr(validated, cls.base_param or "", None), ("scheme",))
+
+
+def _spec_issues(spec: dict[str, Any], prefix: tuple) -> list[tuple[tuple, str]]:
+    """A wrapped scheme's entry ``{name: ..., parameters}``, at ``prefix``."""
     name = spec.get("name")
     if not isinstance(name, str) or name not in SPLITTERS:
         return [(prefix + ("name",), SPLITTERS.suggest(str(name)))]
     cls = SPLITTERS.get(name)
-    params = {k: v for k, v in spec.items() if k != "name"}
     try:
-        validated = cls.Params.model_validate(params)
+        validated = cls.Params.model_validate({k: v for k, v in spec.items() if k != "name"})
     except ValidationError as e:
         return _pydantic_issues(e, cls.Params, prefix)
-    key = cls.base_param  # a scheme that wraps another: that one is checked too
-    if key is not None:
-        base = dict(getattr(validated, key))
-        if not isinstance(base.get("name"), str):
-            return [(prefix + (key,), f"{key} must name a scheme: {key}: {{name: loso}}")]
-        issues = _scheme_issues(base, target, prefix + (key,))
-        if issues:
-            return issues
-    return []
+    return _base_issues(cls, getattr(validated, cls.base_param or "", None), prefix)
+
+
+def _base_issues(cls: type, entry: Any, prefix: tuple) -> list[tuple[tuple, str]]:
+    """The scheme a scheme of class ``cls`` wraps (``entry``, its validated ``base_param``), checked
+    as a scheme."""
+    key = cls.base_param
+    if key is None:
+        return []
+    base = dict(entry)
+    if not isinstance(base.get("name"), str):
+        return [(prefix + (key,), f"{key} must name a scheme: {key}: {{name: loso}}")]
+    return _spec_issues(base, prefix + (key,))
 
 
 def _accepted_params(obj: Any) -> tuple[list[str], bool]:
@@ -497,7 +512,7 @@ def _evaluation_issues(proto: Protocol, subs: list[Protocol], *, clean_so_far: b
     issues: list[tuple[tuple, str]] = []
     for i, sub in enumerate(subs):
         at = ("evaluations", i) if proto.evaluations else ()
-        own = _scheme_issues({"name": sub.scheme.name, **sub.scheme.params}, sub.target, ("scheme",))
+        own = _scheme_issues(sub)
         own += _dataset_issues(sub)
         if not own and clean_so_far and not issues:
             own += _target_issues(sub)

@@ -107,7 +107,7 @@ from .entries import (
 from .errors import ProtocolError, UnknownEvaluation, _ErrorAt, _make_error
 from .expected import Expected, ExpectedBest
 from .seeding import derive_seed
-from .schemes import DEFAULT_SEEDS, Splitter, make_splitter
+from .schemes import DEFAULT_SEEDS, SPLITTERS, Splitter
 from .schemes.base import scheme_class
 from .specs import (EVALUATION_FIELDS, AuditSpec, DatasetSpec, DesignSpec, EvaluationSpec, ReportSpec, SchemeSpec,
                     _folder_name, _one_block_a_method)
@@ -155,6 +155,8 @@ class Protocol(_Model):
     _booleans: dict[tuple, str] = PrivateAttr(default_factory=dict)  # what YAML read as booleans, as written
     _subs: list["Protocol"] | None = PrivateAttr(default=None)
     _splitters: dict[tuple, Splitter] = PrivateAttr(default_factory=dict)  # see splitter()
+    _scheme_models: dict[str, BaseModel] = PrivateAttr(default_factory=dict)  # see scheme_params()
+    _scheme_json: tuple[SchemeSpec, str] | None = PrivateAttr(default=None)  # see scheme_json
 
     @field_validator("metrics")
     @classmethod
@@ -416,18 +418,37 @@ class Protocol(_Model):
         raise self.error_at(("expected", "best_parameters"), f"no {best.classifier} entry with "
                                                              f"{best.parameter} = {best.value!r}")
 
+    @property
+    def scheme_json(self) -> str:
+        """The scheme and its parameters in canonical form (``{"name": ..., parameters}``): what keys
+        the scheme, in task identities and seeds. Computed once per protocol (a copy with another
+        scheme computes its own)."""
+        if self._scheme_json is None or self._scheme_json[0] is not self.scheme:
+            self._scheme_json = (self.scheme, canonical_json({"name": self.scheme.name, **self.scheme.params}))
+        return self._scheme_json[1]
+
+    def scheme_params(self) -> BaseModel:
+        """The scheme's parameters validated by its ``Params`` model, once per protocol: the checks
+        that read the protocol ask first (a ``ValidationError`` is reported at the fields), and the
+        scheme is built from the validated model (:meth:`splitter`)."""
+        key = self.scheme_json
+        if key not in self._scheme_models:
+            params = SPLITTERS.get(self.scheme.name).Params.model_validate(self.scheme.params)
+            self._scheme_models[key] = params
+        return self._scheme_models[key]
+
     def splitter(self, repetition: int = 0) -> Splitter:
-        """The scheme, seeded for ``repetition``: built once per repetition and shared by every layer
-        that asks it something (the checks, the data preparation, the folds, the plan, the leakage
-        label). A scheme's folds depend only on its settings, its seed and the data it is handed
-        (its random draws are seeded at each use, its notes reset by each ``folds``), so sharing it
-        changes no result. Keyed by what builds it, so a copy of the protocol with another scheme,
-        target or seed builds its own."""
-        params = self.scheme.params
+        """The scheme, seeded for ``repetition``: built once per repetition (from
+        :meth:`scheme_params`, not validated again) and shared by every layer that asks it something
+        (the checks, the data preparation, the folds, the plan, the leakage label). A scheme's folds
+        depend only on its settings, its seed and the data it is handed (its random draws are seeded
+        at each use, its notes reset by each ``folds``), so sharing it changes no result. Keyed by
+        what builds it, so a copy of the protocol with another scheme, target or seed builds its own."""
         seed = derive_seed(self.seed, "split", repetition)
-        key = (self.scheme.name, canonical_json(params), self.target, seed)
+        key = (self.scheme_json, self.target, seed)
         if key not in self._splitters:
-            self._splitters[key] = make_splitter(self.scheme.name, target=self.target, random_state=seed, **params)
+            self._splitters[key] = SPLITTERS.get(self.scheme.name).from_params(
+                self.scheme_params(), target=self.target, random_state=seed)
         return self._splitters[key]
 
 

@@ -28,7 +28,6 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ..core.folds import FoldExtra
-from ..core.hashing import canonical_json
 from ..datasets.windows import cut_windows, seconds_to_frames
 from .recognizer import Decision, WindowRecognizer
 from .rules import DecisionRule, RuleSpec
@@ -69,7 +68,7 @@ class LiveSpec(FoldExtra):
 
     def digest(self) -> str:
         """What the fold's results depend on beyond its indices (task identities)."""
-        rules = tuple(canonical_json({"name": r.rule.name, **r.declared}) for r in self.rules)
+        rules = tuple(r.canonical for r in self.rules)
         parts = (self.idle, self.windows_s, self.hop_s, self.train_on, self.train_hop_s, rules,
                  self.none_label, tuple(s.digest() for s in self.streams))
         if self.train_streams or self.inner:

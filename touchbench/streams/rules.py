@@ -40,13 +40,14 @@ which learns the offset's level from the training captures).
 from __future__ import annotations
 
 from collections import Counter, deque
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Annotated, Any, ClassVar, Sequence, Union
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PlainValidator, Strict, ValidationError
 
 from ..core.errors import TouchbenchError, UnknownNameError
+from ..core.hashing import canonical_json
 from ..core.registry import Registry
 from ..core.suggest import did_you_mean
 
@@ -188,6 +189,8 @@ class RuleSpec:
     rule: type["DecisionRule"]
     params: RuleParams
     declared: dict[str, Any]
+    #: the declaration in canonical form (what identifies it in task identities), computed once
+    canonical: str = field(default="", compare=False, repr=False)
 
     @property
     def name(self) -> str:
@@ -213,7 +216,7 @@ def rule_spec(spec: "dict[str, Any] | str | RuleSpec") -> RuleSpec:
     d = {"name": spec} if isinstance(spec, str) else dict(spec)
     cls = rule_class(d.pop("name", None))
     try:
-        return RuleSpec(cls, cls.Params.model_validate(d), d)
+        return RuleSpec(cls, cls.Params.model_validate(d), d, canonical_json({"name": cls.name, **d}))
     except ValidationError as e:
         issues = [_issue(err, cls.Params) for err in e.errors()]
         text = "; ".join(f"{'.'.join(map(str, loc)) or '(rule)'}: {msg}" for loc, msg in issues)

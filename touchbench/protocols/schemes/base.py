@@ -310,6 +310,9 @@ def check_base(base: dict[str, Any], scheme: str, refused: tuple[str, ...] = ())
 
 
 # ----------------------------------------------------------------- base
+S = TypeVar("S", bound="Splitter")
+
+
 class Splitter:
     """Base class: subclasses set ``Params`` and implement ``_split``.
 
@@ -338,9 +341,24 @@ class Splitter:
         return None
 
     def __init__(self, target: str = "gesture", random_state: int | None = None, **params: Any):
+        self.params = self.Params.model_validate(params)
+        self._setup(target, random_state)
+
+    @classmethod
+    def from_params(cls: type[S], params: BaseModel, target: str = "gesture", random_state: int | None = None) -> S:
+        """The scheme with ``params`` already validated by its ``Params`` model (not validated again:
+        a protocol validates its scheme's parameters once, when it is read)."""
+        if not isinstance(params, cls.Params):
+            raise TypeError(f"scheme {cls.name!r} takes a {cls.Params.__name__}, got {type(params).__name__}")
+        self = cls.__new__(cls)
+        self.params = params
+        self._setup(target, random_state)
+        return self
+
+    def _setup(self, target: str, random_state: int | None) -> None:
+        """What building sets besides the validated ``self.params``."""
         self.target = target
         self.random_state = 0 if random_state is None else int(random_state)
-        self.params = self.Params.model_validate(params)
         self.notes_: list[str] = []
 
     # properties the engine and the tests rely on
@@ -518,8 +536,8 @@ class WrappingSplitter(Splitter):
 
     base_param = "base"
 
-    def __init__(self, target: str = "gesture", random_state: int | None = None, **params: Any):
-        super().__init__(target=target, random_state=random_state, **params)
+    def _setup(self, target: str, random_state: int | None) -> None:
+        super()._setup(target, random_state)
         base = dict(self.params.base)  # type: ignore[attr-defined]
         self.base = make_splitter(base.pop("name"), target=target, random_state=random_state, **base)
 

@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
 import pandas as pd
-from pydantic import Field, Strict, field_validator, model_validator
+from pydantic import Field, Strict, ValidationInfo, field_validator, model_validator
 
 from ...streams.replay import InnerFold, LiveSpec
 from ...streams.rules import RuleError, RuleSpec, rule_spec
@@ -102,9 +102,11 @@ class _StreamParams(WrappingParams):
 
     @field_validator("rules", mode="before")
     @classmethod
-    def _rules(cls, v: Any) -> Any:
+    def _rules(cls, v: Any, info: ValidationInfo) -> Any:
         """Each rule validated by its parameter model into a :class:`RuleSpec`; the first rule in the
-        wrong reported at its fields (every problem of it), as the protocol gives them."""
+        wrong reported at its fields (every problem of it), as the protocol gives them. A rule whose
+        idle class is not the scheme's, and a rule twice (the same name and parameters, defaults
+        filled in), are refused."""
         if not isinstance(v, list):
             return v
         out: list[RuleSpec] = []
@@ -114,6 +116,17 @@ class _StreamParams(WrappingParams):
             except RuleError as e:
                 (loc, msg), *more = e.issues
                 raise _ErrorAt((k, *loc), msg, [((k, *at), m) for at, m in more]) from None
+        idle = info.data.get("idle")  # absent when the scheme's own is in the wrong (reported there)
+        seen: dict[tuple, int] = {}
+        for k, spec in enumerate(out):
+            own = getattr(spec.params, "idle", idle)
+            if idle is not None and own != idle:
+                raise _ErrorAt((k, "idle"), f"the rule's idle class {own!r} is not the scheme's ({idle!r})")
+            key = (spec.rule, spec.params)  # every parameter, defaults filled in
+            if key in seen:
+                raise _ErrorAt((k,), f"the same rule as rules[{seen[key]}] ({spec.name}, the same parameters): "
+                               "each rule is replayed once")
+            seen[key] = k
         return out
 
     @model_validator(mode="after")
@@ -126,22 +139,7 @@ class _StreamParams(WrappingParams):
         check_base(self.base, "stream")
         if self.none_label == self.idle:
             raise ValueError("none_label must differ from the idle class")
-        self._check_rules()
         return self
-
-    def _check_rules(self) -> None:
-        """Refuse a rule whose idle class is not the scheme's, and a rule twice (the same name and
-        parameters, defaults filled in)."""
-        seen: dict[tuple, int] = {}
-        for k, r in enumerate(self.rules):
-            idle = getattr(r.params, "idle", self.idle)
-            if idle != self.idle:
-                raise _ErrorAt(("rules", k, "idle"), f"the rule's idle class {idle!r} is not the scheme's ({self.idle!r})")
-            key = (r.rule, r.params)  # every parameter, defaults filled in
-            if key in seen:
-                raise _ErrorAt(("rules", k), f"the same rule as rules[{seen[key]}] ({r.name}, the same parameters): "
-                               "each rule is replayed once")
-            seen[key] = k
 
 
 @SPLITTERS.register(
