@@ -158,9 +158,10 @@ def constraint_words(constraints: Any) -> str:
 
 def constraint_params(cls: type) -> list[Param]:
     """The ``__init__`` parameters of the scikit-learn-style ``cls``, with its
-    ``_parameter_constraints`` in words and its ``_parameter_docs`` lines."""
+    ``_parameter_constraints`` in words and its ``_parameter_docs`` lines (a base class's lines
+    hold for its subclasses, unless they give their own)."""
     constraints = getattr(cls, "_parameter_constraints", {})
-    docs = getattr(cls, "_parameter_docs", {})
+    docs = {k: v for c in reversed(cls.__mro__) for k, v in vars(c).get("_parameter_docs", {}).items()}
     out = []
     for p in inspect.signature(cls.__init__).parameters.values():
         if p.name == "self" or p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):

@@ -123,6 +123,10 @@ class FeatureSet(TransformerMixin, BaseEstimator):
     #: each parameter's domain, declared once (scikit-learn's form: types, ``Interval``, ``StrOptions``,
     #: ``None``; a boolean is never a number): checked when a protocol is read and before any capture
     _parameter_constraints: ClassVar[dict] = {}
+    #: each parameter's description, one or two sentences (the generated "Parameters" section reads
+    #: it; a subclass's line replaces its base's)
+    _parameter_docs: ClassVar[dict[str, str]] = {
+        "sensor": "the dataset's sensor (:class:`touchbench.datasets.model.SensorSpec`); the run engine passes it."}
 
     def fit(self, captures, y=None):
         caps = check_captures(captures, name=type(self).__name__)

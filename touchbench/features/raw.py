@@ -49,10 +49,6 @@ class RawWindow(FeatureSet):
       the capture.
     - Values are the raw sensor values as float64 (no scaling: the paper
       feeds raw data; scaling belongs to the classifier).
-
-    Parameters: ``frames`` (F >= 1, required), ``offset`` (>= 0, 0),
-    ``shorter`` ("refuse" / "pad"), ``sensor`` (unused: the grid comes with
-    the captures).
     """
 
     paper = "Al-mashhadani et al. 2021, section 3 (raw-frame CNN)"
@@ -62,6 +58,10 @@ class RawWindow(FeatureSet):
     _parameter_constraints = {"frames": [Interval(Integral, 1, None, closed="left"), None],
                               "offset": [Interval(Integral, 0, None, closed="left")],
                               "shorter": [StrOptions(set(SHORTER_RULES))]}
+    _parameter_docs = {"frames": "F, the window's length in frames (required: None is refused when it runs).",
+                       "offset": "the first frame kept.",
+                       "shorter": "a capture shorter than the window: ``refuse`` it, or ``pad`` it with its last frame.",
+                       "sensor": "unused: the grid comes with the captures."}
 
     def __init__(self, frames: int | None = None, offset: int = 0, shorter: str = "refuse", sensor: SensorSpec | None = None):
         self.frames = frames
