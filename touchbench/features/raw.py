@@ -49,6 +49,17 @@ class RawWindow(FeatureSet):
       the capture.
     - Values are the raw sensor values as float64 (no scaling: the paper
       feeds raw data; scaling belongs to the classifier).
+
+    Examples
+    --------
+    Two frames of a 1 x 2 grid, flattened frame by frame:
+
+    >>> import numpy as np
+    >>> raw = RawWindow(frames=2)
+    >>> raw.fit_transform([np.array([[[1, 2]], [[3, 4]]])])
+    array([[1., 2., 3., 4.]])
+    >>> list(raw.get_feature_names_out())
+    ['f0_r0_c0', 'f0_r0_c1', 'f1_r0_c0', 'f1_r0_c1']
     """
 
     paper = "Al-mashhadani et al. 2021, section 3 (raw-frame CNN)"
