@@ -35,10 +35,11 @@ from typing import Any
 
 from ..core.errors import TouchbenchError
 from ..core.introspect import with_accepted
+from ..core.paramdoc import of_defaults
 from ..core.registry import Registry
 
 # Filled by every module of touchbench.classifiers (imported on first use of the registry).
-CLASSIFIERS: Registry = Registry("classifier", package="touchbench.classifiers")
+CLASSIFIERS: Registry = Registry("classifier", package="touchbench.classifiers", params_of=of_defaults)
 
 
 def make_classifier(name: str, random_state: int | None = None, sensor: Any = None, **params: Any):

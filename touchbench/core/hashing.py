@@ -16,7 +16,11 @@ RECENT_SECONDS = 2.0
 
 
 def canonical_json(obj: Any) -> str:
-    """JSON with sorted keys and no spaces, for hashing and for the ``params`` columns."""
+    """JSON with sorted keys and no spaces, for hashing and for the ``params`` columns.
+
+    >>> canonical_json({"b": 1, "a": [1, 2.5, None]})
+    '{"a":[1,2.5,null],"b":1}'
+    """
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), default=str)
 
 

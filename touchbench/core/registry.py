@@ -26,6 +26,7 @@ from functools import partial
 from typing import Any, Callable, Generic, Iterator, TypeVar
 
 from .errors import RegistrationError, UnknownNameError
+from .paramdoc import Param, document
 from .plugins import PluginInfo, current_plugin, importing, load_plugins, on_left_out
 from .suggest import did_you_mean
 
@@ -85,13 +86,18 @@ class Registry(Generic[T]):
     """
 
     def __init__(self, kind: str, loader: Callable[[], Any] | None = None, *, package: str | None = None,
-                 tags_of: Callable[[Any], dict[str, Any]] | None = None, plugins: bool | None = None):
+                 tags_of: Callable[[Any], dict[str, Any]] | None = None, plugins: bool | None = None,
+                 params_of: Callable[[Any, dict[str, Any]], list[Param] | None] | None = None):
         """``tags_of(obj)`` gives the tags an entry declares on the object itself
         (class attributes, say), so that they are written once, not twice.
+        ``params_of(obj, tags)`` reads the parameters an entry declares (:mod:`touchbench.core.paramdoc`):
+        each entry registered gets their "Parameters" section in its docstring, generated, in place
+        of a hand-written one.
         ``plugins``: whether installed plugins fill this registry too; by
         default the registries that find their modules by ``package`` do."""
         self.kind = kind
         self._tags_of = tags_of
+        self._params_of = params_of
         self._entries: dict[str, Entry[T]] = {}
         if package is not None:
             loader = partial(import_submodules, package)
@@ -143,6 +149,8 @@ class Registry(Generic[T]):
                 raise RegistrationError(f"{self.kind} {name!r}: the tag 'plugin' is touchbench's (it names the plugin)")
             extra = {"plugin": plugin} if plugin is not None else {}
             self._entries[name] = Entry(name, obj, description, {**declared, **tags, **extra})
+            if self._params_of is not None:
+                document(obj, self._params_of(obj, {**declared, **tags}))
             if plugin is not None:
                 on_left_out(plugin, partial(self._entries.pop, name, None))
             return obj

@@ -42,7 +42,11 @@ SOURCE_CAPTURE = "source_capture"
 
 def seconds_to_frames(seconds: float, frame_rate: float, what: str = "a window length or hop") -> int:
     """``seconds`` at ``frame_rate``, rounded to whole frames (at least 1); ``what`` names the
-    option in the error for a length that is not positive."""
+    option in the error for a length that is not positive.
+
+    >>> seconds_to_frames(0.5, 54.0), seconds_to_frames(0.1, 54.0), seconds_to_frames(0.001, 54.0)
+    (27, 5, 1)
+    """
     if not (isinstance(seconds, (int, float)) and np.isfinite(seconds) and seconds > 0):
         raise TouchbenchError(f"{what} must be a positive number of seconds, got {seconds!r}")
     return max(1, int(round(float(seconds) * float(frame_rate))))

@@ -31,11 +31,12 @@ from sklearn.base import BaseEstimator, TransformerMixin, clone
 from ..core.constraints import declared_failures
 from ..core.errors import TouchbenchError
 from ..core.introspect import sensor_problem, with_accepted
+from ..core.paramdoc import of_constraints
 from ..core.registry import Registry
 
 # Filled by every module of touchbench.features (imported on first use of the registry).
 FEATURES: Registry = Registry("feature set", package="touchbench.features",
-                              tags_of=lambda cls: {"paper": cls.paper, "cost": cls.cost})
+                              tags_of=lambda cls: {"paper": cls.paper, "cost": cls.cost}, params_of=of_constraints)
 
 # Upper bound on the values stacked at once by ``transform``: bounds peak
 # memory whatever the dataset size, and keeps a chunk's float64 temporaries
@@ -122,6 +123,10 @@ class FeatureSet(TransformerMixin, BaseEstimator):
     #: each parameter's domain, declared once (scikit-learn's form: types, ``Interval``, ``StrOptions``,
     #: ``None``; a boolean is never a number): checked when a protocol is read and before any capture
     _parameter_constraints: ClassVar[dict] = {}
+    #: each parameter's description, one or two sentences (the generated "Parameters" section reads
+    #: it; a subclass's line replaces its base's)
+    _parameter_docs: ClassVar[dict[str, str]] = {
+        "sensor": "the dataset's sensor (:class:`touchbench.datasets.model.SensorSpec`); the run engine passes it."}
 
     def fit(self, captures, y=None):
         caps = check_captures(captures, name=type(self).__name__)

@@ -76,9 +76,6 @@ class FlaggStats(FeatureSet):
       the grid centre ((W-1)/2, (H-1)/2), so a no-touch capture has a
       centred, motionless centroid (variance and total variation 0).
     - No normalisation by length (area and total variation grow with T).
-
-    Parameters: ``channels``, ``contact_threshold``, ``value_range``
-    (replaces the sensor's), ``sensor``.
     """
 
     paper = "Flagg 2012 (MSc thesis, UBC), sections 3.4.2 and 4.3.2"
@@ -88,6 +85,10 @@ class FlaggStats(FeatureSet):
     _parameter_constraints = {"channels": [StrOptions({"auto", "grid", "cells"})],
                               "contact_threshold": [Interval(Real, 0, None, closed="left"), None],
                               "value_range": ["array-like", None]}
+    _parameter_docs = {"channels": "``auto``, ``grid`` or ``cells`` (above).",
+                       "contact_threshold": "the contact area's threshold above the low end (None: 1.5 % of the "
+                                            "sensor's value range).",
+                       "value_range": "replaces the sensor's (for use from Python without a sensor)."}
 
     def __init__(self, channels: str = "auto", contact_threshold: float | None = None,
                  value_range: tuple[float, float] | None = None, sensor: SensorSpec | None = None):

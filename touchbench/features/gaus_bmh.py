@@ -47,10 +47,6 @@ class BinaryMotionHistory(FeatureSet):
       ``max - 1`` but not ``max - 2``. A channel sensor is refused; without
       a sensor a preset or ``offset`` must be given. The output is one
       value per cell of any grid (nothing else depends on the grid).
-
-    Parameters: ``preset`` ("haart", "cost" or None: the sensor's),
-    ``offset`` (overrides the preset, never scaled), ``level`` ("instance"
-    / "frame"), ``sensor`` (picks the preset or scales HAART's).
     """
 
     paper = f"{GAUS_PAPER}.2"
@@ -59,6 +55,10 @@ class BinaryMotionHistory(FeatureSet):
 
     _parameter_constraints = {"preset": [StrOptions(set(_TABLE)), None], "offset": [Real, None],
                               "level": [StrOptions({"instance", "frame"})]}
+    _parameter_docs = {"preset": "the table's settings (None: the sensor's).",
+                       "offset": "overrides the preset, never scaled.",
+                       "level": "``instance`` or ``frame`` (above).",
+                       "sensor": "picks the preset or scales HAART's."}
 
     def __init__(self, preset: str | None = None, offset: float | None = None, level: str = "instance", sensor: SensorSpec | None = None):
         self.preset = preset

@@ -75,9 +75,6 @@ class LBPTOP(FeatureSet):
       voxel (fewer than 2 r_t + 1 frames, or a grid thinner than
       2 r + 1, e.g. a 1 x C channel sensor) has no codes: its histograms
       are all 0 rather than 0/0.
-
-    Parameters: ``radius`` (r_x, r_y, r_t), ``n_points`` (P per plane, 4..16),
-    ``mapping`` ("u2" or "none": all 2**P codes), ``sensor`` (unused).
     """
 
     paper = f"{GAUS_PAPER}.5 (Zhao & Pietikainen 2007)"
@@ -86,6 +83,10 @@ class LBPTOP(FeatureSet):
 
     _parameter_constraints = {"radius": ["array-like"], "n_points": [Interval(Integral, 4, 16, closed="both")],
                               "mapping": [StrOptions({"u2", "none"})]}
+    _parameter_docs = {"radius": "the radii (r_x, r_y, r_t), three positive integers.",
+                       "n_points": "P, the neighbours per plane.",
+                       "mapping": "``u2``: the uniform patterns' bins; ``none``: all 2**P codes.",
+                       "sensor": "unused."}
 
     def __init__(self, radius: tuple[int, int, int] = (1, 1, 1), n_points: int = 8, mapping: str = "u2", sensor: SensorSpec | None = None):
         self.radius = radius

@@ -54,13 +54,12 @@ class MotionStatisticalDistribution(FeatureSet):
       constant in every cell.
     - No normalisation by the number of frames (area and total variation
       grow with length), as in the paper.
-
-    Parameters: ``sensor`` (unused; nothing depends on the sensor).
     """
 
     paper = f"{GAUS_PAPER}.3"
     cost = "cheap"
     fold_dependent = False
+    _parameter_docs = {"sensor": "unused; nothing depends on the sensor."}
 
     def __init__(self, sensor: SensorSpec | None = None):
         self.sensor = sensor

@@ -50,9 +50,16 @@ class RawWindow(FeatureSet):
     - Values are the raw sensor values as float64 (no scaling: the paper
       feeds raw data; scaling belongs to the classifier).
 
-    Parameters: ``frames`` (F >= 1, required), ``offset`` (>= 0, 0),
-    ``shorter`` ("refuse" / "pad"), ``sensor`` (unused: the grid comes with
-    the captures).
+    Examples
+    --------
+    Two frames of a 1 x 2 grid, flattened frame by frame:
+
+    >>> import numpy as np
+    >>> raw = RawWindow(frames=2)
+    >>> raw.fit_transform([np.array([[[1, 2]], [[3, 4]]])])
+    array([[1., 2., 3., 4.]])
+    >>> list(raw.get_feature_names_out())
+    ['f0_r0_c0', 'f0_r0_c1', 'f1_r0_c0', 'f1_r0_c1']
     """
 
     paper = "Al-mashhadani et al. 2021, section 3 (raw-frame CNN)"
@@ -62,6 +69,10 @@ class RawWindow(FeatureSet):
     _parameter_constraints = {"frames": [Interval(Integral, 1, None, closed="left"), None],
                               "offset": [Interval(Integral, 0, None, closed="left")],
                               "shorter": [StrOptions(set(SHORTER_RULES))]}
+    _parameter_docs = {"frames": "F, the window's length in frames (required: None is refused when it runs).",
+                       "offset": "the first frame kept.",
+                       "shorter": "a capture shorter than the window: ``refuse`` it, or ``pad`` it with its last frame.",
+                       "sensor": "unused: the grid comes with the captures."}
 
     def __init__(self, frames: int | None = None, offset: int = 0, shorter: str = "refuse", sensor: SensorSpec | None = None):
         self.frames = frames

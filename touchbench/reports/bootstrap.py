@@ -169,7 +169,18 @@ def pigeonhole(a: Any, b: Any = None, *, paired: bool = True, level: float = LEV
                resamples: int = PIGEONHOLE_RESAMPLES, seed: int = PIGEONHOLE_SEED) -> Pigeonhole:
     """Owen's pigeonhole bootstrap of the mean of ``a`` (rows: captures, columns: replicates; NaN:
     not scored), or of ``mean(a) - mean(b)`` with ``b`` on the same captures, its columns drawn with
-    ``a``'s (``paired``) or on their own (module docstring, with its degenerate cases)."""
+    ``a``'s (``paired``) or on their own (module docstring, with its degenerate cases).
+
+    Every capture right with every replicate: the interval is the mean, without drawing; one capture
+    (a 1 x 2 matrix): its mean, and no interval.
+
+    >>> p = pigeonhole([[1, 1], [1, 1], [1, 1]])
+    >>> p.mean, p.low, p.high, p.fixed, p.captures
+    (1.0, 1.0, 1.0, True, 3)
+    >>> p = pigeonhole([[1, 0]])
+    >>> p.mean, p.low, p.captures
+    (0.5, nan, 1)
+    """
     xa, xb = _inputs(a, b, paired)
     mean, fixed = _observed(xa, xb, paired)
     none = np.empty(0, dtype=np.float64)

@@ -37,7 +37,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from pydantic import model_validator
+from pydantic import Field, model_validator
 
 from ..core.errors import TouchbenchError
 from .rules import RULES, ClassName, DecisionRule, FieldProblem, Fraction, RuleParams, Seconds
@@ -49,12 +49,13 @@ FLOOR = 1e-6
 
 
 class TouchParams(RuleParams):
-    idle: ClassName
-    begin: Fraction = 0.6
-    end: Fraction = 0.4
-    begin_s: Seconds = 0.2
-    end_s: Seconds = 0.3
-    memory: Seconds = 0.0
+    idle: ClassName = Field(description="the idle class (no touch; in a stream evaluation, the scheme's ``idle``).")
+    begin: Fraction = Field(0.6, description="a touch begins at ``P(touch) >= begin``.")
+    end: Fraction = Field(0.4, description="a touch ends at ``P(touch) < end`` (``end <= begin``).")
+    begin_s: Seconds = Field(0.2, description="for how long (seconds, counted in decisions) ``begin`` must hold.")
+    end_s: Seconds = Field(0.3, description="for how long (seconds, counted in decisions) ``end`` must hold.")
+    memory: Seconds = Field(0.0, description="seconds of the touch whose evidence decides the gesture (0: since "
+                            "the onset).")
 
     @model_validator(mode="after")
     def _order(self) -> "TouchParams":
@@ -67,16 +68,6 @@ class TouchParams(RuleParams):
                 "gesture is the one most probable over the touch so far")
 class TouchRule(DecisionRule):
     """Touch detection with hysteresis, then the gesture from the touch so far (module docstring).
-
-    Parameters
-    ----------
-    idle : the idle class (no touch; in a stream evaluation, the scheme's ``idle``).
-    begin, end : a touch begins at ``P(touch) >= begin``, ends at ``P(touch) < end``; each in [0, 1],
-        ``end <= begin`` (defaults 0.6 and 0.4).
-    begin_s, end_s : for how long (seconds, counted in decisions) each must hold, in [0, 3600)
-        (defaults 0.2 and 0.3).
-    memory : seconds of the touch whose evidence decides the gesture, in [0, 3600) (default 0: since
-        the onset).
     """
 
     name = "touch"

@@ -29,6 +29,7 @@ touch) are classified by the model trained on the recogniser's lengths.
 from __future__ import annotations
 
 import numpy as np
+from pydantic import Field
 
 from .rules import RULES, GateParams, GateRule, Seconds, frame_contact
 
@@ -55,17 +56,12 @@ def contact_run(contact: np.ndarray, bridge: int) -> int:
 
 
 class OnsetParams(GateParams):
-    bridge_s: Seconds = 0.5
+    bridge_s: Seconds = Field(0.5, description="gaps of contact shorter than this many seconds are bridged.")
 
 
 @RULES.register("onset", description="windows aligned to the touch's onset (contact gate), not sliding")
 class OnsetRule(GateRule):
     """The gate, and one window from the touch's onset instead of the sliding ones (module docstring).
-
-    Parameters
-    ----------
-    idle, level, gate_s, threshold : the gate's (:class:`touchbench.streams.rules.GateRule`).
-    bridge_s : gaps of contact shorter than this many seconds are bridged, in [0, 3600) (default 0.5).
     """
 
     name = "onset"

@@ -48,6 +48,7 @@ from pydantic import BaseModel, ConfigDict, Field, PlainValidator, Strict, Valid
 
 from ..core.errors import TouchbenchError, UnknownNameError
 from ..core.hashing import canonical_json
+from ..core.paramdoc import of_model
 from ..core.registry import Registry
 from ..core.suggest import did_you_mean
 
@@ -55,7 +56,7 @@ __all__ = ["DEFAULT_RULE", "RULES", "DecisionRule", "FieldProblem", "GateRule", 
            "RuleParams", "RuleSpec", "fitted_declaration", "frame_contact", "make_rule", "needs_fitting", "peak_contact",
            "rule_class", "rule_defaults", "rule_params", "rule_spec", "stream_rule"]
 
-RULES: Registry = Registry("decision rule", package="touchbench.streams")
+RULES: Registry = Registry("decision rule", package="touchbench.streams", params_of=of_model)
 
 
 class RuleParams(BaseModel):
@@ -295,17 +296,20 @@ def needs_fitting(rule: DecisionRule) -> bool:
 
 
 class MaxParams(RuleParams):
-    threshold: Fraction = 0.5
+    threshold: Fraction = Field(0.5, description="the least probability of the most probable class to name it "
+                                "(0: always the most probable class).")
 
 
 @RULES.register("max", description="the most probable class, none under the threshold")
 class MaxRule(DecisionRule):
     """The most probable class, or the none label when its probability is under ``threshold``.
 
-    Parameters
-    ----------
-    threshold : the least probability of the most probable class to name it, in [0, 1] (default 0.5;
-        0: always the most probable class).
+    Examples
+    --------
+    >>> rule = MaxRule(threshold=0.5)
+    >>> rule.start(["a", "b", "c"], none_label="none", frame_rate=54.0)
+    >>> rule.decide([0.2, 0.7, 0.1]), rule.decide([0.4, 0.3, 0.3])
+    ('b', 'none')
     """
 
     name = "max"
@@ -334,10 +338,11 @@ def peak_contact(frames: np.ndarray, value_range: tuple[float, float], higher_is
 
 
 class GateParams(RuleParams):
-    idle: ClassName
-    level: Level = "auto"
-    gate_s: PositiveSeconds = 0.25
-    threshold: Fraction = 0.0
+    idle: ClassName = Field(description="the idle class (in a stream evaluation, the scheme's ``idle``).")
+    level: Level = Field("auto", description="the peak contact, a fraction of the sensor's value range in [0, 1], "
+                         "under which the gate decides idle; ``auto``: chosen on the training captures (``fit``).")
+    gate_s: PositiveSeconds = Field(0.25, description="the newest seconds whose peak the gate reads.")
+    threshold: Fraction = Field(0.0, description="the least probability of the class named (0: always one).")
 
 
 @RULES.register("gate", description="a rest/contact gate decides idle before the classifier; else the best "
@@ -345,14 +350,6 @@ class GateParams(RuleParams):
 class GateRule(DecisionRule):
     """A rest/contact gate: the idle class without the classifier while the newest ``gate_s``
     seconds' peak contact is under ``level``; otherwise the most probable class other than idle.
-
-    Parameters
-    ----------
-    idle : the idle class (in a stream evaluation, the scheme's ``idle``).
-    level : the peak contact, a fraction of the sensor's value range in [0, 1], under which the gate
-        decides idle; ``auto`` (the default): chosen on the training captures (:meth:`fit`).
-    gate_s : the newest seconds whose peak the gate reads, in (0, 3600) (default 0.25).
-    threshold : the least probability of the class named, in [0, 1] (default 0: always one).
     """
 
     name = "gate"
@@ -417,8 +414,9 @@ def best_level(peaks: np.ndarray, idle: np.ndarray) -> float:
 
 
 class MajorityParams(RuleParams):
-    n: Annotated[int, Strict(), Field(ge=1)] = 5
-    threshold: Fraction = 0.5
+    n: Annotated[int, Strict(), Field(ge=1)] = Field(5, description="how many of the latest decisions vote "
+                                                     "(1: ``max`` itself).")
+    threshold: Fraction = Field(0.5, description="``max``'s threshold.")
 
 
 @RULES.register("majority", description="the most frequent of the last n decisions of max (smoothing)")
@@ -426,10 +424,12 @@ class MajorityRule(MaxRule):
     """The most frequent of the last ``n`` decisions of ``max`` (ties: the most recent of the tied
     labels).
 
-    Parameters
-    ----------
-    n : how many of the latest decisions vote, a whole number >= 1 (default 5; 1: ``max`` itself).
-    threshold : ``max``'s threshold, in [0, 1] (default 0.5).
+    Examples
+    --------
+    >>> rule = MajorityRule(n=3)
+    >>> rule.start(["a", "b"], none_label="none", frame_rate=54.0)
+    >>> [rule.decide(p) for p in ([0.9, 0.1], [0.2, 0.8], [0.3, 0.7], [0.9, 0.1])]
+    ['a', 'b', 'b', 'b']
     """
 
     name = "majority"
@@ -447,8 +447,9 @@ class MajorityRule(MaxRule):
 
 
 class HmmParams(RuleParams):
-    switch: Fraction = 0.05
-    threshold: Fraction = 0.5
+    switch: Fraction = Field(0.05, description="the probability per hop of moving to another class (0: the "
+                             "first decision's class is kept as long as every class has some probability).")
+    threshold: Fraction = Field(0.5, description="the least filtered probability of the class named.")
 
 
 @RULES.register("hmm", description="forward filtering over the classes with a sticky transition (smoothing)")
@@ -456,12 +457,6 @@ class HmmRule(MaxRule):
     """Forward filtering over the classes: a hidden Markov model whose state stays with probability
     ``1 - switch`` per hop and moves to each other class with ``switch / (C - 1)``; the most probable
     class of the filtered posterior, or the none label under ``threshold``.
-
-    Parameters
-    ----------
-    switch : the probability per hop of moving to another class, in [0, 1] (default 0.05; 0: the
-        first decision's class is kept as long as every class has some probability).
-    threshold : the least filtered probability of the class named, in [0, 1] (default 0.5).
     """
 
     name = "hmm"

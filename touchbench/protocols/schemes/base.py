@@ -33,6 +33,7 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_valida
 
 from ...core.errors import TouchbenchError, UnknownNameError
 from ...core.folds import FoldExtra
+from ...core.paramdoc import of_model
 from ...core.registry import Registry
 from ..seeding import derive_seed
 
@@ -487,7 +488,7 @@ def _sklearn_table(X: Any, y: Any, groups: Any, target: str) -> pd.DataFrame:
     return meta.assign(**columns) if columns else meta
 
 
-SPLITTERS: Registry = Registry("evaluation scheme", package="touchbench.protocols.schemes")
+SPLITTERS: Registry = Registry("evaluation scheme", package="touchbench.protocols.schemes", params_of=of_model)
 
 
 def make_splitter(name: str, target: str = "gesture", random_state: int | None = None, **params: Any) -> Splitter:

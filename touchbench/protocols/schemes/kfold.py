@@ -17,12 +17,13 @@ from .base import (SPLITTERS, Fold, SchemeParams, SplitError, Splitter, deal, fo
 
 
 class _KFoldParams(SchemeParams):
-    k: int = Field(default=10, ge=2)
-    repeats: int = Field(default=1, ge=1)
-    stratified: bool = True
-    grouped: bool = False
-    group_column: str = "subject"
-    shuffle: bool = True
+    k: int = Field(default=10, ge=2, description="the number of folds.")
+    repeats: int = Field(default=1, ge=1, description="how many times the k folds are drawn (more than one "
+                         "needs ``shuffle``).")
+    stratified: bool = Field(default=True, description="each fold holds each class in proportion.")
+    grouped: bool = Field(default=False, description="every value of ``group_column`` on one side of each fold.")
+    group_column: str = Field(default="subject", description="the metadata column ``grouped`` keeps together.")
+    shuffle: bool = Field(default=True, description="captures dealt at random (from the protocol's seed).")
 
     @model_validator(mode="after")
     def _check(self) -> "_KFoldParams":

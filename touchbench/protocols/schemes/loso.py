@@ -12,8 +12,9 @@ from .base import SPLITTERS, Fold, SchemeParams, SplitError, Splitter, StrList, 
 
 
 class _LosoParams(SchemeParams):
-    column: str = "subject"
-    subjects: StrList | None = Field(default=None, min_length=1)
+    column: str = Field(default="subject", description="the metadata column whose values are held out in turn.")
+    subjects: StrList | None = Field(default=None, min_length=1, description="the values held out (None: every "
+                                     "one); each fold still trains on all the others.")
 
 
 @SPLITTERS.register(
