@@ -96,7 +96,7 @@ def test_sd_value_on_edge_and_clip():
 
 
 def test_sd_unknown_preset_is_clear():
-    with pytest.raises(ValueError, match="unknown preset 'coast'"):
+    with pytest.raises(ValueError, match=r"'preset' parameter of sd .*Got 'coast' instead; did you mean 'cost'\?"):
         make_set("sd", preset="coast").fit_transform([SD_CAPTURE])
 
 
