@@ -127,3 +127,22 @@ def test_values_at_their_bounds_run(tmp_path):
                     "seed: 0\n")
     r = CliRunner().invoke(cli, ["run", str(path), "--out", str(tmp_path / "res")])
     assert r.exit_code == 0, r.output
+
+
+def test_a_refused_choice_lists_the_choices_in_the_same_order_in_every_process(tmp_path):
+    # a set of strings iterates in an order that depends on the hash seed: two interpreters with
+    # different seeds must still print the choices alike, sorted
+    import os
+    import subprocess
+    import sys
+
+    from helpers import SUBPROCESS_HANG_S
+
+    code = ("from sklearn.utils._param_validation import StrOptions\n"
+            "from touchbench.core.constraints import declared_failures\n"
+            "print(declared_failures({'p': [StrOptions({'delta', 'alpha', 'charlie', 'bravo'})]}, {'p': 'x'}, 'o')['p'])")
+    outs = {subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                           timeout=SUBPROCESS_HANG_S, env={**os.environ, "PYTHONHASHSEED": str(seed)}).stdout
+            for seed in (1, 2, 3, 4)}
+    assert outs == {"The 'p' parameter of o must be a str among {'alpha', 'bravo', 'charlie', 'delta'}. "
+                    "Got 'x' instead.\n"}

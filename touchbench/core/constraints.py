@@ -5,6 +5,7 @@ string outside a ``StrOptions`` choice is answered with the nearest choice."""
 
 from __future__ import annotations
 
+import copy
 from numbers import Integral, Number, Real
 from typing import Any
 
@@ -32,6 +33,21 @@ def _choices(constraints: Any) -> list[str]:
                   for o in c.options if isinstance(o, str))
 
 
+def _in_order(constraints: Any) -> Any:
+    """``constraints`` with each ``StrOptions``' choices in sorted order, so that a refusal lists them
+    the same way in every process (a set of strings iterates in an order that changes with the
+    interpreter's hash seed)."""
+    if not isinstance(constraints, list):
+        return constraints
+    out = []
+    for c in constraints:
+        if isinstance(c, StrOptions) and all(isinstance(o, str) for o in c.options):
+            c = copy.copy(c)
+            c.options = dict.fromkeys(sorted(c.options))  # ordered, and answers `in` as the set did
+        out.append(c)
+    return out
+
+
 def declared_failures(constraints: dict[str, Any], values: dict[str, Any], owner: str) -> dict[str, str]:
     """``parameter -> message`` for each of ``values`` that its entry of ``constraints`` (scikit-learn's
     form) refuses; ``owner`` names the object in the message. A parameter without an entry is not asked."""
@@ -41,7 +57,7 @@ def declared_failures(constraints: dict[str, Any], values: dict[str, Any], owner
             continue
         v = values[k]
         try:
-            validate_parameter_constraints({k: c}, {k: v}, caller_name=owner)
+            validate_parameter_constraints({k: _in_order(c)}, {k: v}, caller_name=owner)
         except (ValueError, TypeError) as e:
             hint = did_you_mean(v, _choices(c)) if isinstance(v, str) else ""
             out[k] = str(e).rstrip(".") + hint if hint else str(e)
