@@ -34,16 +34,16 @@ import pandas as pd
 from ..classifiers.adapt import adapt_each_session
 from ..core.threads import available_cpus, single_thread
 from ..datasets.model import TouchDataset
-from ..scoring.metrics import metrics
 from ..features.base import make_feature_set
 from ..methods import FittedMethod, Method
 from ..methods.fitting import FittedEstimator, fit_estimator
 from ..protocols.schemes import Fold, fold_notes
 from ..results.manifest import load_average
 from ..results.store import PREDICTED, PROBA_PREFIX, TRUE
+from ..scoring.metrics import metrics
+from ..streams.replay import LiveSpec
 from .backends import run_setup
 from .cache import FeatureCache, crop_captures
-from ..streams.replay import LiveSpec
 from .live import live_outcome
 
 __all__ = ["RunContext", "SetSpec", "Task", "execute_task"]

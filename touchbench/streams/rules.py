@@ -54,7 +54,7 @@ from ..core.suggest import did_you_mean
 
 __all__ = ["DEFAULT_RULE", "RULES", "DecisionRule", "FieldProblem", "GateRule", "HmmRule", "MajorityRule", "MaxRule", "RuleError",
            "RuleParams", "RuleSpec", "fitted_declaration", "frame_contact", "make_rule", "needs_fitting", "peak_contact",
-           "rule_class", "rule_defaults", "rule_params", "rule_spec", "stream_rule"]
+           "rule_class", "rule_defaults", "rule_spec", "stream_rule"]
 
 RULES: Registry = Registry("decision rule", package="touchbench.streams", params_of=of_model)
 
@@ -125,8 +125,7 @@ class DecisionRule:
         fields = list(self.Params.model_fields)
         if len(args) > len(fields):
             raise TypeError(f"{type(self).__name__} takes at most {len(fields)} positional parameters ({', '.join(fields)})")
-        _, params = rule_params({**dict(zip(fields, args)), **given, "name": self.name})
-        self._set(params)
+        self._set(rule_spec({**dict(zip(fields, args)), **given, "name": self.name}).params)
 
     @classmethod
     def from_params(cls, params: RuleParams) -> "DecisionRule":
@@ -222,12 +221,6 @@ def rule_spec(spec: "dict[str, Any] | str | RuleSpec") -> RuleSpec:
         issues = [_issue(err, cls.Params) for err in e.errors()]
         text = "; ".join(f"{'.'.join(map(str, loc)) or '(rule)'}: {msg}" for loc, msg in issues)
         raise RuleError(f"decision rule {cls.name!r}: {text}", issues) from None
-
-
-def rule_params(spec: dict[str, Any] | str) -> tuple[type["DecisionRule"], RuleParams]:
-    """The rule class and its validated parameters of the declaration ``spec`` (:func:`rule_spec`)."""
-    r = rule_spec(spec)
-    return r.rule, r.params
 
 
 def _issue(err: Any, model: type[RuleParams]) -> tuple[tuple, str]:

@@ -68,22 +68,22 @@ MAX_WINDOW_S = 60.0
 #: capture (at most its length) or, for a subject with none, made of the sensor's rest
 MAX_GAP_S = 60.0
 
-#: a number of seconds the scheme reads: a number (a boolean or a string refused), finite
-_Seconds = Annotated[float, Strict(), Field(allow_inf_nan=False)]
+#: a number the scheme reads (seconds, or a rate): finite, a boolean or a string refused
+_Finite = Annotated[float, Strict(), Field(allow_inf_nan=False)]
 
 
 class _StreamParams(WrappingParams):
     source: Literal["spliced", "recorded"] = "spliced"
     idle: str = Field(min_length=1)
-    gap_s: tuple[_Seconds, _Seconds] = (1.0, 3.0)
+    gap_s: tuple[_Finite, _Finite] = (1.0, 3.0)
     per_stream: int | None = Field(default=None, ge=1)
-    windows_s: list[Annotated[_Seconds, Field(gt=0, le=MAX_WINDOW_S)]] = Field(default=[0.5, 1.0], min_length=1)
-    hop_s: _Seconds = Field(default=0.1, gt=0)
+    windows_s: list[Annotated[_Finite, Field(gt=0, le=MAX_WINDOW_S)]] = Field(default=[0.5, 1.0], min_length=1)
+    hop_s: _Finite = Field(default=0.1, gt=0)
     train_on: Literal["windows", "captures", "streams"] = "windows"
-    train_hop_s: _Seconds | None = Field(default=None, gt=0)
+    train_hop_s: _Finite | None = Field(default=None, gt=0)
     choose_rule: bool = False
     inner_folds: int | None = Field(default=None, ge=2)
-    max_false_per_min: _Seconds = Field(default=5.0, ge=0)
+    max_false_per_min: _Finite = Field(default=5.0, ge=0)
     rules: list[Any] = Field(default=[{"name": "max", "threshold": 0.5}], min_length=1, validate_default=True)
     none_label: str = "none"
 
