@@ -89,6 +89,7 @@ from .haart import (
     read_bytes,
 )
 from .model import TouchDataset
+from .windows import no_frame
 
 log = logging.getLogger("touchbench.datasets")
 
@@ -306,9 +307,9 @@ def _capture(arr, win: Window, rate: float, path: Path, leave_out: bool = False)
 def _check_frames(win: Window, rec_s: float | None, rate: float) -> None:
     """Refuse a window or a recording cut of no frame at ``rate``, naming the option."""
     for option, seconds in (("recording_window", win.seconds), ("recording_seconds", rec_s)):
-        if seconds is not None and round(seconds * rate) < 1:
-            raise OptionValueError(f"{option}: {seconds:g} s is {round(seconds * rate)} frames at {rate:g} Hz: "
-                                   f"a window is at least one frame ({1 / rate:.3g} s)")
+        problem = None if seconds is None else no_frame(seconds, rate)
+        if problem:
+            raise OptionValueError(f"{option}: {problem}")
 
 
 def read_haart_raw(

@@ -34,10 +34,25 @@ import numpy as np
 from ..core.errors import TouchbenchError
 from .model import TIME_COLUMN, TouchDataset
 
-__all__ = ["SOURCE_CAPTURE", "cut_windows", "seconds_to_frames", "window_dataset"]
+__all__ = ["SOURCE_CAPTURE", "cut_windows", "no_frame", "seconds_to_frames", "window_dataset"]
 
 #: the metadata column naming the capture a window was cut from
 SOURCE_CAPTURE = "source_capture"
+
+
+def no_frame(seconds: float, frame_rate: float) -> str | None:
+    """Why ``seconds`` is no window at ``frame_rate`` (it rounds to no frame), or None.
+
+    >>> no_frame(0.009, 50.0)
+    '0.009 s is 0 frames at 50 Hz: a window is at least one frame (0.02 s)'
+    >>> no_frame(0.011, 50.0) is None
+    True
+    """
+    frames = round(float(seconds) * float(frame_rate))
+    if frames >= 1:
+        return None
+    return f"{float(seconds):g} s is {frames} frames at {float(frame_rate):g} Hz: a window is at least one frame " \
+           f"({1 / float(frame_rate):.3g} s)"
 
 
 def seconds_to_frames(seconds: float, frame_rate: float, what: str = "a window length or hop") -> int:

@@ -120,7 +120,7 @@ def _folds(protocol: Protocol, ds: TouchDataset, repetition: int, notes: list[st
     try:
         folds = splitter.folds(ds.meta)
     except SplitError as e:
-        raise protocol.error_at(("scheme",), str(e)) from None
+        raise protocol.error_at(("scheme", *e.field), str(e)) from None
     prefix = f"repetition {repetition}: " if protocol.repetitions > 1 else ""
     notes += [prefix + n for n in splitter.notes_]
     unseen = _unseen_class_note(ds.meta[protocol.target].astype(str).to_numpy(), folds)

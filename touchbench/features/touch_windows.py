@@ -43,6 +43,7 @@ from sklearn.utils._param_validation import Interval
 
 from ..core.suggest import did_you_mean
 from ..datasets.model import SensorSpec
+from ..datasets.windows import no_frame
 from .base import FEATURES, FeatureInputError, FeatureSet
 from .touch import _TouchBase
 
@@ -82,10 +83,9 @@ class TouchWindows(_TouchBase):
             hint = did_you_mean(unknown[0], OWN_SETS) if unknown else ""
             raise FeatureInputError(f"touch-windows: sets must name some of {list(OWN_SETS)}, got {self.sets!r}{hint}")
         rate = self.frame_rate if self.frame_rate is not None else getattr(self.sensor, "frame_rate", None)
-        frames = None if rate is None else round(float(self.window_s) * float(rate))
-        if frames is not None and frames < 1:
-            raise FeatureInputError(f"touch-windows: window_s {float(self.window_s):g} s is {frames} frames at {rate:g} "
-                                    f"Hz: a window is at least one frame ({1 / rate:.3g} s)")
+        problem = None if rate is None else no_frame(self.window_s, rate)
+        if problem:
+            raise FeatureInputError(f"touch-windows: window_s {problem}")
         super()._check_params()
 
     def check_sensor(self, sensor: SensorSpec, min_frames: int | None = None) -> str | None:

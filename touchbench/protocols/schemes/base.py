@@ -48,7 +48,12 @@ DEFAULT_SEEDS = 5
 
 
 class SplitError(TouchbenchError):
-    """A scheme that cannot be evaluated on this metadata (refused before any work)."""
+    """A scheme that cannot be evaluated on this metadata (refused before any work); ``field``, the
+    scheme's parameter at fault (``("hop_s",)``), where one is."""
+
+    def __init__(self, message: str, field: tuple = ()):
+        super().__init__(message)
+        self.field = tuple(field)
 
 
 class MissingColumnError(SplitError):

@@ -45,6 +45,7 @@ import numpy as np
 import pandas as pd
 from pydantic import Field, Strict, ValidationInfo, field_validator, model_validator
 
+from ...datasets.windows import no_frame, seconds_to_frames
 from ...streams.replay import InnerFold, LiveSpec
 from ...streams.rules import RuleError, RuleSpec, rule_spec
 from ...streams.timeline import recorded_streams, spliced_streams
@@ -94,11 +95,6 @@ class _StreamParams(WrappingParams):
         if isinstance(d, dict) and isinstance(d.get("rules"), list):
             d = {**d, "rules": [{"name": r} if isinstance(r, str) else r for r in d["rules"]]}
         return d
-
-    @field_validator("windows_s")
-    @classmethod
-    def _windows(cls, v: list[float]) -> list[float]:
-        return sorted(v)
 
     @field_validator("rules", mode="before")
     @classmethod
@@ -179,13 +175,40 @@ class Stream(WrappingSplitter):
         if self.params.idle not in set(ds.meta[self.target].astype(str)):
             raise SplitError(f"scheme 'stream': the idle class {self.params.idle!r} is not a {self.target} of the "
                              f"dataset ({', '.join(sorted(set(ds.meta[self.target].astype(str))))})")
+        self._check_lengths(ds, context)
         spliced = "scene" if str(context.dataset_name).startswith("scene:") else "spliced"
         meta = ds.meta.assign(**{N_FRAMES: np.asarray(ds.n_frames, dtype=np.int64),
                                  FRAME_RATE: float(ds.sensor.frame_rate),
                                  SOURCE: self.params.source if self.params.source == "recorded" else spliced})
         context.notes.append(f"{meta[SOURCE].iloc[0]} streams of the test subjects, replayed with windows "
-                             f"{', '.join(f'{w:g}' for w in self.params.windows_s)} s and hop {self.params.hop_s:g} s")
+                             f"{', '.join(f'{w:g}' for w in sorted(self.params.windows_s))} s and hop {self.params.hop_s:g} s")
         return type(ds)(ds.name, ds.captures, meta, ds.sensor)
+
+    def _check_lengths(self, ds: "TouchDataset", context: DataContext) -> None:
+        """Refuse a window or hop of no frame at the data's rate, and an idle stretch longer than the
+        shortest idle capture it could be cut from (it would be cut short without a word)."""
+        p, rate = self.params, float(ds.sensor.frame_rate)
+        lengths = [(("windows_s", i), w) for i, w in enumerate(p.windows_s)] + [(("hop_s",), p.hop_s)]
+        lengths += [(("train_hop_s",), p.train_hop_s)] if p.train_hop_s is not None else []
+        for at, seconds in lengths:
+            problem = no_frame(seconds, rate)
+            if problem:
+                raise context.error_at(("scheme", *at), problem)
+        idle = np.asarray(ds.n_frames, dtype=np.int64)[ds.meta[self.target].astype(str).to_numpy() == p.idle]
+        if p.source != "recorded" and len(idle) and round(p.gap_s[1] * rate) > idle.min():
+            raise context.error_at(("scheme", "gap_s", 1), (
+                f"an idle stretch is cut from one {p.idle!r} capture, and the shortest is {idle.min() / rate:g} s "
+                f"({idle.min()} frames at {rate:g} Hz): a stretch of {p.gap_s[1]:g} s would be cut short"))
+
+    def _check_streams(self, streams: list, rate: float, fold: str) -> None:
+        """Refuse a hop or shortest window not shorter than the shortest stream of ``fold`` (no
+        decision or a single one on it)."""
+        p, shortest = self.params, min(streams, key=lambda s: s.n_frames)
+        first = min(range(len(p.windows_s)), key=p.windows_s.__getitem__)
+        for at, seconds in ((("hop_s",), p.hop_s), (("windows_s", first), p.windows_s[first])):
+            if seconds_to_frames(seconds, rate) >= shortest.n_frames:
+                raise SplitError(f"{at[0]} {seconds:g} s is not shorter than the shortest stream of fold {fold!r} "
+                                 f"({shortest.name}: {shortest.n_frames / rate:g} s)", field=at)
 
     def _split(self, meta: pd.DataFrame) -> list[Fold]:
         if N_FRAMES not in meta.columns or FRAME_RATE not in meta.columns:
@@ -197,6 +220,7 @@ class Stream(WrappingSplitter):
         for f in base_folds:
             streams = self._streams(meta, n_frames, f)
             test = np.unique(np.concatenate([s.captures for s in streams]))
+            self._check_streams(streams, float(meta[FRAME_RATE].iloc[0]), f.name)
             out.append(f.with_extra(self._live(streams, meta, n_frames, f), test=test))
         return out
 
@@ -255,7 +279,7 @@ class Stream(WrappingSplitter):
 
     def _live(self, streams: list, meta: pd.DataFrame, n_frames: np.ndarray, fold: Fold) -> LiveSpec:
         p = self.params
-        return LiveSpec(streams=tuple(streams), idle=p.idle, windows_s=tuple(p.windows_s), hop_s=p.hop_s,
+        return LiveSpec(streams=tuple(streams), idle=p.idle, windows_s=tuple(sorted(p.windows_s)), hop_s=p.hop_s,
                         train_on=p.train_on, train_hop_s=p.train_hop_s,
                         rules=tuple(p.rules), none_label=p.none_label,
                         train_streams=self._training_streams(meta, n_frames, fold.train, fold.name),
