@@ -59,25 +59,26 @@ repetitions: 2
 
 
 def test_a_stream_protocols_scheme_parameters_are_validated_once_per_read_and_run(tmp_path, monkeypatch):
-    params = SPLITTERS.get("stream").Params
-    real = params.model_validate  # BaseModel's, bound to the stream scheme's model
-    validated: list[dict] = []
+    validated: dict[str, list[dict]] = {"stream": [], "loso": []}
+    for name in validated:
+        params = SPLITTERS.get(name).Params
 
-    def counted(cls, obj, *args, **kw):
-        validated.append(obj)
-        return real(obj, *args, **kw)
+        def counted(cls, obj, *args, real=params.model_validate, seen=validated[name], **kw):
+            seen.append(obj)
+            return real(obj, *args, **kw)
 
-    monkeypatch.setattr(params, "model_validate", classmethod(counted))
+        monkeypatch.setattr(params, "model_validate", classmethod(counted))
     built = _counting(monkeypatch)
     p = tmp_path / "live.yaml"
     p.write_text(STREAM)
     run_protocol(p, out=tmp_path / "results", progress=False, jobs=1)
-    # worked out by hand: reading the protocol validates the scheme's parameters (the checks: 1); the
-    # run builds one scheme per repetition (2) from that model, and the data preparation, the folds,
-    # the plan and the leakage label ask the built ones: 1 validation in all
-    assert len(validated) == 1
-    assert validated[0]["rules"] == [{"name": "hmm", "switch": 0.01}]
-    assert sorted(name for name, _ in built) == ["stream", "stream"]
+    # worked out by hand: reading the protocol validates the scheme's parameters and those of the
+    # scheme it wraps (the checks: 1 each); the run builds one scheme per repetition (2), each with
+    # its base (2), from those models, and the data preparation, the folds, the plan and the leakage
+    # label ask the built ones: 1 validation of each in all
+    assert [len(v) for v in validated.values()] == [1, 1]
+    assert validated["stream"][0]["rules"] == [{"name": "hmm", "switch": 0.01}]
+    assert sorted(name for name, _ in built) == ["loso", "loso", "stream", "stream"]
 
 
 def test_a_scheme_is_not_built_from_another_schemes_parameters():

@@ -31,6 +31,7 @@ from .errors import _loc_str, _make_error, _pydantic_issues
 from .expected import ExpectedBest
 from .schema import MAX_ENTRIES, Protocol, protocol_dataset_ref
 from .schemes import SPLITTERS, SplitError
+from .schemes.base import WrappingParams
 from .specs import EVALUATION_FIELDS
 
 
@@ -42,32 +43,25 @@ def _scheme_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
         validated = protocol.scheme_params()
     except ValidationError as e:
         return _pydantic_issues(e, cls.Params, ("scheme",))
-    return _base_issues(cls, getattr(validated, cls.base_param or "", None), ("scheme",))
+    return _base_issues(validated, ("scheme",))
 
 
-def _spec_issues(spec: dict[str, Any], prefix: tuple) -> list[tuple[tuple, str]]:
-    """A wrapped scheme's entry ``{name: ..., parameters}``, at ``prefix``."""
-    name = spec.get("name")
-    if not isinstance(name, str) or name not in SPLITTERS:
-        return [(prefix + ("name",), SPLITTERS.suggest(str(name)))]
-    cls = SPLITTERS.get(name)
-    try:
-        validated = cls.Params.model_validate({k: v for k, v in spec.items() if k != "name"})
-    except ValidationError as e:
-        return _pydantic_issues(e, cls.Params, prefix)
-    return _base_issues(cls, getattr(validated, cls.base_param or "", None), prefix)
-
-
-def _base_issues(cls: type, entry: Any, prefix: tuple) -> list[tuple[tuple, str]]:
-    """The scheme a scheme of class ``cls`` wraps (``entry``, its validated ``base_param``), checked
-    as a scheme."""
-    key = cls.base_param
-    if key is None:
+def _base_issues(validated: Any, prefix: tuple) -> list[tuple[tuple, str]]:
+    """The scheme that the scheme of parameters ``validated`` wraps (its ``base``), validated once by
+    its own model (:attr:`WrappingParams.base_params`, from which it is built), and the one that wraps."""
+    if not isinstance(validated, WrappingParams):
         return []
-    base = dict(entry)
-    if not isinstance(base.get("name"), str):
-        return [(prefix + (key,), f"{key} must name a scheme: {key}: {{name: loso}}")]
-    return _spec_issues(base, prefix + (key,))
+    at = prefix + ("base",)
+    name = validated.base.get("name")
+    if not isinstance(name, str):
+        return [(at, "base must name a scheme: base: {name: loso}")]
+    if name not in SPLITTERS:
+        return [(at + ("name",), SPLITTERS.suggest(name))]
+    try:
+        base = validated.base_params
+    except ValidationError as e:
+        return _pydantic_issues(e, SPLITTERS.get(name).Params, at)
+    return _base_issues(base, at)
 
 
 def _accepted_params(obj: Any) -> tuple[list[str], bool]:

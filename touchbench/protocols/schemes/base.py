@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from typing import TYPE_CHECKING, Annotated, Any, Callable, ClassVar, Iterator, TypeVar
 
 import numpy as np
@@ -293,6 +294,14 @@ class WrappingParams(SchemeParams):
     def _base(cls, d: Any) -> Any:
         return named(d, "base")
 
+    @cached_property
+    def base_params(self) -> BaseModel:
+        """The wrapped scheme's parameters validated by its own model, once (a ``ValidationError``
+        at its fields; an unknown name: ``UnknownNameError``): the protocol's checks ask it first,
+        and the wrapped scheme is built from it."""
+        return SPLITTERS.get(self.base["name"]).Params.model_validate(
+            {k: v for k, v in self.base.items() if k != "name"})
+
 
 class CurveParams(WrappingParams):
     """A data-curve scheme's parameters: its base and the number of random ``draws`` per point."""
@@ -544,8 +553,9 @@ class WrappingSplitter(Splitter):
 
     def _setup(self, target: str, random_state: int | None) -> None:
         super()._setup(target, random_state)
-        base = dict(self.params.base)  # type: ignore[attr-defined]
-        self.base = make_splitter(base.pop("name"), target=target, random_state=random_state, **base)
+        params = self.params.base_params  # type: ignore[attr-defined]
+        self.base = SPLITTERS.get(self.params.base["name"]).from_params(  # type: ignore[attr-defined]
+            params, target=target, random_state=random_state)
 
     def keeps_subjects_apart(self) -> bool:
         return self.base.keeps_subjects_apart()
