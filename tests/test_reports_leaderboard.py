@@ -481,19 +481,6 @@ def test_a_terminal_of_any_width_shows_every_number_whole_and_shortens_a_long_la
         assert max(len(x) for x in table) > width
 
 
-def test_shorten_column_keeps_the_part_that_tells_labels_apart():
-    from touchbench.reports.rendering import shorten_column
-
-    labels = [f"touch-extra-trees-with-a-long-name (max_features={k})" for k in ("0.1", "0.3", "sqrt")]
-    # the shared start goes: "…" and the last 19 characters, which hold where they differ
-    assert shorten_column(labels, 20) == ["…(max_features=0.1)", "…(max_features=0.3)", "…(max_features=sqrt)"]
-    # narrower than the part that differs: from where it differs, its start and end around "…"
-    assert shorten_column(labels, 6) == ["…=0.1)", "…=0.3)", "…sqrt)"]  # the last 5 fit
-    assert shorten_column(labels, 100) == labels  # room enough: nothing cut
-    # no shared start: the start and the end around "…", as one label alone
-    assert shorten_column(["abcdefghij", "xyz"], 5) == ["ab…ij", "xyz"]
-
-
 @pytest.mark.parametrize("width", [20, 30, 40])
 def test_many_methods_at_a_narrow_terminal_keep_what_tells_them_apart(tmp_path, width):
     from rich.console import Console

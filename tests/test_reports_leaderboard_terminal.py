@@ -137,7 +137,8 @@ def test_200_methods_at_a_narrow_terminal_keep_every_label_distinct(board_of_200
     lb = board_of_200
     full = [c[1] for c in display_rows(lb)[1]]
     assert len(set(full)) == 200 and full[0] == "touch-rhythm+cell-rhythm / extra-trees"
-    _, _, names = _terminal_table(lb, width)
+    _, _, ((what, names), *_) = _terminal_table(lb, width)
+    assert what == "method names"
     assert len(set(names.shown)) == 200
     for s, f in zip(names.shown, full):
         if s.startswith("["):  # numbered: the legend names it in full

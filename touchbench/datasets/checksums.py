@@ -10,24 +10,36 @@ relative to the folder of recordings, without ``.gz``), saying what was not chec
   checked"); lines that are not ``digest  name`` are counted and the first named.
 
 :func:`verify_checksums` returns the provenance entry; the readers (``haart``, ``icmi15-study2``,
-the ``haart-raw`` format's ``checksums``) put it in the dataset's provenance.
+``socialtouch``, ``inflatable-skin``, the ``haart-raw`` format's ``checksums``) put it in the dataset's provenance.
 """
 
 from __future__ import annotations
 
+import gzip
 import logging
 import re
 from pathlib import Path
 
 from ..core.errors import DataError
 
-__all__ = ["NAMED", "verify_checksums"]
+__all__ = ["NAMED", "read_bytes", "verify_checksums"]
 
 log = logging.getLogger("touchbench.datasets")
 
 #: the files a message names before it counts the rest
 NAMED = 5
 _LINE = re.compile(r"^([0-9a-fA-F]{64})\s+\*?(.+)$")
+
+
+def read_bytes(path: Path) -> bytes:
+    """A recording's original bytes (those its line lists), plain or gzipped."""
+    data = path.read_bytes()
+    if data[:2] == b"\x1f\x8b":
+        try:
+            data = gzip.decompress(data)
+        except (OSError, EOFError) as e:
+            raise DataError(f"corrupt gzip file ({e})", path) from None
+    return data
 
 
 def _names(names: list[str]) -> str:

@@ -29,7 +29,6 @@ placeholder), and otherwise the first in sorted order, and says so.
 
 from __future__ import annotations
 
-import gzip
 import hashlib
 import io
 import re
@@ -42,7 +41,7 @@ import pandas as pd
 from ..core.errors import DataError
 from ..core.paths import raw_folder
 from .cache import cached_dataset
-from .checksums import verify_checksums
+from .checksums import read_bytes, verify_checksums
 from .model import SensorSpec, TouchDataset
 from .registry import DATASETS
 
@@ -119,17 +118,6 @@ def find_recordings(raw: Path) -> list[Recording]:
             raise DataError(f"recording given twice (also {seen[r.key].name})", r.path)
         seen[r.key] = r.path
     return sorted(recs, key=lambda r: r.key)
-
-
-def read_bytes(path: Path) -> bytes:
-    """A recording's original bytes, plain or gzipped."""
-    data = path.read_bytes()
-    if data[:2] == b"\x1f\x8b":
-        try:
-            data = gzip.decompress(data)
-        except (OSError, EOFError) as e:
-            raise DataError(f"corrupt gzip file ({e})", path) from None
-    return data
 
 
 def parse_recording(data: bytes, path: Path, min_lines: int = LINES_USED) -> np.ndarray:

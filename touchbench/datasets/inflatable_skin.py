@@ -52,7 +52,6 @@ stream's length, a window in seconds) depends on that assumption:
 
 from __future__ import annotations
 
-import gzip
 import hashlib
 import json
 import re
@@ -67,7 +66,7 @@ import pandas as pd
 from ..core.errors import DataError
 from ..core.paths import raw_folder
 from .cache import cached_dataset
-from .checksums import verify_checksums
+from .checksums import read_bytes, verify_checksums
 from .model import SensorSpec, TouchDataset
 from .registry import DATASETS
 
@@ -154,17 +153,6 @@ def runs(labels: list[str]) -> list[tuple[int, int]]:
     """The runs of one label in ``labels``: ``(start, stop)`` pairs, in order."""
     starts = [i for i in range(len(labels)) if i == 0 or labels[i] != labels[i - 1]]
     return list(zip(starts, starts[1:] + [len(labels)]))
-
-
-def read_bytes(path: Path) -> bytes:
-    """A file's original bytes, plain or gzipped."""
-    data = path.read_bytes()
-    if path.name.endswith(".gz") or data[:2] == b"\x1f\x8b":
-        try:
-            data = gzip.decompress(data)
-        except (OSError, EOFError) as e:
-            raise DataError(f"corrupt gzip file ({e})", path) from None
-    return data
 
 
 def _frame(fr: object, k: int, path: Path, shape: tuple[int, ...] | None) -> tuple[str, np.ndarray]:

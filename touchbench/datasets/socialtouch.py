@@ -56,7 +56,6 @@ and the SHA-256 of every file against ``SHA256SUMS`` when present.
 
 from __future__ import annotations
 
-import gzip
 import hashlib
 import re
 from dataclasses import dataclass
@@ -69,11 +68,12 @@ import pandas as pd
 from ..core.errors import DataError
 from ..core.paths import data_dir as default_data_dir, data_dir_help
 from .cache import cached_dataset
+from .checksums import read_bytes, verify_checksums
 from .model import RECORDED_TIME_COLUMN, SensorSpec, TouchDataset, time_step_summary
 from .registry import DATASETS
 from .tables import numeric, read_table, runs
 
-READER_VERSION = "socialtouch-1"
+READER_VERSION = "socialtouch-2"
 
 GRID = (19, 24)
 VALUE_RANGE = (0.0, 255.0)
@@ -230,34 +230,20 @@ def resample(time_ms: np.ndarray, frames: np.ndarray, rate_hz: float = RATE_HZ) 
     return gu / q, ((2 * num + span) // (2 * span)).astype(frames.dtype)
 
 
-def _verify_checksums(base: Path, recs: list[Recording], digests: dict[str, str]) -> None:
-    sums = base / "SHA256SUMS"
-    if not sums.is_file():
-        return
-    expected = {}
-    for line in sums.read_text().splitlines():
-        parts = line.split()
-        if len(parts) == 2:
-            expected[Path(parts[1].lstrip("*")).name] = parts[0]
-    for r in recs:
-        if r.original_name in expected and expected[r.original_name] != digests[r.original_name]:
-            raise DataError("content does not match SHA256SUMS (corrupted copy?)", r.path)
-
-
-def read_all(base: Path) -> tuple[list[Capture], dict[int, str]]:
-    """Every capture as recorded, sorted by participant, gesture, repetition."""
+def read_all(base: Path) -> tuple[list[Capture], dict[int, str], str]:
+    """Every capture as recorded, sorted by participant, gesture, repetition; the gesture names; what
+    ``SHA256SUMS`` checked (:func:`~.checksums.verify_checksums`)."""
     names = gesture_names(base)
     recs = find_recordings(base / "raw")
-    digests = {}
+    files = []
     captures: list[Capture] = []
     for r in recs:
         if r.gesture not in names:
             raise DataError(f"gesture id {r.gesture} is not in GesturesRated.csv (ids {min(names)}..{max(names)})", r.path)
-        data = r.path.read_bytes()
-        digests[r.original_name] = hashlib.sha256(gzip.decompress(data) if data[:2] == b"\x1f\x8b" else data).hexdigest()
+        files.append((r.original_name, r.path, hashlib.sha256(read_bytes(r.path)).hexdigest()))
         captures += read_recording(r)
-    _verify_checksums(base, recs, digests)
-    return sorted(captures, key=lambda c: (c.participant, c.gesture, c.repetition)), names
+    checked = verify_checksums(base / "SHA256SUMS", files, base / "raw")["checksums"]
+    return sorted(captures, key=lambda c: (c.participant, c.gesture, c.repetition)), names, checked
 
 
 def _meta(captures: list[Capture], names: dict[int, str]) -> pd.DataFrame:
@@ -279,7 +265,7 @@ def _recorded_note(captures: list[Capture]) -> str:
 
 
 def build_recorded(base: Path) -> TouchDataset:
-    captures, names = read_all(base)
+    captures, names, checked = read_all(base)
     meta = _meta(captures, names)
     meta["time_ms"] = [c.time_ms.tolist() for c in captures]
     ds = TouchDataset("socialtouch-recorded", [c.frames for c in captures], meta, SOCIALTOUCH_SENSOR)
@@ -288,12 +274,13 @@ def build_recorded(base: Path) -> TouchDataset:
         "frame rule": (f"as recorded, irregular; time_ms holds each frame's time. The sensor's {RATE_HZ:g} Hz is the "
                    "median step only: fixed-rate methods belong on socialtouch (resampled to that rate)"),
         "recorded": _recorded_note(captures),
+        "checksums": checked,
     }
     return ds
 
 
 def build_resampled(base: Path) -> TouchDataset:
-    captures, names = read_all(base)
+    captures, names, checked = read_all(base)
     meta = _meta(captures, names)
     times, frames = zip(*(resample(c.time_ms, c.frames) for c in captures))
     meta["recorded_frames"] = np.array([len(c.time_ms) for c in captures], dtype=np.int64)
@@ -307,6 +294,7 @@ def build_resampled(base: Path) -> TouchDataset:
                    "the nearest integer (halves up); the recorded times are in recorded_time_ms (socialtouch-recorded: the frames "
                    "as recorded)"),
         "recorded": _recorded_note(captures),
+        "checksums": checked,
     }
     return ds
 

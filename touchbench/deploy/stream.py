@@ -207,7 +207,6 @@ def choose_rule(model: TrainedModel, spec: dict[str, Any] | str | None,
         + (f" ({problem})" if problem else "")
         + "; train the model on a stream protocol that declares this rule (touchbench train), or give the "
           "level in --rule, e.g. '{name: gate, idle: IDLE, level: 0.1}'")
-    return rule, "--rule given on the command line"
 
 
 def buffer_limit() -> int:

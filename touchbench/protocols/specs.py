@@ -93,10 +93,7 @@ class DesignSpec(_Model):
     methods: list[str] = Field(default_factory=list)
     note: str = ""
 
-    @field_validator("subjects", "methods", mode="before")
-    @classmethod
-    def _strs(cls, v: Any) -> Any:
-        return _coerce_str_list(v)
+    _strs = field_validator("subjects", "methods", mode="before")(_coerce_str_list)
 
     _lists = field_validator("rows", mode="before")(_coerce_str_lists)
 
@@ -142,10 +139,7 @@ class ReportSpec(_Model):
     recall: list[str] = Field(default_factory=list)
     by: list[str] = Field(default_factory=list)
 
-    @field_validator("recall", "by", mode="before")
-    @classmethod
-    def _strs(cls, v: Any) -> Any:
-        return _coerce_str_list(v)
+    _strs = field_validator("recall", "by", mode="before")(_coerce_str_list)
 
     @model_validator(mode="after")
     def _something(self) -> "ReportSpec":

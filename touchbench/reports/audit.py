@@ -17,6 +17,7 @@ from typing import Any
 import pandas as pd
 
 from ..core.atomic import atomic_write_bytes
+from .labels import _pct
 
 __all__ = ["audit_markdown", "audit_rows", "plot_audit", "write_audit"]
 
@@ -26,10 +27,6 @@ LEGEND = ("Accuracy: mean over folds. Inflation: a leaky variant's accuracy minu
           "both sides). subject-id: capture-kfold with the subject's id as a feature. tuned-on-test: a parameter "
           "chosen by its mean test accuracy. stopped-on-test: training stopped at the epoch of the best test "
           "accuracy (early stopping on the held-out subject).")
-
-
-def _pct(v: float) -> str:
-    return "—" if v is None or not math.isfinite(v) else f"{100 * v:.1f}"
 
 
 def audit_rows(table: pd.DataFrame, published: dict[str, dict[str, Any]] | None = None) -> tuple[list[str], list[list[str]]]:

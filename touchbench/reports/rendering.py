@@ -268,7 +268,7 @@ _TERMINAL_HEADERS = {"accuracy % (±sd)": "accuracy %\n(±sd)", "95 % interval":
                      "vs best: Δ pp, p (Holm)": "vs best: Δ pp,\np (Holm)", "macro F1 %": "macro\nF1 %",
                      "latency ms": "latency\nms", "CPU ms": "CPU\nms", "features ms": "features\nms", "held out %": "held out\n%",
                      "timing machine": "timing\nmachine"}
-#: the columns of words, not numbers: a narrow terminal shortens them (:func:`shorten`) down to
+#: the columns of words, not numbers: a narrow terminal shortens them (:func:`~.short_labels.fit_labels`) down to
 #: :data:`TEXT_MIN_WIDTH` characters (or their header's width); a number is never cut nor wrapped
 TERMINAL_TEXT = ("method", "features", "estimator", "evaluation", "timing machine")
 TEXT_MIN_WIDTH = 12
@@ -290,50 +290,6 @@ def fitting_columns(widths: dict[str, int], available: int, essential: Iterable[
         shown.append(h)
         used += widths[h] + 3
     return shown
-
-
-def shorten(text: str, width: int) -> str:
-    """``text`` in at most ``width`` terminal cells: when longer, its start and its end around "…"
-    (the start the longer half), so that rows told apart by their last parameters stay apart."""
-    if cell_len(text) <= width:
-        return text
-    keep = max(width - 1, 0)
-    head, tail = "", ""
-    for ch in text:
-        if cell_len(head + ch) > keep - keep // 2:
-            break
-        head += ch
-    for ch in reversed(text):
-        if cell_len(head) + cell_len(ch + tail) > keep:
-            break
-        tail = ch + tail
-    return head + "…" + tail
-
-
-def _shared_prefix(a: str, b: str) -> int:
-    n = 0
-    for x, y in zip(a, b):
-        if x != y:
-            break
-        n += 1
-    return n
-
-
-def shorten_column(texts: list[str], width: int) -> list[str]:
-    """Each of ``texts`` (a column's cells) in at most ``width`` terminal cells, keeping the part
-    that tells them apart: the start every text of the column shares is elided first ("…" then
-    the rest, as much of its end as fits), then :func:`shorten` cuts the rest around "…". Labels
-    that differ only after a long common start (a grid's parameters) stay apart when shortened."""
-    order = sorted(set(texts))
-    common = _shared_prefix(order[0], order[-1]) if len(order) > 1 else 0
-    out = []
-    for t in texts:
-        if cell_len(t) <= width or common == 0 or width < 2:
-            out.append(shorten(t, width))
-            continue
-        start = min(common, max(len(t) - (width - 1), 0))  # from where they differ at the latest
-        out.append("…" + shorten(t[start:].lstrip(), width - 1))
-    return out
 
 
 def _table_width(widths: dict[str, int], shown: Iterable[str]) -> int:
@@ -383,9 +339,10 @@ def terminal_layout(header: list[str], cells: list[list[str]], text_cells: list[
 
 def _fitted_table(title: str, header: list[str], cells: list[list[str]], text_cells: list[set[int]],
                   available: int, essential: Iterable[str], priority: Iterable[str] = (),
-                  text: Iterable[str] = TERMINAL_TEXT) -> Table:
-    """A rich table of ``cells`` laid out by :func:`terminal_layout`: its text shortened to the
-    widths, no cell wrapped."""
+                  text: Iterable[str] = TERMINAL_TEXT) -> tuple[Table, list[int], list[tuple[str, FittedLabels]]]:
+    """A rich table of ``cells`` laid out by :func:`terminal_layout`, no cell wrapped, each text
+    column's lines fitted to its width as a whole (:func:`~.short_labels.fit_labels`: each still told
+    apart); the indices of the columns shown, and each text column's name with its fitted lines."""
     keep, widths = terminal_layout(header, cells, text_cells, available, essential, priority, text)
     text = set(text)
     names = [h.replace("\n", " ") for h in header]
@@ -393,13 +350,16 @@ def _fitted_table(title: str, header: list[str], cells: list[list[str]], text_ce
     for i in keep:
         t.add_column(escape(header[i]), no_wrap=True, overflow="ignore", width=widths[names[i]])
     short: dict[tuple[int, str], str] = {}
-    for i in keep:  # each text column shortened as a whole: the part that tells its cells apart is kept
+    fitted = []
+    for i in keep:
         lines = [x for c, row_text in zip(cells, text_cells) if i in row_text or names[i] in text
                  for x in c[i].split("\n")]
-        short.update(((i, x), y) for x, y in zip(lines, shorten_column(lines, widths[names[i]])))
+        if lines:
+            fitted.append((names[i], fit_labels(lines, widths[names[i]])))
+            short.update(((i, x), y) for x, y in zip(lines, fitted[-1][1].shown))
     for c in cells:
         t.add_row(*(escape("\n".join(short.get((i, x), x) for x in c[i].split("\n"))) for i in keep))
-    return t
+    return t, keep, fitted
 
 
 def terminal_priority(lb: Leaderboard) -> tuple[str, ...]:
@@ -411,12 +371,12 @@ def terminal_priority(lb: Leaderboard) -> tuple[str, ...]:
     return (*rest[:at], *costs, *rest[at:])
 
 
-def _terminal_table(lb: Leaderboard, width: int) -> tuple[Table, list[str], FittedLabels]:
+def _terminal_table(lb: Leaderboard, width: int) -> tuple[Table, list[str], list[tuple[str, FittedLabels]]]:
     """The table of ``lb`` as a terminal of ``width`` characters shows it (:func:`terminal_layout`):
     a number and its note on one line where the whole table fits so, else on two; the method names
     fitted to their column (:func:`touchbench.reports.short_labels.fit_labels`: each still told
-    apart), then the columns laid out again with those names; the headers of the columns shown,
-    and the names as fitted."""
+    apart), then the columns laid out again with those names (:func:`_fitted_table`); the headers
+    of the columns shown, and each text column fitted (the method names first)."""
     failed = [r["n_folds"] == 0 and r["n_failed"] > 0 for _, r in lb.rows.iterrows()]
     priority = terminal_priority(lb)
     for sep in (" ", "\n"):
@@ -432,27 +392,30 @@ def _terminal_table(lb: Leaderboard, width: int) -> tuple[Table, list[str], Fitt
     names = fit_labels([c[m] for c in cells], widths["method"])
     cells = [[*c[:m], name, *c[m + 1:]] for c, name in zip(cells, names.shown)]
     text = [h for h in TERMINAL_TEXT if h != "method"]  # fitted: never cut again
-    keep, _ = terminal_layout(heads, cells, text_cells, width, TERMINAL_ESSENTIAL, priority, text)
-    table = _fitted_table(lb.title, heads, cells, text_cells, width, TERMINAL_ESSENTIAL, priority, text)
-    return table, [header[i] for i in keep], names
+    table, keep, fitted = _fitted_table(lb.title, heads, cells, text_cells, width, TERMINAL_ESSENTIAL, priority, text)
+    return table, [header[i] for i in keep], [("method names", names), *fitted]
 
 
-def _print_fitted(console: Console, table: Table) -> None:
+def _print_fitted(console: Console, table: Table, fitted: list[tuple[str, FittedLabels]] = ()) -> None:
     """Print ``table`` whole: wider than the console when its numbers need it (the terminal wraps
-    the lines; no number is cut)."""
+    the lines; no number is cut); above it what the ``fitted`` columns' lines leave out, under it
+    their numbered lines in full (:class:`~.short_labels.FittedLabels`)."""
+    for what, f in fitted:
+        if f.heading(what) is not None:
+            console.print(escape(f.heading(what)), style="dim")
     need = console.measure(table, options=console.options.update_width(10 ** 4)).maximum
-    if need <= console.width:
-        console.print(table)
-        return
     width = console.width
-    console.width = need
+    console.width = max(need, width)
     try:
         console.print(table)
     finally:
         console.width = width
+    for _, f in fitted:
+        if f.legend() is not None:
+            console.print(escape(f.legend()))
 
 
-def _terminal_live(lb: Leaderboard, width: int) -> Table:
+def _terminal_live(lb: Leaderboard, width: int) -> tuple[Table, list[int], list[tuple[str, FittedLabels]]]:
     """A stream evaluation's table (:mod:`.stream_table`) laid out as any table (:func:`terminal_layout`):
     the method and rule shortened first, no number cut."""
     header, cells = live_cells(lb.live)
@@ -473,7 +436,8 @@ def _print_curve(console: Console, lb: Leaderboard) -> None:
             if len(keep) == len(header) and _table_width(widths, header) <= console.width:
                 break
         if header:
-            _print_fitted(console, _fitted_table(title, header, cells, [{0}] * len(cells), console.width, essential))
+            table, _, fitted = _fitted_table(title, header, cells, [{0}] * len(cells), console.width, essential)
+            _print_fitted(console, table, fitted)
             console.print()
     for line in reach_lines(lb.curve, names):
         console.print(escape(line))
@@ -493,15 +457,12 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
     console = console or Console(width=_terminal_width())
     for lb in lbs:
         if lb.live is None:
-            table, shown, names = _terminal_table(lb, console.width)
-            if names.heading() is not None:
-                console.print(escape(names.heading()), style="dim")
-            _print_fitted(console, table)
-            if names.legend() is not None:
-                console.print(escape(names.legend()))
+            table, shown, fitted = _terminal_table(lb, console.width)
+            _print_fitted(console, table, fitted)
             console.print(escape(legend(lb, shown)), style="dim")  # the columns shown, no other
         else:
-            _print_fitted(console, _terminal_live(lb, console.width))
+            table, _, fitted = _terminal_live(lb, console.width)
+            _print_fitted(console, table, fitted)
             console.print(escape(LIVE_LEGEND), style="dim")
         for n in lb.notes:
             console.print(escape(f"Note: {n}"), style="yellow")
@@ -512,8 +473,9 @@ def print_terminal(lbs: list[Leaderboard], console=None) -> None:
     if ranks is not None and len(ranks):
         header = ["method", "mean rank", "mean accuracy %"]
         cells = [[r.method, f"{r.mean_rank:.2f}", _pct(r.mean_accuracy)] for r in ranks.itertuples()]
-        _print_fitted(console, _fitted_table(f"Mean rank across {int(ranks['tables'].iloc[0])} tables", header, cells,
-                                             [set() for _ in cells], console.width, header))
+        table, _, fitted = _fitted_table(f"Mean rank across {int(ranks['tables'].iloc[0])} tables", header, cells,
+                                         [set() for _ in cells], console.width, header)
+        _print_fitted(console, table, fitted)
         console.print(RANK_LEGEND, style="dim")
         f = across_friedman(lbs)
         if f is not None:

@@ -46,7 +46,7 @@ class FittedLabels:
     def heading(self, what: str = "method names") -> str | None:
         """The line above the table saying what the shown labels leave out (None: nothing)."""
         parts = ([f"the start “{self.prefix}”"] if self.prefix else []) + ([f"the end “{self.suffix}”"] if self.suffix else [])
-        return f"{what.capitalize()} below leave out {' and '.join(parts)} that all share." if parts else None
+        return f"{what[:1].upper()}{what[1:]} below leave out {' and '.join(parts)} that all share." if parts else None
 
     def legend(self) -> str | None:
         """One line naming each numbered label in full (None: no label was numbered)."""

@@ -59,7 +59,7 @@ import pandas as pd
 from scipy import stats
 
 from ..streams.rules import DEFAULT_RULE, RULES, rule_defaults
-from .labels import method_label
+from .labels import _pct, method_label
 
 __all__ = ["LIVE_COLUMNS", "LIVE_ESSENTIAL", "LIVE_LEGEND", "LIVE_PRIORITY", "default_rule_index", "live_cells",
            "live_markdown", "live_rows", "live_sources", "live_table", "rule_label"]
@@ -336,10 +336,6 @@ def live_sources(rows: pd.DataFrame) -> str:
     """What the streams are, for a title: ``spliced streams``, ``scene streams``, ``recorded streams``."""
     kinds = sorted({k for s in rows["sources"] for k in s})
     return " and ".join(kinds) + " streams"
-
-
-def _pct(v: float) -> str:
-    return "—" if v is None or not np.isfinite(v) else f"{100 * v:.1f}"
 
 
 def _num(v: float, d: int = 2) -> str:

@@ -168,8 +168,8 @@ def short_label(r: Any, width: int = 28, with_features: bool = True) -> str:
     return lab if len(lab) <= width else lab[: width - 1] + "…"
 
 
-#: a label's height and its width per character at fontsize 7, in points (a generous estimate)
-LABEL_H, LABEL_CHAR_W = 8.5, 4.3
+#: a label's height at fontsize 7, in points (a generous estimate)
+LABEL_H = 8.5
 #: where a label goes (points from its point) when nothing is in its way, right of its point
 LABEL_OFFSET = (4, 3)
 
