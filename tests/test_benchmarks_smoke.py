@@ -49,6 +49,7 @@ SMOKE = {
     "compare_runs.py": ["--base", "{root}", "--protocol", "tiny", "--max-seconds", str(SUBPROCESS_HANG_S)],
     "compare_verdicts.py": ["--base", "{root}", "{results}"],
     "make_sample.py": ["--out", "{tmp}/sample.parquet"],
+    "trace_protocol_route.py": [],
 }
 #: what each script prints when it ran to the end (beside exit status 0)
 DONE = {
@@ -73,6 +74,7 @@ DONE = {
     "compare_runs.py": "all identical",
     "compare_verdicts.py": "verdicts changed: 0",
     "make_sample.py": "14 captures",
+    "trace_protocol_route.py": "stream rule, YAML to first decision",
 }
 #: scripts that need the real HAART recordings
 REAL_DATA = {"make_sample.py"}
