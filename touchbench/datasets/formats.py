@@ -19,6 +19,7 @@ from typing import Any, Callable
 from ..core.errors import TouchbenchError
 from ..core.introspect import accepts
 from ..core.registry import Registry
+from ..core.suggest import did_you_mean
 
 __all__ = ["FORMATS", "FileFormat", "FormatOption", "OptionValueError", "check_frame_rate", "check_value_range", "parse_frame_rate",
            "parse_grid", "parse_value_range", "register_format"]
@@ -78,14 +79,35 @@ class FileFormat:
         """The required options that ``values`` lacks (``None`` counts as missing)."""
         return [o for o in self.options if o.required and values.get(o.name) is None]
 
+    def option_problems(self, values: dict[str, Any]) -> dict[str, str]:
+        """``option -> why`` for each of ``values`` (a protocol's ``options``, or Python's) that is not
+        an option of the reader or not a value of it: a text or a number is read as the command line
+        reads it (``0..255``, ``19x24``, ``54``), a boolean never; a list is left to the reader."""
+        known = {o.name: o for o in self.options}
+        out: dict[str, str] = {}
+        for k, v in values.items():
+            o = known.get(k)
+            if o is None:
+                out[k] = (f"the {self.name} format takes no option {k!r}{did_you_mean(k, list(known))} "
+                          f"(it takes: {', '.join(sorted(known)) or 'none'})")
+            elif isinstance(v, bool):
+                out[k] = f"{o.flag} takes {o.metavar or 'a value'}, not a boolean"
+            elif isinstance(v, (str, int, float)):
+                try:
+                    o.parse(str(v))
+                except ValueError as e:
+                    out[k] = str(e)
+        return out
+
     def read(self, path: str | Path, *, name: str | None = None, like: Any = None, **options: Any) -> Any:
-        """Read ``path``; ``None`` options are left to the reader's defaults (or ``like``)."""
-        known = {o.name for o in self.options}
-        unknown = sorted(k for k, v in options.items() if v is not None and k not in known)
-        if unknown:
-            takes = ", ".join(sorted(known)) or "none"
-            raise TouchbenchError(f"the {self.name} format takes no option {unknown[0]!r} (it takes: {takes})")
-        kw = {k: v for k, v in options.items() if v is not None}
+        """Read ``path``; ``None`` options are left to the reader's defaults (or ``like``); a text or
+        number option is read as the command line reads it (:meth:`option_problems`)."""
+        given = {k: v for k, v in options.items() if v is not None}
+        problem = next(iter(self.option_problems(given).values()), None)
+        if problem:
+            raise OptionValueError(problem)
+        known = {o.name: o for o in self.options}
+        kw = {k: known[k].parse(str(v)) if isinstance(v, (str, int, float)) else v for k, v in given.items()}
         if like is not None and accepts(self.reader, "like"):
             kw["like"] = like
         elif self.missing(kw):

@@ -477,8 +477,10 @@ def _dataset_issues(protocol: Protocol) -> list[tuple[tuple, str]]:
     ref = protocol_dataset_ref(protocol)
     if protocol.dataset.format is not None:
         problem = format_ref_problem(ref.value, protocol.dataset.format)
-        return [] if problem is None else [(("dataset", "format" if protocol.dataset.format not in FORMATS
-                                             else "name"), problem)]
+        if problem is not None:
+            return [(("dataset", "format" if protocol.dataset.format not in FORMATS else "name"), problem)]
+        problems = FORMATS.get(protocol.dataset.format).option_problems(protocol.dataset.options)
+        return [(("dataset", "options", k), why) for k, why in problems.items()]
     problem = dataset_ref_problem(ref)
     if problem is not None:
         return [(("dataset", "name"), problem)]
