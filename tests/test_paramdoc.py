@@ -1,5 +1,6 @@
-"""Every registered scheme, decision rule, feature set and classifier documents exactly the parameters
-it declares, in a "Parameters" section generated from the declaration (touchbench.core.paramdoc)."""
+"""Every registered scheme, decision rule, feature set, classifier and method documents exactly the
+parameters it declares, in a "Parameters" section generated from the declaration
+(touchbench.core.paramdoc); a method's are its classifier's and those it sets."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 from touchbench.classifiers.base import CLASSIFIERS
 from touchbench.core.paramdoc import constraint_words, model_params, render, with_parameters
 from touchbench.features.base import FEATURES
+from touchbench.methods import METHODS
 from touchbench.protocols.schemes.base import SPLITTERS
 from touchbench.streams.rules import RULES
 
@@ -27,12 +29,14 @@ def documented(doc: str) -> list[str]:
 def declared(registry, entry) -> list[str]:
     if registry is CLASSIFIERS:
         return list(entry.tags["defaults"])
+    if registry is METHODS:  # its classifier's parameters, and any it gives that classifier beside them
+        return sorted(set(CLASSIFIERS.entry(entry.tags["estimator"]).tags["defaults"]) | set(entry.tags["defaults"]))
     if registry is FEATURES:
         return list(entry.obj._get_param_names())  # scikit-learn's reading of __init__ (sorted)
     return list(entry.obj.Params.model_fields)
 
 
-@pytest.mark.parametrize("registry", [SPLITTERS, RULES, FEATURES, CLASSIFIERS], ids=lambda r: r.kind)
+@pytest.mark.parametrize("registry", [SPLITTERS, RULES, FEATURES, CLASSIFIERS, METHODS], ids=lambda r: r.kind)
 def test_every_entry_documents_exactly_its_declared_parameters(registry):
     entries = list(registry.entries())
     assert entries
@@ -110,3 +114,11 @@ def test_a_hand_written_section_is_replaced_in_place():
     assert out == "Summary.\n\nParameters\n----------\nnew : int, default 1\n\nExamples\n--------\n>>> 1\n1\n"
     assert with_parameters("Summary.", "Parameters\n----------\nNone.\n") == \
         "Summary.\n\nParameters\n----------\nNone.\n"
+
+
+def test_a_methods_section_shows_the_values_it_sets():
+    # touch-et-adapt gives session-centred params={} (its classifier's default is None); touch-et sets
+    # nothing, so touch-extra-trees' own defaults show (500 trees)
+    adapt = METHODS.get("touch-et-adapt").__doc__
+    assert "params : any value, default {}\n    (this method's value; session-centred's is None)" in adapt
+    assert "n_estimators : int, default 500" in METHODS.get("touch-et").__doc__

@@ -232,7 +232,7 @@ def resample(time_ms: np.ndarray, frames: np.ndarray, rate_hz: float = RATE_HZ) 
 
 def read_all(base: Path) -> tuple[list[Capture], dict[int, str], str]:
     """Every capture as recorded, sorted by participant, gesture, repetition; the gesture names; what
-    ``SHA256SUMS`` checked (:func:`~.checksums.verify_checksums`)."""
+    ``SHA256SUMS`` checked (:func:`touchbench.datasets.checksums.verify_checksums`)."""
     names = gesture_names(base)
     recs = find_recordings(base / "raw")
     files = []

@@ -8,13 +8,14 @@ protocol may write ``{name: touch-et, params: {n_estimators: 100}}``.
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
 from ..classifiers import CLASSIFIERS
 from ..classifiers.adapt import uses_unlabelled_test
 from ..core.errors import TouchbenchError
 from ..core.hashing import canonical_json
+from ..core.paramdoc import Param, defaults_params, of_defaults
 from ..core.registry import Registry
 from ..core.suggest import did_you_mean
 
@@ -151,8 +152,24 @@ def features_label(spec: MethodSpec, combination_label: str) -> str:
     return combination_label
 
 
+def _method_params(obj: Any, tags: dict[str, Any]) -> list[Param] | None:
+    """A named method's "Parameters": those of the classifier it builds (its ``estimator`` tag, as
+    that classifier documents them), each default the method sets in place of the classifier's."""
+    est, own = tags.get("estimator"), dict(tags.get("defaults") or {})
+    if est not in CLASSIFIERS:
+        return None
+    entry = CLASSIFIERS.entry(est)
+    theirs = of_defaults(entry.obj, entry.tags) or []
+    mine = {q.name: q for q in defaults_params(own)}
+    out = [replace(p, default=mine[p.name].default, description=f"{p.description} (this method's value; {est}'s "
+                   f"is {p.default})".strip()) if p.name in mine and mine[p.name].default != p.default else p
+           for p in theirs]
+    return out + [replace(q, description=f"given to {est} by this method") for n, q in mine.items()
+                  if n not in {p.name for p in theirs}]
+
+
 # Filled by every module of touchbench.methods (imported on first use of the registry).
-METHODS: Registry = Registry("method", package="touchbench.methods")
+METHODS: Registry = Registry("method", package="touchbench.methods", params_of=_method_params)
 
 
 def method_spec(name: str, **params: Any) -> MethodSpec:
@@ -166,6 +183,8 @@ def pipeline_method(name: str, feature_sets: tuple[str, ...], estimator: str,
     base = dict(estimator_params or {})
 
     def factory(**params: Any) -> MethodSpec:
+        """The method's feature sets, then its classifier: a protocol's ``params`` go to the classifier
+        (the parameters below, with the values this method sets)."""
         if "random_state" in params:
             raise TouchbenchError(f"method {name!r}: random_state is derived from the protocol's seed")
         return MethodSpec(name=name, feature_sets=tuple((s, {}) for s in feature_sets), estimator=estimator,
