@@ -133,7 +133,7 @@ from ._util import (
     sensor_frames,
     torch_available,
 )
-from .base import CLASSIFIERS
+from .base import CLASSIFIERS, check_declared
 from .torch_fit import INSTALL_HINT, TORCH_JOBS, Threads, import_torch, softmax_batches, train, validation_split
 from .torch_state import load_weights, weights_as_arrays
 
@@ -292,7 +292,7 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
         ``test_set``: ``(X_test, y_test)``, a leak: early stopping on the
         test data's accuracy instead of a validation split (module docstring)."""
         torch = import_torch("cnn")
-        self._validate_params()
+        check_declared(self)
         grid, _ = sensor_frames("HaartCNNClassifier", self.sensor, self.grid)
         if is_captures(X):  # the captures as recorded: the stated length, else the longest training capture
             length = int(self.length) if self.length is not None else max(len(c) for c in X)

@@ -66,7 +66,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ..core.errors import TouchbenchError
 from ._util import MAX_SEED, build, captures_to_rows, frames_in_row, is_captures, sensor_frames, torch_available
-from .base import CLASSIFIERS
+from .base import CLASSIFIERS, check_declared
 from .torch_fit import INSTALL_HINT, TORCH_JOBS, Plateau, Threads, import_torch, softmax_batches, train, validation_split
 from .torch_state import load_weights, weights_as_arrays
 
@@ -232,7 +232,7 @@ class InceptionTimeClassifier(ClassifierMixin, BaseEstimator):
     def fit(self, X, y, groups=None):
         """Fit on captures (or raw-window rows) ``X`` with labels ``y``; ``groups`` as the CNN's."""
         torch = import_torch("inception-time")
-        self._validate_params()
+        check_declared(self)
         self.grid_, _ = sensor_frames("InceptionTimeClassifier", self.sensor, self.grid)
         if is_captures(X):
             length = int(self.length) if self.length is not None else max(len(c) for c in X)
