@@ -8,6 +8,7 @@ Most tests switch every effect off but the one under test (a range ``(v, v)`` dr
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -159,16 +160,20 @@ def test_a_channel_sensor_and_no_sensor_are_refused():
 
 
 @pytest.mark.parametrize("params,message", [
-    ({"gain": (0.0, 1.2)}, "gain must be (low, high) with 0 < low <= high"),
-    ({"offset": (0.01, 0.0)}, "offset must be (low, high)"),
-    ({"ar_coef": (0.5, 1.0)}, "ar_coef must be (low, high) with 0 <= low <= high < 1"),
-    ({"dead": 0.1}, "dead must be (low, high)"),
-    ({"crop": 0.0}, "crop must be a fraction in (0, 1]"),
-    ({"copies": -1}, "copies must be a whole number >= 0"),
+    ({"gain": (0.0, 1.2)}, "'gain' parameter of ShiftAugmented must be a list of 2 items, each a float in the range "
+                           "(0.0, inf), low <= high. Got (0.0, 1.2)"),
+    ({"offset": (0.01, 0.0)}, "'offset' parameter of ShiftAugmented must be a list of 2 items, each a float in the "
+                              "range [-1.0, 1.0], low <= high. Got (0.01, 0.0)"),
+    ({"ar_coef": (0.5, 1.0)}, "'ar_coef' parameter of ShiftAugmented must be a list of 2 items, each a float in the "
+                              "range [0.0, 1.0), low <= high. Got (0.5, 1.0)"),
+    ({"dead": 0.1}, "'dead' parameter of ShiftAugmented must be a list of 2 items"),
+    ({"crop": 0.0}, "'crop' parameter of ShiftAugmented must be a float in the range (0.0, 1.0]. Got 0.0"),
+    ({"copies": -1}, "'copies' parameter of ShiftAugmented must be an int in the range [0, 100]. Got -1"),
 ])
 def test_bad_parameters_are_refused_with_the_rule(params, message):
-    with pytest.raises(TouchbenchError, match=f"shift-augmented: {message}".replace("(", r"\(").replace(")", r"\)")):
+    with pytest.raises(TouchbenchError, match=re.escape(message)) as e:
         _augmenter(**params).fit([_press(), _press()], ["a", "b"])
+    assert e.value.field == (next(iter(params)),)
 
 
 # ------------------------------------------------------------------ seeds and the training set

@@ -124,7 +124,8 @@ def test_early_stopping_holds_out_training_groups_only():
     rows = make_classifier("cnn", random_state=0, validation_fraction=0.2, validation_by="rows", **SMALL)
     rows.fit(X, y, groups=g)
     assert rows.validation_groups_ is None and rows.validation_size_ == 12
-    with pytest.raises(ValueError, match="validation_by must be 'groups' or 'rows'"):
+    with pytest.raises(ValueError, match=r"The 'validation_by' parameter of HaartCNNClassifier must be a str among "
+                                         r"\{'groups', 'rows'\}\. Got 'subjects' instead\."):
         make_classifier("cnn", random_state=0, validation_by="subjects", **SMALL).fit(X, y)
 
 

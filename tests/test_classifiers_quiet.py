@@ -166,10 +166,10 @@ def test_no_sensor_and_bad_parameters_are_refused():
     caps, y = _data(per=2)
     with pytest.raises(TouchbenchError, match="needs the sensor"):
         make_classifier("quiet-gated", random_state=0, sensor=None).fit(caps, y)
-    for params, message in (({"gate_c": 0}, "gate_c must be a number above 0"),
-                            ({"sure": 0}, "sure must be a probability"),
-                            ({"quiet_frames": 1.0}, "quiet_frames must be a fraction"),
-                            ({"stride": 0}, "stride must be a fraction")):
+    for params, message in (({"gate_c": 0}, r"'gate_c' parameter of QuietGated must be a float in the range \(0\.0, inf\)"),
+                            ({"sure": 0}, r"'sure' parameter of QuietGated must be a float in the range \(0\.0, 1\.0\]"),
+                            ({"quiet_frames": 1.0}, r"'quiet_frames' .* must be a float in the range \[0\.0, 1\.0\)"),
+                            ({"stride": 0}, r"'stride' parameter of QuietGated must be a float in the range \(0\.0, 1\.0\]")):
         with pytest.raises(ParamError, match=message):
             _gated(**params).fit(caps, y)
 

@@ -15,6 +15,7 @@ MODULES = {
     "touchbench.core.registry": 3,
     "touchbench.core.paramdoc": 3,
     "touchbench.core.hashing": 1,
+    "touchbench.core.constraints": 4,
     "touchbench.datasets.windows": 1,
     "touchbench.reports.bootstrap": 4,
     "touchbench.streams.rules": 6,

@@ -113,9 +113,12 @@ def test_default_weight_grids():
     assert default_weights(2) == [(0.0, 1.0), (0.25, 0.75), (0.5, 0.5), (0.75, 0.25), (1.0, 0.0)]
     assert default_weights(3) == [(1 / 3, 1 / 3, 1 / 3), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)]
     assert weight_grid([(1, 3), (2, 0)], 2).tolist() == [[0.25, 0.75], [1.0, 0.0]]
-    for bad in ([(1, 2, 3)], [(-1, 2)], [(0, 0)], [(np.nan, 1)], []):
+    for bad in ([(1, 2, 3)], [(-1, 2)], [(0, 0)], [(np.nan, 1)]):
         with pytest.raises(TouchbenchError, match="weight"):
             weight_grid(bad, 2)
+    # no vector at all: outside the declared domain, refused when the fusion is fitted
+    with pytest.raises(TouchbenchError, match=r"'weights' parameter of Fusion must be None or a non-empty list"):
+        make_classifier("fusion", weights=[]).fit([np.zeros((4, 2, 2))] * 2, ["a", "b"])
 
 
 def test_the_weight_with_the_best_pooled_inner_accuracy_is_chosen(stub):

@@ -36,9 +36,9 @@ vector, not a trial of channels):
 - a standard deviation below ``sd_floor`` is taken as ``sd_floor`` (a
   constant feature, a session of one row): the centred value, zero, stays
   zero instead of becoming undefined; a session of one row is therefore
-  centred to zeros; ``sd_floor`` must be positive (registry tag
-  ``check_params``: a protocol's validation refuses 0, a negative or a
-  non-finite floor, and ``fit`` does too);
+  centred to zeros; ``sd_floor`` must be a positive finite number (declared:
+  a protocol's validation refuses 0, a negative or a non-finite floor, and
+  ``fit`` does too);
 - statistics in float64, in the order of the rows (bit-identical for the
   same rows).
 
@@ -49,11 +49,12 @@ figure of another kind than a plain one (:func:`uses_unlabelled_test`).
 
 from __future__ import annotations
 
-import math
+from numbers import Real
 from typing import Any, Iterator
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.utils._param_validation import Interval
 from sklearn.utils.metaestimators import available_if
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
@@ -61,7 +62,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from ..core.errors import TouchbenchError
 from ..core.introspect import sensor_problem
 from ._util import build
-from .base import CLASSIFIERS, ParamError, check_nested_params, make_classifier
+from .base import CLASSIFIERS, check_declared, check_nested_params, make_classifier
 from .fitting import fit_on_codes
 
 __all__ = ["NotAdaptedError", "SessionCentred", "adapt_each_session", "session_statistics", "uses_unlabelled_test"]
@@ -103,12 +104,8 @@ def adapt_each_session(estimator: Any, X: np.ndarray, sessions: Any) -> Iterator
 
 
 def check_params(params: dict[str, Any]) -> None:
-    """``sd_floor`` a positive finite number (a floor of 0 divides a constant feature by 0), and the
-    inner classifier's own checks of its ``params``."""
-    floor = params.get("sd_floor")
-    if isinstance(floor, bool) or not isinstance(floor, (int, float)) or not math.isfinite(floor) or floor <= 0:
-        raise ParamError("sd_floor", f"session-centred: sd_floor must be a positive number (the smallest standard "
-                                     f"deviation a feature is divided by), got {floor!r}")
+    """The inner classifier's own checks of its ``params`` (its declared domains, then its own
+    ``check_params``)."""
     check_nested_params(params.get("estimator"), dict(params.get("params") or {}), ("params",))
 
 
@@ -125,6 +122,12 @@ class SessionCentred(ClassifierMixin, BaseEstimator):
     sensor : the data's SensorSpec, given to an inner classifier that takes one.
     random_state : the inner classifier's seed.
     """
+
+    #: ``sd_floor`` a positive finite number (a floor of 0 divides a constant feature by 0); the
+    #: inner classifier's parameters are its own (``check_params``)
+    _parameter_constraints = {"estimator": [str], "params": [dict, None], "scale": ["boolean"],
+                              "sd_floor": [Interval(Real, 0, None, closed="neither")],
+                              "sensor": "no_validation", "random_state": ["random_state"]}
 
     def __init__(self, estimator="touch-extra-trees", params=None, scale=False, sd_floor=SD_FLOOR, sensor=None,
                  random_state=None):
@@ -166,6 +169,7 @@ class SessionCentred(ClassifierMixin, BaseEstimator):
         """Centre (scale) each training session by its own statistics, then fit the inner classifier."""
         X, y = validate_data(self, X, y, dtype=np.float64)
         check_classification_targets(y)
+        check_declared(self)
         check_params(self.get_params(deep=False))
         self._check_inner()
         self.fitted_ = fit_on_codes(self.estimator, dict(self.params or {}), self.random_state,

@@ -78,13 +78,12 @@ recorded under another set-up, never like another gesture):
 - ``dead=(0.0, 0.05)``: up to 5 % of the cells (3 of an 8 x 8 grid);
 - ``crop=0.75``: windows from three quarters of the capture to all of it.
 
-Checks: the ranges, fractions and ``copies`` are the registry entry's
-``check_params`` (:func:`check_params`: a protocol's validation refuses a
-bad value with its file, line and field; ``fit`` uses the same checks), and
-``copies`` whose copies would take more than a quarter of the available
-memory (:func:`touchbench.core.memory.memory_limit`) are refused before any
-copy is made: at validation, by the least a copy costs (its array), in
-``fit`` by the training captures' bytes.
+Checks: the ranges, fractions and ``copies`` are declared
+(``_parameter_constraints``: a protocol's validation refuses a bad value
+with its file, line and field; ``fit`` asks the same), ``copies`` at most
+:data:`MAX_COPIES` (100), and copies that would take more than a quarter of
+the available memory (:func:`touchbench.core.memory.memory_limit`) are
+refused in ``fit``, by the training captures' bytes, before any copy is made.
 
 Sensors: pressure grids with a value range. Refused: no sensor (nothing
 gives the full scale or the range to round and clip to) and channel sensors
@@ -96,19 +95,22 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from numbers import Integral, Real
 from typing import Any, Sequence
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted
 
+from ..core.constraints import ListOf
 from ..core.errors import TouchbenchError
 from ..core.memory import describe_bytes, memory_limit
 from ..features.base import check_captures
 from ..features.contact import MIN_NOISE, heights, noise_floor
 from ..scenes.sensor import adc, add_noise
 from ._util import build, seed_int
-from .base import CLASSIFIERS, ParamError, check_nested_params
+from .base import CLASSIFIERS, ParamError, check_declared, check_nested_params
 from .fitting import capture_labels, feature_specs, fit_pipeline, pipeline_refusal, proba_over
 
 NAME = "shift-augmented"
@@ -117,14 +119,16 @@ COPY_OVERHEAD = 128
 SOURCE = ("touchbench (docs/research/contact-features.md, section Training for shift): the synthetic scenes' "
           "sensor effects as data augmentation, after Um et al. 2017 (ICMI), scaling, jittering and cropping")
 
-#: each range's name -> (the test its bounds pass, how the message says it)
-RANGES: dict[str, tuple[Any, str]] = {
-    "gain": (lambda a, b: 0 < a <= b, "0 < low <= high"),
-    "offset": (lambda a, b: -1 <= a <= b <= 1, "-1 <= low <= high <= 1 (fractions of full scale)"),
-    "noise": (lambda a, b: 0 <= a <= b, "0 <= low <= high (multiples of the capture's noise floor)"),
-    "ar_coef": (lambda a, b: 0 <= a <= b < 1, "0 <= low <= high < 1"),
-    "dead": (lambda a, b: 0 <= a <= b <= 1, "0 <= low <= high <= 1 (fractions of the cells)"),
-}
+#: the ranges drawn per copy, each a ``(low, high)`` pair (their domains: :attr:`ShiftAugmented._parameter_constraints`)
+RANGES = ("gain", "offset", "noise", "ar_coef", "dead")
+#: the most copies of each training capture: the training set at most 101 times its size, its feature
+#: sets computed on every copy inside every task
+MAX_COPIES = 100
+
+
+def _pair(low: Interval) -> list:
+    """The declared domain of a ``(low, high)`` range whose bounds lie in ``low``."""
+    return [ListOf([low], length=2, ordered=True)]
 
 
 @dataclass(frozen=True)
@@ -180,51 +184,23 @@ def shifted_copy(capture: np.ndarray, sensor: Any, shift: Shift, rng: np.random.
     return adc(x.reshape(t, h, w), (lo, hi), capture.dtype)
 
 
-def check_ranges(params: dict[str, Any]) -> dict[str, tuple[float, float]]:
-    """Every range of ``params`` as floats, the fractions and ``copies`` checked: a
-    :class:`ParamError` naming the one at fault."""
-    out = {}
-    for name, (ok, rule) in RANGES.items():
-        value = params.get(name)
-        try:
-            a, b = (float(v) for v in value)
-        except (TypeError, ValueError):
-            a = b = math.nan
-        if not (math.isfinite(a) and math.isfinite(b) and ok(a, b)):
-            raise ParamError(name, f"{NAME}: {name} must be (low, high) with {rule}, got {value!r}")
-        out[name] = (a, b)
-    for name, low_open in (("ar_share", False), ("crop", True)):
-        v = params.get(name)
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (0 < v <= 1 if low_open else 0 <= v <= 1):
-            raise ParamError(name, f"{NAME}: {name} must be a fraction in {'(0, 1]' if low_open else '[0, 1]'}, "
-                                   f"got {v!r}")
-    c = params.get("copies")
-    if isinstance(c, bool) or not isinstance(c, (int, np.integer)) or c < 0:
-        raise ParamError("copies", f"{NAME}: copies must be a whole number >= 0, got {c!r}")
-    return out
-
-
-def check_copies_fit(copies: int, capture_bytes: Sequence[int] | None) -> None:
-    """Refuse ``copies`` copies of captures of ``capture_bytes`` bytes each (None: of one capture of
-    unknown size, at validation) when they would take more than
-    :func:`touchbench.core.memory.memory_limit`: each copy costs at most its capture's bytes (a crop
-    is never longer) and :data:`COPY_OVERHEAD` (its array), at least the latter."""
-    sizes = [0] if capture_bytes is None else list(capture_bytes)
+def check_copies_fit(copies: int, capture_bytes: Sequence[int]) -> None:
+    """Refuse ``copies`` copies of captures of ``capture_bytes`` bytes each when they would take more
+    than :func:`touchbench.core.memory.memory_limit`: each copy costs at most its capture's bytes (a
+    crop is never longer) and :data:`COPY_OVERHEAD` (its array)."""
+    sizes = list(capture_bytes)
     need = int(copies) * sum(int(b) + COPY_OVERHEAD for b in sizes)
     limit = memory_limit()
     if need > limit:
-        made = (f"{int(copies):,} copies of even one training capture, at least {describe_bytes(need)} (an array "
-                f"each)" if capture_bytes is None else f"{int(copies) * len(sizes):,} copies of {len(sizes):,} "
-                f"training captures, up to {describe_bytes(need)}")
-        raise ParamError("copies", f"{NAME}: copies={copies} would make {made}, over the limit of "
-                                   f"{describe_bytes(limit)} (a quarter of the memory available): make copies smaller")
+        raise ParamError("copies", f"{NAME}: copies={copies} would make {int(copies) * len(sizes):,} copies of "
+                                   f"{len(sizes):,} training captures, up to {describe_bytes(need)}, over the limit "
+                                   f"of {describe_bytes(limit)} (a quarter of the memory available): make copies "
+                                   "smaller")
 
 
 def check_params(params: dict[str, Any]) -> None:
-    """The ranges, fractions and ``copies`` (even one capture's copies must fit: each is at least an
-    array), and the pipeline's estimator's own checks of its ``params``."""
-    check_ranges(params)
-    check_copies_fit(params["copies"], None)
+    """The pipeline's estimator's own checks of its ``params`` (the ranges, fractions and ``copies``
+    are declared: :attr:`ShiftAugmented._parameter_constraints`)."""
     check_nested_params(params.get("estimator"), dict(params.get("params") or {}), ("params",))
 
 
@@ -243,6 +219,21 @@ class ShiftAugmented(ClassifierMixin, BaseEstimator):
     sensor : the data's SensorSpec (the run engine passes it); required.
     random_state : seeds the draws and the estimator.
     """
+
+    #: the ranges as the module docstring draws them (gain above 0; offset fractions of full scale
+    #: in [-1, 1]; noise at least 0; ar_coef in [0, 1), a stationary AR(1); dead a fraction of the
+    #: cells), each low <= high; ``copies`` 0..MAX_COPIES; the estimator's parameters are its own
+    #: (``check_params``)
+    _parameter_constraints = {
+        "features": [list, tuple], "estimator": [str], "params": [dict, None],
+        "copies": [Interval(Integral, 0, MAX_COPIES, closed="both")],
+        "gain": _pair(Interval(Real, 0, None, closed="neither")),
+        "offset": _pair(Interval(Real, -1, 1, closed="both")),
+        "noise": _pair(Interval(Real, 0, None, closed="left")),
+        "ar_coef": _pair(Interval(Real, 0, 1, closed="left")),
+        "dead": _pair(Interval(Real, 0, 1, closed="both")),
+        "ar_share": [Interval(Real, 0, 1, closed="both")], "crop": [Interval(Real, 0, 1, closed="right")],
+        "sensor": "no_validation", "random_state": ["random_state"]}
 
     def __init__(self, features=(), estimator="touch-extra-trees", params=None, copies=2, gain=(0.8, 1.25),
                  offset=(0.0, 0.005), noise=(0.0, 1.0), ar_share=0.5, ar_coef=(0.8, 0.98), dead=(0.0, 0.05),
@@ -263,8 +254,9 @@ class ShiftAugmented(ClassifierMixin, BaseEstimator):
 
     # -- parameters -------------------------------------------------------------
     def _ranges(self) -> dict[str, tuple[float, float]]:
-        """Every range as floats, checked (:func:`check_ranges`)."""
-        return check_ranges(self.get_params(deep=False))
+        """Every range as floats, every parameter checked against its declared domain."""
+        check_declared(self)
+        return {name: (float(getattr(self, name)[0]), float(getattr(self, name)[1])) for name in RANGES}
 
     def _pipeline(self) -> tuple[list[tuple[str, dict[str, Any]]], str, dict[str, Any]]:
         return feature_specs(self.features), str(self.estimator), dict(self.params or {})

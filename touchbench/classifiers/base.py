@@ -12,27 +12,39 @@ seconds: the tests' estimator checks use them). The estimators are plain
 scikit-learn estimators (or follow that API), so users can use them in their
 own pipelines.
 
-A classifier whose parameter values can only fail when it runs (a weight,
-a floor, a fraction, a count) names its own check in the tag
+Every estimator declares the domain of each of its parameters as
+scikit-learn's ``_parameter_constraints`` (types, ``Interval`` bounds,
+``StrOptions`` choices, :class:`touchbench.core.constraints.ListOf` for a
+list whose items have a domain); a protocol's validation asks them of every
+entry, and a wrapper calls :func:`check_declared` when it is fitted. A rule
+that ties parameters together (a weight vector per part, an inner
+estimator's own parameters) is the classifier's check in the tag
 ``check_params``: a function of its parameters over its defaults that
 raises :class:`ParamError` naming the parameter. :func:`check_classifier_params`
 calls it, and that of every classifier nested in the parameters (the
 candidates a ``candidates=`` tag names, written out; an inner estimator that
-the check itself hands to :func:`check_nested_params`), so a protocol's
-validation refuses the value with its file, line and field, before anything
-runs; the classifier calls the same function when it is fitted.
+the check itself hands to :func:`check_nested_params`; each asked its
+declared domains first), so a protocol's validation refuses the
+value with its file, line and field, before anything runs; the classifier
+calls the same function when it is fitted.
 
 Counts every classifier shares are bounded here, whatever the classifier
 (:data:`COUNT_BOUNDS`): ``n_estimators`` a whole number 1..100000 and
 ``inner_folds`` None or 2..1000 (the inner splits never use more folds than
 training subjects), so ``n_estimators: 1e12`` is refused at validation rather
-than running for ever.
+than running for ever, even by a classifier that declares no bound of its own
+(scikit-learn's forests); touchbench's estimators declare the same bounds
+(:func:`count_constraint`).
 """
 
 from __future__ import annotations
 
+from numbers import Integral
 from typing import Any
 
+from sklearn.utils._param_validation import Interval
+
+from ..core.constraints import declared_failures
 from ..core.errors import TouchbenchError
 from ..core.introspect import with_accepted
 from ..core.paramdoc import of_defaults
@@ -54,7 +66,7 @@ def make_classifier(name: str, random_state: int | None = None, sensor: Any = No
     return CLASSIFIERS.create(name, random_state=random_state, **with_accepted(factory, params, sensor=sensor))
 
 
-class ParamError(TouchbenchError):
+class ParamError(TouchbenchError, ValueError):
     """A parameter value a classifier refuses: ``field`` is its path below the classifier's
     parameters (``("weights", 0)``: the first weight vector)."""
 
@@ -68,6 +80,13 @@ COUNT_BOUNDS = {"n_estimators": (1, 100_000, "trees or boosting rounds"),
                 "inner_folds": (2, 1000, "inner folds of whole subjects, or None for one per training subject")}
 
 
+def count_constraint(key: str) -> list:
+    """The declared domain (``_parameter_constraints``) of the shared count ``key`` of
+    :data:`COUNT_BOUNDS`: a whole number within its bounds."""
+    low, high, _ = COUNT_BOUNDS[key]
+    return [Interval(Integral, low, high, closed="both")]
+
+
 def _check_counts(name: str, params: dict[str, Any]) -> None:
     for key, (low, high, what) in COUNT_BOUNDS.items():
         value = params.get(key)
@@ -78,12 +97,48 @@ def _check_counts(name: str, params: dict[str, Any]) -> None:
                                   f"got {value!r}")
 
 
+def check_declared(estimator: Any) -> None:
+    """Refuse the first parameter of ``estimator`` outside its declared domain
+    (``_parameter_constraints``, :func:`touchbench.core.constraints.declared_failures`: a boolean
+    never read as a number), as a :class:`ParamError` naming it: what a protocol's validation
+    says, said again when the estimator is fitted from Python."""
+    found = _declared_failures(estimator)
+    if found:
+        key, message = next(iter(found.items()))
+        raise ParamError(key, message)
+
+
+def _declared_failures(estimator: Any) -> dict[str, str]:
+    return declared_failures(getattr(estimator, "_parameter_constraints", {}), estimator.get_params(deep=False),
+                             type(estimator).__name__)
+
+
+def _check_declared_params(name: str, params: dict[str, Any]) -> None:
+    """The declared domains of the classifier ``name`` built with ``params``: the first refused value
+    as a :class:`ParamError`, beyond what its own defaults break (a subclass widening its parent's
+    domain); nothing when it cannot be built here (a missing extra, a value its constructor
+    refuses: refused when it is built)."""
+    try:
+        built, default = make_classifier(name, random_state=0, **params), make_classifier(name, random_state=0)
+    except Exception:
+        return
+    if not callable(getattr(built, "get_params", None)):
+        return
+    own = set(_declared_failures(default))
+    found = {k: m for k, m in _declared_failures(built).items() if k not in own}
+    if found:
+        key, message = next(iter(found.items()))
+        raise ParamError(key, message)
+
+
 def check_classifier_params(name: str, params: dict[str, Any]) -> None:
     """Refuse a value of ``params`` the registered classifier ``name`` cannot run with (module
-    docstring): its ``check_params`` over its defaults, then each candidate of its ``candidates=``
+    docstring): its declared domains, the shared counts, its ``check_params`` over its defaults,
+    then each candidate of its ``candidates=``
     parameter that is written out (``{features, estimator, params}``), as a nested classifier."""
     entry = CLASSIFIERS.entry(name)
     full = {**(entry.tags.get("defaults") or {}), **params}
+    _check_declared_params(name, params)
     _check_counts(name, full)
     check = entry.tags.get("check_params")
     if check is not None:

@@ -112,14 +112,17 @@ a given seed and ``n_jobs`` give bit-identical weights and predictions.
 
 from __future__ import annotations
 
+from numbers import Integral, Real
 from typing import Any
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from ..core.constraints import ListOf
 from ..core.errors import TouchbenchError
 from ._util import (
     MAX_SEED,
@@ -130,8 +133,8 @@ from ._util import (
     sensor_frames,
     torch_available,
 )
-from .base import CLASSIFIERS
-from .torch_fit import INSTALL_HINT, Threads, import_torch, softmax_batches, train, validation_split
+from .base import CLASSIFIERS, check_declared
+from .torch_fit import INSTALL_HINT, TORCH_JOBS, Threads, import_torch, softmax_batches, train, validation_split
 from .torch_state import load_weights, weights_as_arrays
 
 SOURCE = "Al-mashhadani et al. 2021, section 2.3, Table 1, Eq. 3"
@@ -154,6 +157,11 @@ def build_network(torch, in_channels: int, grid: tuple[int, int], n_classes: int
     with torch.no_grad():
         n_flat = features(torch.zeros(1, in_channels, *grid)).shape[1]
     return nn.Sequential(features, nn.Linear(n_flat, hidden_units), nn.ReLU(), nn.Linear(hidden_units, n_classes))
+
+
+#: "first", "all", a window index or a list of them (an index beyond L is refused when fitting)
+WINDOWS = [StrOptions({"first", "all"}), Interval(Integral, 0, None, closed="left"),
+           ListOf([Interval(Integral, 0, None, closed="left")], min_length=1)]
 
 
 def _window_indices(spec: Any, n_windows: int, what: str) -> np.ndarray:
@@ -202,7 +210,34 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
     device : ``"cpu"`` (deterministic) or a torch device string.
     n_jobs : torch threads during fit and predict (default 1; -1 = all cores).
     verbose : print one line per epoch when > 0.
+
+    The domains are declared (``_parameter_constraints``: checked when a protocol is read and when
+    ``fit`` begins). Upper bounds where a value only costs: ``max_epochs`` at most 100,000 (an
+    epoch is a pass over the training windows, as the MLP's), ``hidden_units`` at most 16,384 and
+    each of ``channels`` at most 4,096 (64 and 32 times Table 1's 256 and 128: the weights grow
+    with their products). ``L`` has no upper bound of its own: a run whose captures are shorter
+    than ``L`` frames is refused by :meth:`check_sensor`. ``patience`` at least 1 (0 would stop
+    after the first epoch); ``n_jobs`` -1 (every core) or at least 1.
     """
+
+    _parameter_constraints = {
+        "sensor": "no_validation", "grid": ["array-like", None],
+        "length": [Interval(Integral, 1, None, closed="left"), None],
+        "L": [Interval(Integral, 1, None, closed="left")],
+        "train_windows": WINDOWS, "test_windows": WINDOWS,
+        "vote": [StrOptions({"soft", "hard"})],
+        "max_epochs": [Interval(Integral, 1, 100_000, closed="both")],
+        "batch_size": [Interval(Integral, 1, None, closed="left")],
+        "learning_rate": [Interval(Real, 0, None, closed="neither")],
+        "weight_decay": [Interval(Real, 0, None, closed="left")],
+        "patience": [Interval(Integral, 1, None, closed="left")],
+        "validation_fraction": [Interval(Real, 0, 1, closed="left"), None],
+        "validation_by": [StrOptions({"groups", "rows"})],
+        "scaling": [StrOptions({"standard", "none"})],
+        "channels": [ListOf([Interval(Integral, 1, 4096, closed="both")], length=3)],
+        "hidden_units": [Interval(Integral, 1, 16_384, closed="both")],
+        "random_state": ["random_state"], "device": [str], "n_jobs": TORCH_JOBS, "verbose": ["verbose"],
+    }
 
     def __init__(self, sensor=None, grid=None, length=None, L=30, train_windows="first", test_windows="first", vote="soft",
                  max_epochs=100, batch_size=32, learning_rate=1e-3, weight_decay=0.0, patience=10,
@@ -231,19 +266,6 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
         self.validation_by = validation_by
 
     # -- shapes ---------------------------------------------------------------
-    def _check_params(self):
-        if self.vote not in ("soft", "hard"):
-            raise ValueError(f"vote must be 'soft' or 'hard', got {self.vote!r}")
-        if self.scaling not in ("standard", "none"):
-            raise ValueError(f"scaling must be 'standard' or 'none', got {self.scaling!r}")
-        if not (isinstance(self.L, (int, np.integer)) and self.L >= 1):
-            raise ValueError(f"L must be a positive integer, got {self.L!r}")
-        vf = self.validation_fraction
-        if vf is not None and not (0.0 <= vf < 1.0):
-            raise ValueError(f"validation_fraction must be in [0, 1), got {vf!r}")
-        grid, _ = sensor_frames("HaartCNNClassifier", self.sensor, self.grid)
-        return grid
-
     def check_sensor(self, sensor, min_frames=None):
         """Why the CNN cannot serve ``sensor`` with captures of at least ``min_frames`` frames, or None."""
         try:
@@ -270,7 +292,8 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
         ``test_set``: ``(X_test, y_test)``, a leak: early stopping on the
         test data's accuracy instead of a validation split (module docstring)."""
         torch = import_torch("cnn")
-        grid = self._check_params()
+        check_declared(self)
+        grid, _ = sensor_frames("HaartCNNClassifier", self.sensor, self.grid)
         if is_captures(X):  # the captures as recorded: the stated length, else the longest training capture
             length = int(self.length) if self.length is not None else max(len(c) for c in X)
             X = captures_to_rows(X, grid, length, "cnn")
@@ -288,8 +311,6 @@ class HaartCNNClassifier(ClassifierMixin, BaseEstimator):
         rs = check_random_state(self.random_state)
         seed = int(rs.randint(MAX_SEED))
         rng = np.random.default_rng(seed)
-        if self.validation_by not in ("groups", "rows"):
-            raise ValueError(f"validation_by must be 'groups' or 'rows', not {self.validation_by!r}")
         by = groups if self.validation_by == "groups" else None
         fraction = 0.0 if test_set is not None else self.validation_fraction  # the test data stop it instead
         fit_rows, val_rows, self.validation_groups_ = validation_split(yi, by, rng, fraction)

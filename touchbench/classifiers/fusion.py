@@ -38,7 +38,10 @@ touchbench's feature methods and the Rocket family make different errors.
 ``weights``: a list of weight vectors, one weight per part in the order of
 ``parts``, each non-negative with a positive sum; a vector is scaled to sum
 1 (the argmax is unchanged, and ``predict_proba`` stays a distribution). A
-protocol's validation refuses any other (registry tag ``check_params``).
+protocol's validation refuses any other: a non-empty list of vectors is
+declared (``_parameter_constraints``), each vector's weights (one per part,
+non-negative, a positive sum) are the registry tag ``check_params`` (they
+depend on ``parts``), which names the vector at fault.
 None gives a default grid: for two parts ``(w, 1 - w)`` for w in 0, 0.25,
 0.5, 0.75, 1 (the second part alone first); for k parts the equal weights,
 then each part alone.
@@ -77,9 +80,10 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted
 
+from ..core.constraints import ListOf
 from ..core.errors import TouchbenchError
 from ._util import build, seed_int
-from .base import CLASSIFIERS, ParamError
+from .base import CLASSIFIERS, ParamError, check_declared, count_constraint
 from .inner import candidate_list, candidate_refusal, inner_fits, inner_splits, proba_over, refit, shortest_capture
 
 __all__ = ["Fusion", "default_weights", "weight_grid"]
@@ -98,13 +102,9 @@ def default_weights(k: int) -> list[tuple[float, ...]]:
 
 def weight_grid(weights: Any, k: int) -> np.ndarray:
     """The weight vectors ``(m, k)`` as float64, each scaled to sum 1 (``weights`` None: :func:`default_weights`);
-    a :class:`ParamError` naming the vector at fault."""
-    if weights is not None and (isinstance(weights, (str, bytes, dict)) or not hasattr(weights, "__iter__")):
-        raise ParamError("weights", f"fusion: 'weights' must be a list of weight vectors (one weight per part), "
-                                    f"got {weights!r}")
+    a :class:`ParamError` naming the vector at fault (the list itself: its declared domain,
+    :attr:`Fusion._parameter_constraints`)."""
     vectors = default_weights(k) if weights is None else list(weights)
-    if not vectors:
-        raise ParamError("weights", "fusion: 'weights' is an empty list; give weight vectors or None for the default grid")
     W = []
     for i, v in enumerate(vectors):
         try:
@@ -120,8 +120,8 @@ def weight_grid(weights: Any, k: int) -> np.ndarray:
 
 
 def check_params(params: dict[str, Any]) -> None:
-    """Two parts or more, and the weights against their number (the parts' own values: their
-    classifiers' checks)."""
+    """Two parts or more (the default, no parts, is what a method fills in), and the weights against
+    their number (the parts' own values: their classifiers' checks)."""
     parts = params.get("parts")
     if isinstance(parts, (list, tuple)) and len(parts) < 2:
         raise ParamError("parts", f"fusion needs at least 2 parts (the methods whose probabilities it sums), got "
@@ -157,6 +157,16 @@ class Fusion(ClassifierMixin, BaseEstimator):
 
     #: ``predict`` is ``classes_`` at the argmax of ``predict_proba``: the run engine asks once for both
     labels_are_argmax_proba = True
+
+    #: parts: candidate mappings (or registered methods' names, written out before the fusion is
+    #: built); weights: None or at least one vector (its numbers, one per part, non-negative with a
+    #: positive sum: ``check_params``, which names the vector); inner_folds: None or the shared
+    #: bound, 2..1000
+    _parameter_constraints = {
+        "parts": [ListOf([dict, str])],
+        "weights": [None, ListOf([list, tuple], min_length=1)],
+        "inner_folds": [None, *count_constraint("inner_folds")],
+        "sensor": "no_validation", "random_state": ["random_state"]}
 
     def __init__(self, parts=(), weights=None, inner_folds=None, sensor=None, random_state=None):
         self.parts = parts
@@ -209,6 +219,7 @@ class Fusion(ClassifierMixin, BaseEstimator):
         y = np.asarray(y)
         check_classification_targets(y)
         self.classes_ = np.unique(y)
+        check_declared(self)
         parts = self._parts()
         W = weight_grid(self.weights, len(parts))
         problem = self.check_sensor(self.sensor, shortest_capture(captures)) if self.sensor is not None else None

@@ -55,16 +55,19 @@ inside ``torch.random.fork_rng`` with deterministic algorithms and
 
 from __future__ import annotations
 
+from numbers import Integral, Real
+
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ..core.errors import TouchbenchError
 from ._util import MAX_SEED, build, captures_to_rows, frames_in_row, is_captures, sensor_frames, torch_available
-from .base import CLASSIFIERS
-from .torch_fit import INSTALL_HINT, Plateau, Threads, import_torch, softmax_batches, train, validation_split
+from .base import CLASSIFIERS, check_declared
+from .torch_fit import INSTALL_HINT, TORCH_JOBS, Plateau, Threads, import_torch, softmax_batches, train, validation_split
 from .torch_state import load_weights, weights_as_arrays
 
 SOURCE = "Ismail Fawaz et al. 2020 (InceptionTime), sections 3-4; aeon 1.x InceptionTimeClassifier's settings"
@@ -135,7 +138,36 @@ class InceptionTimeClassifier(ClassifierMixin, BaseEstimator):
     validation_fraction, patience : early stopping on a validation share (0: none, the paper).
     scaling : ``"standard"`` or ``"none"``.
     random_state, device, n_jobs, verbose : as the CNN.
+
+    The domains are declared (``_parameter_constraints``: checked when a protocol is read and when
+    ``fit`` begins). Upper bounds where a value only costs: ``n_networks`` at most 100 (20 times
+    the paper's 5, each trained in full), ``depth`` at most 100, ``n_filters`` and
+    ``bottleneck_size`` at most 1,024 (32 times the paper's 32: a convolution's weights grow with
+    their square), ``kernel_size`` at most 1,000 (25 times the paper's 40), ``max_epochs`` at most
+    100,000 (a pass over the training captures each). ``lr_factor`` in (0, 1) (PyTorch's
+    plateau rule refuses 1), ``patience`` None or at least 1.
     """
+
+    _parameter_constraints = {
+        "sensor": "no_validation", "grid": ["array-like", None],
+        "length": [Interval(Integral, 1, None, closed="left"), None],
+        "n_networks": [Interval(Integral, 1, 100, closed="both")],
+        "depth": [Interval(Integral, 1, 100, closed="both")],
+        "n_filters": [Interval(Integral, 1, 1024, closed="both")],
+        "kernel_size": [Interval(Integral, 1, 1000, closed="both")],
+        "bottleneck_size": [Interval(Integral, 1, 1024, closed="both")],
+        "use_residual": ["boolean"],
+        "max_epochs": [Interval(Integral, 1, 100_000, closed="both")],
+        "batch_size": [Interval(Integral, 1, None, closed="left")],
+        "learning_rate": [Interval(Real, 0, None, closed="neither")],
+        "lr_factor": [Interval(Real, 0, 1, closed="neither")],
+        "lr_patience": [Interval(Integral, 0, None, closed="left")],
+        "min_lr": [Interval(Real, 0, None, closed="left")],
+        "validation_fraction": [Interval(Real, 0, 1, closed="left"), None],
+        "patience": [Interval(Integral, 1, None, closed="left"), None],
+        "scaling": [StrOptions({"standard", "none"})],
+        "random_state": ["random_state"], "device": [str], "n_jobs": TORCH_JOBS, "verbose": ["verbose"],
+    }
 
     def __init__(self, sensor=None, grid=None, length=None, n_networks=5, depth=6, n_filters=32, kernel_size=40,
                  bottleneck_size=32, use_residual=True, max_epochs=1500, batch_size=64, learning_rate=1e-3,
@@ -200,10 +232,7 @@ class InceptionTimeClassifier(ClassifierMixin, BaseEstimator):
     def fit(self, X, y, groups=None):
         """Fit on captures (or raw-window rows) ``X`` with labels ``y``; ``groups`` as the CNN's."""
         torch = import_torch("inception-time")
-        if self.scaling not in ("standard", "none"):
-            raise ValueError(f"scaling must be 'standard' or 'none', got {self.scaling!r}")
-        if not (isinstance(self.n_networks, (int, np.integer)) and self.n_networks >= 1):
-            raise ValueError(f"n_networks must be a positive integer, got {self.n_networks!r}")
+        check_declared(self)
         self.grid_, _ = sensor_frames("InceptionTimeClassifier", self.sensor, self.grid)
         if is_captures(X):
             length = int(self.length) if self.length is not None else max(len(c) for c in X)

@@ -53,6 +53,23 @@ length of MiniRocket's kernels) are padded here the same way, by repeating
 the last frame (a held pose; aeon itself asks for zero padding, which on a
 pressure sensor would invent a release).
 
+Declared domains (``_parameter_constraints``, checked when a protocol is read), from what
+aeon 1.x does with a value: MiniRocket silently runs 84 kernels for any
+``n_kernels`` below 84 and MultiRocket divides by zero there (both use
+``n_kernels // 84`` kernels of each of the 84 shapes), so ``n_kernels`` is at
+least 84; ``max_dilations_per_kernel`` 0, Hydra's ``n_kernels`` or ``n_groups``
+0, QUANT's ``interval_depth`` or ``quantile_divisor`` 0 and RDST's
+``max_shapelets`` 0 fail inside aeon, so each is at least 1. Upper bounds
+where a count only costs: ``n_kernels`` and ``max_shapelets`` at most
+100,000 (ten times the papers' 10,000; every kernel or shapelet gives each
+capture one to eight features, a matrix of some gigabytes on HAART at the
+bound), Hydra's ``n_kernels`` at most 128 and ``n_groups`` at most 1,024 (16
+times the paper's 8 and 64: the features grow as their product), QUANT's
+``interval_depth`` at most 16 (``2**depth - 1`` intervals per
+representation). ``n_jobs``: None or a whole number other than 0 (-1: every
+core). The engine's ``sensor``, ``grid`` and ``length`` are declared as
+they come (a sensor, an ``(H, W)`` pair, a frame count).
+
 A training set of one class gets no aeon model: the peer predicts that
 class (the run engine does the same for a one-class training fold).
 
@@ -64,9 +81,11 @@ from __future__ import annotations
 
 import importlib
 import sys
+from numbers import Integral
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.utils._param_validation import Interval
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
@@ -119,6 +138,10 @@ class _AeonPeer(ClassifierMixin, BaseEstimator):
     """
 
     _OWN = ("sensor", "grid", "length", "random_state")
+    #: the engine's parameters, declared as the engine passes them (module docstring)
+    _parameter_constraints = {"sensor": "no_validation", "grid": ["array-like", None],
+                              "length": [Interval(Integral, 1, None, closed="left"), None],
+                              "random_state": ["random_state"]}
     _aeon_module = "aeon.classification.convolution_based"
     _aeon_class = ""
     _requires: tuple[str, ...] = ("aeon",)
@@ -198,8 +221,19 @@ class _AeonPeer(ClassifierMixin, BaseEstimator):
         return P[:, order]
 
 
+#: None, or a whole number other than 0 (aeon's and joblib's: -1 every core, -2 all but one)
+N_JOBS = [Interval(Integral, 1, None, closed="left"), Interval(Integral, None, -1, closed="right"), None]
+#: the most kernels or shapelets: ten times the papers' 10,000 (module docstring)
+MAX_KERNELS = 100_000
+
+
 class _RocketPeer(_AeonPeer):
-    """MiniRocket and MultiRocket: the parameters they share."""
+    """MiniRocket and MultiRocket: the parameters they share (bounds: module docstring)."""
+
+    _parameter_constraints = {**_AeonPeer._parameter_constraints,
+                              "n_kernels": [Interval(Integral, 84, MAX_KERNELS, closed="both")],
+                              "max_dilations_per_kernel": [Interval(Integral, 1, None, closed="left")],
+                              "n_jobs": N_JOBS}
 
     def __init__(self, sensor=None, grid=None, length=None, n_kernels=10000, max_dilations_per_kernel=32, n_jobs=1,
                  random_state=None):
@@ -230,6 +264,10 @@ class MultiRocketHydraPeer(_AeonPeer):
     _aeon_class = "MultiRocketHydraClassifier"
     _requires = ("aeon", "torch")
     _min_timepoints = MIN_TIMEPOINTS + 1  # its MultiRocket half also convolves the first differences
+    #: 16 times the paper's 8 kernels per group and 64 groups at most (module docstring)
+    _parameter_constraints = {**_AeonPeer._parameter_constraints,
+                              "n_kernels": [Interval(Integral, 1, 128, closed="both")],
+                              "n_groups": [Interval(Integral, 1, 1024, closed="both")], "n_jobs": N_JOBS}
 
     def __init__(self, sensor=None, grid=None, length=None, n_kernels=8, n_groups=64, n_jobs=1, random_state=None):
         self.sensor = sensor
@@ -247,6 +285,10 @@ class QuantPeer(_AeonPeer):
     _aeon_module = "aeon.classification.interval_based"
     _aeon_class = "QUANTClassifier"
     _requires = ("aeon", "torch")
+    #: depth 16 at most: 2**16 - 1 intervals per representation (module docstring)
+    _parameter_constraints = {**_AeonPeer._parameter_constraints,
+                              "interval_depth": [Interval(Integral, 1, 16, closed="both")],
+                              "quantile_divisor": [Interval(Integral, 1, None, closed="left")]}
 
     def __init__(self, sensor=None, grid=None, length=None, interval_depth=6, quantile_divisor=4, random_state=None):
         self.sensor = sensor
@@ -262,6 +304,8 @@ class RDSTPeer(_AeonPeer):
 
     _aeon_module = "aeon.classification.shapelet_based"
     _aeon_class = "RDSTClassifier"
+    _parameter_constraints = {**_AeonPeer._parameter_constraints,
+                              "max_shapelets": [Interval(Integral, 1, MAX_KERNELS, closed="both")], "n_jobs": N_JOBS}
 
     def __init__(self, sensor=None, grid=None, length=None, max_shapelets=10000, n_jobs=1, random_state=None):
         self.sensor = sensor

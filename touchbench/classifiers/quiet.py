@@ -73,6 +73,7 @@ parts refuse.
 
 from __future__ import annotations
 
+from numbers import Real
 from typing import Any, Sequence
 
 import numpy as np
@@ -80,13 +81,14 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.linear_model import LogisticRegression
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
+from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted
 
 from ..core.errors import TouchbenchError
 from ..features.base import check_captures, feature_set_refusal
 from ..features.contact import ContactEvidence
 from ._util import build, seed_int
-from .base import CLASSIFIERS, ParamError, check_nested_params
+from .base import CLASSIFIERS, check_declared, check_nested_params
 from .fitting import capture_labels, feature_specs, fit_pipeline, pipeline_refusal, proba_over
 
 NAME = "quiet-gated"
@@ -150,16 +152,8 @@ def gate_decides(base: np.ndarray, gate: np.ndarray, column: int, sure: float) -
 
 
 def check_params(params: dict[str, Any]) -> None:
-    """``gate_c`` above 0, ``quiet_frames`` in [0, 1), ``stride`` and ``sure`` in (0, 1], and the pipeline's
-    estimator's own checks of its ``params``."""
-    checks = (("gate_c", lambda v: v > 0, "a number above 0"),
-              ("quiet_frames", lambda v: 0 <= v < 1, "a fraction in [0, 1)"),
-              ("stride", lambda v: 0 < v <= 1, "a fraction of the window in (0, 1]"),
-              ("sure", lambda v: 0 < v <= 1, "a probability in (0, 1]"))
-    for key, ok, what in checks:
-        v = params.get(key)
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not ok(float(v)):
-            raise ParamError((key,), f"{key} must be {what}, got {v!r}")
+    """The pipeline's estimator's own checks of its ``params`` (the gate's numbers are declared:
+    :attr:`QuietGated._parameter_constraints`)."""
     check_nested_params(params.get("estimator"), dict(params.get("params") or {}), ("params",))
 
 
@@ -182,6 +176,17 @@ class QuietGated(ClassifierMixin, BaseEstimator):
 
     #: ``predict`` is ``classes_`` at the argmax of ``predict_proba`` (the run engine asks once for both)
     labels_are_argmax_proba = True
+
+    #: ``gate_c`` above 0 (an inverse penalty), ``quiet_frames`` a fraction in [0, 1) (1 would take
+    #: every class for the quiet one), ``stride`` a fraction of the window in (0, 1], ``sure`` a
+    #: probability in (0, 1]; the estimator's parameters are its own (``check_params``)
+    _parameter_constraints = {"features": [list, tuple], "estimator": [str], "params": [dict, None],
+                              "gate": ["boolean"], "windows": ["boolean"], "train_windows": ["boolean"],
+                              "gate_c": [Interval(Real, 0, None, closed="neither")],
+                              "quiet_frames": [Interval(Real, 0, 1, closed="left")],
+                              "stride": [Interval(Real, 0, 1, closed="right")],
+                              "sure": [Interval(Real, 0, 1, closed="right")],
+                              "sensor": "no_validation", "random_state": ["random_state"]}
 
     def __init__(self, features=("touch-rhythm",), estimator="touch-extra-trees", params=None, gate=True,
                  windows=True, train_windows=False, gate_c=0.1, quiet_frames=0.05, stride=0.25, sure=0.5,
@@ -222,6 +227,7 @@ class QuietGated(ClassifierMixin, BaseEstimator):
 
     def fit(self, X: Sequence[np.ndarray], y: Any, groups: Any = None) -> "QuietGated":
         """Fit the pipeline on the captures as given; find the no-contact class and fit its gate."""
+        check_declared(self)
         check_params(self.get_params(deep=False))
         captures = self._checked(X)
         y = capture_labels(y, captures, NAME)

@@ -48,9 +48,10 @@ from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted
 
+from ..core.constraints import ListOf
 from ..core.errors import TouchbenchError
 from ._util import build, seed_int
-from .base import CLASSIFIERS
+from .base import CLASSIFIERS, check_declared, count_constraint
 from .inner import (
     candidate,
     candidate_list,
@@ -79,6 +80,11 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
     random_state : seed of every candidate's estimator (the same for all, so
         the choice compares methods, not seeds).
     """
+
+    #: candidates: mappings (or registered methods' names, written out before the search is built);
+    #: inner_folds: None or the shared bound, 2..1000 (every candidate is fitted once per inner fold)
+    _parameter_constraints = {"candidates": [ListOf([dict, str])], "inner_folds": [None, *count_constraint("inner_folds")],
+                              "sensor": "no_validation", "random_state": ["random_state"]}
 
     def __init__(self, candidates=(), inner_folds=None, sensor=None, random_state=None):
         self.candidates = candidates
@@ -147,6 +153,7 @@ class NestedSelection(ClassifierMixin, BaseEstimator):
         y = np.asarray(y)
         check_classification_targets(y)
         self.classes_ = np.unique(y)
+        check_declared(self)
         cands, left_out = self._serving(captures)
         seed = seed_int(self.random_state)
         splits, how = inner_splits(y, groups, self.inner_folds, seed)

@@ -29,8 +29,10 @@ from __future__ import annotations
 import copy
 import os
 from dataclasses import dataclass
+from numbers import Integral
 
 import numpy as np
+from sklearn.utils._param_validation import Interval, Options
 
 from ..core.errors import TouchbenchError
 
@@ -44,6 +46,10 @@ def import_torch(who: str):
     except ImportError as e:
         raise TouchbenchError(f"the {who!r} classifier needs PyTorch, which is not installed: {INSTALL_HINT}") from e
     return torch
+
+
+#: the declared domain of a torch classifier's ``n_jobs`` (:class:`Threads`): -1 or None for every core, else at least 1
+TORCH_JOBS = [Interval(Integral, 1, None, closed="left"), Options(Integral, {-1}), None]
 
 
 class Threads:

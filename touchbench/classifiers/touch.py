@@ -38,8 +38,9 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 from sklearn.utils._param_validation import Interval
 
+from ..core.constraints import ListOf
 from ._util import MAX_SEED, build, seed_int
-from .base import CLASSIFIERS
+from .base import CLASSIFIERS, count_constraint
 from .fastforest import compile_forest
 
 #: at most this many rows are predicted with the compiled forest (live use, latency)
@@ -62,10 +63,13 @@ class SelectedExtraTrees(ClassifierMixin, BaseEstimator):
     #: ``predict`` is ``classes_`` at the argmax of ``predict_proba`` (the run engine asks once for both)
     labels_are_argmax_proba = True
 
-    #: checked when a protocol is read: max_features is the ExtraTreesClassifier's (its own
-    #: constraint), keep None or at least 1 column
-    _parameter_constraints = {"max_features": ExtraTreesClassifier._parameter_constraints["max_features"],
-                              "keep": [None, Interval(Integral, 1, None, closed="left")]}
+    #: checked when a protocol is read: max_features and n_jobs are the ExtraTreesClassifier's (its
+    #: own constraints), keep None or at least 1 column, n_estimators the shared bound on trees
+    _parameter_constraints = {"n_estimators": count_constraint("n_estimators"),
+                              "max_features": ExtraTreesClassifier._parameter_constraints["max_features"],
+                              "keep": [None, Interval(Integral, 1, None, closed="left")],
+                              "n_jobs": ExtraTreesClassifier._parameter_constraints["n_jobs"],
+                              "random_state": ["random_state"]}
 
     def __init__(self, n_estimators=500, max_features=0.3, keep=None, n_jobs=1, random_state=None):
         self.n_estimators = n_estimators
@@ -125,8 +129,18 @@ class NestedTunedExtraTrees(ClassifierMixin, BaseEstimator):
     #: ``predict`` is ``classes_`` at the argmax of ``predict_proba`` (the run engine asks once for both)
     labels_are_argmax_proba = True
 
-    #: checked when a protocol is read: max_groups_loo at least 0 (only compared with the groups)
-    _parameter_constraints = {"max_groups_loo": [Interval(Integral, 0, None, closed="left")]}
+    #: checked when a protocol is read: each grid's values as SelectedExtraTrees declares them (at
+    #: least one value each; every pair is fitted once per inner fold), n_estimators and
+    #: inner_folds the shared bounds (trees; 2..1000 inner folds, never more than the training
+    #: subjects), max_groups_loo at least 0 (only compared with the number of groups)
+    _parameter_constraints = {
+        "n_estimators": count_constraint("n_estimators"),
+        "grid_max_features": [ListOf(SelectedExtraTrees._parameter_constraints["max_features"], min_length=1)],
+        "grid_keep": [ListOf(SelectedExtraTrees._parameter_constraints["keep"], min_length=1)],
+        "inner_folds": count_constraint("inner_folds"),
+        "max_groups_loo": [Interval(Integral, 0, None, closed="left")],
+        "n_jobs": ExtraTreesClassifier._parameter_constraints["n_jobs"],
+        "random_state": ["random_state"]}
 
     def __init__(self, n_estimators=500, grid_max_features=(0.3, "sqrt"), grid_keep=(None, 150),
                  inner_folds=3, max_groups_loo=0, n_jobs=1, random_state=None):

@@ -54,7 +54,7 @@ from ..core.errors import TouchbenchError
 from ..features.base import check_captures, feature_set_refusal
 from ..features.contact import ContactEvidence
 from ._util import build, seed_int
-from .base import CLASSIFIERS, ParamError, check_nested_params
+from .base import CLASSIFIERS, ParamError, check_declared, check_nested_params
 from .quiet import GATE_SET, QUIET_COLUMN, quiet_class
 from .fitting import FittedMethod, capture_labels, feature_specs, fit_features, fit_on_codes, pipeline_refusal
 
@@ -67,14 +67,11 @@ QUIET_FRAMES = 0.05
 
 
 def check_params(params: dict[str, Any]) -> None:
-    """``idle`` a class name or None, and the estimator's own checks of ``params`` and of ``params``
-    with ``detector_params`` over them."""
-    idle = params.get("idle")
-    if idle is not None and (not isinstance(idle, str) or not idle):
-        raise ParamError(("idle",), f"idle must name the idle class, got {idle!r}")
+    """``idle`` not empty (its type is declared), and the estimator's own checks of ``params`` and of
+    ``params`` with ``detector_params`` over them."""
+    if params.get("idle") == "":
+        raise ParamError(("idle",), "idle must name the idle class, got ''")
     det = params.get("detector_params") or {}
-    if not isinstance(det, dict):
-        raise ParamError(("detector_params",), f"detector_params must be a mapping, got {det!r}")
     check_nested_params(params.get("estimator"), dict(params.get("params") or {}), ("params",))
     check_nested_params(params.get("estimator"), {**dict(params.get("params") or {}), **det}, ("detector_params",))
 
@@ -112,6 +109,11 @@ class TwoStage(ClassifierMixin, BaseEstimator):
     #: ``predict`` is ``classes_`` at the argmax of ``predict_proba`` (the run engine asks once for both)
     labels_are_argmax_proba = True
 
+    #: the estimator's own parameters are its (``check_params``: with and without ``detector_params``)
+    _parameter_constraints = {"features": [list, tuple], "estimator": [str], "params": [dict, None],
+                              "idle": [str, None], "detector_params": [dict, None],
+                              "sensor": "no_validation", "random_state": ["random_state"]}
+
     def __init__(self, features=("touch-rhythm",), estimator="touch-extra-trees", params=None, idle=None,
                  detector_params=None, sensor=None, random_state=None):
         self.features = features
@@ -133,6 +135,7 @@ class TwoStage(ClassifierMixin, BaseEstimator):
         """Fit the feature sets once, the detector on every sample (idle or touch) and the gesture
         classifier on the touch samples. ``class_names``: the name of each code of ``y`` when ``y``
         holds codes (the run engine's fit path gives them), so that ``idle`` names a class."""
+        check_declared(self)
         check_params(self.get_params(deep=False))
         captures = check_captures(X, name=NAME)
         y = capture_labels(y, captures, NAME)

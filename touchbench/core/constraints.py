@@ -1,7 +1,9 @@
 """Declared parameter domains, checked one parameter at a time: scikit-learn's
 ``_parameter_constraints`` (``Interval``, ``StrOptions``, types...) of any object, with two rules
 of touchbench's own: a boolean is never read as a number (Python's ``True`` is an ``int``), and a
-string outside a ``StrOptions`` choice is answered with the nearest choice."""
+string outside a ``StrOptions`` choice is answered with the nearest choice. :class:`ListOf` declares a
+list whose every item has a domain (a pair of bounds, a list of counts), which scikit-learn's own
+constraints cannot say."""
 
 from __future__ import annotations
 
@@ -9,11 +11,11 @@ import copy
 from numbers import Integral, Number, Real
 from typing import Any
 
-from sklearn.utils._param_validation import Interval, StrOptions, make_constraint, validate_parameter_constraints
+from sklearn.utils._param_validation import Interval, Options, StrOptions, make_constraint, validate_parameter_constraints
 
 from .suggest import did_you_mean
 
-__all__ = ["declared_failures"]
+__all__ = ["ListOf", "declared_failures"]
 
 #: the types whose instances a boolean is (Python's bool is an int): allowed only as a number
 _NUMBER_TYPES = (int, float, Integral, Real, Number)
@@ -26,6 +28,47 @@ def _number_only(constraints: Any, value: bool) -> bool:
         return False
     met = [c for c in map(make_constraint, constraints) if c.is_satisfied_by(value)]
     return bool(met) and all(isinstance(c, Interval) or getattr(c, "type", None) in _NUMBER_TYPES for c in met)
+
+
+class ListOf(Options):
+    """A list or tuple whose every item meets one of ``items`` (scikit-learn constraints: an
+    ``Interval``, a type, None...; a boolean never read as a number), of exactly ``length`` items
+    (None: at least ``min_length``), in non-decreasing order when ``ordered`` (a ``(low, high)``
+    pair). Declared in ``_parameter_constraints`` like any constraint: scikit-learn asks it as one of
+    its own ``Options`` (the kind it takes), and a refusal says it in words.
+
+    >>> from numbers import Real
+    >>> pair = ListOf([Interval(Real, 0, 1, closed="both")], length=2, ordered=True)
+    >>> pair.is_satisfied_by((0.2, 0.5)), pair.is_satisfied_by((0.5, 0.2)), pair.is_satisfied_by([True, 1])
+    (True, False, False)
+    >>> print(pair)
+    a list of 2 items, each a float in the range [0.0, 1.0], low <= high
+    """
+
+    def __init__(self, items: list, *, length: int | None = None, min_length: int = 0, ordered: bool = False):
+        super().__init__(object, set())
+        self.items = [make_constraint(c) for c in _in_order(list(items))]
+        self.length, self.min_length, self.ordered = length, min_length, ordered
+
+    def _item_ok(self, v: Any) -> bool:
+        met = [c for c in self.items if c.is_satisfied_by(v)]
+        return bool(met) and not (isinstance(v, bool) and all(
+            isinstance(c, Interval) or getattr(c, "type", None) in _NUMBER_TYPES for c in met))
+
+    def is_satisfied_by(self, val: Any) -> bool:
+        if not isinstance(val, (list, tuple)):
+            return False
+        if len(val) != self.length if self.length is not None else len(val) < self.min_length:
+            return False
+        if not all(self._item_ok(v) for v in val):
+            return False
+        return not self.ordered or all(a <= b for a, b in zip(val, val[1:]))
+
+    def __str__(self) -> str:
+        n = (f"a list of {self.length} items" if self.length is not None else "a non-empty list" if self.min_length == 1
+             else f"a list of at least {self.min_length} items" if self.min_length else "a list")
+        return (f"{n}, each {' or '.join(map(str, self.items))}"
+                + (", low <= high" if self.ordered else ""))
 
 
 def _choices(constraints: Any) -> list[str]:
