@@ -100,9 +100,9 @@ BOUNDS: dict[str, list[tuple[str, str, str]]] = {
     "zhou-quadratic-svm": [("polynomial_order", "1", "0")],
     "zhou-tree": [("max_leaf_nodes", "2", "1"), ("min_samples_split", "2", "1")],
 }
-#: classifiers whose numeric parameters are not declared here: the deep networks and the peers'
-#: time-series classifiers (their own libraries check them when fitted), and the wrappers whose
-#: values their own ``check_params`` refuses (tests/test_protocols_params.py)
+#: classifiers whose bounds are worked out in tests/test_classifier_constraints.py instead: the deep
+#: networks, the peers' time-series classifiers and the wrappers (every declared bound of every
+#: classifier is also walked by tests/test_registry_params_walk.py)
 LEFT = {"cnn", "inception-time", "minirocket", "multirocket", "multirocket-hydra", "quant", "rdst",
         "fusion", "two-stage", "nested-select", "session-centred", "shift-augmented", "quiet-gated"}
 

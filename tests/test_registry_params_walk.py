@@ -1,4 +1,5 @@
-"""Every registered feature set's declared numeric parameters, walked at and beyond their bounds.
+"""Every registered feature set's and classifier's declared numeric parameters, walked at and beyond
+their bounds.
 
 For each ``Interval`` of a set's ``_parameter_constraints``: a value beyond a closed bound (one
 less for an integer, a little less for a real) or at an open one is refused when the protocol is
@@ -11,10 +12,13 @@ from __future__ import annotations
 
 from numbers import Integral
 
+import numpy as np
 import pytest
-from sklearn.utils._param_validation import Interval
+from sklearn.utils._param_validation import Interval, make_constraint
 
+from touchbench.classifiers import CLASSIFIERS
 from touchbench.core.errors import TouchbenchError
+from touchbench.core.versions import missing_extra
 from touchbench.engine import run_protocol
 from touchbench.features import FEATURES
 from touchbench.protocols.loading import parse_protocol
@@ -70,3 +74,94 @@ def test_a_window_of_no_frame_is_refused_where_the_rate_is_known(tmp_path):
                                               r"frame \(0.02 s\)"):
         parse_protocol(bad, "p.yaml")
     parse_protocol(_text("touch-windows", {"frame_rate": 50.0, "window_s": 0.011}), "p.yaml")
+
+
+# ----------------------------------------------------------------- every classifier's declared bounds
+#: the at-bound cases of classifiers that run on scene:tiny (the fewest trees, neighbours, kernels,
+#: groups and shapelets a classifier allows)
+RUN_CLASSIFIERS = {("gaus-rf", "n_estimators", "left"), ("zhou-knn", "n_neighbors", "left"),
+                   ("minirocket", "n_kernels", "left"), ("multirocket-hydra", "n_groups", "left"),
+                   ("rdst", "max_shapelets", "left")}
+
+
+#: what a classifier needs stated to be valid at all (the methods a fusion or a selection is over)
+NEEDS_CLASSIFIER = {"fusion": {"parts": ["touch-et-fast", "touch-et"]},
+                    "nested-select": {"candidates": ["touch-et-fast", "touch-et"]}}
+
+
+def _built(name: str):
+    """The estimator the registered classifier ``name`` builds with its defaults (None without its extra)."""
+    extra = CLASSIFIERS.entry(name).tags.get("extra")
+    return None if extra and missing_extra(extra) else CLASSIFIERS.get(name)(random_state=0)
+
+
+def _beyond(bound: float, side: str, integer: bool):
+    step = 1 if integer else 1e-6 * max(1.0, abs(bound))
+    beyond = bound - step if side == "left" else bound + step
+    return int(beyond) if integer else float(beyond)
+
+
+def _classifier_cases():
+    """(classifier, parameter, side, bound, closed, integer) for each bound of each ``Interval`` a
+    registered classifier's estimator declares for a parameter a protocol may set, where the value
+    beyond it is one that no other alternative of the parameter's domain takes."""
+    for name in CLASSIFIERS.names():
+        est = _built(name)
+        if est is None:
+            continue
+        constraints = getattr(est, "_parameter_constraints", {})
+        for param in sorted(set(est.get_params(deep=False)) - {"random_state", "sensor"}):
+            domain = constraints.get(param)
+            for c in domain if isinstance(domain, list) else []:
+                if not isinstance(c, Interval):
+                    continue
+                integer = c.type is Integral
+                for side, bound in (("left", c.left), ("right", c.right)):
+                    if bound is None or not np.isfinite(bound):
+                        continue
+                    beyond = _beyond(bound, side, integer)
+                    if any(make_constraint(o).is_satisfied_by(beyond) for o in domain if o is not c):
+                        continue
+                    yield pytest.param(name, param, side, bound, c.closed in (side, "both"), integer,
+                                       id=f"{name}-{param}-{side}")
+
+
+CLASSIFIER_CASES = list(_classifier_cases())
+
+
+def _classifier_text(name: str, params: dict) -> tuple[str, str]:
+    """A protocol giving classifier ``name`` ``params`` on line 6, and the section it is in."""
+    head = "name: walk\ndataset: scene:tiny\nscheme: loso\nseed: 1\n"
+    params = {**NEEDS_CLASSIFIER.get(name, {}), **params}
+    entry = f"[{{name: {name}, params: {params!r}}}]".replace("'", '"')
+    if CLASSIFIERS.entry(name).tags.get("input") == "captures":
+        return head + "methods:\n  - " + entry[1:-1] + "\n", "methods"
+    return head + "features: [[msd]]\nclassifiers: " + entry + "\n", "classifiers"
+
+
+def test_every_registered_classifier_is_built_and_most_declare_bounds():
+    # with every extra installed (as in CI), each classifier is built; the ones with no numeric bound
+    # a protocol may set: the naive Bayes and LDA have none (worked out from scikit-learn's and
+    # touchbench's declarations), two-stage and nested-select take names and mappings
+    walked = {c.values[0] for c in CLASSIFIER_CASES}
+    if not missing_extra("peers,deep"):
+        assert set(CLASSIFIERS.names()) - walked <= {"two-stage", "nested-select", "jung-naive-bayes", "zhou-lda",
+                                                     "example-nearest-centroid"}
+
+
+@pytest.mark.parametrize("name,param,side,bound,closed,integer", CLASSIFIER_CASES)
+def test_a_classifier_parameter_at_and_beyond_its_bound(tmp_path, name, param, side, bound, closed, integer):
+    text, section = _classifier_text(name, {param: _beyond(bound, side, integer)})
+    with pytest.raises(TouchbenchError) as e:
+        parse_protocol(text, "p.yaml")
+    assert f"{section}[0].params.{param}: " in str(e.value), str(e.value)
+    at = int(bound) if integer else float(bound)
+    text, _ = _classifier_text(name, {param: at})
+    if not closed:
+        with pytest.raises(TouchbenchError, match=f"params.{param}: "):
+            parse_protocol(text, "p.yaml")
+        return
+    protocol = parse_protocol(text, tmp_path / "p.yaml")
+    if (name, param, side) in RUN_CLASSIFIERS:
+        result = run_protocol(protocol, tmp_path / "out", jobs=1, progress=False)
+        assert (result.scores["status"] == "ok").all()

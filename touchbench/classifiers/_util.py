@@ -18,6 +18,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
 from sklearn.ensemble import RandomForestClassifier
 from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import StrOptions
 from sklearn.utils.metaestimators import available_if
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
@@ -229,6 +230,14 @@ class WekaRandomForestClassifier(RandomForestClassifier):
     from Weka's ``RandomForest``: the random streams and the tie-breaking
     between equally good splits, so individual trees differ for one seed.
     """
+
+    #: scikit-learn's domains, ``max_features`` taking ``"weka"`` too (without it the default would
+    #: break the parent's domain, and a protocol's ``max_features`` would not be checked at all)
+    _parameter_constraints = {
+        **RandomForestClassifier._parameter_constraints,
+        "max_features": [c if not isinstance(c, StrOptions) else StrOptions({*c.options, "weka"})
+                         for c in RandomForestClassifier._parameter_constraints["max_features"]],
+    }
 
     def fit(self, X, y, sample_weight=None):
         requested = self.max_features
