@@ -1,15 +1,20 @@
 """Every registered feature set's and classifier's declared numeric parameters, walked at and beyond
-their bounds.
+their bounds (the schemes' and the decision rules' are walked by tests/test_schemes_params_walk.py and
+tests/test_stream_rules_params.py).
 
-For each ``Interval`` of a set's ``_parameter_constraints``: a value beyond a closed bound (one
-less for an integer, a little less for a real) or at an open one is refused when the protocol is
-read, naming the field; a value at a closed bound is accepted. Running every accepted value on
-``scene:tiny`` would take minutes, so a sample runs (``RUN``: the lowest window, step or rate a
-set allows, where a run is the likeliest to break); the rest are validated only.
+For each bound of each ``Interval`` of a component's ``_parameter_constraints`` (a classifier's: those
+of the estimator it builds, for a parameter a protocol may set): a value beyond a closed bound (one
+less or more for an integer, a little for a real) or at an open one is refused when the protocol is
+read, naming the field; a value at a closed bound is accepted, and then computes on ``scene:tiny``
+as a task would: the feature set on the captures, the classifier fitted on three of its people and
+predicting the fourth (the method's path: feature sets, then the estimator built with the sensor;
+every other parameter at the entry's cheap settings). A cap on a count (at most so many trees,
+kernels, epochs, networks) and on the cores used is validated, not run: at the cap a run takes hours.
 """
 
 from __future__ import annotations
 
+import functools
 from numbers import Integral
 
 import numpy as np
@@ -19,14 +24,15 @@ from sklearn.utils._param_validation import Interval, make_constraint
 from touchbench.classifiers import CLASSIFIERS
 from touchbench.core.errors import TouchbenchError
 from touchbench.core.versions import missing_extra
-from touchbench.engine import run_protocol
+from touchbench.classifiers.fitting import fit_features
 from touchbench.features import FEATURES
+from touchbench.methods.base import MethodSpec
+from touchbench.methods.fitting import fit_method
 from touchbench.protocols.loading import parse_protocol
+from touchbench.scenes import generate_scene
 
 #: what a set needs stated to run at all (``raw-window``'s window)
 NEEDS = {"raw-window": {"frames": 4, "shorter": "pad"}}
-#: the at-bound cases run on scene:tiny
-RUN = {("raw-window", "frames", "left"), ("touch-windows", "n_windows", "left"), ("zhou-basic", "upsample", "left")}
 
 
 def _cases():
@@ -61,10 +67,12 @@ def test_a_parameter_at_and_beyond_its_bound(tmp_path, name, param, side, bound,
             parse_protocol(_text(name, {**NEEDS.get(name, {}), param: bound}), "p.yaml")
         return
     at = int(bound) if integer else float(bound)
-    protocol = parse_protocol(_text(name, {**NEEDS.get(name, {}), param: at}), tmp_path / "p.yaml")
-    if (name, param, side) in RUN:
-        result = run_protocol(protocol, tmp_path / "out", jobs=1, progress=False)
-        assert (result.scores["status"] == "ok").all()
+    parse_protocol(_text(name, {**NEEDS.get(name, {}), param: at}), tmp_path / "p.yaml")
+    # accepted: the set computes on scene:tiny's captures as a task computes it (built with the sensor)
+    ds = _tiny()
+    _, X = fit_features([(name, {**NEEDS.get(name, {}), param: at})], list(ds.captures), ds.meta["gesture"].to_numpy(),
+                        ds.sensor)
+    assert X.shape[0] == len(ds.captures) and np.isfinite(X).all()
 
 
 def test_a_window_of_no_frame_is_refused_where_the_rate_is_known(tmp_path):
@@ -77,16 +85,12 @@ def test_a_window_of_no_frame_is_refused_where_the_rate_is_known(tmp_path):
 
 
 # ----------------------------------------------------------------- every classifier's declared bounds
-#: the at-bound cases of classifiers that run on scene:tiny (the fewest trees, neighbours, kernels,
-#: groups and shapelets a classifier allows)
-RUN_CLASSIFIERS = {("gaus-rf", "n_estimators", "left"), ("zhou-knn", "n_neighbors", "left"),
-                   ("minirocket", "n_kernels", "left"), ("multirocket-hydra", "n_groups", "left"),
-                   ("rdst", "max_shapelets", "left")}
-
-
 #: what a classifier needs stated to be valid at all (the methods a fusion or a selection is over)
+#: or for every value of a walked parameter to be valid with it (the rules across fields: a
+#: capture of ``length`` frames holds the CNN's ``L`` windows; LDA shrinks with the lsqr solver)
 NEEDS_CLASSIFIER = {"fusion": {"parts": ["touch-et-fast", "touch-et"]},
-                    "nested-select": {"candidates": ["touch-et-fast", "touch-et"]}}
+                    "nested-select": {"candidates": ["touch-et-fast", "touch-et"]},
+                    "cnn": {"L": 1}, "zhou-lda": {"solver": "lsqr"}}
 
 
 def _built(name: str):
@@ -129,10 +133,11 @@ def _classifier_cases():
 CLASSIFIER_CASES = list(_classifier_cases())
 
 
-def _classifier_text(name: str, params: dict) -> tuple[str, str]:
-    """A protocol giving classifier ``name`` ``params`` on line 6, and the section it is in."""
+def _classifier_text(name: str, params: dict, needs: bool = True) -> tuple[str, str]:
+    """A protocol giving classifier ``name`` ``params`` (over what it ``needs``, :data:`NEEDS_CLASSIFIER`)
+    on line 6, and the section it is in."""
     head = "name: walk\ndataset: scene:tiny\nscheme: loso\nseed: 1\n"
-    params = {**NEEDS_CLASSIFIER.get(name, {}), **params}
+    params = {**(NEEDS_CLASSIFIER.get(name, {}) if needs else {}), **params}
     entry = f"[{{name: {name}, params: {params!r}}}]".replace("'", '"')
     if CLASSIFIERS.entry(name).tags.get("input") == "captures":
         return head + "methods:\n  - " + entry[1:-1] + "\n", "methods"
@@ -161,7 +166,38 @@ def test_a_classifier_parameter_at_and_beyond_its_bound(tmp_path, name, param, s
         with pytest.raises(TouchbenchError, match=f"params.{param}: "):
             parse_protocol(text, "p.yaml")
         return
-    protocol = parse_protocol(text, tmp_path / "p.yaml")
-    if (name, param, side) in RUN_CLASSIFIERS:
-        result = run_protocol(protocol, tmp_path / "out", jobs=1, progress=False)
-        assert (result.scores["status"] == "ok").all()
+    parse_protocol(text, tmp_path / "p.yaml")
+    if integer and side == "right" or param == "n_jobs":
+        return  # a cap on a count (trees, kernels, epochs, networks...) or on the cores used: validated only
+    # accepted: it fits and predicts on scene:tiny as a task would (the method's path: its feature
+    # sets, then the estimator built with the sensor), every other parameter at the entry's cheap
+    # settings; trained on three of tiny's people, tested on the fourth
+    ds, params = _tiny(), {**NEEDS_CLASSIFIER.get(name, {}), **CLASSIFIERS.entry(name).tags.get("cheap_params", {}),
+                           param: at}
+    sets = () if CLASSIFIERS.entry(name).tags.get("input") == "captures" else (("msd", {}),)
+    subjects = ds.meta["subject"].astype(str).to_numpy()
+    train, test = np.flatnonzero(subjects != subjects[-1]), np.flatnonzero(subjects == subjects[-1])
+    fitted = fit_method(MethodSpec(name, sets, name, params), 0, [ds.captures[i] for i in train],
+                        ds.meta["gesture"].to_numpy()[train], subjects[train], sensor=ds.sensor)
+    predicted = fitted.predict([ds.captures[i] for i in test])
+    assert len(predicted) == len(test) and set(map(str, predicted)) <= set(ds.meta["gesture"].astype(str))
+
+
+@functools.cache
+def _tiny():
+    return generate_scene("tiny")
+
+
+@pytest.mark.parametrize("name,params,field,words", [
+    # the CNN cuts a capture of `length` frames into L windows of at least one frame: 29 < 30
+    ("cnn", {"length": 29}, "length", "length 29 leaves no frame per window for L=30"),
+    # scikit-learn's LDA takes shrinkage with the lsqr or eigen solver only; zhou-lda's is svd
+    ("zhou-lda", {"shrinkage": 0.5}, "shrinkage", "shrinkage needs solver: lsqr or eigen"),
+])
+def test_a_rule_across_fields_is_checked_when_the_protocol_is_read(name, params, field, words):
+    text, section = _classifier_text(name, params, needs=False)
+    with pytest.raises(TouchbenchError) as e:
+        parse_protocol(text, "p.yaml")
+    assert f"p.yaml:6: {section}[0].params.{field}: " in str(e.value) and words in str(e.value), str(e.value)
+    fixed = {"cnn": {"length": 30}, "zhou-lda": {"shrinkage": 0.5, "solver": "lsqr"}}[name]
+    parse_protocol(_classifier_text(name, fixed, needs=False)[0], "p.yaml")

@@ -133,7 +133,7 @@ from ._util import (
     sensor_frames,
     torch_available,
 )
-from .base import CLASSIFIERS, check_declared
+from .base import CLASSIFIERS, ParamError, check_declared
 from .torch_fit import INSTALL_HINT, TORCH_JOBS, Threads, import_torch, softmax_batches, train, validation_split
 from .torch_state import load_weights, weights_as_arrays
 
@@ -442,10 +442,18 @@ DEFAULTS = {
 }
 
 
+def check_windows(params: dict) -> None:
+    """The rule across fields: a capture cut or padded to ``length`` frames holds ``L`` windows of at
+    least one frame each (``length`` is set by the run engine unless a protocol sets it)."""
+    length, L = params.get("length"), params.get("L", 30)
+    if isinstance(length, int) and isinstance(L, int) and not isinstance(length, bool) and length < L:
+        raise ParamError(("length",), f"length {length} leaves no frame per window for L={L}: at least L frames")
+
+
 @CLASSIFIERS.register(
     "cnn",
     description="raw-frame CNN (3 conv blocks + FC 256, softmax) on H x W x F windows, F = floor(frames/L), L = 30",
-    source=SOURCE, defaults=DEFAULTS, extra="deep", input="captures",
+    source=SOURCE, defaults=DEFAULTS, extra="deep", input="captures", check_params=check_windows,
     cheap_params=dict(max_epochs=3, channels=(4, 8, 8), hidden_units=16), stops_on_test=True,
 )
 def cnn(random_state=None, sensor=None, **params):

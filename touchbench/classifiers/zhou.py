@@ -67,7 +67,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from sklearn.utils._param_validation import Interval
 
 from ._util import MAX_SEED, DelegatingClassifier, SampleStandardScaler, build
-from .base import CLASSIFIERS
+from .base import CLASSIFIERS, ParamError
 
 SOURCE = "Zhou et al. 2017, section 4.2; MATLAB Classification Learner R2017a presets"
 
@@ -268,8 +268,16 @@ def zhou_tree(random_state=None, **params):
     return build(DecisionTreeClassifier, TREE_DEFAULTS, random_state, params, name="zhou-tree")
 
 
+def check_lda(params: dict) -> None:
+    """scikit-learn's rule across fields, which its declared domains cannot say: ``shrinkage`` only
+    with the ``lsqr`` or ``eigen`` solver (the ``svd`` solver refuses it when fitted)."""
+    if params.get("shrinkage") is not None and params.get("solver", "svd") == "svd":
+        raise ParamError(("shrinkage",), "shrinkage needs solver: lsqr or eigen (the svd solver, zhou-lda's, "
+                                         "takes none)")
+
+
 @CLASSIFIERS.register("zhou-lda", description="MATLAB Linear Discriminant: pooled full covariance",
-                      source=SOURCE, defaults=LDA_DEFAULTS, extra=None)
+                      source=SOURCE, defaults=LDA_DEFAULTS, extra=None, check_params=check_lda)
 def zhou_lda(random_state=None, **params):
     return build(LinearDiscriminantAnalysis, LDA_DEFAULTS, random_state, params, name="zhou-lda")
 
