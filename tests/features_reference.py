@@ -14,6 +14,7 @@ from touchbench.features.contact import NOISE_UNITS, ContactEvidence, noise_floo
 from touchbench.features.numerics import moments
 from touchbench.features.touch import (AC_LAGS, BANDS, BASELINE_Q, CELL_RANKS, MIN_FRAMES, QUANTS, THRESHOLDS, CellRhythm,
                                        ContactMotion, TouchRhythm, _band_name)
+from touchbench.features.touch_windows import TouchWindows
 
 
 _EPS = 1e-12
@@ -326,3 +327,21 @@ class RefContactEvidence(ContactEvidence):
         cols += [(flat[:, -1] - rest) / noise, (cell_mean.max(axis=1) - rest) / noise,
                  tstd.mean(axis=1) / noise, tstd.max(axis=1) / noise]
         return np.column_stack(cols)
+
+
+REF_SETS = {"touch-rhythm": RefTouchRhythm, "cell-rhythm": RefCellRhythm, "contact-motion": RefContactMotion}
+
+
+class RefTouchWindows(TouchWindows):
+    """touch-windows as it was computed before it was made faster: each window cut out and given to
+    each inner set (here their reference computations) on its own, one window at a time."""
+
+    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
+        starts, length = self.window_starts(stack.shape[1])
+        inner = [REF_SETS[name](frame_rate=self._fs(), value_range=self._range()) for name in self.sets]
+        per_window = []
+        for s in starts:
+            part = stack[:, s:s + length]
+            per_window.append(np.hstack([fs._transform_batch(part) for fs in inner]))
+        W = np.stack(per_window)  # (windows, N, D)
+        return np.hstack([W.mean(axis=0), W.std(axis=0)])
