@@ -196,6 +196,14 @@ class _TouchBase(FeatureSet):
         self._fs()
         self._range()
 
+    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
+        return self._from_pressure(stack.shape[2:], *_pressure(stack))
+
+    def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
+        """The features from :func:`_pressure`'s ``(s, base, c)`` of captures of ``grid`` (so a caller
+        computing several sets on the same captures, ``touch-windows``, computes the pressure once)."""
+        raise NotImplementedError
+
 
 def pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(N, T, H, W)`` -> pressure above baseline ``(N, T', H*W)`` float64 and baseline ``(N, H*W)``.
@@ -370,10 +378,8 @@ class TouchRhythm(_TouchBase):
     def n_features(self, grid: tuple[int, int]) -> int:
         return len(SERIES) * len(_STAT_NAMES) + 7 + 3 * (len(CELL_RANKS) + 1) + 2
 
-    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
-        n, _, h, w = stack.shape
-        s, base, c = _pressure(stack)
-        t = s.shape[1]
+    def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
+        (n, t, _), (h, w) = s.shape, grid
         P = c.sum(axis=2)
         ps = s.sum(axis=2)
         M = c.max(axis=2)
@@ -450,10 +456,8 @@ class CellRhythm(_TouchBase):
                 + ["cell_fcent", "cell_fpeak", "cell_fpeak_top", "coherence", "cell_pow_entropy", "cell_mcr",
                    "ncorr_h", "ncorr_v", "blobs_mean", "blobs_max", "blob_cells_mean"])
 
-    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
-        n, _, h, w = stack.shape
-        s, _ = pressure(stack)
-        t = s.shape[1]
+    def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
+        (n, t, _), (h, w) = s.shape, grid
         fs = self._fs()
         cells = np.swapaxes(s, 1, 2)  # (N, C, T)
         p, f = spectrum(cells, fs)  # (N, C, F)
@@ -536,10 +540,8 @@ class ContactMotion(_TouchBase):
             names += [f"{tag}_act_fpeak", f"{tag}_act_fcent"]
         return names + ["logpeak_robust"]
 
-    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
-        n, _, h, w = stack.shape
-        s, _ = pressure(stack)
-        t = s.shape[1]
+    def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
+        (n, t, _), (h, w) = s.shape, grid
         peak = np.sort(s.max(axis=2), axis=1)[:, int(round(0.95 * (t - 1)))]
         # every threshold at once: axis 1 of the arrays below is the threshold
         thr = np.maximum(np.multiply.outer(peak, THRESHOLDS), self._floor(self.CONTACT_FLOOR))
