@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from touchbench.features.contact import NOISE_UNITS, ContactEvidence, noise_floor
+from touchbench.features.contact import MAD_TO_SD, NOISE_UNITS, QUIET_SHARE, ContactEvidence
 from touchbench.features.numerics import moments
 from touchbench.features.touch import (AC_LAGS, BANDS, BASELINE_Q, CELL_RANKS, MIN_FRAMES, QUANTS, THRESHOLDS, CellRhythm,
                                        ContactMotion, TouchRhythm, _band_name)
@@ -307,6 +307,19 @@ def _local_bands(p: np.ndarray, f: np.ndarray, bands) -> dict:
     return {"fpeak": fpeak, "fcent": fcent, "bands": out}
 
 
+
+
+def noise_floor(u: np.ndarray, floor: float) -> tuple[np.ndarray, np.ndarray]:
+    """Rest level and noise floor ``(N,)`` of heights ``u`` ``(N, T, C)``: every cell's median and MAD,
+    then the quiet cells' median level and 1.4826 x their median MAD, at least ``floor``."""
+    n, _, c = u.shape
+    med = np.median(u, axis=1)
+    mad = np.median(np.abs(u - med[:, None, :]), axis=1)
+    q = max(1, int(np.floor(QUIET_SHARE * c)))
+    quiet = np.argsort(med, axis=1, kind="stable")[:, :q]
+    rest = np.median(np.take_along_axis(med, quiet, axis=1), axis=1)
+    noise = MAD_TO_SD * np.median(np.take_along_axis(mad, quiet, axis=1), axis=1)
+    return rest, np.maximum(noise, floor)
 
 
 class RefContactEvidence(ContactEvidence):

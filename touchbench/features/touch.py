@@ -240,11 +240,16 @@ def _gradient(x: np.ndarray) -> np.ndarray:
 
 def spectrum(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
     """Power spectrum (DC removed) of the mean-removed, Hann-windowed series along axis -1; frequencies."""
-    t = x.shape[-1]
-    hann, f = _hann_freqs(t, float(fs))
-    d = x - x.mean(axis=-1, keepdims=True)
-    d[x.max(axis=-1) == x.min(axis=-1)] = 0.0  # a constant series has no spectrum (exactly)
-    p = np.abs(np.fft.rfft(d * hann, axis=-1)) ** 2
+    return centred_spectrum(x - x.mean(axis=-1, keepdims=True), x.max(axis=-1) == x.min(axis=-1), fs)
+
+
+def centred_spectrum(d: np.ndarray, const: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`spectrum` of series whose mean is removed already (``d``), ``const`` marking the
+    constant ones (they have no spectrum, exactly)."""
+    hann, f = _hann_freqs(d.shape[-1], float(fs))
+    dw = d * hann
+    dw[const] = 0.0
+    p = np.abs(np.fft.rfft(dw, axis=-1)) ** 2
     return p[..., 1:], f
 
 
@@ -460,30 +465,32 @@ class CellRhythm(_TouchBase):
         (n, t, _), (h, w) = s.shape, grid
         fs = self._fs()
         cells = np.swapaxes(s, 1, 2)  # (N, C, T)
-        p, f = spectrum(cells, fs)  # (N, C, F)
+        d = cells - cells.mean(axis=2, keepdims=True)
+        p, f = centred_spectrum(d, cells.max(axis=2) == cells.min(axis=2), fs)  # (N, C, F)
         pw = p.sum(axis=2)  # (N, C)
         tot = pw.sum(axis=1)
         none = tot <= 0
-        wc = np.where(none[:, None], 0.0, pw / np.where(none, 1.0, tot)[:, None])
-        cellpow = np.where(pw > 0, pw, 1.0)
-        feats = list(np.einsum("ncb,nc->bn", band_sums(p, f, BANDS), wc / cellpow))
-        fc = np.einsum("ncf,f->nc", p, f) / cellpow
-        feats.append((fc * wc).sum(axis=1))
+        safe = np.where(none, 1.0, tot)
+        wc = np.where(none[:, None], 0.0, pw / safe[:, None])
+        # a cell's band fraction weighted by its share of the power is its band power over the total:
+        # the bands and centroid of the cells' summed spectrum
+        pooled = p.sum(axis=1)
+        feats = list(np.where(none, 0.0, band_sums(pooled, f, BANDS).T / safe))
+        feats.append(np.where(none, 0.0, pooled @ f / safe))
         fp = f[np.argmax(p, axis=2)] if p.shape[2] else np.zeros(pw.shape)
         feats.append((fp * wc).sum(axis=1))
         feats.append(np.where(none, 0.0, fp[np.arange(n), np.argmax(pw, axis=1)]))
-        d = cells - cells.mean(axis=2, keepdims=True)
         psum, _ = spectrum(d.sum(axis=1), fs)
-        feats.append(np.where(none, 0.0, psum.sum(axis=1) / np.where(none, 1.0, tot)))
+        feats.append(np.where(none, 0.0, psum.sum(axis=1) / safe))
         feats.append(-(wc * np.log(np.where(wc > 0, wc, 1.0))).sum(axis=1))
         above = d > 0
         mcr = (above[:, :, 1:] != above[:, :, :-1]).mean(axis=2)
         feats.append((mcr * wc).sum(axis=1))
         g = d.reshape(n, h, w, t)
-        sd = np.sqrt((g * g).sum(axis=3))
+        sd = np.sqrt(np.einsum("nhwt,nhwt->nhw", g, g))
         for a, b in (((slice(None), slice(None), slice(1, None)), (slice(None), slice(None), slice(None, -1))),
                      ((slice(None), slice(1, None), slice(None)), (slice(None), slice(None, -1), slice(None)))):
-            num = (g[a] * g[b]).sum(axis=3)
+            num = np.einsum("nhwt,nhwt->nhw", g[a], g[b])
             wgt = sd[a] * sd[b]
             ok = wgt > 0
             corr = np.where(ok, num / np.where(ok, wgt, 1.0), 0.0)
