@@ -191,7 +191,8 @@ class ContactEvidence(FullScaleSet):
         frame_max = u.max(axis=2)
         for i in range(len(NOISE_UNITS)):
             cols += [above[:, i] / (t * c), (frame_max > thr[:, i, None]).mean(axis=1), (cell_mean > thr[:, i, None]).mean(axis=1)]
-        tstd = u.std(axis=1)
+        dev = u - cell_mean[:, None, :]
+        tstd = np.sqrt(np.einsum("ntc,ntc->nc", dev, dev) / t)  # population standard deviation
         cols += [(flat[:, -1] - rest) / noise, (cell_mean.max(axis=1) - rest) / noise,
                  tstd.mean(axis=1) / noise, tstd.max(axis=1) / noise]
         return np.column_stack(cols)
@@ -220,12 +221,12 @@ def noise_floor(u: np.ndarray, floor: float) -> tuple[np.ndarray, np.ndarray]:
     level and 1.4826 x their median MAD, at least ``floor`` (module docstring). Only the quiet
     cells' MADs are computed."""
     c = u.shape[2]
-    cells = np.ascontiguousarray(np.swapaxes(u, 1, 2))  # (N, C, T), scratch for the partitions
-    med = _median_last(cells)
+    med = _median_last(np.ascontiguousarray(np.swapaxes(u, 1, 2)))
     q = max(1, int(np.floor(QUIET_SHARE * c)))
     quiet = np.argsort(med, axis=1, kind="stable")[:, :q]
     qmed = np.take_along_axis(med, quiet, axis=1)
-    dev = np.abs(np.take_along_axis(cells, quiet[:, :, None], axis=1) - qmed[:, :, None])
+    dev = np.abs(np.take_along_axis(u, quiet[:, None, :], axis=2) - qmed[:, None, :])  # (N, T, quiet)
+    dev = np.ascontiguousarray(np.swapaxes(dev, 1, 2))
     rest = np.median(qmed, axis=1)
     noise = MAD_TO_SD * np.median(_median_last(dev), axis=1)
     return rest, np.maximum(noise, floor)
@@ -233,10 +234,9 @@ def noise_floor(u: np.ndarray, floor: float) -> tuple[np.ndarray, np.ndarray]:
 
 def _median_last(x: np.ndarray) -> np.ndarray:
     """``numpy.median`` along the last axis (the mean of the two middle values of an even count),
-    partitioning ``x`` in place."""
+    partitioning ``x`` in place (once: a partition at two ranks costs twice as much)."""
     m = x.shape[-1] // 2
+    x.partition(m, axis=-1)
     if x.shape[-1] % 2:
-        x.partition(m, axis=-1)
         return x[..., m].copy()
-    x.partition([m - 1, m], axis=-1)
-    return (x[..., m - 1] + x[..., m]) / 2.0
+    return (x[..., :m].max(axis=-1) + x[..., m]) / 2.0  # the largest below the middle: the other middle value
