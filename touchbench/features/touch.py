@@ -218,7 +218,7 @@ def pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`pressure`, plus the padded values themselves ``(N, T', H*W)`` float64."""
     n, t, h, w = stack.shape
-    c = np.asarray(stack, dtype=np.float64).reshape(n, t, h * w)
+    c = np.ascontiguousarray(stack, dtype=np.float64).reshape(n, t, h * w)  # C order: sums never depend on the layout
     if t < MIN_FRAMES:
         c = np.concatenate([c, np.repeat(c[:, -1:], MIN_FRAMES - t, axis=1)], axis=1)
         t = MIN_FRAMES
@@ -458,7 +458,7 @@ class CellRhythm(_TouchBase):
         # the bands and centroid of the cells' summed spectrum
         pooled = p.sum(axis=1)
         feats = list(np.where(none, 0.0, band_sums(pooled, f, BANDS).T / safe))
-        feats.append(np.where(none, 0.0, pooled @ f / safe))
+        feats.append(np.where(none, 0.0, np.einsum("nf,f->n", pooled, f) / safe))
         fp = f[np.argmax(p, axis=2)] if p.shape[2] else np.zeros(pw.shape)
         feats.append((fp * wc).sum(axis=1))
         feats.append(np.where(none, 0.0, fp[np.arange(n), np.argmax(pw, axis=1)]))

@@ -121,7 +121,8 @@ class TouchWindows(_TouchBase):
         rows = []
         for k in range(0, len(starts), group):
             frames = starts[k:k + group, None] + np.arange(length)  # (windows, L)
-            pr = _pressure(stack[:, frames].reshape(-1, length, h, w))  # (N * windows, ...), capture-major
+            # (N * windows, ...), capture-major, C order (numpy's sums follow the memory order)
+            pr = _pressure(np.ascontiguousarray(stack[:, frames]).reshape(-1, length, h, w))
             rows.append(np.hstack([fs._from_pressure((h, w), *pr) for fs in inner]).reshape(n, len(frames), -1))
-        per_window = np.concatenate(rows, axis=1)  # (N, windows, D)
-        return np.hstack([per_window.mean(axis=1), per_window.std(axis=1)])
+        per_window = np.ascontiguousarray(np.concatenate(rows, axis=1).transpose(1, 0, 2))  # (windows, N, D)
+        return np.hstack([per_window.mean(axis=0), per_window.std(axis=0)])
