@@ -534,7 +534,8 @@ class ContactMotion(_TouchBase):
         peak = np.sort(s.max(axis=2), axis=1)[:, int(round(0.95 * (t - 1)))]
         # every threshold at once: axis 1 of the arrays below is the threshold
         thr = np.maximum(np.multiply.outer(peak, THRESHOLDS), self._floor(self.CONTACT_FLOOR))
-        wt = np.maximum(s[:, None] - thr[:, :, None, None], 0.0)  # (N, R, T, C)
+        wt = np.subtract(s[:, None], thr[:, :, None, None])  # (N, R, T, C)
+        np.maximum(wt, 0.0, out=wt)
         ws = wt.sum(axis=3)
         act = ws > 0
         cyx = np.einsum("nrtc,kc->nrkt", wt, moment_coords(h, w)[:2]) / np.where(act, ws, 1.0)[:, :, None]
