@@ -3,6 +3,13 @@ tsfresh's MinimalFCParameters on the same 64 cell series as a reference.
 
     python benchmarks/bench_features.py [--runs 5] [--tsfresh-runs 3]
     python benchmarks/bench_features.py --dataset haart-sample --runs 1 --no-tsfresh   # seconds
+    python benchmarks/bench_features.py --no-tsfresh --sets touch-rhythm --baseline /tmp/base   # before / after
+
+``--baseline DIR``: a checkout of touchbench (``git worktree add /tmp/base
+REV``) whose feature sets of the same names are timed in the same run,
+each run of a set alternating with the baseline's, so both figures see
+the same load; its package is imported under another name
+(``touchbench_baseline``), the captures are this checkout's.
 
 A set whose parameters must be stated gets the value that fits the data
 (``raw-window``: ``frames`` = the shortest capture, so no capture is padded).
@@ -69,10 +76,41 @@ def time_runs(fn, runs: int) -> tuple[list[float], list[float]]:
     return wall, cpu
 
 
+def time_beside(fs, old, caps, runs: int) -> tuple[list[float], list[float], list[float], list[float]]:
+    """Wall and CPU seconds of ``fs`` and of the baseline's ``old``, their runs alternating (so both
+    see the same load): ``(wall, cpu, baseline wall, baseline cpu)``."""
+    out: tuple[list[float], ...] = ([], [], [], [])
+    for _ in range(runs):
+        for runner, k in ((old, 2), (fs, 0)):
+            w, c = time_runs(lambda: runner.fit_transform(caps), 1)
+            out[k].extend(w)
+            out[k + 1].extend(c)
+    return out
+
+
 def floor_us(caps, runs: int) -> float:
     """Median CPU microseconds per capture of one numpy pass over its frames (the floor)."""
     _, cpu = time_runs(lambda: [c.astype(np.float64).sum(axis=(1, 2)) for c in caps], max(runs, 3))
     return statistics.median(cpu) / len(caps) * 1e6
+
+
+def baseline_features(tree: str):
+    """The feature registry of the touchbench package in the checkout ``tree``, imported as
+    ``touchbench_baseline`` (a copy in a temporary folder), filled from its own modules only."""
+    import importlib
+    import shutil
+    import tempfile
+    from functools import partial
+
+    from touchbench.core.registry import import_submodules
+
+    dest = tempfile.mkdtemp(prefix="bench-baseline-")
+    shutil.copytree(os.path.join(tree, "touchbench"), os.path.join(dest, "touchbench_baseline"),
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    sys.path.insert(0, dest)
+    registry = importlib.import_module("touchbench_baseline.features.base").FEATURES
+    registry._loader, registry._loaded, registry.plugins = partial(import_submodules, "touchbench_baseline.features"), False, False
+    return registry
 
 
 def tsfresh_frame(captures):
@@ -98,6 +136,7 @@ def main(argv=None) -> int:
     ap.add_argument("--sets", nargs="*", help="feature sets (default: all registered)")
     ap.add_argument("--cpu", type=int, default=None, help="CPU to pin to (default: the last allowed one)")
     ap.add_argument("--json", help="also write the figures to this JSON file")
+    ap.add_argument("--baseline", help="a checkout whose sets of the same names are timed beside these (alternating runs)")
     args = ap.parse_args(argv)
 
     if hasattr(os, "sched_setaffinity"):
@@ -123,10 +162,23 @@ def main(argv=None) -> int:
           f"load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     print(f"\n{'set':14s} {'size':>6s} {'median us/cap':>14s} {'min us/cap':>11s} {'cpu us/cap':>11s} {'x floor':>8s} "
           f"{'s for all':>10s}")
+    base = baseline_features(args.baseline) if args.baseline else None
     for name in names:
         fs = FEATURES.create(name, sensor=ds.sensor, **stated_params(name, caps))
         fs.fit_transform(caps[:20])  # warm-up (imports, caches)
-        wall, cpu = time_runs(lambda: fs.fit_transform(caps), args.runs)
+        if base is None:
+            wall, cpu = time_runs(lambda: fs.fit_transform(caps), args.runs)
+        else:
+            old = base.create(name, sensor=ds.sensor, **stated_params(name, caps))
+            old.fit_transform(caps[:20])
+            wall, cpu, bwall, bcpu = time_beside(fs, old, caps, args.runs)
+            bmed = statistics.median(bcpu) / n * 1e6
+            rows[f"{name} (baseline)"] = {"median_cpu_us_per_capture": bmed, "cpu_over_floor": bmed / floor,
+                                          "median_us_per_capture": statistics.median(bwall) / n * 1e6,
+                                          "min_us_per_capture": min(bwall) / n * 1e6}
+            b = rows[f"{name} (baseline)"]
+            print(f"{name + ' (base)':14s} {'':6s} {b['median_us_per_capture']:14.1f} {b['min_us_per_capture']:11.1f} "
+                  f"{bmed:11.1f} {b['cpu_over_floor']:8.1f}", flush=True)
         med = statistics.median(wall)
         rows[name] = {
             "size": fs.n_features(ds.sensor.grid),
@@ -138,8 +190,11 @@ def main(argv=None) -> int:
         }
         r = rows[name]
         r["cpu_over_floor"] = r["median_cpu_us_per_capture"] / floor
+        speedup = (f"   {rows[name + ' (baseline)']['median_cpu_us_per_capture'] / r['median_cpu_us_per_capture']:.2f} x "
+                   "faster (CPU)" if base is not None else "")
         print(f"{name:14s} {r['size']:6d} {r['median_us_per_capture']:14.1f} {r['min_us_per_capture']:11.1f} "
-              f"{r['median_cpu_us_per_capture']:11.1f} {r['cpu_over_floor']:8.1f} {med:10.2f}", flush=True)
+              f"{r['median_cpu_us_per_capture']:11.1f} {r['cpu_over_floor']:8.1f} {med:10.2f}{speedup}", flush=True)
+    print(f"load average after the sets: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     rss_features = peak_rss_mb()
 
     result = {"dataset": args.dataset, "captures": n, "runs": args.runs, "sets": rows, "peak_rss_mb_features": rss_features,

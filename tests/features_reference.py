@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from touchbench.features.contact import NOISE_UNITS, ContactEvidence, noise_floor
+from touchbench.features.contact import MAD_TO_SD, NOISE_UNITS, QUIET_SHARE, ContactEvidence
 from touchbench.features.numerics import moments
 from touchbench.features.touch import (AC_LAGS, BANDS, BASELINE_Q, CELL_RANKS, MIN_FRAMES, QUANTS, THRESHOLDS, CellRhythm,
                                        ContactMotion, TouchRhythm, _band_name)
+from touchbench.features.touch_windows import TouchWindows
 
 
 _EPS = 1e-12
@@ -308,6 +309,19 @@ def _local_bands(p: np.ndarray, f: np.ndarray, bands) -> dict:
 
 
 
+def noise_floor(u: np.ndarray, floor: float) -> tuple[np.ndarray, np.ndarray]:
+    """Rest level and noise floor ``(N,)`` of heights ``u`` ``(N, T, C)``: every cell's median and MAD,
+    then the quiet cells' median level and 1.4826 x their median MAD, at least ``floor``."""
+    n, _, c = u.shape
+    med = np.median(u, axis=1)
+    mad = np.median(np.abs(u - med[:, None, :]), axis=1)
+    q = max(1, int(np.floor(QUIET_SHARE * c)))
+    quiet = np.argsort(med, axis=1, kind="stable")[:, :q]
+    rest = np.median(np.take_along_axis(med, quiet, axis=1), axis=1)
+    noise = MAD_TO_SD * np.median(np.take_along_axis(mad, quiet, axis=1), axis=1)
+    return rest, np.maximum(noise, floor)
+
+
 class RefContactEvidence(ContactEvidence):
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         u, full = self._heights(stack)
@@ -326,3 +340,21 @@ class RefContactEvidence(ContactEvidence):
         cols += [(flat[:, -1] - rest) / noise, (cell_mean.max(axis=1) - rest) / noise,
                  tstd.mean(axis=1) / noise, tstd.max(axis=1) / noise]
         return np.column_stack(cols)
+
+
+REF_SETS = {"touch-rhythm": RefTouchRhythm, "cell-rhythm": RefCellRhythm, "contact-motion": RefContactMotion}
+
+
+class RefTouchWindows(TouchWindows):
+    """touch-windows as it was computed before it was made faster: each window cut out and given to
+    each inner set (here their reference computations) on its own, one window at a time."""
+
+    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
+        starts, length = self.window_starts(stack.shape[1])
+        inner = [REF_SETS[name](frame_rate=self._fs(), value_range=self._range()) for name in self.sets]
+        per_window = []
+        for s in starts:
+            part = stack[:, s:s + length]
+            per_window.append(np.hstack([fs._transform_batch(part) for fs in inner]))
+        W = np.stack(per_window)  # (windows, N, D)
+        return np.hstack([W.mean(axis=0), W.std(axis=0)])

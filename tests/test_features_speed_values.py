@@ -1,7 +1,8 @@
 """The faster feature sets give the values of their slower reference computation.
 
-touch-rhythm, cell-rhythm, contact-motion and contact-evidence against the
-one-statistic-at-a-time code they replaced (tests/features_reference.py);
+touch-rhythm, cell-rhythm, contact-motion, contact-evidence and touch-windows
+against the one-statistic-at-a-time (one-window-at-a-time) code they replaced
+(tests/features_reference.py);
 the radix sort of 8- and 16-bit readings (msd, sd's median, contact-evidence's
 levels) against numpy's default sort and ``numpy.median``. On real HAART
 captures (the real-data pattern: fails under CI=true without the data), on
@@ -14,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from features_reference import RefCellRhythm, RefContactEvidence, RefContactMotion, RefTouchRhythm
+from features_reference import RefCellRhythm, RefContactEvidence, RefContactMotion, RefTouchRhythm, RefTouchWindows
 from numpy.testing import assert_allclose, assert_array_equal
 
 from touchbench.datasets.model import SensorSpec
@@ -23,6 +24,7 @@ from touchbench.features.contact import ContactEvidence
 from touchbench.features.gaus_sd import median_rows
 from touchbench.features.numerics import sort_last
 from touchbench.features.touch import CellRhythm, ContactMotion, TouchRhythm
+from touchbench.features.touch_windows import TouchWindows
 
 PAIRS = [(TouchRhythm, RefTouchRhythm), (CellRhythm, RefCellRhythm), (ContactMotion, RefContactMotion),
          (ContactEvidence, RefContactEvidence)]
@@ -99,13 +101,35 @@ def test_msd_and_sd_unchanged_by_the_sort(real_haart):
     assert_array_equal(x[:, 3:6], np.moveaxis(q, 0, 1))
 
 
-def test_touch_windows_agree_with_the_reference_sets(real_haart):
-    """touch-windows: mean and sd over its windows of the three reference sets (ties in a spectrum's
-    peak among them: the fast code must find the same peak)."""
-    caps = real_haart.captures[:20]
-    tw = FEATURES.create("touch-windows", sensor=real_haart.sensor).fit(caps)
-    starts, length = tw.window_starts(caps[0].shape[0])
-    refs = [cls(sensor=real_haart.sensor) for cls in (RefTouchRhythm, RefCellRhythm, RefContactMotion)]
-    per_window = np.stack([np.hstack([r.fit(w).transform(w) for r in refs])
-                           for w in ([c[s:s + length] for c in caps] for s in starts)])
-    assert_allclose(tw.transform(caps), np.hstack([per_window.mean(axis=0), per_window.std(axis=0)]), **TOL)
+@pytest.mark.parametrize("caps_at", [slice(0, 20), slice(None, None, 83)])
+def test_touch_windows_agree_with_the_reference_on_real_haart(real_haart, caps_at):
+    """touch-windows against its window-at-a-time reference over the reference sets (the first 20
+    captures hold ties in a spectrum's peak: the fast code must find the same peak)."""
+    caps = real_haart.captures[caps_at]
+    fast = TouchWindows(sensor=real_haart.sensor).fit(caps).transform(caps)
+    ref = RefTouchWindows(sensor=real_haart.sensor).fit(caps).transform(caps)
+    assert_allclose(fast, ref, **TOL)
+
+
+TINY = SensorSpec(name="tiny", grid=(3, 4), frame_rate=12.0, value_range=(0.0, 255.0))
+
+
+@pytest.mark.parametrize("t, grid, dtype, sensor, params", [
+    # captures shorter than one window: every window is the whole capture
+    (64, (8, 8), np.uint16, SensorSpec(name="haart", grid=(8, 8), frame_rate=54.0), {}),
+    # windows of 6 frames, shorter than the sets need (padded), on a flipped sensor
+    (40, (5, 7), np.float64, FLIPPED, {"n_windows": 3, "window_s": 0.3}),
+    # two-frame windows of a large skin, two of the sets in another order
+    (10, SKIN.grid, np.uint8, SKIN, {"window_s": 0.2, "sets": ("contact-motion", "touch-rhythm")}),
+    # one-frame windows, seven of them overlapping
+    (9, (4, 6), np.float32, TINY, {"n_windows": 7, "window_s": 1 / 12}),
+    # one window; a capture of one frame
+    (30, (4, 6), np.int16, TINY, {"n_windows": 1, "window_s": 1.0, "sets": ("cell-rhythm",)}),
+    (1, (3, 4), np.int16, TINY, {}),
+])
+def test_touch_windows_agree_with_the_reference_on_synthetic_captures(t, grid, dtype, sensor, params):
+    caps = synthetic(t, t, grid, dtype)
+    fast = TouchWindows(sensor=sensor, **params).fit(caps).transform(caps)
+    ref = RefTouchWindows(sensor=sensor, **params).fit(caps).transform(caps)
+    assert fast.shape == ref.shape
+    assert_allclose(fast, ref, **TOL)

@@ -184,11 +184,15 @@ class ContactEvidence(FullScaleSet):
                  flat[:, -1], cell_mean.min(axis=1), cell_mean.max(axis=1)]
         rest, noise = noise_floor(u, self.min_noise * full)
         cols = [v / full for v in level]
-        for k in NOISE_UNITS:
-            above = u > (rest + k * noise)[:, None, None]
-            cols += [above.reshape(n, -1).mean(axis=1), above.any(axis=2).mean(axis=1),
-                     (cell_mean > (rest + k * noise)[:, None]).mean(axis=1)]
-        tstd = u.std(axis=1)
+        thr = rest[:, None] + np.multiply.outer(noise, NOISE_UNITS)  # (N, units)
+        # readings above a threshold counted in the sorted readings; a frame has one above it when its
+        # highest reading is
+        above = t * c - np.stack([np.searchsorted(row, x, side="right") for row, x in zip(flat, thr)])
+        frame_max = u.max(axis=2)
+        for i in range(len(NOISE_UNITS)):
+            cols += [above[:, i] / (t * c), (frame_max > thr[:, i, None]).mean(axis=1), (cell_mean > thr[:, i, None]).mean(axis=1)]
+        dev = u - cell_mean[:, None, :]
+        tstd = np.sqrt(np.einsum("ntc,ntc->nc", dev, dev) / t)  # population standard deviation
         cols += [(flat[:, -1] - rest) / noise, (cell_mean.max(axis=1) - rest) / noise,
                  tstd.mean(axis=1) / noise, tstd.max(axis=1) / noise]
         return np.column_stack(cols)
@@ -214,12 +218,25 @@ def sorted_heights(stack: np.ndarray, value_range: tuple[float, float], flipped:
 
 def noise_floor(u: np.ndarray, floor: float) -> tuple[np.ndarray, np.ndarray]:
     """Rest level and noise floor ``(N,)`` of heights ``u`` ``(N, T, C)``: the quiet cells' median
-    level and 1.4826 x their median MAD, at least ``floor`` (module docstring)."""
-    n, _, c = u.shape
-    med = np.median(u, axis=1)
-    mad = np.median(np.abs(u - med[:, None, :]), axis=1)
+    level and 1.4826 x their median MAD, at least ``floor`` (module docstring). Only the quiet
+    cells' MADs are computed."""
+    c = u.shape[2]
+    med = _median_last(np.ascontiguousarray(np.swapaxes(u, 1, 2)))
     q = max(1, int(np.floor(QUIET_SHARE * c)))
     quiet = np.argsort(med, axis=1, kind="stable")[:, :q]
-    rest = np.median(np.take_along_axis(med, quiet, axis=1), axis=1)
-    noise = MAD_TO_SD * np.median(np.take_along_axis(mad, quiet, axis=1), axis=1)
+    qmed = np.take_along_axis(med, quiet, axis=1)
+    dev = np.abs(np.take_along_axis(u, quiet[:, None, :], axis=2) - qmed[:, None, :])  # (N, T, quiet)
+    dev = np.ascontiguousarray(np.swapaxes(dev, 1, 2))
+    rest = np.median(qmed, axis=1)
+    noise = MAD_TO_SD * np.median(_median_last(dev), axis=1)
     return rest, np.maximum(noise, floor)
+
+
+def _median_last(x: np.ndarray) -> np.ndarray:
+    """``numpy.median`` along the last axis (the mean of the two middle values of an even count),
+    partitioning ``x`` in place (once: a partition at two ranks costs twice as much)."""
+    m = x.shape[-1] // 2
+    x.partition(m, axis=-1)
+    if x.shape[-1] % 2:
+        return x[..., m].copy()
+    return (x[..., :m].max(axis=-1) + x[..., m]) / 2.0  # the largest below the middle: the other middle value

@@ -29,6 +29,8 @@ here):
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 SKEW_CONSTANT = 0.0
@@ -144,3 +146,39 @@ def weighted_centroid(frames: np.ndarray, floor: float = 0.0) -> tuple[np.ndarra
     r = np.where(empty, (h - 1) / 2.0, r_num / safe)
     c = np.where(empty, (w - 1) / 2.0, c_num / safe)
     return r, c, total
+
+
+@functools.lru_cache(maxsize=64)
+def grid_coords(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column of every cell, row-major (read-only, cached)."""
+    yy = np.repeat(np.arange(h, dtype=np.float64), w)
+    xx = np.tile(np.arange(w, dtype=np.float64), h)
+    yy.flags.writeable = False
+    xx.flags.writeable = False
+    return yy, xx
+
+
+@functools.lru_cache(maxsize=64)
+def same_row(h: int, w: int) -> np.ndarray:
+    """``(H*W - 1,)``: 1 where flat cells ``i`` and ``i + 1`` lie in one row, else 0 (read-only, cached)."""
+    out = (np.arange(1, h * w) % w != 0).astype(np.float64)
+    out.flags.writeable = False
+    return out
+
+
+@functools.lru_cache(maxsize=64)
+def moment_coords(h: int, w: int) -> np.ndarray:
+    """``(4, H*W)``: row, column, row squared, column squared of every cell (read-only, cached)."""
+    yy, xx = grid_coords(h, w)
+    out = np.stack([yy, xx, yy * yy, xx * xx])
+    out.flags.writeable = False
+    return out
+
+
+def gradient(x: np.ndarray) -> np.ndarray:
+    """``numpy.gradient`` along the last axis (unit spacing, first-order edges; at least 2 samples)."""
+    g = np.empty_like(x)
+    g[..., 1:-1] = (x[..., 2:] - x[..., :-2]) / 2.0
+    g[..., 0] = x[..., 1] - x[..., 0]
+    g[..., -1] = x[..., -1] - x[..., -2]
+    return g

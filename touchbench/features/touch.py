@@ -79,7 +79,7 @@ from sklearn.utils._param_validation import Interval
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError
-from .numerics import KURT_CONSTANT, SKEW_CONSTANT, moments
+from .numerics import KURT_CONSTANT, SKEW_CONSTANT, gradient, moment_coords, moments, same_row
 
 MIN_FRAMES = 8
 BASELINE_Q = 0.05
@@ -196,6 +196,14 @@ class _TouchBase(FeatureSet):
         self._fs()
         self._range()
 
+    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
+        return self._from_pressure(stack.shape[2:], *_pressure(stack))
+
+    def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
+        """The features from :func:`_pressure`'s ``(s, base, c)`` of captures of ``grid`` (so a caller
+        computing several sets on the same captures, ``touch-windows``, computes the pressure once)."""
+        raise NotImplementedError
+
 
 def pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(N, T, H, W)`` -> pressure above baseline ``(N, T', H*W)`` float64 and baseline ``(N, H*W)``.
@@ -210,33 +218,31 @@ def pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`pressure`, plus the padded values themselves ``(N, T', H*W)`` float64."""
     n, t, h, w = stack.shape
-    c = np.asarray(stack, dtype=np.float64).reshape(n, t, h * w)
+    c = np.ascontiguousarray(stack, dtype=np.float64).reshape(n, t, h * w)  # C order: sums never depend on the layout
     if t < MIN_FRAMES:
         c = np.concatenate([c, np.repeat(c[:, -1:], MIN_FRAMES - t, axis=1)], axis=1)
         t = MIN_FRAMES
     k = int(np.floor(BASELINE_Q * (t - 1)))
-    base = np.partition(c, k, axis=1)[:, k]
+    cells = np.ascontiguousarray(np.swapaxes(c, 1, 2))  # a partition along the frames is faster contiguous
+    cells.partition(k, axis=2)
+    base = cells[:, :, k].copy()
     s = c - base[:, None, :]
     np.maximum(s, 0.0, out=s)
     return s, base, c
 
 
-def _gradient(x: np.ndarray) -> np.ndarray:
-    """``numpy.gradient`` along the last axis (unit spacing, first-order edges; at least 2 samples)."""
-    g = np.empty_like(x)
-    g[..., 1:-1] = (x[..., 2:] - x[..., :-2]) / 2.0
-    g[..., 0] = x[..., 1] - x[..., 0]
-    g[..., -1] = x[..., -1] - x[..., -2]
-    return g
-
-
 def spectrum(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
     """Power spectrum (DC removed) of the mean-removed, Hann-windowed series along axis -1; frequencies."""
-    t = x.shape[-1]
-    hann, f = _hann_freqs(t, float(fs))
-    d = x - x.mean(axis=-1, keepdims=True)
-    d[x.max(axis=-1) == x.min(axis=-1)] = 0.0  # a constant series has no spectrum (exactly)
-    p = np.abs(np.fft.rfft(d * hann, axis=-1)) ** 2
+    return centred_spectrum(x - x.mean(axis=-1, keepdims=True), x.max(axis=-1) == x.min(axis=-1), fs)
+
+
+def centred_spectrum(d: np.ndarray, const: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`spectrum` of series whose mean is removed already (``d``), ``const`` marking the
+    constant ones (they have no spectrum, exactly)."""
+    hann, f = _hann_freqs(d.shape[-1], float(fs))
+    dw = d * hann
+    dw[const] = 0.0
+    p = np.abs(np.fft.rfft(dw, axis=-1)) ** 2
     return p[..., 1:], f
 
 
@@ -282,7 +288,7 @@ def _series_stats(s: np.ndarray, fs: float) -> dict[str, np.ndarray]:
     out["madn"] = np.where(flat, 0.0, mad1 / np.where(flat, 1.0, sd))
     above = d > 0
     out["mcr"] = np.where(flat, 0.0, (above[..., 1:] != above[..., :-1]).mean(axis=-1))
-    out.update(spectral_summary(*spectrum(s, fs)))
+    out.update(spectral_summary(*centred_spectrum(s - s.mean(axis=-1, keepdims=True), mo["min"] == mo["max"], fs)))
     safe = np.where(flat, 1.0, ac0)
     ac = np.zeros(ac0.shape + (len(AC_LAGS),))
     for i, lag in enumerate(AC_LAGS):
@@ -301,25 +307,6 @@ _STAT_NAMES: list[str] = (
     + [f"band{_band_name(lo, hi)}" for lo, hi in BANDS] + ["fpeak", "fcent", "fent", "logpow"]
     + [f"ac{lag}" for lag in AC_LAGS]
 )
-
-
-@functools.lru_cache(maxsize=64)
-def _grid_coords(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
-    """Row and column of every cell, row-major (read-only, cached)."""
-    yy = np.repeat(np.arange(h, dtype=np.float64), w)
-    xx = np.tile(np.arange(w, dtype=np.float64), h)
-    yy.flags.writeable = False
-    xx.flags.writeable = False
-    return yy, xx
-
-
-@functools.lru_cache(maxsize=64)
-def _moment_coords(h: int, w: int) -> np.ndarray:
-    """``(4, H*W)``: row, column, row squared, column squared of every cell (read-only, cached)."""
-    yy, xx = _grid_coords(h, w)
-    out = np.stack([yy, xx, yy * yy, xx * xx])
-    out.flags.writeable = False
-    return out
 
 
 @FEATURES.register("touch-rhythm", description="rhythm, level and movement statistics of 11 frame-level series (touchbench)")
@@ -370,10 +357,8 @@ class TouchRhythm(_TouchBase):
     def n_features(self, grid: tuple[int, int]) -> int:
         return len(SERIES) * len(_STAT_NAMES) + 7 + 3 * (len(CELL_RANKS) + 1) + 2
 
-    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
-        n, _, h, w = stack.shape
-        s, base, c = _pressure(stack)
-        t = s.shape[1]
+    def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
+        (n, t, _), (h, w) = s.shape, grid
         P = c.sum(axis=2)
         ps = s.sum(axis=2)
         M = c.max(axis=2)
@@ -382,10 +367,10 @@ class TouchRhythm(_TouchBase):
         A = np.count_nonzero(s > thr[:, None, None], axis=2).astype(np.float64)
         empty = ps <= 0
         # pressure-weighted row, column and their squares: one pass over the cells
-        mom = np.einsum("ntc,kc->nkt", s, _moment_coords(h, w)) / np.where(empty, 1.0, ps)[:, None, :]
+        mom = np.einsum("ntc,kc->nkt", s, moment_coords(h, w)) / np.where(empty, 1.0, ps)[:, None, :]
         cyx = np.where(empty[:, None, :], np.array([(h - 1) / 2.0, (w - 1) / 2.0])[:, None], mom[:, :2])
         syx = np.sqrt(np.maximum(np.where(empty[:, None, :], 0.0, mom[:, 2:] - cyx * cyx), 0.0))
-        v = _gradient(cyx)
+        v = gradient(cyx)
         speed = np.hypot(v[:, 1], v[:, 0]) * (ps > thr[:, None])
         mean_ps = ps.mean(axis=1, keepdims=True)
         pn = np.where(mean_ps > 0, ps / np.where(mean_ps > 0, mean_ps, 1.0), 0.0)
@@ -403,16 +388,24 @@ class TouchRhythm(_TouchBase):
         ranks = [int(round(r * (h * w - 1))) for r in CELL_RANKS]
         cell_mean = s.sum(axis=1) / t
         dev = s - cell_mean[:, None, :]
-        ds_ = np.abs(s[:, 1:] - s[:, :-1])
-        cells = np.sort(np.stack([cell_mean, np.sqrt((dev * dev).sum(axis=1) / t), ds_.sum(axis=1) / (t - 1)], axis=1), axis=2)
+        ds_ = np.subtract(s[:, 1:], s[:, :-1])
+        np.abs(ds_, out=ds_)
+        cell_sd = np.sqrt(np.einsum("ntc,ntc->nc", dev, dev) / t)
+        cells = np.sort(np.stack([cell_mean, cell_sd, ds_.sum(axis=1) / (t - 1)], axis=1), axis=2)
         at = cells[:, :, ranks]
         for k in range(3):
             extra += [at[:, k, i] for i in range(len(ranks))] + [cells[:, k].sum(axis=1)]
-        g = s.reshape(n, t, h, w)
-        grad = np.abs(np.diff(g, axis=3)).sum(axis=(2, 3)) + np.abs(np.diff(g, axis=2)).sum(axis=(2, 3))
+        # spatial gradient on the flat cells (contiguous): neighbours along a row are 1 apart (the
+        # pairs across a row's end weighted 0), along a column w apart
+        grad = np.zeros(n)
+        for lag, weight in ((1, same_row(h, w)), (w, None)):
+            if lag < h * w:
+                step_ = np.subtract(s[..., lag:], s[..., :-lag])
+                np.abs(step_, out=step_)
+                grad += np.einsum("ntc,c->n", step_, weight) if weight is not None else step_.sum(axis=(1, 2))
         mp = ps.mean(axis=1)
         has = mp > 0
-        extra.append(np.where(has, grad.mean(axis=1) / np.where(has, mp, 1.0), 0.0))
+        extra.append(np.where(has, grad / t / np.where(has, mp, 1.0), 0.0))
         tot = ps.sum(axis=1)
         extra.append(np.where(tot > 0, ds_.sum(axis=(1, 2)) / np.where(tot > 0, tot, 1.0), 0.0))
         return np.hstack([block, np.column_stack(extra)])
@@ -450,36 +443,36 @@ class CellRhythm(_TouchBase):
                 + ["cell_fcent", "cell_fpeak", "cell_fpeak_top", "coherence", "cell_pow_entropy", "cell_mcr",
                    "ncorr_h", "ncorr_v", "blobs_mean", "blobs_max", "blob_cells_mean"])
 
-    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
-        n, _, h, w = stack.shape
-        s, _ = pressure(stack)
-        t = s.shape[1]
+    def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
+        (n, t, _), (h, w) = s.shape, grid
         fs = self._fs()
         cells = np.swapaxes(s, 1, 2)  # (N, C, T)
-        p, f = spectrum(cells, fs)  # (N, C, F)
+        d = cells - cells.mean(axis=2, keepdims=True)
+        p, f = centred_spectrum(d, cells.max(axis=2) == cells.min(axis=2), fs)  # (N, C, F)
         pw = p.sum(axis=2)  # (N, C)
         tot = pw.sum(axis=1)
         none = tot <= 0
-        wc = np.where(none[:, None], 0.0, pw / np.where(none, 1.0, tot)[:, None])
-        cellpow = np.where(pw > 0, pw, 1.0)
-        feats = list(np.einsum("ncb,nc->bn", band_sums(p, f, BANDS), wc / cellpow))
-        fc = np.einsum("ncf,f->nc", p, f) / cellpow
-        feats.append((fc * wc).sum(axis=1))
+        safe = np.where(none, 1.0, tot)
+        wc = np.where(none[:, None], 0.0, pw / safe[:, None])
+        # a cell's band fraction weighted by its share of the power is its band power over the total:
+        # the bands and centroid of the cells' summed spectrum
+        pooled = p.sum(axis=1)
+        feats = list(np.where(none, 0.0, band_sums(pooled, f, BANDS).T / safe))
+        feats.append(np.where(none, 0.0, np.einsum("nf,f->n", pooled, f) / safe))
         fp = f[np.argmax(p, axis=2)] if p.shape[2] else np.zeros(pw.shape)
         feats.append((fp * wc).sum(axis=1))
         feats.append(np.where(none, 0.0, fp[np.arange(n), np.argmax(pw, axis=1)]))
-        d = cells - cells.mean(axis=2, keepdims=True)
         psum, _ = spectrum(d.sum(axis=1), fs)
-        feats.append(np.where(none, 0.0, psum.sum(axis=1) / np.where(none, 1.0, tot)))
+        feats.append(np.where(none, 0.0, psum.sum(axis=1) / safe))
         feats.append(-(wc * np.log(np.where(wc > 0, wc, 1.0))).sum(axis=1))
         above = d > 0
         mcr = (above[:, :, 1:] != above[:, :, :-1]).mean(axis=2)
         feats.append((mcr * wc).sum(axis=1))
         g = d.reshape(n, h, w, t)
-        sd = np.sqrt((g * g).sum(axis=3))
+        sd = np.sqrt(np.einsum("nhwt,nhwt->nhw", g, g))
         for a, b in (((slice(None), slice(None), slice(1, None)), (slice(None), slice(None), slice(None, -1))),
                      ((slice(None), slice(1, None), slice(None)), (slice(None), slice(None, -1), slice(None)))):
-            num = (g[a] * g[b]).sum(axis=3)
+            num = np.einsum("nhwt,nhwt->nhw", g[a], g[b])
             wgt = sd[a] * sd[b]
             ok = wgt > 0
             corr = np.where(ok, num / np.where(ok, wgt, 1.0), 0.0)
@@ -536,22 +529,21 @@ class ContactMotion(_TouchBase):
             names += [f"{tag}_act_fpeak", f"{tag}_act_fcent"]
         return names + ["logpeak_robust"]
 
-    def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
-        n, _, h, w = stack.shape
-        s, _ = pressure(stack)
-        t = s.shape[1]
+    def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
+        (n, t, _), (h, w) = s.shape, grid
         peak = np.sort(s.max(axis=2), axis=1)[:, int(round(0.95 * (t - 1)))]
         # every threshold at once: axis 1 of the arrays below is the threshold
         thr = np.maximum(np.multiply.outer(peak, THRESHOLDS), self._floor(self.CONTACT_FLOOR))
-        wt = np.maximum(s[:, None] - thr[:, :, None, None], 0.0)  # (N, R, T, C)
+        wt = np.subtract(s[:, None], thr[:, :, None, None])  # (N, R, T, C)
+        np.maximum(wt, 0.0, out=wt)
         ws = wt.sum(axis=3)
         act = ws > 0
-        cyx = np.einsum("nrtc,kc->nrkt", wt, _moment_coords(h, w)[:2]) / np.where(act, ws, 1.0)[:, :, None]
+        cyx = np.einsum("nrtc,kc->nrkt", wt, moment_coords(h, w)[:2]) / np.where(act, ws, 1.0)[:, :, None]
         nact = act.sum(axis=2)
         centre = np.array([(h - 1) / 2.0, (w - 1) / 2.0])
         mean_pos = np.where((nact > 0)[..., None], (cyx * act[:, :, None]).sum(axis=3) / np.maximum(nact, 1)[..., None], centre)
         cyx = np.where(act[:, :, None], cyx, mean_pos[..., None])  # (N, R, 2, T)
-        area = np.count_nonzero(wt > 0, axis=3).astype(np.float64)
+        area = np.count_nonzero(wt, axis=3).astype(np.float64)  # wt >= 0
         both = act[..., 1:] & act[..., :-1]
         v = np.diff(cyx, axis=3)
         sp = np.hypot(v[:, :, 1], v[:, :, 0]) * both

@@ -45,7 +45,7 @@ from ..core.suggest import did_you_mean
 from ..datasets.model import SensorSpec
 from ..datasets.windows import no_frame
 from .base import FEATURES, FeatureInputError, FeatureSet
-from .touch import _TouchBase
+from .touch import _pressure, _TouchBase
 
 OWN_SETS: tuple[str, ...] = ("touch-rhythm", "cell-rhythm", "contact-motion")
 
@@ -111,11 +111,18 @@ class TouchWindows(_TouchBase):
         return np.round(np.linspace(0, t - length, int(self.n_windows))).astype(int), length
 
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
-        starts, length = self.window_starts(stack.shape[1])
+        """Every window of every capture is a capture of its own: the windows are stacked (a group
+        of them at a time, at most the chunk's frames), their pressure computed once for all the
+        inner sets, and each capture's rows reduced to their mean and standard deviation."""
+        n, t, h, w = stack.shape
+        starts, length = self.window_starts(t)
         inner = self._inner()
-        per_window = []
-        for s in starts:
-            part = stack[:, s:s + length]
-            per_window.append(np.hstack([fs._transform_batch(part) for fs in inner]))
-        W = np.stack(per_window)  # (windows, N, D)
-        return np.hstack([W.mean(axis=0), W.std(axis=0)])
+        group = max(1, t // length)
+        rows = []
+        for k in range(0, len(starts), group):
+            frames = starts[k:k + group, None] + np.arange(length)  # (windows, L)
+            # (N * windows, ...), capture-major, C order (numpy's sums follow the memory order)
+            pr = _pressure(np.ascontiguousarray(stack[:, frames]).reshape(-1, length, h, w))
+            rows.append(np.hstack([fs._from_pressure((h, w), *pr) for fs in inner]).reshape(n, len(frames), -1))
+        per_window = np.ascontiguousarray(np.concatenate(rows, axis=1).transpose(1, 0, 2))  # (windows, N, D)
+        return np.hstack([per_window.mean(axis=0), per_window.std(axis=0)])
