@@ -36,6 +36,8 @@ CASES = [
     (*MHH_CLS, {}), (*MHH_CLS, {"skips": (1, 3), "max_len": 2}), (*MHH_CLS, {"n_scales": 2, "threshold": (0.5, 1.0)}),
 ]
 IDS = [f"{c[0].__name__}-{'-'.join(f'{k}={v}' for k, v in c[2].items()) or 'defaults'}" for c in CASES]
+# on all of HAART, every case but 12-point LBP (its reference takes minutes there; synthetic captures check it)
+REAL = [(c, i) for c, i in zip(CASES, IDS) if c[2] != {"n_points": 12}]
 
 
 def both(fast_cls, ref_cls, params, caps, sensor):
@@ -63,7 +65,7 @@ def synthetic(seed: int, t: int, grid: tuple[int, int], dtype, top: float) -> li
     return [np.clip(c, 0, top).astype(dtype) for c in caps]
 
 
-@pytest.mark.parametrize("fast_cls, ref_cls, params", CASES, ids=IDS)
+@pytest.mark.parametrize("fast_cls, ref_cls, params", [c for c, _ in REAL], ids=[i for _, i in REAL])
 def test_every_real_haart_capture_agrees_with_the_reference(real_haart, fast_cls, ref_cls, params):
     fast, ref = both(fast_cls, ref_cls, params, real_haart.captures, real_haart.sensor)
     assert_allclose(fast, ref, **TOL)
