@@ -75,9 +75,10 @@ class BinaryMotionHistory(FeatureSet):
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         off = float(resolve_units("bmh", self.preset, _TABLE, "offset", self.offset, self.sensor, "offset"))
         n, t = stack.shape[:2]
-        x = stack.reshape(n, t, -1).astype(np.float64)
         if self.level == "instance":
-            top = x.max(axis=(1, 2))[:, None, None]
-        else:
-            top = x.max(axis=2, keepdims=True)
-        return (x >= top - off).any(axis=1).astype(np.float64)
+            # a cell reaches the threshold in some frame iff its largest value does; the maxima are
+            # taken in the captures' dtype and then made float64 (rounding keeps the order)
+            peak = stack.reshape(n, t, -1).max(axis=1).astype(np.float64)
+            return (peak >= peak.max(axis=1, keepdims=True) - off).astype(np.float64)
+        x = stack.reshape(n, t, -1).astype(np.float64)
+        return (x >= x.max(axis=2, keepdims=True) - off).any(axis=1).astype(np.float64)

@@ -117,37 +117,36 @@ class LBPTOP(FeatureSet):
         ct, ch, cw = t - 2 * rt, h - 2 * ry, w - 2 * rx
         if ct < 1 or ch < 1 or cw < 1:
             return out
+        n_centres = ct * ch * cw
         v = stack if stack.dtype.kind in "biu" else stack.astype(np.float64)
         # Flat layout: voxel (t, y, x) is t*H*W + y*W + x, so a neighbour is a
-        # fixed offset and every comparison runs over one contiguous range
-        # covering all centres; positions in that range that are not
-        # interior voxels (they wrap around a border) are dropped by a mask.
-        flat = v.reshape(n, -1)
+        # fixed offset and every comparison runs over one contiguous range: the
+        # whole frames rt..T-rt-1, padded by ``margin`` values on both ends so
+        # that no offset leaves the array. Codes of voxels that are not interior
+        # (a neighbour wraps around a border or lies in the padding) are computed
+        # and then left out by slicing the frames' inner cells.
         hw = h * w
-        lo = rt * hw + ry * w + rx
-        hi = (t - rt - 1) * hw + (h - ry - 1) * w + (w - rx - 1) + 1
-        pos = np.arange(lo, hi)
-        tt, yy, xx = pos // hw, (pos // w) % h, pos % w
-        interior = (tt >= rt) & (tt < t - rt) & (yy >= ry) & (yy < h - ry) & (xx >= rx) & (xx < w - rx)
+        margin = ry * w + rx
+        flat = np.pad(v.reshape(n, -1), [(0, 0), (margin, margin)])
+        lo, hi = margin + rt * hw, margin + (t - rt) * hw
         centre = flat[:, lo:hi]
         planes = {
             "xy": [(0, a, b) for a, b in circle_offsets(p, ry, rx)],
             "xt": [(a, 0, b) for a, b in circle_offsets(p, rt, rx)],
             "yt": [(a, b, 0) for a, b in circle_offsets(p, rt, ry)],
         }
-        # code histogram (2**P bins) -> mapped bins, as a 0/1 matrix product
-        onehot = np.zeros((2**p, nb))
-        onehot[np.arange(2**p), table] = 1.0
-        n_centres = ct * ch * cw
-        code_dtype = np.uint8 if p <= 8 else np.uint16
-        offsets = (np.arange(n) * 2**p)[:, None]
+        code = np.empty(centre.shape, dtype=np.uint8 if p <= 8 else np.uint16)
+        ge = np.empty(centre.shape, dtype=bool)
+        offsets = (np.arange(n) * nb)[:, None, None, None]
         for i, pl in enumerate(PLANES):
-            code = np.zeros(centre.shape, dtype=code_dtype)
-            for bit, (dt, dy, dx) in enumerate(planes[pl]):
+            code[:] = 0
+            # highest bit first: code = 2 code + bit, all in place
+            for dt, dy, dx in reversed(planes[pl]):
                 off = dt * hw + dy * w + dx
-                ge = flat[:, lo + off:hi + off] >= centre
-                code += ge.view(np.uint8) * code_dtype(1 << bit)
-            codes = code[:, interior].astype(np.int64) + offsets
-            hist = np.bincount(codes.ravel(), minlength=n * 2**p).reshape(n, 2**p)
-            out[:, i * nb:(i + 1) * nb] = (hist @ onehot) / n_centres
+                np.greater_equal(flat[:, lo + off:hi + off], centre, out=ge)
+                np.add(code, code, out=code)
+                np.add(code, ge.view(np.uint8), out=code)
+            inner = code.reshape(n, ct, h, w)[:, :, ry:h - ry, rx:w - rx]
+            hist = np.bincount((table[inner] + offsets).ravel(), minlength=n * nb).reshape(n, nb)
+            out[:, i * nb:(i + 1) * nb] = hist / n_centres
         return out
