@@ -161,3 +161,21 @@ def run_loso_method(tmp_path: Path, method_yaml: str, n_subjects: int = 4):
     p = tmp_path / "one-method.yaml"
     p.write_text(f"name: one-method\ndataset: {data}\nscheme: loso\nmethods:\n{method_yaml}")
     return run_protocol(p, out=tmp_path / "results", progress=False)
+
+
+def synthetic_captures(seed: int, t: int, grid: tuple[int, int], dtype, top: float = 255.0) -> list[np.ndarray]:
+    """Captures of values in 0..top: moving blobs (saturating at top), sparse taps, noise, fractions
+    for float dtypes; a constant one and an empty one."""
+    rng = np.random.default_rng(seed)
+    h, w = grid
+    yy, xx = np.mgrid[0:h, 0:w]
+    caps = []
+    for k in range(4):
+        cy = h / 2 + (h / 3) * np.sin(np.arange(t) * (0.3 + 0.2 * k))
+        cx = w / 2 + (w / 3) * np.cos(np.arange(t) * (0.2 + 0.1 * k))
+        blob = 1.2 * top * np.exp(-((yy[None] - cy[:, None, None]) ** 2 + (xx[None] - cx[:, None, None]) ** 2) / 3.0)
+        taps = (rng.random((t, h, w)) < 0.05) * rng.uniform(0, top, (t, h, w))
+        c = blob * (rng.random(t) < 0.7)[:, None, None] + taps + rng.uniform(0, 4, (t, h, w))
+        caps.append(c if np.dtype(dtype).kind == "f" else np.floor(c))
+    caps += [np.full((t, h, w), top / 3), np.zeros((t, h, w))]
+    return [np.clip(c, 0, top).astype(dtype) for c in caps]

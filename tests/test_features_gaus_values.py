@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from features_reference_gaus import (RefBinaryMotionHistory, RefLBPTOP, RefMotionStatisticalDistribution,
                                      RefSpatialMultiScaleMHH, RefStatisticalDistribution)
+from helpers import synthetic_captures
 from numpy.testing import assert_allclose
 
 from touchbench.datasets.model import SensorSpec
@@ -47,24 +48,6 @@ def both(fast_cls, ref_cls, params, caps, sensor):
     return fast, ref
 
 
-def synthetic(seed: int, t: int, grid: tuple[int, int], dtype, top: float) -> list[np.ndarray]:
-    """Captures of values in 0..top: moving blobs (saturating at top), sparse taps, noise, fractions
-    for float dtypes; a constant one and an empty one."""
-    rng = np.random.default_rng(seed)
-    h, w = grid
-    yy, xx = np.mgrid[0:h, 0:w]
-    caps = []
-    for k in range(4):
-        cy = h / 2 + (h / 3) * np.sin(np.arange(t) * (0.3 + 0.2 * k))
-        cx = w / 2 + (w / 3) * np.cos(np.arange(t) * (0.2 + 0.1 * k))
-        blob = 1.2 * top * np.exp(-((yy[None] - cy[:, None, None]) ** 2 + (xx[None] - cx[:, None, None]) ** 2) / 3.0)
-        taps = (rng.random((t, h, w)) < 0.05) * rng.uniform(0, top, (t, h, w))
-        c = blob * (rng.random(t) < 0.7)[:, None, None] + taps + rng.uniform(0, 4, (t, h, w))
-        caps.append(c if np.dtype(dtype).kind == "f" else np.floor(c))
-    caps += [np.full((t, h, w), top / 3), np.zeros((t, h, w))]
-    return [np.clip(c, 0, top).astype(dtype) for c in caps]
-
-
 @pytest.mark.parametrize("fast_cls, ref_cls, params", [c for c, _ in REAL], ids=[i for _, i in REAL])
 def test_every_real_haart_capture_agrees_with_the_reference(real_haart, fast_cls, ref_cls, params):
     fast, ref = both(fast_cls, ref_cls, params, real_haart.captures, real_haart.sensor)
@@ -83,7 +66,7 @@ def test_every_real_haart_capture_agrees_with_the_reference(real_haart, fast_cls
 ])
 def test_synthetic_captures_agree_with_the_reference(fast_cls, ref_cls, params, t, grid, dtype, top):
     sensor = SensorSpec(name="synthetic", grid=grid, frame_rate=30.0, value_range=(0.0, top))
-    caps = synthetic(t, t, grid, dtype, top)
+    caps = synthetic_captures(t, t, grid, dtype, top)
     fast, ref = both(fast_cls, ref_cls, params, caps, sensor)
     assert_allclose(fast, ref, **TOL)
 
@@ -91,6 +74,6 @@ def test_synthetic_captures_agree_with_the_reference(fast_cls, ref_cls, params, 
 @pytest.mark.parametrize("fast_cls, ref_cls, params", CASES, ids=IDS)
 def test_captures_of_several_lengths_in_one_batch_agree_with_the_reference(fast_cls, ref_cls, params):
     sensor = SensorSpec(name="synthetic", grid=(6, 5), frame_rate=30.0, value_range=(0.0, 1023.0))
-    caps = [c for t in (1, 2, 4, 9, 60) for c in synthetic(t + 100, t, (6, 5), np.uint16, 1023.0)]
+    caps = [c for t in (1, 2, 4, 9, 60) for c in synthetic_captures(t + 100, t, (6, 5), np.uint16, 1023.0)]
     fast, ref = both(fast_cls, ref_cls, params, caps, sensor)
     assert_allclose(fast, ref, **TOL)

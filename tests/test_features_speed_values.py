@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from features_reference import RefCellRhythm, RefContactEvidence, RefContactMotion, RefTouchRhythm, RefTouchWindows
+from helpers import synthetic_captures
 from numpy.testing import assert_allclose, assert_array_equal
 
 from touchbench.datasets.model import SensorSpec
@@ -39,22 +40,6 @@ def both(fast_cls, ref_cls, caps, sensor):
     return fast, ref
 
 
-def synthetic(seed: int, t: int, grid: tuple[int, int], dtype) -> list[np.ndarray]:
-    """Captures with a moving blob, sparse taps, noise, a constant one and an empty one."""
-    rng = np.random.default_rng(seed)
-    h, w = grid
-    yy, xx = np.mgrid[0:h, 0:w]
-    caps = []
-    for k in range(4):
-        cy = h / 2 + (h / 3) * np.sin(np.arange(t) * (0.3 + 0.2 * k))
-        cx = w / 2 + (w / 3) * np.cos(np.arange(t) * (0.2 + 0.1 * k))
-        blob = 200 * np.exp(-((yy[None] - cy[:, None, None]) ** 2 + (xx[None] - cx[:, None, None]) ** 2) / 3.0)
-        taps = (rng.random((t, h, w)) < 0.05) * rng.integers(0, 250, (t, h, w))
-        caps.append(blob * (rng.random(t) < 0.7)[:, None, None] + taps + rng.integers(0, 4, (t, h, w)))
-    caps += [np.full((t, h, w), 7.0), np.zeros((t, h, w))]
-    return [np.clip(c, 0, 255).astype(dtype) for c in caps]
-
-
 @pytest.mark.parametrize("fast_cls, ref_cls", PAIRS)
 def test_real_haart_captures_agree_with_the_reference(real_haart, fast_cls, ref_cls):
     caps = real_haart.captures[::83]  # ten captures spread over subjects, gestures and substrates
@@ -66,7 +51,7 @@ def test_real_haart_captures_agree_with_the_reference(real_haart, fast_cls, ref_
 @pytest.mark.parametrize("t", [5, 10])
 @pytest.mark.parametrize("dtype", [np.uint8, np.float32])
 def test_short_skin_windows_agree_with_the_reference(fast_cls, ref_cls, t, dtype):
-    caps = synthetic(t, t, SKIN.grid, dtype)
+    caps = synthetic_captures(t, t, SKIN.grid, dtype)
     fast, ref = both(fast_cls, ref_cls, caps, SKIN)
     assert_allclose(fast, ref, **TOL)
 
@@ -78,7 +63,7 @@ def test_short_skin_windows_agree_with_the_reference(fast_cls, ref_cls, t, dtype
     (1, (3, 4), np.int16, SensorSpec(name="tiny", grid=(3, 4), frame_rate=12.0, value_range=(0.0, 255.0))),
 ])
 def test_synthetic_captures_agree_with_the_reference(fast_cls, ref_cls, t, grid, dtype, sensor):
-    caps = synthetic(t, t, grid, dtype)
+    caps = synthetic_captures(t, t, grid, dtype)
     fast, ref = both(fast_cls, ref_cls, caps, sensor)
     assert_allclose(fast, ref, **TOL)
 
@@ -128,7 +113,7 @@ TINY = SensorSpec(name="tiny", grid=(3, 4), frame_rate=12.0, value_range=(0.0, 2
     (1, (3, 4), np.int16, TINY, {}),
 ])
 def test_touch_windows_agree_with_the_reference_on_synthetic_captures(t, grid, dtype, sensor, params):
-    caps = synthetic(t, t, grid, dtype)
+    caps = synthetic_captures(t, t, grid, dtype)
     fast = TouchWindows(sensor=sensor, **params).fit(caps).transform(caps)
     ref = RefTouchWindows(sensor=sensor, **params).fit(caps).transform(caps)
     assert fast.shape == ref.shape
