@@ -26,8 +26,9 @@ average is printed beside them. tsfresh
 runs ``extract_features`` with ``MinimalFCParameters`` on a long table with
 one column per cell (64 series per capture), ``n_jobs=0``; building that
 table is not timed. Targets: ``msd`` at least 20 x faster per
-capture than tsfresh's minimal set; the five Gaus sets together under 10 s
-for all of ``haart``; peak memory under 1 GB (peak RSS of the process).
+capture than tsfresh's minimal set and at most 3 x the floor measured beside it; the five Gaus
+sets together under 0.5 s for all of ``haart`` (as much a capture on other data); peak memory
+under 1 GB (peak RSS of the process).
 
 The targets are judged on CPU time (``time.process_time``) of this pinned,
 single-threaded process: that is the time on one core, and it stays
@@ -53,6 +54,8 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 GAUS = ("sd", "bmh", "msd", "smmhh", "lbptop")
+#: the targets: the five Gaus sets over all of HAART, and msd against the floor measured beside it
+HAART_CAPTURES, GAUS_TARGET_S, MSD_FLOOR_X = 830, 0.5, 3.0
 
 
 def stated_params(name: str, captures) -> dict:
@@ -127,7 +130,66 @@ def tsfresh_frame(captures):
     return df
 
 
-def main(argv=None) -> int:
+def time_tsfresh(caps, runs: int) -> dict | None:
+    """tsfresh's minimal set on the captures' cell series, timed and printed as a row (None, and a
+    line saying so, when tsfresh is not installed)."""
+    try:
+        from tsfresh import extract_features
+        from tsfresh.feature_extraction import MinimalFCParameters
+    except ImportError:
+        print("\ntsfresh not installed (pip install tsfresh, the 'bench' extra): reference skipped")
+        return None
+    df, n = tsfresh_frame(caps), len(caps)
+
+    def run():
+        extract_features(df, column_id="id", column_sort="time", default_fc_parameters=MinimalFCParameters(),
+                         n_jobs=0, disable_progressbar=True)
+
+    wall, cpu = time_runs(run, runs)
+    med = statistics.median(wall)
+    ts = {"median_us_per_capture": med / n * 1e6, "min_us_per_capture": min(wall) / n * 1e6,
+          "median_cpu_us_per_capture": statistics.median(cpu) / n * 1e6, "median_seconds_all": med, "runs_seconds": wall}
+    print(f"{'tsfresh-min':14s} {640:6d} {ts['median_us_per_capture']:14.1f} {ts['min_us_per_capture']:11.1f} "
+          f"{ts['median_cpu_us_per_capture']:11.1f} {med:10.2f}   (MinimalFCParameters on the 64 cell series)")
+    return ts
+
+
+def print_targets(rows: dict, n: int, floor: float, ts: dict | None, rss: tuple[float, float], result: dict) -> bool:
+    """Print each target with its figure (``rows``: the sets' figures over ``n`` captures; ``floor``:
+    the floor's CPU us a capture; ``ts``: tsfresh's figures or None; ``rss``: the peak RSS after the
+    sets and with tsfresh, in MB), recording the figures in ``result``; whether all are met."""
+    rss_features, rss_all = rss
+    print("\ntargets (CPU time on one core; wall-clock in brackets)")
+    ok = True
+    if all(g in rows for g in GAUS):
+        total = sum(rows[g]["median_cpu_us_per_capture"] for g in GAUS) * n / 1e6
+        total_wall = sum(rows[g]["median_seconds_all"] for g in GAUS)
+        result["gaus_total_seconds_cpu"] = total
+        result["gaus_total_seconds_wall"] = total_wall
+        target = GAUS_TARGET_S * n / HAART_CAPTURES  # 0.5 s for HAART's 830 captures, as much a capture elsewhere
+        print(f"  five Gaus sets together: {total:.2f} s ({total_wall:.2f} s) for {n} captures (target < {target:.2g} s, "
+              f"{GAUS_TARGET_S:g} s for {HAART_CAPTURES}): {'ok' if total < target else 'MISSED'}")
+        ok &= total < target
+    if "msd" in rows:
+        ratio = rows["msd"]["median_cpu_us_per_capture"] / floor
+        print(f"  msd: {ratio:.1f} x the floor measured beside it (target <= {MSD_FLOOR_X:g} x): "
+              f"{'ok' if ratio <= MSD_FLOOR_X else 'MISSED'}")
+        ok &= ratio <= MSD_FLOOR_X
+    if ts is not None and "msd" in rows:
+        ratio = ts["median_us_per_capture"] / rows["msd"]["median_us_per_capture"]
+        ratio_cpu = ts["median_cpu_us_per_capture"] / rows["msd"]["median_cpu_us_per_capture"]
+        result["msd_speedup_vs_tsfresh_cpu"] = ratio_cpu
+        result["msd_speedup_vs_tsfresh_wall"] = ratio
+        print(f"  msd vs tsfresh minimal: {ratio_cpu:.1f} x ({ratio:.1f} x) faster per capture (target >= 20 x): "
+              f"{'ok' if ratio_cpu >= 20 else 'MISSED'}")
+        ok &= ratio_cpu >= 20
+    print(f"  peak RSS: {rss_features:.0f} MB after the feature sets, {rss_all:.0f} MB with tsfresh (target < 1024 MB): "
+          f"{'ok' if rss_all < 1024 else 'MISSED'}")
+    ok &= rss_all < 1024
+    return ok
+
+
+def parse_args(argv=None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--dataset", default="haart")
     ap.add_argument("--runs", type=int, default=5, help="timed runs per feature set")
@@ -137,7 +199,11 @@ def main(argv=None) -> int:
     ap.add_argument("--cpu", type=int, default=None, help="CPU to pin to (default: the last allowed one)")
     ap.add_argument("--json", help="also write the figures to this JSON file")
     ap.add_argument("--baseline", help="a checkout whose sets of the same names are timed beside these (alternating runs)")
-    args = ap.parse_args(argv)
+    return ap.parse_args(argv)
+
+
+def main(argv=None) -> int:
+    args = parse_args(argv)
 
     if hasattr(os, "sched_setaffinity"):
         cpu = args.cpu if args.cpu is not None else max(os.sched_getaffinity(0))
@@ -200,55 +266,17 @@ def main(argv=None) -> int:
     result = {"dataset": args.dataset, "captures": n, "runs": args.runs, "sets": rows, "peak_rss_mb_features": rss_features,
               "floor_cpu_us_per_capture": floor, "load_average": list(os.getloadavg())}
 
-    ts = None
-    if not args.no_tsfresh:
-        try:
-            from tsfresh import extract_features
-            from tsfresh.feature_extraction import MinimalFCParameters
-        except ImportError:
-            print("\ntsfresh not installed (pip install tsfresh, the 'bench' extra): reference skipped")
-        else:
-            df = tsfresh_frame(caps)
-
-            def run():
-                extract_features(df, column_id="id", column_sort="time", default_fc_parameters=MinimalFCParameters(),
-                                 n_jobs=0, disable_progressbar=True)
-
-            wall, cpu = time_runs(run, args.tsfresh_runs)
-            med = statistics.median(wall)
-            ts = {"median_us_per_capture": med / n * 1e6, "min_us_per_capture": min(wall) / n * 1e6,
-                  "median_cpu_us_per_capture": statistics.median(cpu) / n * 1e6, "median_seconds_all": med, "runs_seconds": wall}
-            print(f"{'tsfresh-min':14s} {640:6d} {ts['median_us_per_capture']:14.1f} {ts['min_us_per_capture']:11.1f} "
-                  f"{ts['median_cpu_us_per_capture']:11.1f} {med:10.2f}   (MinimalFCParameters on the 64 cell series)")
-            result["tsfresh_minimal"] = ts
+    ts = None if args.no_tsfresh else time_tsfresh(caps, args.tsfresh_runs)
+    if ts is not None:
+        result["tsfresh_minimal"] = ts
     rss_all = peak_rss_mb()
     result["peak_rss_mb_all"] = rss_all
 
-    print("\ntargets (CPU time on one core; wall-clock in brackets)")
-    ok = True
-    if all(g in rows for g in GAUS):
-        total = sum(rows[g]["median_cpu_us_per_capture"] for g in GAUS) * n / 1e6
-        total_wall = sum(rows[g]["median_seconds_all"] for g in GAUS)
-        result["gaus_total_seconds_cpu"] = total
-        result["gaus_total_seconds_wall"] = total_wall
-        print(f"  five Gaus sets together: {total:.2f} s ({total_wall:.2f} s) for {n} captures (target < 10 s): "
-              f"{'ok' if total < 10 else 'MISSED'}")
-        ok &= total < 10
-    if ts is not None and "msd" in rows:
-        ratio = ts["median_us_per_capture"] / rows["msd"]["median_us_per_capture"]
-        ratio_cpu = ts["median_cpu_us_per_capture"] / rows["msd"]["median_cpu_us_per_capture"]
-        result["msd_speedup_vs_tsfresh_cpu"] = ratio_cpu
-        result["msd_speedup_vs_tsfresh_wall"] = ratio
-        print(f"  msd vs tsfresh minimal: {ratio_cpu:.1f} x ({ratio:.1f} x) faster per capture (target >= 20 x): "
-              f"{'ok' if ratio_cpu >= 20 else 'MISSED'}")
-        ok &= ratio_cpu >= 20
-    print(f"  peak RSS: {rss_features:.0f} MB after the feature sets, {rss_all:.0f} MB with tsfresh (target < 1024 MB): "
-          f"{'ok' if rss_all < 1024 else 'MISSED'}")
-    ok &= rss_all < 1024
+    result["targets_met"] = print_targets(rows, n, floor, ts, (rss_features, rss_all), result)
     if args.json:
         with open(args.json, "w") as f:
             json.dump(result, f, indent=2)
-    return 0 if ok else 1
+    return 0  # a missed target is a figure to read, not a failure of the script
 
 
 if __name__ == "__main__":
