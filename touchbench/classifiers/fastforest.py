@@ -64,9 +64,11 @@ class CompiledForest:
             feature.append(np.where(leaf, 0, t.feature).astype(np.int64))
             threshold.append(np.where(leaf, np.inf, t.threshold).astype(np.float64))
             value.append(np.asarray(t.value[:, 0, :], dtype=np.float64))
-        self.left = np.concatenate(left)
-        self.right = np.concatenate(right)
+        # children side by side: node k's left child at 2k, its right child at 2k + 1
+        self.children = np.stack([np.concatenate(left), np.concatenate(right)], axis=1).ravel()
         self.feature = np.concatenate(feature)
+        if self.columns is not None:  # read the wrapping estimator's columns directly
+            self.feature = self.columns[self.feature]
         self.threshold = np.concatenate(threshold)
         self.value = np.concatenate(value)
         self.roots = offsets.astype(np.int64)
@@ -74,22 +76,26 @@ class CompiledForest:
         self.classes_ = forest.classes_
 
     def predict_proba(self, X: np.ndarray) -> np.ndarray:
-        """Same as ``forest.predict_proba(X[:, columns])``, for a 2-D ``X`` of a few rows."""
+        """Same as ``forest.predict_proba(X[:, columns])``, for a 2-D ``X`` of a few rows.
+
+        Each step of the walk, for all (sample, tree) pairs at once: the node's feature read from
+        the flat rows, compared with its threshold, and the child taken at ``2 node + (x > threshold)``
+        (``x > threshold`` is ``not x <= threshold`` for the finite values walked), into buffers
+        allocated once per call."""
         X = np.asarray(X)
         if X.ndim != 2 or X.shape[1] != self.n_features:
             raise ValueError(f"expected {self.n_features} features per row, got shape {X.shape}")
-        if self.columns is not None:
-            X = X[:, self.columns]
         x32 = X.astype(np.float32)
-        if not np.isfinite(x32).all():
-            return self.forest.predict_proba(X)
-        xs = x32.astype(np.float64)
-        n = xs.shape[0]
+        if not np.isfinite(x32 if self.columns is None else x32[:, self.columns]).all():
+            return self.forest.predict_proba(X if self.columns is None else X[:, self.columns])
+        n = x32.shape[0]
+        xs = x32.astype(np.float64).ravel()
         node = np.broadcast_to(self.roots, (n, self.n_trees)).copy()
-        rows = np.arange(n)[:, None]
+        offset = np.arange(0, n * self.n_features, self.n_features, dtype=np.int64)[:, None]
+        feature, threshold, children = self.feature, self.threshold, self.children
         for _ in range(self.depth):
-            go_left = xs[rows, self.feature[node]] <= self.threshold[node]
-            node = np.where(go_left, self.left[node], self.right[node])
+            right = xs[feature[node] + offset] > threshold[node]
+            node = children[(node << 1) + right]
         leaf_values = self.value[node]  # (n, trees, classes)
         total = np.cumsum(leaf_values, axis=1)[:, -1, :]
         return total / self.n_trees

@@ -30,7 +30,7 @@ from sklearn.utils.validation import check_memory
 
 from ..core.errors import TouchbenchError
 from ..core.introspect import accepts, sensor_problem
-from ..features.base import feature_set_refusal, learns_from_data, make_feature_set, stack_features
+from ..features.base import FeatureStack, feature_set_refusal, learns_from_data, make_feature_set
 from .base import make_classifier
 
 __all__ = ["FittedEstimator", "FittedMethod", "capture_labels", "feature_specs", "fit_features", "fit_on_codes", "fit_pipeline",
@@ -134,6 +134,7 @@ class FittedMethod:
     feature_seconds: float = float("nan")
     fit_seconds: float = float("nan")
     _fast: Any = field(default=None, init=False, repr=False, compare=False)
+    _stack: Any = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def classes(self) -> np.ndarray:
@@ -144,8 +145,13 @@ class FittedMethod:
         return self.fitted.estimator
 
     def transform(self, captures: Any) -> Any:
-        """The feature matrix of ``captures`` (the captures themselves without feature sets)."""
-        return stack_features(self.sets, captures)
+        """The feature matrix of ``captures`` (the captures themselves without feature sets): one
+        :class:`FeatureStack` of the fitted sets, kept, so the sets' parameters are checked once."""
+        if not self.sets:
+            return list(captures)
+        if getattr(self, "_stack", None) is None:
+            self._stack = FeatureStack(self.sets)
+        return self._stack.transform(captures)
 
     def predict(self, captures: Any) -> np.ndarray:
         return self.fitted.predict(self.transform(captures))
@@ -175,9 +181,10 @@ class FittedMethod:
         return P
 
     def __getstate__(self) -> dict[str, Any]:
-        """Everything but the compiled forest, which is built again from the estimator when asked."""
+        """Everything but the compiled forest and the kept feature stack, built again when asked."""
         state = dict(self.__dict__)
         state.pop("_fast", None)
+        state.pop("_stack", None)
         return state
 
     def _compiled(self) -> Any:

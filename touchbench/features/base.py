@@ -178,36 +178,27 @@ class FeatureSet(TransformerMixin, BaseEstimator):
         """Learn data-dependent parameters; nothing by default."""
 
     def transform(self, captures) -> np.ndarray:
-        caps = check_captures(captures, name=type(self).__name__)
+        return FeatureStack([self]).transform(captures)
+
+    def _ready(self, grid: tuple[int, int], checked: bool) -> int:
+        """Refuse captures of ``grid`` this fitted set cannot take (another grid than it was fitted
+        on, a set that learns from data not fitted yet) and, unless ``checked``, parameters outside
+        their domain; the output width for ``grid``."""
         fitted_grid = getattr(self, "grid_", None)
-        if not caps:
-            return np.zeros((0, self.n_features(fitted_grid) if fitted_grid else 0))
-        grid = caps[0].shape[1:]
         if fitted_grid is not None and tuple(grid) != tuple(fitted_grid):
             raise FeatureInputError(f"{type(self).__name__}: fitted on grid {tuple(fitted_grid)}, got captures of grid {tuple(grid)}")
         if self.fold_dependent and fitted_grid is None:
             raise FeatureInputError(f"{type(self).__name__}: call fit before transform (this set learns from the training fold)")
-        self.check_declared()
-        self._check_params()
+        if not checked:
+            self.check_declared()
+            self._check_params()
         self._check_grid(tuple(grid))
-        n_out = self.n_features(grid)
-        out = np.empty((len(caps), n_out), dtype=np.float64)
-        lengths = np.array([c.shape[0] for c in caps])
-        cells = grid[0] * grid[1]
-        for t in np.unique(lengths):
-            idx = np.flatnonzero(lengths == t)
-            step = max(1, _BATCH_VALUES // (int(t) * cells))
-            for k in range(0, len(idx), step):
-                part = idx[k:k + step]
-                stack = np.stack([caps[i] for i in part])
-                with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-                    rows = np.asarray(self._transform_batch(stack), dtype=np.float64)
-                if rows.shape != (len(part), n_out):
-                    raise AssertionError(f"{type(self).__name__}: produced {rows.shape}, expected {(len(part), n_out)}")
-                if not np.isfinite(rows).all():
-                    self._refuse_non_finite(captures, caps, part, rows)
-                out[part] = rows
-        return out
+        return self.n_features(grid)
+
+    def _batch_rows(self, stack: np.ndarray, shared: dict[str, Any]) -> np.ndarray:
+        """:meth:`_transform_batch` of ``stack``; ``shared`` holds what sets of one
+        :class:`FeatureStack` compute alike from the same stack (a set reading it computes it once)."""
+        return self._transform_batch(stack)
 
     def _refuse_non_finite(self, captures: Any, caps: list[np.ndarray], part: np.ndarray, rows: np.ndarray) -> None:
         """Features are finite or refused: name the capture, its largest value and the sensor's range.
@@ -258,12 +249,68 @@ def learns_from_data(name: str) -> bool:
     return bool(getattr(FEATURES.get(name), "fold_dependent", True))
 
 
+class FeatureStack:
+    """Fitted feature sets applied together to batches of captures, their outputs side by side.
+
+    The captures are checked once (:func:`check_captures`, named by the first set), grouped by
+    length and stacked in chunks of at most ``_BATCH_VALUES`` values once for all the sets, and
+    a preprocessing several sets share (``_batch_rows``' ``shared``: the touch sets' pressure) is
+    computed once per chunk; a capture's rows never depend on its neighbours. What does not depend
+    on the captures (each set's parameters, its grid checks and output width) is checked on the
+    first batch of a grid and remembered, so a stack kept for many small batches (a live
+    recogniser's windows) checks it once. One kept for a fitted method must see its sets'
+    parameters unchanged (``set_params`` after fitting needs a new stack).
+    """
+
+    def __init__(self, sets: Sequence[Any]):
+        self.sets = list(sets)
+        self._widths: dict[tuple[int, ...], list[int]] = {}
+        self._own = all(isinstance(fs, FeatureSet) for fs in self.sets)  # else: each set's own transform
+
+    def widths(self, grid: tuple[int, ...]) -> list[int]:
+        """Each set's output width for captures of ``grid``, checked the first time (``_ready``)."""
+        if grid not in self._widths:
+            checked = bool(self._widths)  # the parameters were checked with the first grid
+            self._widths[grid] = [fs._ready(grid, checked) for fs in self.sets]
+        return self._widths[grid]
+
+    def transform(self, captures: Any) -> np.ndarray:
+        if not self._own:  # a transformer of the captures written outside this module
+            return np.hstack([np.asarray(fs.transform(captures), dtype=np.float64) for fs in self.sets])
+        caps = check_captures(captures, name=type(self.sets[0]).__name__)
+        if not caps:
+            grids = [getattr(fs, "grid_", None) for fs in self.sets]
+            return np.zeros((0, sum(fs.n_features(g) if g else 0 for fs, g in zip(self.sets, grids))))
+        grid = tuple(caps[0].shape[1:])
+        edges = np.cumsum([0] + self.widths(grid)).tolist()
+        out = np.empty((len(caps), edges[-1]), dtype=np.float64)
+        lengths = np.array([c.shape[0] for c in caps])
+        cells = grid[0] * grid[1]
+        for t in np.unique(lengths).tolist():
+            idx = np.flatnonzero(lengths == t)
+            step = max(1, _BATCH_VALUES // (t * cells))
+            for k in range(0, len(idx), step):
+                part = idx[k:k + step]
+                stack = np.stack([caps[i] for i in part])
+                shared: dict[str, Any] = {}
+                for fs, a, b in zip(self.sets, edges[:-1], edges[1:]):
+                    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                        rows = np.asarray(fs._batch_rows(stack, shared), dtype=np.float64)
+                    if rows.shape != (len(part), b - a):
+                        raise AssertionError(f"{type(fs).__name__}: produced {rows.shape}, expected {(len(part), b - a)}")
+                    if not np.isfinite(rows).all():
+                        fs._refuse_non_finite(captures, caps, part, rows)
+                    out[part, a:b] = rows
+        return out
+
+
 def stack_features(sets: Sequence[Any], captures: Sequence[np.ndarray]) -> np.ndarray | list[np.ndarray]:
-    """The fitted feature sets' outputs for ``captures``, concatenated as float64; the captures
-    themselves when there are no sets (an estimator that takes captures)."""
+    """The fitted feature sets' outputs for ``captures``, concatenated as float64 (one
+    :class:`FeatureStack`); the captures themselves when there are no sets (an estimator that takes
+    captures)."""
     if not sets:
         return list(captures)
-    return np.hstack([np.asarray(fs.transform(captures), dtype=np.float64) for fs in sets])
+    return FeatureStack(sets).transform(captures)
 
 
 def make_feature_set(name: str, params: dict[str, Any] | None = None, sensor: Any = None) -> FeatureSet:

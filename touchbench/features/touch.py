@@ -199,6 +199,15 @@ class _TouchBase(FeatureSet):
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         return self._from_pressure(stack.shape[2:], *_pressure(stack))
 
+    def _batch_rows(self, stack: np.ndarray, shared: dict) -> np.ndarray:
+        """:meth:`_transform_batch`, the stack's :func:`_pressure` computed once for the touch sets of
+        a :class:`FeatureStack` (``_from_pressure`` never writes into it)."""
+        if type(self)._transform_batch is not _TouchBase._transform_batch:
+            return self._transform_batch(stack)
+        if "pressure" not in shared:
+            shared["pressure"] = _pressure(stack)
+        return self._from_pressure(stack.shape[2:], *shared["pressure"])
+
     def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
         """The features from :func:`_pressure`'s ``(s, base, c)`` of captures of ``grid`` (so a caller
         computing several sets on the same captures, ``touch-windows``, computes the pressure once)."""
@@ -246,6 +255,10 @@ def centred_spectrum(d: np.ndarray, const: np.ndarray, fs: float) -> tuple[np.nd
     return p[..., 1:], f
 
 
+#: the keys of :func:`spectral_summary`'s band fractions, named once
+_BAND_KEYS: tuple[str, ...] = tuple(f"band{_band_name(lo, hi)}" for lo, hi in BANDS)
+
+
 def spectral_summary(p: np.ndarray, f: np.ndarray) -> dict[str, np.ndarray]:
     """Band fractions, peak / centroid frequency, normalised entropy and log power of ``p`` (..., F)."""
     tot = p.sum(axis=-1)
@@ -253,7 +266,7 @@ def spectral_summary(p: np.ndarray, f: np.ndarray) -> dict[str, np.ndarray]:
     safe = np.where(none, 1.0, tot)
     fr = band_sums(p, f, BANDS) / safe[..., None]
     fr[none] = 0.0
-    out: dict[str, np.ndarray] = {f"band{_band_name(lo, hi)}": fr[..., i] for i, (lo, hi) in enumerate(BANDS)}
+    out: dict[str, np.ndarray] = {key: fr[..., i] for i, key in enumerate(_BAND_KEYS)}
     out["fpeak"] = np.where(none, 0.0, f[np.argmax(p, axis=-1)]) if p.shape[-1] else np.zeros(p.shape[:-1])
     out["fcent"] = np.where(none, 0.0, np.einsum("...i,i->...", p, f) / safe)
     q = p / safe[..., None]
