@@ -3,9 +3,9 @@ tsfresh's MinimalFCParameters on the same 64 cell series as a reference.
 
     python benchmarks/bench_features.py [--runs 5] [--tsfresh-runs 3]
     python benchmarks/bench_features.py --dataset haart-sample --runs 1 --no-tsfresh   # seconds
-    python benchmarks/bench_features.py --no-tsfresh --sets touch-rhythm --baseline /tmp/base   # before / after
+    python benchmarks/bench_features.py --no-tsfresh --sets touch-rhythm --baseline ../base   # before / after
 
-``--baseline DIR``: a checkout of touchbench (``git worktree add /tmp/base
+``--baseline DIR``: a checkout of touchbench (``git worktree add ../base
 REV``) whose feature sets of the same names are timed in the same run,
 each run of a set alternating with the baseline's, so both figures see
 the same load; its package is imported under another name
@@ -99,15 +99,20 @@ def floor_us(caps, runs: int) -> float:
 
 def baseline_features(tree: str):
     """The feature registry of the touchbench package in the checkout ``tree``, imported as
-    ``touchbench_baseline`` (a copy in a temporary folder), filled from its own modules only."""
+    ``touchbench_baseline`` (a copy in this benchmark's folder, :func:`workdir.bench_dir`, removed
+    when the script ends), filled from its own modules only."""
+    import atexit
     import importlib
     import shutil
     import tempfile
     from functools import partial
 
+    from workdir import bench_dir
+
     from touchbench.core.registry import import_submodules
 
-    dest = tempfile.mkdtemp(prefix="bench-baseline-")
+    dest = tempfile.mkdtemp(prefix="baseline-", dir=bench_dir(__file__))
+    atexit.register(shutil.rmtree, dest, True)
     shutil.copytree(os.path.join(tree, "touchbench"), os.path.join(dest, "touchbench_baseline"),
                     ignore=shutil.ignore_patterns("__pycache__"))
     sys.path.insert(0, dest)

@@ -26,7 +26,12 @@ def _number_only(constraints: Any, value: bool) -> bool:
     numeric type), none of them saying a boolean (``"boolean"``, ``"verbose"``)."""
     if not isinstance(constraints, list):
         return False
-    met = [c for c in map(make_constraint, constraints) if c.is_satisfied_by(value)]
+    return _met_only_as_number([c for c in map(make_constraint, constraints) if c.is_satisfied_by(value)])
+
+
+def _met_only_as_number(met: list) -> bool:
+    """Whether the constraints a boolean ``met`` (made constraints) are all numeric ones: some, and
+    none of them saying a boolean."""
     return bool(met) and all(isinstance(c, Interval) or getattr(c, "type", None) in _NUMBER_TYPES for c in met)
 
 
@@ -52,8 +57,7 @@ class ListOf(Options):
 
     def _item_ok(self, v: Any) -> bool:
         met = [c for c in self.items if c.is_satisfied_by(v)]
-        return bool(met) and not (isinstance(v, bool) and all(
-            isinstance(c, Interval) or getattr(c, "type", None) in _NUMBER_TYPES for c in met))
+        return bool(met) and not (isinstance(v, bool) and _met_only_as_number(met))
 
     def is_satisfied_by(self, val: Any) -> bool:
         if not isinstance(val, (list, tuple)):

@@ -83,31 +83,36 @@ class FileFormat:
         """``option -> why`` for each of ``values`` (a protocol's ``options``, or Python's) that is not
         an option of the reader or not a value of it: a text or a number is read as the command line
         reads it (``0..255``, ``19x24``, ``54``), a boolean never; a list is left to the reader."""
+        return self._read_options(values)[1]
+
+    def _read_options(self, values: dict[str, Any]) -> tuple[dict[str, Any], dict[str, str]]:
+        """``values`` as the reader takes them (text and numbers through their option's ``parse``),
+        and ``option -> why`` for each that cannot be (:meth:`option_problems`)."""
         known = {o.name: o for o in self.options}
-        out: dict[str, str] = {}
+        read: dict[str, Any] = {}
+        problems: dict[str, str] = {}
         for k, v in values.items():
             o = known.get(k)
             if o is None:
-                out[k] = (f"the {self.name} format takes no option {k!r}{did_you_mean(k, list(known))} "
-                          f"(it takes: {', '.join(sorted(known)) or 'none'})")
+                problems[k] = (f"the {self.name} format takes no option {k!r}{did_you_mean(k, list(known))} "
+                               f"(it takes: {', '.join(sorted(known)) or 'none'})")
             elif isinstance(v, bool):
-                out[k] = f"{o.flag} takes {o.metavar or 'a value'}, not a boolean"
+                problems[k] = f"{o.flag} takes {o.metavar or 'a value'}, not a boolean"
             elif isinstance(v, (str, int, float)):
                 try:
-                    o.parse(str(v))
+                    read[k] = o.parse(str(v))
                 except ValueError as e:
-                    out[k] = str(e)
-        return out
+                    problems[k] = str(e)
+            else:
+                read[k] = v
+        return read, problems
 
     def read(self, path: str | Path, *, name: str | None = None, like: Any = None, **options: Any) -> Any:
         """Read ``path``; ``None`` options are left to the reader's defaults (or ``like``); a text or
         number option is read as the command line reads it (:meth:`option_problems`)."""
-        given = {k: v for k, v in options.items() if v is not None}
-        problem = next(iter(self.option_problems(given).values()), None)
-        if problem:
-            raise OptionValueError(problem)
-        known = {o.name: o for o in self.options}
-        kw = {k: known[k].parse(str(v)) if isinstance(v, (str, int, float)) else v for k, v in given.items()}
+        kw, problems = self._read_options({k: v for k, v in options.items() if v is not None})
+        if problems:
+            raise OptionValueError(next(iter(problems.values())))
         if like is not None and accepts(self.reader, "like"):
             kw["like"] = like
         elif self.missing(kw):
