@@ -131,14 +131,16 @@ def _check_declared_params(name: str, params: dict[str, Any]) -> None:
         raise ParamError(key, message)
 
 
-def check_classifier_params(name: str, params: dict[str, Any]) -> None:
+def check_classifier_params(name: str, params: dict[str, Any], declared: bool = True) -> None:
     """Refuse a value of ``params`` the registered classifier ``name`` cannot run with (module
-    docstring): its declared domains, the shared counts, its ``check_params`` over its defaults,
+    docstring): its declared domains (unless ``declared`` is False: a caller that has just checked
+    them on the built estimator), the shared counts, its ``check_params`` over its defaults,
     then each candidate of its ``candidates=``
     parameter that is written out (``{features, estimator, params}``), as a nested classifier."""
     entry = CLASSIFIERS.entry(name)
     full = {**(entry.tags.get("defaults") or {}), **params}
-    _check_declared_params(name, params)
+    if declared:
+        _check_declared_params(name, params)
     _check_counts(name, full)
     check = entry.tags.get("check_params")
     if check is not None:

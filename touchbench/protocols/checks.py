@@ -215,10 +215,11 @@ def _estimator_issues(name: str, params: dict[str, Any], loc: tuple, what: str) 
 def _own_check_issues(est_name: str, base: dict[str, Any], params: dict[str, Any], loc: tuple) -> list[tuple[tuple, str]]:
     """The first point of the grid ``params`` whose values the classifier's own checks refuse
     (``check_classifier_params``: its registry entry's ``check_params`` and those of the classifiers
-    nested in it, candidates written out), at the field the refusal names."""
+    nested in it, candidates written out), at the field the refusal names; the declared domains of
+    the estimator itself were checked when it was built (:func:`_construction_issues`)."""
     for p in expand_grid(params):
         try:
-            check_classifier_params(est_name, expand_candidates(est_name, {**base, **p}))
+            check_classifier_params(est_name, expand_candidates(est_name, {**base, **p}), declared=False)
         except ParamError as e:
             return [(loc + ("params",) + e.field, str(e))]
         except TouchbenchError as e:  # a candidate that cannot be written out
