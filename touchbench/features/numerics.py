@@ -216,6 +216,19 @@ def total_variation(x: np.ndarray, axis: int = -1) -> np.ndarray:
     return np.abs(np.subtract(as_f64(a), b)).sum(axis=axis)
 
 
+def count_true(a: np.ndarray) -> np.ndarray:
+    """The number of True values of the boolean ``a`` ``(R, L, P)`` along axis 1, int64 ``(R, P)``.
+
+    Summed as bytes (``einsum`` over blocks of at most 255 samples, which cannot overflow a byte):
+    several times faster than ``sum(axis=1)``, which casts every value to the accumulator's type.
+    """
+    u = a.view(np.uint8)
+    out = np.zeros((a.shape[0], a.shape[2]), dtype=np.int64)
+    for i in range(0, a.shape[1], 255):
+        out += np.einsum("rtp->rp", u[:, i:i + 255])
+    return out
+
+
 def weighted_centroid(frames: np.ndarray, floor: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pressure centroid (row, column) of each ``(..., H, W)`` frame, and its total weight.
 
