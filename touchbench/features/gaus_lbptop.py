@@ -121,14 +121,14 @@ class LBPTOP(FeatureSet):
         v = stack if stack.dtype.kind in "biu" else stack.astype(np.float64)
         # Flat layout: voxel (t, y, x) is t*H*W + y*W + x, so a neighbour is a
         # fixed offset and every comparison runs over one contiguous range: the
-        # whole frames rt..T-rt-1, padded by ``margin`` values on both ends so
-        # that no offset leaves the array. Codes of voxels that are not interior
-        # (a neighbour wraps around a border or lies in the padding) are computed
+        # whole frames rt..T-rt-1 but their first and last ``margin`` voxels
+        # (border cells), so that no offset leaves the array. Codes of voxels
+        # that are not interior (a neighbour wraps around a border) are computed
         # and then left out by slicing the frames' inner cells.
         hw = h * w
         margin = ry * w + rx
-        flat = np.pad(v.reshape(n, -1), [(0, 0), (margin, margin)])
-        lo, hi = margin + rt * hw, margin + (t - rt) * hw
+        flat = v.reshape(n, -1)
+        lo, hi = rt * hw + margin, (t - rt) * hw - margin
         centre = flat[:, lo:hi]
         planes = {
             "xy": [(0, a, b) for a, b in circle_offsets(p, ry, rx)],
@@ -139,11 +139,12 @@ class LBPTOP(FeatureSet):
         bits = np.empty((p,) + centre.shape, dtype=np.uint8)
         weights = (2 ** np.arange(p)).astype(np.uint8 if p <= 8 else np.uint16)
         offsets = (np.arange(n) * 2**p)[:, None, None, None]
+        code = np.zeros((n, ct * hw), dtype=weights.dtype)
         for i, pl in enumerate(PLANES):
             for k, (dt, dy, dx) in enumerate(planes[pl]):
                 off = dt * hw + dy * w + dx
                 np.greater_equal(flat[:, lo + off:hi + off], centre, out=bits[k].view(bool))
-            code = np.einsum("pnm,p->nm", bits, weights)
+            np.einsum("pnm,p->nm", bits, weights, out=code[:, margin:ct * hw - margin])
             inner = code.reshape(n, ct, h, w)[:, :, ry:h - ry, rx:w - rx]
             # each capture's codes counted, then the counts summed into the mapping's bins
             counts = np.bincount(np.add(inner, offsets, dtype=np.intp).ravel(), minlength=n * 2**p)
