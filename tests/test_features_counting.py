@@ -64,8 +64,11 @@ def test_counted_moments_equal_scipys(seed, t, dtype, spread):
     assert_allclose(m["kurt"], kurt, rtol=1e-9, atol=1e-9)
 
 
-def test_counts_decline_floats_and_wide_ranges():
-    assert SeriesCounts.of(np.zeros((1, 4, 2))) is None
+def test_counts_decline_fractions_and_wide_ranges():
+    assert SeriesCounts.of(np.full((1, 4, 2), 0.5)) is None
+    assert SeriesCounts.of(np.full((1, 4, 2), 2.0**31)) is None
+    whole = SeriesCounts.of(np.array([[[3.0], [1.0], [2.0]]], dtype=np.float32))  # whole numbers: counted
+    assert {k: v.tolist() for k, v in whole.order_stats([0, 1, 2]).items()} == {0: [1], 1: [2], 2: [3]}
     wide = np.array([[[0], [60000]]], dtype=np.uint16)  # 60001 bins for 2 readings
     assert SeriesCounts.of(wide) is None
     assert SeriesCounts.of(wide, max_bins_per_value=np.inf) is not None

@@ -143,8 +143,10 @@ class SeriesCounts:
     + p``; a stack of captures' frames, cells last, is read in place). Series ``g``'s values
     ``lo[g]..hi[g]`` get bins of their own in one count array (value ``v`` -> bin ``v + shift[g]``),
     so its bins hold ``hi - lo + 1`` counts: little when readings vary over a small part of the
-    sensor's range, as pressure readings of a cell do. :meth:`of` returns None when the bins would
-    outnumber ``max_bins_per_value`` times the readings (a sort is then cheaper).
+    sensor's range, as pressure readings of a cell do. Floats that are all whole numbers (within
+    int32) are counted as those integers, so a capture gives the same statistics in any dtype.
+    :meth:`of` returns None for other floats and when the bins would outnumber
+    ``max_bins_per_value`` times the readings (a sort is then cheaper).
     """
 
     def __init__(self, lo: np.ndarray, hi: np.ndarray, shift: np.ndarray, counts: np.ndarray, n: int):
@@ -152,6 +154,9 @@ class SeriesCounts:
 
     @classmethod
     def of(cls, x: np.ndarray, max_bins_per_value: float = 2.0) -> "SeriesCounts | None":
+        if x.dtype.kind == "f":  # whole readings held as floats are counted as the integers they are
+            whole = bool(x.size) and np.abs(x).max() < 2**31 and np.array_equal(x, np.rint(x))
+            x = x.astype(np.int32) if whole else x
         if x.dtype.kind not in "biu" or x.dtype.itemsize > 4:
             return None
         n_series, t, p = x.shape
