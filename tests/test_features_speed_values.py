@@ -76,8 +76,9 @@ def test_radix_sort_gives_numpys_sorted_values(dtype):
     assert_array_equal(median_rows(x.reshape(3, -1)), np.median(x.reshape(3, -1).astype(np.float64), axis=1))
 
 
-def test_msd_and_sd_unchanged_by_the_sort(real_haart):
-    """msd's quartiles and sd's median come from the radix sort: the values of numpy's default sort."""
+def test_msd_quartiles_are_numpys_hazen_quantiles(real_haart):
+    """msd's quartiles come from each cell's value counts (a sort where the counts would be too many):
+    numpy's hazen quantiles of the cell series."""
     caps = real_haart.captures[:12]
     msd = FEATURES.create("msd", sensor=real_haart.sensor).fit(caps)
     x = msd.transform(caps).reshape(len(caps), 12, 64)

@@ -121,32 +121,33 @@ class LBPTOP(FeatureSet):
         v = stack if stack.dtype.kind in "biu" else stack.astype(np.float64)
         # Flat layout: voxel (t, y, x) is t*H*W + y*W + x, so a neighbour is a
         # fixed offset and every comparison runs over one contiguous range: the
-        # whole frames rt..T-rt-1, padded by ``margin`` values on both ends so
-        # that no offset leaves the array. Codes of voxels that are not interior
-        # (a neighbour wraps around a border or lies in the padding) are computed
+        # whole frames rt..T-rt-1 but their first and last ``margin`` voxels
+        # (border cells), so that no offset leaves the array. Codes of voxels
+        # that are not interior (a neighbour wraps around a border) are computed
         # and then left out by slicing the frames' inner cells.
         hw = h * w
         margin = ry * w + rx
-        flat = np.pad(v.reshape(n, -1), [(0, 0), (margin, margin)])
-        lo, hi = margin + rt * hw, margin + (t - rt) * hw
+        flat = v.reshape(n, -1)
+        lo, hi = rt * hw + margin, (t - rt) * hw - margin
         centre = flat[:, lo:hi]
         planes = {
             "xy": [(0, a, b) for a, b in circle_offsets(p, ry, rx)],
             "xt": [(a, 0, b) for a, b in circle_offsets(p, rt, rx)],
             "yt": [(a, b, 0) for a, b in circle_offsets(p, rt, ry)],
         }
-        code = np.empty(centre.shape, dtype=np.uint8 if p <= 8 else np.uint16)
-        ge = np.empty(centre.shape, dtype=bool)
-        offsets = (np.arange(n) * nb)[:, None, None, None]
+        # one row of bits per neighbour, combined into codes by one weighted sum (neighbour k: 2**k)
+        bits = np.empty((p,) + centre.shape, dtype=np.uint8)
+        weights = (2 ** np.arange(p)).astype(np.uint8 if p <= 8 else np.uint16)
+        offsets = (np.arange(n) * 2**p)[:, None, None, None]
+        code = np.zeros((n, ct * hw), dtype=weights.dtype)
         for i, pl in enumerate(PLANES):
-            code[:] = 0
-            # highest bit first: code = 2 code + bit, all in place
-            for dt, dy, dx in reversed(planes[pl]):
+            for k, (dt, dy, dx) in enumerate(planes[pl]):
                 off = dt * hw + dy * w + dx
-                np.greater_equal(flat[:, lo + off:hi + off], centre, out=ge)
-                np.add(code, code, out=code)
-                np.add(code, ge.view(np.uint8), out=code)
+                np.greater_equal(flat[:, lo + off:hi + off], centre, out=bits[k].view(bool))
+            np.einsum("pnm,p->nm", bits, weights, out=code[:, margin:ct * hw - margin])
             inner = code.reshape(n, ct, h, w)[:, :, ry:h - ry, rx:w - rx]
-            hist = np.bincount((table[inner] + offsets).ravel(), minlength=n * nb).reshape(n, nb)
-            out[:, i * nb:(i + 1) * nb] = hist / n_centres
+            # each capture's codes counted, then the counts summed into the mapping's bins
+            counts = np.bincount(np.add(inner, offsets, dtype=np.intp).ravel(), minlength=n * 2**p)
+            bins = (table + (np.arange(n) * nb)[:, None]).ravel()
+            out[:, i * nb:(i + 1) * nb] = np.bincount(bins, weights=counts, minlength=n * nb).reshape(n, nb) / n_centres
         return out

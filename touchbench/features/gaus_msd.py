@@ -8,7 +8,7 @@ import numpy as np
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureSet, cell_names
 from .gaus_common import GAUS_PAPER
-from .numerics import as_f64, hazen_quantiles, moments, sort_last, total_variation
+from .numerics import SeriesCounts, as_f64, hazen_quantiles, moments, sort_last, total_variation
 
 MSD_STATS = ("min", "max", "mean", "q1", "median", "q3", "area", "tv", "iqr", "var", "skew", "kurt")
 
@@ -69,11 +69,17 @@ class MotionStatisticalDistribution(FeatureSet):
         return [f"msd_{s}_{c}" for s in MSD_STATS for c in cells]
 
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
-        series = cell_series(stack)  # (N, P, T)
-        srt = sorted_f64(series)
-        q1, med, q3 = hazen_quantiles(srt, (0.25, 0.5, 0.75))
-        m = moments(srt, presorted=True, overwrite=True)  # srt is scratch from here on
-        area = m["sum"]
-        tv = total_variation(series)
-        cols = [m["min"], m["max"], m["mean"], q1, med, q3, area, tv, q3 - q1, m["var"], m["skew"], m["kurt"]]
+        n, t = stack.shape[:2]
+        frames = stack.reshape(n, t, -1)  # (N, T, P): every cell's series along axis 1, in place
+        counts = SeriesCounts.of(frames)
+        if counts is not None:  # integer readings over a narrow range: counted, not sorted
+            q1, med, q3 = counts.quantiles((0.25, 0.5, 0.75))
+            m = {k: v.reshape(n, -1) for k, v in counts.moments().items()}
+            q1, med, q3 = (q.reshape(n, -1) for q in (q1, med, q3))
+        else:
+            srt = sorted_f64(cell_series(stack))
+            q1, med, q3 = hazen_quantiles(srt, (0.25, 0.5, 0.75))
+            m = moments(srt, presorted=True, overwrite=True)  # srt is scratch from here on
+        tv = total_variation(frames, axis=1)
+        cols = [m["min"], m["max"], m["mean"], q1, med, q3, m["sum"], tv, q3 - q1, m["var"], m["skew"], m["kurt"]]
         return np.concatenate(cols, axis=1)

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import functools
 from numbers import Real
 
 from typing import Any
@@ -14,7 +15,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
 from .gaus_common import GAUS_PAPER, lookup, resolve_units, setting_for
-from .numerics import sort_last
+from .numerics import SeriesCounts, sort_last
 
 _CONDITIONS = ("notouch", "touched", "high")
 _VALUES = "bins for notouch, touched and high, high_offset and touched_fixed"
@@ -37,6 +38,14 @@ _TABLE: dict[str, dict[str, Any]] = {
 }
 
 
+def conditions(fixed: float | None) -> list[tuple[str, str]]:
+    """(feature prefix, bins key) in output order (``fixed``: the extra touched threshold or None)."""
+    conds = [("notouch_frame", "notouch"), ("notouch_instance", "notouch"), ("touched_median", "touched")]
+    if fixed is not None:
+        conds.append((f"touched_ge{fixed:g}", "touched"))
+    return conds + [("high_frame", "high"), ("high_instance", "high")]
+
+
 def histcounts_edges(width: float, lead: float, trail: float) -> np.ndarray:
     """MATLAB ``histcounts(..., 'BinWidth', width, 'BinLimits', [lead trail])`` edges.
 
@@ -53,7 +62,7 @@ def histcounts_edges(width: float, lead: float, trail: float) -> np.ndarray:
     return edges
 
 
-def histogram_counts(counts: np.ndarray, n_cells: int, edges: dict[str, np.ndarray], keys: list[str],
+def histogram_counts(counts: list[np.ndarray], n_cells: int, edges: dict[str, np.ndarray], keys: list[str],
                      clip: bool) -> np.ndarray:
     """Histogram each row of every ``counts[i]`` (N, T) of cells (integers ``0..n_cells``) over
     ``edges[keys[i]]`` -> (N, sum of the bins), the histograms side by side, in one ``bincount``.
@@ -65,10 +74,21 @@ def histogram_counts(counts: np.ndarray, n_cells: int, edges: dict[str, np.ndarr
     first / last bin, so every frame is counted; without, they are dropped
     (into one extra column, cut off at the end).
     """
+    lut, width = _count_to_column(n_cells, tuple(tuple(edges[k].tolist()) for k in keys), clip)
+    n = counts[0].shape[0]
+    key = np.stack(counts, axis=1)  # (N, conditions, T)
+    key += (np.arange(len(keys)) * (n_cells + 1))[:, None]
+    key = lut[key] + (np.arange(n) * width)[:, None, None]
+    return np.bincount(key.ravel(), minlength=n * width).reshape(n, width)[:, :width - 1].astype(np.float64)
+
+
+@functools.lru_cache(maxsize=32)
+def _count_to_column(n_cells: int, edges: tuple[tuple[float, ...], ...], clip: bool) -> tuple[np.ndarray, int]:
+    """:func:`histogram_counts`' table: count ``c`` of condition ``i`` (``i * (n_cells + 1) + c``) ->
+    its column (the dropped ones: the last column), and the number of columns (read-only, cached)."""
     every = np.arange(n_cells + 1, dtype=np.float64)
     luts, start = [], 0
-    for key in keys:
-        e = edges[key]
+    for e in map(np.array, edges):
         nb = len(e) - 1
         idx = np.searchsorted(e, every, side="right") - 1
         idx = np.where(every == e[-1], nb - 1, idx)
@@ -76,14 +96,10 @@ def histogram_counts(counts: np.ndarray, n_cells: int, edges: dict[str, np.ndarr
         idx = np.clip(idx, 0, nb - 1) + start
         luts.append(idx if clip else np.where(inside, idx, -1))
         start += nb
-    lut = np.concatenate(luts)  # count c of condition i -> column, -1 for dropped
+    lut = np.concatenate(luts)
     lut[lut < 0] = start
-    width = start + 1
-    n = counts[0].shape[0]
-    key = np.stack(counts, axis=1)  # (N, conditions, T)
-    key += (np.arange(len(keys)) * (n_cells + 1))[:, None]
-    key = lut[key] + (np.arange(n) * width)[:, None, None]
-    return np.bincount(key.ravel(), minlength=n * width).reshape(n, width)[:, :start].astype(np.float64)
+    lut.flags.writeable = False
+    return lut, start + 1
 
 
 @FEATURES.register("sd", description="no-touch / touched / high-pressure cell counts per frame, histogrammed")
@@ -224,16 +240,11 @@ class StatisticalDistribution(FeatureSet):
 
     def _conditions(self) -> list[tuple[str, str]]:
         """(feature prefix, bins key) in output order."""
-        _, fixed, _ = self._resolved()
-        conds = [("notouch_frame", "notouch"), ("notouch_instance", "notouch"), ("touched_median", "touched")]
-        if fixed is not None:
-            conds.append((f"touched_ge{fixed:g}", "touched"))
-        conds += [("high_frame", "high"), ("high_instance", "high")]
-        return conds
+        return conditions(self._resolved()[1])
 
     def feature_names(self, grid: tuple[int, int]) -> list[str]:
-        _, _, edges = self._resolved()
-        return [f"sd_{p}_b{k:02d}" for p, key in self._conditions() for k in range(len(edges[key]) - 1)]
+        _, fixed, edges = self._resolved()
+        return [f"sd_{p}_b{k:02d}" for p, key in conditions(fixed) for k in range(len(edges[key]) - 1)]
 
     # ----------------------------------------------------------- transform
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
@@ -266,7 +277,7 @@ class StatisticalDistribution(FeatureSet):
         }
         if fixed is not None:
             counts[f"touched_ge{fixed:g}"] = count(x >= fixed)
-        conds = self._conditions()
+        conds = conditions(fixed)
         h = histogram_counts([counts[c] for c, _ in conds], p, edges, [k for _, k in conds], self.clip)
         return h / t if self.normalize else h
 
@@ -274,18 +285,15 @@ class StatisticalDistribution(FeatureSet):
 def median_rows(flat: np.ndarray) -> np.ndarray:
     """Median of each row of ``flat`` (N, M) as float64 (mean of the two middle values for even M).
 
-    Integers of up to 16 bits: the two middle order statistics from the row's value counts (one
-    ``bincount``, cheaper than a sort); other dtypes: a sort.
+    Integer rows over a narrow range: the two middle order statistics from the rows' value counts
+    (:class:`~touchbench.features.numerics.SeriesCounts`, one ``bincount``, cheaper than a sort);
+    other rows: a sort.
     """
     m = flat.shape[1]
-    ranks = np.array([(m - 1) // 2, m // 2])
-    if flat.dtype.kind in "biu" and flat.dtype.itemsize <= 2:
-        out = np.empty(flat.shape[0])
-        for i, row in enumerate(flat):
-            lo = int(row.min())
-            cum = np.cumsum(np.bincount(np.subtract(row, lo, dtype=np.intp)))
-            mid = lo + np.searchsorted(cum, ranks, side="right").astype(np.float64)
-            out[i] = (mid[0] + mid[1]) / 2.0
-        return out
+    ranks = ((m - 1) // 2, m // 2)
+    counts = SeriesCounts.of(flat[:, :, None])
+    if counts is not None:
+        stats = counts.order_stats(ranks)
+        return (stats[ranks[0]].astype(np.float64) + stats[ranks[1]].astype(np.float64)) / 2.0
     srt = sort_last(flat)
     return (srt[:, ranks[0]].astype(np.float64) + srt[:, ranks[1]].astype(np.float64)) / 2.0

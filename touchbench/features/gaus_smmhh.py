@@ -14,7 +14,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, cell_names
 from .gaus_common import GAUS_PAPER, resolve_units
-from .numerics import as_f64
+from .numerics import count_true
 
 # Motion threshold (raw sensor units): the paper says only "appropriate
 # thresholds". HAART: 3 is the 99th percentile of |frame(t+s) - frame(t)|
@@ -62,26 +62,24 @@ def pyramid_shapes(grid: tuple[int, int], n_scales: int) -> list[tuple[int, int]
     return out
 
 
-def run_length_histogram(binary: np.ndarray, max_len: int) -> np.ndarray:
-    """Histogram of the lengths of the runs of 1s along the last axis of ``binary`` (..., L).
+def run_length_histogram(padded: np.ndarray, length: int, max_len: int) -> np.ndarray:
+    """Histogram of the lengths of the runs of 1s along axis 1 of ``padded`` ``(R, length + max_len + 1, P)``
+    booleans: the sequences of ``length`` samples in rows ``1..length``, the other rows 0 (so a run
+    touching either end counts, the sequence read as bordered by 0s). Returns ``(R, max_len, P)``.
 
-    Bin m-1 counts runs of exactly m ones, m < ``max_len``; the last bin
-    counts runs of ``max_len`` or more. A run touching either end counts
-    (the sequence is read as if bordered by 0s). Returns (..., max_len).
-    ``binary`` may be a strided view (it is copied once, into the padding).
+    Bin m-1 counts runs of exactly m ones, m < ``max_len``; the last bin counts runs of ``max_len``
+    or more. With ``a_m(t)`` = "a run starts at t and lasts at least m samples" (a start, ANDed with
+    the next m - 1 samples), the runs of at least m are the sum of ``a_m`` over t, and those of
+    exactly m the difference of two such sums: ``max_len`` ANDs of whole arrays, no run is listed.
     """
-    lead, L = binary.shape[:-1], binary.shape[-1]
-    r = int(np.prod(lead))
-    padded = np.zeros(lead + (L + 2,), dtype=np.int8)
-    padded[..., 1:-1] = binary
-    d = np.diff(padded.reshape(r, L + 2), axis=1).ravel()
-    starts = np.flatnonzero(d == 1)
-    ends = np.flatnonzero(d == -1)
-    lengths = ends - starts  # each run's end follows its start in the same row
-    rows = starts // (L + 1)
-    bins = np.minimum(lengths, max_len) - 1
-    hist = np.bincount(rows * max_len + bins, minlength=r * max_len).astype(np.float64)
-    return hist.reshape(lead + (max_len,))
+    a = np.greater(padded[:, 1:length + 1], padded[:, :length])  # a run starts: 1 after 0
+    at_least = [count_true(a)]
+    for k in range(1, max_len):
+        a &= padded[:, 1 + k:1 + k + length]
+        at_least.append(count_true(a))
+    g = np.stack(at_least, axis=1).astype(np.float64)  # (R, max_len, P): runs of at least m
+    g[:, :-1] -= g[:, 1:]
+    return g
 
 
 @FEATURES.register("smmhh", description="multi-scale motion history histograms on 8x8..1x1 pooled videos")
@@ -197,30 +195,48 @@ class SpatialMultiScaleMHH(FeatureSet):
 
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         levels = self._levels(stack.shape[2:])
-        thr = self._thresholds(levels)
         skips = [int(s) for s in self.skips]
         M = int(self.max_len)
         n, t = stack.shape[:2]
         shapes = pyramid_shapes(stack.shape[2:], levels)
-        sizes = [h * w for h, w in shapes]
-        ptot = sum(sizes)
+        edges = np.cumsum([0] + [h * w for h, w in shapes])
         L = max(t - min(skips), 0)
-        motion = np.zeros((n, len(skips), max(L, 1), ptot), dtype=bool)  # time-major: contiguous writes
-        v = as_f64(stack)
-        off = 0
-        for k, size in enumerate(sizes):
-            if k:
-                v = pool2(v)
-            flat = v.reshape(n, t, size)
-            for si, s in enumerate(skips):
-                if t > s:
-                    np.greater(np.abs(flat[:, s:] - flat[:, :-s]), thr[k], out=motion[:, si, : t - s, off:off + size])
-            off += size
-        hist = run_length_histogram(motion.transpose(0, 1, 3, 2), M)  # (n, S, P, M)
-        parts = []
-        off = 0
-        for size in sizes:
-            # (n, S, P_k, M) -> (n, S, M, P_k): scale, skip, run length, pixel
-            parts.append(hist[:, :, off:off + size, :].transpose(0, 1, 3, 2).reshape(n, -1))
-            off += size
-        return np.concatenate(parts, axis=1)
+        if L < 1:
+            return np.zeros((n, len(skips) * M * int(edges[-1])))
+        video, thr = pyramid_video(stack, shapes, self._thresholds(levels))
+        motion = np.zeros((n, len(skips), L + M + 1, int(edges[-1])), dtype=bool)
+        for si, s in enumerate(skips):
+            if t > s:
+                d = np.subtract(video[:, s:], video[:, :-s])
+                np.greater(np.abs(d, out=d), thr, out=motion[:, si, 1:t - s + 1])
+        hist = run_length_histogram(motion.reshape(n * len(skips), L + M + 1, -1), L, M).reshape(n, len(skips), M, -1)
+        # scale, skip, run length, pixel
+        return np.concatenate([hist[..., a:b].reshape(n, -1) for a, b in zip(edges[:-1], edges[1:])], axis=1)
+
+
+def pyramid_video(stack: np.ndarray, shapes: list[tuple[int, int]], thresholds: list[float]) -> tuple[np.ndarray, np.ndarray]:
+    """Every scale's pixels side by side, time-major ``(N, T, pixels of all scales)``, and each
+    pixel's motion threshold: motion at skip ``s`` is ``|video(t + s) - video(t)| > threshold``.
+
+    The scales are :func:`pool2`'s averages, in float64. Integer readings (up to 16 bits) on a grid
+    that every pooling halves exactly (8 x 8: 8, 4, 2) give the same motion in int32: a level-k
+    pixel is then the sum of its ``c = 4**k`` cells over ``c`` (exactly, in float64), so its change
+    exceeds ``thr`` iff the sum's change exceeds ``thr * c``, for an integer iff it exceeds
+    ``floor(thr * c)``.
+    """
+    n, t = stack.shape[:2]
+    sizes = [h * w for h, w in shapes]
+    edges = np.cumsum([0] + sizes)
+    even = all(h % 2 == 0 and w % 2 == 0 for h, w in shapes[:-1])
+    exact = (stack.dtype.kind in "biu" and stack.dtype.itemsize <= 2 and sizes[0] < 2**14 and even
+             and not np.isnan(thresholds).any())
+    video = np.empty((n, t, int(edges[-1])), dtype=np.int32 if exact else np.float64)
+    v = stack.astype(video.dtype)
+    for k in range(len(shapes)):
+        if k:
+            v = v[..., 0::2, 0::2] + v[..., 1::2, 0::2] + v[..., 0::2, 1::2] + v[..., 1::2, 1::2] if exact else pool2(v)
+        video[:, :, edges[k]:edges[k + 1]] = v.reshape(n, t, -1)
+    if not exact:
+        return video, np.repeat(thresholds, sizes)
+    scaled = np.asarray(thresholds, dtype=np.float64) * 4.0 ** np.arange(len(shapes))
+    return video, np.repeat(np.clip(np.floor(scaled), -1, 2**31 - 1).astype(np.int32), sizes)

@@ -30,6 +30,7 @@ here):
 from __future__ import annotations
 
 import functools
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -65,14 +66,11 @@ def moments(x: np.ndarray, *, ddof_scale: int = 0, presorted: bool = False, over
     """
     n = x.shape[-1]
     total = x.sum(axis=-1)
-    mean = total / n
     if presorted:
         lo, hi = x[..., 0].copy(), x[..., -1].copy()
     else:
         lo, hi = x.min(axis=-1), x.max(axis=-1)
-    rng = hi - lo
-    const = rng == 0
-    scale = np.where(const, 1.0, rng)
+    scale = _scale(lo, hi)
     # shift to the minimum and scale by the range first, centre afterwards:
     # z lies in [0, 1], so its mean and deviations never underflow
     z = np.subtract(x, lo[..., None], out=x if overwrite else None)
@@ -82,6 +80,23 @@ def moments(x: np.ndarray, *, ddof_scale: int = 0, presorted: bool = False, over
     m2 = z2.sum(axis=-1) / n
     m3 = np.einsum("...i,...i->...", z2, z) / n
     m4 = np.einsum("...i,...i->...", z2, z2) / n
+    return _moment_stats(n, total, lo, hi, (m2, m3, m4), ddof_scale)
+
+
+def _scale(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The range ``hi - lo``, 1 where it is 0 (a constant series): the divisor of the scaled moments."""
+    rng = hi - lo
+    return np.where(rng == 0, 1.0, rng)
+
+
+def _moment_stats(n: int, total: np.ndarray, lo: np.ndarray, hi: np.ndarray, central: tuple, ddof_scale: int) -> dict[str, np.ndarray]:
+    """:func:`moments`' statistics from the sum, the ends and the second to fourth central moments
+    (1/n) of the series scaled by its range (``central``)."""
+    m2, m3, m4 = central
+    mean = total / n
+    rng = hi - lo
+    const = rng == 0
+    scale = _scale(lo, hi)
     # variance with ddof=1 (0 for n == 1), back in the input's units
     var = np.where(const, 0.0, m2 * scale * scale * (n / (n - 1) if n > 1 else 0.0))
     s2 = m2 * (n / (n - ddof_scale) if n > ddof_scale else 1.0)
@@ -89,6 +104,14 @@ def moments(x: np.ndarray, *, ddof_scale: int = 0, presorted: bool = False, over
     skew = np.where(const, SKEW_CONSTANT, m3 / s2**1.5)
     kurt = np.where(const, KURT_CONSTANT, m4 / (s2 * s2))
     return {"sum": total, "mean": mean, "var": var, "skew": skew, "kurt": kurt, "min": lo, "max": hi, "range": np.where(const, 0.0, rng)}
+
+
+def hazen_points(n: int, p: float) -> tuple[int, int, float]:
+    """Where MATLAB's quantile ``p`` of ``n`` sorted values lies: the 0-based order statistics ``i``
+    and ``j`` it interpolates between and the weight ``f`` of ``j`` (see :func:`hazen_quantiles`)."""
+    pos = min(max(n * p - 0.5, 0.0), n - 1.0)
+    i = int(np.floor(pos))
+    return i, min(i + 1, n - 1), pos - i
 
 
 def hazen_quantiles(sorted_x: np.ndarray, probs: tuple[float, ...]) -> list[np.ndarray]:
@@ -99,29 +122,116 @@ def hazen_quantiles(sorted_x: np.ndarray, probs: tuple[float, ...]) -> list[np.n
     interpolate linearly between, and return the min/max beyond the first /
     last point: numpy's ``method="hazen"``.
     """
-    n = sorted_x.shape[-1]
+    return _interpolate(sorted_x.shape[-1], probs, lambda k: sorted_x[..., k])
+
+
+def _interpolate(n: int, probs: tuple[float, ...], order_stat: Callable[[int], np.ndarray]) -> list[np.ndarray]:
+    """Hazen quantiles from ``order_stat(k)``, the k-th smallest (0-based) of every series."""
     out = []
     for p in probs:
-        pos = min(max(n * p - 0.5, 0.0), n - 1.0)
-        i = int(np.floor(pos))
-        j = min(i + 1, n - 1)
-        f = pos - i
-        a = sorted_x[..., i]
-        out.append(a + f * (sorted_x[..., j] - a) if f else a.astype(np.float64, copy=True))
+        i, j, f = hazen_points(n, p)
+        a = order_stat(i)
+        out.append(a + f * (order_stat(j) - a) if f else np.array(a, dtype=np.float64))
     return out
 
 
-def total_variation(x: np.ndarray) -> np.ndarray:
-    """Sum of absolute consecutive differences along the last axis (0 for one sample).
+class SeriesCounts:
+    """Integer series held as their value counts: every order statistic and moment of each series
+    from one ``bincount``, with no sort.
 
-    Integer input (up to 16 bits) is differenced exactly in int32, anything
-    else in float64.
+    ``x`` ``(N, T, P)`` integers: ``N * P`` series of ``T`` readings along axis 1 (series ``g = i * P
+    + p``; a stack of captures' frames, cells last, is read in place). Series ``g``'s values
+    ``lo[g]..hi[g]`` get bins of their own in one count array (value ``v`` -> bin ``v + shift[g]``),
+    so its bins hold ``hi - lo + 1`` counts: little when readings vary over a small part of the
+    sensor's range, as pressure readings of a cell do. Floats that are all whole numbers (within
+    int32) are counted as those integers, so a capture gives the same statistics in any dtype.
+    :meth:`of` returns None for other floats and when the bins would outnumber
+    ``max_bins_per_value`` times the readings (a sort is then cheaper).
     """
-    if x.shape[-1] < 2:
-        return np.zeros(x.shape[:-1])
+
+    def __init__(self, lo: np.ndarray, hi: np.ndarray, shift: np.ndarray, counts: np.ndarray, n: int):
+        self.lo, self.hi, self.shift, self.counts, self.n = lo, hi, shift, counts, n
+
+    @classmethod
+    def of(cls, x: np.ndarray, max_bins_per_value: float = 2.0) -> "SeriesCounts | None":
+        if x.dtype.kind == "f":  # whole readings held as floats are counted as the integers they are
+            whole = bool(x.size) and np.abs(x).max() < 2**31 and np.array_equal(x, np.rint(x))
+            x = x.astype(np.int32) if whole else x
+        if x.dtype.kind not in "biu" or x.dtype.itemsize > 4:
+            return None
+        n_series, t, p = x.shape
+        lo = x.min(axis=1).astype(np.int64)
+        hi = x.max(axis=1).astype(np.int64)
+        span = (hi - lo + 1).ravel()
+        start = np.cumsum(span) - span
+        bins = int(start[-1] + span[-1]) if span.size else 0
+        if bins > max_bins_per_value * x.size:
+            return None
+        shift = start - lo.ravel()
+        key = np.add(x, shift.reshape(n_series, 1, p), dtype=np.int64)
+        return cls(lo.ravel(), hi.ravel(), shift, np.bincount(key.ravel(), minlength=bins), t)
+
+    def order_stats(self, ranks: Sequence[int]) -> dict[int, np.ndarray]:
+        """The ``k``-th smallest (0-based) reading of every series for each ``k`` in ``ranks``, int64."""
+        cum = np.cumsum(self.counts)
+        base = np.arange(self.lo.size, dtype=np.int64) * self.n
+        return {k: np.searchsorted(cum, base + k, side="right") - self.shift for k in sorted(set(ranks))}
+
+    def quantiles(self, probs: tuple[float, ...]) -> list[np.ndarray]:
+        """Hazen quantiles of every series (:func:`hazen_quantiles`' values), float64."""
+        ranks = [k for p in probs for k in hazen_points(self.n, p)[:2]]
+        stats = {k: v.astype(np.float64) for k, v in self.order_stats(ranks).items()}
+        return _interpolate(self.n, probs, stats.__getitem__)
+
+    def moments(self, ddof_scale: int = 0) -> dict[str, np.ndarray]:
+        """:func:`moments` of every series, each distinct value weighted by its count."""
+        bins = np.flatnonzero(self.counts)
+        counts = self.counts[bins].astype(np.float64)
+        first = np.searchsorted(bins, self.shift + self.lo)  # each series' first (lowest) bin
+        series = np.repeat(np.arange(self.lo.size), np.diff(np.append(first, bins.size)))
+        lo, hi = self.lo.astype(np.float64), self.hi.astype(np.float64)
+        value = (bins - self.shift[series]).astype(np.float64)
+        total = np.add.reduceat(counts * value, first)
+        z = (value - lo[series]) / _scale(lo, hi)[series]
+        z -= (np.add.reduceat(counts * z, first) / self.n)[series]
+        cz2 = counts * z * z
+        central = [np.add.reduceat(w, first) / self.n for w in (cz2, cz2 * z, cz2 * z * z)]
+        return _moment_stats(self.n, total, lo, hi, tuple(central), ddof_scale)
+
+
+def total_variation(x: np.ndarray, axis: int = -1) -> np.ndarray:
+    """Sum of absolute consecutive differences along ``axis`` (0 for one sample).
+
+    Unsigned integers of up to 16 bits are differenced exactly in their own
+    dtype (``max - min`` of each pair), other integers up to 16 bits in
+    int32, anything else in float64.
+    """
+    axis = axis % x.ndim
+    if x.shape[axis] < 2:
+        return np.zeros(x.shape[:axis] + x.shape[axis + 1:])
+    before = (slice(None),) * axis
+    a, b = x[before + (slice(1, None),)], x[before + (slice(None, -1),)]
     if x.dtype.kind in "biu" and x.dtype.itemsize <= 2:
-        return np.abs(np.diff(x.astype(np.int32), axis=-1)).sum(axis=-1, dtype=np.int64).astype(np.float64)
-    return np.abs(np.diff(as_f64(x), axis=-1)).sum(axis=-1)
+        if x.dtype.kind == "u":
+            d = np.maximum(a, b)
+            d -= np.minimum(a, b)
+        else:
+            d = np.abs(np.subtract(a, b, dtype=np.int32))
+        return d.sum(axis=axis, dtype=np.int64).astype(np.float64)
+    return np.abs(np.subtract(as_f64(a), b)).sum(axis=axis)
+
+
+def count_true(a: np.ndarray) -> np.ndarray:
+    """The number of True values of the boolean ``a`` ``(R, L, P)`` along axis 1, int64 ``(R, P)``.
+
+    Summed as bytes (``einsum`` over blocks of at most 255 samples, which cannot overflow a byte):
+    several times faster than ``sum(axis=1)``, which casts every value to the accumulator's type.
+    """
+    u = a.view(np.uint8)
+    out = np.zeros((a.shape[0], a.shape[2]), dtype=np.int64)
+    for i in range(0, a.shape[1], 255):
+        out += np.einsum("rtp->rp", u[:, i:i + 255])
+    return out
 
 
 def weighted_centroid(frames: np.ndarray, floor: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
