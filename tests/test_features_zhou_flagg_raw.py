@@ -3,13 +3,19 @@ values worked out by hand in the comments)."""
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 import pytest
-from helpers import make_set
+from helpers import make_set, synthetic_captures
 from numpy.testing import assert_allclose, assert_array_equal
 
 from touchbench.datasets.model import SensorSpec
 from touchbench.features import FEATURES
+from touchbench.engine.cache import FeatureCache
+from touchbench.features import base as base_module
+from touchbench.features import zhou
+from touchbench.features.base import SharedPrep
 from touchbench.features.zhou import bicubic_matrix, cutoff_slice, frame_descriptors
 
 # 2 x 2 grid, three frames
@@ -197,3 +203,38 @@ def test_raw_window_pads_with_last_frame():
     assert make_set("raw-window").n_features((8, 8)) == 432 * 64
     big = np.arange(432 * 64, dtype=np.uint16).reshape(432, 8, 8)
     assert_array_equal(make_set("raw-window").fit_transform([big])[0].reshape(432, 8, 8), big)
+
+
+# --------------------------------------------------------------- sets computed together
+def test_zhou_sets_computed_together_share_the_descriptors_and_give_each_sets_own_rows(tmp_path, monkeypatch):
+    caps = synthetic_captures(3, 40, (4, 5), np.uint16) + synthetic_captures(4, 25, (4, 5), np.uint16)
+    specs = [("zhou-basic", {}), ("zhou-wavelet", {"levels": 4}), ("zhou-basic", {"descriptors": ["D3"]})]
+    alone = [make_set(n, **p).fit(caps).transform(caps) for n, p in specs]
+    calls = []
+    original = zhou.frame_descriptors
+    monkeypatch.setattr(zhou, "frame_descriptors", lambda *a: calls.append(1) or original(*a))
+    make_set("zhou-basic").fit(caps).transform(caps)
+    per_pass = len(calls)  # one per batch of captures of one length
+    assert per_pass >= 2  # two lengths: at least two batches
+    calls.clear()
+    entries = [(f"key{i}", partial(make_set, n, **p), {}) for i, (n, p) in enumerate(specs)]
+    got = FeatureCache(tmp_path).compute(entries, caps)
+    assert len(calls) == per_pass  # the three sets read one computation of the descriptors
+    for a, (b, info) in zip(alone, got):
+        assert a.tobytes() == np.asarray(b).tobytes()  # each set's rows as it gives them alone, bit for bit
+        assert info["seconds_per_capture"] > 0
+    # D3's statistics are the third block of five of the full set's (independent of the sharing)
+    assert_array_equal(np.asarray(got[2][0]), np.asarray(got[0][0])[:, 10:15])
+    assert got[2][1]["columns"] == [f"zhou_basic_D3_{s}" for s in ("mean", "std", "range", "kurt", "skew")]
+
+
+def test_a_shared_preprocessing_is_made_once_and_charged_to_every_reader(monkeypatch):
+    clock = iter([10.0, 12.5])  # making the value takes 2.5 s of the fake clock
+    monkeypatch.setattr(base_module.time, "perf_counter", lambda: next(clock))
+    shared = SharedPrep()
+    shared.start()
+    assert shared.get("k", lambda: [1, 2]) == [1, 2]
+    assert (shared.made, shared.read) == (2.5, 2.5)  # the first reader made it
+    shared.start()
+    assert shared.get("k", lambda: pytest.fail("made twice")) == [1, 2]
+    assert (shared.made, shared.read) == (0.0, 2.5)  # the second reader is charged what it read

@@ -298,8 +298,8 @@ def test_no_more_workers_than_feature_chunks(tmp_path, monkeypatch):
     monkeypatch.setattr(backends, "Parallel", Recording)
     monkeypatch.setattr(Recording, "calls", calls := [])
     caps = [np.full((3, 2, 2), i, dtype=np.uint16) for i in range(2 * cache.CHUNK + 1)]  # 3 chunks
-    matrix, _ = cache.FeatureCache(tmp_path).compute(
-        "k" * 64, partial(make_feature_set, "raw-window", {"frames": 3}, None), caps, jobs=1000)
+    [(matrix, _)] = cache.FeatureCache(tmp_path).compute(
+        [("k" * 64, partial(make_feature_set, "raw-window", {"frames": 3}, None), {})], caps, jobs=1000)
     assert calls == [3]
     assert matrix.shape == (len(caps), 12) and matrix[-1].tolist() == [2.0 * cache.CHUNK] * 12
 

@@ -19,7 +19,9 @@ JSON is not an entry. An entry whose file is truncated or whose matrix does
 not match its checksum is never loaded (:meth:`FeatureCache.problem` says
 why; the run computes it again and says so in its notes). The checksum is
 verified once per process and file. Rows are computed in chunks of a fixed
-size, so the matrix is the same whatever the number of parallel jobs.
+size, so the matrix is the same whatever the number of parallel jobs; the
+sets of one pass (:meth:`FeatureCache.compute`) share a chunk's preprocessing and
+each gets the rows it gives alone.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from threadpoolctl import threadpool_limits
 from ..core.atomic import atomic_write_bytes
 from ..core.hashing import file_state
 from ..core.paths import cache_dir
+from ..features.base import FeatureStack
 from .backends import parallel, run_setup
 
 __all__ = ["CHUNK", "FeatureCache", "crop_captures", "matrix_checksum"]
@@ -134,27 +137,29 @@ class FeatureCache:
 
     def compute(
         self,
-        key: str,
-        make: Callable[[], Any],
+        entries: Sequence[tuple[str, Callable[[], Any], dict[str, Any]]],
         captures: Sequence[np.ndarray],
         *,
         jobs: int = 1,
-        info: dict[str, Any] | None = None,
         on_chunk: Callable[[int], None] | None = None,
         setup: Callable[[], None] | None = None,
-    ) -> tuple[np.ndarray, dict[str, Any]]:
-        """Compute (chunked, ``jobs`` in parallel), store and return an entry.
+    ) -> list[tuple[np.ndarray, dict[str, Any]]]:
+        """Compute (chunked, ``jobs`` in parallel), store and return entries of the same captures.
 
-        ``make()`` builds an unfitted feature set; each chunk fits it on an
-        empty-learning ``fit`` (the set is fold-independent) and transforms.
-        ``seconds_per_capture`` is the transform time per capture, summed
-        over chunks (CPU time per capture when chunks run in parallel).
+        ``entries``: ``(key, make, info)``, ``make()`` building an unfitted feature set; each
+        chunk fits every set on an empty-learning ``fit`` (the sets are fold-independent) and
+        transforms the chunk through one :class:`touchbench.features.base.FeatureStack`, so a
+        preprocessing the sets share (the Zhou sets' frame descriptors) is computed once per
+        chunk; each set's matrix is the one it gives alone. ``seconds_per_capture`` is a set's
+        transform time per capture, summed over chunks (CPU time per capture when chunks run in
+        parallel), a shared preprocessing counted in every set that reads it.
         """
         chunks = [list(captures[i:i + CHUNK]) for i in range(0, len(captures), CHUNK)]
+        makes = [make for _, make, _ in entries]
         if jobs == 1 or len(chunks) == 1:
             results = []
             for ch in chunks:
-                results.append(_transform_chunk(make, ch, setup))
+                results.append(_transform_chunk(makes, ch, setup))
                 if on_chunk:
                     on_chunk(len(ch))
         else:
@@ -163,38 +168,45 @@ class FeatureCache:
 
             # never more workers than chunks
             par = parallel(min(jobs, len(chunks)))
-            for ch, res in zip(chunks, par(delayed(_transform_chunk)(make, ch, setup) for ch in chunks)):
+            for ch, res in zip(chunks, par(delayed(_transform_chunk)(makes, ch, setup) for ch in chunks)):
                 results.append(res)
                 if on_chunk:
                     on_chunk(len(ch))
-        X = np.vstack([r[0] for r in results]) if results else np.zeros((0, 0))
-        seconds = float(sum(r[1] for r in results))
-        columns = results[0][2] if results else []
-        entry = {
-            **(info or {}),
-            "columns": columns,
-            "seconds_per_capture": seconds / max(1, len(captures)),
-            "n_columns": int(X.shape[1]) if X.ndim == 2 else 0,
-            "created": time.time(),
-        }
-        self.store(key, X, entry)
-        loaded = self.load(key)
-        assert loaded is not None
-        return loaded
+        out = []
+        for j, (key, _, info) in enumerate(entries):
+            X = np.vstack([r[j][0] for r in results]) if results else np.zeros((0, 0))
+            seconds = float(sum(r[j][1] for r in results))
+            entry = {
+                **(info or {}),
+                "columns": results[0][j][2] if results else [],
+                "seconds_per_capture": seconds / max(1, len(captures)),
+                "n_columns": int(X.shape[1]) if X.ndim == 2 else 0,
+                "created": time.time(),
+            }
+            self.store(key, X, entry)
+            loaded = self.load(key)
+            assert loaded is not None
+            out.append(loaded)
+        return out
 
 
-def _transform_chunk(make: Callable[[], Any], captures: list[np.ndarray],
-                     setup: Callable[[], None] | None = None) -> tuple[np.ndarray, float, list[str]]:
+def _transform_chunk(makes: Sequence[Callable[[], Any]], captures: list[np.ndarray],
+                     setup: Callable[[], None] | None = None) -> list[tuple[np.ndarray, float, list[str]]]:
+    """Each set's ``(matrix, transform seconds, column names)`` of one chunk of captures."""
     run_setup(setup)
 
     with threadpool_limits(limits=1):
-        fs = make()
-        fs.fit(captures)
-        t0 = time.perf_counter()
-        X = np.asarray(fs.transform(captures), dtype=np.float64)
-        dt = time.perf_counter() - t0
-    try:
-        cols = [str(c) for c in fs.get_feature_names_out()]
-    except Exception:
-        cols = [f"f{i}" for i in range(X.shape[1])]
-    return X, dt, cols
+        sets = [make() for make in makes]
+        for fs in sets:
+            fs.fit(captures)
+        seconds = [0.0] * len(sets)
+        parts = FeatureStack(sets).transform_each(captures, seconds=seconds)
+    out = []
+    for fs, X, dt in zip(sets, parts, seconds):
+        X = np.asarray(X, dtype=np.float64)
+        try:
+            cols = [str(c) for c in fs.get_feature_names_out()]
+        except Exception:
+            cols = [f"f{i}" for i in range(X.shape[1])]
+        out.append((X, dt, cols))
+    return out

@@ -117,7 +117,10 @@ class _Progress:
 
 # ----------------------------------------------------------------- running
 def _fill_cache(plan: Plan, pending: list[Task], jobs: int, progress: _Progress, setup=None) -> list[str]:
-    """Compute the missing (or damaged) feature cache entries of ``pending``; notes on damaged ones."""
+    """Compute the missing (or damaged) feature cache entries of ``pending``; notes on damaged ones.
+
+    The missing sets of one crop are computed together, chunk by chunk (one pass over the
+    captures; a preprocessing they share computed once per chunk), each into its own entry."""
     ds = plan.dataset
     notes: list[str] = []
     cache = FeatureCache(plan.cache_root)
@@ -131,20 +134,23 @@ def _fill_cache(plan: Plan, pending: list[Task], jobs: int, progress: _Progress,
                 needed.setdefault(s.key_full, (s.name, s.params, None))
             if s.key_crop is not None:
                 needed.setdefault(s.key_crop, (s.name, s.params, t.crop_frames))
+    by_crop: dict[int | None, list[tuple[str, str, dict]]] = {}
     for key, (name, params, crop) in needed.items():
         problem = cache.problem(key)
         if problem is None:
             continue
-        caps = crop_captures(ds.captures, crop)
         label = name + (f" (first {crop} frames)" if crop is not None else "")
         if problem != "missing":
             notes.append(f"the cached features of {label} were not used ({problem}): computed again")
-        tid = progress.add(f"features {label}", len(caps))
-        cache.compute(
-            key, partial(make_feature_set, name, params, ds.sensor), caps, jobs=jobs,
-            info={"dataset_hash": ds.content_hash, "name": name, "params": params, "crop": crop},
-            on_chunk=lambda n, tid=tid: progress.advance(tid, n), setup=setup,
-        )
+        by_crop.setdefault(crop, []).append((key, name, params))
+    for crop, group in by_crop.items():
+        caps = crop_captures(ds.captures, crop)
+        names = ", ".join(dict.fromkeys(name for _, name, _ in group))
+        tid = progress.add(f"features {names}" + (f" (first {crop} frames)" if crop is not None else ""), len(caps))
+        entries = [(key, partial(make_feature_set, name, params, ds.sensor),
+                    {"dataset_hash": ds.content_hash, "name": name, "params": params, "crop": crop})
+                   for key, name, params in group]
+        cache.compute(entries, caps, jobs=jobs, on_chunk=lambda n, tid=tid: progress.advance(tid, n), setup=setup)
     return notes
 
 

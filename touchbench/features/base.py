@@ -23,7 +23,8 @@ in input order, so a capture's features never depend on its neighbours.
 
 from __future__ import annotations
 
-from typing import Any, ClassVar, Sequence
+import time
+from typing import Any, Callable, ClassVar, Sequence
 
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin, clone
@@ -195,9 +196,10 @@ class FeatureSet(TransformerMixin, BaseEstimator):
         self._check_grid(tuple(grid))
         return self.n_features(grid)
 
-    def _batch_rows(self, stack: np.ndarray, shared: dict[str, Any]) -> np.ndarray:
+    def _batch_rows(self, stack: np.ndarray, shared: "SharedPrep") -> np.ndarray:
         """:meth:`_transform_batch` of ``stack``; ``shared`` holds what sets of one
-        :class:`FeatureStack` compute alike from the same stack (a set reading it computes it once)."""
+        :class:`FeatureStack` compute alike from the same stack (``shared.get``: the first set
+        reading it computes it)."""
         return self._transform_batch(stack)
 
     def _refuse_non_finite(self, captures: Any, caps: list[np.ndarray], part: np.ndarray, rows: np.ndarray) -> None:
@@ -249,13 +251,42 @@ def learns_from_data(name: str) -> bool:
     return bool(getattr(FEATURES.get(name), "fold_dependent", True))
 
 
+class SharedPrep:
+    """What the sets of one :class:`FeatureStack` batch compute alike from the same stack (the
+    touch sets' pressure, the Zhou sets' frame descriptors): each value computed once, by the
+    first set that asks, and the seconds it took charged to every set that reads it (``made``:
+    seconds spent making values, ``read``: seconds of the values read, since :meth:`start`)."""
+
+    def __init__(self) -> None:
+        self._values: dict[Any, tuple[Any, float]] = {}
+        self.made = 0.0
+        self.read = 0.0
+
+    def start(self) -> None:
+        """Start the account of the next set."""
+        self.made = self.read = 0.0
+
+    def get(self, key: Any, make: Callable[[], Any]) -> Any:
+        """The value under ``key``, made now by ``make()`` when no set made it before (it must
+        not be written into by its readers)."""
+        if key not in self._values:
+            t0 = time.perf_counter()
+            value = make()
+            self._values[key] = (value, time.perf_counter() - t0)
+            self.made += self._values[key][1]
+        value, seconds = self._values[key]
+        self.read += seconds
+        return value
+
+
 class FeatureStack:
     """Fitted feature sets applied together to batches of captures, their outputs side by side.
 
     The captures are checked once (:func:`check_captures`, named by the first set), grouped by
     length and stacked in chunks of at most ``_BATCH_VALUES`` values once for all the sets, and
-    a preprocessing several sets share (``_batch_rows``' ``shared``: the touch sets' pressure) is
-    computed once per chunk; a capture's rows never depend on its neighbours. What does not depend
+    a preprocessing several sets share (``_batch_rows``' ``shared``, a :class:`SharedPrep`: the
+    touch sets' pressure, the Zhou sets' frame descriptors) is computed once per chunk; a capture's
+    rows never depend on its neighbours, nor on the other sets of the stack. What does not depend
     on the captures (each set's parameters, its grid checks and output width) is checked on the
     first batch of a grid and remembered, so a stack kept for many small batches (a live
     recogniser's windows) checks it once. One kept for a fitted method must see its sets'
@@ -274,9 +305,12 @@ class FeatureStack:
             self._widths[grid] = [fs._ready(grid, checked) for fs in self.sets]
         return self._widths[grid]
 
-    def transform(self, captures: Any) -> np.ndarray:
+    def transform(self, captures: Any, seconds: list[float] | None = None) -> np.ndarray:
+        """The sets' rows of ``captures`` side by side; ``seconds`` (one per set) receives each
+        set's compute time, a shared preprocessing counted in every set that reads it (each set
+        costs what it would cost alone)."""
         if not self._own:  # a transformer of the captures written outside this module
-            return np.hstack([np.asarray(fs.transform(captures), dtype=np.float64) for fs in self.sets])
+            return np.hstack(self._each_own(captures, seconds))
         caps = check_captures(captures, name=type(self.sets[0]).__name__)
         if not caps:
             grids = [getattr(fs, "grid_", None) for fs in self.sets]
@@ -290,18 +324,47 @@ class FeatureStack:
             idx = np.flatnonzero(lengths == t)
             step = max(1, _BATCH_VALUES // (t * cells))
             for k in range(0, len(idx), step):
-                part = idx[k:k + step]
-                stack = np.stack([caps[i] for i in part])
-                shared: dict[str, Any] = {}
-                for fs, a, b in zip(self.sets, edges[:-1], edges[1:]):
-                    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-                        rows = np.asarray(fs._batch_rows(stack, shared), dtype=np.float64)
-                    if rows.shape != (len(part), b - a):
-                        raise AssertionError(f"{type(fs).__name__}: produced {rows.shape}, expected {(len(part), b - a)}")
-                    if not np.isfinite(rows).all():
-                        fs._refuse_non_finite(captures, caps, part, rows)
-                    out[part, a:b] = rows
+                self._batch(captures, caps, idx[k:k + step], edges, out, seconds)
         return out
+
+    def transform_each(self, captures: Any, seconds: list[float] | None = None) -> list[np.ndarray]:
+        """:meth:`transform`'s matrix cut into each set's own (the rows each set gives alone)."""
+        if not self._own:
+            return self._each_own(captures, seconds)
+        X = self.transform(captures, seconds)
+        caps = captures if isinstance(captures, (list, tuple)) else check_captures(captures)
+        if not len(caps):
+            return [X[:, :0] for _ in self.sets]
+        edges = np.cumsum([0] + self.widths(tuple(caps[0].shape[1:]))).tolist()
+        return [X[:, a:b] for a, b in zip(edges[:-1], edges[1:])]
+
+    def _each_own(self, captures: Any, seconds: list[float] | None) -> list[np.ndarray]:
+        """Each set's own ``transform`` (sets written outside this module)."""
+        parts = []
+        for i, fs in enumerate(self.sets):
+            t0 = time.perf_counter()
+            parts.append(np.asarray(fs.transform(captures), dtype=np.float64))
+            if seconds is not None:
+                seconds[i] += time.perf_counter() - t0
+        return parts
+
+    def _batch(self, captures: Any, caps: list[np.ndarray], part: np.ndarray, edges: list[int], out: np.ndarray,
+               seconds: list[float] | None) -> None:
+        """Every set's rows of the captures ``part`` (of one length) into ``out``."""
+        stack = np.stack([caps[i] for i in part])
+        shared = SharedPrep()
+        for j, (fs, a, b) in enumerate(zip(self.sets, edges[:-1], edges[1:])):
+            shared.start()
+            t0 = time.perf_counter()
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                rows = np.asarray(fs._batch_rows(stack, shared), dtype=np.float64)
+            if seconds is not None:
+                seconds[j] += time.perf_counter() - t0 - shared.made + shared.read
+            if rows.shape != (len(part), b - a):
+                raise AssertionError(f"{type(fs).__name__}: produced {rows.shape}, expected {(len(part), b - a)}")
+            if not np.isfinite(rows).all():
+                fs._refuse_non_finite(captures, caps, part, rows)
+            out[part, a:b] = rows
 
 
 def stack_features(sets: Sequence[Any], captures: Sequence[np.ndarray]) -> np.ndarray | list[np.ndarray]:

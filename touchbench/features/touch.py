@@ -78,7 +78,7 @@ import numpy as np
 from sklearn.utils._param_validation import Interval
 
 from ..datasets.model import SensorSpec
-from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError
+from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError, SharedPrep
 from .numerics import KURT_CONSTANT, SKEW_CONSTANT, gradient, moment_coords, moments, same_row
 
 MIN_FRAMES = 8
@@ -199,14 +199,12 @@ class _TouchBase(FeatureSet):
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         return self._from_pressure(stack.shape[2:], *_pressure(stack))
 
-    def _batch_rows(self, stack: np.ndarray, shared: dict) -> np.ndarray:
+    def _batch_rows(self, stack: np.ndarray, shared: SharedPrep) -> np.ndarray:
         """:meth:`_transform_batch`, the stack's :func:`_pressure` computed once for the touch sets of
         a :class:`FeatureStack` (``_from_pressure`` never writes into it)."""
         if type(self)._transform_batch is not _TouchBase._transform_batch:
             return self._transform_batch(stack)
-        if "pressure" not in shared:
-            shared["pressure"] = _pressure(stack)
-        return self._from_pressure(stack.shape[2:], *shared["pressure"])
+        return self._from_pressure(stack.shape[2:], *shared.get("pressure", lambda: _pressure(stack)))
 
     def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
         """The features from :func:`_pressure`'s ``(s, base, c)`` of captures of ``grid`` (so a caller

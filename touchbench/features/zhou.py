@@ -60,7 +60,7 @@ import pywt
 from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..datasets.model import SensorSpec
-from .base import FEATURES, FeatureInputError, FeatureSet
+from .base import FEATURES, FeatureInputError, FeatureSet, SharedPrep
 from .numerics import as_f64, moments
 
 ZHOU_PAPER = "Zhou et al. 2017 (Sensors 17:2585), section 4.1"
@@ -194,8 +194,18 @@ class _ZhouBase(FeatureSet):
         raise NotImplementedError
 
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
+        return self._from_descriptors(frame_descriptors(stack, float(self.upsample), self._floor()))
+
+    def _batch_rows(self, stack: np.ndarray, shared: SharedPrep) -> np.ndarray:
+        """:meth:`_transform_batch`, the stack's :func:`frame_descriptors` computed once for the Zhou
+        sets of a :class:`FeatureStack` with the same up-sampling and floor (every descriptor, whatever
+        ``descriptors`` selects; the rows never write into them)."""
+        key = ("zhou-descriptors", float(self.upsample), self._floor())
+        return self._from_descriptors(shared.get(key, lambda: frame_descriptors(stack, key[1], key[2])))
+
+    def _from_descriptors(self, desc: np.ndarray) -> np.ndarray:
+        """The rows of captures whose frame descriptors are ``desc`` ``(N, T, 6)``."""
         idx = _parse_descriptors(self._name, self.descriptors)
-        desc = frame_descriptors(stack, float(self.upsample), self._floor())  # (N, T, 6)
         rows = []
         for d in desc:  # one capture at a time: the cut-off gives each its own length
             keep = cutoff_slice(d[:, 0]) if self.trim else slice(None)
