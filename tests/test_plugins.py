@@ -306,10 +306,8 @@ def test_a_plugin_installed_or_broken_after_the_listings_were_indexed_is_listed(
     # editing it into one that fails, changes what they show at once
     site = tmp_path / "site"
     site.mkdir()
-    for args in (["features", "list", "--json"], ["plugins", "list", "--json"]):
-        assert _touchbench(site, tmp_path, *args).returncode == 0
-    indexed = _touchbench(site, tmp_path, "features", "list", "--json")
-    assert indexed.returncode == 0 and "late-set" not in indexed.stdout
+    indexed = [_touchbench(site, tmp_path, *args) for args in (["features", "list", "--json"], ["plugins", "list", "--json"])]
+    assert all(r.returncode == 0 for r in indexed) and "late-set" not in indexed[0].stdout
     folder_time = site.stat().st_mtime_ns
     _fake_plugin(site, "late-plugin", "late_mod",
                  "from touchbench.features.base import FEATURES, FeatureSet\n"
