@@ -16,6 +16,7 @@ root, so the facade never takes part in an import.
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -50,19 +51,27 @@ def module_name(path: Path) -> str:
     return ".".join(parts)
 
 
+@functools.lru_cache(maxsize=None)
 def all_modules() -> dict[str, Path]:
+    """Every module of the package (read once per test process: the tests only read it)."""
     return {module_name(p): p for p in PACKAGE.rglob("*.py")}
+
+
+@functools.lru_cache(maxsize=None)
+def parsed(path: Path) -> ast.Module:
+    """``path``'s syntax tree, parsed once per test process (the tests only read it)."""
+    return ast.parse(path.read_text(encoding="utf-8"))
 
 
 def imports_of(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
     """The touchbench modules that ``name`` imports (a name imported from a
     package counts as its submodule when it is one)."""
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    body = parsed(path).body
     if name == "touchbench":  # the facade's imports for type checkers (module docstring)
-        tree.body = [n for n in tree.body if not _type_checking_only(n)]
+        body = [n for n in body if not _type_checking_only(n)]
     out: set[str] = set()
-    for node in ast.walk(tree):
+    for node in (n for top in body for n in ast.walk(top)):
         if isinstance(node, ast.Import):
             targets = [a.name for a in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -168,7 +177,7 @@ def root_names_used(name: str, path: Path) -> set[str]:
     ``from .. import X`` reaching the root, ``touchbench.X`` after ``import touchbench``."""
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     out: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in ast.walk(parsed(path)):
         if isinstance(node, ast.ImportFrom):
             mod = node.module or ""
             if node.level:

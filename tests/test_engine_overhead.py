@@ -46,7 +46,7 @@ def _sklearn(y_true, y_pred) -> dict[str, float]:
                 "macro_f1": f1_score(y_true, y_pred, average="macro")}
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=100, deadline=None)  # the degenerate cases are also checked one by one below
 @given(st.lists(st.tuples(LABELS, LABELS), min_size=1, max_size=60))
 def test_the_scores_are_scikit_learns_to_the_last_bit(pairs):
     y_true = np.array([t for t, _ in pairs], dtype=object)

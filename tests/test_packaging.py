@@ -125,26 +125,36 @@ def test_papers_list(installed, empty):
     assert "gaus-tables6-7-haart" in r.stdout and "cnn-table2-loso-haart" in r.stdout
 
 
-def test_run_tiny_and_demo_from_an_empty_folder(installed, empty):
-    r = tb(installed, empty, "run", "tiny", "--no-progress")
+@pytest.fixture(scope="module")
+def tiny_ran(installed, tmp_path_factory) -> Path:
+    """A folder outside the repository, empty before touchbench alone (no extra importable) ran ``tiny``
+    there: the run the demo and the report tests below start from (``tiny`` is run once for the module)."""
+    d = tmp_path_factory.mktemp("elsewhere")
+    r = tb(installed, d, "run", "tiny", "--no-progress", core_only=True)
     assert r.returncode == 0, r.stdout + r.stderr
-    assert (empty / "results" / "tiny" / "scores.parquet").is_file()
-    r = tb(installed, empty, "demo", "--jobs", "1")
+    return d
+
+
+def test_run_tiny_from_an_empty_folder_with_touchbench_alone(installed, tiny_ran):
+    blocked = subprocess.run([str(installed / "python"), "-c", "import aeon"], cwd=tiny_ran, capture_output=True,
+                             text=True, env={**os.environ, "TB_TEST_CORE_ONLY": "1"})
+    assert blocked.returncode != 0 and "ModuleNotFoundError" in blocked.stderr  # the extras are out of reach
+    assert (tiny_ran / "results" / "tiny" / "scores.parquet").is_file()
+
+
+def test_demo_from_the_folder(installed, tiny_ran):
+    r = tb(installed, tiny_ran, "demo", "--jobs", "1")
     assert r.returncode == 0, r.stdout + r.stderr
     assert "running the built-in tiny scene" in r.stderr
     assert "zhou-lda" in r.stdout  # the leaderboard of the tiny run
 
 
-def test_report_and_the_shipped_references_with_touchbench_alone(installed, empty):
-    blocked = subprocess.run([str(installed / "python"), "-c", "import aeon"], cwd=empty, capture_output=True,
-                             text=True, env={**os.environ, "TB_TEST_CORE_ONLY": "1"})
-    assert blocked.returncode != 0 and "ModuleNotFoundError" in blocked.stderr  # the extras are out of reach
-    assert tb(installed, empty, "run", "tiny", "--no-progress", core_only=True).returncode == 0
-    r = tb(installed, empty, "report", "results/tiny", "--out", "report", core_only=True)
+def test_report_and_the_shipped_references_with_touchbench_alone(installed, tiny_ran):
+    r = tb(installed, tiny_ran, "report", "results/tiny", "--out", "report", core_only=True)
     assert r.returncode == 0, r.stdout + r.stderr
-    assert (empty / "report" / "report.html").is_file()
-    r = tb(installed, empty, "reference", "list", core_only=True)
+    assert (tiny_ran / "report" / "report.html").is_file()
+    r = tb(installed, tiny_ran, "reference", "list", core_only=True)
     assert r.returncode == 0 and {"tiny", "demo-haart", "haart-loso-msd-rf"} <= {
         line.split()[0] for line in r.stdout.splitlines()}, r.stdout + r.stderr
-    r = tb(installed, empty, "leaderboard", "results/tiny", "--reference", "tiny", "--json", core_only=True)
+    r = tb(installed, tiny_ran, "leaderboard", "results/tiny", "--reference", "tiny", "--json", core_only=True)
     assert r.returncode == 0 and "beside reference tiny" in r.stderr, r.stdout + r.stderr

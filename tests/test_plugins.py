@@ -202,26 +202,31 @@ def _where(package: str, module: str) -> str:
     return f"plugin {package} 1.0 (entry point 'main' = '{module}' in group 'touchbench.plugins')"
 
 
+#: the listings that load the plugins, each of its own registry (the first also gives the names listed)
+LISTINGS = (["features", "list", "--json"], ["classifiers", "list"], ["data", "list"], ["data", "formats"])
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("source, why", [
-    ("import a_module_nobody_has\n", "ModuleNotFoundError: No module named 'a_module_nobody_has'"),
+@pytest.mark.parametrize("source, why, listings", [
+    ("import a_module_nobody_has\n", "ModuleNotFoundError: No module named 'a_module_nobody_has'", LISTINGS),
+    # how a plugin fails is told apart where it is loaded, whichever listing loads it: one listing here
     ("from touchbench.features.base import FEATURES, FeatureSet\n"
      "@FEATURES.register('half-way', description='registered before the exit')\n"
      "class Mine(FeatureSet):\n    pass\n"
-     "import sys\nsys.exit(3)\n", "it called sys.exit(3) while being imported"),
+     "import sys\nsys.exit(3)\n", "it called sys.exit(3) while being imported", LISTINGS[:1]),
 ], ids=["import-error", "sys-exit"])
-def test_a_plugin_that_fails_to_load_is_reported_and_left_out(tmp_path, source, why):
+def test_a_plugin_that_fails_to_load_is_reported_and_left_out(tmp_path, source, why, listings):
     site = tmp_path / "site"
     site.mkdir()
     _fake_plugin(site, "broken-plugin", "broken_plugin_mod", source)
     where = _where("broken-plugin", "broken_plugin_mod")
-    for args in (["features", "list"], ["classifiers", "list"], ["data", "list"], ["data", "formats"]):
-        r = _touchbench(site, tmp_path, *args)
+    said = {}
+    for args in listings:
+        r = said[tuple(args)] = _touchbench(site, tmp_path, *args)
         assert r.returncode == 0, (args, r.stdout, r.stderr)  # the command goes on without the plugin
         assert f"{where} failed to load and is left out: {why}" in r.stderr, args
         assert "Traceback" not in r.stderr
-    r = _touchbench(site, tmp_path, "features", "list", "--json")
-    names = [row["name"] for row in json.loads(r.stdout)]
+    names = [row["name"] for row in json.loads(said[tuple(LISTINGS[0])].stdout)]
     assert "sd" in names and "half-way" not in names  # what it registered before it failed is removed
     # help, and the command that says what is installed, still work
     r = _touchbench(site, tmp_path, "--help")
@@ -301,10 +306,8 @@ def test_a_plugin_installed_or_broken_after_the_listings_were_indexed_is_listed(
     # editing it into one that fails, changes what they show at once
     site = tmp_path / "site"
     site.mkdir()
-    for args in (["features", "list", "--json"], ["plugins", "list", "--json"]):
-        assert _touchbench(site, tmp_path, *args).returncode == 0
-    indexed = _touchbench(site, tmp_path, "features", "list", "--json")
-    assert indexed.returncode == 0 and "late-set" not in indexed.stdout
+    indexed = [_touchbench(site, tmp_path, *args) for args in (["features", "list", "--json"], ["plugins", "list", "--json"])]
+    assert all(r.returncode == 0 for r in indexed) and "late-set" not in indexed[0].stdout
     folder_time = site.stat().st_mtime_ns
     _fake_plugin(site, "late-plugin", "late_mod",
                  "from touchbench.features.base import FEATURES, FeatureSet\n"
