@@ -504,10 +504,11 @@ def _track(ws, cyx, area, h, w, o, pos, act):
 
 
 @jit
-def evidence(u, flat, floor, units, quiet, ranks, full, out):
+def evidence(u, flat, floor, units, quiet, ranks, full, integral, out):
     """``contact-evidence``'s features into ``out`` ``(N, 6 + 3 * units + 4)`` from the heights ``u``
     ``(N, T, C)``, them sorted per capture ``flat`` ``(N, T * C)``, the noise floor's lower bound
-    ``floor``, the ``quiet`` cells' count, the ranks of the level's order statistics and the full scale.
+    ``floor``, the ``quiet`` cells' count, the ranks of the level's order statistics and the full scale
+    (``integral``: every height is a whole number, so a cell's median is read off its counts).
     Medians, the quiet cells and the thresholds are numpy's values exactly (a reading is counted
     above a threshold by comparison)."""
     n, t, nc = u.shape
@@ -515,12 +516,13 @@ def evidence(u, flat, floor, units, quiet, ranks, full, out):
     med = np.empty(nc)
     mads = np.empty(quiet)
     cm = np.empty(nc)
+    counts = np.zeros(4 * t + 1, dtype=np.int64)
     for i in range(n):
         ui = u[i]
         o = out[i]
         for c in range(nc):
             col[:] = ui[:, c]
-            med[c] = _median(col)
+            med[c] = _median_counted(col, counts) if integral else _median(col)
         qcells = np.argsort(med, kind="mergesort")[:quiet]
         for m in range(quiet):
             c = qcells[m]
@@ -592,3 +594,26 @@ def _median(x):
         else:
             break
     return x[m] if x.size % 2 else (x[:m].max() + x[m]) / 2.0
+
+
+@jit
+def _median_counted(x, counts):
+    """:func:`_median` of whole numbers ``x`` from their counts (``counts``: scratch space), when
+    their range fits it; else by selection."""
+    lo = x.min()
+    span = int(x.max() - lo) + 1
+    if span > counts.size:
+        return _median(x)
+    counts[:span] = 0
+    for v in x:
+        counts[int(v - lo)] += 1
+    m = x.size // 2
+    below = -1
+    acc = 0
+    for b in range(span):
+        acc += counts[b]
+        if below < 0 and acc > m - 1:
+            below = b
+        if acc > m:
+            return lo + b if x.size % 2 else ((lo + below) + (lo + b)) / 2.0
+    return lo

@@ -190,8 +190,13 @@ def series_block(series: np.ndarray, fs: float) -> np.ndarray:
         return np.stack([st[k] for k in _STAT_NAMES], axis=2)
     t = series.shape[-1]
     p, f = centred_spectrum(series - series.mean(axis=-1, keepdims=True), series.max(axis=-1) == series.min(axis=-1), fs)
-    starts, ends = band_slices(f, BANDS)
-    order = np.array([int(round(q / 100 * (t - 1))) for q in QUANTS], dtype=np.intp)
     srt = np.sort(series, axis=-1)
-    return kern.series_stats(np.ascontiguousarray(series), srt, srt.sum(axis=-1) / t, np.ascontiguousarray(p), f, starts,
-                             ends, order, np.array(AC_LAGS, dtype=np.intp))
+    return kern.series_stats(np.ascontiguousarray(series), srt, srt.sum(axis=-1) / t, np.ascontiguousarray(p), f,
+                             *band_slices(f, BANDS), *_ranks_lags(t))
+
+
+@functools.lru_cache(maxsize=128)
+def _ranks_lags(t: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ranks of the order statistics of a ``t``-frame series and the autocorrelation lags."""
+    return (np.array([int(round(q / 100 * (t - 1))) for q in QUANTS], dtype=np.intp),
+            np.array(AC_LAGS, dtype=np.intp))
