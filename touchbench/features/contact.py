@@ -180,14 +180,14 @@ class ContactEvidence(FullScaleSet):
         u, full = self._heights(stack)
         n, t, c = u.shape
         flat = sorted_heights(stack, self._range(), self._flipped())
-        kern = kernels()
-        if kern is not None:
+        if kernels() is not None:
+            from .evidence_kernels import evidence  # compiled on first use
             lo, hi = self._range()
             out = np.zeros((n, 10 + 3 * len(NOISE_UNITS)))
-            kern.evidence(u, flat, self.min_noise * full, np.array(NOISE_UNITS, dtype=np.float64),
-                          max(1, int(np.floor(QUIET_SHARE * c))),
-                          np.array([round(0.5 * (t * c - 1)), round(0.95 * (t * c - 1))]), full,
-                          stack.dtype.kind in "biu" and float(lo).is_integer() and float(hi).is_integer(), out)
+            evidence(u, flat, self.min_noise * full, np.array(NOISE_UNITS, dtype=np.float64),
+                     max(1, int(np.floor(QUIET_SHARE * c))),
+                     np.array([round(0.5 * (t * c - 1)), round(0.95 * (t * c - 1))]), full,
+                     stack.dtype.kind in "biu" and float(lo).is_integer() and float(hi).is_integer(), out)
             return out
         cell_mean = u.mean(axis=1)
         level = [flat.mean(axis=1), flat[:, round(0.5 * (t * c - 1))], flat[:, round(0.95 * (t * c - 1))],
