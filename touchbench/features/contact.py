@@ -86,6 +86,7 @@ from sklearn.utils._param_validation import Interval
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError
 from .numerics import sort_last
+from .touch_spectra import kernels
 
 #: multiples of the noise floor above the rest level at which contact is counted
 NOISE_UNITS: tuple[int, ...] = (3, 10, 30)
@@ -179,6 +180,15 @@ class ContactEvidence(FullScaleSet):
         u, full = self._heights(stack)
         n, t, c = u.shape
         flat = sorted_heights(stack, self._range(), self._flipped())
+        if kernels() is not None:
+            from .evidence_kernels import evidence  # compiled on first use
+            lo, hi = self._range()
+            out = np.zeros((n, 10 + 3 * len(NOISE_UNITS)))
+            evidence(u, flat, self.min_noise * full, np.array(NOISE_UNITS, dtype=np.float64),
+                     max(1, int(np.floor(QUIET_SHARE * c))),
+                     np.array([round(0.5 * (t * c - 1)), round(0.95 * (t * c - 1))]), full,
+                     stack.dtype.kind in "biu" and float(lo).is_integer() and float(hi).is_integer(), out)
+            return out
         cell_mean = u.mean(axis=1)
         level = [flat.mean(axis=1), flat[:, round(0.5 * (t * c - 1))], flat[:, round(0.95 * (t * c - 1))],
                  flat[:, -1], cell_mean.min(axis=1), cell_mean.max(axis=1)]

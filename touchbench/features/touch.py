@@ -71,71 +71,24 @@ from __future__ import annotations
 
 from numbers import Real
 
-import functools
-
 import numpy as np
 
 from sklearn.utils._param_validation import Interval
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError, SharedPrep
-from .numerics import KURT_CONSTANT, SKEW_CONSTANT, gradient, moment_coords, moments, same_row
+from .numerics import KURT_CONSTANT, SKEW_CONSTANT, gradient, moment_coords, same_row
+from .touch_spectra import (AC_LAGS, BANDS, QUANTS, _STAT_NAMES, _band_name, _local_bands, band_slices, band_sums,
+                            centred_spectrum,
+                            kernels, series_block, spectral_summary, spectrum)
 
 MIN_FRAMES = 8
 BASELINE_Q = 0.05
 #: the full scale on which the sets' absolute contact floors were chosen (HAART's 0..1023, in raw units)
 FLOOR_SCALE = 1023.0
-#: spectral bands in Hz, upper edge inclusive; the last one is open-ended
-BANDS: tuple[tuple[float, float], ...] = ((0, 1), (1, 2), (2, 3), (3, 4.5), (4.5, 6), (6, 8), (8, 11), (11, 15), (15, np.inf))
-AC_LAGS: tuple[int, ...] = (2, 4, 6, 9, 13, 18, 27)
-QUANTS: tuple[int, ...] = (5, 25, 50, 75, 95)
 CELL_RANKS: tuple[float, ...] = (0.0, 0.25, 0.5, 0.75, 0.875, 0.9375, 1.0)
 SERIES: tuple[str, ...] = ("P", "logP", "Pn", "M", "A", "cy", "cx", "sy", "sx", "speed", "dP")
 THRESHOLDS: tuple[float, ...] = (0.1, 0.3, 0.5)
-_EPS = 1e-12
-
-
-def _band_name(lo: float, hi: float) -> str:
-    return f"{lo:g}-{hi:g}Hz" if np.isfinite(hi) else f"{lo:g}Hz+"
-
-
-@functools.lru_cache(maxsize=128)
-def _band_slices(n_freq: int, f0: float, bands: tuple[tuple[float, float], ...]) -> tuple[np.ndarray, np.ndarray]:
-    """Start and end (exclusive) indices of each band in the frequencies ``f0 * (1..n_freq)`` (those of
-    :func:`spectrum`); an empty band is (0, 0)."""
-    f = f0 * np.arange(1, n_freq + 1, dtype=np.float64)
-    starts, ends = np.zeros(len(bands), dtype=np.intp), np.zeros(len(bands), dtype=np.intp)
-    for i, (lo, hi) in enumerate(bands):
-        m = np.flatnonzero((f > lo) & (f <= hi))
-        if m.size:
-            starts[i], ends[i] = m[0], m[-1] + 1
-    return starts, ends
-
-
-def band_sums(p: np.ndarray, f: np.ndarray, bands: tuple[tuple[float, float], ...]) -> np.ndarray:
-    """Sums of ``p`` (..., F) over the frequencies ``f`` (those of :func:`spectrum`) in each band
-    (lo, hi] -> (..., len(bands)); 0 for a band without frequencies.
-
-    Read off one cumulative sum in frequency order, so a capture's value never depends on how many
-    captures share its batch (numpy's plain ``sum`` may change its summation order with the array's
-    shape). The cumulative sum never decreases (``p >= 0``), so no band sum is negative.
-    """
-    if not f.size:
-        return np.zeros(p.shape[:-1] + (len(bands),))
-    starts, ends = _band_slices(f.size, float(f[0]), tuple(bands))
-    c = np.zeros(p.shape[:-1] + (p.shape[-1] + 1,))
-    np.cumsum(p, axis=-1, out=c[..., 1:])
-    return c[..., ends] - c[..., starts]
-
-
-@functools.lru_cache(maxsize=128)
-def _hann_freqs(t: int, fs: float) -> tuple[np.ndarray, np.ndarray]:
-    """The Hann window of ``t`` frames and the positive rfft frequencies (read-only, cached)."""
-    hann = np.hanning(t) if t > 1 else np.ones(1)
-    f = np.fft.rfftfreq(t, 1.0 / fs)[1:]
-    hann.flags.writeable = False
-    f.flags.writeable = False
-    return hann, f
 
 
 class _TouchBase(FeatureSet):
@@ -225,99 +178,21 @@ def pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`pressure`, plus the padded values themselves ``(N, T', H*W)`` float64."""
     n, t, h, w = stack.shape
-    c = np.ascontiguousarray(stack, dtype=np.float64).reshape(n, t, h * w)  # C order: sums never depend on the layout
+    x = np.asarray(stack).reshape(n, t, h * w)
     if t < MIN_FRAMES:
-        c = np.concatenate([c, np.repeat(c[:, -1:], MIN_FRAMES - t, axis=1)], axis=1)
+        x = np.concatenate([x, np.repeat(x[:, -1:], MIN_FRAMES - t, axis=1)], axis=1)
         t = MIN_FRAMES
+    c = np.ascontiguousarray(x, dtype=np.float64)  # C order: sums never depend on the layout
     k = int(np.floor(BASELINE_Q * (t - 1)))
-    cells = np.ascontiguousarray(np.swapaxes(c, 1, 2))  # a partition along the frames is faster contiguous
+    # the order statistic of the readings themselves (fewer bytes to move than in float64; the same
+    # value, as float64 represents every reading exactly and keeps their order); a partition along
+    # the frames is faster contiguous
+    cells = np.ascontiguousarray(np.swapaxes(x if x.dtype.kind in "iuf" else c, 1, 2))
     cells.partition(k, axis=2)
-    base = cells[:, :, k].copy()
+    base = cells[:, :, k].astype(np.float64)
     s = c - base[:, None, :]
     np.maximum(s, 0.0, out=s)
     return s, base, c
-
-
-def spectrum(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
-    """Power spectrum (DC removed) of the mean-removed, Hann-windowed series along axis -1; frequencies."""
-    return centred_spectrum(x - x.mean(axis=-1, keepdims=True), x.max(axis=-1) == x.min(axis=-1), fs)
-
-
-def centred_spectrum(d: np.ndarray, const: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`spectrum` of series whose mean is removed already (``d``), ``const`` marking the
-    constant ones (they have no spectrum, exactly)."""
-    hann, f = _hann_freqs(d.shape[-1], float(fs))
-    dw = d * hann
-    dw[const] = 0.0
-    p = np.abs(np.fft.rfft(dw, axis=-1)) ** 2
-    return p[..., 1:], f
-
-
-#: the keys of :func:`spectral_summary`'s band fractions, named once
-_BAND_KEYS: tuple[str, ...] = tuple(f"band{_band_name(lo, hi)}" for lo, hi in BANDS)
-
-
-def spectral_summary(p: np.ndarray, f: np.ndarray) -> dict[str, np.ndarray]:
-    """Band fractions, peak / centroid frequency, normalised entropy and log power of ``p`` (..., F)."""
-    tot = p.sum(axis=-1)
-    none = tot <= 0
-    safe = np.where(none, 1.0, tot)
-    fr = band_sums(p, f, BANDS) / safe[..., None]
-    fr[none] = 0.0
-    out: dict[str, np.ndarray] = {key: fr[..., i] for i, key in enumerate(_BAND_KEYS)}
-    out["fpeak"] = np.where(none, 0.0, f[np.argmax(p, axis=-1)]) if p.shape[-1] else np.zeros(p.shape[:-1])
-    out["fcent"] = np.where(none, 0.0, np.einsum("...i,i->...", p, f) / safe)
-    q = p / safe[..., None]
-    ent = -np.einsum("...i,...i->...", q, np.log(np.where(q > 0, q, 1.0)))
-    out["fent"] = np.where(none, 0.0, ent / np.log(max(p.shape[-1], 2)))
-    out["logpow"] = np.log1p(np.where(none, 0.0, tot))
-    return out
-
-
-def _series_stats(s: np.ndarray, fs: float) -> dict[str, np.ndarray]:
-    """Statistics of series ``s`` (N, K, T) -> dict of (N, K) arrays (see the module docstring)."""
-    t = s.shape[-1]
-    srt = np.sort(s, axis=-1)
-    order = srt[..., [int(round(q / 100 * (t - 1))) for q in QUANTS] + [t - 1]]
-    mo = moments(srt, presorted=True, overwrite=True)
-    mu = mo["mean"]
-    d = s - mu[..., None]
-    ac0 = np.einsum("...i,...i->...", d, d)
-    sd = np.sqrt(ac0 / t)
-    out: dict[str, np.ndarray] = {"mean": mu, "std": sd}
-    for i, q in enumerate(QUANTS):
-        out[f"p{q}"] = order[..., i]
-    out["max"] = order[..., -1]
-    out["skew"] = mo["skew"]
-    out["kurt"] = mo["kurt"]
-    dd = s[..., 1:] - s[..., :-1]
-    mad1 = np.abs(dd).mean(axis=-1)
-    out["mad1"] = mad1
-    out["dstd"] = dd.std(axis=-1)
-    flat = sd <= _EPS * (1.0 + np.abs(mu))
-    out["cv"] = np.where(flat, 0.0, sd / np.maximum(np.abs(mu), sd * 1e-6 + _EPS))
-    out["madn"] = np.where(flat, 0.0, mad1 / np.where(flat, 1.0, sd))
-    above = d > 0
-    out["mcr"] = np.where(flat, 0.0, (above[..., 1:] != above[..., :-1]).mean(axis=-1))
-    out.update(spectral_summary(*centred_spectrum(s - s.mean(axis=-1, keepdims=True), mo["min"] == mo["max"], fs)))
-    safe = np.where(flat, 1.0, ac0)
-    ac = np.zeros(ac0.shape + (len(AC_LAGS),))
-    for i, lag in enumerate(AC_LAGS):
-        if lag < t:
-            ac[..., i] = np.einsum("...i,...i->...", d[..., lag:], d[..., :-lag])
-    ac /= safe[..., None]
-    ac[flat] = 0.0
-    for i, lag in enumerate(AC_LAGS):
-        out[f"ac{lag}"] = ac[..., i]
-    return out
-
-
-_STAT_NAMES: list[str] = (
-    ["mean", "std"] + [f"p{q}" for q in QUANTS]
-    + ["max", "skew", "kurt", "mad1", "dstd", "cv", "madn", "mcr"]
-    + [f"band{_band_name(lo, hi)}" for lo, hi in BANDS] + ["fpeak", "fcent", "fent", "logpow"]
-    + [f"ac{lag}" for lag in AC_LAGS]
-)
 
 
 @FEATURES.register("touch-rhythm", description="rhythm, level and movement statistics of 11 frame-level series (touchbench)")
@@ -369,6 +244,18 @@ class TouchRhythm(_TouchBase):
         return len(SERIES) * len(_STAT_NAMES) + 7 + 3 * (len(CELL_RANKS) + 1) + 2
 
     def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
+        (h, w), kern = grid, kernels()
+        if kern is None:
+            series, extra = self._frames(grid, s, base, c)
+        else:
+            ranks = np.array([int(round(r * (h * w - 1))) for r in CELL_RANKS], dtype=np.intp)
+            series, extra = kern.rhythm_frames(s, c, base, h, w, self._floor(self.AREA_FLOOR), self.AREA_REL, ranks)
+        block = series_block(series, self._fs()).reshape(len(s), -1)  # series-major, matching feature_names
+        return np.hstack([block, extra])
+
+    def _frames(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The eleven frame series ``(N, 11, T)`` and the capture scalars ``(N, 33)``: the numpy path
+        of :func:`touchbench.features.touch_kernels.rhythm_frames`."""
         (n, t, _), (h, w) = s.shape, grid
         P = c.sum(axis=2)
         ps = s.sum(axis=2)
@@ -388,8 +275,6 @@ class TouchRhythm(_TouchBase):
         dP = np.zeros_like(P)
         np.abs(P[:, 1:] - P[:, :-1], out=dP[:, 1:])
         series = np.stack([P, np.log1p(ps), pn, M, A, cyx[:, 0], cyx[:, 1], syx[:, 0], syx[:, 1], speed, dP], axis=1)
-        st = _series_stats(series, self._fs())
-        block = np.stack([st[k] for k in _STAT_NAMES], axis=2).reshape(n, -1)  # series-major, matching feature_names
         pmax = ps.max(axis=1, keepdims=True)
         step = np.diff(cyx, axis=2)
         extra = [base.mean(axis=1), base.max(axis=1), peak, np.log1p(peak),
@@ -419,7 +304,7 @@ class TouchRhythm(_TouchBase):
         extra.append(np.where(has, grad / t / np.where(has, mp, 1.0), 0.0))
         tot = ps.sum(axis=1)
         extra.append(np.where(tot > 0, ds_.sum(axis=(1, 2)) / np.where(tot > 0, tot, 1.0), 0.0))
-        return np.hstack([block, np.column_stack(extra)])
+        return series, np.column_stack(extra)
 
 
 @FEATURES.register("cell-rhythm", description="per-cell spectra pooled by cell power, cell coherence, neighbour correlation, blobs (touchbench)")
@@ -458,8 +343,15 @@ class CellRhythm(_TouchBase):
         (n, t, _), (h, w) = s.shape, grid
         fs = self._fs()
         cells = np.swapaxes(s, 1, 2)  # (N, C, T)
-        d = cells - cells.mean(axis=2, keepdims=True)
+        mean = cells.mean(axis=2, keepdims=True)
+        d = cells - mean
         p, f = centred_spectrum(d, cells.max(axis=2) == cells.min(axis=2), fs)  # (N, C, F)
+        kern = kernels()
+        if kern is not None:
+            out = np.zeros((n, len(BANDS) + 11))
+            kern.cell_pool(s, np.ascontiguousarray(mean[..., 0]), np.ascontiguousarray(p), f, *band_slices(f, BANDS),
+                           spectrum(d.sum(axis=1), fs)[0].sum(axis=1), h, w, self._floor(self.BLOB_FLOOR), out)
+            return out
         pw = p.sum(axis=2)  # (N, C)
         tot = pw.sum(axis=1)
         none = tot <= 0
@@ -548,6 +440,15 @@ class ContactMotion(_TouchBase):
         wt = np.subtract(s[:, None], thr[:, :, None, None])  # (N, R, T, C)
         np.maximum(wt, 0.0, out=wt)
         ws = wt.sum(axis=3)
+        kern = kernels()
+        if kern is not None:
+            cols, pos, act = np.zeros((n, len(THRESHOLDS), 18)), np.empty(ws.shape), np.empty(ws.shape)
+            kern.contact_tracks(ws, np.einsum("nrtc,kc->nrkt", wt, moment_coords(h, w)[:2]),
+                                np.count_nonzero(wt, axis=3).astype(np.float64), h, w, cols, pos, act)
+            p, f = spectrum(np.stack([pos, act]), self._fs())
+            track, onoff = _local_bands(p[0], f, self.POS_BANDS), _local_bands(p[1], f, ())
+            cols[..., 10:] = np.stack([track["fpeak"], track["fcent"], *track["bands"], onoff["fpeak"], onoff["fcent"]], axis=2)
+            return np.hstack([cols.reshape(n, -1), np.log1p(peak)[:, None]])
         act = ws > 0
         cyx = np.einsum("nrtc,kc->nrkt", wt, moment_coords(h, w)[:2]) / np.where(act, ws, 1.0)[:, :, None]
         nact = act.sum(axis=2)
@@ -580,15 +481,5 @@ class ContactMotion(_TouchBase):
         return np.hstack([per_threshold.reshape(n, -1), np.log1p(peak)[:, None]])
 
 
-def _local_bands(p: np.ndarray, f: np.ndarray, bands) -> dict:
-    tot = p.sum(axis=-1)
-    none = tot <= 0
-    safe = np.where(none, 1.0, tot)
-    fpeak = np.where(none, 0.0, f[np.argmax(p, axis=-1)]) if p.shape[-1] else np.zeros(p.shape[:-1])
-    fcent = np.where(none, 0.0, np.einsum("...i,i->...", p, f) / safe)
-    fr = np.where(none[..., None], 0.0, band_sums(p, f, tuple(bands)) / safe[..., None])
-    return {"fpeak": fpeak, "fcent": fcent, "bands": [fr[..., i] for i in range(len(bands))]}
-
-
 __all__ = ["TouchRhythm", "CellRhythm", "ContactMotion", "pressure", "spectrum", "spectral_summary",
-           "SKEW_CONSTANT", "KURT_CONSTANT"]
+           "SKEW_CONSTANT", "KURT_CONSTANT", "AC_LAGS", "BANDS", "QUANTS"]

@@ -1,0 +1,59 @@
+"""The compiled loops of touchbench's own sets (numba, touchbench.features.touch_kernels) give the values of
+the numpy path (``TOUCHBENCH_NUMBA=0``) within 1e-9, relative or absolute (sums in another order):
+on real HAART captures (the real-data pattern: fails under CI=true without the data), on short
+windows of a 19 x 27 skin (the live case, padded ones included) and on synthetic captures of other
+grids, dtypes and lengths. Skipped where numba is not installed (the numpy path is then the only one)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from helpers import synthetic_captures
+from numpy.testing import assert_allclose
+
+from touchbench.datasets.model import SensorSpec
+from touchbench.features.base import FEATURES
+
+pytest.importorskip("numba")
+
+SETS = ["touch-rhythm", "cell-rhythm", "contact-motion", "contact-evidence", "touch-windows"]
+SKIN = SensorSpec(name="skin", grid=(19, 27), frame_rate=10.0, value_range=(0.0, 255.0))
+TOL = {"rtol": 1e-9, "atol": 1e-9}
+
+
+def both(name, caps, sensor, monkeypatch, **params):
+    fast = FEATURES.create(name, sensor=sensor, **params).fit(caps).transform(caps)
+    with monkeypatch.context() as m:
+        m.setenv("TOUCHBENCH_NUMBA", "0")
+        plain = FEATURES.create(name, sensor=sensor, **params).fit(caps).transform(caps)
+    assert fast.shape == plain.shape
+    return fast, plain
+
+
+@pytest.mark.parametrize("name", SETS)
+def test_real_haart_captures_agree_with_the_numpy_path(real_haart, name, monkeypatch):
+    caps = real_haart.captures if name != "touch-windows" else real_haart.captures[::7]
+    fast, plain = both(name, caps, real_haart.sensor, monkeypatch)
+    assert_allclose(fast, plain, **TOL)
+
+
+@pytest.mark.parametrize("name", SETS[:4])
+@pytest.mark.parametrize("t", [1, 5, 10, 30])
+@pytest.mark.parametrize("dtype", [np.uint8, np.float32])
+def test_skin_windows_agree_with_the_numpy_path(name, t, dtype, monkeypatch):
+    caps = synthetic_captures(t, t, SKIN.grid, dtype)
+    caps.append(np.zeros_like(caps[0]))  # a window without pressure
+    fast, plain = both(name, caps, SKIN, monkeypatch)
+    assert_allclose(fast, plain, **TOL)
+
+
+@pytest.mark.parametrize("name", SETS[:4])
+@pytest.mark.parametrize("t, grid, dtype, top", [(64, (8, 8), np.uint16, 1023.0), (31, (5, 7), np.float64, 1023.0),
+                                                 (9, (1, 6), np.int16, 100.0), (12, (4, 1), np.uint8, 255.0)])
+@pytest.mark.parametrize("more_is_higher", [True, False])
+def test_synthetic_captures_agree_with_the_numpy_path(name, t, grid, dtype, top, more_is_higher, monkeypatch):
+    sensor = SensorSpec(name="synthetic", grid=grid, frame_rate=54.0, value_range=(0.0, top),
+                        higher_is_more_pressure=more_is_higher)
+    caps = synthetic_captures(t, t, grid, dtype, top)
+    fast, plain = both(name, caps, sensor, monkeypatch)
+    assert_allclose(fast, plain, **TOL)

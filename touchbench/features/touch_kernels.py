@@ -1,0 +1,503 @@
+"""Compiled loops for touchbench's own feature sets (``touch-rhythm``, ``cell-rhythm``,
+``contact-motion``), used when numba is installed.
+
+Each kernel computes, for one capture at a time, what the vectorised numpy code of
+:mod:`touchbench.features.touch` computes with many whole-array passes: one loop over the
+capture's frames and cells instead. The numpy code stays the path without numba (and the reference
+the kernels are tested against, tests/test_touch_kernels.py): the values agree within 1e-9 (sums
+are taken in another order). A capture's values never depend on the other captures of its batch:
+the loops run capture by capture.
+
+Imported on first use (:func:`touchbench.features.touch_spectra.kernels`: never without numba),
+compiled once per machine (numba's on-disk cache).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+jit = numba.njit(cache=True, nogil=True)
+
+
+@jit
+def rhythm_frames(s, c, base, h, w, floor, area_rel, ranks):
+    """``touch-rhythm``'s eleven frame series ``(N, 11, T)`` and its capture scalars ``(N, 33)``
+    from the pressure ``s``, the values ``c`` (both ``(N, T, C)``) and the baseline ``(N, C)``."""
+    n, t, nc = s.shape
+    series = np.zeros((n, 11, t))
+    extra = np.zeros((n, 7 + 3 * (len(ranks) + 1) + 2))
+    yy = np.empty(nc)
+    xx = np.empty(nc)
+    for j in range(nc):
+        yy[j] = j // w
+        xx[j] = j % w
+    y2 = yy * yy
+    x2 = xx * xx
+    cm = np.empty(nc)
+    csd = np.empty(nc)
+    cdf = np.empty(nc)
+    psa = np.empty(t)
+    gh = np.zeros(max(nc - 1, 0))
+    gv = np.zeros(max(nc - w, 0))
+    for i in range(n):
+        gh[:] = 0.0
+        gv[:] = 0.0
+        cm[:] = 0.0
+        cdf[:] = 0.0
+        si = s[i]
+        peak = si[0, 0]
+        for k in range(t):
+            for j in range(nc):
+                if si[k, j] > peak:
+                    peak = si[k, j]
+        thr = max(area_rel * peak, floor)
+        out = series[i]
+        for k in range(t):
+            p_ = 0.0
+            ps = 0.0
+            m_ = c[i, k, 0]
+            a_ = 0
+            my = 0.0
+            mx = 0.0
+            myy = 0.0
+            mxx = 0.0
+            for j in range(nc):
+                v = si[k, j]
+                cv = c[i, k, j]
+                p_ += cv
+                ps += v
+                m_ = max(m_, cv)
+                a_ += v > thr
+                my += v * yy[j]
+                mx += v * xx[j]
+                myy += v * y2[j]
+                mxx += v * x2[j]
+            for j in range(nc):
+                cm[j] += si[k, j]
+                if k:
+                    cdf[j] += abs(si[k, j] - si[k - 1, j])
+            for j in range(nc - 1):
+                gh[j] += abs(si[k, j + 1] - si[k, j])
+            for j in range(nc - w):
+                gv[j] += abs(si[k, j + w] - si[k, j])
+            out[0, k] = p_
+            psa[k] = ps
+            out[3, k] = m_
+            out[4, k] = a_
+            if ps <= 0:
+                out[5, k] = (h - 1) / 2.0
+                out[6, k] = (w - 1) / 2.0
+            else:
+                cy = my / ps
+                cx = mx / ps
+                out[5, k] = cy
+                out[6, k] = cx
+                out[7, k] = math.sqrt(max(myy / ps - cy * cy, 0.0))
+                out[8, k] = math.sqrt(max(mxx / ps - cx * cx, 0.0))
+        grad = gv.sum()
+        for j in range(nc - 1):
+            if (j + 1) % w:  # neighbours along a row
+                grad += gh[j]
+        _rhythm_series(out, psa, thr)
+        _rhythm_cells(si, base[i], out, psa, extra[i], ranks, peak, grad, cm, csd, cdf)
+    return series, extra
+
+
+@jit
+def _rhythm_series(out, psa, thr):
+    """Speed, log and level-normalised pressure sum ``psa``, change of P."""
+    t = psa.size
+    mean_ps = psa.sum() / t
+    for k in range(t):
+        lo, hi = max(k - 1, 0), min(k + 1, t - 1)
+        vy = (out[5, hi] - out[5, lo]) / (hi - lo)
+        vx = (out[6, hi] - out[6, lo]) / (hi - lo)
+        ps = psa[k]
+        out[1, k] = math.log1p(ps)
+        out[9, k] = math.hypot(vx, vy) if ps > thr else 0.0
+        out[2, k] = ps / mean_ps if mean_ps > 0 else 0.0
+        if k:
+            out[10, k] = abs(out[0, k] - out[0, k - 1])
+
+
+@jit
+def _rhythm_cells(si, base, out, ps, ex, ranks, peak, grad, cm, csd, cdf):
+    """``touch-rhythm``'s capture scalars (``ps``: the frames' pressure sums)."""
+    t, nc = si.shape
+    bsum = 0.0
+    bmax = base[0]
+    for j in range(nc):
+        bsum += base[j]
+        bmax = max(bmax, base[j])
+        csd[j] = 0.0
+    for j in range(nc):
+        cm[j] /= t
+    for k in range(t):
+        for j in range(nc):
+            d = si[k, j] - cm[j]
+            csd[j] += d * d
+    dsum = 0.0
+    for j in range(nc):
+        csd[j] = math.sqrt(csd[j] / t)
+        dsum += cdf[j]
+        cdf[j] /= t - 1
+    pmax = ps.max()
+    tot = ps.sum()
+    act = 0.0
+    path = 0.0
+    for k in range(t):
+        if ps[k] > 0.2 * pmax:
+            act += 1.0
+        if k:
+            path += math.hypot(out[6, k] - out[6, k - 1], out[5, k] - out[5, k - 1])
+    ex[0] = bsum / nc
+    ex[1] = bmax
+    ex[2] = peak
+    ex[3] = math.log1p(peak)
+    ex[4] = act / t if pmax > 0 else 0.0
+    ex[5] = path
+    ex[6] = math.hypot(out[6, t - 1] - out[6, 0], out[5, t - 1] - out[5, 0])
+    at = 7
+    for v in (cm, csd, cdf):
+        srt = np.sort(v)
+        for r in ranks:
+            ex[at] = srt[r]
+            at += 1
+        ex[at] = srt.sum()
+        at += 1
+    mp = tot / t
+    ex[at] = grad / t / mp if mp > 0 else 0.0
+    ex[at + 1] = dsum / tot if tot > 0 else 0.0
+
+
+@jit
+def series_stats(x, xs, mean, p, f, starts, ends, order, lags):
+    """Statistics of series ``x`` ``(N, K, T)`` given them sorted (``xs``), their means (numpy's sum
+    of the sorted values: the mean-crossings of a series with values at its mean are the signs of its
+    rounding) and their power spectra ``p`` ``(N, K, F)`` at the
+    frequencies ``f``: ``(N, K, 22 + bands + len(lags))`` in the order of ``touch-rhythm``'s names
+    (``order``: the ranks of the order statistics; ``starts``/``ends``: the bands' slices of ``f``)."""
+    n, nk, t = x.shape
+    nb = starts.size
+    nf = f.size
+    out = np.zeros((n, nk, 10 + len(order) + nb + 4 + len(lags)))
+    d = np.empty(t)
+    lognf = math.log(max(nf, 2))
+    for i in range(n):
+        for q in range(nk):
+            o = out[i, q]
+            s = x[i, q]
+            srt = xs[i, q]
+            mu = mean[i, q]
+            lo, hi = srt[0], srt[t - 1]
+            ac0 = 0.0
+            for k in range(t):
+                d[k] = s[k] - mu
+                ac0 += d[k] * d[k]
+            sd = math.sqrt(ac0 / t)
+            o[0] = mu
+            o[1] = sd
+            for m in range(len(order)):
+                o[2 + m] = srt[order[m]]
+            a = 2 + len(order)
+            o[a] = hi
+            o[a + 1], o[a + 2] = _shape(srt, lo, hi)
+            flat = sd <= 1e-12 * (1.0 + abs(mu))
+            mad1, dstd, mcr = _differences(s, d)
+            o[a + 3] = mad1
+            o[a + 4] = dstd
+            if not flat:
+                o[a + 5] = sd / max(abs(mu), sd * 1e-6 + 1e-12)
+                o[a + 6] = mad1 / sd
+                o[a + 7] = mcr
+            _spectral(p[i, q], f, starts, ends, lognf, o[a + 8:a + 12 + nb])
+            b = a + 12 + nb
+            if not flat:
+                _autocorrelation(d, lags, ac0, o[b:])
+    return out
+
+
+@jit
+def _shape(srt, lo, hi):
+    """Skewness and kurtosis of sorted values (:func:`touchbench.features.numerics.moments`)."""
+    t = srt.size
+    if hi - lo == 0:
+        return 0.0, 3.0
+    scale = hi - lo
+    zm = 0.0
+    for k in range(t):
+        zm += (srt[k] - lo) / scale
+    zm /= t
+    m2 = 0.0
+    m3 = 0.0
+    m4 = 0.0
+    for k in range(t):
+        z = (srt[k] - lo) / scale - zm
+        z2 = z * z
+        m2 += z2
+        m3 += z2 * z
+        m4 += z2 * z2
+    m2 /= t
+    return (m3 / t) / m2 ** 1.5, (m4 / t) / (m2 * m2)
+
+
+@jit
+def _autocorrelation(d, lags, ac0, o):
+    """The autocorrelation of the centred series ``d`` at ``lags`` (its energy ``ac0``) into ``o``:
+    every lag in one pass over the series."""
+    t = d.size
+    acc = np.zeros(len(lags))
+    for k in range(t):
+        dk = d[k]
+        for m in range(len(lags)):
+            if k >= lags[m]:
+                acc[m] += dk * d[k - lags[m]]
+    for m in range(len(lags)):
+        if lags[m] < t:
+            o[m] = acc[m] / ac0
+
+
+@jit
+def _differences(s, d):
+    """Mean absolute and standard deviation of first differences, mean-crossing rate."""
+    t = s.size
+    mad = 0.0
+    tot = 0.0
+    cross = 0
+    for k in range(1, t):
+        dd = s[k] - s[k - 1]
+        mad += abs(dd)
+        tot += dd
+        if (d[k] > 0) != (d[k - 1] > 0):
+            cross += 1
+    mean = tot / (t - 1)
+    var = 0.0
+    for k in range(1, t):
+        e = s[k] - s[k - 1] - mean
+        var += e * e
+    return mad / (t - 1), math.sqrt(var / (t - 1)), cross / (t - 1)
+
+
+@jit
+def _spectral(p, f, starts, ends, lognf, o):
+    """Band fractions, peak and centroid frequency, normalised entropy, log power into ``o``."""
+    nb = starts.size
+    tot = p.sum()
+    if tot <= 0:
+        o[nb + 3] = math.log1p(0.0)
+        return
+    for b in range(nb):
+        acc = 0.0
+        for k in range(starts[b], ends[b]):
+            acc += p[k]
+        o[b] = acc / tot
+    o[nb] = f[np.argmax(p)]
+    cen = 0.0
+    ent = 0.0
+    for k in range(p.size):
+        cen += p[k] * f[k]
+        qk = p[k] / tot
+        if qk > 0:
+            ent -= qk * math.log(qk)
+    o[nb + 1] = cen / tot
+    o[nb + 2] = ent / lognf
+    o[nb + 3] = math.log1p(tot)
+
+
+@jit
+def cell_pool(s, mean, p, f, starts, ends, sum_power, h, w, floor, out):
+    """``cell-rhythm``'s features into ``out`` ``(N, 20)`` from the pressure ``s`` ``(N, T, C)``, the
+    cells' means ``(N, C)``, their power spectra ``p`` ``(N, C, F)`` and the power of the cells' summed
+    series ``sum_power`` ``(N,)``."""
+    n, t, nc = s.shape
+    nb = starts.size
+    pw = np.empty(nc)
+    pooled = np.empty(f.size)
+    for i in range(n):
+        o = out[i]
+        pooled[:] = 0.0
+        for c in range(nc):
+            acc = 0.0
+            for k in range(f.size):
+                acc += p[i, c, k]
+                pooled[k] += p[i, c, k]
+            pw[c] = acc
+        tot = pw.sum()
+        if tot > 0:
+            for b in range(nb):
+                acc = 0.0
+                for k in range(starts[b], ends[b]):
+                    acc += pooled[k]
+                o[b] = acc / tot
+            cen = 0.0
+            for k in range(f.size):
+                cen += pooled[k] * f[k]
+            o[nb] = cen / tot
+            o[nb + 2] = f[np.argmax(p[i, np.argmax(pw)])] if f.size else 0.0
+            o[nb + 3] = sum_power[i] / tot
+            fpk = 0.0
+            ent = 0.0
+            for c in range(nc):
+                wc = pw[c] / tot
+                if f.size:
+                    fpk += f[np.argmax(p[i, c])] * wc
+                if wc > 0:
+                    ent -= wc * math.log(wc)
+            o[nb + 1] = fpk
+            o[nb + 4] = ent
+            o[nb + 5] = _weighted_mcr(s[i], mean[i], pw, tot)
+        o[nb + 6], o[nb + 7] = _neighbour_corr(s[i], mean[i], h, w)
+        o[nb + 8], o[nb + 9], o[nb + 10] = _blobs(s[i], h, w, floor)
+
+
+@jit
+def _weighted_mcr(si, mean, pw, tot):
+    """The cells' mean-crossing rates weighted by their share of the power."""
+    t, nc = si.shape
+    out = 0.0
+    for c in range(nc):
+        cross = 0
+        for k in range(1, t):
+            cross += (si[k, c] - mean[c] > 0) != (si[k - 1, c] - mean[c] > 0)
+        out += cross / (t - 1) * (pw[c] / tot)
+    return out
+
+
+@jit
+def _neighbour_corr(si, mean, h, w):
+    """Correlation of horizontally and vertically adjacent cells, weighted by their deviations."""
+    t, nc = si.shape
+    sq = np.zeros(nc)
+    ph = np.zeros(nc)
+    pv = np.zeros(nc)
+    dk = np.empty(nc)
+    for k in range(t):
+        for c in range(nc):
+            dk[c] = si[k, c] - mean[c]
+            sq[c] += dk[c] * dk[c]
+        for r in range(h):
+            for x in range(w - 1):
+                ph[r * w + x] += dk[r * w + x] * dk[r * w + x + 1]
+        for c in range(nc - w):
+            pv[c] += dk[c] * dk[c + w]
+    sd = np.sqrt(sq)
+    res = np.zeros(2)
+    for m in range(2):
+        num = 0.0
+        den = 0.0
+        for c in range(nc):
+            if m == 0 and (c + 1) % w == 0 or m == 1 and c + w >= nc:
+                continue
+            wgt = sd[c] * sd[c + 1 if m == 0 else c + w]
+            if wgt > 0:
+                num += (ph[c] if m == 0 else pv[c]) / wgt * wgt
+            den += wgt
+        res[m] = num / den if den > 0 else 0.0
+    return res[0], res[1]
+
+
+@jit
+def _blobs(si, h, w, floor):
+    """Blobs per frame (nodes minus 4-neighbour edges of the cells above half the frame's maximum):
+    mean over active frames, maximum, mean number of such cells."""
+    t, nc = si.shape
+    comp_sum = 0
+    comp_max = -nc
+    nodes_sum = 0
+    active = 0
+    on = np.empty(nc, dtype=np.bool_)
+    for k in range(t):
+        thr = max(0.5 * si[k].max(), floor)
+        nodes = 0
+        for c in range(nc):
+            on[c] = si[k, c] > thr
+            nodes += on[c]
+        edges = 0
+        for c in range(nc):
+            if on[c]:
+                if (c + 1) % w and on[c + 1]:
+                    edges += 1
+                if c + w < nc and on[c + w]:
+                    edges += 1
+        comp = nodes - edges if nodes > 0 else 0
+        active += nodes > 0
+        comp_sum += comp
+        comp_max = max(comp_max, comp)
+        nodes_sum += nodes
+    nact = max(active, 1)
+    return comp_sum / nact, float(comp_max if t else 0), nodes_sum / nact
+
+
+@jit
+def contact_tracks(ws, num, area, h, w, out, pos, act):
+    """``contact-motion``'s features without spectra into ``out`` ``(N, R, 18)`` (columns 0-9), the
+    position along the axis of motion into ``pos`` and the on/off activity into ``act`` (both
+    ``(N, R, T)``), from each threshold's contact weight ``ws`` ``(N, R, T)``, its weighted row and
+    column ``num`` ``(N, R, 2, T)`` (divided by the weight here, in place) and its area ``(N, R, T)``.
+    The weights and sums come from numpy: the reversals count signs of position changes, which
+    for a position that does not move are the signs of rounding (the same ones as numpy's)."""
+    n, nr, t = ws.shape
+    for i in range(n):
+        for r in range(nr):
+            _track(ws[i, r], num[i, r], area[i, r], h, w, out[i, r], pos[i, r], act[i, r])
+
+
+@jit
+def _track(ws, cyx, area, h, w, o, pos, act):
+    """One threshold's track: activity, onsets, area, speed, range, path, reversals."""
+    t = ws.size
+    nact = 0
+    msum = np.zeros(2)
+    for k in range(t):
+        if ws[k] > 0:
+            act[k] = 1.0
+            nact += 1
+            for a in range(2):
+                cyx[a, k] /= ws[k]
+                msum[a] += cyx[a, k]
+        else:
+            act[k] = 0.0
+    for a in range(2):
+        fill = msum[a] / max(nact, 1) if nact > 0 else ((h - 1) / 2.0 if a == 0 else (w - 1) / 2.0)
+        for k in range(t):
+            if ws[k] <= 0:
+                cyx[a, k] = fill
+    rng = np.empty(2)
+    for a in range(2):
+        srt = np.sort(cyx[a])
+        rng[a] = srt[int(round(0.95 * (t - 1)))] - srt[int(round(0.05 * (t - 1)))]
+    major = 0 if rng[0] >= rng[1] else 1
+    sp = np.zeros(t - 1)
+    onsets = 0
+    nboth = 0
+    spsum = 0.0
+    nz = 0
+    rev = 0
+    prev = 0.0
+    for k in range(t - 1):
+        both = act[k] > 0 and act[k + 1] > 0
+        onsets += act[k + 1] > 0 and not act[k] > 0
+        sg = 0.0
+        if both:
+            nboth += 1
+            sp[k] = math.hypot(cyx[1, k + 1] - cyx[1, k], cyx[0, k + 1] - cyx[0, k])
+            spsum += sp[k]
+            sg = np.sign(cyx[major, k + 1] - cyx[major, k])
+        nz += sg != 0
+        if k and sg * prev < 0:
+            rev += 1
+        prev = sg
+    o[0] = nact / t
+    o[1] = onsets
+    o[2] = area.sum() / max(nact, 1)
+    o[3] = area.max()
+    o[4] = spsum / max(nboth, 1)
+    o[5] = np.sort(sp)[int(round(0.9 * (t - 2)))]
+    o[6] = rng[0]
+    o[7] = rng[1]
+    o[8] = spsum
+    o[9] = rev / max(nz, 1) if nz > 0 else 0.0
+    pos[:] = cyx[major]
