@@ -10,7 +10,6 @@ by the vectorised numpy code here (the two agree within 1e-9).
 from __future__ import annotations
 
 import functools
-import os
 from types import ModuleType
 
 import numpy as np
@@ -167,12 +166,16 @@ def _local_bands(p: np.ndarray, f: np.ndarray, bands) -> dict:
     return {"fpeak": fpeak, "fcent": fcent, "bands": [fr[..., i] for i in range(len(bands))]}
 
 
+#: whether the compiled loops run where numba is installed; the tests set it False to compare them
+#: with the numpy path. Not a user setting: a run's identity (its feature cache keys and task ids)
+#: holds numba's version, not this switch, so both paths of one environment must not share a cache.
+COMPILED = True
 
 
 def kernels() -> ModuleType | None:
-    """:mod:`touchbench.features.touch_kernels` (compiled on first use), or None without numba or
-    when the environment variable ``TOUCHBENCH_NUMBA`` is ``0`` (the numpy path)."""
-    if os.environ.get("TOUCHBENCH_NUMBA", "1") == "0":
+    """:mod:`touchbench.features.touch_kernels` (compiled on first use), or None without numba
+    (the numpy path) or when :data:`COMPILED` is False."""
+    if not COMPILED:
         return None
     try:
         from . import touch_kernels
