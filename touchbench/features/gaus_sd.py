@@ -286,7 +286,7 @@ def median_rows(flat: np.ndarray) -> np.ndarray:
     """Median of each row of ``flat`` (N, M) as float64 (mean of the two middle values for even M).
 
     Integer rows over a narrow range: the two middle order statistics from the rows' value counts
-    (:class:`~touchbench.features.numerics.SeriesCounts`, one ``bincount``, cheaper than a sort);
+    (:class:`touchbench.features.numerics.SeriesCounts`, one ``bincount``, cheaper than a sort);
     other rows: a sort.
     """
     m = flat.shape[1]
