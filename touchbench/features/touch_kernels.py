@@ -48,11 +48,7 @@ def rhythm_frames(s, c, base, h, w, floor, area_rel, ranks):
         cm[:] = 0.0
         cdf[:] = 0.0
         si = s[i]
-        peak = si[0, 0]
-        for k in range(t):
-            for j in range(nc):
-                if si[k, j] > peak:
-                    peak = si[k, j]
+        peak = _largest(si)
         thr = max(area_rel * peak, floor)
         out = series[i]
         for k in range(t):
@@ -104,6 +100,17 @@ def rhythm_frames(s, c, base, h, w, floor, area_rel, ranks):
         _rhythm_series(out, psa, thr)
         _rhythm_cells(si, base[i], out, psa, extra[i], ranks, peak, grad, cm, csd, cdf)
     return series, extra
+
+
+@jit
+def _largest(si):
+    """The largest value of a capture's pressure ``(T, C)`` (its first, for ties), by one walk."""
+    peak = si[0, 0]
+    for k in range(si.shape[0]):
+        for j in range(si.shape[1]):
+            if si[k, j] > peak:
+                peak = si[k, j]
+    return peak
 
 
 @jit
