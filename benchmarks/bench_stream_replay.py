@@ -206,8 +206,10 @@ def _set_name(fs) -> str:
 def live_parts(fitted, frames, spec, rate) -> dict:
     """CPU ms per decision of each feature set (on the decision's windows, alone) and of the classifier
     on their features, over the first :data:`PARTS_SAMPLE` decisions: median and p99."""
-    lengths = sorted({max(1, int(round(w * rate))) for w in spec.windows_s})
-    hop = max(1, int(round(spec.hop_s * rate)))
+    from touchbench.datasets.windows import seconds_to_frames
+
+    lengths = sorted({seconds_to_frames(w, rate) for w in spec.windows_s})
+    hop = seconds_to_frames(spec.hop_s, rate)
     due = list(range(lengths[0], len(frames) + 1, hop))[:PARTS_SAMPLE]
     sets = list(getattr(fitted, "sets", None) or [])
     per: dict[str, list[float]] = {_set_name(fs): [] for fs in sets}
