@@ -215,3 +215,55 @@ def test_gaus_sets_of_haarts_training_split_equal_the_rows_of_the_whole_and_each
         assert np.asarray(X).tobytes() == np.asarray(Y).tobytes(), n  # bit for bit
         one = np.vstack([make_set(n, ds.sensor).fit([c]).transform([c]) for c in train[:3]])
         assert np.asarray(X)[:3].tobytes() == one.tobytes(), n
+
+
+# --------------------------------------------------------------- several plans of one dataset
+def _zhou_protocol(tmp_path, data, name, feature):
+    p = tmp_path / f"{name}.yaml"
+    p.write_text(PROTOCOL.format(name=name, data=data, filters="").replace("[zhou-basic]", feature))
+    return p
+
+
+def test_plans_of_one_dataset_fill_the_cache_in_one_pass_and_their_runs_find_it(tmp_path, monkeypatch):
+    from touchbench.engine.runner import fill_features, plan_protocol
+    from touchbench.features import zhou
+
+    data = _toy(tmp_path)
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    a = _zhou_protocol(tmp_path, data, "basic", "[zhou-basic]")
+    b = _zhou_protocol(tmp_path, data, "wavelet", "[{name: zhou-wavelet, params: {levels: 4}}]")
+    calls = []
+    original = zhou.frame_descriptors
+    monkeypatch.setattr(zhou, "frame_descriptors", lambda *x: calls.append(1) or original(*x))
+    from touchbench.protocols.loading import load_protocol
+
+    one = plan_protocol(load_protocol(a), tmp_path / "r-basic")
+    fill_features(one, progress=False, jobs=1)
+    per_pass = len(calls)  # one per batch of captures of one length
+    assert per_pass >= 2
+    plans = one + plan_protocol(load_protocol(b), tmp_path / "r-wavelet")
+    calls.clear()
+    fill_features(plans, progress=False, jobs=1)
+    assert len(calls) == per_pass  # the wavelet set alone was missing: one pass
+    filled = {p.name: p.read_text() for p in (tmp_path / "cache" / "features").glob("*.json")}
+    assert len(filled) == 2
+    run_protocol(a, out=tmp_path / "r-basic", progress=False)
+    run_protocol(b, out=tmp_path / "r-wavelet", progress=False)
+    after = {p.name: p.read_text() for p in (tmp_path / "cache" / "features").glob("*.json")}
+    assert after == filled  # each run found its entries: none written again
+
+
+def test_the_sets_of_finished_tasks_are_not_computed_again(tmp_path, monkeypatch):
+    from touchbench.engine.runner import fill_features, plan_protocol
+    from touchbench.protocols.loading import load_protocol
+
+    data = _toy(tmp_path)
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    a = _zhou_protocol(tmp_path, data, "basic", "[zhou-basic]")
+    run_protocol(a, out=tmp_path / "r", progress=False)
+    for f in (tmp_path / "cache" / "features").glob("*.*"):
+        f.unlink()
+    fill_features(plan_protocol(load_protocol(a), tmp_path / "r"), progress=False)
+    assert not list((tmp_path / "cache" / "features").glob("*.json"))  # every task finished
+    fill_features(plan_protocol(load_protocol(a), tmp_path / "elsewhere"), progress=False)
+    assert len(list((tmp_path / "cache" / "features").glob("*.json"))) == 1

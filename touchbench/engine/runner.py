@@ -58,7 +58,7 @@ from .cache import FeatureCache, crop_captures
 from .planning import Plan, check_methods, names_a_method, plan_method_list, plan_methods, plan_run, plan_test_set
 from .tasks import RunContext, SetSpec, Task, execute_task, make_feature_set
 
-__all__ = ["RunResult", "default_results_dir", "plan_protocol", "results_dirs", "run_plan",
+__all__ = ["RunResult", "default_results_dir", "fill_features", "plan_protocol", "results_dirs", "run_plan",
            "run_protocol"]
 
 
@@ -152,6 +152,25 @@ def _fill_cache(plan: Plan, pending: list[Task], jobs: int, progress: _Progress,
                      "family": s.family})
                    for key, s in group]
         cache.compute(entries, caps, jobs=jobs, on_chunk=lambda n, tid=tid: progress.advance(tid, n), setup=setup)
+    return notes
+
+
+def fill_features(plans: Sequence[tuple[Plan, Path]], *, jobs: int = 1, progress: bool | None = None) -> list[str]:
+    """Compute the missing feature-cache entries that the unfinished tasks of several plans read
+    (each plan with its results folder: a task whose scores fragment is there is finished), the
+    plans of one dataset together: one pass per crop over its captures for the sets of all of
+    them, so a set two plans use is computed once and a preprocessing their sets share (the Zhou
+    sets' frame descriptors) once. Each plan's run then finds its entries. Notes on damaged entries."""
+    by_dataset: dict[tuple[str, Path], tuple[Plan, list[Task]]] = {}
+    for plan, out in plans:
+        folder = Path(out) / "fragments"
+        done = {p.name[:-len(".scores.parquet")] for p in folder.glob("*.scores.parquet")} if folder.is_dir() else set()
+        _, tasks = by_dataset.setdefault((plan.dataset.content_hash, plan.cache_root), (plan, []))
+        tasks.extend(t for t in plan.tasks if t.task_id not in done)
+    notes: list[str] = []
+    with _Progress(sys.stderr.isatty() if progress is None else progress) as prog:
+        for plan, tasks in by_dataset.values():
+            notes += _fill_cache(plan, tasks, _jobs_for_backend(jobs), prog)
     return notes
 
 

@@ -27,7 +27,7 @@ from joblib.externals.loky import get_reusable_executor
 from ..catalog import load_dataset
 from ..core.errors import TouchbenchError
 from ..engine.audit import run_audit
-from ..engine.runner import run_protocol
+from ..engine.runner import fill_features, plan_protocol, run_protocol
 from ..protocols.loading import load_protocol
 from ..protocols.schema import resolve_dataset_ref
 from ..reports.audit import write_audit
@@ -72,8 +72,13 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
     t_all = time.perf_counter()
     loaded = _LoadedDataset()
     audit_options = dict(prof.audit_options) if audit else None
+    filled: set[str] = set()
     with LoadSampler() as sampler:
         for proto, changes, f in chosen:
+            if _dataset_key(proto) not in filled:  # the first protocol of its dataset
+                filled.add(_dataset_key(proto))
+                group = [(p, out / profile / p.name) for p, _, _ in chosen if _dataset_key(p) == _dataset_key(proto)]
+                _fill_features(group, loaded, echo=echo, jobs=jobs, progress=progress)
             r = ProtocolRun(path=f, name=proto.name, out=out / profile / proto.name, changes=changes)
             _run_guarded(proto, r, loaded, echo=echo, jobs=jobs, progress=progress, failed=failed,
                          audit=audit_options)
@@ -157,6 +162,26 @@ class _LoadedDataset:
             self.dataset = load_dataset(resolve_dataset_ref(proto), **proto.dataset.options)
             self.key = key
         return self.dataset
+
+
+def _fill_features(group: list[tuple[Any, Path]], loaded: "_LoadedDataset", *, echo: Callable[[str], None],
+                   jobs: int, progress: bool | None) -> None:
+    """The feature-cache entries of the protocols of one dataset (``group``: each with its results
+    folder), computed together before the first of them runs
+    (:func:`touchbench.engine.runner.fill_features`: Zhou's tables compute their frame descriptors
+    once). A protocol that cannot be planned, or a set that fails, is left to the protocol's own
+    run, which reports it."""
+    plans = []
+    for proto, folder in group:
+        try:
+            plans += plan_protocol(proto, folder, dataset=loaded.get(proto, echo))
+        except Exception:  # noqa: BLE001 -- reported by the protocol's own run
+            continue
+    try:
+        for note in fill_features(plans, jobs=jobs, progress=progress):
+            echo(note)
+    except Exception:  # noqa: BLE001 -- the set fails again in its protocol's run, which reports it
+        pass
 
 
 def _run_guarded(proto, r: ProtocolRun, loaded: _LoadedDataset, *, echo: Callable[[str], None], jobs: int,
