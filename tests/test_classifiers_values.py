@@ -37,6 +37,23 @@ def test_weka_features_per_split():
     assert rf.max_features == 5 and rf.estimators_[0].max_features_ == 3
 
 
+def test_weka_forest_grows_scikit_learns_trees():
+    rng = np.random.default_rng(1)
+    X, y = rng.normal(size=(60, 20)), rng.integers(0, 4, 60)
+    w = rng.random(60)
+    for weights in (None, w):
+        ours = WekaRandomForestClassifier(n_estimators=7, criterion="entropy", max_features="weka",
+                                          random_state=5).fit(X, y, sample_weight=weights)
+        # scikit-learn's own forest with Weka's int(log2 20) + 1 = 5 features per split
+        theirs = RandomForestClassifier(n_estimators=7, criterion="entropy", max_features=5,
+                                        random_state=5).fit(X, y, sample_weight=weights)
+        assert [t.random_state for t in ours.estimators_] == [t.random_state for t in theirs.estimators_]
+        for a, b in zip(ours.estimators_, theirs.estimators_):
+            assert a.get_params() == b.get_params()
+            assert np.array_equal(a.tree_.threshold, b.tree_.threshold) and np.array_equal(a.tree_.value, b.tree_.value)
+        assert np.array_equal(ours.predict_proba(X), theirs.predict_proba(X))
+
+
 def test_sample_standard_scaler_uses_the_sample_deviation():
     X = np.array([[1.0, 5.0], [2.0, 5.0], [4.0, 5.0]])
     Z = SampleStandardScaler().fit_transform(X)

@@ -17,6 +17,7 @@ from typing import Any, Sequence
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
 from sklearn.ensemble import RandomForestClassifier
+from sklearn.tree import DecisionTreeClassifier
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import StrOptions
 from sklearn.utils.metaestimators import available_if
@@ -238,6 +239,20 @@ class WekaRandomForestClassifier(RandomForestClassifier):
         "max_features": [c if not isinstance(c, StrOptions) else StrOptions({*c.options, "weka"})
                          for c in RandomForestClassifier._parameter_constraints["max_features"]],
     }
+
+    def _make_estimator(self, append=True, random_state=None):
+        """A tree as scikit-learn's ensembles make it (a tree of the forest's ``estimator_params``,
+        its ``random_state`` the one integer drawn from ``random_state``), built directly instead of
+        by ``clone`` and ``set_params``, which read the constructor's signature at every tree
+        (about a twentieth of a 100-tree forest's fit): the same trees."""
+        if type(self.estimator_) is not DecisionTreeClassifier:
+            return super()._make_estimator(append=append, random_state=random_state)
+        tree = DecisionTreeClassifier(**{p: getattr(self, p) for p in self.estimator_params})
+        if random_state is not None:
+            tree.random_state = check_random_state(random_state).randint(np.iinfo(np.int32).max)
+        if append:
+            self.estimators_.append(tree)
+        return tree
 
     def fit(self, X, y, sample_weight=None):
         requested = self.max_features
