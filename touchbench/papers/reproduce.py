@@ -52,7 +52,8 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
 
     Results go to ``out/<profile>/<protocol name>/`` (resumable: a rerun
     skips finished tasks). Each dataset is loaded once for the protocols that
-    share it. A protocol that fails to run is reported, and the others go on;
+    share it, and their feature-cache entries are computed together before the
+    first of them runs (:func:`_fill_features`). A protocol that fails to run is reported, and the others go on;
     ``failed`` (when given) receives the name of each protocol that failed or
     had a failed task. ``audit``: a protocol with an ``audit:`` block is also
     audited (:func:`touchbench.engine.audit.run_audit`) into
