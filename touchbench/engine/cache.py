@@ -22,17 +22,6 @@ verified once per process and file. Rows are computed in chunks of a fixed
 size, so the matrix is the same whatever the number of parallel jobs; the
 sets of one pass (:meth:`FeatureCache.compute`) share a chunk's preprocessing and
 each gets the rows it gives alone.
-
-A capture's row depends on nothing but the capture, the set (name, parameters,
-code) and the sensor, so rows are also shared between datasets: an entry
-computed with a *family* (:meth:`FeatureCache.family`: the set's name,
-parameters, code and the sensor, without the dataset) keeps the SHA-256 of each
-of its captures (:func:`capture_digest`: the values in their own type, with
-their shape) in ``rows/<family>/<key>.rows``, its checksum in the entry's
-JSON. An entry missing for another selection of the same captures (a table
-on the training split after one on the whole dataset, a crop that leaves
-short captures whole) takes the rows it finds in the family's sound entries
-and computes only the captures none of them holds.
 """
 
 from __future__ import annotations
@@ -41,7 +30,6 @@ import hashlib
 import io
 import json
 import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
@@ -55,7 +43,7 @@ from ..core.paths import cache_dir
 from ..features.base import FeatureStack
 from .backends import parallel, run_setup
 
-__all__ = ["CHUNK", "FeatureCache", "capture_digest", "crop_captures", "matrix_checksum"]
+__all__ = ["CHUNK", "FeatureCache", "crop_captures", "matrix_checksum"]
 
 CHUNK = 32  # captures per chunk (fixed: results must not depend on --jobs)
 
@@ -66,30 +54,6 @@ def matrix_checksum(X: np.ndarray) -> str:
     h = hashlib.sha256(f"{a.shape}".encode())
     h.update(memoryview(a).cast("B") if a.size else b"")
     return h.hexdigest()
-
-
-def capture_digest(capture: np.ndarray) -> bytes:
-    """SHA-256 (32 bytes) of a capture as a feature set reads it: its values in their own type, with
-    the type and the shape (a uint16 capture and its float copy are two captures here)."""
-    a = np.ascontiguousarray(capture)
-    h = hashlib.sha256(f"{a.dtype.str}{a.shape}".encode())
-    h.update(memoryview(a).cast("B") if a.size else b"")
-    return h.digest()
-
-
-@dataclass
-class _Found:
-    """The rows of one entry found in other entries of its family: the matrix (rows where ``found``),
-    and each found row's seconds per capture as its source recorded it."""
-
-    X: np.ndarray | None
-    found: np.ndarray
-    seconds: np.ndarray
-    columns: list[str]
-
-    @classmethod
-    def none(cls, n: int) -> "_Found":
-        return cls(None, np.zeros(n, dtype=bool), np.zeros(n), [])
 
 
 def crop_captures(captures: Sequence[np.ndarray], n_frames: int | None) -> list[np.ndarray]:
@@ -115,17 +79,6 @@ class FeatureCache:
             sort_keys=True, default=str,
         )
         return hashlib.sha256(blob.encode()).hexdigest()[:32]
-
-    @staticmethod
-    def family(name: str, params: dict[str, Any], version: str, sensor: dict[str, Any] | None) -> str:
-        """What a capture's row depends on besides the capture: the set's name, parameters and code,
-        and the sensor (an entry's key adds the dataset and the crop)."""
-        blob = json.dumps({"name": name, "params": params, "code": version, "sensor": sensor},
-                          sort_keys=True, default=str)
-        return hashlib.sha256(blob.encode()).hexdigest()[:32]
-
-    def _rows_path(self, family: str, key: str) -> Path:
-        return self.root / "rows" / family / f"{key}.rows"
 
     def _paths(self, key: str) -> tuple[Path, Path]:
         return self.root / f"{key}.npy", self.root / f"{key}.json"
@@ -172,67 +125,15 @@ class FeatureCache:
         problem, X, info = self._check(npy, js)
         return None if problem is not None else (X, info)
 
-    def store(self, key: str, X: np.ndarray, info: dict[str, Any], rows: Sequence[bytes] | None = None) -> None:
-        """Write an entry; ``rows`` (one :func:`capture_digest` per row) makes its rows findable by
-        other entries of ``info["family"]``."""
+    def store(self, key: str, X: np.ndarray, info: dict[str, Any]) -> None:
         npy, js = self._paths(key)
         X = np.ascontiguousarray(X, dtype=np.float64)
         buf = io.BytesIO()
         np.save(buf, X)
         data = buf.getvalue()
         atomic_write_bytes(npy, data)
-        extra: dict[str, Any] = {}
-        if rows is not None and info.get("family"):
-            blob = b"".join(rows)
-            atomic_write_bytes(self._rows_path(info["family"], key), blob)
-            extra["rows_sha256"] = hashlib.sha256(blob).hexdigest()
-        atomic_write_bytes(js, json.dumps({**info, **extra, "n_rows": int(X.shape[0]), "npy_bytes": len(data),
+        atomic_write_bytes(js, json.dumps({**info, "n_rows": int(X.shape[0]), "npy_bytes": len(data),
                                            "sha256": matrix_checksum(X)}, default=str).encode())
-
-    def _source(self, family: str, path: Path) -> tuple[np.ndarray, dict[str, Any], list[bytes]] | None:
-        """A sound entry of ``family`` (its rows file at ``path``): matrix, info and row digests;
-        None when damaged, of another family or its rows file does not match its checksum."""
-        got = self.load(path.name[:-len(".rows")])
-        if got is None or got[1].get("family") != family:
-            return None
-        M, info = got
-        try:
-            blob = path.read_bytes()
-        except OSError:
-            return None
-        if len(blob) != 32 * M.shape[0] or hashlib.sha256(blob).hexdigest() != info.get("rows_sha256"):
-            return None
-        return M, info, [blob[i:i + 32] for i in range(0, len(blob), 32)]
-
-    def found_rows(self, family: str, digests: Sequence[bytes], skip: str | None = None) -> _Found:
-        """The rows of captures ``digests`` that sound entries of ``family`` (other than ``skip``) hold."""
-        n = len(digests)
-        out = _Found.none(n)
-        where: dict[bytes, list[int]] = {}
-        for i, d in enumerate(digests):
-            where.setdefault(d, []).append(i)
-        folder = self.root / "rows" / family
-        for path in sorted(folder.glob("*.rows")) if folder.is_dir() else []:
-            if out.found.all():
-                break
-            src = None if path.name == f"{skip}.rows" else self._source(family, path)
-            if src is None or (out.X is not None and src[0].shape[1] != out.X.shape[1]):
-                continue
-            M, info, rows = src
-            dst, take = [], []
-            for r, d in enumerate(rows):
-                for i in where.get(d, ()):
-                    if not out.found[i]:
-                        out.found[i] = True
-                        dst.append(i)
-                        take.append(r)
-            if dst:
-                if out.X is None:
-                    out.X = np.empty((n, M.shape[1]), dtype=np.float64)
-                    out.columns = list(info.get("columns") or [])
-                out.X[dst] = M[take]
-                out.seconds[dst] = float(info.get("seconds_per_capture", 0.0))
-        return out
 
     def compute(
         self,
@@ -252,86 +153,41 @@ class FeatureCache:
         chunk; each set's matrix is the one it gives alone. ``seconds_per_capture`` is a set's
         transform time per capture, summed over chunks (CPU time per capture when chunks run in
         parallel), a shared preprocessing counted in every set that reads it.
-
-        An entry whose ``info`` names its ``family`` takes the rows other entries of the family
-        hold (:meth:`found_rows`; ``reused_rows`` in its info counts them, a reused row's seconds
-        its source's); only the captures some entry lacks are computed, in chunks of their own.
         """
-        n = len(captures)
-        digests = ([capture_digest(c) for c in captures]
-                   if any((info or {}).get("family") for _, _, info in entries) else None)
-        found = [self.found_rows(info["family"], digests, skip=key) if digests is not None and (info or {}).get("family")
-                 else _Found.none(n) for key, _, info in entries]
-        missing = np.flatnonzero(~np.logical_and.reduce([f.found for f in found])) if entries else np.arange(n)
-        todo = [j for j, f in enumerate(found) if not f.found.all()]
-        if on_chunk and n > len(missing):
-            on_chunk(n - len(missing))
-        computed = dict(zip(todo, _transform_all([entries[j][1] for j in todo], [captures[i] for i in missing],
-                                                 jobs=jobs, on_chunk=on_chunk, setup=setup)))
+        chunks = [list(captures[i:i + CHUNK]) for i in range(0, len(captures), CHUNK)]
+        makes = [make for _, make, _ in entries]
+        if jobs == 1 or len(chunks) == 1:
+            results = []
+            for ch in chunks:
+                results.append(_transform_chunk(makes, ch, setup))
+                if on_chunk:
+                    on_chunk(len(ch))
+        else:
+
+            results = []
+
+            # never more workers than chunks
+            par = parallel(min(jobs, len(chunks)))
+            for ch, res in zip(chunks, par(delayed(_transform_chunk)(makes, ch, setup) for ch in chunks)):
+                results.append(res)
+                if on_chunk:
+                    on_chunk(len(ch))
         out = []
         for j, (key, _, info) in enumerate(entries):
-            X, seconds, cols, reused = _assemble(found[j], computed.get(j), missing, n)
+            X = np.vstack([r[j][0] for r in results]) if results else np.zeros((0, 0))
+            seconds = float(sum(r[j][1] for r in results))
             entry = {
                 **(info or {}),
-                "columns": cols,
-                "seconds_per_capture": seconds / max(1, n),
+                "columns": results[0][j][2] if results else [],
+                "seconds_per_capture": seconds / max(1, len(captures)),
                 "n_columns": int(X.shape[1]) if X.ndim == 2 else 0,
-                "reused_rows": reused,
                 "created": time.time(),
             }
-            self.store(key, X, entry, rows=digests)
+            self.store(key, X, entry)
             loaded = self.load(key)
             assert loaded is not None
             out.append(loaded)
         return out
-
-
-def _assemble(found: _Found, computed: tuple[np.ndarray, float, list[str]] | None, missing: np.ndarray,
-              n: int) -> tuple[np.ndarray, float, list[str], int]:
-    """One entry's matrix from its found rows and the rows computed for the captures ``missing``:
-    ``(matrix, seconds, columns, rows reused)``."""
-    if computed is None:  # every row found
-        assert found.X is not None or n == 0
-        return (found.X if found.X is not None else np.zeros((0, 0)), float(found.seconds.sum()),
-                found.columns, n)
-    Xc, seconds, cols = computed
-    if found.X is None:
-        if len(missing) == n:
-            return Xc, seconds, cols, 0
-        found.X = np.empty((n, Xc.shape[1]), dtype=np.float64)
-    X = found.X
-    X[missing] = Xc
-    used = np.ones(n, dtype=bool)
-    used[missing] = False
-    return X, seconds + float(found.seconds[used].sum()), cols, int(used.sum())
-
-
-def _transform_all(makes: Sequence[Callable[[], Any]], captures: Sequence[np.ndarray], *, jobs: int,
-                   on_chunk: Callable[[int], None] | None,
-                   setup: Callable[[], None] | None) -> list[tuple[np.ndarray, float, list[str]]]:
-    """Each set's ``(matrix, seconds, columns)`` of ``captures``, computed in chunks of ``CHUNK``
-    (``jobs`` in parallel; nothing to compute when there are no sets)."""
-    if not makes:
-        return []
-    chunks = [list(captures[i:i + CHUNK]) for i in range(0, len(captures), CHUNK)]
-    if jobs == 1 or len(chunks) <= 1:
-        results = []
-        for ch in chunks:
-            results.append(_transform_chunk(makes, ch, setup))
-            if on_chunk:
-                on_chunk(len(ch))
-    else:
-        results = []
-        par = parallel(min(jobs, len(chunks)))  # never more workers than chunks
-        for ch, res in zip(chunks, par(delayed(_transform_chunk)(makes, ch, setup) for ch in chunks)):
-            results.append(res)
-            if on_chunk:
-                on_chunk(len(ch))
-    out = []
-    for j in range(len(makes)):
-        X = np.vstack([r[j][0] for r in results]) if results else np.zeros((0, 0))
-        out.append((X, float(sum(r[j][1] for r in results)), results[0][j][2] if results else []))
-    return out
 
 
 def _transform_chunk(makes: Sequence[Callable[[], Any]], captures: list[np.ndarray],

@@ -343,17 +343,15 @@ def _input_notes(methods: list[Method], ds: TouchDataset) -> list[str]:
             for m in methods if m.input_frames is not None and (lo != m.input_frames or hi != m.input_frames)]
 
 
-def _set_specs(m: Method, comps: Components, ds: TouchDataset, crop_frames: int | None) -> tuple[SetSpec, ...]:
-    """The method's feature sets with their cache keys and family (fold-independent ones)."""
+def _set_specs(m: Method, comps: Components, ds_hash: str, crop_frames: int | None) -> tuple[SetSpec, ...]:
+    """The method's feature sets with their cache keys (fold-independent ones)."""
     out = []
-    ds_hash = ds.content_hash
     for name, params in m.spec.feature_sets:
         dep, digest = comps.sets[(name, canonical_json(params))]
         out.append(SetSpec(
             name=name, params=params, fold_dependent=dep,
             key_full=None if dep else FeatureCache.key(ds_hash, name, params, digest, None),
             key_crop=None if dep or crop_frames is None else FeatureCache.key(ds_hash, name, params, digest, crop_frames),
-            family=None if dep else FeatureCache.family(name, params, digest, ds.sensor.to_dict()),
         ))
     return tuple(out)
 
@@ -442,7 +440,7 @@ def _task(place: _FoldPlace, m: Method, comps: Components, measure_latency: bool
     task_id = hashlib.sha256(canonical_json(_task_identity(place, m, comps)).encode()).hexdigest()[:20]
     seed = _task_seed(place, m)
     return Task(task_id=task_id, repetition=place.repetition, fold=place.fold, method=m,
-                sets=_set_specs(m, comps, place.dataset, place.crop_frames), seed=seed,
+                sets=_set_specs(m, comps, place.dataset.content_hash, place.crop_frames), seed=seed,
                 crop_frames=place.crop_frames, measure_latency=measure_latency,
                 base_row=_base_row(place, m, task_id, seed))
 

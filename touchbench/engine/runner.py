@@ -56,7 +56,7 @@ from ..results.summary import check_expected, summarize
 from .backends import check_jobs, is_local_backend, local_jobs, parallel
 from .cache import FeatureCache, crop_captures
 from .planning import Plan, check_methods, names_a_method, plan_method_list, plan_methods, plan_run, plan_test_set
-from .tasks import RunContext, SetSpec, Task, execute_task, make_feature_set
+from .tasks import RunContext, Task, execute_task, make_feature_set
 
 __all__ = ["RunResult", "default_results_dir", "fill_features", "plan_protocol", "results_dirs", "run_plan",
            "run_protocol"]
@@ -124,33 +124,32 @@ def _fill_cache(plan: Plan, pending: list[Task], jobs: int, progress: _Progress,
     ds = plan.dataset
     notes: list[str] = []
     cache = FeatureCache(plan.cache_root)
-    needed: dict[str, tuple[SetSpec, int | None]] = {}
+    needed: dict[str, tuple[str, dict, int | None]] = {}
     for t in pending:
         crop_train = t.fold.crops_training()
         for s in t.sets:
             if s.fold_dependent:
                 continue
             if not crop_train:
-                needed.setdefault(s.key_full, (s, None))
+                needed.setdefault(s.key_full, (s.name, s.params, None))
             if s.key_crop is not None:
-                needed.setdefault(s.key_crop, (s, t.crop_frames))
-    by_crop: dict[int | None, list[tuple[str, SetSpec]]] = {}
-    for key, (s, crop) in needed.items():
+                needed.setdefault(s.key_crop, (s.name, s.params, t.crop_frames))
+    by_crop: dict[int | None, list[tuple[str, str, dict]]] = {}
+    for key, (name, params, crop) in needed.items():
         problem = cache.problem(key)
         if problem is None:
             continue
-        label = s.name + (f" (first {crop} frames)" if crop is not None else "")
+        label = name + (f" (first {crop} frames)" if crop is not None else "")
         if problem != "missing":
             notes.append(f"the cached features of {label} were not used ({problem}): computed again")
-        by_crop.setdefault(crop, []).append((key, s))
+        by_crop.setdefault(crop, []).append((key, name, params))
     for crop, group in by_crop.items():
         caps = crop_captures(ds.captures, crop)
-        names = ", ".join(dict.fromkeys(s.name for _, s in group))
+        names = ", ".join(dict.fromkeys(name for _, name, _ in group))
         tid = progress.add(f"features {names}" + (f" (first {crop} frames)" if crop is not None else ""), len(caps))
-        entries = [(key, partial(make_feature_set, s.name, s.params, ds.sensor),
-                    {"dataset_hash": ds.content_hash, "name": s.name, "params": s.params, "crop": crop,
-                     "family": s.family})
-                   for key, s in group]
+        entries = [(key, partial(make_feature_set, name, params, ds.sensor),
+                    {"dataset_hash": ds.content_hash, "name": name, "params": params, "crop": crop})
+                   for key, name, params in group]
         cache.compute(entries, caps, jobs=jobs, on_chunk=lambda n, tid=tid: progress.advance(tid, n), setup=setup)
     return notes
 

@@ -66,7 +66,6 @@ class SetSpec:
     fold_dependent: bool
     key_full: str | None = None  # cache key of the uncut captures
     key_crop: str | None = None  # cache key of the cut captures (early scheme)
-    family: str | None = None  # what its rows depend on besides the captures (``FeatureCache.family``)
 
 
 @dataclass(frozen=True)
