@@ -82,3 +82,24 @@ def test_the_sets_of_finished_tasks_are_not_computed_again(tmp_path, monkeypatch
     assert not list((tmp_path / "cache" / "features").glob("*.json"))  # every task finished
     fill_features(plan_protocol(load_protocol(a), tmp_path / "elsewhere"), progress=False)
     assert len(list((tmp_path / "cache" / "features").glob("*.json"))) == 1
+
+
+def test_papers_reproduce_fills_the_cache_once_for_the_protocols_of_one_dataset(tmp_path, monkeypatch):
+    import touchbench.papers.reproduce as R
+
+    data = _toy(tmp_path)
+    monkeypatch.setenv("TOUCHBENCH_CACHE_DIR", str(tmp_path / "cache"))
+    d = tmp_path / "papers"
+    d.mkdir()
+    expected = ("expected:\n  metric: accuracy\n  tolerance: 100.0\n  results:\n"
+                "    - {features: [zhou-basic], classifier: zhou-knn, value: 50.0, source: made up}\n")
+    for name in ("zhou-one", "zhou-two"):
+        (d / f"{name}.yaml").write_text(PROTOCOL.format(name=name, data=data) + expected)
+    calls = []
+    original = R.fill_features
+    monkeypatch.setattr(R, "fill_features", lambda plans, **kw: calls.append(
+        sorted(p.protocol.name for p, _ in plans)) or original(plans, **kw))
+    R.reproduce("quick", tmp_path / "res", protocols_dir=d, echo=lambda s: None)
+    assert calls == [["zhou-one", "zhou-two"]]  # once, before the first of them ran
+    for name in ("zhou-one", "zhou-two"):
+        assert (tmp_path / "res" / "quick" / name / "scores.parquet").is_file()

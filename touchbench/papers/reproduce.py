@@ -79,7 +79,8 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
             if _dataset_key(proto) not in filled:  # the first protocol of its dataset
                 filled.add(_dataset_key(proto))
                 group = [(p, out / profile / p.name) for p, _, _ in chosen if _dataset_key(p) == _dataset_key(proto)]
-                _fill_features(group, loaded, echo=echo, jobs=jobs, progress=progress)
+                if len(group) > 1:  # one protocol fills its own
+                    _fill_features(group, loaded, echo=echo, jobs=jobs, progress=progress)
             r = ProtocolRun(path=f, name=proto.name, out=out / profile / proto.name, changes=changes)
             _run_guarded(proto, r, loaded, echo=echo, jobs=jobs, progress=progress, failed=failed,
                          audit=audit_options)
