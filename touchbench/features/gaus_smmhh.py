@@ -13,6 +13,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, cell_names
+from .compiled import kernels
 from .gaus_common import GAUS_PAPER, resolve_units
 from .numerics import count_true
 
@@ -204,6 +205,11 @@ class SpatialMultiScaleMHH(FeatureSet):
         if L < 1:
             return np.zeros((n, len(skips) * M * int(edges[-1])))
         video, thr = pyramid_video(stack, shapes, self._thresholds(levels))
+        kern = kernels("gaus_kernels")
+        if kern is not None:
+            out = np.empty((n, len(skips) * M * int(edges[-1])))
+            kern.smmhh(video, thr, np.array(skips, dtype=np.int64), M, edges.astype(np.int64), out)
+            return out
         motion = np.zeros((n, len(skips), L + M + 1, int(edges[-1])), dtype=bool)
         for si, s in enumerate(skips):
             if t > s:
