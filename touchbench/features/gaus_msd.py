@@ -68,13 +68,24 @@ class MotionStatisticalDistribution(FeatureSet):
         n, t = stack.shape[:2]
         frames = stack.reshape(n, t, -1)  # (N, T, P): every cell's series along axis 1, in place
         kern = kernels("gaus_kernels")
-        ints = as_integers(frames) if kern is not None else None
-        if ints is None:
+        if kern is None:
             return msd_rows(frames)
-        out, ok = compiled_msd(kern, ints)
-        if not ok.all():  # a cell spans too many values to count
-            out[~ok] = msd_rows(frames[~ok])
-        return out
+        ints = as_integers(frames)
+        if ints is None:  # fractions in the batch: each capture alone, so its row never depends on its batch
+            return np.concatenate([msd_one(kern, frames[i:i + 1]) for i in range(n)])
+        return msd_one(kern, ints)
+
+
+def msd_one(kern, frames: np.ndarray) -> np.ndarray:
+    """The statistics of ``frames`` ``(N, T, P)`` by the compiled loop where its readings are
+    integers of a narrow span, else by numpy, capture by capture."""
+    ints = as_integers(frames)
+    if ints is None:
+        return msd_rows(frames)
+    out, ok = compiled_msd(kern, ints)
+    for i in np.flatnonzero(~ok):  # a cell spans too many values to count: this capture alone, as numpy
+        out[i] = msd_rows(frames[i:i + 1])[0]
+    return out
 
 
 def msd_rows(frames: np.ndarray) -> np.ndarray:

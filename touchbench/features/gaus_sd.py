@@ -262,8 +262,8 @@ class StatisticalDistribution(FeatureSet):
         kern.sd(ints, off, 0.0 if fixed is None else fixed, fixed is not None, lut, counts, ok)
         h = counts[:, :width - 1].astype(np.float64)
         h = h / t if self.normalize else h
-        if not ok.all():  # readings spanning too many values to count
-            h[~ok] = self._numpy_rows(x[~ok], off, fixed, edges)
+        for i in np.flatnonzero(~ok):  # readings spanning too many values to count: this capture alone, as numpy
+            h[i] = self._numpy_rows(x[i:i + 1], off, fixed, edges)[0]
         return h
 
     def _numpy_rows(self, x: np.ndarray, off: float, fixed: float | None, edges: dict[str, np.ndarray]) -> np.ndarray:
