@@ -57,7 +57,8 @@ def _edge_captures(t, grid, dtype, top):
 @pytest.mark.parametrize("t, grid, dtype, top", [(432, (8, 8), np.uint16, 1023), (1, (8, 8), np.uint16, 1023),
                                                  (2, (8, 8), np.uint16, 1023), (40, (4, 4), np.uint16, 1023),
                                                  (25, (19, 27), np.uint8, 255), (30, (8, 8), np.float64, 1023),
-                                                 (30, (8, 8), np.float32, 1023), (30, (5, 7), np.int16, 1023)])
+                                                 (30, (8, 8), np.float32, 1023), (30, (5, 7), np.int16, 1023),
+                                                 (30, (8, 8), np.bool_, 1)])
 def test_edge_cases_agree_with_the_numpy_path(name, t, grid, dtype, top, monkeypatch):
     sensor = HAART_SENSOR if grid == (8, 8) else SensorSpec(name="edge", grid=grid, frame_rate=54.0,
                                                             value_range=(0.0, float(top)))

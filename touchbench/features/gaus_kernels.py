@@ -215,38 +215,97 @@ def sd(x, off, fixed, has_fixed, lut, out, ok):
 
 
 @jit
-def smmhh(video, thr, skips, max_len, edges, out):
-    """``smmhh``'s run-length histograms ``out`` ``(N, columns)`` of the motion
-    ``|video(t + s) - video(t)| > thr`` of every pixel of ``video`` ``(N, T, pixels)`` at each skip
-    ``s``, ordered scale (pixels ``edges[k]..edges[k + 1]``), skip, run length, pixel. A run counts
-    in bin ``m`` when it lasts exactly ``m + 1`` frames, in the last when at least ``max_len``: the
-    runs reaching each length are counted (a pixel's current run, 0 without motion, reaches length
-    ``m + 1`` once per run that long), those of exactly ``m + 1`` are the difference of two counts."""
+def _motion_runs(a, b, thr, run, least, exact):
+    """One frame pair of ``smmhh``: each pixel's current motion run ``run`` (0 without motion) grown
+    by the motion ``|a - b| > thr``, and ``least[m]`` counting the pixels whose run reaches
+    ``m + 1`` frames. ``exact``: integer pixels whose differences fit int32 (compared in int32,
+    so the loop runs on eight pixels at once)."""
+    one = np.int32(1)
+    for j in range(run.size):
+        th = thr[j]
+        if exact:
+            x = np.int32(np.int32(a[j] - b[j]) > th) | np.int32(np.int32(b[j] - a[j]) > th)
+        else:
+            x = np.int32(a[j] - b[j] > th) | np.int32(b[j] - a[j] > th)
+        run[j] = np.int32((run[j] + one) * x)
+    for m in range(least.shape[0]):
+        reach = np.int32(m + 1)
+        for j in range(run.size):
+            least[m, j] = np.int32(least[m, j] + np.int32(run[j] == reach))
+
+
+@jit
+def _run_hist(vi, thr, skips, edges, exact, run, least, out_i):
+    """``smmhh``'s row ``out_i`` of one capture's video ``vi`` ``(T, pixels)``: a run counts in bin
+    ``m`` when it lasts exactly ``m + 1`` frames, in the last when at least ``max_len`` (the runs
+    reaching each length counted, those of exactly ``m + 1`` the difference of two counts); ordered
+    scale (pixels ``edges[k]..edges[k + 1]``), skip, run length, pixel."""
+    t = vi.shape[0]
+    max_len = least.shape[0]
+    for si in range(skips.size):
+        s = skips[si]
+        run[:] = 0
+        least[:] = 0
+        for k in range(t - s):
+            _motion_runs(vi[k + s], vi[k], thr, run, least, exact)
+        for g in range(edges.size - 1):
+            a0, b0 = edges[g], edges[g + 1]
+            base = a0 * skips.size * max_len + si * max_len * (b0 - a0)
+            for m in range(max_len):
+                for j in range(a0, b0):
+                    c = least[m, j] - least[m + 1, j] if m < max_len - 1 else least[m, j]
+                    out_i[base + m * (b0 - a0) + j - a0] = c
+
+
+@jit
+def _pyramid(xi, levels, vid):
+    """The integer pyramid video ``vid`` ``(T, pixels)`` of one capture ``xi`` ``(T, H, W)``: level
+    0 the cells, each next level (``levels[k]``: its rows and columns) the sums of 2 x 2 blocks of
+    the previous one (every level but the last halves exactly), row-major, levels side by side."""
+    t, h, w = xi.shape
+    for k in range(t):
+        for y in range(h):
+            for x in range(w):
+                vid[k, y * w + x] = xi[k, y, x]
+    src = 0
+    for g in range(1, levels.shape[0]):
+        ph, pw = levels[g - 1, 0], levels[g - 1, 1]
+        lh, lw = levels[g, 0], levels[g, 1]
+        dst = src + ph * pw
+        for k in range(t):
+            for y in range(lh):
+                r0 = src + 2 * y * pw
+                for x in range(lw):
+                    c = r0 + 2 * x
+                    vid[k, dst + y * lw + x] = vid[k, c] + vid[k, c + 1] + vid[k, c + pw] + vid[k, c + pw + 1]
+        src = dst
+
+
+@jit
+def smmhh(x, levels, thr, skips, max_len, edges, out):
+    """``smmhh``'s run-length histograms ``out`` ``(N, columns)`` of the integer readings ``x``
+    ``(N, T, H, W)`` (at most 16 bits, on a grid every pooling halves exactly), each capture's
+    pyramid video built here in int32 (:func:`_pyramid`; ``thr`` each pixel's integer threshold on
+    the sums: :func:`touchbench.features.gaus_smmhh.pyramid_video`'s equivalence)."""
+    n, t = x.shape[:2]
+    p = edges[-1]
+    vid = np.empty((t, p), dtype=np.int32)
+    run = np.zeros(p, dtype=np.int32)
+    least = np.zeros((max_len, p), dtype=np.int32)
+    for i in range(n):
+        _pyramid(x[i], levels, vid)
+        _run_hist(vid, thr, skips, edges, True, run, least, out[i])
+
+
+@jit
+def smmhh_video(video, thr, skips, max_len, edges, out):
+    """:func:`smmhh` of a pyramid video ``video`` ``(N, T, pixels)`` made by numpy (float64 means of
+    :func:`touchbench.features.gaus_smmhh.pool2`), ``thr`` each pixel's threshold."""
     n, t, p = video.shape
     run = np.zeros(p, dtype=np.int32)
-    least = np.zeros((max_len, p), dtype=np.int32)  # runs of at least m + 1 frames
+    least = np.zeros((max_len, p), dtype=np.int32)
     for i in range(n):
-        vi = video[i]
-        for si in range(skips.size):
-            s = skips[si]
-            run[:] = 0
-            least[:] = 0
-            for k in range(t - s):
-                a, b = vi[k + s], vi[k]
-                for j in range(p):
-                    d = a[j] - b[j]
-                    run[j] = np.int32(run[j] + 1) * np.int32((d > thr[j]) | (-d > thr[j]))  # |d| > thr
-                for m in range(max_len):
-                    reach = np.int32(m + 1)
-                    for j in range(p):
-                        least[m, j] += np.int32(run[j] == reach)
-            for g in range(edges.size - 1):
-                a0, b0 = edges[g], edges[g + 1]
-                base = a0 * skips.size * max_len + si * max_len * (b0 - a0)
-                for m in range(max_len):
-                    for j in range(a0, b0):
-                        c = least[m, j] - least[m + 1, j] if m < max_len - 1 else least[m, j]
-                        out[i, base + m * (b0 - a0) + j - a0] = c
+        _run_hist(video[i], thr, skips, edges, False, run, least, out[i])
 
 
 @jit
@@ -259,6 +318,7 @@ def lbptop(flat, offsets, lo, hi, inner, counts, code):
     n_planes, n_points = offsets.shape
     size = hi - lo
     one = code.dtype.type(1)
+    part = np.zeros((4, counts.shape[2]), dtype=np.int64)  # four tallies: a run of equal codes waits less
     for i in range(n):
         c = flat[i, lo:hi]
         for pl in range(n_planes):
@@ -268,5 +328,8 @@ def lbptop(flat, offsets, lo, hi, inner, counts, code):
                 bit = code.dtype.type(one << k)
                 for m in range(size):
                     code[m] += bit * code.dtype.type(a[m] >= c[m])
-            for m in inner:
-                counts[i, pl, code[m]] += 1
+            part[:] = 0
+            for m in range(inner.size):
+                part[m & 3, code[inner[m]]] += 1
+            for b in range(counts.shape[2]):
+                counts[i, pl, b] = part[0, b] + part[1, b] + part[2, b] + part[3, b]
