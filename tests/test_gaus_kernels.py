@@ -13,7 +13,7 @@ from numpy.testing import assert_allclose
 
 from touchbench.datasets.haart import HAART_SENSOR
 from touchbench.datasets.model import SensorSpec
-from touchbench.features import compiled
+from touchbench.features import base, compiled
 from touchbench.features.base import FEATURES
 
 pytest.importorskip("numba")
@@ -88,3 +88,34 @@ def test_cost_preset_and_a_frame_level_sd_agree_with_the_numpy_path(monkeypatch)
                          ("lbptop", {"n_points": 4, "mapping": "none"}), ("lbptop", {"radius": (2, 1, 3)})]:
         fast, plain = both(name, caps, HAART_SENSOR, monkeypatch, **params)
         assert_allclose(fast, plain, **TOL)
+
+
+def _batch_sizes(sets, caps, monkeypatch):
+    """The rows of ``sets`` side by side for ``caps``, and the number of captures of each batch."""
+    sizes, batch = [], base.FeatureStack._batch
+
+    def spy(self, captures, all_caps, part, *args):
+        sizes.append(len(part))
+        return batch(self, captures, all_caps, part, *args)
+
+    with monkeypatch.context() as m:
+        m.setattr(base.FeatureStack, "_batch", spy)
+        return base.FeatureStack(sets).transform(caps), sizes
+
+
+def test_sets_whose_loops_run_take_larger_chunks_and_the_same_rows(monkeypatch):
+    """432 x 8 x 8 captures: the numpy path's bound (131072 values) stacks 4 at a time; the compiled
+    loops' (2097152 values) 75. A stack with a set without loops (bmh) keeps the smaller bound; one
+    capture per batch gives every row bit for bit."""
+    caps = _edge_captures(432, (8, 8), np.uint16, 1023) * 2  # 10 captures
+    sets = [FEATURES.create(n, sensor=HAART_SENSOR).fit(caps) for n in ["msd", "sd", "smmhh", "lbptop"]]
+    rows, sizes = _batch_sizes(sets, caps, monkeypatch)
+    assert sizes == [10]
+    bmh = FEATURES.create("bmh", sensor=HAART_SENSOR).fit(caps)
+    assert _batch_sizes(sets + [bmh], caps, monkeypatch)[1] == [4, 4, 2]
+    monkeypatch.setattr(base, "_LOOP_BATCH_VALUES", 1)
+    one_by_one, sizes = _batch_sizes(sets, caps, monkeypatch)
+    assert sizes == [1] * 10
+    np.testing.assert_array_equal(rows, one_by_one)
+    monkeypatch.setattr(compiled, "COMPILED", False)
+    assert _batch_sizes(sets, caps, monkeypatch)[1] == [4, 4, 2]

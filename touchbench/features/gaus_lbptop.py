@@ -81,6 +81,7 @@ class LBPTOP(FeatureSet):
     paper = f"{GAUS_PAPER}.5 (Zhao & Pietikainen 2007)"
     cost = "moderate"
     fold_dependent = False
+    compiled_loops = "gaus_kernels"
 
     _parameter_constraints = {"radius": ["array-like"], "n_points": [Interval(Integral, 4, 16, closed="both")],
                               "mapping": [StrOptions({"u2", "none"})]}

@@ -55,6 +55,7 @@ class MotionStatisticalDistribution(FeatureSet):
     paper = f"{GAUS_PAPER}.3"
     cost = "cheap"
     fold_dependent = False
+    compiled_loops = "gaus_kernels"
     _parameter_docs = {"sensor": "unused; nothing depends on the sensor."}
 
     def __init__(self, sensor: SensorSpec | None = None):

@@ -192,6 +192,7 @@ class StatisticalDistribution(FeatureSet):
     paper = f"{GAUS_PAPER}.1, Tables 3-4"
     cost = "cheap"
     fold_dependent = False
+    compiled_loops = "gaus_kernels"
 
     _parameter_constraints = {"preset": [StrOptions(set(_TABLE)), None], "bins": [dict, None],
                               "high_offset": [Real, None], "touched_fixed": [Interval(Real, 0, None, closed="left"),

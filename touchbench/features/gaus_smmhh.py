@@ -143,6 +143,7 @@ class SpatialMultiScaleMHH(FeatureSet):
     paper = f"{GAUS_PAPER}.4, eq. 1"
     cost = "moderate"
     fold_dependent = False
+    compiled_loops = "gaus_kernels"
 
     _parameter_constraints = {"preset": [StrOptions(set(_TABLE)), None], "threshold": [Real, "array-like", None],
                               "skips": ["array-like"], "max_len": [Interval(Integral, 1, None, closed="left")],
