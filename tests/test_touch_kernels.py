@@ -1,5 +1,5 @@
 """The compiled loops of touchbench's own sets (numba, touchbench.features.touch_kernels) give the values of
-the numpy path (``touch_spectra.COMPILED = False``) within 1e-9, relative or absolute (sums in another order):
+the numpy path (``compiled.COMPILED = False``) within 1e-9, relative or absolute (sums in another order):
 on real HAART captures (the real-data pattern: fails under CI=true without the data), on short
 windows of a 19 x 27 skin (the live case, padded ones included) and on synthetic captures of other
 grids, dtypes and lengths. Skipped where numba is not installed (the numpy path is then the only one)."""
@@ -12,7 +12,7 @@ from helpers import synthetic_captures
 from numpy.testing import assert_allclose
 
 from touchbench.datasets.model import SensorSpec
-from touchbench.features import touch_spectra
+from touchbench.features import compiled
 from touchbench.features.base import FEATURES
 
 pytest.importorskip("numba")
@@ -25,7 +25,7 @@ TOL = {"rtol": 1e-9, "atol": 1e-9}
 def both(name, caps, sensor, monkeypatch, **params):
     fast = FEATURES.create(name, sensor=sensor, **params).fit(caps).transform(caps)
     with monkeypatch.context() as m:
-        m.setattr(touch_spectra, "COMPILED", False)
+        m.setattr(compiled, "COMPILED", False)
         plain = FEATURES.create(name, sensor=sensor, **params).fit(caps).transform(caps)
     assert fast.shape == plain.shape
     return fast, plain

@@ -17,8 +17,9 @@ Subclasses implement either ``_transform_one(capture)`` (one capture ->
 1-D row) or, to vectorise across captures, ``_transform_batch(stack)``
 (``(N, T, H, W)`` stack of captures of the same length -> ``(N, n_out)``).
 :meth:`FeatureSet.transform` groups captures by length, stacks each group
-in chunks of bounded size (``_BATCH_VALUES`` values) and puts the rows back
-in input order, so a capture's features never depend on its neighbours.
+in chunks of bounded size (``_BATCH_VALUES`` values; ``_LOOP_BATCH_VALUES``
+for a set whose compiled loops run, see ``compiled_loops``) and puts the rows
+back in input order, so a capture's features never depend on its neighbours.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from ..core.errors import TouchbenchError
 from ..core.introspect import sensor_problem, with_accepted
 from ..core.paramdoc import of_constraints
 from ..core.registry import Registry
+from .compiled import kernels
 
 # Filled by every module of touchbench.features (imported on first use of the registry).
 FEATURES: Registry = Registry("feature set", package="touchbench.features",
@@ -43,6 +45,10 @@ FEATURES: Registry = Registry("feature set", package="touchbench.features",
 # memory whatever the dataset size, and keeps a chunk's float64 temporaries
 # (1 MB each) in the CPU cache, which is faster than larger chunks.
 _BATCH_VALUES = 131_072
+# The bound for sets whose compiled loops run (``FeatureSet.compiled_loops``): the loops take one
+# capture at a time, with no temporaries the size of a chunk, so larger chunks only save the fixed
+# cost of a batch (its stack, constants and calls); still a bounded memory (16 MB as float64).
+_LOOP_BATCH_VALUES = 2_097_152
 
 
 class FeatureInputError(TouchbenchError, ValueError):
@@ -128,6 +134,14 @@ class FeatureSet(TransformerMixin, BaseEstimator):
     #: it; a subclass's line replaces its base's)
     _parameter_docs: ClassVar[dict[str, str]] = {
         "sensor": "the dataset's sensor (:class:`touchbench.datasets.model.SensorSpec`); the run engine passes it."}
+    #: the kernels module (:func:`touchbench.features.compiled.kernels`) whose loops take this set's
+    #: captures one at a time; while they run, its chunks hold up to ``_LOOP_BATCH_VALUES`` values
+    compiled_loops: ClassVar[str | None] = None
+
+    def batch_values(self) -> int:
+        """The most values :class:`FeatureStack` stacks at once for this set (a stack takes the
+        least of its sets'): larger while the set's compiled loops run."""
+        return _LOOP_BATCH_VALUES if self.compiled_loops and kernels(self.compiled_loops) is not None else _BATCH_VALUES
 
     def fit(self, captures, y=None):
         caps = check_captures(captures, name=type(self).__name__)
@@ -283,7 +297,8 @@ class FeatureStack:
     """Fitted feature sets applied together to batches of captures, their outputs side by side.
 
     The captures are checked once (:func:`check_captures`, named by the first set), grouped by
-    length and stacked in chunks of at most ``_BATCH_VALUES`` values once for all the sets, and
+    length and stacked in chunks of at most the least of the sets' :meth:`FeatureSet.batch_values`
+    values once for all the sets, and
     a preprocessing several sets share (``_batch_rows``' ``shared``, a :class:`SharedPrep`: the
     touch sets' pressure, the Zhou sets' frame descriptors) is computed once per chunk; a capture's
     rows never depend on its neighbours, nor on the other sets of the stack. What does not depend
@@ -319,10 +334,10 @@ class FeatureStack:
         edges = np.cumsum([0] + self.widths(grid)).tolist()
         out = np.empty((len(caps), edges[-1]), dtype=np.float64)
         lengths = np.array([c.shape[0] for c in caps])
-        cells = grid[0] * grid[1]
+        cells, bound = grid[0] * grid[1], min(fs.batch_values() for fs in self.sets)
         for t in np.unique(lengths).tolist():
             idx = np.flatnonzero(lengths == t)
-            step = max(1, _BATCH_VALUES // (t * cells))
+            step = max(1, bound // (t * cells))
             for k in range(0, len(idx), step):
                 self._batch(captures, caps, idx[k:k + step], edges, out, seconds)
         return out

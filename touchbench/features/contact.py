@@ -86,7 +86,7 @@ from sklearn.utils._param_validation import Interval
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError
 from .numerics import sort_last
-from .touch_spectra import kernels
+from .compiled import kernels
 
 #: multiples of the noise floor above the rest level at which contact is counted
 NOISE_UNITS: tuple[int, ...] = (3, 10, 30)
@@ -180,11 +180,11 @@ class ContactEvidence(FullScaleSet):
         u, full = self._heights(stack)
         n, t, c = u.shape
         flat = sorted_heights(stack, self._range(), self._flipped())
-        if kernels() is not None:
-            from .evidence_kernels import evidence  # compiled on first use
+        kern = kernels("evidence_kernels")
+        if kern is not None:
             lo, hi = self._range()
             out = np.zeros((n, 10 + 3 * len(NOISE_UNITS)))
-            evidence(u, flat, self.min_noise * full, np.array(NOISE_UNITS, dtype=np.float64),
+            kern.evidence(u, flat, self.min_noise * full, np.array(NOISE_UNITS, dtype=np.float64),
                      max(1, int(np.floor(QUIET_SHARE * c))),
                      np.array([round(0.5 * (t * c - 1)), round(0.95 * (t * c - 1))]), full,
                      stack.dtype.kind in "biu" and float(lo).is_integer() and float(hi).is_integer(), out)

@@ -13,6 +13,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
+from .compiled import kernels
 from .gaus_common import GAUS_PAPER
 
 PLANES = ("xy", "xt", "yt")
@@ -80,6 +81,7 @@ class LBPTOP(FeatureSet):
     paper = f"{GAUS_PAPER}.5 (Zhao & Pietikainen 2007)"
     cost = "moderate"
     fold_dependent = False
+    compiled_loops = "gaus_kernels"
 
     _parameter_constraints = {"radius": ["array-like"], "n_points": [Interval(Integral, 4, 16, closed="both")],
                               "mapping": [StrOptions({"u2", "none"})]}
@@ -135,6 +137,15 @@ class LBPTOP(FeatureSet):
             "xt": [(a, 0, b) for a, b in circle_offsets(p, rt, rx)],
             "yt": [(a, b, 0) for a, b in circle_offsets(p, rt, ry)],
         }
+        kern = kernels("gaus_kernels")
+        if kern is not None:
+            offs = np.array([[dt * hw + dy * w + dx for dt, dy, dx in planes[pl]] for pl in PLANES], dtype=np.int64)
+            counts = np.zeros((n, len(PLANES), 2**p), dtype=np.int64)
+            code = np.empty(hi - lo, dtype=np.uint8 if p <= 8 else np.uint16)
+            kern.lbptop(flat.view(np.uint8) if flat.dtype.kind == "b" else flat, offs, lo, hi, _inner(ct, h, w, rx, ry),
+                        counts, code)
+            bins = (table + (np.arange(n * len(PLANES)) * nb)[:, None]).ravel()
+            return np.bincount(bins, weights=counts.ravel(), minlength=n * 3 * nb).reshape(n, 3 * nb) / n_centres
         # one row of bits per neighbour, combined into codes by one weighted sum (neighbour k: 2**k)
         bits = np.empty((p,) + centre.shape, dtype=np.uint8)
         weights = (2 ** np.arange(p)).astype(np.uint8 if p <= 8 else np.uint16)
@@ -151,3 +162,13 @@ class LBPTOP(FeatureSet):
             bins = (table + (np.arange(n) * nb)[:, None]).ravel()
             out[:, i * nb:(i + 1) * nb] = np.bincount(bins, weights=counts, minlength=n * nb).reshape(n, nb) / n_centres
         return out
+
+
+@lru_cache(maxsize=64)
+def _inner(ct: int, h: int, w: int, rx: int, ry: int) -> np.ndarray:
+    """The interior voxels' places among the compared ones (frames ``rt..T - rt - 1`` laid end to end
+    from their first cell ``margin = ry * W + rx`` on), read-only: the centres whose codes count."""
+    t, y, x = np.meshgrid(np.arange(ct), np.arange(ry, h - ry), np.arange(rx, w - rx), indexing="ij")
+    out = (t * h * w + y * w + x - (ry * w + rx)).ravel().astype(np.int64)
+    out.flags.writeable = False
+    return out

@@ -7,16 +7,12 @@ import numpy as np
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureSet, cell_names
+from .compiled import kernels
 from .gaus_common import GAUS_PAPER
-from .numerics import SeriesCounts, as_f64, hazen_quantiles, moments, sort_last, total_variation
+from .numerics import SeriesCounts, as_f64, as_integers, hazen_points, hazen_quantiles, moments, sort_last, total_variation
 
 MSD_STATS = ("min", "max", "mean", "q1", "median", "q3", "area", "tv", "iqr", "var", "skew", "kurt")
-
-
-def cell_series(stack: np.ndarray) -> np.ndarray:
-    """``(N, T, H, W)`` -> ``(N, H*W, T)``: one contiguous time series per cell, native dtype."""
-    n, t = stack.shape[:2]
-    return np.ascontiguousarray(stack.reshape(n, t, -1).transpose(0, 2, 1))
+QUARTILES = (0.25, 0.5, 0.75)
 
 
 def sorted_f64(series: np.ndarray) -> np.ndarray:
@@ -59,6 +55,7 @@ class MotionStatisticalDistribution(FeatureSet):
     paper = f"{GAUS_PAPER}.3"
     cost = "cheap"
     fold_dependent = False
+    compiled_loops = "gaus_kernels"
     _parameter_docs = {"sensor": "unused; nothing depends on the sensor."}
 
     def __init__(self, sensor: SensorSpec | None = None):
@@ -71,15 +68,54 @@ class MotionStatisticalDistribution(FeatureSet):
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         n, t = stack.shape[:2]
         frames = stack.reshape(n, t, -1)  # (N, T, P): every cell's series along axis 1, in place
-        counts = SeriesCounts.of(frames)
-        if counts is not None:  # integer readings over a narrow range: counted, not sorted
-            q1, med, q3 = counts.quantiles((0.25, 0.5, 0.75))
-            m = {k: v.reshape(n, -1) for k, v in counts.moments().items()}
-            q1, med, q3 = (q.reshape(n, -1) for q in (q1, med, q3))
-        else:
-            srt = sorted_f64(cell_series(stack))
-            q1, med, q3 = hazen_quantiles(srt, (0.25, 0.5, 0.75))
-            m = moments(srt, presorted=True, overwrite=True)  # srt is scratch from here on
-        tv = total_variation(frames, axis=1)
-        cols = [m["min"], m["max"], m["mean"], q1, med, q3, m["sum"], tv, q3 - q1, m["var"], m["skew"], m["kurt"]]
-        return np.concatenate(cols, axis=1)
+        kern = kernels("gaus_kernels")
+        if kern is None:
+            return msd_rows(frames)
+        ints = as_integers(frames)
+        if ints is None:  # fractions in the batch: each capture alone, so its row never depends on its batch
+            return np.concatenate([msd_one(kern, frames[i:i + 1]) for i in range(n)])
+        return msd_one(kern, ints)
+
+
+def msd_one(kern, frames: np.ndarray) -> np.ndarray:
+    """The statistics of ``frames`` ``(N, T, P)`` by the compiled loop where its readings are
+    integers of a narrow span, else by numpy, capture by capture."""
+    ints = as_integers(frames)
+    if ints is None:
+        return msd_rows(frames)
+    out, ok = compiled_msd(kern, ints)
+    for i in np.flatnonzero(~ok):  # a cell spans too many values to count: this capture alone, as numpy
+        out[i] = msd_rows(frames[i:i + 1])[0]
+    return out
+
+
+def msd_rows(frames: np.ndarray) -> np.ndarray:
+    """The twelve statistics of every cell of ``frames`` ``(N, T, P)`` (the numpy path): counted
+    for integer readings over a narrow range, else sorted."""
+    n = frames.shape[0]
+    counts = SeriesCounts.of(frames)
+    if counts is not None:  # integer readings over a narrow range: counted, not sorted
+        q1, med, q3 = counts.quantiles(QUARTILES)
+        m = {k: v.reshape(n, -1) for k, v in counts.moments().items()}
+        q1, med, q3 = (q.reshape(n, -1) for q in (q1, med, q3))
+    else:
+        srt = sorted_f64(np.ascontiguousarray(frames.transpose(0, 2, 1)))
+        q1, med, q3 = hazen_quantiles(srt, QUARTILES)
+        m = moments(srt, presorted=True, overwrite=True)  # srt is scratch from here on
+    tv = total_variation(frames, axis=1)
+    cols = [m["min"], m["max"], m["mean"], q1, med, q3, m["sum"], tv, q3 - q1, m["var"], m["skew"], m["kurt"]]
+    return np.concatenate(cols, axis=1)
+
+
+def compiled_msd(kern, ints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`msd_rows` of the integer readings ``ints`` ``(N, T, P)`` by the compiled loop
+    (:func:`touchbench.features.gaus_kernels.msd`: the quartiles at the same Hazen points), and
+    which captures it computed (one with a cell spanning too many values to count is left out)."""
+    n, t, p = ints.shape
+    points = [hazen_points(t, q) for q in QUARTILES]
+    ranks = [k for i, j, _ in points for k in (i, j)]
+    order = np.array(sorted(set(ranks)), dtype=np.intp)
+    fracs = np.array([f for _, _, f in points], dtype=np.float64)
+    out, ok = np.empty((n, len(MSD_STATS), p)), np.zeros(n, dtype=bool)
+    kern.msd(ints, order, np.searchsorted(order, ranks), fracs, out, ok)
+    return out.reshape(n, -1), ok

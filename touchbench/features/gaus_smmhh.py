@@ -13,6 +13,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, cell_names
+from .compiled import kernels
 from .gaus_common import GAUS_PAPER, resolve_units
 from .numerics import count_true
 
@@ -142,6 +143,7 @@ class SpatialMultiScaleMHH(FeatureSet):
     paper = f"{GAUS_PAPER}.4, eq. 1"
     cost = "moderate"
     fold_dependent = False
+    compiled_loops = "gaus_kernels"
 
     _parameter_constraints = {"preset": [StrOptions(set(_TABLE)), None], "threshold": [Real, "array-like", None],
                               "skips": ["array-like"], "max_len": [Interval(Integral, 1, None, closed="left")],
@@ -203,7 +205,18 @@ class SpatialMultiScaleMHH(FeatureSet):
         L = max(t - min(skips), 0)
         if L < 1:
             return np.zeros((n, len(skips) * M * int(edges[-1])))
-        video, thr = pyramid_video(stack, shapes, self._thresholds(levels))
+        thresholds = self._thresholds(levels)
+        kern = kernels("gaus_kernels")
+        if kern is not None:
+            out, args = np.empty((n, len(skips) * M * int(edges[-1]))), (np.array(skips, dtype=np.int64), M, edges)
+            if exact_pyramid(stack, shapes, thresholds):  # the pyramid built in the loop, capture by capture
+                ints = stack.view(np.uint8) if stack.dtype.kind == "b" else stack
+                kern.smmhh(ints, np.array(shapes, dtype=np.int64), sum_thresholds(shapes, thresholds), *args, out)
+            else:
+                video, thr = pyramid_video(stack, shapes, thresholds)
+                kern.smmhh_video(video, thr, *args, out)
+            return out
+        video, thr = pyramid_video(stack, shapes, thresholds)
         motion = np.zeros((n, len(skips), L + M + 1, int(edges[-1])), dtype=bool)
         for si, s in enumerate(skips):
             if t > s:
@@ -212,6 +225,20 @@ class SpatialMultiScaleMHH(FeatureSet):
         hist = run_length_histogram(motion.reshape(n * len(skips), L + M + 1, -1), L, M).reshape(n, len(skips), M, -1)
         # scale, skip, run length, pixel
         return np.concatenate([hist[..., a:b].reshape(n, -1) for a, b in zip(edges[:-1], edges[1:])], axis=1)
+
+
+def exact_pyramid(stack: np.ndarray, shapes: list[tuple[int, int]], thresholds: list[float]) -> bool:
+    """Whether the pyramid of ``stack`` is taken in int32 sums (:func:`pyramid_video`): integer
+    readings of up to 16 bits on a grid every pooling halves exactly (8 x 8: 8, 4, 2)."""
+    even = all(h % 2 == 0 and w % 2 == 0 for h, w in shapes[:-1])
+    return (stack.dtype.kind in "biu" and stack.dtype.itemsize <= 2 and shapes[0][0] * shapes[0][1] < 2**14 and even
+            and not np.isnan(thresholds).any())
+
+
+def sum_thresholds(shapes: list[tuple[int, int]], thresholds: list[float]) -> np.ndarray:
+    """Each pixel's threshold on the int32 sums of an exact pyramid (:func:`pyramid_video`)."""
+    scaled = np.asarray(thresholds, dtype=np.float64) * 4.0 ** np.arange(len(shapes))
+    return np.repeat(np.clip(np.floor(scaled), -1, 2**31 - 1).astype(np.int32), [h * w for h, w in shapes])
 
 
 def pyramid_video(stack: np.ndarray, shapes: list[tuple[int, int]], thresholds: list[float]) -> tuple[np.ndarray, np.ndarray]:
@@ -227,9 +254,7 @@ def pyramid_video(stack: np.ndarray, shapes: list[tuple[int, int]], thresholds: 
     n, t = stack.shape[:2]
     sizes = [h * w for h, w in shapes]
     edges = np.cumsum([0] + sizes)
-    even = all(h % 2 == 0 and w % 2 == 0 for h, w in shapes[:-1])
-    exact = (stack.dtype.kind in "biu" and stack.dtype.itemsize <= 2 and sizes[0] < 2**14 and even
-             and not np.isnan(thresholds).any())
+    exact = exact_pyramid(stack, shapes, thresholds)
     video = np.empty((n, t, int(edges[-1])), dtype=np.int32 if exact else np.float64)
     v = stack.astype(video.dtype)
     for k in range(len(shapes)):
@@ -238,5 +263,4 @@ def pyramid_video(stack: np.ndarray, shapes: list[tuple[int, int]], thresholds: 
         video[:, :, edges[k]:edges[k + 1]] = v.reshape(n, t, -1)
     if not exact:
         return video, np.repeat(thresholds, sizes)
-    scaled = np.asarray(thresholds, dtype=np.float64) * 4.0 ** np.arange(len(shapes))
-    return video, np.repeat(np.clip(np.floor(scaled), -1, 2**31 - 1).astype(np.int32), sizes)
+    return video, sum_thresholds(shapes, thresholds)

@@ -43,6 +43,18 @@ def as_f64(a: np.ndarray) -> np.ndarray:
     return np.asarray(a, dtype=np.float64)
 
 
+def as_integers(x: np.ndarray) -> np.ndarray | None:
+    """The readings ``x`` as integers of at most 32 bits, or None: integers of up to 4 bytes as they
+    are (booleans as uint8), floats that are all whole numbers within int32 as int32 (the same
+    values); None for other floats and wider integers."""
+    if x.dtype.kind == "b":
+        return x.view(np.uint8)
+    if x.dtype.kind == "f":
+        whole = bool(x.size) and np.abs(x).max() < 2**31 and np.array_equal(x, np.rint(x))
+        return x.astype(np.int32) if whole else None
+    return x if x.dtype.itemsize <= 4 else None
+
+
 def sort_last(x: np.ndarray) -> np.ndarray:
     """``numpy.sort`` along the last axis, by radix sort for integers of up to 16 bits (numpy's
     ``kind="stable"`` for them; several times faster than its quicksort there). The sorted values are
@@ -154,10 +166,8 @@ class SeriesCounts:
 
     @classmethod
     def of(cls, x: np.ndarray, max_bins_per_value: float = 2.0) -> "SeriesCounts | None":
-        if x.dtype.kind == "f":  # whole readings held as floats are counted as the integers they are
-            whole = bool(x.size) and np.abs(x).max() < 2**31 and np.array_equal(x, np.rint(x))
-            x = x.astype(np.int32) if whole else x
-        if x.dtype.kind not in "biu" or x.dtype.itemsize > 4:
+        x = as_integers(x)  # whole readings held as floats are counted as the integers they are
+        if x is None:
             return None
         n_series, t, p = x.shape
         lo = x.min(axis=1).astype(np.int64)

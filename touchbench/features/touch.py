@@ -77,10 +77,10 @@ from sklearn.utils._param_validation import Interval
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError, SharedPrep
+from .compiled import kernels
 from .numerics import KURT_CONSTANT, SKEW_CONSTANT, gradient, moment_coords, same_row
 from .touch_spectra import (AC_LAGS, BANDS, QUANTS, _STAT_NAMES, _band_name, _local_bands, band_slices, band_sums,
-                            centred_spectrum,
-                            kernels, series_block, spectral_summary, spectrum)
+                            centred_spectrum, series_block, spectral_summary, spectrum)
 
 MIN_FRAMES = 8
 BASELINE_Q = 0.05
@@ -244,7 +244,7 @@ class TouchRhythm(_TouchBase):
         return len(SERIES) * len(_STAT_NAMES) + 7 + 3 * (len(CELL_RANKS) + 1) + 2
 
     def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
-        (h, w), kern = grid, kernels()
+        (h, w), kern = grid, kernels("touch_kernels")
         if kern is None:
             series, extra = self._frames(grid, s, base, c)
         else:
@@ -346,7 +346,7 @@ class CellRhythm(_TouchBase):
         mean = cells.mean(axis=2, keepdims=True)
         d = cells - mean
         p, f = centred_spectrum(d, cells.max(axis=2) == cells.min(axis=2), fs)  # (N, C, F)
-        kern = kernels()
+        kern = kernels("touch_kernels")
         if kern is not None:
             out = np.zeros((n, len(BANDS) + 11))
             kern.cell_pool(s, np.ascontiguousarray(mean[..., 0]), np.ascontiguousarray(p), f, *band_slices(f, BANDS),
@@ -440,7 +440,7 @@ class ContactMotion(_TouchBase):
         wt = np.subtract(s[:, None], thr[:, :, None, None])  # (N, R, T, C)
         np.maximum(wt, 0.0, out=wt)
         ws = wt.sum(axis=3)
-        kern = kernels()
+        kern = kernels("touch_kernels")
         if kern is not None:
             cols, pos, act = np.zeros((n, len(THRESHOLDS), 18)), np.empty(ws.shape), np.empty(ws.shape)
             kern.contact_tracks(ws, np.einsum("nrtc,kc->nrkt", wt, moment_coords(h, w)[:2]),

@@ -8,7 +8,7 @@ the kernels are tested against, tests/test_touch_kernels.py): the values agree w
 are taken in another order). A capture's values never depend on the other captures of its batch:
 the loops run capture by capture.
 
-Imported on first use (:func:`touchbench.features.touch_spectra.kernels`: never without numba),
+Imported on first use (:func:`touchbench.features.compiled.kernels`: never without numba),
 compiled once per machine (numba's on-disk cache).
 """
 

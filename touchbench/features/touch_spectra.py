@@ -10,10 +10,10 @@ by the vectorised numpy code here (the two agree within 1e-9).
 from __future__ import annotations
 
 import functools
-from types import ModuleType
 
 import numpy as np
 
+from .compiled import kernels
 from .numerics import moments
 
 #: spectral bands in Hz, upper edge inclusive; the last one is open-ended
@@ -166,28 +166,10 @@ def _local_bands(p: np.ndarray, f: np.ndarray, bands) -> dict:
     return {"fpeak": fpeak, "fcent": fcent, "bands": [fr[..., i] for i in range(len(bands))]}
 
 
-#: whether the compiled loops run where numba is installed; the tests set it False to compare them
-#: with the numpy path. Not a user setting: a run's identity (its feature cache keys and task ids)
-#: holds numba's version, not this switch, so both paths of one environment must not share a cache.
-COMPILED = True
-
-
-def kernels() -> ModuleType | None:
-    """:mod:`touchbench.features.touch_kernels` (compiled on first use), or None without numba
-    (the numpy path) or when :data:`COMPILED` is False."""
-    if not COMPILED:
-        return None
-    try:
-        from . import touch_kernels
-    except ImportError:  # numba is not installed
-        return None
-    return touch_kernels
-
-
 def series_block(series: np.ndarray, fs: float) -> np.ndarray:
     """:func:`_series_stats` of ``series`` (N, K, T) as ``(N, K, len(_STAT_NAMES))``, columns in the
     order of ``_STAT_NAMES``."""
-    kern = kernels()
+    kern = kernels("touch_kernels")
     if kern is None:
         st = _series_stats(series, fs)
         return np.stack([st[k] for k in _STAT_NAMES], axis=2)

@@ -1,0 +1,121 @@
+"""The compiled loops of the five Gaus et al. (2015) sets (numba, touchbench.features.gaus_kernels) give
+the values of their numpy path (``compiled.COMPILED = False``) within 1e-9, relative or absolute: on
+every real HAART capture (the real-data pattern: fails under CI=true without the data) and on edge
+cases (one frame, constant cells, all zero, saturated at 1023, other grids, float and int16 readings,
+readings too wide to count). Skipped where numba is not installed (the numpy path is then the only
+one)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from touchbench.datasets.haart import HAART_SENSOR
+from touchbench.datasets.model import SensorSpec
+from touchbench.features import base, compiled
+from touchbench.features.base import FEATURES
+
+pytest.importorskip("numba")
+
+SETS = ["msd", "sd", "bmh", "smmhh", "lbptop"]
+TOL = {"rtol": 1e-9, "atol": 1e-9}
+
+
+def both(name, caps, sensor, monkeypatch, **params):
+    fast = FEATURES.create(name, sensor=sensor, **params).fit(caps).transform(caps)
+    with monkeypatch.context() as m:
+        m.setattr(compiled, "COMPILED", False)
+        plain = FEATURES.create(name, sensor=sensor, **params).fit(caps).transform(caps)
+    assert fast.shape == plain.shape
+    return fast, plain
+
+
+def test_one_switch_chooses_the_numpy_path(monkeypatch):
+    assert compiled.kernels("gaus_kernels") is not None
+    monkeypatch.setattr(compiled, "COMPILED", False)
+    assert compiled.kernels("gaus_kernels") is None
+    assert compiled.kernels("touch_kernels") is None
+
+
+@pytest.mark.parametrize("name", SETS)
+def test_real_haart_captures_agree_with_the_numpy_path(real_haart, name, monkeypatch):
+    fast, plain = both(name, real_haart.captures, real_haart.sensor, monkeypatch)
+    assert_allclose(fast, plain, **TOL)
+
+
+def _edge_captures(t, grid, dtype, top):
+    rng = np.random.default_rng(7)
+    noisy = rng.integers(0, int(top) + 1, size=(t, *grid))
+    touch = np.clip(np.cumsum(rng.integers(-3, 4, size=(t, *grid)), axis=0) + 20, 0, top)
+    const = np.full((t, *grid), 17)
+    const[:, 0, 0] = 3  # constant cells, two levels
+    return [a.astype(dtype) for a in (noisy, touch, const, np.zeros((t, *grid)), np.full((t, *grid), top))]
+
+
+@pytest.mark.parametrize("name", SETS)
+@pytest.mark.parametrize("t, grid, dtype, top", [(432, (8, 8), np.uint16, 1023), (1, (8, 8), np.uint16, 1023),
+                                                 (2, (8, 8), np.uint16, 1023), (40, (4, 4), np.uint16, 1023),
+                                                 (25, (19, 27), np.uint8, 255), (30, (8, 8), np.float64, 1023),
+                                                 (30, (8, 8), np.float32, 1023), (30, (5, 7), np.int16, 1023),
+                                                 (30, (8, 8), np.bool_, 1)])
+def test_edge_cases_agree_with_the_numpy_path(name, t, grid, dtype, top, monkeypatch):
+    sensor = HAART_SENSOR if grid == (8, 8) else SensorSpec(name="edge", grid=grid, frame_rate=54.0,
+                                                            value_range=(0.0, float(top)))
+    fast, plain = both(name, _edge_captures(t, grid, dtype, top), sensor, monkeypatch)
+    assert_allclose(fast, plain, **TOL)
+
+
+@pytest.mark.parametrize("name", ["msd", "sd", "smmhh", "lbptop"])
+def test_fractional_and_wide_readings_agree_with_the_numpy_path(name, monkeypatch):
+    """Readings that cannot be counted (fractions; integers spanning more values than the loops count)
+    take the numpy path, capture by capture, beside counted ones in the same batch."""
+    rng = np.random.default_rng(3)
+    counted = rng.integers(0, 1024, size=(12, 8, 8))
+    wide = counted * 100000  # a span of 1e8 in 12 frames
+    caps = [counted.astype(np.int32), wide.astype(np.int32), counted.astype(np.int32) + 5]
+    fast, plain = both(name, caps, HAART_SENSOR, monkeypatch)
+    assert_allclose(fast, plain, **TOL)
+    frac = [rng.random((12, 8, 8)) * 1023.0, np.full((12, 8, 8), 0.5)]
+    fast, plain = both(name, frac, HAART_SENSOR, monkeypatch)
+    assert_allclose(fast, plain, **TOL)
+
+
+def test_cost_preset_and_a_frame_level_sd_agree_with_the_numpy_path(monkeypatch):
+    caps = _edge_captures(60, (8, 8), np.uint16, 1023)
+    for name, params in [("sd", {"preset": "cost"}), ("sd", {"preset": "haart", "clip": False, "normalize": True}),
+                         ("smmhh", {"preset": "cost", "threshold": [2.5, 3.0, 7.0, 0.0]}),
+                         ("lbptop", {"n_points": 4, "mapping": "none"}), ("lbptop", {"radius": (2, 1, 3)})]:
+        fast, plain = both(name, caps, HAART_SENSOR, monkeypatch, **params)
+        assert_allclose(fast, plain, **TOL)
+
+
+def _batch_sizes(sets, caps, monkeypatch):
+    """The rows of ``sets`` side by side for ``caps``, and the number of captures of each batch."""
+    sizes, batch = [], base.FeatureStack._batch
+
+    def spy(self, captures, all_caps, part, *args):
+        sizes.append(len(part))
+        return batch(self, captures, all_caps, part, *args)
+
+    with monkeypatch.context() as m:
+        m.setattr(base.FeatureStack, "_batch", spy)
+        return base.FeatureStack(sets).transform(caps), sizes
+
+
+def test_sets_whose_loops_run_take_larger_chunks_and_the_same_rows(monkeypatch):
+    """432 x 8 x 8 captures: the numpy path's bound (131072 values) stacks 4 at a time; the compiled
+    loops' (2097152 values) 75. A stack with a set without loops (bmh) keeps the smaller bound; one
+    capture per batch gives every row bit for bit."""
+    caps = _edge_captures(432, (8, 8), np.uint16, 1023) * 2  # 10 captures
+    sets = [FEATURES.create(n, sensor=HAART_SENSOR).fit(caps) for n in ["msd", "sd", "smmhh", "lbptop"]]
+    rows, sizes = _batch_sizes(sets, caps, monkeypatch)
+    assert sizes == [10]
+    bmh = FEATURES.create("bmh", sensor=HAART_SENSOR).fit(caps)
+    assert _batch_sizes(sets + [bmh], caps, monkeypatch)[1] == [4, 4, 2]
+    monkeypatch.setattr(base, "_LOOP_BATCH_VALUES", 1)
+    one_by_one, sizes = _batch_sizes(sets, caps, monkeypatch)
+    assert sizes == [1] * 10
+    np.testing.assert_array_equal(rows, one_by_one)
+    monkeypatch.setattr(compiled, "COMPILED", False)
+    assert _batch_sizes(sets, caps, monkeypatch)[1] == [4, 4, 2]
