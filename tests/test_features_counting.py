@@ -156,3 +156,33 @@ def test_odd_grids_and_floats_keep_the_float_pyramid():
     assert video.dtype == np.float64
     video, _ = pyramid_video(stack.astype(np.float32).reshape(2, 5, 5, 6)[:, :, :4, :4], pyramid_shapes((4, 4), 3), [1.0] * 3)
     assert video.dtype == np.float64
+
+
+def test_countable_decides_block_by_block():
+    # block 0: readings 0..3 in each of 2 cells over 4 frames: 4 + 4 = 8 bins <= 2 * 8 readings
+    # block 1: one cell spans 0..99 (100 bins) > 2 * 8 readings; block 2: a fraction
+    x = np.zeros((3, 4, 2))
+    x[0] = [[0, 3], [1, 2], [2, 1], [3, 0]]
+    x[1, :, 0] = [0, 99, 5, 7]
+    x[2, 0, 1] = 0.5
+    assert_array_equal(SeriesCounts.countable(x), [True, False, False])
+    assert_array_equal(SeriesCounts.countable(x[:2].astype(np.int16)), [True, False])
+    assert_array_equal(SeriesCounts.countable(x[:1].astype(np.int64)), [False])
+
+
+def test_numpy_msd_row_does_not_depend_on_its_batch(monkeypatch):
+    from touchbench.features import compiled
+    from touchbench.features.gaus_msd import MotionStatisticalDistribution
+    monkeypatch.setattr(compiled, "COMPILED", False)
+    rng = np.random.default_rng(3)
+    narrow = rng.integers(0, 20, (40, 4, 4)).astype(np.float64)  # counted on its own
+    wide = rng.integers(0, 1024, (40, 4, 4)).astype(np.float64)  # sorted on its own (range >> readings)
+    fraction = narrow + 0.25
+    msd = MotionStatisticalDistribution()
+    alone = np.vstack([msd.fit_transform([c]) for c in (narrow, wide, fraction)])
+    assert_array_equal(msd.fit_transform([narrow, wide, fraction]), alone)
+    # and each alone is what an independent computation gives (mean, hazen median, scipy's skewness)
+    cells = narrow.reshape(40, -1)
+    assert_allclose(alone[0, 32:48], cells.mean(axis=0), rtol=1e-12)
+    assert_allclose(alone[0, 64:80], np.quantile(cells, 0.5, axis=0, method="hazen"), rtol=1e-12)
+    assert_allclose(alone[1, 160:176], stats.skew(wide.reshape(40, -1), axis=0), rtol=1e-9)

@@ -91,7 +91,19 @@ def msd_one(kern, frames: np.ndarray) -> np.ndarray:
 
 def msd_rows(frames: np.ndarray) -> np.ndarray:
     """The twelve statistics of every cell of ``frames`` ``(N, T, P)`` (the numpy path): counted
-    for integer readings over a narrow range, else sorted."""
+    for a capture of integer readings over a narrow range, else sorted; decided capture by capture
+    (:meth:`SeriesCounts.countable`: the moments' last bits differ between the two), so a row never
+    depends on its batch."""
+    ok = SeriesCounts.countable(frames)
+    if ok.all() or not ok.any():
+        return _msd_rows(frames)
+    out = np.empty((frames.shape[0], len(MSD_STATS) * frames.shape[2]))
+    out[ok], out[~ok] = _msd_rows(frames[ok]), _msd_rows(frames[~ok])
+    return out
+
+
+def _msd_rows(frames: np.ndarray) -> np.ndarray:
+    """:func:`msd_rows` of captures that are all countable, or none of them."""
     n = frames.shape[0]
     counts = SeriesCounts.of(frames)
     if counts is not None:  # integer readings over a narrow range: counted, not sorted

@@ -164,6 +164,24 @@ class SeriesCounts:
     def __init__(self, lo: np.ndarray, hi: np.ndarray, shift: np.ndarray, counts: np.ndarray, n: int):
         self.lo, self.hi, self.shift, self.counts, self.n = lo, hi, shift, counts, n
 
+    @staticmethod
+    def countable(x: np.ndarray, max_bins_per_value: float = 2.0) -> np.ndarray:
+        """Which blocks ``x[i]`` of ``x`` ``(N, T, P)`` :meth:`of` would count on their own: integer
+        (or whole) readings whose bins number at most ``max_bins_per_value`` times the block's
+        readings. :meth:`of` decides for the whole of ``x``; a statistic whose last bits differ
+        between counting and sorting (the moments) splits a batch by this, so a capture's value
+        never depends on the captures beside it."""
+        n = x.shape[0]
+        flat = x.reshape(n, -1)
+        if x.dtype.kind == "f":
+            ok = (np.abs(flat).max(axis=1, initial=0) < 2**31) & (flat == np.rint(flat)).all(axis=1)
+        else:
+            ok = np.full(n, as_integers(x[:0]) is not None)
+        if not ok.any():
+            return ok
+        span = (x.max(axis=1).astype(np.float64) - x.min(axis=1) + 1).reshape(n, -1).sum(axis=1)
+        return ok & (span <= max_bins_per_value * flat.shape[1])
+
     @classmethod
     def of(cls, x: np.ndarray, max_bins_per_value: float = 2.0) -> "SeriesCounts | None":
         x = as_integers(x)  # whole readings held as floats are counted as the integers they are
