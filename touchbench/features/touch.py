@@ -70,6 +70,7 @@ Interpretations and limits shared by the sets:
 from __future__ import annotations
 
 from numbers import Real
+from typing import Any
 
 import numpy as np
 
@@ -434,21 +435,15 @@ class ContactMotion(_TouchBase):
 
     def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
         (n, t, _), (h, w) = s.shape, grid
+        kern = kernels()
+        if kern is not None:
+            return self._compiled(kern, grid, s)
         peak = np.sort(s.max(axis=2), axis=1)[:, int(round(0.95 * (t - 1)))]
         # every threshold at once: axis 1 of the arrays below is the threshold
         thr = np.maximum(np.multiply.outer(peak, THRESHOLDS), self._floor(self.CONTACT_FLOOR))
         wt = np.subtract(s[:, None], thr[:, :, None, None])  # (N, R, T, C)
         np.maximum(wt, 0.0, out=wt)
         ws = wt.sum(axis=3)
-        kern = kernels()
-        if kern is not None:
-            cols, pos, act = np.zeros((n, len(THRESHOLDS), 18)), np.empty(ws.shape), np.empty(ws.shape)
-            kern.contact_tracks(ws, np.einsum("nrtc,kc->nrkt", wt, moment_coords(h, w)[:2]),
-                                np.count_nonzero(wt, axis=3).astype(np.float64), h, w, cols, pos, act)
-            p, f = spectrum(np.stack([pos, act]), self._fs())
-            track, onoff = _local_bands(p[0], f, self.POS_BANDS), _local_bands(p[1], f, ())
-            cols[..., 10:] = np.stack([track["fpeak"], track["fcent"], *track["bands"], onoff["fpeak"], onoff["fcent"]], axis=2)
-            return np.hstack([cols.reshape(n, -1), np.log1p(peak)[:, None]])
         act = ws > 0
         cyx = np.einsum("nrtc,kc->nrkt", wt, moment_coords(h, w)[:2]) / np.where(act, ws, 1.0)[:, :, None]
         nact = act.sum(axis=2)
@@ -479,6 +474,22 @@ class ContactMotion(_TouchBase):
         cols += pos["bands"] + [onoff["fpeak"], onoff["fcent"]]
         per_threshold = np.stack(cols, axis=2)  # (N, R, 18), threshold-major like feature_names
         return np.hstack([per_threshold.reshape(n, -1), np.log1p(peak)[:, None]])
+
+    def _compiled(self, kern: Any, grid: tuple[int, int], s: np.ndarray) -> np.ndarray:
+        """:meth:`_from_pressure` by the compiled loops: the peak, weights and areas elementwise as
+        numpy computes them, the weights' sums numpy's (the reversals count signs of rounding), the
+        position and activity spectra numpy's (their peaks), the rest in two loops."""
+        (n, t, nc), (h, w), nr = s.shape, grid, len(THRESHOLDS)
+        wt, area, peak = np.empty((n, nr, t, nc)), np.empty((n, nr, t)), np.empty(n)
+        kern.contact_weights(s, int(round(0.95 * (t - 1))), np.asarray(THRESHOLDS), self._floor(self.CONTACT_FLOOR),
+                             wt, area, peak)
+        ws = wt.sum(axis=3)
+        tracks, pos, act = np.zeros((n, nr, 10)), np.empty(ws.shape), np.empty(ws.shape)
+        kern.contact_tracks(ws, np.einsum("nrtc,kc->nrkt", wt, moment_coords(h, w)[:2]), area, h, w, tracks, pos, act)
+        p, f = spectrum(np.stack([pos, act]), self._fs())
+        out = np.empty((n, nr * 18 + 1))
+        kern.contact_spectra(p, f, *band_slices(f, self.POS_BANDS), tracks, peak, out)
+        return out
 
 
 __all__ = ["TouchRhythm", "CellRhythm", "ContactMotion", "pressure", "spectrum", "spectral_summary",

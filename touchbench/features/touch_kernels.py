@@ -508,3 +508,56 @@ def _track(ws, cyx, area, h, w, o, pos, act):
     o[8] = spsum
     o[9] = rev / max(nz, 1) if nz > 0 else 0.0
     pos[:] = cyx[major]
+
+
+@jit
+def contact_weights(s, rank, rel, floor, wt, area, peak):
+    """``contact-motion``'s robust peak ``(N,)`` (the order statistic ``rank`` of the frames' maximum
+    pressure), each threshold's contact weights ``wt`` ``(N, R, T, C)``, the pressure above
+    ``max(rel[r] * peak, floor)`` clipped at 0, and their nonzero counts ``area`` ``(N, R, T)``:
+    the operations of the numpy path, elementwise, so the same numbers."""
+    n, t, nc = s.shape
+    top = np.empty(t)
+    for i in range(n):
+        for k in range(t):
+            top[k] = s[i, k].max()
+        peak[i] = np.sort(top)[rank]
+        for r in range(rel.size):
+            thr = max(peak[i] * rel[r], floor)
+            for k in range(t):
+                cnt = 0
+                for c in range(nc):
+                    v = max(s[i, k, c] - thr, 0.0)
+                    wt[i, r, k, c] = v
+                    cnt += v != 0.0
+                area[i, r, k] = cnt
+
+
+@jit
+def contact_spectra(p, f, starts, ends, tracks, peak, out):
+    """``contact-motion``'s rows ``out`` ``(N, R * 18 + 1)``: each threshold's ``tracks`` columns 0-9
+    (:func:`contact_tracks`), then from the power spectra ``p`` ``(2, N, R, F)`` of the position
+    along the axis of motion and of the on/off activity (numpy's, so the peaks are numpy's): the
+    position's peak and centroid frequency and band fractions, the activity's peak and centroid
+    frequency (0 without power); last log(1 + peak)."""
+    _, n, nr, nf = p.shape
+    nb = starts.size
+    for i in range(n):
+        for r in range(nr):
+            o = out[i, r * (10 + 4 + nb):(r + 1) * (10 + 4 + nb)]
+            o[:10] = tracks[i, r, :10]
+            for m in range(2):
+                q = p[m, i, r]
+                tot = q.sum()
+                at = 10 if m == 0 else 12 + nb
+                o[at] = f[np.argmax(q)] if tot > 0 and nf else 0.0
+                cen = 0.0
+                for k in range(nf):
+                    cen += q[k] * f[k]
+                o[at + 1] = cen / tot if tot > 0 else 0.0
+                for b in range(nb if m == 0 else 0):
+                    acc = 0.0
+                    for k in range(starts[b], ends[b]):
+                        acc += q[k]
+                    o[12 + b] = acc / tot if tot > 0 else 0.0
+        out[i, -1] = math.log1p(peak[i])
