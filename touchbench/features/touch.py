@@ -80,7 +80,7 @@ from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError, SharedPrep
 from .numerics import KURT_CONSTANT, SKEW_CONSTANT, gradient, moment_coords, same_row
 from .touch_spectra import (AC_LAGS, BANDS, QUANTS, _STAT_NAMES, _band_name, _local_bands, band_slices, band_sums,
-                            centred_spectrum,
+                            _hann_freqs, centred_spectrum,
                             kernels, series_block, spectral_summary, spectrum)
 
 MIN_FRAMES = 8
@@ -345,14 +345,18 @@ class CellRhythm(_TouchBase):
         fs = self._fs()
         cells = np.swapaxes(s, 1, 2)  # (N, C, T)
         mean = cells.mean(axis=2, keepdims=True)
+        kern = kernels()
+        if kern is not None:  # the cells' spectra numpy's (their peaks), the rest in two loops
+            hann, f = _hann_freqs(t, float(fs))
+            mean = np.ascontiguousarray(mean[..., 0])
+            dw = np.empty((n, h * w, t))
+            kern.cell_windowed(s, mean, hann, dw)
+            out = np.empty((n, len(BANDS) + 11))
+            kern.cell_pool(s, mean, np.abs(np.fft.rfft(dw, axis=-1)) ** 2, f, *band_slices(f, BANDS), hann, h, w,
+                           self._floor(self.BLOB_FLOOR), out)
+            return out
         d = cells - mean
         p, f = centred_spectrum(d, cells.max(axis=2) == cells.min(axis=2), fs)  # (N, C, F)
-        kern = kernels()
-        if kern is not None:
-            out = np.zeros((n, len(BANDS) + 11))
-            kern.cell_pool(s, np.ascontiguousarray(mean[..., 0]), np.ascontiguousarray(p), f, *band_slices(f, BANDS),
-                           spectrum(d.sum(axis=1), fs)[0].sum(axis=1), h, w, self._floor(self.BLOB_FLOOR), out)
-            return out
         pw = p.sum(axis=2)  # (N, C)
         tot = pw.sum(axis=1)
         none = tot <= 0
