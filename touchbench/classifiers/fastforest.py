@@ -128,26 +128,15 @@ class CompiledForest:
 
     def _packed(self, kern: ModuleType) -> tuple:
         """The compiled walk's nodes (:mod:`.forest_kernels`), packed once: each tree's root, the records'
-        thresholds, features and first children (views of one record array) and the leaves' distinct
-        values."""
+        thresholds, features and first children (views of one record array) and the table of leaf values."""
         if getattr(self, "_pack", None) is None:
-            trees = [e.tree_ for e in self.forest.estimators_]
-            leaves = [t.children_left == -1 for t in trees]
-            table, rows = np.unique(np.concatenate([np.asarray(t.value[:, 0, :], dtype=np.float64)[m]
-                                                    for t, m in zip(trees, leaves)]), axis=0, return_inverse=True)
-            rows = rows.ravel().astype(np.int64)
-            nodes = np.empty(sum(t.node_count for t in trees), dtype=kern.NODE)
-            roots, at, used = np.empty(len(trees), dtype=np.int64), 0, 0
-            for k, (t, m) in enumerate(zip(trees, leaves)):
-                leaf_row = np.full(t.node_count, -1, dtype=np.int64)
-                leaf_row[m] = rows[used:used + int(m.sum())]
-                used += int(m.sum())
-                feature = t.feature.astype(np.int64) if self.columns is None else self.columns[np.maximum(t.feature, 0)]
-                roots[k] = at
-                at = kern.pack_tree(t.children_left.astype(np.int64), t.children_right.astype(np.int64), feature,
-                                    t.threshold.astype(np.float64), leaf_row, at, nodes["threshold"],
-                                    nodes["feature"], nodes["child"])
-            self._pack = (roots, nodes["threshold"], nodes["feature"], nodes["child"], np.ascontiguousarray(table))
+            n, n_classes = self.value.shape
+            nodes = np.empty(n, dtype=kern.NODE)
+            table = np.zeros((n_classes + int(np.count_nonzero(self.children[::2] == np.arange(n))), n_classes))
+            table[:n_classes] = np.eye(n_classes)
+            used = kern.pack_forest(self.children, self.feature, self.threshold, self.value, self.roots,
+                                    nodes["threshold"], nodes["feature"], nodes["child"], table)
+            self._pack = (self.roots, nodes["threshold"], nodes["feature"], nodes["child"], table[:used].copy())
         return self._pack
 
 

@@ -1,9 +1,10 @@
 """The compiled walk of :class:`touchbench.classifiers.fastforest.CompiledForest`, used when numba is
 installed.
 
-The nodes are packed once (:func:`pack_tree`), each tree breadth first: a node is one 16-byte record
+The nodes are packed once (:func:`pack_forest`), each tree breadth first: a node is one 16-byte record
 (threshold, feature, first child; a node's two children side by side, so a step of the walk reads
-one record), a leaf's record points to its row of a table of the leaves' distinct values. The walk
+one record), a leaf's record points to its row of a table of leaf values (one row per class for the leaves
+of one class, as a grown tree's mostly are; a row of its own for another). The walk
 (:func:`forest_proba`): each tree for every row, from the root to the child at ``child + (x[feature]
 > threshold)`` until a leaf; each row's leaf values added in tree order, then divided by the number
 of trees. The same comparisons and the same additions in the same order as scikit-learn's walk and
@@ -26,34 +27,55 @@ NODE = np.dtype([("threshold", np.float64), ("feature", np.int32), ("child", np.
 
 
 @jit
-def pack_tree(left, right, feature, threshold, leaf_row, at, thr_out, feat_out, child_out):
-    """One tree's nodes (scikit-learn's arrays; a leaf's ``left`` is -1) into the packed records from
-    index ``at``, breadth first; the index after its last node."""
-    n = left.size
-    queue = np.empty(n, dtype=np.int64)
-    where = np.empty(n, dtype=np.int64)
-    queue[0] = 0
-    where[0] = at
-    head, tail, free = 0, 1, at + 1
-    while head < tail:
-        u = queue[head]
-        head += 1
-        k = where[u]
-        if left[u] < 0:
-            thr_out[k] = np.inf
-            feat_out[k] = 0
-            child_out[k] = -1 - leaf_row[u]
-            continue
-        thr_out[k] = threshold[u]
-        feat_out[k] = feature[u]
-        child_out[k] = free
-        where[left[u]] = free
-        where[right[u]] = free + 1
-        queue[tail] = left[u]
-        queue[tail + 1] = right[u]
-        tail += 2
-        free += 2
-    return free
+def pack_forest(children, feature, threshold, value, roots, thr_out, feat_out, child_out, table):
+    """The flat walk's nodes (:class:`~touchbench.classifiers.fastforest.CompiledForest`'s: a leaf is
+    its own child) packed into the records, each tree breadth first from its root; a leaf points to
+    its row of ``table``: the one-hot row of its class when its values are one class's (``table``'s
+    first rows, the identity), else a row of its own. The rows of ``table`` used."""
+    n_classes = value.shape[1]
+    queue = np.empty(threshold.size, dtype=np.int64)
+    where = np.empty(threshold.size, dtype=np.int64)
+    rows = n_classes
+    free = 0
+    for root in roots:
+        queue[0] = root
+        where[root] = free
+        head, tail, free = 0, 1, free + 1
+        while head < tail:
+            u = queue[head]
+            head += 1
+            k = where[u]
+            if children[2 * u] == u:
+                thr_out[k] = np.inf
+                feat_out[k] = 0
+                child_out[k] = -1 - _leaf_row(value[u], table, rows)
+                if child_out[k] == -1 - rows:
+                    rows += 1
+                continue
+            thr_out[k] = threshold[u]
+            feat_out[k] = feature[u]
+            child_out[k] = free
+            for side in range(2):
+                where[children[2 * u + side]] = free + side
+                queue[tail + side] = children[2 * u + side]
+            tail += 2
+            free += 2
+    return rows
+
+
+@jit
+def _leaf_row(v, table, rows):
+    """The row of ``table`` for the leaf values ``v``: its class's when one-hot, else ``rows`` (filled)."""
+    hot = -1
+    for k in range(v.size):
+        if v[k] == 1.0 and hot < 0:
+            hot = k
+        elif v[k] != 0.0:
+            hot = -2
+    if hot >= 0:
+        return hot
+    table[rows] = v
+    return rows
 
 
 @jit

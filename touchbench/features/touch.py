@@ -69,6 +69,7 @@ Interpretations and limits shared by the sets:
 
 from __future__ import annotations
 
+import functools
 from numbers import Real
 from typing import Any
 
@@ -166,6 +167,12 @@ class _TouchBase(FeatureSet):
         raise NotImplementedError
 
 
+@functools.lru_cache(maxsize=32)
+def _cell_ranks(cells: int) -> np.ndarray:
+    """The ranks over ``cells`` cells at which ``touch-rhythm`` reads its sorted cell statistics."""
+    return np.array([int(round(r * (cells - 1))) for r in CELL_RANKS], dtype=np.intp)
+
+
 def pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(N, T, H, W)`` -> pressure above baseline ``(N, T', H*W)`` float64 and baseline ``(N, H*W)``.
 
@@ -180,6 +187,12 @@ def _pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`pressure`, plus the padded values themselves ``(N, T', H*W)`` float64."""
     n, t, h, w = stack.shape
     x = np.asarray(stack).reshape(n, t, h * w)
+    kern = kernels()
+    if kern is not None and (x.dtype in (np.float32, np.float64) or x.dtype.kind in "iu" and x.dtype.isnative):
+        tp = max(t, MIN_FRAMES)
+        c, s, base = np.empty((n, tp, h * w)), np.empty((n, tp, h * w)), np.empty((n, h * w))
+        kern.pressure(x, int(np.floor(BASELINE_Q * (tp - 1))), c, s, base)
+        return s, base, c
     if t < MIN_FRAMES:
         x = np.concatenate([x, np.repeat(x[:, -1:], MIN_FRAMES - t, axis=1)], axis=1)
         t = MIN_FRAMES
@@ -249,8 +262,8 @@ class TouchRhythm(_TouchBase):
         if kern is None:
             series, extra = self._frames(grid, s, base, c)
         else:
-            ranks = np.array([int(round(r * (h * w - 1))) for r in CELL_RANKS], dtype=np.intp)
-            series, extra = kern.rhythm_frames(s, c, base, h, w, self._floor(self.AREA_FLOOR), self.AREA_REL, ranks)
+            series, extra = kern.rhythm_frames(s, c, base, h, w, self._floor(self.AREA_FLOOR), self.AREA_REL,
+                                               _cell_ranks(h * w))
         block = series_block(series, self._fs()).reshape(len(s), -1)  # series-major, matching feature_names
         return np.hstack([block, extra])
 
@@ -350,7 +363,7 @@ class CellRhythm(_TouchBase):
             hann, f = _hann_freqs(t, float(fs))
             mean = np.ascontiguousarray(mean[..., 0])
             dw = np.empty((n, h * w, t))
-            kern.cell_windowed(s, mean, hann, dw)
+            kern.windowed(s, mean, hann, dw)
             out = np.empty((n, len(BANDS) + 11))
             kern.cell_pool(s, mean, np.abs(np.fft.rfft(dw, axis=-1)) ** 2, f, *band_slices(f, BANDS), hann, h, w,
                            self._floor(self.BLOB_FLOOR), out)

@@ -222,7 +222,7 @@ def series_stats(x, xs, mean, p, f, starts, ends, order, lags):
                 o[a + 5] = sd / max(abs(mu), sd * 1e-6 + 1e-12)
                 o[a + 6] = mad1 / sd
                 o[a + 7] = mcr
-            _spectral(p[i, q], f, starts, ends, lognf, o[a + 8:a + 12 + nb])
+            _spectral(p[i, q, 1:], f, starts, ends, lognf, o[a + 8:a + 12 + nb])
             b = a + 12 + nb
             if not flat:
                 _autocorrelation(d, lags, ac0, o[b:])
@@ -317,9 +317,10 @@ def _spectral(p, f, starts, ends, lognf, o):
 
 
 @jit
-def cell_windowed(s, mean, hann, out):
-    """Every cell's series less its mean, times the Hann window, into ``out`` ``(N, C, T)`` (0 for a
-    constant cell): numpy's ``centred_spectrum`` input, elementwise, so the same numbers."""
+def windowed(s, mean, hann, out):
+    """Every series ``s[i, :, c]`` (of ``(N, T, M)``: a cell's, or ``touch-rhythm``'s series through a
+    transposed view) less its mean ``(N, M)``, times the Hann window, into ``out`` ``(N, M, T)`` (0
+    for a constant series): numpy's ``centred_spectrum`` input, elementwise, so the same numbers."""
     n, t, nc = s.shape
     for i in range(n):
         for c in range(nc):
@@ -479,3 +480,24 @@ def _blobs(si, h, w, floor):
         nodes_sum += nodes
     nact = max(active, 1)
     return comp_sum / nact, float(comp_max if t else 0), nodes_sum / nact
+
+
+@jit
+def pressure(x, rank, c, s, base):
+    """The values ``c`` ``(N, T', C)`` as float64 (frames past ``x``'s last repeating it), each cell's
+    baseline ``base`` ``(N, C)`` (the order statistic ``rank`` over the frames) and the pressure
+    ``s``, the values above it clipped at 0 (NaN kept): :func:`touchbench.features.touch._pressure`'s
+    operations, so the same numbers."""
+    n, t, nc = x.shape
+    tp = c.shape[1]
+    col = np.empty(tp)
+    for i in range(n):
+        for j in range(nc):
+            for k in range(tp):
+                col[k] = x[i, min(k, t - 1), j]
+                c[i, k, j] = col[k]
+            b = np.sort(col)[rank]
+            base[i, j] = b
+            for k in range(tp):
+                v = col[k] - b
+                s[i, k, j] = 0.0 if v < 0 else v

@@ -192,10 +192,12 @@ def series_block(series: np.ndarray, fs: float) -> np.ndarray:
         st = _series_stats(series, fs)
         return np.stack([st[k] for k in _STAT_NAMES], axis=2)
     t = series.shape[-1]
-    p, f = centred_spectrum(series - series.mean(axis=-1, keepdims=True), series.max(axis=-1) == series.min(axis=-1), fs)
+    hann, f = _hann_freqs(t, float(fs))
+    dw = np.empty(series.shape)  # the windowed series as centred_spectrum makes them, elementwise
+    kern.windowed(np.swapaxes(series, 1, 2), series.mean(axis=-1), hann, dw)
     srt = np.sort(series, axis=-1)
-    return kern.series_stats(np.ascontiguousarray(series), srt, srt.sum(axis=-1) / t, np.ascontiguousarray(p), f,
-                             *band_slices(f, BANDS), *_ranks_lags(t))
+    return kern.series_stats(np.ascontiguousarray(series), srt, srt.sum(axis=-1) / t,
+                             np.abs(np.fft.rfft(dw, axis=-1)) ** 2, f, *band_slices(f, BANDS), *_ranks_lags(t))
 
 
 @functools.lru_cache(maxsize=128)
