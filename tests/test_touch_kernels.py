@@ -60,24 +60,6 @@ def test_synthetic_captures_agree_with_the_numpy_path(name, t, grid, dtype, top,
     assert_allclose(fast, plain, **TOL)
 
 
-@pytest.mark.parametrize("dtype, t, grid", [(np.float32, 5, (19, 27)), (np.float64, 10, (19, 27)), (np.uint16, 12, (4, 5)),
-                                            (np.int64, 3, (2, 2)), (np.uint8, 8, (1, 6))])
-def test_pressure_loop_gives_numpys_numbers_bit_for_bit(dtype, t, grid, monkeypatch):
-    """The values, baseline and pressure of the compiled loop are the numpy path's exactly (elementwise
-    operations and an order statistic), a short window padded by its last frame included."""
-    from touchbench.features.touch import _pressure
-
-    rng = np.random.default_rng(t)
-    stack = rng.uniform(-5, 40, (3, t, *grid)) if np.dtype(dtype).kind == "f" else rng.integers(0, 200, (3, t, *grid))
-    stack = stack.astype(dtype)
-    fast = _pressure(stack)
-    transposed = _pressure(np.swapaxes(np.swapaxes(stack, 2, 3).copy(), 2, 3))  # a strided layout
-    monkeypatch.setattr(touch_spectra, "COMPILED", False)
-    plain = _pressure(stack)
-    for a, b, c in zip(fast, transposed, plain):
-        assert np.array_equal(a, c) and np.array_equal(b, c)
-
-
 def test_cell_spectra_inputs_are_numpys_bit_for_bit():
     """The windowed series the compiled path gives numpy's FFT are ``centred_spectrum``'s, so the
     spectra (whose peaks are taken) are the same bits: constant cells and cells at 0 included."""

@@ -187,12 +187,6 @@ def _pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`pressure`, plus the padded values themselves ``(N, T', H*W)`` float64."""
     n, t, h, w = stack.shape
     x = np.asarray(stack).reshape(n, t, h * w)
-    kern = kernels()
-    if kern is not None and (x.dtype in (np.float32, np.float64) or x.dtype.kind in "iu" and x.dtype.isnative):
-        tp = max(t, MIN_FRAMES)
-        c, s, base = np.empty((n, tp, h * w)), np.empty((n, tp, h * w)), np.empty((n, h * w))
-        kern.pressure(x, int(np.floor(BASELINE_Q * (tp - 1))), c, s, base)
-        return s, base, c
     if t < MIN_FRAMES:
         x = np.concatenate([x, np.repeat(x[:, -1:], MIN_FRAMES - t, axis=1)], axis=1)
         t = MIN_FRAMES

@@ -481,23 +481,3 @@ def _blobs(si, h, w, floor):
     nact = max(active, 1)
     return comp_sum / nact, float(comp_max if t else 0), nodes_sum / nact
 
-
-@jit
-def pressure(x, rank, c, s, base):
-    """The values ``c`` ``(N, T', C)`` as float64 (frames past ``x``'s last repeating it), each cell's
-    baseline ``base`` ``(N, C)`` (the order statistic ``rank`` over the frames) and the pressure
-    ``s``, the values above it clipped at 0 (NaN kept): :func:`touchbench.features.touch._pressure`'s
-    operations, so the same numbers."""
-    n, t, nc = x.shape
-    tp = c.shape[1]
-    col = np.empty(tp)
-    for i in range(n):
-        for j in range(nc):
-            for k in range(tp):
-                col[k] = x[i, min(k, t - 1), j]
-                c[i, k, j] = col[k]
-            b = np.sort(col)[rank]
-            base[i, j] = b
-            for k in range(tp):
-                v = col[k] - b
-                s[i, k, j] = 0.0 if v < 0 else v
