@@ -1,7 +1,7 @@
 """The compiled walk of :class:`touchbench.classifiers.fastforest.CompiledForest`, used when numba is
 installed.
 
-The nodes are packed once (:func:`pack_forest`), each tree breadth first: a node is one 16-byte record
+The nodes are packed once (:func:`pack_forest`), each tree depth first: a node is one 16-byte record
 (threshold, feature, first child; a node's two children side by side, so a step of the walk reads
 one record), a leaf's record points to its row of a table of leaf values (one row per class for the leaves
 of one class, as a grown tree's mostly are; a row of its own for another). The walk
@@ -29,21 +29,22 @@ NODE = np.dtype([("threshold", np.float64), ("feature", np.int32), ("child", np.
 @jit
 def pack_forest(children, feature, threshold, value, roots, thr_out, feat_out, child_out, table):
     """The flat walk's nodes (:class:`~touchbench.classifiers.fastforest.CompiledForest`'s: a leaf is
-    its own child) packed into the records, each tree breadth first from its root; a leaf points to
+    its own child) packed into the records, each tree depth first from its root (a node's children side
+    by side, the left one's subtree next: a walk going left reads nearby records); a leaf points to
     its row of ``table``: the one-hot row of its class when its values are one class's (``table``'s
     first rows, the identity), else a row of its own. The rows of ``table`` used."""
     n_classes = value.shape[1]
-    queue = np.empty(threshold.size, dtype=np.int64)
+    stack = np.empty(threshold.size, dtype=np.int64)
     where = np.empty(threshold.size, dtype=np.int64)
     rows = n_classes
     free = 0
     for root in roots:
-        queue[0] = root
+        stack[0] = root
         where[root] = free
-        head, tail, free = 0, 1, free + 1
-        while head < tail:
-            u = queue[head]
-            head += 1
+        top, free = 1, free + 1
+        while top:
+            top -= 1
+            u = stack[top]
             k = where[u]
             if children[2 * u] == u:
                 thr_out[k] = np.inf
@@ -55,10 +56,10 @@ def pack_forest(children, feature, threshold, value, roots, thr_out, feat_out, c
             thr_out[k] = threshold[u]
             feat_out[k] = feature[u]
             child_out[k] = free
-            for side in range(2):
+            for side in range(2):  # the left child on top: its subtree is packed next
                 where[children[2 * u + side]] = free + side
-                queue[tail + side] = children[2 * u + side]
-            tail += 2
+                stack[top + 1 - side] = children[2 * u + side]
+            top += 2
             free += 2
     return rows
 
