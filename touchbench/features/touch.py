@@ -489,7 +489,7 @@ class ContactMotion(_TouchBase):
     def _compiled(self, kern: Any, grid: tuple[int, int], s: np.ndarray) -> np.ndarray:
         """:meth:`_from_pressure` by the compiled loops: the peak, weights and areas elementwise as
         numpy computes them, the weights' sums numpy's (the reversals count signs of rounding), the
-        position and activity spectra numpy's (their peaks), the rest in two loops."""
+        position and activity spectra numpy's (their peaks), the rest in the loops of motion_kernels."""
         (n, t, nc), (h, w), nr = s.shape, grid, len(THRESHOLDS)
         wt, area, peak = np.empty((n, nr, t, nc)), np.empty((n, nr, t)), np.empty(n)
         kern.contact_weights(s, int(round(0.95 * (t - 1))), np.asarray(THRESHOLDS), self._floor(self.CONTACT_FLOOR),
