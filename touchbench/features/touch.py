@@ -357,7 +357,7 @@ class CellRhythm(_TouchBase):
             hann, f = _hann_freqs(t, float(fs))
             mean = np.ascontiguousarray(mean[..., 0])
             dw = np.empty((n, h * w, t))
-            kern.windowed(s, mean, hann, dw)
+            kern.windowed(s, mean, hann, False, dw)
             out = np.empty((n, len(BANDS) + 11))
             kern.cell_pool(s, mean, np.abs(np.fft.rfft(dw, axis=-1)) ** 2, f, *band_slices(f, BANDS), hann, h, w,
                            self._floor(self.BLOB_FLOOR), out)

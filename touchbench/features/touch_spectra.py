@@ -194,9 +194,10 @@ def series_block(series: np.ndarray, fs: float) -> np.ndarray:
     t = series.shape[-1]
     hann, f = _hann_freqs(t, float(fs))
     dw = np.empty(series.shape)  # the windowed series as centred_spectrum makes them, elementwise
-    kern.windowed(np.swapaxes(series, 1, 2), series.mean(axis=-1), hann, dw)
+    series = np.ascontiguousarray(series)
+    kern.windowed(series, series.mean(axis=-1), hann, True, dw)
     srt = np.sort(series, axis=-1)
-    return kern.series_stats(np.ascontiguousarray(series), srt, srt.sum(axis=-1) / t,
+    return kern.series_stats(series, srt, srt.sum(axis=-1) / t,
                              np.abs(np.fft.rfft(dw, axis=-1)) ** 2, f, *band_slices(f, BANDS), *_ranks_lags(t))
 
 
