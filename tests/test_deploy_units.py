@@ -61,12 +61,23 @@ def test_combine_windows_max_and_mean():
 
 
 # ----------------------------------------------------------------- forest
+@pytest.fixture(params=["compiled", "numpy"])
+def walk(request, monkeypatch):
+    """Each forest test twice: the compiled walk (where numba is installed) and the numpy walk."""
+    from touchbench.core import compiled
+
+    if request.param == "compiled":
+        pytest.importorskip("numba")
+    monkeypatch.setattr(compiled, "COMPILED", request.param == "compiled")
+    return request.param
+
+
 @pytest.mark.parametrize("make", [
     lambda: RandomForestClassifier(n_estimators=60, random_state=3, n_jobs=1),
     lambda: RandomForestClassifier(n_estimators=30, criterion="entropy", max_features=3, random_state=1, n_jobs=1),
     lambda: ExtraTreesClassifier(n_estimators=40, random_state=0, n_jobs=1),
 ])
-def test_compiled_forest_equals_sklearn_exactly(make):
+def test_compiled_forest_equals_sklearn_exactly(make, walk):
     rng = np.random.default_rng(0)
     X = rng.normal(size=(150, 12))
     y = np.array(["a", "b", "c"])[rng.integers(0, 3, 150)]
@@ -80,7 +91,24 @@ def test_compiled_forest_equals_sklearn_exactly(make):
     np.testing.assert_array_equal(fast.predict_proba(Xt[:1]), est.predict_proba(Xt[:1]))
 
 
-def test_compiled_forest_nan_falls_back_and_others_unsupported():
+def test_compiled_forest_ties_and_float32_rounding_follow_sklearn(walk):
+    """Inputs exactly on a split (a random forest on whole numbers splits at halves: 0.5, 1.5, ...)
+    go left, as scikit-learn's ``x <= threshold``; inputs that float32 rounds onto or across a
+    split follow scikit-learn's float32 reading; many rows with impure leaves (min_samples_leaf)."""
+    rng = np.random.default_rng(5)
+    X = rng.integers(0, 6, size=(300, 5)).astype(np.float64)
+    y = (X[:, 0] + X[:, 1] + rng.integers(0, 3, 300)) % 4
+    est = RandomForestClassifier(n_estimators=50, min_samples_leaf=3, random_state=2, n_jobs=1).fit(X, y)
+    halves = rng.integers(0, 12, size=(400, 5)) / 2.0  # on the splits half the time
+    near = halves + rng.choice([-1e-9, 0.0, 1e-9], size=halves.shape)  # float32 rounds these onto the split
+    Xt = np.vstack([halves, near, rng.uniform(-1, 7, size=(200, 5))])
+    fast = compile_forest(est)
+    np.testing.assert_array_equal(fast.predict_proba(Xt), est.predict_proba(Xt))
+    for row in Xt[:20]:
+        np.testing.assert_array_equal(fast.predict_proba(row[None]), est.predict_proba(row[None]))
+
+
+def test_compiled_forest_nan_falls_back_and_others_unsupported(walk):
     rng = np.random.default_rng(1)
     X = rng.normal(size=(80, 4))
     y = (X[:, 0] > 0).astype(int)
@@ -91,7 +119,7 @@ def test_compiled_forest_nan_falls_back_and_others_unsupported():
 
 
 @pytest.mark.parametrize("wrapped", ["selected", "tuned"])
-def test_compiled_forest_sees_through_touchbench_extra_trees(wrapped):
+def test_compiled_forest_sees_through_touchbench_extra_trees(wrapped, walk):
     from touchbench.classifiers.touch import NestedTunedExtraTrees, SelectedExtraTrees
 
     rng = np.random.default_rng(2)

@@ -171,7 +171,7 @@ def test_countable_decides_block_by_block():
 
 
 def test_numpy_msd_row_does_not_depend_on_its_batch(monkeypatch):
-    from touchbench.features import compiled
+    from touchbench.core import compiled
     from touchbench.features.gaus_msd import MotionStatisticalDistribution
     monkeypatch.setattr(compiled, "COMPILED", False)
     rng = np.random.default_rng(3)

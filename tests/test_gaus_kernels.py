@@ -13,7 +13,8 @@ from numpy.testing import assert_allclose
 
 from touchbench.datasets.haart import HAART_SENSOR
 from touchbench.datasets.model import SensorSpec
-from touchbench.features import base, compiled
+from touchbench.core import compiled
+from touchbench.features import base
 from touchbench.features.base import FEATURES
 
 pytest.importorskip("numba")

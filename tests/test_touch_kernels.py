@@ -12,7 +12,7 @@ from helpers import synthetic_captures
 from numpy.testing import assert_allclose
 
 from touchbench.datasets.model import SensorSpec
-from touchbench.features import compiled
+from touchbench.core import compiled
 from touchbench.features.base import FEATURES
 
 pytest.importorskip("numba")
@@ -58,3 +58,24 @@ def test_synthetic_captures_agree_with_the_numpy_path(name, t, grid, dtype, top,
     caps = synthetic_captures(t, t, grid, dtype, top)
     fast, plain = both(name, caps, sensor, monkeypatch)
     assert_allclose(fast, plain, **TOL)
+
+
+def test_cell_spectra_inputs_are_numpys_bit_for_bit():
+    """The windowed series the compiled path gives numpy's FFT are ``centred_spectrum``'s, so the
+    spectra (whose peaks are taken) are the same bits: constant cells and cells at 0 included."""
+    from touchbench.features import touch_kernels
+    from touchbench.features.touch_spectra import _hann_freqs, centred_spectrum
+
+    rng = np.random.default_rng(4)
+    for t in (8, 10, 33):
+        s = np.maximum(rng.normal(0, 5, (2, t, 40)), 0.0)
+        s[:, :, :5] = 7.0
+        cells = np.swapaxes(s, 1, 2)
+        mean = cells.mean(axis=2)
+        p_plain, _ = centred_spectrum(cells - mean[..., None], cells.max(axis=2) == cells.min(axis=2), 10.0)
+        dw = np.empty((2, 40, t))
+        touch_kernels.windowed(s, mean, _hann_freqs(t, 10.0)[0], False, dw)
+        assert np.array_equal((np.abs(np.fft.rfft(dw, axis=-1)) ** 2)[..., 1:], p_plain)
+        rows = np.ascontiguousarray(cells)  # the same series stored one per row (touch-rhythm's layout)
+        touch_kernels.windowed(rows, mean, _hann_freqs(t, 10.0)[0], True, dw)
+        assert np.array_equal((np.abs(np.fft.rfft(dw, axis=-1)) ** 2)[..., 1:], p_plain)

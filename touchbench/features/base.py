@@ -35,7 +35,7 @@ from ..core.errors import TouchbenchError
 from ..core.introspect import sensor_problem, with_accepted
 from ..core.paramdoc import of_constraints
 from ..core.registry import Registry
-from .compiled import kernels
+from ..core.compiled import kernels
 
 # Filled by every module of touchbench.features (imported on first use of the registry).
 FEATURES: Registry = Registry("feature set", package="touchbench.features",
@@ -134,7 +134,7 @@ class FeatureSet(TransformerMixin, BaseEstimator):
     #: it; a subclass's line replaces its base's)
     _parameter_docs: ClassVar[dict[str, str]] = {
         "sensor": "the dataset's sensor (:class:`touchbench.datasets.model.SensorSpec`); the run engine passes it."}
-    #: the kernels module (:func:`touchbench.features.compiled.kernels`) whose loops take this set's
+    #: the kernels module (:func:`touchbench.core.compiled.kernels`) whose loops take this set's
     #: captures one at a time; while they run, its chunks hold up to ``_LOOP_BATCH_VALUES`` values
     compiled_loops: ClassVar[str | None] = None
 

@@ -86,7 +86,7 @@ from sklearn.utils._param_validation import Interval
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError
 from .numerics import sort_last
-from .compiled import kernels
+from ..core.compiled import kernels
 
 #: multiples of the noise floor above the rest level at which contact is counted
 NOISE_UNITS: tuple[int, ...] = (3, 10, 30)
@@ -180,7 +180,7 @@ class ContactEvidence(FullScaleSet):
         u, full = self._heights(stack)
         n, t, c = u.shape
         flat = sorted_heights(stack, self._range(), self._flipped())
-        kern = kernels("evidence_kernels")
+        kern = kernels("features.evidence_kernels")
         if kern is not None:
             lo, hi = self._range()
             out = np.zeros((n, 10 + 3 * len(NOISE_UNITS)))

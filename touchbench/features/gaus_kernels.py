@@ -8,7 +8,7 @@ edge cases). Order statistics, counts and comparisons are numpy's exactly (the s
 compared in the same dtype); only sums are taken in another order. Readings are read in their own
 dtype and made float64 one at a time (exact for every integer up to 2**53 and float32).
 
-Imported on first use (:func:`touchbench.features.compiled.kernels`: never without numba),
+Imported on first use (:func:`touchbench.core.compiled.kernels`: never without numba),
 compiled once per machine (numba's on-disk cache).
 """
 

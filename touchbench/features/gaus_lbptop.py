@@ -13,7 +13,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
-from .compiled import kernels
+from ..core.compiled import kernels
 from .gaus_common import GAUS_PAPER
 
 PLANES = ("xy", "xt", "yt")
@@ -81,7 +81,7 @@ class LBPTOP(FeatureSet):
     paper = f"{GAUS_PAPER}.5 (Zhao & Pietikainen 2007)"
     cost = "moderate"
     fold_dependent = False
-    compiled_loops = "gaus_kernels"
+    compiled_loops = "features.gaus_kernels"
 
     _parameter_constraints = {"radius": ["array-like"], "n_points": [Interval(Integral, 4, 16, closed="both")],
                               "mapping": [StrOptions({"u2", "none"})]}
@@ -137,7 +137,7 @@ class LBPTOP(FeatureSet):
             "xt": [(a, 0, b) for a, b in circle_offsets(p, rt, rx)],
             "yt": [(a, b, 0) for a, b in circle_offsets(p, rt, ry)],
         }
-        kern = kernels("gaus_kernels")
+        kern = kernels("features.gaus_kernels")
         if kern is not None:
             offs = np.array([[dt * hw + dy * w + dx for dt, dy, dx in planes[pl]] for pl in PLANES], dtype=np.int64)
             counts = np.zeros((n, len(PLANES), 2**p), dtype=np.int64)

@@ -7,7 +7,7 @@ import numpy as np
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureSet, cell_names
-from .compiled import kernels
+from ..core.compiled import kernels
 from .gaus_common import GAUS_PAPER
 from .numerics import SeriesCounts, as_f64, as_integers, hazen_points, hazen_quantiles, moments, sort_last, total_variation
 
@@ -55,7 +55,7 @@ class MotionStatisticalDistribution(FeatureSet):
     paper = f"{GAUS_PAPER}.3"
     cost = "cheap"
     fold_dependent = False
-    compiled_loops = "gaus_kernels"
+    compiled_loops = "features.gaus_kernels"
     _parameter_docs = {"sensor": "unused; nothing depends on the sensor."}
 
     def __init__(self, sensor: SensorSpec | None = None):
@@ -68,7 +68,7 @@ class MotionStatisticalDistribution(FeatureSet):
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         n, t = stack.shape[:2]
         frames = stack.reshape(n, t, -1)  # (N, T, P): every cell's series along axis 1, in place
-        kern = kernels("gaus_kernels")
+        kern = kernels("features.gaus_kernels")
         if kern is None:
             return msd_rows(frames)
         ints = as_integers(frames)

@@ -14,7 +14,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet
-from .compiled import kernels
+from ..core.compiled import kernels
 from .gaus_common import GAUS_PAPER, lookup, resolve_units, setting_for
 from .numerics import SeriesCounts, as_integers, sort_last
 
@@ -192,7 +192,7 @@ class StatisticalDistribution(FeatureSet):
     paper = f"{GAUS_PAPER}.1, Tables 3-4"
     cost = "cheap"
     fold_dependent = False
-    compiled_loops = "gaus_kernels"
+    compiled_loops = "features.gaus_kernels"
 
     _parameter_constraints = {"preset": [StrOptions(set(_TABLE)), None], "bins": [dict, None],
                               "high_offset": [Real, None], "touched_fixed": [Interval(Real, 0, None, closed="left"),
@@ -253,7 +253,7 @@ class StatisticalDistribution(FeatureSet):
         off, fixed, edges = self._resolved()
         n, t = stack.shape[:2]
         x = stack.reshape(n, t, -1)
-        kern = kernels("gaus_kernels")
+        kern = kernels("features.gaus_kernels")
         ints = as_integers(x) if kern is not None else None
         if ints is None:
             return self._numpy_rows(x, off, fixed, edges)

@@ -13,7 +13,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, cell_names
-from .compiled import kernels
+from ..core.compiled import kernels
 from .gaus_common import GAUS_PAPER, resolve_units
 from .numerics import count_true
 
@@ -143,7 +143,7 @@ class SpatialMultiScaleMHH(FeatureSet):
     paper = f"{GAUS_PAPER}.4, eq. 1"
     cost = "moderate"
     fold_dependent = False
-    compiled_loops = "gaus_kernels"
+    compiled_loops = "features.gaus_kernels"
 
     _parameter_constraints = {"preset": [StrOptions(set(_TABLE)), None], "threshold": [Real, "array-like", None],
                               "skips": ["array-like"], "max_len": [Interval(Integral, 1, None, closed="left")],
@@ -206,7 +206,7 @@ class SpatialMultiScaleMHH(FeatureSet):
         if L < 1:
             return np.zeros((n, len(skips) * M * int(edges[-1])))
         thresholds = self._thresholds(levels)
-        kern = kernels("gaus_kernels")
+        kern = kernels("features.gaus_kernels")
         if kern is not None:
             out, args = np.empty((n, len(skips) * M * int(edges[-1]))), (np.array(skips, dtype=np.int64), M, edges)
             if exact_pyramid(stack, shapes, thresholds):  # the pyramid built in the loop, capture by capture

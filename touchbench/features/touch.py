@@ -69,7 +69,9 @@ Interpretations and limits shared by the sets:
 
 from __future__ import annotations
 
+import functools
 from numbers import Real
+from typing import Any
 
 import numpy as np
 
@@ -77,10 +79,10 @@ from sklearn.utils._param_validation import Interval
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError, SharedPrep
-from .compiled import kernels
+from ..core.compiled import kernels
 from .numerics import KURT_CONSTANT, SKEW_CONSTANT, gradient, moment_coords, same_row
 from .touch_spectra import (AC_LAGS, BANDS, QUANTS, _STAT_NAMES, _band_name, _local_bands, band_slices, band_sums,
-                            centred_spectrum, series_block, spectral_summary, spectrum)
+                            _hann_freqs, centred_spectrum, series_block, spectral_summary, spectrum)
 
 MIN_FRAMES = 8
 BASELINE_Q = 0.05
@@ -165,6 +167,12 @@ class _TouchBase(FeatureSet):
         raise NotImplementedError
 
 
+@functools.lru_cache(maxsize=32)
+def _cell_ranks(cells: int) -> np.ndarray:
+    """The ranks over ``cells`` cells at which ``touch-rhythm`` reads its sorted cell statistics."""
+    return np.array([int(round(r * (cells - 1))) for r in CELL_RANKS], dtype=np.intp)
+
+
 def pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(N, T, H, W)`` -> pressure above baseline ``(N, T', H*W)`` float64 and baseline ``(N, H*W)``.
 
@@ -244,12 +252,12 @@ class TouchRhythm(_TouchBase):
         return len(SERIES) * len(_STAT_NAMES) + 7 + 3 * (len(CELL_RANKS) + 1) + 2
 
     def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
-        (h, w), kern = grid, kernels("touch_kernels")
+        (h, w), kern = grid, kernels("features.touch_kernels")
         if kern is None:
             series, extra = self._frames(grid, s, base, c)
         else:
-            ranks = np.array([int(round(r * (h * w - 1))) for r in CELL_RANKS], dtype=np.intp)
-            series, extra = kern.rhythm_frames(s, c, base, h, w, self._floor(self.AREA_FLOOR), self.AREA_REL, ranks)
+            series, extra = kern.rhythm_frames(s, c, base, h, w, self._floor(self.AREA_FLOOR), self.AREA_REL,
+                                               _cell_ranks(h * w))
         block = series_block(series, self._fs()).reshape(len(s), -1)  # series-major, matching feature_names
         return np.hstack([block, extra])
 
@@ -344,14 +352,18 @@ class CellRhythm(_TouchBase):
         fs = self._fs()
         cells = np.swapaxes(s, 1, 2)  # (N, C, T)
         mean = cells.mean(axis=2, keepdims=True)
+        kern = kernels("features.touch_kernels")
+        if kern is not None:  # the cells' spectra numpy's (their peaks), the rest in two loops
+            hann, f = _hann_freqs(t, float(fs))
+            mean = np.ascontiguousarray(mean[..., 0])
+            dw = np.empty((n, h * w, t))
+            kern.windowed(s, mean, hann, False, dw)
+            out = np.empty((n, len(BANDS) + 11))
+            kern.cell_pool(s, mean, np.abs(np.fft.rfft(dw, axis=-1)) ** 2, f, *band_slices(f, BANDS), hann, h, w,
+                           self._floor(self.BLOB_FLOOR), out)
+            return out
         d = cells - mean
         p, f = centred_spectrum(d, cells.max(axis=2) == cells.min(axis=2), fs)  # (N, C, F)
-        kern = kernels("touch_kernels")
-        if kern is not None:
-            out = np.zeros((n, len(BANDS) + 11))
-            kern.cell_pool(s, np.ascontiguousarray(mean[..., 0]), np.ascontiguousarray(p), f, *band_slices(f, BANDS),
-                           spectrum(d.sum(axis=1), fs)[0].sum(axis=1), h, w, self._floor(self.BLOB_FLOOR), out)
-            return out
         pw = p.sum(axis=2)  # (N, C)
         tot = pw.sum(axis=1)
         none = tot <= 0
@@ -434,21 +446,15 @@ class ContactMotion(_TouchBase):
 
     def _from_pressure(self, grid: tuple[int, int], s: np.ndarray, base: np.ndarray, c: np.ndarray) -> np.ndarray:
         (n, t, _), (h, w) = s.shape, grid
+        kern = kernels("features.touch_kernels")
+        if kern is not None:
+            return self._compiled(kern, grid, s)
         peak = np.sort(s.max(axis=2), axis=1)[:, int(round(0.95 * (t - 1)))]
         # every threshold at once: axis 1 of the arrays below is the threshold
         thr = np.maximum(np.multiply.outer(peak, THRESHOLDS), self._floor(self.CONTACT_FLOOR))
         wt = np.subtract(s[:, None], thr[:, :, None, None])  # (N, R, T, C)
         np.maximum(wt, 0.0, out=wt)
         ws = wt.sum(axis=3)
-        kern = kernels("touch_kernels")
-        if kern is not None:
-            cols, pos, act = np.zeros((n, len(THRESHOLDS), 18)), np.empty(ws.shape), np.empty(ws.shape)
-            kern.contact_tracks(ws, np.einsum("nrtc,kc->nrkt", wt, moment_coords(h, w)[:2]),
-                                np.count_nonzero(wt, axis=3).astype(np.float64), h, w, cols, pos, act)
-            p, f = spectrum(np.stack([pos, act]), self._fs())
-            track, onoff = _local_bands(p[0], f, self.POS_BANDS), _local_bands(p[1], f, ())
-            cols[..., 10:] = np.stack([track["fpeak"], track["fcent"], *track["bands"], onoff["fpeak"], onoff["fcent"]], axis=2)
-            return np.hstack([cols.reshape(n, -1), np.log1p(peak)[:, None]])
         act = ws > 0
         cyx = np.einsum("nrtc,kc->nrkt", wt, moment_coords(h, w)[:2]) / np.where(act, ws, 1.0)[:, :, None]
         nact = act.sum(axis=2)
@@ -479,6 +485,22 @@ class ContactMotion(_TouchBase):
         cols += pos["bands"] + [onoff["fpeak"], onoff["fcent"]]
         per_threshold = np.stack(cols, axis=2)  # (N, R, 18), threshold-major like feature_names
         return np.hstack([per_threshold.reshape(n, -1), np.log1p(peak)[:, None]])
+
+    def _compiled(self, kern: Any, grid: tuple[int, int], s: np.ndarray) -> np.ndarray:
+        """:meth:`_from_pressure` by the compiled loops: the peak, weights and areas elementwise as
+        numpy computes them, the weights' sums numpy's (the reversals count signs of rounding), the
+        position and activity spectra numpy's (their peaks), the rest in the loops of motion_kernels."""
+        (n, t, nc), (h, w), nr = s.shape, grid, len(THRESHOLDS)
+        wt, area, peak = np.empty((n, nr, t, nc)), np.empty((n, nr, t)), np.empty(n)
+        kern.contact_weights(s, int(round(0.95 * (t - 1))), np.asarray(THRESHOLDS), self._floor(self.CONTACT_FLOOR),
+                             wt, area, peak)
+        ws = wt.sum(axis=3)
+        tracks, pos, act = np.zeros((n, nr, 10)), np.empty(ws.shape), np.empty(ws.shape)
+        kern.contact_tracks(ws, np.einsum("nrtc,kc->nrkt", wt, moment_coords(h, w)[:2]), area, h, w, tracks, pos, act)
+        p, f = spectrum(np.stack([pos, act]), self._fs())
+        out = np.empty((n, nr * 18 + 1))
+        kern.contact_spectra(p, f, *band_slices(f, self.POS_BANDS), tracks, peak, out)
+        return out
 
 
 __all__ = ["TouchRhythm", "CellRhythm", "ContactMotion", "pressure", "spectrum", "spectral_summary",

@@ -8,7 +8,7 @@ the kernels are tested against, tests/test_touch_kernels.py): the values agree w
 are taken in another order). A capture's values never depend on the other captures of its batch:
 the loops run capture by capture.
 
-Imported on first use (:func:`touchbench.features.compiled.kernels`: never without numba),
+Imported on first use (:func:`touchbench.core.compiled.kernels`: never without numba),
 compiled once per machine (numba's on-disk cache).
 """
 
@@ -18,6 +18,8 @@ import math
 
 import numba
 import numpy as np
+
+from .motion_kernels import contact_spectra, contact_tracks, contact_weights  # noqa: F401  (contact-motion's)
 
 jit = numba.njit(cache=True, nogil=True)
 
@@ -220,7 +222,7 @@ def series_stats(x, xs, mean, p, f, starts, ends, order, lags):
                 o[a + 5] = sd / max(abs(mu), sd * 1e-6 + 1e-12)
                 o[a + 6] = mad1 / sd
                 o[a + 7] = mcr
-            _spectral(p[i, q], f, starts, ends, lognf, o[a + 8:a + 12 + nb])
+            _spectral(p[i, q, 1:], f, starts, ends, lognf, o[a + 8:a + 12 + nb])
             b = a + 12 + nb
             if not flat:
                 _autocorrelation(d, lags, ac0, o[b:])
@@ -315,24 +317,46 @@ def _spectral(p, f, starts, ends, lognf, o):
 
 
 @jit
-def cell_pool(s, mean, p, f, starts, ends, sum_power, h, w, floor, out):
+def windowed(s, mean, hann, rows, out):
+    """Every series less its mean ``(N, M)``, times the Hann window, into ``out`` ``(N, M, T)`` (0 for a
+    constant series): numpy's ``centred_spectrum`` input, elementwise, so the same numbers. The
+    series are ``s[i, :, c]`` of the cells' ``(N, T, M)``, or with ``rows`` ``s[i, c]`` of
+    ``touch-rhythm``'s ``(N, M, T)`` (both C-ordered: one compiled version, however many captures)."""
+    n, m = mean.shape
+    t = hann.size
+    for i in range(n):
+        for c in range(m):
+            lo = s[i, c, 0] if rows else s[i, 0, c]
+            hi = lo
+            for k in range(t):
+                v = s[i, c, k] if rows else s[i, k, c]
+                lo = min(lo, v)
+                hi = max(hi, v)
+                out[i, c, k] = (v - mean[i, c]) * hann[k]
+            if lo == hi:
+                out[i, c, :] = 0.0
+
+
+@jit
+def cell_pool(s, mean, p, f, starts, ends, hann, h, w, floor, out):
     """``cell-rhythm``'s features into ``out`` ``(N, 20)`` from the pressure ``s`` ``(N, T, C)``, the
-    cells' means ``(N, C)``, their power spectra ``p`` ``(N, C, F)`` and the power of the cells' summed
-    series ``sum_power`` ``(N,)``."""
+    cells' means ``(N, C)`` and their power spectra ``p`` ``(N, C, F + 1)`` (DC first, left out)."""
     n, t, nc = s.shape
     nb = starts.size
+    nf = f.size
     pw = np.empty(nc)
-    pooled = np.empty(f.size)
+    pooled = np.empty(nf)
     for i in range(n):
         o = out[i]
         pooled[:] = 0.0
         for c in range(nc):
             acc = 0.0
-            for k in range(f.size):
-                acc += p[i, c, k]
-                pooled[k] += p[i, c, k]
+            for k in range(nf):
+                acc += p[i, c, k + 1]
+                pooled[k] += p[i, c, k + 1]
             pw[c] = acc
         tot = pw.sum()
+        o[:] = 0.0
         if tot > 0:
             for b in range(nb):
                 acc = 0.0
@@ -340,17 +364,17 @@ def cell_pool(s, mean, p, f, starts, ends, sum_power, h, w, floor, out):
                     acc += pooled[k]
                 o[b] = acc / tot
             cen = 0.0
-            for k in range(f.size):
+            for k in range(nf):
                 cen += pooled[k] * f[k]
             o[nb] = cen / tot
-            o[nb + 2] = f[np.argmax(p[i, np.argmax(pw)])] if f.size else 0.0
-            o[nb + 3] = sum_power[i] / tot
+            o[nb + 2] = f[np.argmax(p[i, np.argmax(pw), 1:])] if nf else 0.0
+            o[nb + 3] = _summed_power(s[i], mean[i], hann) / tot
             fpk = 0.0
             ent = 0.0
             for c in range(nc):
                 wc = pw[c] / tot
-                if f.size:
-                    fpk += f[np.argmax(p[i, c])] * wc
+                if nf:
+                    fpk += f[np.argmax(p[i, c, 1:])] * wc
                 if wc > 0:
                     ent -= wc * math.log(wc)
             o[nb + 1] = fpk
@@ -358,6 +382,28 @@ def cell_pool(s, mean, p, f, starts, ends, sum_power, h, w, floor, out):
             o[nb + 5] = _weighted_mcr(s[i], mean[i], pw, tot)
         o[nb + 6], o[nb + 7] = _neighbour_corr(s[i], mean[i], h, w)
         o[nb + 8], o[nb + 9], o[nb + 10] = _blobs(s[i], h, w, floor)
+
+
+@jit
+def _summed_power(si, mean, hann):
+    """The power (DC left out) of the sum of the cells' mean-removed series, mean removed and Hann
+    windowed, by Parseval's theorem: the sum of squares less the DC (and half the Nyquist bin)."""
+    t, nc = si.shape
+    x = np.zeros(t)
+    for k in range(t):
+        for c in range(nc):
+            x[k] += si[k, c] - mean[c]
+    if x.max() == x.min():
+        return 0.0
+    mu = x.sum() / t
+    energy, dc, nyq = 0.0, 0.0, 0.0
+    for k in range(t):
+        y = (x[k] - mu) * hann[k]
+        energy += y * y
+        dc += y
+        nyq += -y if k % 2 else y
+    rest = t * energy - dc * dc
+    return (rest + nyq * nyq) / 2.0 if t % 2 == 0 else rest / 2.0
 
 
 @jit
@@ -437,74 +483,3 @@ def _blobs(si, h, w, floor):
     nact = max(active, 1)
     return comp_sum / nact, float(comp_max if t else 0), nodes_sum / nact
 
-
-@jit
-def contact_tracks(ws, num, area, h, w, out, pos, act):
-    """``contact-motion``'s features without spectra into ``out`` ``(N, R, 18)`` (columns 0-9), the
-    position along the axis of motion into ``pos`` and the on/off activity into ``act`` (both
-    ``(N, R, T)``), from each threshold's contact weight ``ws`` ``(N, R, T)``, its weighted row and
-    column ``num`` ``(N, R, 2, T)`` (divided by the weight here, in place) and its area ``(N, R, T)``.
-    The weights and sums come from numpy: the reversals count signs of position changes, which
-    for a position that does not move are the signs of rounding (the same ones as numpy's)."""
-    n, nr, t = ws.shape
-    for i in range(n):
-        for r in range(nr):
-            _track(ws[i, r], num[i, r], area[i, r], h, w, out[i, r], pos[i, r], act[i, r])
-
-
-@jit
-def _track(ws, cyx, area, h, w, o, pos, act):
-    """One threshold's track: activity, onsets, area, speed, range, path, reversals."""
-    t = ws.size
-    nact = 0
-    msum = np.zeros(2)
-    for k in range(t):
-        if ws[k] > 0:
-            act[k] = 1.0
-            nact += 1
-            for a in range(2):
-                cyx[a, k] /= ws[k]
-                msum[a] += cyx[a, k]
-        else:
-            act[k] = 0.0
-    for a in range(2):
-        fill = msum[a] / max(nact, 1) if nact > 0 else ((h - 1) / 2.0 if a == 0 else (w - 1) / 2.0)
-        for k in range(t):
-            if ws[k] <= 0:
-                cyx[a, k] = fill
-    rng = np.empty(2)
-    for a in range(2):
-        srt = np.sort(cyx[a])
-        rng[a] = srt[int(round(0.95 * (t - 1)))] - srt[int(round(0.05 * (t - 1)))]
-    major = 0 if rng[0] >= rng[1] else 1
-    sp = np.zeros(t - 1)
-    onsets = 0
-    nboth = 0
-    spsum = 0.0
-    nz = 0
-    rev = 0
-    prev = 0.0
-    for k in range(t - 1):
-        both = act[k] > 0 and act[k + 1] > 0
-        onsets += act[k + 1] > 0 and not act[k] > 0
-        sg = 0.0
-        if both:
-            nboth += 1
-            sp[k] = math.hypot(cyx[1, k + 1] - cyx[1, k], cyx[0, k + 1] - cyx[0, k])
-            spsum += sp[k]
-            sg = np.sign(cyx[major, k + 1] - cyx[major, k])
-        nz += sg != 0
-        if k and sg * prev < 0:
-            rev += 1
-        prev = sg
-    o[0] = nact / t
-    o[1] = onsets
-    o[2] = area.sum() / max(nact, 1)
-    o[3] = area.max()
-    o[4] = spsum / max(nboth, 1)
-    o[5] = np.sort(sp)[int(round(0.9 * (t - 2)))]
-    o[6] = rng[0]
-    o[7] = rng[1]
-    o[8] = spsum
-    o[9] = rev / max(nz, 1) if nz > 0 else 0.0
-    pos[:] = cyx[major]

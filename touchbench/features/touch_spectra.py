@@ -13,7 +13,7 @@ import functools
 
 import numpy as np
 
-from .compiled import kernels
+from ..core.compiled import kernels
 from .numerics import moments
 
 #: spectral bands in Hz, upper edge inclusive; the last one is open-ended
@@ -169,15 +169,18 @@ def _local_bands(p: np.ndarray, f: np.ndarray, bands) -> dict:
 def series_block(series: np.ndarray, fs: float) -> np.ndarray:
     """:func:`_series_stats` of ``series`` (N, K, T) as ``(N, K, len(_STAT_NAMES))``, columns in the
     order of ``_STAT_NAMES``."""
-    kern = kernels("touch_kernels")
+    kern = kernels("features.touch_kernels")
     if kern is None:
         st = _series_stats(series, fs)
         return np.stack([st[k] for k in _STAT_NAMES], axis=2)
     t = series.shape[-1]
-    p, f = centred_spectrum(series - series.mean(axis=-1, keepdims=True), series.max(axis=-1) == series.min(axis=-1), fs)
+    hann, f = _hann_freqs(t, float(fs))
+    dw = np.empty(series.shape)  # the windowed series as centred_spectrum makes them, elementwise
+    series = np.ascontiguousarray(series)
+    kern.windowed(series, series.mean(axis=-1), hann, True, dw)
     srt = np.sort(series, axis=-1)
-    return kern.series_stats(np.ascontiguousarray(series), srt, srt.sum(axis=-1) / t, np.ascontiguousarray(p), f,
-                             *band_slices(f, BANDS), *_ranks_lags(t))
+    return kern.series_stats(series, srt, srt.sum(axis=-1) / t,
+                             np.abs(np.fft.rfft(dw, axis=-1)) ** 2, f, *band_slices(f, BANDS), *_ranks_lags(t))
 
 
 @functools.lru_cache(maxsize=128)

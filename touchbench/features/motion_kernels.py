@@ -1,0 +1,140 @@
+"""Compiled loops for ``contact-motion`` (:mod:`touchbench.features.touch`), used when numba is
+installed: its contact weights, tracks and spectra's summaries, one capture at a time (what the
+numpy code of ``ContactMotion`` computes with whole-array passes; the values agree within 1e-9,
+tests/test_touch_kernels.py). Reached through :mod:`touchbench.features.touch_kernels` (imported on
+first use, never without numba), compiled once per machine (numba's on-disk cache).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+jit = numba.njit(cache=True, nogil=True)
+
+
+@jit
+def contact_tracks(ws, num, area, h, w, out, pos, act):
+    """``contact-motion``'s features without spectra into ``out`` ``(N, R, 18)`` (columns 0-9), the
+    position along the axis of motion into ``pos`` and the on/off activity into ``act`` (both
+    ``(N, R, T)``), from each threshold's contact weight ``ws`` ``(N, R, T)``, its weighted row and
+    column ``num`` ``(N, R, 2, T)`` (divided by the weight here, in place) and its area ``(N, R, T)``.
+    The weights and sums come from numpy: the reversals count signs of position changes, which
+    for a position that does not move are the signs of rounding (the same ones as numpy's)."""
+    n, nr, t = ws.shape
+    for i in range(n):
+        for r in range(nr):
+            _track(ws[i, r], num[i, r], area[i, r], h, w, out[i, r], pos[i, r], act[i, r])
+
+
+@jit
+def _track(ws, cyx, area, h, w, o, pos, act):
+    """One threshold's track: activity, onsets, area, speed, range, path, reversals."""
+    t = ws.size
+    nact = 0
+    msum = np.zeros(2)
+    for k in range(t):
+        if ws[k] > 0:
+            act[k] = 1.0
+            nact += 1
+            for a in range(2):
+                cyx[a, k] /= ws[k]
+                msum[a] += cyx[a, k]
+        else:
+            act[k] = 0.0
+    for a in range(2):
+        fill = msum[a] / max(nact, 1) if nact > 0 else ((h - 1) / 2.0 if a == 0 else (w - 1) / 2.0)
+        for k in range(t):
+            if ws[k] <= 0:
+                cyx[a, k] = fill
+    rng = np.empty(2)
+    for a in range(2):
+        srt = np.sort(cyx[a])
+        rng[a] = srt[int(round(0.95 * (t - 1)))] - srt[int(round(0.05 * (t - 1)))]
+    major = 0 if rng[0] >= rng[1] else 1
+    sp = np.zeros(t - 1)
+    onsets = 0
+    nboth = 0
+    spsum = 0.0
+    nz = 0
+    rev = 0
+    prev = 0.0
+    for k in range(t - 1):
+        both = act[k] > 0 and act[k + 1] > 0
+        onsets += act[k + 1] > 0 and not act[k] > 0
+        sg = 0.0
+        if both:
+            nboth += 1
+            sp[k] = math.hypot(cyx[1, k + 1] - cyx[1, k], cyx[0, k + 1] - cyx[0, k])
+            spsum += sp[k]
+            sg = np.sign(cyx[major, k + 1] - cyx[major, k])
+        nz += sg != 0
+        if k and sg * prev < 0:
+            rev += 1
+        prev = sg
+    o[0] = nact / t
+    o[1] = onsets
+    o[2] = area.sum() / max(nact, 1)
+    o[3] = area.max()
+    o[4] = spsum / max(nboth, 1)
+    o[5] = np.sort(sp)[int(round(0.9 * (t - 2)))]
+    o[6] = rng[0]
+    o[7] = rng[1]
+    o[8] = spsum
+    o[9] = rev / max(nz, 1) if nz > 0 else 0.0
+    pos[:] = cyx[major]
+
+
+@jit
+def contact_weights(s, rank, rel, floor, wt, area, peak):
+    """``contact-motion``'s robust peak ``(N,)`` (the order statistic ``rank`` of the frames' maximum
+    pressure), each threshold's contact weights ``wt`` ``(N, R, T, C)``, the pressure above
+    ``max(rel[r] * peak, floor)`` clipped at 0, and their nonzero counts ``area`` ``(N, R, T)``:
+    the operations of the numpy path, elementwise, so the same numbers."""
+    n, t, nc = s.shape
+    top = np.empty(t)
+    for i in range(n):
+        for k in range(t):
+            top[k] = s[i, k].max()
+        peak[i] = np.sort(top)[rank]
+        for r in range(rel.size):
+            thr = max(peak[i] * rel[r], floor)
+            for k in range(t):
+                cnt = 0
+                for c in range(nc):
+                    v = max(s[i, k, c] - thr, 0.0)
+                    wt[i, r, k, c] = v
+                    cnt += v != 0.0
+                area[i, r, k] = cnt
+
+
+@jit
+def contact_spectra(p, f, starts, ends, tracks, peak, out):
+    """``contact-motion``'s rows ``out`` ``(N, R * 18 + 1)``: each threshold's ``tracks`` columns 0-9
+    (:func:`contact_tracks`), then from the power spectra ``p`` ``(2, N, R, F)`` of the position
+    along the axis of motion and of the on/off activity (numpy's, so the peaks are numpy's): the
+    position's peak and centroid frequency and band fractions, the activity's peak and centroid
+    frequency (0 without power); last log(1 + peak)."""
+    _, n, nr, nf = p.shape
+    nb = starts.size
+    for i in range(n):
+        for r in range(nr):
+            o = out[i, r * (10 + 4 + nb):(r + 1) * (10 + 4 + nb)]
+            o[:10] = tracks[i, r, :10]
+            for m in range(2):
+                q = p[m, i, r]
+                tot = q.sum()
+                at = 10 if m == 0 else 12 + nb
+                o[at] = f[np.argmax(q)] if tot > 0 and nf else 0.0
+                cen = 0.0
+                for k in range(nf):
+                    cen += q[k] * f[k]
+                o[at + 1] = cen / tot if tot > 0 else 0.0
+                for b in range(nb if m == 0 else 0):
+                    acc = 0.0
+                    for k in range(starts[b], ends[b]):
+                        acc += q[k]
+                    o[12 + b] = acc / tot if tot > 0 else 0.0
+        out[i, -1] = math.log1p(peak[i])
