@@ -11,6 +11,7 @@ manifest lists the package versions that entered the task ids.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import json
 import sys
 import textwrap
@@ -399,3 +400,21 @@ def test_a_component_defined_without_a_source_file_is_identified_by_its_code():
     finally:
         CLASSIFIERS._entries.pop("user-notebook", None)
         sys.modules.pop("tb_notebook", None)
+
+
+def test_compiled_loops_imported_by_name_count_in_the_identity():
+    # kernels("features.gaus_kernels") imports its module on first use, by name: the identity
+    # follows it (and numba behind it) as it follows an import statement
+    import ast
+
+    from touchbench.engine.identity import _kernels_module
+
+    call = ast.parse('kern = compiled.kernels("features.gaus_kernels")').body[0].value
+    assert _kernels_module(call) == "touchbench.features.gaus_kernels"
+    assert _kernels_module(ast.parse('kernels(name)').body[0].value) is None
+    assert _kernels_module(ast.parse('other("features.gaus_kernels")').body[0].value) is None
+    for name, module in [("msd", "gaus_kernels"), ("touch-rhythm", "touch_kernels"),
+                         ("contact-motion", "motion_kernels"), ("contact-evidence", "evidence_kernels")]:
+        ident = feature_set_identity(name)
+        assert f"touchbench.features.{module}" in ident.modules, name
+        assert ("numba" in ident.packages) == (importlib.util.find_spec("numba") is not None), name

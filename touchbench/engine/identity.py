@@ -176,7 +176,22 @@ def _parse(path: str, signature: tuple[int, ...]) -> tuple[str, tuple[tuple[str,
             imports += [(a.name, (), 0) for a in node.names]
         elif isinstance(node, ast.ImportFrom):
             imports.append((node.module or "", tuple(a.name for a in node.names), node.level))
+        elif (loops := _kernels_module(node)) is not None:
+            imports.append((loops, (), 0))
     return digest, tuple(imports)
+
+
+def _kernels_module(node: ast.AST) -> str | None:
+    """The module a call ``kernels("features.gaus_kernels")`` imports
+    (:func:`touchbench.core.compiled.kernels`: compiled loops imported by name on first use), so the
+    walk follows it, and numba, as it follows an import statement; None for any other node."""
+    if not isinstance(node, ast.Call) or len(node.args) != 1:
+        return None
+    func, arg = node.func, node.args[0]
+    name = func.id if isinstance(func, ast.Name) else func.attr if isinstance(func, ast.Attribute) else None
+    if name != "kernels" or not (isinstance(arg, ast.Constant) and isinstance(arg.value, str)):
+        return None
+    return f"touchbench.{arg.value}"
 
 
 #: the versions of the distributions behind sets of import names, kept in the cache folder with the
@@ -185,8 +200,9 @@ PACKAGES_RECORD = "packages.json"
 
 
 #: each source file's content hash and imports with the file's state when it was parsed
-#: (``identity/sources.json`` in the cache folder), so a new process parses only files written since
-SOURCES_RECORD = "sources.json"
+#: (``identity/sources-2.json`` in the cache folder), so a new process parses only files written since;
+#: the name changes with what a parse reads (2: the modules ``kernels("...")`` calls import)
+SOURCES_RECORD = "sources-2.json"
 _parsed: dict[str, Any] = {"path": None, "files": {}, "changed": False}
 
 
