@@ -33,10 +33,11 @@ def both(name, caps, sensor, monkeypatch, **params):
 
 
 def test_one_switch_chooses_the_numpy_path(monkeypatch):
-    assert compiled.kernels("gaus_kernels") is not None
+    assert compiled.kernels("features.gaus_kernels") is not None
     monkeypatch.setattr(compiled, "COMPILED", False)
-    assert compiled.kernels("gaus_kernels") is None
-    assert compiled.kernels("touch_kernels") is None
+    assert compiled.kernels("features.gaus_kernels") is None
+    assert compiled.kernels("features.touch_kernels") is None
+    assert compiled.kernels("classifiers.forest_kernels") is None
 
 
 @pytest.mark.parametrize("name", SETS)
