@@ -179,3 +179,17 @@ def synthetic_captures(seed: int, t: int, grid: tuple[int, int], dtype, top: flo
         caps.append(c if np.dtype(dtype).kind == "f" else np.floor(c))
     caps += [np.full((t, h, w), top / 3), np.zeros((t, h, w))]
     return [np.clip(c, 0, top).astype(dtype) for c in caps]
+
+
+def compiled_and_numpy(name: str, caps, sensor, monkeypatch, **params) -> tuple[np.ndarray, np.ndarray]:
+    """Feature set ``name``'s rows of ``caps`` by its compiled loops and by its numpy path
+    (:data:`touchbench.core.compiled.COMPILED` False), of the same shape."""
+    from touchbench.core import compiled
+    from touchbench.features.base import FEATURES
+
+    fast = FEATURES.create(name, sensor=sensor, **params).fit(caps).transform(caps)
+    with monkeypatch.context() as m:
+        m.setattr(compiled, "COMPILED", False)
+        plain = FEATURES.create(name, sensor=sensor, **params).fit(caps).transform(caps)
+    assert fast.shape == plain.shape
+    return fast, plain

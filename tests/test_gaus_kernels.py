@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+from helpers import compiled_and_numpy
+
 from touchbench.datasets.haart import HAART_SENSOR
 from touchbench.datasets.model import SensorSpec
 from touchbench.core import compiled
@@ -23,13 +25,7 @@ SETS = ["msd", "sd", "bmh", "smmhh", "lbptop"]
 TOL = {"rtol": 1e-9, "atol": 1e-9}
 
 
-def both(name, caps, sensor, monkeypatch, **params):
-    fast = FEATURES.create(name, sensor=sensor, **params).fit(caps).transform(caps)
-    with monkeypatch.context() as m:
-        m.setattr(compiled, "COMPILED", False)
-        plain = FEATURES.create(name, sensor=sensor, **params).fit(caps).transform(caps)
-    assert fast.shape == plain.shape
-    return fast, plain
+both = compiled_and_numpy
 
 
 def test_one_switch_chooses_the_numpy_path(monkeypatch):

@@ -8,12 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import synthetic_captures
+from helpers import compiled_and_numpy, synthetic_captures
 from numpy.testing import assert_allclose
 
 from touchbench.datasets.model import SensorSpec
-from touchbench.core import compiled
-from touchbench.features.base import FEATURES
 
 pytest.importorskip("numba")
 
@@ -22,13 +20,7 @@ SKIN = SensorSpec(name="skin", grid=(19, 27), frame_rate=10.0, value_range=(0.0,
 TOL = {"rtol": 1e-9, "atol": 1e-9}
 
 
-def both(name, caps, sensor, monkeypatch, **params):
-    fast = FEATURES.create(name, sensor=sensor, **params).fit(caps).transform(caps)
-    with monkeypatch.context() as m:
-        m.setattr(compiled, "COMPILED", False)
-        plain = FEATURES.create(name, sensor=sensor, **params).fit(caps).transform(caps)
-    assert fast.shape == plain.shape
-    return fast, plain
+both = compiled_and_numpy
 
 
 @pytest.mark.parametrize("name", SETS)
