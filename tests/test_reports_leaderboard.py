@@ -481,17 +481,27 @@ def test_a_terminal_of_any_width_shows_every_number_whole_and_shortens_a_long_la
         assert max(len(x) for x in table) > width
 
 
+MANY = 60
+
+
+@pytest.fixture(scope="module")
+def many_methods_board(tmp_path_factory):
+    """One leaderboard of 60 methods whose labels differ only in a number (its tests only print it)."""
+    folder = tmp_path_factory.mktemp("many") / "r"
+    write_fake_run(folder, CAPS, FOLDS, [
+        FakeMethod("msd", f"touch-extra-trees-variant-{k:03d} with the paper's settings", classifier_name="gaus-rf",
+                   classifier_params={"variant": k}, wrong=_wrong(A_WRONG)) for k in range(MANY)])
+    [lb] = build_leaderboards(load_results([folder]))
+    return lb
+
+
 @pytest.mark.parametrize("width", [20, 30, 40])
-def test_many_methods_at_a_narrow_terminal_keep_what_tells_them_apart(tmp_path, width):
+def test_many_methods_at_a_narrow_terminal_keep_what_tells_them_apart(many_methods_board, width):
     from rich.console import Console
 
     from touchbench.reports.rendering import print_terminal
 
-    n = 60
-    write_fake_run(tmp_path / "r", CAPS, FOLDS, [
-        FakeMethod("msd", f"touch-extra-trees-variant-{k:03d} with the paper's settings", classifier_name="gaus-rf",
-                   classifier_params={"variant": k}, wrong=_wrong(A_WRONG)) for k in range(n)])
-    [lb] = build_leaderboards(load_results([tmp_path / "r"]))
+    n, lb = MANY, many_methods_board
     console = Console(record=True, width=width)
     print_terminal([lb], console)
     text = console.export_text()
