@@ -88,6 +88,20 @@ def test_cost_preset_and_a_frame_level_sd_agree_with_the_numpy_path(monkeypatch)
         assert_allclose(fast, plain, **TOL)
 
 
+@pytest.mark.parametrize("dtype", [np.uint16, np.uint8, np.int16, np.float32, np.float64, np.bool_, np.float16])
+def test_bmh_at_both_levels_and_every_dtype_agrees_with_the_numpy_path(dtype, monkeypatch):
+    """Counts: the two paths agree exactly, each frame's own maximum too (float16 keeps numpy's path)."""
+    caps = _edge_captures(40, (8, 8), dtype, 1 if dtype is np.bool_ else 255)
+    for params in [{}, {"level": "frame"}, {"offset": 0.0, "level": "frame"}, {"offset": 200.0}]:
+        fast, plain = both("bmh", caps, HAART_SENSOR, monkeypatch, **params)
+        np.testing.assert_array_equal(fast, plain)
+
+
+def test_bmh_frame_level_on_real_haart_captures_agrees_with_the_numpy_path(real_haart, monkeypatch):
+    fast, plain = both("bmh", real_haart.captures, real_haart.sensor, monkeypatch, level="frame")
+    np.testing.assert_array_equal(fast, plain)
+
+
 def _batch_sizes(sets, caps, monkeypatch):
     """The rows of ``sets`` side by side for ``caps``, and the number of captures of each batch."""
     sizes, batch = [], base.FeatureStack._batch
@@ -103,14 +117,14 @@ def _batch_sizes(sets, caps, monkeypatch):
 
 def test_sets_whose_loops_run_take_larger_chunks_and_the_same_rows(monkeypatch):
     """432 x 8 x 8 captures: the numpy path's bound (131072 values) stacks 4 at a time; the compiled
-    loops' (2097152 values) 75. A stack with a set without loops (bmh) keeps the smaller bound; one
-    capture per batch gives every row bit for bit."""
+    loops' (2097152 values) 75. A stack with a set without loops (flagg-stats) keeps the smaller
+    bound; one capture per batch gives every row bit for bit."""
     caps = _edge_captures(432, (8, 8), np.uint16, 1023) * 2  # 10 captures
-    sets = [FEATURES.create(n, sensor=HAART_SENSOR).fit(caps) for n in ["msd", "sd", "smmhh", "lbptop"]]
+    sets = [FEATURES.create(n, sensor=HAART_SENSOR).fit(caps) for n in SETS]
     rows, sizes = _batch_sizes(sets, caps, monkeypatch)
     assert sizes == [10]
-    bmh = FEATURES.create("bmh", sensor=HAART_SENSOR).fit(caps)
-    assert _batch_sizes(sets + [bmh], caps, monkeypatch)[1] == [4, 4, 2]
+    plain = FEATURES.create("flagg-stats", sensor=HAART_SENSOR).fit(caps)
+    assert _batch_sizes(sets + [plain], caps, monkeypatch)[1] == [4, 4, 2]
     monkeypatch.setattr(base, "_LOOP_BATCH_VALUES", 1)
     one_by_one, sizes = _batch_sizes(sets, caps, monkeypatch)
     assert sizes == [1] * 10

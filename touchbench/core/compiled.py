@@ -1,7 +1,7 @@
 """The one switch between the feature sets' compiled loops and their numpy path.
 
 Where numba is installed (an optional dependency: the ``peers`` extra brings it), the feature sets
-that have compiled loops (the touch sets, ``contact-evidence``, four Gaus sets) and the live forest
+that have compiled loops (the touch sets, ``contact-evidence``, the five Gaus sets) and the live forest
 walk run them, from a kernels module imported on first use and compiled once per machine into
 numba's on-disk cache. Without numba every one runs its vectorised numpy code, which stays the
 reference the loops are tested against (within 1e-9 for the feature sets; the forest walk gives

@@ -12,6 +12,7 @@ from sklearn.utils._param_validation import StrOptions
 
 from ..datasets.model import SensorSpec
 from .base import FEATURES, FeatureSet, cell_names
+from ..core.compiled import kernels
 from .gaus_common import GAUS_PAPER, resolve_units
 
 # Section 3.2.2: high pressure is value >= maximum - offset.
@@ -52,6 +53,7 @@ class BinaryMotionHistory(FeatureSet):
     paper = f"{GAUS_PAPER}.2"
     cost = "cheap"
     fold_dependent = False
+    compiled_loops = "features.gaus_kernels"
 
     _parameter_constraints = {"preset": [StrOptions(set(_TABLE)), None], "offset": [Real, None],
                               "level": [StrOptions({"instance", "frame"})]}
@@ -75,6 +77,12 @@ class BinaryMotionHistory(FeatureSet):
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         off = float(resolve_units("bmh", self.preset, _TABLE, "offset", self.offset, self.sensor, "offset"))
         n, t = stack.shape[:2]
+        kern = kernels("features.gaus_kernels")
+        if kern is not None and stack.dtype != np.float16:  # numba has no float16: numpy's path for it
+            frames = stack.reshape(n, t, -1)
+            out = np.empty((n, frames.shape[2]))
+            kern.bmh(frames.view(np.uint8) if frames.dtype.kind == "b" else frames, off, self.level == "frame", out)
+            return out
         if self.level == "instance":
             # a cell reaches the threshold in some frame iff its largest value does; the maxima are
             # taken in the captures' dtype and then made float64 (rounding keeps the order)

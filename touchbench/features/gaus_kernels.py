@@ -1,5 +1,5 @@
-"""Compiled loops for the five Gaus et al. (2015) feature sets (``msd``, ``sd``, ``smmhh``,
-``lbptop``; ``bmh`` is two numpy reductions), used when numba is installed.
+"""Compiled loops for the five Gaus et al. (2015) feature sets (``msd``, ``sd``, ``bmh``,
+``smmhh``, ``lbptop``), used when numba is installed.
 
 A sibling of :mod:`touchbench.features.touch_kernels` with the same rules: one capture at a time (a
 capture's values never depend on its batch), the numpy code of each set stays the path without
@@ -333,3 +333,32 @@ def lbptop(flat, offsets, lo, hi, inner, counts, code):
                 part[m & 3, code[inner[m]]] += 1
             for b in range(counts.shape[2]):
                 counts[i, pl, b] = part[0, b] + part[1, b] + part[2, b] + part[3, b]
+
+
+@jit
+def bmh(x, off, frame, out):
+    """``bmh``'s cells ``out`` ``(N, P)`` of the readings ``x`` ``(N, T, P)``: 1 where a cell's value
+    (made float64) reaches ``max - off`` in some frame, the maximum the capture's (``frame`` False)
+    or each frame's own; taken in the readings' dtype and made float64 (rounding keeps the order)."""
+    n, t, p = x.shape
+    peak = np.empty(p, x.dtype)
+    for i in range(n):
+        xi = x[i]
+        if frame:
+            out[i, :] = 0.0
+            for k in range(t):
+                top = xi[k, 0]
+                for j in range(1, p):
+                    top = max(top, xi[k, j])
+                thr = np.float64(top) - off
+                for j in range(p):
+                    if np.float64(xi[k, j]) >= thr:
+                        out[i, j] = 1.0
+            continue
+        peak[:] = xi[0]
+        for k in range(1, t):
+            for j in range(p):
+                peak[j] = max(peak[j], xi[k, j])
+        thr = np.float64(peak.max()) - off
+        for j in range(p):
+            out[i, j] = 1.0 if np.float64(peak[j]) >= thr else 0.0
