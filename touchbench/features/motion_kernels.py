@@ -50,9 +50,11 @@ def _track(ws, cyx, area, h, w, o, pos, act):
             if ws[k] <= 0:
                 cyx[a, k] = fill
     rng = np.empty(2)
+    hi, lo = int(round(0.95 * (t - 1))), int(round(0.05 * (t - 1)))
     for a in range(2):
-        srt = np.sort(cyx[a])
-        rng[a] = srt[int(round(0.95 * (t - 1)))] - srt[int(round(0.05 * (t - 1)))]
+        srt = cyx[a].copy()
+        top = select(srt, hi)  # leaves the values below it first: the lower rank among them
+        rng[a] = top - (select(srt[:hi], lo) if lo < hi else top)
     major = 0 if rng[0] >= rng[1] else 1
     sp = np.zeros(t - 1)
     onsets = 0
@@ -79,7 +81,7 @@ def _track(ws, cyx, area, h, w, o, pos, act):
     o[2] = area.sum() / max(nact, 1)
     o[3] = area.max()
     o[4] = spsum / max(nboth, 1)
-    o[5] = np.sort(sp)[int(round(0.9 * (t - 2)))]
+    o[5] = select(sp, int(round(0.9 * (t - 2))))  # the last use of sp
     o[6] = rng[0]
     o[7] = rng[1]
     o[8] = spsum
@@ -98,7 +100,7 @@ def contact_weights(s, rank, rel, floor, wt, area, peak):
     for i in range(n):
         for k in range(t):
             top[k] = s[i, k].max()
-        peak[i] = np.sort(top)[rank]
+        peak[i] = select(top, rank)
         for r in range(rel.size):
             thr = max(peak[i] * rel[r], floor)
             for k in range(t):
@@ -138,3 +140,29 @@ def contact_spectra(p, f, starts, ends, tracks, peak, out):
                         acc += q[k]
                     o[12 + b] = acc / tot if tot > 0 else 0.0
         out[i, -1] = math.log1p(peak[i])
+
+
+@jit
+def select(x, m):
+    """The ``m``-th smallest value of ``x`` (0-based), the value at ``m`` once sorted, reordering
+    ``x`` in place so that nothing before ``m`` is larger (Hoare's selection)."""
+    lo, hi = 0, x.size - 1
+    while lo < hi:
+        pivot = x[(lo + hi) // 2]
+        i, j = lo, hi
+        while i <= j:
+            while x[i] < pivot:
+                i += 1
+            while x[j] > pivot:
+                j -= 1
+            if i <= j:
+                x[i], x[j] = x[j], x[i]
+                i += 1
+                j -= 1
+        if m <= j:
+            hi = j
+        elif m >= i:
+            lo = i
+        else:
+            break
+    return x[m]

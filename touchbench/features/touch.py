@@ -190,8 +190,13 @@ def _pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if t < MIN_FRAMES:
         x = np.concatenate([x, np.repeat(x[:, -1:], MIN_FRAMES - t, axis=1)], axis=1)
         t = MIN_FRAMES
-    c = np.ascontiguousarray(x, dtype=np.float64)  # C order: sums never depend on the layout
     k = int(np.floor(BASELINE_Q * (t - 1)))
+    kern = kernels("features.touch_kernels")
+    if kern is not None and x.dtype.kind in "iuf":  # one pass: the baseline by selection, cell by cell
+        c, s, base = np.empty((n, t, h * w)), np.empty((n, t, h * w)), np.empty((n, h * w))
+        kern.pressure(np.ascontiguousarray(x), k, x.dtype.kind in "iu", c, s, base)
+        return s, base, c
+    c = np.ascontiguousarray(x, dtype=np.float64)  # C order: sums never depend on the layout
     # the order statistic of the readings themselves (fewer bytes to move than in float64; the same
     # value, as float64 represents every reading exactly and keeps their order); a partition along
     # the frames is faster contiguous

@@ -25,6 +25,83 @@ jit = numba.njit(cache=True, nogil=True)
 
 
 @jit
+def pressure(x, k, integral, c, s, base):
+    """The common preprocessing of :func:`touchbench.features.touch._pressure` for readings ``x``
+    ``(N, T, C)`` (``integral``: whole numbers): the values ``c`` as float64, each cell's baseline
+    ``base`` ``(N, C)``, its ``k``-th smallest reading (0-based), and the pressure
+    ``s = max(c - base, 0)``, elementwise as numpy computes them. The baseline is numpy's
+    partition's value exactly: read off the cells' counts of each value where the readings are
+    whole numbers of a short span, else selected frame by frame (:func:`_lowest`)."""
+    n, t, nc = x.shape
+    lo = np.empty(nc)
+    hi = np.empty(nc)
+    counts = np.zeros((nc, 4 * t + 1), dtype=np.int32)
+    for i in range(n):
+        ci = c[i]
+        for j in range(nc):
+            lo[j] = hi[j] = x[i, 0, j]
+        for kk in range(t):
+            for j in range(nc):
+                v = float(x[i, kk, j])
+                ci[kk, j] = v
+                lo[j] = min(lo[j], v)
+                hi[j] = max(hi[j], v)
+        if integral and (hi - lo).max() < counts.shape[1]:
+            _counted(ci, lo, hi, k, counts, base[i])
+        else:
+            _lowest(ci, k, base[i])
+        bi = base[i]
+        si = s[i]
+        for kk in range(t):
+            for j in range(nc):
+                si[kk, j] = max(ci[kk, j] - bi[j], 0.0)
+
+
+@jit
+def _counted(ci, lo, hi, k, counts, out):
+    """Each cell's ``k``-th smallest of whole numbers ``ci`` ``(T, C)`` from its counts of each value
+    (``lo``, ``hi``: the cells' extremes, their span within ``counts``)."""
+    t, nc = ci.shape
+    for j in range(nc):
+        counts[j, :int(hi[j] - lo[j]) + 1] = 0
+    for kk in range(t):
+        for j in range(nc):
+            counts[j, int(ci[kk, j] - lo[j])] += 1
+    for j in range(nc):
+        acc = 0
+        b = 0
+        while True:
+            acc += counts[j, b]
+            if acc > k:
+                break
+            b += 1
+        out[j] = lo[j] + b
+
+
+@jit
+def _lowest(ci, k, out):
+    """Each cell's ``k``-th smallest of ``ci`` ``(T, C)``: the cells keep their ``k + 1`` smallest
+    values so far, sorted, frame by frame (a value above the largest of them costs one comparison)."""
+    t, nc = ci.shape
+    low = np.empty((nc, k + 1))
+    for kk in range(t):
+        for j in range(nc):
+            v = ci[kk, j]
+            top = min(kk, k + 1)  # values held
+            if top == k + 1:
+                if v >= low[j, k]:
+                    continue
+                top = k
+            m = top
+            while m > 0 and low[j, m - 1] > v:
+                low[j, m] = low[j, m - 1]
+                m -= 1
+            low[j, m] = v
+    for j in range(nc):
+        out[j] = low[j, k]
+
+
+@jit
 def rhythm_frames(s, c, base, h, w, floor, area_rel, ranks):
     """``touch-rhythm``'s eleven frame series ``(N, 11, T)`` and its capture scalars ``(N, 33)``
     from the pressure ``s``, the values ``c`` (both ``(N, T, C)``) and the baseline ``(N, C)``."""
@@ -75,7 +152,8 @@ def rhythm_frames(s, c, base, h, w, floor, area_rel, ranks):
                 mxx += v * x2[j]
             for j in range(nc):
                 cm[j] += si[k, j]
-                if k:
+            if k:
+                for j in range(nc):
                     cdf[j] += abs(si[k, j] - si[k - 1, j])
             for j in range(nc - 1):
                 gh[j] += abs(si[k, j + 1] - si[k, j])
@@ -236,15 +314,17 @@ def _shape(srt, lo, hi):
     if hi - lo == 0:
         return 0.0, 3.0
     scale = hi - lo
+    zs = np.empty(t)
     zm = 0.0
     for k in range(t):
-        zm += (srt[k] - lo) / scale
+        zs[k] = (srt[k] - lo) / scale
+        zm += zs[k]
     zm /= t
     m2 = 0.0
     m3 = 0.0
     m4 = 0.0
     for k in range(t):
-        z = (srt[k] - lo) / scale - zm
+        z = zs[k] - zm
         z2 = z * z
         m2 += z2
         m3 += z2 * z
@@ -390,8 +470,8 @@ def _summed_power(si, mean, hann):
     windowed, by Parseval's theorem: the sum of squares less the DC (and half the Nyquist bin)."""
     t, nc = si.shape
     x = np.zeros(t)
-    for k in range(t):
-        for c in range(nc):
+    for c in range(nc):  # each frame's sum in the cells' order; the frames side by side
+        for k in range(t):
             x[k] += si[k, c] - mean[c]
     if x.max() == x.min():
         return 0.0
@@ -410,12 +490,18 @@ def _summed_power(si, mean, hann):
 def _weighted_mcr(si, mean, pw, tot):
     """The cells' mean-crossing rates weighted by their share of the power."""
     t, nc = si.shape
+    prev = np.empty(nc, dtype=np.bool_)
+    cross = np.zeros(nc, dtype=np.int64)
+    for c in range(nc):
+        prev[c] = si[0, c] - mean[c] > 0
+    for k in range(1, t):
+        for c in range(nc):
+            cur = si[k, c] - mean[c] > 0
+            cross[c] += cur != prev[c]
+            prev[c] = cur
     out = 0.0
     for c in range(nc):
-        cross = 0
-        for k in range(1, t):
-            cross += (si[k, c] - mean[c] > 0) != (si[k - 1, c] - mean[c] > 0)
-        out += cross / (t - 1) * (pw[c] / tot)
+        out += cross[c] / (t - 1) * (pw[c] / tot)
     return out
 
 
@@ -431,9 +517,8 @@ def _neighbour_corr(si, mean, h, w):
         for c in range(nc):
             dk[c] = si[k, c] - mean[c]
             sq[c] += dk[c] * dk[c]
-        for r in range(h):
-            for x in range(w - 1):
-                ph[r * w + x] += dk[r * w + x] * dk[r * w + x + 1]
+        for c in range(nc - 1):
+            ph[c] += dk[c] * dk[c + 1]  # across a row's end too: never read
         for c in range(nc - w):
             pv[c] += dk[c] * dk[c + w]
     sd = np.sqrt(sq)
@@ -461,20 +546,23 @@ def _blobs(si, h, w, floor):
     comp_max = -nc
     nodes_sum = 0
     active = 0
-    on = np.empty(nc, dtype=np.bool_)
+    above = np.zeros(w, dtype=np.bool_)  # the row above's cells
     for k in range(t):
-        thr = max(0.5 * si[k].max(), floor)
+        top = si[k, 0]
+        for c in range(nc):
+            top = max(top, si[k, c])
+        thr = max(0.5 * top, floor)
         nodes = 0
-        for c in range(nc):
-            on[c] = si[k, c] > thr
-            nodes += on[c]
         edges = 0
-        for c in range(nc):
-            if on[c]:
-                if (c + 1) % w and on[c + 1]:
-                    edges += 1
-                if c + w < nc and on[c + w]:
-                    edges += 1
+        for r in range(h):
+            left = False
+            for x in range(w):
+                on = si[k, r * w + x] > thr
+                nodes += on
+                edges += on and left
+                edges += on and r > 0 and above[x]
+                above[x] = on
+                left = on
         comp = nodes - edges if nodes > 0 else 0
         active += nodes > 0
         comp_sum += comp
@@ -482,4 +570,3 @@ def _blobs(si, h, w, floor):
         nodes_sum += nodes
     nact = max(active, 1)
     return comp_sum / nact, float(comp_max if t else 0), nodes_sum / nact
-
