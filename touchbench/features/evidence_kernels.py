@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from .motion_kernels import select
 from .touch_kernels import jit
 
 
@@ -135,26 +136,8 @@ def _median(x):
     """``numpy.median`` of ``x`` (reordered in place): the middle value, or the mean of the two middle
     ones (the largest below the middle, as :func:`touchbench.features.contact._median_last`)."""
     m = x.size // 2
-    lo, hi = 0, x.size - 1
-    while lo < hi:  # Hoare's selection: x[m] the m-th smallest, nothing larger before it
-        pivot = x[(lo + hi) // 2]
-        i, j = lo, hi
-        while i <= j:
-            while x[i] < pivot:
-                i += 1
-            while x[j] > pivot:
-                j -= 1
-            if i <= j:
-                x[i], x[j] = x[j], x[i]
-                i += 1
-                j -= 1
-        if m <= j:
-            hi = j
-        elif m >= i:
-            lo = i
-        else:
-            break
-    return x[m] if x.size % 2 else (x[:m].max() + x[m]) / 2.0
+    mid = select(x, m)  # x[m] the m-th smallest, nothing larger before it
+    return mid if x.size % 2 else (x[:m].max() + mid) / 2.0
 
 
 @jit
