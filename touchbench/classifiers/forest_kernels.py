@@ -28,7 +28,7 @@ NODE = np.dtype([("threshold", np.float64), ("feature", np.int32), ("child", np.
 
 @jit
 def pack_forest(children, feature, threshold, value, roots, thr_out, feat_out, child_out, table):
-    """The flat walk's nodes (:class:`~touchbench.classifiers.fastforest.CompiledForest`'s: a leaf is
+    """The flat walk's nodes (:class:`touchbench.classifiers.fastforest.CompiledForest`'s: a leaf is
     its own child) packed into the records, each tree depth first from its root (a node's children side
     by side, the left one's subtree next: a walk going left reads nearby records); a leaf points to
     its row of ``table``: the one-hot row of its class when its values are one class's (``table``'s
