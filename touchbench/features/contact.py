@@ -175,7 +175,6 @@ class ContactEvidence(FullScaleSet):
         lo, hi = self._range()
         return heights(stack, (lo, hi), self._flipped()), hi - lo
 
-
     def _transform_batch(self, stack: np.ndarray) -> np.ndarray:
         u, full = self._heights(stack)
         n, t, c = u.shape
