@@ -26,9 +26,17 @@ def _numba_installed() -> bool:
     return importlib.util.find_spec("numba") is not None
 
 
+#: the kernels modules imported so far, by the name :func:`kernels` was given (a live decision asks
+#: several times per window: a dictionary read, not the import machinery)
+_LOADED: dict[str, ModuleType] = {}
+
+
 def kernels(module: str) -> ModuleType | None:
     """The kernels module ``module`` of touchbench (e.g. ``"features.gaus_kernels"``), compiled on
     first use, or None without numba (the numpy path) or when :data:`COMPILED` is False."""
     if not COMPILED or not _numba_installed():
         return None
-    return importlib.import_module(f"touchbench.{module}")
+    found = _LOADED.get(module)
+    if found is None:
+        found = _LOADED[module] = importlib.import_module(f"touchbench.{module}")
+    return found
