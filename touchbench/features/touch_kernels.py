@@ -127,42 +127,34 @@ def rhythm_frames(s, c, base, h, w, floor, area_rel, ranks):
         cm[:] = 0.0
         cdf[:] = 0.0
         si = s[i]
-        peak = _largest(si)
-        thr = max(area_rel * peak, floor)
         out = series[i]
+        peak = si[0, 0]  # the largest pressure (its first, for ties), in the same walk
         for k in range(t):
+            row = si[k]
+            crow = c[i, k]
             p_ = 0.0
             ps = 0.0
-            m_ = c[i, k, 0]
-            a_ = 0
+            m_ = crow[0]
             my = 0.0
             mx = 0.0
             myy = 0.0
             mxx = 0.0
             for j in range(nc):
-                v = si[k, j]
-                cv = c[i, k, j]
+                v = row[j]
+                cv = crow[j]
                 p_ += cv
                 ps += v
                 m_ = max(m_, cv)
-                a_ += v > thr
+                if v > peak:
+                    peak = v
                 my += v * yy[j]
                 mx += v * xx[j]
                 myy += v * y2[j]
                 mxx += v * x2[j]
-            for j in range(nc):
-                cm[j] += si[k, j]
-            if k:
-                for j in range(nc):
-                    cdf[j] += abs(si[k, j] - si[k - 1, j])
-            for j in range(nc - 1):
-                gh[j] += abs(si[k, j + 1] - si[k, j])
-            for j in range(nc - w):
-                gv[j] += abs(si[k, j + w] - si[k, j])
+            _cell_sums(row, si[max(k - 1, 0)], k, w, cm, cdf, gh, gv)
             out[0, k] = p_
             psa[k] = ps
             out[3, k] = m_
-            out[4, k] = a_
             if ps <= 0:
                 out[5, k] = (h - 1) / 2.0
                 out[6, k] = (w - 1) / 2.0
@@ -173,24 +165,33 @@ def rhythm_frames(s, c, base, h, w, floor, area_rel, ranks):
                 out[6, k] = cx
                 out[7, k] = math.sqrt(max(myy / ps - cy * cy, 0.0))
                 out[8, k] = math.sqrt(max(mxx / ps - cx * cx, 0.0))
+        thr = max(area_rel * peak, floor)
         grad = gv.sum()
         for j in range(nc - 1):
             if (j + 1) % w:  # neighbours along a row
                 grad += gh[j]
         _rhythm_series(out, psa, thr)
-        _rhythm_cells(si, base[i], out, psa, extra[i], ranks, peak, grad, cm, csd, cdf)
+        _rhythm_cells(si, base[i], out, psa, extra[i], ranks, peak, thr, grad, cm, csd, cdf)
     return series, extra
 
 
 @jit
-def _largest(si):
-    """The largest value of a capture's pressure ``(T, C)`` (its first, for ties), by one walk."""
-    peak = si[0, 0]
-    for k in range(si.shape[0]):
-        for j in range(si.shape[1]):
-            if si[k, j] > peak:
-                peak = si[k, j]
-    return peak
+def _cell_sums(row, prev, k, w, cm, cdf, gh, gv):
+    """A frame's pressure ``row`` (the one before: ``prev``) into each cell's sum ``cm``, absolute
+    change ``cdf`` (from the second frame ``k``), absolute differences with the cell to its right
+    ``gh`` and below ``gv``."""
+    nc = row.size
+    for j in range(nc):
+        cm[j] += row[j]
+    if k:
+        for j in range(nc):
+            cdf[j] += abs(row[j] - prev[j])
+    right = row[1:]
+    for j in range(nc - 1):
+        gh[j] += abs(right[j] - row[j])
+    below = row[w:]
+    for j in range(nc - w):
+        gv[j] += abs(below[j] - row[j])
 
 
 @jit
@@ -211,8 +212,9 @@ def _rhythm_series(out, psa, thr):
 
 
 @jit
-def _rhythm_cells(si, base, out, ps, ex, ranks, peak, grad, cm, csd, cdf):
-    """``touch-rhythm``'s capture scalars (``ps``: the frames' pressure sums)."""
+def _rhythm_cells(si, base, out, ps, ex, ranks, peak, thr, grad, cm, csd, cdf):
+    """``touch-rhythm``'s capture scalars (``ps``: the frames' pressure sums) and its frames' areas
+    (the cells above ``thr``), with the cells' deviations from their means in the same walk."""
     t, nc = si.shape
     bsum = 0.0
     bmax = base[0]
@@ -223,9 +225,14 @@ def _rhythm_cells(si, base, out, ps, ex, ranks, peak, grad, cm, csd, cdf):
     for j in range(nc):
         cm[j] /= t
     for k in range(t):
+        row = si[k]
+        a_ = 0
         for j in range(nc):
-            d = si[k, j] - cm[j]
+            v = row[j]
+            d = v - cm[j]
             csd[j] += d * d
+            a_ += v > thr
+        out[4, k] = a_
     dsum = 0.0
     for j in range(nc):
         csd[j] = math.sqrt(csd[j] / t)
