@@ -413,7 +413,7 @@ def test_compiled_loops_imported_by_name_count_in_the_identity():
     assert _kernels_module(call) == "touchbench.features.gaus_kernels"
     assert _kernels_module(ast.parse('kernels(name)').body[0].value) is None
     assert _kernels_module(ast.parse('other("features.gaus_kernels")').body[0].value) is None
-    for name, module in [("msd", "gaus_kernels"), ("touch-rhythm", "touch_kernels"),
+    for name, module in [("msd", "gaus_kernels"), ("touch-rhythm", "touch_kernels"), ("touch-rhythm", "series_kernels"),
                          ("contact-motion", "motion_kernels"), ("contact-evidence", "evidence_kernels")]:
         ident = feature_set_identity(name)
         assert f"touchbench.features.{module}" in ident.modules, name

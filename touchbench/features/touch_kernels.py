@@ -127,42 +127,34 @@ def rhythm_frames(s, c, base, h, w, floor, area_rel, ranks):
         cm[:] = 0.0
         cdf[:] = 0.0
         si = s[i]
-        peak = _largest(si)
-        thr = max(area_rel * peak, floor)
         out = series[i]
+        peak = si[0, 0]  # the largest pressure (its first, for ties), in the same walk
         for k in range(t):
+            row = si[k]
+            crow = c[i, k]
             p_ = 0.0
             ps = 0.0
-            m_ = c[i, k, 0]
-            a_ = 0
+            m_ = crow[0]
             my = 0.0
             mx = 0.0
             myy = 0.0
             mxx = 0.0
             for j in range(nc):
-                v = si[k, j]
-                cv = c[i, k, j]
+                v = row[j]
+                cv = crow[j]
                 p_ += cv
                 ps += v
                 m_ = max(m_, cv)
-                a_ += v > thr
+                if v > peak:
+                    peak = v
                 my += v * yy[j]
                 mx += v * xx[j]
                 myy += v * y2[j]
                 mxx += v * x2[j]
-            for j in range(nc):
-                cm[j] += si[k, j]
-            if k:
-                for j in range(nc):
-                    cdf[j] += abs(si[k, j] - si[k - 1, j])
-            for j in range(nc - 1):
-                gh[j] += abs(si[k, j + 1] - si[k, j])
-            for j in range(nc - w):
-                gv[j] += abs(si[k, j + w] - si[k, j])
+            _cell_sums(row, si[max(k - 1, 0)], k, w, cm, cdf, gh, gv)
             out[0, k] = p_
             psa[k] = ps
             out[3, k] = m_
-            out[4, k] = a_
             if ps <= 0:
                 out[5, k] = (h - 1) / 2.0
                 out[6, k] = (w - 1) / 2.0
@@ -173,24 +165,33 @@ def rhythm_frames(s, c, base, h, w, floor, area_rel, ranks):
                 out[6, k] = cx
                 out[7, k] = math.sqrt(max(myy / ps - cy * cy, 0.0))
                 out[8, k] = math.sqrt(max(mxx / ps - cx * cx, 0.0))
+        thr = max(area_rel * peak, floor)
         grad = gv.sum()
         for j in range(nc - 1):
             if (j + 1) % w:  # neighbours along a row
                 grad += gh[j]
         _rhythm_series(out, psa, thr)
-        _rhythm_cells(si, base[i], out, psa, extra[i], ranks, peak, grad, cm, csd, cdf)
+        _rhythm_cells(si, base[i], out, psa, extra[i], ranks, peak, thr, grad, cm, csd, cdf)
     return series, extra
 
 
 @jit
-def _largest(si):
-    """The largest value of a capture's pressure ``(T, C)`` (its first, for ties), by one walk."""
-    peak = si[0, 0]
-    for k in range(si.shape[0]):
-        for j in range(si.shape[1]):
-            if si[k, j] > peak:
-                peak = si[k, j]
-    return peak
+def _cell_sums(row, prev, k, w, cm, cdf, gh, gv):
+    """A frame's pressure ``row`` (the one before: ``prev``) into each cell's sum ``cm``, absolute
+    change ``cdf`` (from the second frame ``k``), absolute differences with the cell to its right
+    ``gh`` and below ``gv``."""
+    nc = row.size
+    for j in range(nc):
+        cm[j] += row[j]
+    if k:
+        for j in range(nc):
+            cdf[j] += abs(row[j] - prev[j])
+    right = row[1:]
+    for j in range(nc - 1):
+        gh[j] += abs(right[j] - row[j])
+    below = row[w:]
+    for j in range(nc - w):
+        gv[j] += abs(below[j] - row[j])
 
 
 @jit
@@ -211,8 +212,9 @@ def _rhythm_series(out, psa, thr):
 
 
 @jit
-def _rhythm_cells(si, base, out, ps, ex, ranks, peak, grad, cm, csd, cdf):
-    """``touch-rhythm``'s capture scalars (``ps``: the frames' pressure sums)."""
+def _rhythm_cells(si, base, out, ps, ex, ranks, peak, thr, grad, cm, csd, cdf):
+    """``touch-rhythm``'s capture scalars (``ps``: the frames' pressure sums) and its frames' areas
+    (the cells above ``thr``), with the cells' deviations from their means in the same walk."""
     t, nc = si.shape
     bsum = 0.0
     bmax = base[0]
@@ -223,9 +225,14 @@ def _rhythm_cells(si, base, out, ps, ex, ranks, peak, grad, cm, csd, cdf):
     for j in range(nc):
         cm[j] /= t
     for k in range(t):
+        row = si[k]
+        a_ = 0
         for j in range(nc):
-            d = si[k, j] - cm[j]
+            v = row[j]
+            d = v - cm[j]
             csd[j] += d * d
+            a_ += v > thr
+        out[4, k] = a_
     dsum = 0.0
     for j in range(nc):
         csd[j] = math.sqrt(csd[j] / t)
@@ -258,142 +265,6 @@ def _rhythm_cells(si, base, out, ps, ex, ranks, peak, grad, cm, csd, cdf):
     mp = tot / t
     ex[at] = grad / t / mp if mp > 0 else 0.0
     ex[at + 1] = dsum / tot if tot > 0 else 0.0
-
-
-@jit
-def series_stats(x, xs, mean, p, f, starts, ends, order, lags):
-    """Statistics of series ``x`` ``(N, K, T)`` given them sorted (``xs``), their means (numpy's sum
-    of the sorted values: the mean-crossings of a series with values at its mean are the signs of its
-    rounding) and their power spectra ``p`` ``(N, K, F)`` at the
-    frequencies ``f``: ``(N, K, 22 + bands + len(lags))`` in the order of ``touch-rhythm``'s names
-    (``order``: the ranks of the order statistics; ``starts``/``ends``: the bands' slices of ``f``)."""
-    n, nk, t = x.shape
-    nb = starts.size
-    nf = f.size
-    out = np.zeros((n, nk, 10 + len(order) + nb + 4 + len(lags)))
-    d = np.empty(t)
-    lognf = math.log(max(nf, 2))
-    for i in range(n):
-        for q in range(nk):
-            o = out[i, q]
-            s = x[i, q]
-            srt = xs[i, q]
-            mu = mean[i, q]
-            lo, hi = srt[0], srt[t - 1]
-            ac0 = 0.0
-            for k in range(t):
-                d[k] = s[k] - mu
-                ac0 += d[k] * d[k]
-            sd = math.sqrt(ac0 / t)
-            o[0] = mu
-            o[1] = sd
-            for m in range(len(order)):
-                o[2 + m] = srt[order[m]]
-            a = 2 + len(order)
-            o[a] = hi
-            o[a + 1], o[a + 2] = _shape(srt, lo, hi)
-            flat = sd <= 1e-12 * (1.0 + abs(mu))
-            mad1, dstd, mcr = _differences(s, d)
-            o[a + 3] = mad1
-            o[a + 4] = dstd
-            if not flat:
-                o[a + 5] = sd / max(abs(mu), sd * 1e-6 + 1e-12)
-                o[a + 6] = mad1 / sd
-                o[a + 7] = mcr
-            _spectral(p[i, q, 1:], f, starts, ends, lognf, o[a + 8:a + 12 + nb])
-            b = a + 12 + nb
-            if not flat:
-                _autocorrelation(d, lags, ac0, o[b:])
-    return out
-
-
-@jit
-def _shape(srt, lo, hi):
-    """Skewness and kurtosis of sorted values (:func:`touchbench.features.numerics.moments`)."""
-    t = srt.size
-    if hi - lo == 0:
-        return 0.0, 3.0
-    scale = hi - lo
-    zs = np.empty(t)
-    zm = 0.0
-    for k in range(t):
-        zs[k] = (srt[k] - lo) / scale
-        zm += zs[k]
-    zm /= t
-    m2 = 0.0
-    m3 = 0.0
-    m4 = 0.0
-    for k in range(t):
-        z = zs[k] - zm
-        z2 = z * z
-        m2 += z2
-        m3 += z2 * z
-        m4 += z2 * z2
-    m2 /= t
-    return (m3 / t) / m2 ** 1.5, (m4 / t) / (m2 * m2)
-
-
-@jit
-def _autocorrelation(d, lags, ac0, o):
-    """The autocorrelation of the centred series ``d`` at ``lags`` (its energy ``ac0``) into ``o``:
-    every lag in one pass over the series."""
-    t = d.size
-    acc = np.zeros(len(lags))
-    for k in range(t):
-        dk = d[k]
-        for m in range(len(lags)):
-            if k >= lags[m]:
-                acc[m] += dk * d[k - lags[m]]
-    for m in range(len(lags)):
-        if lags[m] < t:
-            o[m] = acc[m] / ac0
-
-
-@jit
-def _differences(s, d):
-    """Mean absolute and standard deviation of first differences, mean-crossing rate."""
-    t = s.size
-    mad = 0.0
-    tot = 0.0
-    cross = 0
-    for k in range(1, t):
-        dd = s[k] - s[k - 1]
-        mad += abs(dd)
-        tot += dd
-        if (d[k] > 0) != (d[k - 1] > 0):
-            cross += 1
-    mean = tot / (t - 1)
-    var = 0.0
-    for k in range(1, t):
-        e = s[k] - s[k - 1] - mean
-        var += e * e
-    return mad / (t - 1), math.sqrt(var / (t - 1)), cross / (t - 1)
-
-
-@jit
-def _spectral(p, f, starts, ends, lognf, o):
-    """Band fractions, peak and centroid frequency, normalised entropy, log power into ``o``."""
-    nb = starts.size
-    tot = p.sum()
-    if tot <= 0:
-        o[nb + 3] = math.log1p(0.0)
-        return
-    for b in range(nb):
-        acc = 0.0
-        for k in range(starts[b], ends[b]):
-            acc += p[k]
-        o[b] = acc / tot
-    o[nb] = f[np.argmax(p)]
-    cen = 0.0
-    ent = 0.0
-    for k in range(p.size):
-        cen += p[k] * f[k]
-        qk = p[k] / tot
-        if qk > 0:
-            ent -= qk * math.log(qk)
-    o[nb + 1] = cen / tot
-    o[nb + 2] = ent / lognf
-    o[nb + 3] = math.log1p(tot)
 
 
 @jit

@@ -3,7 +3,8 @@
 The spectrum of a series is its power (DC removed) with a Hann window on the mean-removed series;
 band edges are in Hz, upper edge inclusive (the module docstring of :mod:`touchbench.features.touch`
 has the interpretations). :func:`series_block` gives ``touch-rhythm``'s statistics of many series at
-once: by the compiled loops of :mod:`touchbench.features.touch_kernels` when numba is installed, else
+once: by the compiled loops of :mod:`touchbench.features.touch_kernels` and
+:mod:`touchbench.features.series_kernels` when numba is installed, else
 by the vectorised numpy code here (the two agree within 1e-9).
 """
 
@@ -179,8 +180,9 @@ def series_block(series: np.ndarray, fs: float) -> np.ndarray:
     series = np.ascontiguousarray(series)
     kern.windowed(series, series.mean(axis=-1), hann, True, dw)
     srt = np.sort(series, axis=-1)
-    return kern.series_stats(series, srt, srt.sum(axis=-1) / t,
-                             np.abs(np.fft.rfft(dw, axis=-1)) ** 2, f, *band_slices(f, BANDS), *_ranks_lags(t))
+    return kernels("features.series_kernels").series_stats(
+        series, srt, srt.sum(axis=-1) / t, np.abs(np.fft.rfft(dw, axis=-1)) ** 2, f, *band_slices(f, BANDS),
+        *_ranks_lags(t))
 
 
 @functools.lru_cache(maxsize=128)
