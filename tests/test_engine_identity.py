@@ -414,7 +414,8 @@ def test_compiled_loops_imported_by_name_count_in_the_identity():
     assert _kernels_module(ast.parse('kernels(name)').body[0].value) is None
     assert _kernels_module(ast.parse('other("features.gaus_kernels")').body[0].value) is None
     for name, module in [("msd", "gaus_kernels"), ("touch-rhythm", "touch_kernels"), ("touch-rhythm", "series_kernels"),
-                         ("contact-motion", "motion_kernels"), ("contact-evidence", "evidence_kernels")]:
+                         ("contact-motion", "motion_kernels"), ("contact-evidence", "evidence_kernels"),
+                         ("cell-rhythm", "cell_kernels")]:
         ident = feature_set_identity(name)
         assert f"touchbench.features.{module}" in ident.modules, name
         assert ("numba" in ident.packages) == (importlib.util.find_spec("numba") is not None), name

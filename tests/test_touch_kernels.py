@@ -53,21 +53,28 @@ def test_synthetic_captures_agree_with_the_numpy_path(name, t, grid, dtype, top,
 
 
 def test_cell_spectra_inputs_are_numpys_bit_for_bit():
-    """The windowed series the compiled path gives numpy's FFT are ``centred_spectrum``'s, so the
-    spectra (whose peaks are taken) are the same bits: constant cells and cells at 0 included."""
-    from touchbench.features import touch_kernels
+    """The cells' means and the windowed series the compiled paths give numpy's FFT are numpy's
+    (``mean``, ``centred_spectrum``), so the spectra (whose peaks are taken) are the same bits:
+    constant cells and cells at 0 included."""
+    from touchbench.features import cell_kernels, touch_kernels
     from touchbench.features.touch_spectra import _hann_freqs, centred_spectrum
 
     rng = np.random.default_rng(4)
     for t in (8, 10, 33):
-        s = np.maximum(rng.normal(0, 5, (2, t, 40)), 0.0)
+        s = np.maximum(rng.normal(0, 5, (2, t, 40)), 0.0) * 10.0 ** rng.integers(-8, 8, (2, t, 40))
         s[:, :, :5] = 7.0
         cells = np.swapaxes(s, 1, 2)
         mean = cells.mean(axis=2)
         p_plain, _ = centred_spectrum(cells - mean[..., None], cells.max(axis=2) == cells.min(axis=2), 10.0)
+        hann = _hann_freqs(t, 10.0)[0]
         dw = np.empty((2, 40, t))
-        touch_kernels.windowed(s, mean, _hann_freqs(t, 10.0)[0], False, dw)
+        mine = np.empty((2, 40))
+        cell_kernels.cell_series(s, hann, mine, False, dw)  # cell-rhythm's layout, its means its own
+        assert np.array_equal(mine, mean)
         assert np.array_equal((np.abs(np.fft.rfft(dw, axis=-1)) ** 2)[..., 1:], p_plain)
         rows = np.ascontiguousarray(cells)  # the same series stored one per row (touch-rhythm's layout)
-        touch_kernels.windowed(rows, mean, _hann_freqs(t, 10.0)[0], True, dw)
+        touch_kernels.windowed(rows, mean, hann, True, dw)
         assert np.array_equal((np.abs(np.fft.rfft(dw, axis=-1)) ** 2)[..., 1:], p_plain)
+        one = np.ascontiguousarray(s[:, :, 5:6])  # a single cell: its mean is given (numpy's, summed pairwise)
+        cell_kernels.cell_series(one, hann, mean[:, 5:6].copy(), True, dw[:, :1])
+        assert np.array_equal((np.abs(np.fft.rfft(dw[:, :1], axis=-1)) ** 2)[..., 1:], p_plain[:, 5:6])

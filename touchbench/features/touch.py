@@ -356,17 +356,18 @@ class CellRhythm(_TouchBase):
         (n, t, _), (h, w) = s.shape, grid
         fs = self._fs()
         cells = np.swapaxes(s, 1, 2)  # (N, C, T)
-        mean = cells.mean(axis=2, keepdims=True)
-        kern = kernels("features.touch_kernels")
+        kern = kernels("features.cell_kernels")
         if kern is not None:  # the cells' spectra numpy's (their peaks), the rest in two loops
             hann, f = _hann_freqs(t, float(fs))
-            mean = np.ascontiguousarray(mean[..., 0])
+            single = h * w == 1  # a single cell's series: numpy's mean (summed pairwise)
+            mean = np.ascontiguousarray(cells.mean(axis=2)) if single else np.empty((n, h * w))
             dw = np.empty((n, h * w, t))
-            kern.windowed(s, mean, hann, False, dw)
+            kern.cell_series(s, hann, mean, single, dw)
             out = np.empty((n, len(BANDS) + 11))
-            kern.cell_pool(s, mean, np.abs(np.fft.rfft(dw, axis=-1)) ** 2, f, *band_slices(f, BANDS), hann, h, w,
+            kern.cell_pool(s, mean, np.abs(np.fft.rfft(dw, axis=-1)), f, *band_slices(f, BANDS), hann, h, w,
                            self._floor(self.BLOB_FLOOR), out)
             return out
+        mean = cells.mean(axis=2, keepdims=True)
         d = cells - mean
         p, f = centred_spectrum(d, cells.max(axis=2) == cells.min(axis=2), fs)  # (N, C, F)
         pw = p.sum(axis=2)  # (N, C)
