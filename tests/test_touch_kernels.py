@@ -73,7 +73,7 @@ def test_cell_spectra_inputs_are_numpys_bit_for_bit():
         assert np.array_equal(mine, mean)
         assert np.array_equal((np.abs(np.fft.rfft(dw, axis=-1)) ** 2)[..., 1:], p_plain)
         rows = np.ascontiguousarray(cells)  # the same series stored one per row (touch-rhythm's layout)
-        touch_kernels.windowed(rows, mean, hann, True, dw)
+        touch_kernels.windowed(rows, mean, hann, dw)
         assert np.array_equal((np.abs(np.fft.rfft(dw, axis=-1)) ** 2)[..., 1:], p_plain)
         one = np.ascontiguousarray(s[:, :, 5:6])  # a single cell: its mean is given (numpy's, summed pairwise)
         cell_kernels.cell_series(one, hann, mean[:, 5:6].copy(), True, dw[:, :1])

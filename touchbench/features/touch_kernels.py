@@ -268,19 +268,18 @@ def _rhythm_cells(si, base, out, ps, ex, ranks, peak, thr, grad, cm, csd, cdf):
 
 
 @jit
-def windowed(s, mean, hann, rows, out):
-    """Every series less its mean ``(N, M)``, times the Hann window, into ``out`` ``(N, M, T)`` (0 for a
-    constant series): numpy's ``centred_spectrum`` input, elementwise, so the same numbers. The
-    series are ``s[i, :, c]`` of the cells' ``(N, T, M)``, or with ``rows`` ``s[i, c]`` of
-    ``touch-rhythm``'s ``(N, M, T)`` (both C-ordered: one compiled version, however many captures)."""
+def windowed(s, mean, hann, out):
+    """Every series ``s[i, c]`` of ``(N, M, T)`` (C-ordered) less its mean ``(N, M)``, times the Hann
+    window, into ``out`` ``(N, M, T)`` (0 for a constant series): numpy's ``centred_spectrum`` input,
+    elementwise, so the same numbers (``touch-rhythm``'s series; the cells' are ``cell_kernels.cell_series``')."""
     n, m = mean.shape
     t = hann.size
     for i in range(n):
         for c in range(m):
-            lo = s[i, c, 0] if rows else s[i, 0, c]
+            lo = s[i, c, 0]
             hi = lo
             for k in range(t):
-                v = s[i, c, k] if rows else s[i, k, c]
+                v = s[i, c, k]
                 lo = min(lo, v)
                 hi = max(hi, v)
                 out[i, c, k] = (v - mean[i, c]) * hann[k]

@@ -178,7 +178,7 @@ def series_block(series: np.ndarray, fs: float) -> np.ndarray:
     hann, f = _hann_freqs(t, float(fs))
     dw = np.empty(series.shape)  # the windowed series as centred_spectrum makes them, elementwise
     series = np.ascontiguousarray(series)
-    kern.windowed(series, series.mean(axis=-1), hann, True, dw)
+    kern.windowed(series, series.mean(axis=-1), hann, dw)
     srt = np.sort(series, axis=-1)
     return kernels("features.series_kernels").series_stats(
         series, srt, srt.sum(axis=-1) / t, np.abs(np.fft.rfft(dw, axis=-1)) ** 2, f, *band_slices(f, BANDS),
