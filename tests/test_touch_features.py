@@ -133,6 +133,23 @@ def test_square_wave_contact_motion_by_hand():
     assert f["logpeak_robust"] == pytest.approx(np.log(101.0))
 
 
+@pytest.mark.parametrize("dtype", [np.float64, np.uint16])
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_single_cell_keeps_its_frames_in_order(dtype, compiled, monkeypatch):
+    # one cell: ten readings, k = floor(0.05 * 9) = 0, so the baseline is the smallest reading (1) and
+    # the pressure is every reading less 1, in the frames' order; the readings are left as they were
+    from touchbench.core import compiled as switch
+    from touchbench.features.touch import pressure
+
+    monkeypatch.setattr(switch, "COMPILED", compiled)
+    readings = np.array([5, 1, 3, 9, 2, 4, 8, 6, 7, 3], dtype=dtype).reshape(1, 10, 1, 1)
+    kept = readings.copy()
+    s, base = pressure(readings)
+    assert base.tolist() == [[1.0]]
+    assert s[0, :, 0].tolist() == [4.0, 0.0, 2.0, 8.0, 1.0, 3.0, 7.0, 5.0, 6.0, 2.0]
+    assert np.array_equal(readings, kept)
+
+
 def test_frame_rate_scales_frequencies():
     c = square_wave_capture()
     slow = SensorSpec(name="slow", grid=(8, 8), frame_rate=27.0)

@@ -199,8 +199,10 @@ def _pressure(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     c = np.ascontiguousarray(x, dtype=np.float64)  # C order: sums never depend on the layout
     # the order statistic of the readings themselves (fewer bytes to move than in float64; the same
     # value, as float64 represents every reading exactly and keeps their order); a partition along
-    # the frames is faster contiguous
-    cells = np.ascontiguousarray(np.swapaxes(x if x.dtype.kind in "iuf" else c, 1, 2))
+    # the frames is faster contiguous. A copy always: with one cell the swapped axes are already
+    # contiguous, and partitioning a view would reorder the readings (and ``c``, itself a view of
+    # float64 readings) in place
+    cells = np.array(np.swapaxes(x if x.dtype.kind in "iuf" else c, 1, 2), order="C")
     cells.partition(k, axis=2)
     base = cells[:, :, k].astype(np.float64)
     s = c - base[:, None, :]
