@@ -6,8 +6,8 @@ The nodes are packed once (:func:`pack_forest`), each tree depth first: a node i
 one record), a leaf's record points to its row of a table of leaf values (one row per class for the leaves
 of one class, as a grown tree's mostly are; a row of its own for another). The walk
 (:func:`forest_proba`): each tree for every row, from the root to the child at ``child + (x[feature]
-> threshold)`` until a leaf; each row's leaf values added in tree order, then divided by the number
-of trees. The same comparisons and the same additions in the same order as scikit-learn's walk and
+> threshold)`` until a leaf, several trees side by side (their reads overlap); each row's leaf values
+added in tree order, then divided by the number of trees. The same comparisons and the same additions in the same order as scikit-learn's walk and
 accumulation, so the same numbers bit for bit; the vectorised numpy walk of :mod:`.fastforest`
 stays the path without numba (tests/test_deploy_units.py holds both to scikit-learn exactly).
 
@@ -79,24 +79,41 @@ def _leaf_row(v, table, rows):
     return rows
 
 
+#: the trees walked side by side for one row: their steps do not wait on each other's reads, so the
+#: memory reads of several walks are in flight at once (a walk alone waits on every node it reads)
+WALKS = 8
+
+
 @jit
 def forest_proba(xs, n_features, roots, threshold, feature, child, table, out):
     """``out`` ``(n, C)``: the mean leaf value over the trees for each row of the flat rows ``xs``
-    (``n * n_features`` values, float32 readings as float64), walking the packed nodes."""
+    (``n * n_features`` values, float32 readings as float64), walking the packed nodes, :data:`WALKS`
+    trees side by side; each row's leaf values are added in tree order once their walks end."""
     n, n_classes = out.shape
     n_trees = roots.shape[0]
     out[:] = 0.0
-    for t in range(n_trees):
+    node = np.empty(WALKS, dtype=np.int64)
+    c = np.empty(WALKS, dtype=np.int64)
+    for t0 in range(0, n_trees, WALKS):
+        m = min(WALKS, n_trees - t0)
         for i in range(n):
             row = i * n_features
-            node = roots[t]
-            c = child[node]
-            while c >= 0:
-                node = c + (1 if xs[row + feature[node]] > threshold[node] else 0)
-                c = child[node]
-            leaf = -1 - c
-            for k in range(n_classes):
-                out[i, k] += table[leaf, k]
+            for g in range(m):
+                node[g] = roots[t0 + g]
+                c[g] = child[node[g]]
+            walking = True
+            while walking:
+                walking = False
+                for g in range(m):
+                    if c[g] >= 0:
+                        u = c[g] + (1 if xs[row + feature[node[g]]] > threshold[node[g]] else 0)
+                        node[g] = u
+                        c[g] = child[u]
+                        walking = True
+            for g in range(m):
+                leaf = -1 - c[g]
+                for k in range(n_classes):
+                    out[i, k] += table[leaf, k]
     for i in range(n):
         for k in range(n_classes):
             out[i, k] /= n_trees
