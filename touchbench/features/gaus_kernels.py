@@ -14,16 +14,22 @@ compiled once per machine (numba's on-disk cache).
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from .touch_kernels import jit
 
+#: a loop run once per frame pair, inlined where it is called (a call per frame costs as much as its work)
+inline = numba.njit(cache=True, nogil=True, inline="always")
+
 #: a series of integers is counted (bins from its minimum to its maximum) when it spans fewer than
 #: this many bins per reading plus ``_BINS_EXTRA``; a capture with a wider one is left to numpy
 _BINS_PER_VALUE, _BINS_EXTRA = 4, 64
-#: ``smmhh``'s pixels are laid out in rows of a multiple of this many (the counting loop's bytes per
-#: vector), the extra pixels never motion, so no pixel is left to a scalar tail
-_PIXEL_BLOCK = 128
+#: ``smmhh``'s counters are laid out in rows of a multiple of this many pixels (the bytes of the
+#: counting loop's step: four vectors) and an integer pyramid video in rows of a multiple of
+#: ``_INT_BLOCK`` (the int32 motion loop's step), the extra pixels never moving, so that no pixel
+#: is left to a scalar tail
+_PIXEL_BLOCK, _INT_BLOCK = 128, 32
 
 
 @jit
@@ -217,28 +223,29 @@ def sd(x, off, fixed, has_fixed, lut, out, ok):
                 out[i, lut[c * (p + 1) + cnt[c]]] += 1
 
 
-@jit
+@inline
 def _motion(a, b, thr, mo, exact):
-    """``mo[j]`` 1 where ``|a[j] - b[j]| > thr[j]`` (one frame pair of ``smmhh``), else 0, for the
-    pixels of ``a``. ``exact``: integer pixels whose differences fit int32 (compared in int32)."""
-    for j in range(a.size):
+    """``mo[j]`` 255 where ``|a[j] - b[j]| > thr[j]`` (one frame pair of ``smmhh``), else 0, for the
+    pixels of ``thr``. ``exact``: integer pixels whose differences fit int32 (compared in int32)."""
+    for j in range(thr.size):
         th = thr[j]
         if exact:
             d = np.int32(a[j] - b[j])
-            mo[j] = np.uint8(d > th) | np.uint8(np.int32(-d) > th)
+            x = np.uint8(d > th) | np.uint8(np.int32(-d) > th)
         else:
-            mo[j] = np.uint8(a[j] - b[j] > th) | np.uint8(b[j] - a[j] > th)
+            x = np.uint8(a[j] - b[j] > th) | np.uint8(b[j] - a[j] > th)
+        mo[j] = np.uint8(0) - x
 
 
-@jit
+@inline
 def _grow(mo, run, least, lens):
-    """Each pixel's current motion run ``run`` (0 without motion) grown by ``mo``, held at
+    """Each pixel's current motion run ``run`` (0 without motion) grown by ``mo`` (255: motion), held at
     ``lens[-1] + 1`` (so it fits the counters' dtype), and ``least[m]`` counting the pixels whose
     run reaches ``lens[m]`` frames."""
     top = lens[lens.size - 1]
     for j in range(run.size):
         r = run[j]
-        run[j] = (r + (r <= top)) * mo[j]
+        run[j] = (r + (r <= top)) & mo[j]
     for m in range(lens.size):
         reach = lens[m]
         for j in range(run.size):
@@ -327,11 +334,11 @@ def smmhh(x, levels, thr, skips, lens, edges, out):
     to whole blocks of pixels that never move."""
     n, t = x.shape[:2]
     p = edges[-1]
-    pp = -(-p // _PIXEL_BLOCK) * _PIXEL_BLOCK
-    vid = np.zeros((t, pp), dtype=np.int32)
-    thr_p = np.zeros(pp, dtype=np.int32)
+    pm = -(-p // _INT_BLOCK) * _INT_BLOCK
+    vid = np.zeros((t, pm), dtype=np.int32)
+    thr_p = np.zeros(pm, dtype=np.int32)
     thr_p[:p] = thr
-    bufs = _buffers(pp, lens)
+    bufs = _buffers(-(-p // _PIXEL_BLOCK) * _PIXEL_BLOCK, lens)
     index = _pool_index(levels)
     for i in range(n):
         _pyramid(x[i].reshape((t, x.shape[2] * x.shape[3])), index, vid)
