@@ -225,7 +225,7 @@ def sd(x, off, fixed, has_fixed, lut, out, ok):
 
 @inline
 def _motion(a, b, thr, mo, exact):
-    """``mo[j]`` 255 where ``|a[j] - b[j]| > thr[j]`` (one frame pair of ``smmhh``), else 0, for the
+    """``mo[j]`` all ones where ``|a[j] - b[j]| > thr[j]`` (one frame pair of ``smmhh``), else 0, for the
     pixels of ``thr``. ``exact``: integer pixels whose differences fit int32 (compared in int32)."""
     for j in range(thr.size):
         th = thr[j]
@@ -234,12 +234,12 @@ def _motion(a, b, thr, mo, exact):
             x = np.uint8(d > th) | np.uint8(np.int32(-d) > th)
         else:
             x = np.uint8(a[j] - b[j] > th) | np.uint8(b[j] - a[j] > th)
-        mo[j] = np.uint8(0) - x
+        mo[j] = np.uint8(0) - x  # unsigned: all ones
 
 
 @inline
 def _grow(mo, run, least, lens):
-    """Each pixel's current motion run ``run`` (0 without motion) grown by ``mo`` (255: motion), held at
+    """Each pixel's current motion run ``run`` (0 without motion) grown by ``mo`` (all ones: motion), held at
     ``lens[-1] + 1`` (so it fits the counters' dtype), and ``least[m]`` counting the pixels whose
     run reaches ``lens[m]`` frames."""
     top = lens[lens.size - 1]
@@ -321,7 +321,7 @@ def _buffers(p, lens):
     """The work arrays of :func:`_run_hist` for ``p`` pixels (a multiple of ``_PIXEL_BLOCK``) and run
     lengths ``lens`` (1..max_len, in the unsigned dtype of the counters: uint8 while ``max_len`` < 255)."""
     chunk = np.iinfo(lens.dtype).max
-    return (np.zeros(p, np.uint8), np.zeros(p, lens.dtype), np.zeros((lens.size, p), lens.dtype), lens,
+    return (np.zeros(p, lens.dtype), np.zeros(p, lens.dtype), np.zeros((lens.size, p), lens.dtype), lens,
             np.zeros((lens.size, p), np.int64), chunk)
 
 
