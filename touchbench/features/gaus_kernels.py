@@ -284,18 +284,19 @@ def _run_hist(vi, thr, skips, edges, exact, bufs, out_i):
 @jit
 def _pool_index(levels):
     """For every pixel above the cells of the pyramid with ``levels`` (each level's rows and columns;
-    every level but the last halves exactly), row-major, levels side by side: the first of the 2 x 2
-    pixels of the level below it sums and that level's row length (:func:`_pyramid`)."""
+    every level but the last halves exactly), row-major, levels side by side: the 2 x 2 pixels of
+    the level below that it sums (:func:`_pyramid`), unsigned (indices taken as they are)."""
     n = 0
     for g in range(1, levels.shape[0]):
         n += levels[g, 0] * levels[g, 1]
-    index = np.empty((n, 2), dtype=np.int64)
+    index = np.empty((n, 4), dtype=np.uint64)
     src, q = 0, 0
     for g in range(1, levels.shape[0]):
         pw = levels[g - 1, 1]
         for y in range(levels[g, 0]):
             for x in range(levels[g, 1]):
-                index[q, 0], index[q, 1] = src + 2 * y * pw + 2 * x, pw
+                a = src + 2 * y * pw + 2 * x
+                index[q, 0], index[q, 1], index[q, 2], index[q, 3] = a, a + 1, a + pw, a + pw + 1
                 q += 1
         src += levels[g - 1, 0] * pw
     return index
@@ -312,8 +313,7 @@ def _pyramid(xi, index, vid):
         for j in range(c):
             row[j] = cells[j]
         for q in range(index.shape[0]):
-            a, pw = index[q, 0], index[q, 1]
-            row[c + q] = row[a] + row[a + 1] + row[a + pw] + row[a + pw + 1]
+            row[np.uint64(c + q)] = row[index[q, 0]] + row[index[q, 1]] + row[index[q, 2]] + row[index[q, 3]]
 
 
 @jit
