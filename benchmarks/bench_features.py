@@ -103,6 +103,7 @@ def baseline_features(tree: str):
     when the script ends), filled from its own modules only; its compiled loops are its own too."""
     import atexit
     import importlib
+    import importlib.util
     import shutil
     import tempfile
     from functools import partial
@@ -116,7 +117,8 @@ def baseline_features(tree: str):
     shutil.copytree(os.path.join(tree, "touchbench"), os.path.join(dest, "touchbench_baseline"),
                     ignore=shutil.ignore_patterns("__pycache__"))
     sys.path.insert(0, dest)
-    compiled = importlib.import_module("touchbench_baseline.core.compiled")
+    has_loops = importlib.util.find_spec("touchbench_baseline.core.compiled") is not None
+    compiled = importlib.import_module("touchbench_baseline.core.compiled") if has_loops else None
     if hasattr(compiled, "kernels"):  # its compiled loops, not this checkout's (imported by absolute name)
         def own_kernels(module: str, plain=compiled.kernels):
             return None if plain(module) is None else importlib.import_module(f"touchbench_baseline.{module}")
