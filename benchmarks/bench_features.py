@@ -100,9 +100,10 @@ def floor_us(caps, runs: int) -> float:
 def baseline_features(tree: str):
     """The feature registry of the touchbench package in the checkout ``tree``, imported as
     ``touchbench_baseline`` (a copy in this benchmark's folder, :func:`workdir.bench_dir`, removed
-    when the script ends), filled from its own modules only."""
+    when the script ends), filled from its own modules only; its compiled loops are its own too."""
     import atexit
     import importlib
+    import importlib.util
     import shutil
     import tempfile
     from functools import partial
@@ -116,6 +117,12 @@ def baseline_features(tree: str):
     shutil.copytree(os.path.join(tree, "touchbench"), os.path.join(dest, "touchbench_baseline"),
                     ignore=shutil.ignore_patterns("__pycache__"))
     sys.path.insert(0, dest)
+    has_loops = importlib.util.find_spec("touchbench_baseline.core.compiled") is not None
+    compiled = importlib.import_module("touchbench_baseline.core.compiled") if has_loops else None
+    if hasattr(compiled, "kernels"):  # its compiled loops, not this checkout's (imported by absolute name)
+        def own_kernels(module: str, plain=compiled.kernels):
+            return None if plain(module) is None else importlib.import_module(f"touchbench_baseline.{module}")
+        compiled.kernels = own_kernels
     registry = importlib.import_module("touchbench_baseline.features.base").FEATURES
     registry._loader, registry._loaded, registry.plugins = partial(import_submodules, "touchbench_baseline.features"), False, False
     return registry

@@ -131,3 +131,22 @@ def test_sets_whose_loops_run_take_larger_chunks_and_the_same_rows(monkeypatch):
     np.testing.assert_array_equal(rows, one_by_one)
     monkeypatch.setattr(compiled, "COMPILED", False)
     assert _batch_sizes(sets, caps, monkeypatch)[1] == [4, 4, 2]
+
+
+@pytest.mark.parametrize("max_len", [1, 5, 254, 255, 300])
+def test_smmhh_runs_longer_than_its_byte_counters_hold(max_len, monkeypatch):
+    """A ramp of 2 units a frame moves at every skip on every scale (2 s * 4**k > 3 * 4**k), so each
+    pixel has one run of T - s frames: counted once, in the last bin when it reaches ``max_len``
+    (else in bin T - s). 600 frames outlast the compiled loop's byte counters (255 frames a block);
+    ``max_len`` 255 and more take wider counters. The numpy path agrees."""
+    t, skips = 600, (2, 6)
+    ramp = np.broadcast_to((2 * np.arange(t))[:, None, None], (t, 8, 8)).astype(np.uint16)
+    caps = [ramp, np.ascontiguousarray(ramp[::-1])]
+    fast, plain = both("smmhh", caps, HAART_SENSOR, monkeypatch, skips=skips, max_len=max_len)
+    np.testing.assert_array_equal(fast, plain)
+    expected = np.zeros((4, len(skips), max_len, 85))  # scale blocks laid out as (skip, length, pixel)
+    for si, s in enumerate(skips):
+        expected[:, si, min(t - s, max_len) - 1] = 1.0
+    edges = [0, 64, 80, 84, 85]
+    want = np.concatenate([expected[k, :, :, edges[k]:edges[k + 1]].ravel() for k in range(4)])
+    np.testing.assert_array_equal(fast, np.stack([want, want]))

@@ -14,13 +14,22 @@ compiled once per machine (numba's on-disk cache).
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from .touch_kernels import jit
 
+#: a loop run once per frame pair, inlined where it is called (a call per frame costs as much as its work)
+inline = numba.njit(cache=True, nogil=True, inline="always")
+
 #: a series of integers is counted (bins from its minimum to its maximum) when it spans fewer than
 #: this many bins per reading plus ``_BINS_EXTRA``; a capture with a wider one is left to numpy
 _BINS_PER_VALUE, _BINS_EXTRA = 4, 64
+#: ``smmhh``'s counters are laid out in rows of a multiple of this many pixels (the bytes of the
+#: counting loop's step: four vectors) and an integer pyramid video in rows of a multiple of
+#: ``_INT_BLOCK`` (the int32 motion loop's step), the extra pixels never moving, so that no pixel
+#: is left to a scalar tail
+_PIXEL_BLOCK, _INT_BLOCK = 128, 32
 
 
 @jit
@@ -214,98 +223,136 @@ def sd(x, off, fixed, has_fixed, lut, out, ok):
                 out[i, lut[c * (p + 1) + cnt[c]]] += 1
 
 
-@jit
-def _motion_runs(a, b, thr, run, least, exact):
-    """One frame pair of ``smmhh``: each pixel's current motion run ``run`` (0 without motion) grown
-    by the motion ``|a - b| > thr``, and ``least[m]`` counting the pixels whose run reaches
-    ``m + 1`` frames. ``exact``: integer pixels whose differences fit int32 (compared in int32,
-    so the loop runs on eight pixels at once)."""
-    one = np.int32(1)
-    for j in range(run.size):
+@inline
+def _motion(a, b, thr, mo, exact):
+    """``mo[j]`` all ones where ``|a[j] - b[j]| > thr[j]`` (one frame pair of ``smmhh``), else 0, for the
+    pixels of ``thr``. ``exact``: integer pixels whose differences fit int32 (compared in int32)."""
+    for j in range(thr.size):
         th = thr[j]
         if exact:
-            x = np.int32(np.int32(a[j] - b[j]) > th) | np.int32(np.int32(b[j] - a[j]) > th)
+            d = np.int32(a[j] - b[j])
+            x = np.uint8(d > th) | np.uint8(np.int32(-d) > th)
         else:
-            x = np.int32(a[j] - b[j] > th) | np.int32(b[j] - a[j] > th)
-        run[j] = np.int32((run[j] + one) * x)
-    for m in range(least.shape[0]):
-        reach = np.int32(m + 1)
+            x = np.uint8(a[j] - b[j] > th) | np.uint8(b[j] - a[j] > th)
+        mo[j] = np.uint8(0) - x  # unsigned: all ones
+
+
+@inline
+def _grow(mo, run, least, lens):
+    """Each pixel's current motion run ``run`` (0 without motion) grown by ``mo`` (all ones: motion), held at
+    ``lens[-1] + 1`` (so it fits the counters' dtype), and ``least[m]`` counting the pixels whose
+    run reaches ``lens[m]`` frames."""
+    top = lens[lens.size - 1]
+    for j in range(run.size):
+        r = run[j]
+        run[j] = (r + (r <= top)) & mo[j]
+    for m in range(lens.size):
+        reach = lens[m]
         for j in range(run.size):
-            least[m, j] = np.int32(least[m, j] + np.int32(run[j] == reach))
+            least[m, j] += run[j] == reach
 
 
 @jit
-def _run_hist(vi, thr, skips, edges, exact, run, least, out_i):
+def _run_hist(vi, thr, skips, edges, exact, bufs, out_i):
     """``smmhh``'s row ``out_i`` of one capture's video ``vi`` ``(T, pixels)``: a run counts in bin
     ``m`` when it lasts exactly ``m + 1`` frames, in the last when at least ``max_len`` (the runs
     reaching each length counted, those of exactly ``m + 1`` the difference of two counts); ordered
-    scale (pixels ``edges[k]..edges[k + 1]``), skip, run length, pixel."""
+    scale (pixels ``edges[k]..edges[k + 1]``), skip, run length, pixel. ``bufs``: :func:`_buffers`;
+    the narrow counters are added to ``total`` every ``chunk`` frames, before they could wrap."""
+    mo, run, least, lens, total, chunk = bufs
     t = vi.shape[0]
-    max_len = least.shape[0]
+    max_len = lens.size
     for si in range(skips.size):
         s = skips[si]
         run[:] = 0
-        least[:] = 0
-        for k in range(t - s):
-            _motion_runs(vi[k + s], vi[k], thr, run, least, exact)
+        total[:] = 0
+        for k0 in range(0, max(t - s, 0), chunk):
+            least[:] = 0
+            for k in range(k0, min(k0 + chunk, t - s)):
+                _motion(vi[k + s], vi[k], thr, mo, exact)
+                _grow(mo, run, least, lens)
+            total += least
         for g in range(edges.size - 1):
             a0, b0 = edges[g], edges[g + 1]
             base = a0 * skips.size * max_len + si * max_len * (b0 - a0)
             for m in range(max_len):
                 for j in range(a0, b0):
-                    c = least[m, j] - least[m + 1, j] if m < max_len - 1 else least[m, j]
+                    c = total[m, j] - total[m + 1, j] if m < max_len - 1 else total[m, j]
                     out_i[base + m * (b0 - a0) + j - a0] = c
 
 
 @jit
-def _pyramid(xi, levels, vid):
-    """The integer pyramid video ``vid`` ``(T, pixels)`` of one capture ``xi`` ``(T, H, W)``: level
-    0 the cells, each next level (``levels[k]``: its rows and columns) the sums of 2 x 2 blocks of
-    the previous one (every level but the last halves exactly), row-major, levels side by side."""
-    t, h, w = xi.shape
-    for k in range(t):
-        for y in range(h):
-            for x in range(w):
-                vid[k, y * w + x] = xi[k, y, x]
-    src = 0
+def _pool_index(levels):
+    """For every pixel above the cells of the pyramid with ``levels`` (each level's rows and columns;
+    every level but the last halves exactly), row-major, levels side by side: the 2 x 2 pixels of
+    the level below that it sums (:func:`_pyramid`), unsigned (indices taken as they are)."""
+    n = 0
     for g in range(1, levels.shape[0]):
-        ph, pw = levels[g - 1, 0], levels[g - 1, 1]
-        lh, lw = levels[g, 0], levels[g, 1]
-        dst = src + ph * pw
-        for k in range(t):
-            for y in range(lh):
-                r0 = src + 2 * y * pw
-                for x in range(lw):
-                    c = r0 + 2 * x
-                    vid[k, dst + y * lw + x] = vid[k, c] + vid[k, c + 1] + vid[k, c + pw] + vid[k, c + pw + 1]
-        src = dst
+        n += levels[g, 0] * levels[g, 1]
+    index = np.empty((n, 4), dtype=np.uint64)
+    src, q = 0, 0
+    for g in range(1, levels.shape[0]):
+        pw = levels[g - 1, 1]
+        for y in range(levels[g, 0]):
+            for x in range(levels[g, 1]):
+                a = src + 2 * y * pw + 2 * x
+                index[q, 0], index[q, 1], index[q, 2], index[q, 3] = a, a + 1, a + pw, a + pw + 1
+                q += 1
+        src += levels[g - 1, 0] * pw
+    return index
 
 
 @jit
-def smmhh(x, levels, thr, skips, max_len, edges, out):
+def _pyramid(xi, index, vid):
+    """The integer pyramid video ``vid`` ``(T, pixels)`` of one capture ``xi`` ``(T, cells)``: the
+    cells, then each pooled pixel the sum of the 2 x 2 pixels of the level below (:func:`_pool_index`),
+    row-major, levels side by side."""
+    t, c = xi.shape
+    for k in range(t):
+        row, cells = vid[k], xi[k]
+        for j in range(c):
+            row[j] = cells[j]
+        for q in range(index.shape[0]):
+            row[np.uint64(c + q)] = row[index[q, 0]] + row[index[q, 1]] + row[index[q, 2]] + row[index[q, 3]]
+
+
+@jit
+def _buffers(p, lens):
+    """The work arrays of :func:`_run_hist` for ``p`` pixels (a multiple of ``_PIXEL_BLOCK``) and run
+    lengths ``lens`` (1..max_len, in the unsigned dtype of the counters: uint8 while ``max_len`` < 255)."""
+    chunk = np.iinfo(lens.dtype).max
+    return (np.zeros(p, lens.dtype), np.zeros(p, lens.dtype), np.zeros((lens.size, p), lens.dtype), lens,
+            np.zeros((lens.size, p), np.int64), chunk)
+
+
+@jit
+def smmhh(x, levels, thr, skips, lens, edges, out):
     """``smmhh``'s run-length histograms ``out`` ``(N, columns)`` of the integer readings ``x``
     ``(N, T, H, W)`` (at most 16 bits, on a grid every pooling halves exactly), each capture's
     pyramid video built here in int32 (:func:`_pyramid`; ``thr`` each pixel's integer threshold on
-    the sums: :func:`touchbench.features.gaus_smmhh.pyramid_video`'s equivalence)."""
+    the sums: :func:`touchbench.features.gaus_smmhh.pyramid_video`'s equivalence), in rows padded
+    to whole blocks of pixels that never move."""
     n, t = x.shape[:2]
     p = edges[-1]
-    vid = np.empty((t, p), dtype=np.int32)
-    run = np.zeros(p, dtype=np.int32)
-    least = np.zeros((max_len, p), dtype=np.int32)
+    pm = -(-p // _INT_BLOCK) * _INT_BLOCK
+    vid = np.zeros((t, pm), dtype=np.int32)
+    thr_p = np.zeros(pm, dtype=np.int32)
+    thr_p[:p] = thr
+    bufs = _buffers(-(-p // _PIXEL_BLOCK) * _PIXEL_BLOCK, lens)
+    index = _pool_index(levels)
     for i in range(n):
-        _pyramid(x[i], levels, vid)
-        _run_hist(vid, thr, skips, edges, True, run, least, out[i])
+        _pyramid(x[i].reshape((t, x.shape[2] * x.shape[3])), index, vid)
+        _run_hist(vid, thr_p, skips, edges, True, bufs, out[i])
 
 
 @jit
-def smmhh_video(video, thr, skips, max_len, edges, out):
+def smmhh_video(video, thr, skips, lens, edges, out):
     """:func:`smmhh` of a pyramid video ``video`` ``(N, T, pixels)`` made by numpy (float64 means of
     :func:`touchbench.features.gaus_smmhh.pool2`), ``thr`` each pixel's threshold."""
-    n, t, p = video.shape
-    run = np.zeros(p, dtype=np.int32)
-    least = np.zeros((max_len, p), dtype=np.int32)
-    for i in range(n):
-        _run_hist(video[i], thr, skips, edges, False, run, least, out[i])
+    p = video.shape[2]
+    bufs = _buffers(-(-p // _PIXEL_BLOCK) * _PIXEL_BLOCK, lens)
+    for i in range(video.shape[0]):
+        _run_hist(video[i], thr, skips, edges, False, bufs, out[i])
 
 
 @jit

@@ -208,9 +208,10 @@ class SpatialMultiScaleMHH(FeatureSet):
         thresholds = self._thresholds(levels)
         kern = kernels("features.gaus_kernels")
         if kern is not None:
-            out, args = np.empty((n, len(skips) * M * int(edges[-1]))), (np.array(skips, dtype=np.int64), M, edges)
+            lens = np.arange(1, M + 1, dtype=np.uint8 if M < 255 else np.uint32)  # the loop's counters' dtype
+            out, args = np.empty((n, len(skips) * M * int(edges[-1]))), (np.array(skips, dtype=np.int64), lens, edges)
             if exact_pyramid(stack, shapes, thresholds):  # the pyramid built in the loop, capture by capture
-                ints = stack.view(np.uint8) if stack.dtype.kind == "b" else stack
+                ints = np.ascontiguousarray(stack.view(np.uint8) if stack.dtype.kind == "b" else stack)
                 kern.smmhh(ints, np.array(shapes, dtype=np.int64), sum_thresholds(shapes, thresholds), *args, out)
             else:
                 video, thr = pyramid_video(stack, shapes, thresholds)
