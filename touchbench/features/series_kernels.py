@@ -16,6 +16,8 @@ import numba
 import numpy as np
 
 jit = numba.njit(cache=True, nogil=True)
+#: a helper inlined where it is called (numba's own inlining: the same operations in the loop)
+inline = numba.njit(cache=True, nogil=True, inline="always")
 
 
 @jit
@@ -79,6 +81,27 @@ def _lag(lags, m, t):
     return lags[m] if m < len(lags) else t
 
 
+@inline
+def _four_lags(lags, g, t):
+    """The lags ``g`` to ``g + 3`` (:func:`_lag`)."""
+    return _lag(lags, g, t), _lag(lags, g + 1, t), _lag(lags, g + 2, t), _lag(lags, g + 3, t)
+
+
+@inline
+def _lag_terms(d, k, dk, l0, l1, l2, l3, a0, a1, a2, a3):
+    """Four lags' sums of products of the centred values ``d`` with the term of frame ``k`` (``dk``)
+    added where the lag reaches back that far."""
+    if k >= l0:
+        a0 += dk * d[k - l0]
+    if k >= l1:
+        a1 += dk * d[k - l1]
+    if k >= l2:
+        a2 += dk * d[k - l2]
+    if k >= l3:
+        a3 += dk * d[k - l3]
+    return a0, a1, a2, a3
+
+
 @jit
 def _first_pass(s, srt, mu, lo, hi, d, zs, lags, acs):
     """One pass over a series ``s``: its centred values ``d`` and their energy, the sorted values
@@ -87,7 +110,7 @@ def _first_pass(s, srt, mu, lo, hi, d, zs, lags, acs):
     products (into ``acs``)."""
     t = s.size
     scale = hi - lo if hi - lo != 0 else 1.0  # a constant series' moments are not read
-    l0, l1, l2, l3 = _lag(lags, 0, t), _lag(lags, 1, t), _lag(lags, 2, t), _lag(lags, 3, t)
+    l0, l1, l2, l3 = _four_lags(lags, 0, t)
     ac0 = zm = mad = tot = 0.0
     a0 = a1 = a2 = a3 = 0.0
     cross = 0
@@ -103,14 +126,7 @@ def _first_pass(s, srt, mu, lo, hi, d, zs, lags, acs):
             mad += abs(dd)
             tot += dd
             cross += (dk > 0) != (d[k - 1] > 0)
-        if k >= l0:
-            a0 += dk * d[k - l0]
-        if k >= l1:
-            a1 += dk * d[k - l1]
-        if k >= l2:
-            a2 += dk * d[k - l2]
-        if k >= l3:
-            a3 += dk * d[k - l3]
+        a0, a1, a2, a3 = _lag_terms(d, k, dk, l0, l1, l2, l3, a0, a1, a2, a3)
     acs[0], acs[1], acs[2], acs[3] = a0, a1, a2, a3
     return ac0, mad, tot, cross, zm
 
@@ -121,7 +137,7 @@ def _second_pass(s, zs, zm, dmean, d, lags, acs):
     (mean ``zm``), the squared deviations of the first differences from their mean ``dmean``, and
     the next four lags' sums of products of the centred values ``d`` (into ``acs``)."""
     t = s.size
-    l0, l1, l2, l3 = _lag(lags, 4, t), _lag(lags, 5, t), _lag(lags, 6, t), _lag(lags, 7, t)
+    l0, l1, l2, l3 = _four_lags(lags, 4, t)
     m2 = m3 = m4 = var = 0.0
     a0 = a1 = a2 = a3 = 0.0
     for k in range(t):
@@ -134,14 +150,7 @@ def _second_pass(s, zs, zm, dmean, d, lags, acs):
             e = s[k] - s[k - 1] - dmean
             var += e * e
         dk = d[k]
-        if k >= l0:
-            a0 += dk * d[k - l0]
-        if k >= l1:
-            a1 += dk * d[k - l1]
-        if k >= l2:
-            a2 += dk * d[k - l2]
-        if k >= l3:
-            a3 += dk * d[k - l3]
+        a0, a1, a2, a3 = _lag_terms(d, k, dk, l0, l1, l2, l3, a0, a1, a2, a3)
     acs[4], acs[5], acs[6], acs[7] = a0, a1, a2, a3
     return m2, m3, m4, var
 
@@ -151,18 +160,11 @@ def _lag_pass(d, lags, g, acs):
     """The sums of products of the centred values ``d`` at lags ``g`` to ``g + 3`` (into ``acs``):
     past the eighth lag."""
     t = d.size
-    l0, l1, l2, l3 = _lag(lags, g, t), _lag(lags, g + 1, t), _lag(lags, g + 2, t), _lag(lags, g + 3, t)
+    l0, l1, l2, l3 = _four_lags(lags, g, t)
     a0 = a1 = a2 = a3 = 0.0
     for k in range(t):
         dk = d[k]
-        if k >= l0:
-            a0 += dk * d[k - l0]
-        if k >= l1:
-            a1 += dk * d[k - l1]
-        if k >= l2:
-            a2 += dk * d[k - l2]
-        if k >= l3:
-            a3 += dk * d[k - l3]
+        a0, a1, a2, a3 = _lag_terms(d, k, dk, l0, l1, l2, l3, a0, a1, a2, a3)
     acs[g], acs[g + 1], acs[g + 2], acs[g + 3] = a0, a1, a2, a3
 
 
