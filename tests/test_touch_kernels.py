@@ -78,3 +78,21 @@ def test_cell_spectra_inputs_are_numpys_bit_for_bit():
         one = np.ascontiguousarray(s[:, :, 5:6])  # a single cell: its mean is given (numpy's, summed pairwise)
         cell_kernels.cell_series(one, hann, mean[:, 5:6].copy(), True, dw[:, :1])
         assert np.array_equal((np.abs(np.fft.rfft(dw[:, :1], axis=-1)) ** 2)[..., 1:], p_plain[:, 5:6])
+
+
+def test_contact_weights_sums_are_numpys_bit_for_bit():
+    # numpy's sum of a row is pairwise: its order changes at 8 and 128 values and at every split in
+    # two beyond; rows of values spanning 16 orders of magnitude make every other order show
+    motion_kernels = pytest.importorskip("touchbench.features.motion_kernels")
+    rng = np.random.default_rng(11)
+    scratch = np.empty((3, 64), dtype=np.int64), np.empty(64)
+    for n in [1, 2, 7, 8, 9, 15, 16, 17, 63, 64, 65, 127, 128, 129, 130, 255, 256, 257, 432, 513, 1000, 5000]:
+        rows = rng.random((40, n)) * 10.0 ** rng.integers(-8, 8, (40, n))
+        assert [motion_kernels.numpy_sum(r, 0, n, *scratch) for r in rows] == rows.sum(axis=1).tolist(), n
+        tail = rows[:, n // 3:]  # a sum starting inside a row
+        assert [motion_kernels.numpy_sum(r, n // 3, n - n // 3, *scratch) for r in rows] == tail.sum(axis=1).tolist(), n
+    s = rng.random((2, 6, 513)) * 10.0 ** rng.integers(-8, 8, (2, 6, 513))
+    wt, area, peak, ws = np.empty((2, 3, 6, 513)), np.empty((2, 3, 6)), np.empty(2), np.empty((2, 3, 6))
+    motion_kernels.contact_weights(s, 5, np.array([0.1, 0.3, 0.5]), 0.0, wt, area, peak, ws)
+    assert np.array_equal(ws, wt.sum(axis=3))
+    assert np.array_equal(area, np.count_nonzero(wt, axis=3))

@@ -90,13 +90,15 @@ def _track(ws, cyx, area, h, w, o, pos, act):
 
 
 @jit
-def contact_weights(s, rank, rel, floor, wt, area, peak):
+def contact_weights(s, rank, rel, floor, wt, area, peak, ws):
     """``contact-motion``'s robust peak ``(N,)`` (the order statistic ``rank`` of the frames' maximum
     pressure), each threshold's contact weights ``wt`` ``(N, R, T, C)``, the pressure above
-    ``max(rel[r] * peak, floor)`` clipped at 0, and their nonzero counts ``area`` ``(N, R, T)``:
-    the operations of the numpy path, elementwise, so the same numbers."""
+    ``max(rel[r] * peak, floor)`` clipped at 0, their nonzero counts ``area`` and their sums ``ws``
+    (both ``(N, R, T)``): the operations of the numpy path, elementwise, and each sum numpy's
+    (:func:`numpy_sum`), so the same numbers."""
     n, t, nc = s.shape
     top = np.empty(t)
+    halves, lefts = np.empty((3, 64), dtype=np.int64), np.empty(64)
     for i in range(n):
         for k in range(t):
             top[k] = s[i, k].max()
@@ -105,11 +107,70 @@ def contact_weights(s, rank, rel, floor, wt, area, peak):
             thr = max(peak[i] * rel[r], floor)
             for k in range(t):
                 cnt = 0
+                row = wt[i, r, k]
                 for c in range(nc):
                     v = max(s[i, k, c] - thr, 0.0)
-                    wt[i, r, k, c] = v
+                    row[c] = v
                     cnt += v != 0.0
                 area[i, r, k] = cnt
+                ws[i, r, k] = 0.0 + numpy_sum(row, 0, nc, halves, lefts)  # numpy's reduction starts from 0
+
+
+@jit
+def numpy_sum(a, lo, n, halves, lefts):
+    """The sum of ``a[lo:lo + n]`` in the order numpy's ``add.reduce`` adds a contiguous float64 row
+    (its pairwise summation): up to 128 values a block (:func:`_block`); more, the sum of the first
+    half (a multiple of 8 values) plus the sum of the rest, each summed so. Walked without recursion
+    (numba's cache cannot hold a recursive loop): ``halves`` ``(3, 64)`` int64 and ``lefts`` ``(64,)``
+    hold the pending halves (start, size, whether the first half is summed) and the first halves'
+    sums. The same number as numpy's ``sum`` of the row, bit for bit (tests/test_touch_kernels.py
+    checks it on many lengths)."""
+    top = -1
+    at, size = lo, n
+    while True:
+        while size > 128:  # down the first halves, the second ones pending
+            half = size // 2 - (size // 2) % 8
+            top += 1
+            halves[0, top], halves[1, top], halves[2, top] = at + half, size - half, 0
+            size = half
+        v = _block(a, at, size)
+        while top >= 0 and halves[2, top] == 1:  # a second half summed: first + second
+            v = lefts[top] + v
+            top -= 1
+        if top < 0:
+            return v
+        lefts[top] = v  # a first half summed: now its second half
+        halves[2, top] = 1
+        at, size = halves[0, top], halves[1, top]
+
+
+@jit
+def _block(a, lo, n):
+    """numpy's sum of ``a[lo:lo + n]``, up to 128 values: under 8 one after another; else eight
+    running sums over the values eight apart, combined in pairs, then the rest one after another."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += a[lo + i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    while i < n - n % 8:
+        r0 += a[lo + i]
+        r1 += a[lo + i + 1]
+        r2 += a[lo + i + 2]
+        r3 += a[lo + i + 3]
+        r4 += a[lo + i + 4]
+        r5 += a[lo + i + 5]
+        r6 += a[lo + i + 6]
+        r7 += a[lo + i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
 
 
 @jit

@@ -82,7 +82,7 @@ from .base import FEATURES, FeatureInputError, FeatureSet, SensorNeededError, Sh
 from ..core.compiled import kernels
 from .numerics import KURT_CONSTANT, SKEW_CONSTANT, gradient, moment_coords, same_row
 from .touch_spectra import (AC_LAGS, BANDS, QUANTS, _STAT_NAMES, _band_name, _local_bands, band_slices, band_sums,
-                            _hann_freqs, centred_spectrum, series_block, spectral_summary, spectrum)
+                            _hann_freqs, centred_spectrum, series_block, spectral_summary, spectrum, windowed_power)
 
 MIN_FRAMES = 8
 BASELINE_Q = 0.05
@@ -496,18 +496,17 @@ class ContactMotion(_TouchBase):
 
     def _compiled(self, kern: Any, grid: tuple[int, int], s: np.ndarray) -> np.ndarray:
         """:meth:`_from_pressure` by the compiled loops: the peak, weights and areas elementwise as
-        numpy computes them, the weights' sums numpy's (the reversals count signs of rounding), the
+        numpy computes them, the weights' sums in numpy's order (the reversals count signs of rounding), the
         position and activity spectra numpy's (their peaks), the rest in the loops of motion_kernels."""
         (n, t, nc), (h, w), nr = s.shape, grid, len(THRESHOLDS)
-        wt, area, peak = np.empty((n, nr, t, nc)), np.empty((n, nr, t)), np.empty(n)
+        wt, area, peak, ws = np.empty((n, nr, t, nc)), np.empty((n, nr, t)), np.empty(n), np.empty((n, nr, t))
         kern.contact_weights(s, int(round(0.95 * (t - 1))), np.asarray(THRESHOLDS), self._floor(self.CONTACT_FLOOR),
-                             wt, area, peak)
-        ws = wt.sum(axis=3)
+                             wt, area, peak, ws)
         tracks, pos, act = np.zeros((n, nr, 10)), np.empty(ws.shape), np.empty(ws.shape)
         kern.contact_tracks(ws, np.einsum("nrtc,kc->nrkt", wt, moment_coords(h, w)[:2]), area, h, w, tracks, pos, act)
-        p, f = spectrum(np.stack([pos, act]), self._fs())
+        p, f = windowed_power(kern, np.stack([pos, act]), self._fs())
         out = np.empty((n, nr * 18 + 1))
-        kern.contact_spectra(p, f, *band_slices(f, self.POS_BANDS), tracks, peak, out)
+        kern.contact_spectra(p[..., 1:], f, *band_slices(f, self.POS_BANDS), tracks, peak, out)
         return out
 
 

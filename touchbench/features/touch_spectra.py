@@ -11,6 +11,7 @@ by the vectorised numpy code here (the two agree within 1e-9).
 from __future__ import annotations
 
 import functools
+from typing import Any
 
 import numpy as np
 
@@ -175,14 +176,24 @@ def series_block(series: np.ndarray, fs: float) -> np.ndarray:
         st = _series_stats(series, fs)
         return np.stack([st[k] for k in _STAT_NAMES], axis=2)
     t = series.shape[-1]
-    hann, f = _hann_freqs(t, float(fs))
-    dw = np.empty(series.shape)  # the windowed series as centred_spectrum makes them, elementwise
     series = np.ascontiguousarray(series)
-    kern.windowed(series, series.mean(axis=-1), hann, dw)
+    p, f = windowed_power(kern, series, fs)
     srt = np.sort(series, axis=-1)
     return kernels("features.series_kernels").series_stats(
-        series, srt, srt.sum(axis=-1) / t, np.abs(np.fft.rfft(dw, axis=-1)) ** 2, f, *band_slices(f, BANDS),
-        *_ranks_lags(t))
+        series, srt, srt.sum(axis=-1) / t, p, f, *band_slices(f, BANDS), *_ranks_lags(t))
+
+
+def windowed_power(kern: Any, x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`spectrum` of the series ``x`` (..., T) by the compiled loops ``kern``
+    (:mod:`touchbench.features.touch_kernels`), the DC bin kept first: the windowed series built in
+    one loop elementwise as :func:`centred_spectrum` builds them (numpy's mean), so numpy's FFT of
+    them gives the same numbers; and the frequencies (DC left out)."""
+    t = x.shape[-1]
+    hann, f = _hann_freqs(t, float(fs))
+    rows = np.ascontiguousarray(x, dtype=np.float64).reshape(1, -1, t)
+    dw = np.empty(rows.shape)
+    kern.windowed(rows, rows.mean(axis=-1), hann, dw)
+    return (np.abs(np.fft.rfft(dw, axis=-1)) ** 2).reshape(x.shape[:-1] + (t // 2 + 1,)), f
 
 
 @functools.lru_cache(maxsize=128)
