@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .motion_kernels import select
+from .order_kernels import counted, select
 from .touch_kernels import jit
 
 
@@ -114,13 +114,7 @@ def _counted_level(ui, ranks, thr, o):
             hist[int(ui[k, c] - lo)] += 1
             acc += ui[k, c]
     o[0] = acc / total
-    seen = 0
-    r = 0
-    for b in range(hist.size):
-        seen += hist[b]
-        while r < 2 and seen > ranks[r]:
-            o[1 + r] = lo + b
-            r += 1
+    counted(hist, 0, hist.size, lo, ranks, o[1:3])
     o[3] = lo + hist.size - 1
     for m in range(thr.size):
         above = 0

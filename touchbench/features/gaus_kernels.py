@@ -17,6 +17,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from .order_kernels import counted
 from .touch_kernels import jit
 
 #: a loop run once per frame pair, inlined where it is called (a call per frame costs as much as its work)
@@ -49,19 +50,6 @@ def _ends(xi, lo, hi, total, tv):
             hi[j] = max(hi[j], v)
             total[j] += v
             tv[j] += abs(np.int64(v) - np.int64(xi[k - 1, j]))
-
-
-@jit
-def _counted(hist, s0, nb, lo, ranks, stats):
-    """The order statistics ``ranks`` (ascending, 0-based) of a series held as counts
-    ``hist[s0:s0 + nb]`` of the values ``lo + b`` into ``stats``."""
-    cum = 0
-    r = 0
-    for b in range(nb):
-        cum += hist[s0 + b]
-        while r < ranks.size and ranks[r] < cum:
-            stats[r] = lo + b
-            r += 1
 
 
 @jit
@@ -145,7 +133,7 @@ def msd(x, order, at, fracs, out, ok):
         for j in range(p):
             a, b = np.float64(lo[j]), np.float64(hi[j])
             s0, nb = start[j], start[j + 1] - start[j]
-            _counted(hist, s0, nb, a, order, stats)
+            counted(hist, s0, nb, a, order, stats)
             central = _count_moments(hist, s0, nb, t, 1.0 if b == a else b - a)
             for m in range(fracs.size):
                 c = stats[at[2 * m]]
@@ -164,7 +152,7 @@ def _median(xi, imin, nb, ranks, hist):
     for k in range(t):
         for j in range(p):
             hist[np.uint64(base + xi[k, j])] += 1
-    _counted(hist, 0, nb, np.float64(imin), ranks, stats)
+    counted(hist, 0, nb, np.float64(imin), ranks, stats)
     return (stats[0] + stats[1]) / 2.0
 
 

@@ -12,6 +12,8 @@ import math
 import numba
 import numpy as np
 
+from .order_kernels import select
+
 jit = numba.njit(cache=True, nogil=True)
 
 
@@ -201,29 +203,3 @@ def contact_spectra(p, f, starts, ends, tracks, peak, out):
                         acc += q[k]
                     o[12 + b] = acc / tot if tot > 0 else 0.0
         out[i, -1] = math.log1p(peak[i])
-
-
-@jit
-def select(x, m):
-    """The ``m``-th smallest value of ``x`` (0-based), the value at ``m`` once sorted, reordering
-    ``x`` in place so that nothing before ``m`` is larger (Hoare's selection)."""
-    lo, hi = 0, x.size - 1
-    while lo < hi:
-        pivot = x[(lo + hi) // 2]
-        i, j = lo, hi
-        while i <= j:
-            while x[i] < pivot:
-                i += 1
-            while x[j] > pivot:
-                j -= 1
-            if i <= j:
-                x[i], x[j] = x[j], x[i]
-                i += 1
-                j -= 1
-        if m <= j:
-            hi = j
-        elif m >= i:
-            lo = i
-        else:
-            break
-    return x[m]

@@ -20,6 +20,7 @@ import numba
 import numpy as np
 
 from .motion_kernels import contact_spectra, contact_tracks, contact_weights  # noqa: F401  (contact-motion's)
+from .order_kernels import counted
 
 jit = numba.njit(cache=True, nogil=True)
 
@@ -67,15 +68,9 @@ def _counted(ci, lo, hi, k, counts, out):
     for kk in range(t):
         for j in range(nc):
             counts[j, int(ci[kk, j] - lo[j])] += 1
+    rank = np.full(1, k)
     for j in range(nc):
-        acc = 0
-        b = 0
-        while True:
-            acc += counts[j, b]
-            if acc > k:
-                break
-            b += 1
-        out[j] = lo[j] + b
+        counted(counts[j], 0, int(hi[j] - lo[j]) + 1, lo[j], rank, out[j:j + 1])
 
 
 @jit
