@@ -83,7 +83,8 @@ def test_cell_spectra_inputs_are_numpys_bit_for_bit():
 def test_contact_weights_sums_are_numpys_bit_for_bit():
     # numpy's sum of a row is pairwise: its order changes at 8 and 128 values and at every split in
     # two beyond; rows of values spanning 16 orders of magnitude make every other order show
-    motion_kernels = pytest.importorskip("touchbench.features.motion_kernels")
+    from touchbench.features import motion_kernels
+
     rng = np.random.default_rng(11)
     scratch = np.empty((3, 64), dtype=np.int64), np.empty(64)
     for n in [1, 2, 7, 8, 9, 15, 16, 17, 63, 64, 65, 127, 128, 129, 130, 255, 256, 257, 432, 513, 1000, 5000]:
