@@ -211,3 +211,26 @@ def test_a_listing_from_the_registry_index_is_the_same_and_imports_no_numeric_pa
     assert read["outputs"] == built["outputs"]
     assert sorted(set(read["modules"]) & set(_OPTIONAL + _NUMERIC)) == []
     assert "sklearn" in built["modules"] and list((tmp_path / "registry-index").glob("*.json"))
+
+
+def test_a_sigterm_inside_an_import_waits_for_the_import_to_end(tmp_path):
+    # the module's body sends the process SIGTERM and then goes on for 0.3 s: the interruption must
+    # come once the import is whole (DONE set), not in the middle of it
+    (tmp_path / "slowmod.py").write_text(
+        "import os, signal, time\nos.kill(os.getpid(), signal.SIGTERM)\ntime.sleep(0.3)\nDONE = True\n")
+    code = (
+        "import signal, sys, time\n"
+        "from touchbench.cli.main import _terminate\n"
+        "signal.signal(signal.SIGTERM, _terminate)\n"
+        f"sys.path.insert(0, {str(tmp_path)!r})\n"
+        "try:\n"
+        "    import slowmod\n"
+        "    deadline = time.monotonic() + 30\n"
+        "    while time.monotonic() < deadline:\n"
+        "        time.sleep(0.01)\n"
+        "    print('not interrupted')\n"
+        "except KeyboardInterrupt:\n"
+        "    print('interrupted; the import was whole:', getattr(sys.modules.get('slowmod'), 'DONE', False))\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=SUBPROCESS_HANG_S)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "interrupted; the import was whole: True"

@@ -250,7 +250,7 @@ def test_a_long_generation_stops_on_sigterm_writing_nothing(tmp_path):
         if proc.poll() is None:
             proc.kill()
         _, err = proc.communicate()
-    assert proc.returncode == 130 and not out.exists()
+    assert proc.returncode == 130 and not out.exists(), err
     assert err.strip() == f"interrupted: nothing was written to {out}"
 
 

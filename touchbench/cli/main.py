@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import importlib
+import os
 import signal
 import sys
 import threading
@@ -40,7 +41,29 @@ _COMMANDS: dict[str, tuple[str, str, str]] = {
 }
 
 
-def _terminate(signum, frame) -> None:  # SIGTERM: the same path as Ctrl-C (finished work is kept)
+# how long a SIGTERM that lands inside an import waits before it is delivered again
+_IMPORT_RETRY_S = 0.05
+
+
+def _importing(frame) -> bool:
+    """Whether ``frame`` runs inside Python's import machinery (a module's body being executed)."""
+    while frame is not None:
+        if frame.f_code.co_filename.startswith("<frozen importlib"):
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _terminate(signum, frame) -> None:
+    """SIGTERM: the same path as Ctrl-C (finished work is kept). One that lands while a module is
+    being imported is sent again a moment later instead: an exception raised inside the import of
+    a compiled library (pyarrow, numpy) can leave it half made, and the command would then end
+    with an unrelated error, or even run to the end, instead of stopping."""
+    if _importing(frame):
+        timer = threading.Timer(_IMPORT_RETRY_S, os.kill, (os.getpid(), signum))
+        timer.daemon = True
+        timer.start()
+        return
     raise KeyboardInterrupt
 
 
