@@ -93,7 +93,14 @@ def test_contact_weights_sums_are_numpys_bit_for_bit():
         tail = rows[:, n // 3:]  # a sum starting inside a row
         assert [motion_kernels.numpy_sum(r, n // 3, n - n // 3, *scratch) for r in rows] == tail.sum(axis=1).tolist(), n
     s = rng.random((2, 6, 513)) * 10.0 ** rng.integers(-8, 8, (2, 6, 513))
-    wt, area, peak, ws = np.empty((2, 3, 6, 513)), np.empty((2, 3, 6)), np.empty(2), np.empty((2, 3, 6))
-    motion_kernels.contact_weights(s, 5, np.array([0.1, 0.3, 0.5]), 0.0, wt, area, peak, ws)
-    assert np.array_equal(ws, wt.sum(axis=3))
-    assert np.array_equal(area, np.count_nonzero(wt, axis=3))
+    s[1, 2] = 0.0  # a frame without contact at every threshold
+    rel = np.array([0.1, 0.3, 0.5])
+    wt, area, peak, ws = np.empty((2 * 3 * 6, 513)), np.empty((2, 3, 6)), np.empty(2), np.empty((2, 3, 6))
+    m = motion_kernels.contact_weights(s, 5, rel, 0.0, wt, area, peak, ws)
+    # the same by numpy: the peak (the largest frame maximum of 6), the weights above each threshold
+    assert np.array_equal(peak, s.max(axis=2).max(axis=1))
+    plain = np.maximum(s[:, None] - (peak[:, None] * rel)[..., None, None], 0.0)  # (2, 3, 6, 513)
+    assert np.array_equal(ws, plain.sum(axis=3))
+    assert np.array_equal(area, np.count_nonzero(plain, axis=3))
+    with_contact = plain.reshape(-1, 513)[np.count_nonzero(plain, axis=3).ravel() > 0]  # in order
+    assert m == len(with_contact) < 2 * 3 * 6 and np.array_equal(wt[:m], with_contact)

@@ -21,19 +21,24 @@ jit = numba.njit(cache=True, nogil=True)
 def contact_tracks(ws, num, area, h, w, out, pos, act):
     """``contact-motion``'s features without spectra into ``out`` ``(N, R, 18)`` (columns 0-9), the
     position along the axis of motion into ``pos`` and the on/off activity into ``act`` (both
-    ``(N, R, T)``), from each threshold's contact weight ``ws`` ``(N, R, T)``, its weighted row and
-    column ``num`` ``(N, R, 2, T)`` (divided by the weight here, in place) and its area ``(N, R, T)``.
-    The weights and sums come from numpy: the reversals count signs of position changes, which
-    for a position that does not move are the signs of rounding (the same ones as numpy's)."""
+    ``(N, R, T)``), from each threshold's contact weight ``ws`` ``(N, R, T)``, the weighted row and
+    column ``num`` ``(M, 2)`` of each frame with contact (``ws > 0``; in the order of
+    :func:`contact_weights`' rows) and the areas ``(N, R, T)``. The weighted rows and columns come
+    from numpy: the reversals count signs of position changes, which for a position that does not
+    move are the signs of rounding (the same ones as numpy's)."""
     n, nr, t = ws.shape
+    cyx = np.empty((2, t))
+    j = 0
     for i in range(n):
         for r in range(nr):
-            _track(ws[i, r], num[i, r], area[i, r], h, w, out[i, r], pos[i, r], act[i, r])
+            j = _track(ws[i, r], num, j, cyx, area[i, r], h, w, out[i, r], pos[i, r], act[i, r])
 
 
 @jit
-def _track(ws, cyx, area, h, w, o, pos, act):
-    """One threshold's track: activity, onsets, area, speed, range, path, reversals."""
+def _track(ws, num, j, cyx, area, h, w, o, pos, act):
+    """One threshold's track: activity, onsets, area, speed, range, path, reversals; its frames with
+    contact take the rows of ``num`` from ``j`` on (the next row is returned); ``cyx`` ``(2, T)``
+    holds the position."""
     t = ws.size
     nact = 0
     msum = np.zeros(2)
@@ -42,8 +47,9 @@ def _track(ws, cyx, area, h, w, o, pos, act):
             act[k] = 1.0
             nact += 1
             for a in range(2):
-                cyx[a, k] /= ws[k]
+                cyx[a, k] = num[j, a] / ws[k]
                 msum[a] += cyx[a, k]
+            j += 1
         else:
             act[k] = 0.0
     for a in range(2):
@@ -89,18 +95,22 @@ def _track(ws, cyx, area, h, w, o, pos, act):
     o[8] = spsum
     o[9] = rev / max(nz, 1) if nz > 0 else 0.0
     pos[:] = cyx[major]
+    return j
 
 
 @jit
 def contact_weights(s, rank, rel, floor, wt, area, peak, ws):
     """``contact-motion``'s robust peak ``(N,)`` (the order statistic ``rank`` of the frames' maximum
-    pressure), each threshold's contact weights ``wt`` ``(N, R, T, C)``, the pressure above
-    ``max(rel[r] * peak, floor)`` clipped at 0, their nonzero counts ``area`` and their sums ``ws``
-    (both ``(N, R, T)``): the operations of the numpy path, elementwise, and each sum numpy's
-    (:func:`numpy_sum`), so the same numbers."""
+    pressure), each threshold's contact weights, the pressure above ``max(rel[r] * peak, floor)``
+    clipped at 0, their nonzero counts ``area`` and their sums ``ws`` (both ``(N, R, T)``): the
+    operations of the numpy path, elementwise, and each sum numpy's (:func:`numpy_sum`), so the
+    same numbers. The weights of the frames with contact (a nonzero count) go to the rows of ``wt``
+    ``(N * R * T, C)``, one after another (capture, threshold, frame); their number is returned
+    (the other frames' weights are zeros, their sums +0.0 in any order)."""
     n, t, nc = s.shape
     top = np.empty(t)
     halves, lefts = np.empty((3, 64), dtype=np.int64), np.empty(64)
+    m = 0
     for i in range(n):
         for k in range(t):
             top[k] = s[i, k].max()
@@ -109,13 +119,17 @@ def contact_weights(s, rank, rel, floor, wt, area, peak, ws):
             thr = max(peak[i] * rel[r], floor)
             for k in range(t):
                 cnt = 0
-                row = wt[i, r, k]
+                row = wt[m]
                 for c in range(nc):
                     v = max(s[i, k, c] - thr, 0.0)
                     row[c] = v
                     cnt += v != 0.0
                 area[i, r, k] = cnt
-                ws[i, r, k] = 0.0 + numpy_sum(row, 0, nc, halves, lefts)  # numpy's reduction starts from 0
+                ws[i, r, k] = 0.0
+                if cnt:
+                    ws[i, r, k] += numpy_sum(row, 0, nc, halves, lefts)  # numpy's reduction starts from 0
+                    m += 1
+    return m
 
 
 @jit
