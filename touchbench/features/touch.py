@@ -502,11 +502,11 @@ class ContactMotion(_TouchBase):
         wt, area, peak, ws = np.empty((n * nr * t, nc)), np.empty((n, nr, t)), np.empty(n), np.empty((n, nr, t))
         m = kern.contact_weights(s, int(round(0.95 * (t - 1))), np.asarray(THRESHOLDS),
                                  self._floor(self.CONTACT_FLOOR), wt, area, peak, ws)
-        tracks, pos, act = np.zeros((n, nr, 10)), np.empty(ws.shape), np.empty(ws.shape)
+        tracks, pos_act = np.zeros((n, nr, 10)), np.empty((2,) + ws.shape)
         # numpy's weighted rows and columns of the frames with contact alone (each the same dot
         # product over the cells as in the numpy path's einsum, so the same numbers)
-        kern.contact_tracks(ws, np.einsum("mc,kc->mk", wt[:m], moment_coords(h, w)[:2]), area, h, w, tracks, pos, act)
-        p, f = windowed_power(kern, np.stack([pos, act]), self._fs())
+        kern.contact_tracks(ws, np.einsum("mc,kc->mk", wt[:m], moment_coords(h, w)[:2]), area, h, w, tracks, *pos_act)
+        p, f = windowed_power(kern, pos_act, self._fs())
         out = np.empty((n, nr * 18 + 1))
         kern.contact_spectra(p[..., 1:], f, *band_slices(f, self.POS_BANDS), tracks, peak, out)
         return out

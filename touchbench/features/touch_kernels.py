@@ -20,6 +20,7 @@ import numba
 import numpy as np
 
 from .motion_kernels import contact_spectra, contact_tracks, contact_weights  # noqa: F401  (contact-motion's)
+from .motion_kernels import numpy_sum
 from .order_kernels import counted
 
 jit = numba.njit(cache=True, nogil=True)
@@ -263,20 +264,23 @@ def _rhythm_cells(si, base, out, ps, ex, ranks, peak, thr, grad, cm, csd, cdf):
 
 
 @jit
-def windowed(s, mean, hann, out):
-    """Every series ``s[i, c]`` of ``(N, M, T)`` (C-ordered) less its mean ``(N, M)``, times the Hann
-    window, into ``out`` ``(N, M, T)`` (0 for a constant series): numpy's ``centred_spectrum`` input,
-    elementwise, so the same numbers (``touch-rhythm``'s series; the cells' are ``cell_kernels.cell_series``')."""
-    n, m = mean.shape
-    t = hann.size
+def windowed(s, hann, out):
+    """Every series ``s[i, c]`` of ``(N, M, T)`` (C-ordered) less its mean, times the Hann window,
+    into ``out`` ``(N, M, T)`` (0 for a constant series): numpy's ``centred_spectrum`` input,
+    elementwise, so the same numbers (``touch-rhythm``'s series; the cells' are ``cell_kernels.cell_series``').
+    The mean is numpy's ``mean(axis=-1)``: the series summed in numpy's order (:func:`numpy_sum`)
+    over its length."""
+    n, m, t = s.shape
+    halves, lefts = np.empty((3, 64), dtype=np.int64), np.empty(64)
     for i in range(n):
         for c in range(m):
+            mean = (0.0 + numpy_sum(s[i, c], 0, t, halves, lefts)) / t  # numpy sums from 0
             lo = s[i, c, 0]
             hi = lo
             for k in range(t):
                 v = s[i, c, k]
                 lo = min(lo, v)
                 hi = max(hi, v)
-                out[i, c, k] = (v - mean[i, c]) * hann[k]
+                out[i, c, k] = (v - mean) * hann[k]
             if lo == hi:
                 out[i, c, :] = 0.0

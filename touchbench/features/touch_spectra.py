@@ -186,13 +186,13 @@ def series_block(series: np.ndarray, fs: float) -> np.ndarray:
 def windowed_power(kern: Any, x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
     """:func:`spectrum` of the series ``x`` (..., T) by the compiled loops ``kern``
     (:mod:`touchbench.features.touch_kernels`), the DC bin kept first: the windowed series built in
-    one loop elementwise as :func:`centred_spectrum` builds them (numpy's mean), so numpy's FFT of
-    them gives the same numbers; and the frequencies (DC left out)."""
+    one loop elementwise as :func:`centred_spectrum` builds them (numpy's mean, summed in numpy's
+    order), so numpy's FFT of them gives the same numbers; and the frequencies (DC left out)."""
     t = x.shape[-1]
     hann, f = _hann_freqs(t, float(fs))
     rows = np.ascontiguousarray(x, dtype=np.float64).reshape(1, -1, t)
     dw = np.empty(rows.shape)
-    kern.windowed(rows, rows.mean(axis=-1), hann, dw)
+    kern.windowed(rows, hann, dw)
     return (np.abs(np.fft.rfft(dw, axis=-1)) ** 2).reshape(x.shape[:-1] + (t // 2 + 1,)), f
 
 
