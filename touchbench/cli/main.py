@@ -45,10 +45,15 @@ _COMMANDS: dict[str, tuple[str, str, str]] = {
 _IMPORT_RETRY_S = 0.05
 
 
+# the modules of Python's import machinery (frozen, as Python runs them by default, or not)
+_IMPORT_MACHINERY = {"_frozen_importlib", "_frozen_importlib_external", "importlib._bootstrap",
+                     "importlib._bootstrap_external"}
+
+
 def _importing(frame) -> bool:
     """Whether ``frame`` runs inside Python's import machinery (a module's body being executed)."""
     while frame is not None:
-        if frame.f_code.co_filename.startswith("<frozen importlib"):
+        if frame.f_globals.get("__name__") in _IMPORT_MACHINERY:
             return True
         frame = frame.f_back
     return False
