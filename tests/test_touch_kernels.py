@@ -69,16 +69,20 @@ def test_cell_spectra_inputs_are_numpys_bit_for_bit():
         hann = _hann_freqs(t, 10.0)[0]
         dw = np.empty((2, 40, t))
         mine = np.empty((2, 40))
-        cell_kernels.cell_series(s, hann, mine, False, dw)  # cell-rhythm's layout, its means its own
+        cell_kernels.cell_series(s, hann, mine, dw)  # cell-rhythm's layout, its means its own
         assert np.array_equal(mine, mean)
         assert np.array_equal((np.abs(np.fft.rfft(dw, axis=-1)) ** 2)[..., 1:], p_plain)
         rows = np.ascontiguousarray(cells)  # the same series stored one per row (touch-rhythm's layout)
         touch_kernels.windowed(rows, hann, dw)  # its means its own: numpy's of the rows
         p_rows, _ = centred_spectrum(rows - rows.mean(axis=2)[..., None], cells.max(axis=2) == cells.min(axis=2), 10.0)
         assert np.array_equal((np.abs(np.fft.rfft(dw, axis=-1)) ** 2)[..., 1:], p_rows)
-        one = np.ascontiguousarray(s[:, :, 5:6])  # a single cell: its mean is given (numpy's, summed pairwise)
-        cell_kernels.cell_series(one, hann, mean[:, 5:6].copy(), True, dw[:, :1])
-        assert np.array_equal((np.abs(np.fft.rfft(dw[:, :1], axis=-1)) ** 2)[..., 1:], p_plain[:, 5:6])
+        one = np.ascontiguousarray(s[:, :, 5:6])  # a single cell: its series contiguous, numpy sums it pairwise
+        one_mean = np.swapaxes(one, 1, 2).mean(axis=2)
+        p_one, _ = centred_spectrum(np.swapaxes(one, 1, 2) - one_mean[..., None], one.max(axis=1) == one.min(axis=1), 10.0)
+        mine_one = np.empty((2, 1))
+        cell_kernels.cell_series(one, hann, mine_one, dw[:, :1])
+        assert np.array_equal(mine_one, one_mean)
+        assert np.array_equal((np.abs(np.fft.rfft(dw[:, :1], axis=-1)) ** 2)[..., 1:], p_one)
 
 
 def test_contact_weights_sums_are_numpys_bit_for_bit():

@@ -11,20 +11,22 @@ import math
 
 import numpy as np
 
+from .motion_kernels import numpy_sum
 from .touch_kernels import jit
 
 
 @jit
-def cell_series(s, hann, mean, given, out):
-    """The cells' means ``mean`` ``(N, C)`` of the pressure ``s`` ``(N, T, C)`` (unless ``given``) and
-    every cell's series less its mean, times the Hann window, into ``out`` ``(N, C, T)`` (0 for a
-    constant series): numpy's ``centred_spectrum`` input, elementwise. A mean is the cell's frames
-    summed in order from 0, over T: numpy's mean of a cell's strided series (of more than one cell:
-    a single cell's series is contiguous, numpy sums it pairwise, and its mean is ``given``)."""
+def cell_series(s, hann, mean, out):
+    """The cells' means ``mean`` ``(N, C)`` of the pressure ``s`` ``(N, T, C)`` and every cell's
+    series less its mean, times the Hann window, into ``out`` ``(N, C, T)`` (0 for a constant
+    series): numpy's ``centred_spectrum`` input, elementwise. A mean is numpy's mean of the cell's
+    series: of more than one cell, a strided series, its frames summed in order from 0; of a single
+    cell, a contiguous one, summed in numpy's pairwise order (:func:`numpy_sum`); over T."""
     n, t, nc = s.shape
     lo = np.empty(nc)
     hi = np.empty(nc)
     acc = np.empty(nc)
+    halves, lefts = np.empty((3, 64), dtype=np.int64), np.empty(64)
     for i in range(n):
         si = s[i]
         m = mean[i]
@@ -37,9 +39,10 @@ def cell_series(s, hann, mean, given, out):
                 lo[c] = v if v < lo[c] else lo[c]
                 hi[c] = v if v > hi[c] else hi[c]
                 acc[c] += v
-        if not given:
-            for c in range(nc):
-                m[c] = acc[c] / t
+        if nc == 1:
+            acc[0] = 0.0 + numpy_sum(si[:, 0], 0, t, halves, lefts)
+        for c in range(nc):
+            m[c] = acc[c] / t
         oi = out[i]
         for k in range(t):  # the cells side by side (scattered stores: cheaper than gathered loads)
             hk = hann[k]

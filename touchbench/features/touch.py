@@ -361,10 +361,8 @@ class CellRhythm(_TouchBase):
         kern = kernels("features.cell_kernels")
         if kern is not None:  # the cells' spectra numpy's (their peaks), the rest in two loops
             hann, f = _hann_freqs(t, float(fs))
-            single = h * w == 1  # a single cell's series: numpy's mean (summed pairwise)
-            mean = np.ascontiguousarray(cells.mean(axis=2)) if single else np.empty((n, h * w))
-            dw = np.empty((n, h * w, t))
-            kern.cell_series(s, hann, mean, single, dw)
+            mean, dw = np.empty((n, h * w)), np.empty((n, h * w, t))
+            kern.cell_series(s, hann, mean, dw)
             out = np.empty((n, len(BANDS) + 11))
             kern.cell_pool(s, mean, np.abs(np.fft.rfft(dw, axis=-1)), f, *band_slices(f, BANDS), hann, h, w,
                            self._floor(self.BLOB_FLOOR), out)
