@@ -174,6 +174,33 @@ def test_resume_after_interruption_gives_the_same_final_numbers(tmp_path):
     pd.testing.assert_frame_equal(a, b, check_exact=True)
 
 
+def test_a_task_finished_in_another_folder_is_taken_not_computed(tmp_path):
+    """Another protocol's run of the same tasks (same data, folds, methods, seed) gives its finished
+    tasks to a run that names its folder: they are not computed again, a damaged one is, and the
+    results equal a run that computed everything, labelled as the new protocol names them."""
+    run_protocol(protocol(tmp_path), out=tmp_path / "a", progress=False)  # logreg: 4 folds x 3 feature sets
+    frags = tmp_path / "a" / "fragments"
+    damaged = sorted(frags.glob("*.predictions.parquet"))[0]
+    damaged.write_bytes(damaged.read_bytes()[:-8])  # no longer what its task wrote
+    both = ("test-logreg", "{name: test-forest, params: {n_estimators: 4}}")
+    other = parse_protocol(protocol(tmp_path, classifiers=both).text.replace("name: small", "name: other"),
+                           tmp_path / "other.yaml")
+    taken = run_protocol(other, out=tmp_path / "b", progress=False, reuse=[tmp_path / "a"])
+    assert taken.n_tasks == 24 and taken.n_ran == 12 + 1  # the forest's 12 and the damaged one
+    assert any("11 tasks had finished" in n and str(tmp_path / "a") in n for n in taken.notes)
+    fresh = run_protocol(other, out=tmp_path / "c", progress=False)
+    assert fresh.n_ran == 24
+    cols = ["task_id", "protocol", "features", "classifier", "seed", "n_train", "n_test", "status", "accuracy",
+            "balanced_accuracy", "macro_f1"]
+    pd.testing.assert_frame_equal(taken.scores[cols], fresh.scores[cols], check_exact=True)
+    assert (taken.scores["protocol"] == "other").all()
+    a = pd.read_parquet(tmp_path / "b" / "predictions.parquet")
+    b = pd.read_parquet(tmp_path / "c" / "predictions.parquet")
+    pd.testing.assert_frame_equal(a, b, check_exact=True)
+    again = run_protocol(other, out=tmp_path / "d", progress=False, reuse=[tmp_path / "a"], force=True)
+    assert again.n_ran == 24  # --force computes every task
+
+
 def test_failed_task_is_a_row_and_the_run_goes_on(tmp_path):
     p = protocol(tmp_path, classifiers=("test-logreg", "test-fail"))
     res = run_protocol(p, out=tmp_path / "out", progress=False)

@@ -416,6 +416,12 @@ expected:
     tuned = pd.read_parquet(tmp_path / "audit" / "tuned-on-test" / "scores.parquet")
     best = tuned.groupby("classifier")["accuracy"].mean().max()
     assert rows.loc[rows["variant"] == "tuned-on-test", "accuracy"].item() == pytest.approx(best)
+    # C = 1.0 is the honest setting: those 4 tasks are the honest variant's, taken from its folder
+    shared = tuned[tuned["task_id"].isin(honest["task_id"])]
+    assert len(shared) == 4 and (shared["classifier_params"] == honest["classifier_params"].iloc[0]).all()
+    manifest = json.loads((tmp_path / "audit" / "tuned-on-test" / "manifest.json").read_text())
+    assert manifest["sessions"][-1]["ran"] == 4, manifest["sessions"]
+    assert any("4 tasks had finished" in n and "honest" in n for n in manifest["notes"]), manifest["notes"]
     assert not rows["within_tolerance"].any()  # the gestures are easy: every variant is far above a made-up 50 %
     for f in ("audit.md", "audit.html", "audit.png", "audit.svg", "honest/protocol.yaml"):
         assert (tmp_path / "audit" / f).is_file(), f

@@ -1,8 +1,13 @@
 """Several plans of one dataset fill the feature cache together (engine.runner.fill_features), as
 ``papers reproduce`` does for the protocols of one dataset: one pass, the same matrices bit for bit
-as each protocol's run computes alone, and nothing for a finished task."""
+as each protocol's run computes alone, and nothing for a finished task; a task an earlier protocol
+of the run finished is taken from its folder."""
 
 from __future__ import annotations
+
+import json
+
+import pandas as pd
 
 from touchbench.engine.runner import fill_features, plan_protocol, run_protocol
 from touchbench.protocols.loading import load_protocol
@@ -103,3 +108,11 @@ def test_papers_reproduce_fills_the_cache_once_for_the_protocols_of_one_dataset(
     assert calls == [["zhou-one", "zhou-two"]]  # once, before the first of them ran
     for name in ("zhou-one", "zhou-two"):
         assert (tmp_path / "res" / "quick" / name / "scores.parquet").is_file()
+    # the two protocols hold the same tasks: the second takes them from the first's folder
+    two = json.loads((tmp_path / "res" / "quick" / "zhou-two" / "manifest.json").read_text())
+    assert two["sessions"][-1]["ran"] == 0 and any("zhou-one" in n for n in two["notes"]), two["notes"]
+    one_scores, two_scores = (pd.read_parquet(tmp_path / "res" / "quick" / n / "scores.parquet")
+                              for n in ("zhou-one", "zhou-two"))
+    assert len(two_scores) == 2 and (two_scores["protocol"] == "zhou-two").all()
+    cols = ["task_id", "accuracy", "macro_f1"]
+    pd.testing.assert_frame_equal(one_scores[cols], two_scores[cols], check_exact=True)

@@ -65,7 +65,7 @@ import copy
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import pandas as pd
 
@@ -311,18 +311,21 @@ def plan_audit(protocol: Protocol, out: str | Path, *, k: int = 10, window_secon
 def run_audit(protocol: Protocol, out: str | Path, *, jobs: int = 1, k: int = 10, window_seconds: float = 2.0,
               tune: dict[str, list[Any]] | None = None, variants: tuple[str, ...] = VARIANTS,
               progress: bool | None = None, planned: AuditPlan | None = None,
-              window_folds: int | None = None) -> Audit:
+              window_folds: int | None = None, reuse: Sequence[str | Path] = ()) -> Audit:
     """Run every variant (finished tasks are reused) and tabulate accuracy and inflation per method.
-    ``planned``: the :func:`plan_audit` of the same arguments, when the caller made it already."""
+    ``planned``: the :func:`plan_audit` of the same arguments, when the caller made it already.
+    A variant's task that another variant run before it, or a folder of ``reuse`` (the protocol's
+    own run: its honest variant), finished is taken from there (:func:`run_plan`'s ``reuse``): the
+    honest variant is the protocol itself, and tuning on test runs the protocol's own setting too."""
     planned = planned or plan_audit(protocol, out, k=k, window_seconds=window_seconds, tune=tune, variants=variants,
                                     window_folds=window_folds)
     protos, notes = planned.protocols, planned.notes
     accs: dict[str, dict[str, float]] = {}
-    folders = {}
+    folders: dict[str, Path] = {}
     for variant, (plan, folder) in planned.plans.items():
         make_results_dir(folder)
         atomic_write_bytes(folder / "protocol.yaml", protos[variant].text.encode())
-        res = run_plan(plan, folder, jobs=jobs, progress=progress)
+        res = run_plan(plan, folder, jobs=jobs, progress=progress, reuse=[*reuse, *folders.values()])
         same = _method_names(protos[variant], protos["honest"]) if variant == "window-kfold" else {}
         accs[variant] = {same.get(m, m): a for m, a in _accuracies(res.scores).items()}
         folders[variant] = folder

@@ -197,7 +197,8 @@ def _damaged_notes(plan: Plan, problems: dict[str, str]) -> list[str]:
 def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force: bool = False,
              retry_failed: bool = False, progress: bool | None = None, worker_setup=None,
              wait: float = 0.0, fail_fast: bool = False, final: bool = False, force_final: bool = False,
-             ledger: str | Path | None = None, methods: Sequence[str] | None = None) -> RunResult:
+             ledger: str | Path | None = None, methods: Sequence[str] | None = None,
+             reuse: Sequence[str | Path] = ()) -> RunResult:
     """Execute the pending tasks of ``plan`` and write the reports (see the module docstring).
 
     ``methods`` (method names of the plan, ``FEATURES/LABEL`` or a label alone:
@@ -217,6 +218,10 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
     ``final`` marks the run to report and is refused when the test set had
     a final run with other methods, unless ``force_final``
     (:func:`touchbench.results.ledger.check_final`).
+
+    ``reuse``: other results folders (of the same or another protocol) whose finished tasks a
+    pending task takes instead of computing, when its id is there (the same data, fold, method,
+    seed and component code: :meth:`touchbench.results.session.Results.adopt`); not with ``force``.
     """
     out = Path(out) if out is not None else default_results_dir(plan.protocol)
     only = check_methods(plan, methods)
@@ -224,7 +229,7 @@ def run_plan(plan: Plan, out: str | Path | None = None, *, jobs: int = 1, force:
                       ids_hash=plan.ids_hash, task_ids=plan.task_ids, ledger=ledger, wait=wait) as store:
         return _run_held(plan, store, out, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
                          worker_setup=worker_setup, fail_fast=fail_fast, final=final, force_final=force_final,
-                         methods=only)
+                         methods=only, reuse=() if force else reuse)
 
 
 def _design_captures(plan: Plan) -> list[str] | list[list[str]] | None:
@@ -404,7 +409,8 @@ def _merge_and_record(plan: Plan, store: Results, out: Path, session: _Session,
 
 def _run_held(plan: Plan, store: Results, out: Path, *, jobs: int, force: bool, retry_failed: bool,
               progress: bool | None, worker_setup, fail_fast: bool = False, final: bool = False,
-              force_final: bool = False, methods: set[str] | None = None) -> RunResult:
+              force_final: bool = False, methods: set[str] | None = None,
+              reuse: Sequence[str | Path] = ()) -> RunResult:
     t_start, started_at = time.perf_counter(), now_iso()
     jobs = _jobs_for_backend(jobs)
     design_captures = _design_captures(plan)  # a design naming an unknown column is refused before any task
@@ -419,6 +425,13 @@ def _run_held(plan: Plan, store: Results, out: Path, *, jobs: int, force: bool, 
         return _noop_result(plan, store, out, [t.task_id for t in selected], notes, t_start)
     left = set(todo.pending)
     pending = [t for t in selected if t.task_id in left]
+    if reuse and pending:
+        taken = store.adopt([t.task_id for t in pending], reuse)
+        pending = [t for t in pending if t.task_id not in taken]
+        if taken:
+            notes.append(f"{len(taken)} tasks had finished with the same data, fold, method and seed in "
+                         f"{', '.join(map(str, dict.fromkeys(taken.values())))}: their results were taken "
+                         "from there, not computed again")
     session = _Session(started_at, t_start, jobs, force, [t.task_id for t in selected], len(pending), notes=notes)
     with _Progress(sys.stderr.isatty() if progress is None else progress) as prog:
         if pending:
@@ -455,10 +468,11 @@ def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None,
                  cache_root: str | Path | None = None, dataset: TouchDataset | None = None,
                  worker_setup=None, wait: float = 0.0, fail_fast: bool = False, final: bool = False,
                  force_final: bool = False, ledger: str | Path | None = None,
-                 methods: Sequence[str] | None = None) -> RunResult | list[RunResult]:
+                 methods: Sequence[str] | None = None, reuse: Sequence[str | Path] = ()) -> RunResult | list[RunResult]:
     """Validate, plan and run a protocol (a :class:`Protocol` or a file path): its result, or one
     result per evaluation (in order) for a protocol with ``evaluations``. Every evaluation is planned
-    before any runs. ``methods``: run only these methods' tasks (:func:`run_plan`)."""
+    before any runs. ``methods``: run only these methods' tasks; ``reuse``: results folders whose
+    finished tasks a pending task with the same id takes (:func:`run_plan`)."""
     if not isinstance(protocol, Protocol):
         protocol = load_protocol(protocol)
     out_list = []
@@ -466,5 +480,5 @@ def run_protocol(protocol: Protocol | str | Path, out: str | Path | None = None,
         present = [m for m in methods or () if names_a_method(plan, m)]
         out_list.append(run_plan(plan, folder, jobs=jobs, force=force, retry_failed=retry_failed, progress=progress,
                                  worker_setup=worker_setup, wait=wait, fail_fast=fail_fast, final=final,
-                                 force_final=force_final, ledger=ledger, methods=present or methods))
+                                 force_final=force_final, ledger=ledger, methods=present or methods, reuse=reuse))
     return out_list if protocol.evaluations else out_list[0]

@@ -82,8 +82,9 @@ def reproduce(profile: str = "quick", out: str | Path = "results/papers", *, onl
                 if len(group) > 1:  # one protocol fills its own
                     _fill_features(group, loaded, echo=echo, jobs=jobs, progress=progress)
             r = ProtocolRun(path=f, name=proto.name, out=out / profile / proto.name, changes=changes)
+            earlier = [run.out for (p, _, _), run in zip(chosen, runs) if _dataset_key(p) == _dataset_key(proto)]
             _run_guarded(proto, r, loaded, echo=echo, jobs=jobs, progress=progress, failed=failed,
-                         audit=audit_options)
+                         audit=audit_options, reuse=earlier)
             runs.append(r)
         wall = time.perf_counter() - t_all
         _stop_workers()
@@ -187,13 +188,16 @@ def _fill_features(group: list[tuple[Any, Path]], loaded: "_LoadedDataset", *, e
 
 
 def _run_guarded(proto, r: ProtocolRun, loaded: _LoadedDataset, *, echo: Callable[[str], None], jobs: int,
-                 progress: bool | None, failed: list[str] | None, audit: dict[str, Any] | None) -> None:
+                 progress: bool | None, failed: list[str] | None, audit: dict[str, Any] | None,
+                 reuse: list[Path]) -> None:
     """Run one protocol into ``r``: any error is recorded in ``r.error`` (and the protocol's name in
-    ``failed``) instead of raised, so that the other reproductions go on."""
+    ``failed``) instead of raised, so that the other reproductions go on. ``reuse``: the results
+    folders of the protocols run before it on its dataset (a task finished there is not run again)."""
     t0 = time.perf_counter()
     try:
         dataset = loaded.get(proto, echo)
-        _run_one(proto, r, dataset, echo=echo, jobs=jobs, progress=progress, failed=failed, audit=audit)
+        _run_one(proto, r, dataset, echo=echo, jobs=jobs, progress=progress, failed=failed, audit=audit,
+                 reuse=reuse)
     except TouchbenchError as e:
         r.error = str(e)
         echo(f"{proto.name}: FAILED: {e}")
@@ -206,11 +210,12 @@ def _run_guarded(proto, r: ProtocolRun, loaded: _LoadedDataset, *, echo: Callabl
 
 
 def _run_one(proto, r: ProtocolRun, dataset, *, echo: Callable[[str], None], jobs: int, progress: bool | None,
-             failed: list[str] | None, audit: dict[str, Any] | None) -> None:
+             failed: list[str] | None, audit: dict[str, Any] | None, reuse: list[Path]) -> None:
     """Run one protocol on ``dataset`` into ``r.out``, and its leakage audit when asked (``audit``: the
-    profile's options of :func:`touchbench.engine.audit.run_audit`, None: no audit)."""
+    profile's options of :func:`touchbench.engine.audit.run_audit`, None: no audit). A task finished
+    in a folder of ``reuse``, or for the audit in the protocol's own run, is taken from there."""
     echo(f"{proto.name}: running -> {r.out}")
-    res = run_protocol(proto, r.out, jobs=jobs, progress=progress, dataset=dataset)
+    res = run_protocol(proto, r.out, jobs=jobs, progress=progress, dataset=dataset, reuse=reuse)
     r.n_ran = res.n_ran
     echo(f"{proto.name}: {res.n_ran} ran, {res.n_skipped} finished before, {res.n_failed} failed, "
          f"{res.seconds:.0f} s")
@@ -220,7 +225,7 @@ def _run_one(proto, r: ProtocolRun, dataset, *, echo: Callable[[str], None], job
         echo(f"{proto.name}: leakage audit -> {audit_dir(r.out)}")
         a = run_audit(proto, audit_dir(r.out), jobs=jobs, k=proto.audit.k,
                       window_seconds=proto.audit.window_seconds, tune=proto.audit.tune,
-                      variants=tuple(proto.audit.variants), progress=progress, **audit)
+                      variants=tuple(proto.audit.variants), progress=progress, reuse=[r.out], **audit)
         write_audit(a.table, audit_dir(r.out), a.published, a.notes, title=f"Leakage audit: {proto.name}")
 
 

@@ -175,6 +175,26 @@ class Results:
         self._writer.write(row["task_id"], row, predictions)
         self._status[row["task_id"]] = row["status"]
 
+    def adopt(self, task_ids: Sequence[str], sources: Sequence[str | Path]) -> dict[str, Path]:
+        """Those of ``task_ids`` that finished with status ``ok`` in another results folder of
+        ``sources`` (the first holding it), added here as if computed now (:meth:`add`: fragments and
+        checksums of their own, this run's id): each id taken with the folder it came from, in the
+        order asked. A task's id hashes
+        everything its result depends on (data, fold, method, seed and the code of its components), so
+        a sound fragment with the same id elsewhere is its result; the merge relabels its rows as this
+        plan names them. A source whose fragment is damaged, failed or missing gives nothing."""
+        wanted, taken = list(task_ids), {}
+        for source in sources:
+            other = ResultStore(source)
+            if other.root.resolve() == self._store.root.resolve():
+                continue
+            for tid in [t for t in wanted if t not in taken and other.status(t) == "ok"]:
+                row = other.read_scores([tid]).drop(columns="run_id").iloc[0].to_dict()
+                preds = other.read_predictions([tid]).drop(columns="run_id")
+                self.add(row, preds if len(preds) else None)
+                taken[tid] = other.root
+        return {t: taken[t] for t in wanted if t in taken}
+
     def _close(self, exc_type: type[BaseException] | None) -> None:
         """Wait for every fragment being written (raising the last write's error unless the run
         is already leaving on an error of its own)."""

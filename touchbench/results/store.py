@@ -331,6 +331,15 @@ class ResultStore:
                 out[tid] = problem[0]
         return out
 
+    def status(self, tid: str) -> str | None:
+        """The status (``ok`` / ``failed``) of a task whose fragments are sound, else None (none, or
+        damaged: :meth:`finished`)."""
+        path = self.scores_fragment(tid)
+        if not path.is_file():
+            return None
+        problem = self._fragment_problem(tid, path)
+        return None if isinstance(problem, str) else problem[0]
+
     def _fragment_problem(self, tid: str, path: Path) -> str | tuple[str]:
         """The reason a task's fragments cannot be trusted, or ``(status,)``: what is wrong with their
         content first, then whether they are those its task wrote (:func:`checksum_problem`)."""
