@@ -14,6 +14,23 @@ import pytest
 from touchbench.core.paths import data_dir
 
 
+def pytest_configure(config):
+    """Under ``--dist loadgroup`` (``make test``) pytest-xdist sends the tests of one ``xdist_group`` to
+    one worker by appending the group to each test's id; pytest 9.2 keeps the id where pytest-xdist
+    3.8 cannot append it, and xdist then ignores every group without a word: the aeon tests compile
+    aeon's loops in both workers, the cluster tests run beside each other. Refuse that pair."""
+    from importlib.metadata import version
+
+    from packaging.version import Version
+
+    if getattr(config.option, "dist", None) != "loadgroup":
+        return
+    if Version(pytest.__version__) >= Version("9.2") and Version(version("pytest-xdist")) <= Version("3.8.0"):
+        raise pytest.UsageError(f"pytest {pytest.__version__} with pytest-xdist {version('pytest-xdist')}: "
+                                "--dist loadgroup would ignore every xdist_group; install the pins of "
+                                "constraints.txt (pip install -c constraints.txt -e '.[dev]')")
+
+
 def _missing(msg: str):
     """Fail under CI=true (CI must have everything), skip elsewhere."""
     if os.environ.get("CI", "").lower() == "true":
