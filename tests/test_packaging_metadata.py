@@ -79,7 +79,7 @@ def test_the_development_pins_lie_within_the_ranges_users_get():
     pins = [Requirement(line) for line in (REPO / "constraints.txt").read_text(encoding="utf-8").splitlines()
             if line.strip() and not line.startswith("#")]
     ranges = {r.name: r.specifier for r in _requirements()}
-    assert [p.name for p in pins] == ["torch", "flake8", "flake8-functions", "Flake8-pyproject", "pytest-xdist", "skops"]
+    assert [p.name for p in pins] == ["torch", "flake8", "flake8-functions", "Flake8-pyproject", "pytest-xdist", "pytest", "skops"]
     for pin in pins:
         (version,) = [s.version for s in pin.specifier]
         assert version in ranges[pin.name], (pin, ranges[pin.name])
