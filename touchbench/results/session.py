@@ -4,7 +4,8 @@ The engine asks its results folder one question and hands it its finished tasks:
 
     with open_results(out, protocol=..., evaluation=..., run_id=..., ids_hash=..., task_ids=...) as store:
         todo = store.remaining(selected, force=..., retry_failed=..., report=..., final=..., ...)
-        for row, predictions in computed(todo.pending):
+        taken = store.adopt(todo.pending, other_folders)  # finished elsewhere: not computed again
+        for row, predictions in computed(t for t in todo.pending if t not in taken):
             store.add(row, predictions)
         tables = store.finish(stamp=..., metrics=..., per_task=..., notes=..., describe=..., ended=...)
 
@@ -179,10 +180,10 @@ class Results:
         """Those of ``task_ids`` that finished with status ``ok`` in another results folder of
         ``sources`` (the first holding it), added here as if computed now (:meth:`add`: fragments and
         checksums of their own, this run's id): each id taken with the folder it came from, in the
-        order asked. A task's id hashes
-        everything its result depends on (data, fold, method, seed and the code of its components), so
-        a sound fragment with the same id elsewhere is its result; the merge relabels its rows as this
-        plan names them. A source whose fragment is damaged, failed or missing gives nothing."""
+        order asked. A task's id hashes everything its result depends on (data, fold, method, seed
+        and the code of its components), so a sound fragment with the same id elsewhere is its
+        result; the merge relabels its rows as this plan names them. A source whose fragment is
+        damaged, failed or missing gives nothing."""
         wanted, taken = list(task_ids), {}
         for source in sources:
             other = ResultStore(source)
