@@ -588,17 +588,55 @@ def test_window_kfold_keeps_the_first_windows_and_runs_the_first_folds():
         make_splitter("window-kfold", k=4, frames=3, folds=5)
 
 
-def test_the_window_variant_of_a_cnn_is_reported_as_the_same_method(tmp_path):
-    from touchbench.engine.audit import run_audit
+def test_window_twins_are_entries_that_one_window_makes_the_same_network():
+    from touchbench.engine.audit import window_twins
+
+    cnn = {"name": "cnn", "params": {"L": 30}}
+    data = {"classifiers": [cnn,
+                            {"name": "cnn", "label": "all", "params": {"L": 30, "test_windows": "all", "vote": "soft"}},
+                            {"name": "cnn", "label": "hard", "params": {"L": 30, "test_windows": [0, 3], "vote": "hard",
+                                                                        "train_windows": "all"}},
+                            {"name": "cnn", "label": "short", "params": {"L": 30, "max_epochs": 5}},
+                            {"name": "cnn", "label": "grid", "params": {"L": 30, "vote": {"grid": ["soft", "hard"]}}}]}
+    assert window_twins(data) == {"all": "cnn", "hard": "cnn"}
+    assert data["classifiers"][1]["params"]["L"] == 30  # the protocol's data are left as they were
+    assert window_twins({"classifiers": [{"name": "cnn", "params": {"L": 3}}, {"name": "cnn", "params": {"L": 9}}]}) == {}
+
+
+def test_with_one_window_the_windows_tested_and_their_vote_do_not_change_the_cnn():
+    pytest.importorskip("torch")
+    from touchbench.classifiers.cnn import HaartCNNClassifier
+
+    rng = np.random.default_rng(3)
+    X, y = rng.normal(size=(40, 3 * 2 * 2)), np.repeat(["a", "b"], 20)
+    kw = dict(grid=(2, 2), L=1, max_epochs=2, channels=(2, 2, 2), hidden_units=4, random_state=5)
+    one = HaartCNNClassifier(**kw).fit(X, y).predict_proba(X)
+    for other in (dict(test_windows="all", vote="hard", train_windows="all"), dict(test_windows=[0], vote="soft")):
+        np.testing.assert_array_equal(HaartCNNClassifier(**kw, **other).fit(X, y).predict_proba(X), one)
+
+
+def test_the_window_variant_runs_a_twin_once_and_reports_it_for_both(tmp_path):
+    from touchbench.engine.audit import audit_protocols, run_audit
     from touchbench.protocols.loading import load_protocol
 
     p = _cnn_audit_protocol(tmp_path)
-    text = p.read_text().replace("params: {L: 5}", "params: {L: 5, max_epochs: 1, channels: [4, 8, 8], hidden_units: 16}")
-    p.write_text(text)
+    cheap = "max_epochs: 1, channels: [4, 8, 8], hidden_units: 16"
+    p.write_text(p.read_text().replace(
+        "classifiers: [{name: cnn, params: {L: 5}}]",
+        f"classifiers: [{{name: cnn, params: {{L: 5, {cheap}}}}}, "
+        f"{{name: cnn, label: cnn-all-windows, params: {{L: 5, test_windows: all, vote: soft, {cheap}}}}}]"))
+    protos, notes = audit_protocols(load_protocol(p), k=10, variants=("honest", "window-kfold"), window_folds=2)
+    assert [m.label for m in protos["window-kfold"].evaluated_methods()] == ["cnn"]
+    assert [m.label for m in protos["honest"].evaluated_methods()] == ["cnn", "cnn-all-windows"]
+    assert any("cnn-all-windows is the same method as cnn" in n for n in notes)
     a = run_audit(load_protocol(p), tmp_path / "audit", k=10, variants=("honest", "window-kfold"), window_folds=2)
-    # raw-window's frames differ (12 -> 2), yet the window variant's row is the honest method's
-    assert a.table["method"].tolist() == ["captures(frames=12) / cnn"] * 2
     windows = pd.read_parquet(tmp_path / "audit" / "window-kfold" / "scores.parquet")
-    assert len(windows) == 2 and (windows["n_test"] == 30).all()  # 300 windows, 2 of 10 folds
-    row = a.table[a.table["variant"] == "window-kfold"].iloc[0]
-    assert row["accuracy"] == pytest.approx(windows["accuracy"].mean())
+    # one network, 2 of 10 folds of 30 of the 300 windows
+    assert len(windows) == 2 and set(windows["classifier"]) == {"cnn"} and (windows["n_test"] == 30).all()
+    # raw-window's frames differ (12 -> 2), yet the window variant's rows are the honest methods'
+    assert sorted(set(a.table["method"])) == ["captures(frames=12) / cnn", "captures(frames=12) / cnn-all-windows"]
+    t = a.table.set_index(["method", "variant"])["accuracy"]
+    for method in ("captures(frames=12) / cnn", "captures(frames=12) / cnn-all-windows"):
+        assert t[(method, "window-kfold")] == pytest.approx(windows["accuracy"].mean())
+    honest = pd.read_parquet(tmp_path / "audit" / "honest" / "scores.parquet")
+    assert sorted(set(honest["classifier"])) == ["cnn", "cnn-all-windows"]  # both run where they differ

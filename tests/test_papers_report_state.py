@@ -59,6 +59,10 @@ expected:
      "expected.results[0].cause.kind: kind unexplained, but a candidate is excluded by a run of this row"),
     ('{kind: unexplained, ruled_out: [{tried: t, source: docs/x.md, row: 60, gave: "60.0"}]}',
      "expected.results[0].cause.ruled_out[0].row: row is what a run of this row gave: it needs the command"),
+    # an audit variant's figure comes from the audit, not from another command
+    ('{kind: ruled_out, ruled_out: [{tried: t, command: "touchbench run a.yaml", variant: capture-kfold, row: 60, '
+     'gave: "60.0"}]}',
+     "expected.results[0].cause.ruled_out[0].variant: variant names the leakage audit's variant that gave row"),
 ])
 def test_a_declared_kind_against_the_rule_is_refused_naming_the_field(tmp_path, cause, message):
     with pytest.raises(TouchbenchError) as e:
@@ -80,6 +84,35 @@ def test_the_kind_follows_the_rule_and_the_cell_lists_the_excluded_apart():
     assert cause_cell(False, cause, None, 40.0, 15.0) == (
         "unexplained", "**unexplained:** tried: near (`touchbench run a.yaml`: 43.0); far (`touchbench run b.yaml`: "
                        "52.5); note (docs/n.md: 55)")
+
+
+def test_a_figure_cited_from_an_audit_variant_gets_this_reports_figure_beside_it_where_they_differ(tmp_path):
+    import json
+
+    from touchbench.papers.comparisons import audit_section
+
+    cited = {"tried": "leaky folds", "command": "touchbench audit rule", "variant": "capture-kfold", "row": 52.5,
+             "gave": "52.5 %"}
+    cause = Cause.model_validate({"kind": "ruled_out", "ruled_out": [cited]})
+    # 52.54 rounds to the cited 52.5: nothing added; 53.26 rounds to 53.3: this run's figure is given
+    assert cause_cell(False, cause, None, 40.0, 5.0, {"capture-kfold": 52.54}) == cause_cell(False, cause, None, 40.0, 5.0)
+    assert cause_cell(False, cause, None, 40.0, 5.0, {"capture-kfold": 53.26})[1] == (
+        "**ruled out:** cause open; ruled out: leaky folds (`touchbench audit rule`: 52.5 %; this report's own "
+        "audit gave 53.3 %)")
+    assert cause_cell(False, cause, None, 40.0, 5.0, {"honest": 53.26}) == cause_cell(False, cause, None, 40.0, 5.0)
+    p = _protocol(tmp_path, "{kind: ruled_out, ruled_out: [" + json.dumps(cited) + "]}")
+    p.write_text(p.read_text() + "audit: {variants: [honest, capture-kfold]}\n")
+    proto = load_protocol(p, deep=False)
+    out = tmp_path / "rule"
+    (tmp_path / "rule-audit").mkdir()
+    rows = [{"method": "sd / gaus-rf", "variant": "honest", "accuracy": 0.41, "inflation_pp": 0.0, "leaky": False},
+            {"method": "sd / gaus-rf", "variant": "capture-kfold", "accuracy": 0.5326, "inflation_pp": 12.26, "leaky": True}]
+    (tmp_path / "rule-audit" / "audit.json").write_text(json.dumps({"rows": rows, "published": {}, "notes": []}))
+    text = "\n".join(audit_section(proto, out))
+    assert "- sd / gaus-rf, capture-kfold: the protocol cites 52.5 %, this audit gave 53.3 %" in text
+    rows[1]["accuracy"] = 0.5249
+    (tmp_path / "rule-audit" / "audit.json").write_text(json.dumps({"rows": rows, "published": {}, "notes": []}))
+    assert "the protocol cites" not in "\n".join(audit_section(proto, out))
 
 
 def _row_of(proto, r):

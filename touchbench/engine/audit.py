@@ -56,7 +56,10 @@ over the training windows (``validation_by: rows``; the paper describes no
 validation split, and with windows as samples, holding out whole subjects
 for it would be the one honest step in a leaky evaluation); ``window_folds``
 runs only the first folds of that split (a cheaper estimate of the same
-figure).
+figure). With one window a capture, which windows a CNN is tested on and how
+they vote cannot matter: an entry that differs from an earlier one only in
+those (``cnn-all-windows`` beside ``cnn``) is the same network, run once and
+reported for both (:func:`window_twins`).
 """
 
 from __future__ import annotations
@@ -71,17 +74,19 @@ import pandas as pd
 
 from ..core.atomic import atomic_write_bytes
 from ..core.errors import TouchbenchError
+from ..core.hashing import canonical_json
 from ..methods import CAPTURES, METHODS, stops_on_test
 from ..methods.base import takes_captures
 from ..protocols.derive import derive, protocol_data
 from ..protocols.schema import Protocol
+from ..protocols.specs import AUDIT_VARIANTS
 from ..results.locking import make_results_dir
 from .planning import Plan, method_labels, prepare_evaluation
 from .runner import plan_protocol, run_plan
 
 __all__ = ["VARIANTS", "Audit", "AuditPlan", "audit_protocols", "plan_audit", "run_audit", "tunable_params"]
 
-VARIANTS = ("honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test", "stopped-on-test")
+VARIANTS = AUDIT_VARIANTS
 
 
 @dataclass
@@ -125,17 +130,70 @@ def _window_scheme(frames: int, per_capture: int | None, k: int, folds: int | No
     return scheme
 
 
+#: a CNN's parameters that cannot matter with one window a capture (L = 1): the windows it trains and
+#: tests on (window 0, whatever they say) and how a capture's windows vote (there is one)
+ONE_WINDOW_MOOT = ("train_windows", "test_windows", "vote")
+
+
+def _entry_name(spec: dict[str, Any]) -> str | None:
+    return spec.get("name", spec.get("estimator"))
+
+
+def _one_window(spec: Any) -> None:
+    """An entry with sub-windows of its own (an ``L``) on windows: ``L = 1``, in place; a CNN's early
+    stopping drawn over the windows and what cannot matter with one window (:data:`ONE_WINDOW_MOOT`) dropped."""
+    if isinstance(spec, dict) and "L" in (spec.get("params") or {}):
+        spec["params"]["L"] = 1
+        if _entry_name(spec) == "cnn":
+            spec["params"]["validation_by"] = "rows"  # early stopping on windows too: they are the samples
+            for moot in ONE_WINDOW_MOOT:
+                spec["params"].pop(moot, None)
+
+
+def _twin_key(spec: Any, labels: list[str]) -> str | None:
+    """What makes an entry the method it is on windows (its name and parameters once
+    :func:`_one_window`), or None for one never merged: a name alone, a grid, a label that is not
+    the entry's own."""
+    if not isinstance(spec, dict):
+        return None
+    label = spec.get("label") or _entry_name(spec)
+    if any(isinstance(v, dict) and "grid" in v for v in (spec.get("params") or {}).values()) or labels.count(label) != 1:
+        return None
+    spec = copy.deepcopy(spec)
+    _one_window(spec)
+    return canonical_json([_entry_name(spec), spec.get("params") or {}])
+
+
+def window_twins(data: dict[str, Any]) -> dict[str, str]:
+    """The entries of a protocol's ``data`` that on windows (:func:`_one_window`) are the same method as
+    an earlier entry: ``{its label: the earlier one's}`` (``cnn-all-windows`` is ``cnn`` with L = 1)."""
+    twins: dict[str, str] = {}
+    for key in ("classifiers", "methods"):
+        specs = data.get(key) or []
+        labels = [s.get("label") or _entry_name(s) if isinstance(s, dict) else s for s in specs]
+        seen: dict[str, str] = {}
+        for spec, label in zip(specs, labels):
+            ident = _twin_key(spec, labels)
+            if ident is not None and ident in seen:
+                twins[label] = seen[ident]
+            elif ident is not None:
+                seen[ident] = label
+    return twins
+
+
 def _window_entries(data: dict[str, Any], frames: int) -> dict[str, Any]:
-    """The protocol's entries on windows: raw-window's frames set to the window, an L set to 1."""
+    """The protocol's entries on windows: raw-window's frames set to the window, an L set to 1
+    (:func:`_one_window`), an entry that is then an earlier one's twin (:func:`window_twins`) left out."""
+    twins = window_twins(data)
     for combo in data.get("features") or []:
         for ref in (combo if isinstance(combo, list) else [combo]):
             if isinstance(ref, dict) and ref.get("name") == CAPTURES:
                 ref.setdefault("params", {})["frames"] = frames
-    for spec in [*(data.get("classifiers") or []), *(data.get("methods") or [])]:
-        if isinstance(spec, dict) and "L" in (spec.get("params") or {}):
-            spec["params"]["L"] = 1
-            if spec.get("name", spec.get("estimator")) == "cnn":
-                spec["params"]["validation_by"] = "rows"  # early stopping on windows too: they are the samples
+    for key in ("classifiers", "methods"):
+        if data.get(key):
+            data[key] = [s for s in data[key] if not (isinstance(s, dict) and (s.get("label") or _entry_name(s)) in twins)]
+            for spec in data[key]:
+                _one_window(spec)
     return data
 
 
@@ -225,6 +283,9 @@ def audit_protocols(protocol: Protocol, *, k: int = 10, window_seconds: float = 
         out["window-kfold"] = _window_entries(dict(copy.deepcopy(base), scheme=scheme), frames)
         notes.append(f"window-kfold: windows of {frames} frames ({why}), no overlap, stratified {k}-fold over "
                      "the windows" + (f", its first {scheme['folds']} folds run" if "folds" in scheme else ""))
+        notes += [f"window-kfold: with L = 1 (one window a capture) {twin} is the same method as {kept} (which "
+                  "windows it takes and how they vote cannot matter): run once, reported for both"
+                  for twin, kept in window_twins(base).items()]
     if "subject-id" in variants:
         entries = _subject_id_entries(protocol)
         if entries:
@@ -263,14 +324,22 @@ def _accuracies(scores: pd.DataFrame) -> dict[str, float]:
     return out
 
 
-def _method_names(variant: Protocol, honest: Protocol) -> dict[str, str]:
-    """The variant's method names (``features / classifier``) -> the honest protocol's, entry by entry
-    (the window variant changes raw-window's frames, so its feature label differs)."""
-    def names(p: Protocol) -> list[str]:
-        return [f"{m.features_label} / {m.label}" for m in p.evaluated_methods()]
+def _window_accuracies(scores: pd.DataFrame, variant: Protocol, honest: Protocol,
+                       twins: dict[str, str]) -> dict[str, float]:
+    """The window variant's accuracies under the honest protocol's method names (``features /
+    classifier``), entry by entry (the variant changes raw-window's frames, so its feature label
+    differs); an entry left out as an earlier one's twin (:func:`window_twins`) gets that one's."""
+    def name(m) -> str:
+        return f"{m.features_label} / {m.label}"
 
-    ours, theirs = names(variant), names(honest)
-    return dict(zip(ours, theirs)) if len(ours) == len(theirs) else {}
+    ours = [name(m) for m in variant.evaluated_methods()]
+    theirs = [m for m in honest.evaluated_methods() if m.label not in twins]
+    same = dict(zip(ours, map(name, theirs))) if len(ours) == len(theirs) else {}
+    accs = {same.get(m, m): a for m, a in _accuracies(scores).items()}
+    for m in honest.evaluated_methods():
+        if m.label in twins:
+            accs[name(m)] = accs.get(f"{m.features_label} / {twins[m.label]}", math.nan)
+    return accs
 
 
 @dataclass
@@ -326,8 +395,8 @@ def run_audit(protocol: Protocol, out: str | Path, *, jobs: int = 1, k: int = 10
         make_results_dir(folder)
         atomic_write_bytes(folder / "protocol.yaml", protos[variant].text.encode())
         res = run_plan(plan, folder, jobs=jobs, progress=progress, reuse=[*reuse, *folders.values()])
-        same = _method_names(protos[variant], protos["honest"]) if variant == "window-kfold" else {}
-        accs[variant] = {same.get(m, m): a for m, a in _accuracies(res.scores).items()}
+        accs[variant] = (_window_accuracies(res.scores, protos[variant], protos["honest"], window_twins(_base_data(protocol)))
+                         if variant == "window-kfold" else _accuracies(res.scores))
         folders[variant] = folder
     rows = []
     for method, honest in accs["honest"].items():

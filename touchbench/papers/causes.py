@@ -23,13 +23,23 @@ KIND_SHORT = {"measured": "cause measured", "ruled_out": "cause open, candidates
               "unexplained": "cause unexplained"}
 
 
-def _tried(r: RuledOut) -> str:
+def _tried(r: RuledOut, audit: dict[str, float]) -> str:
     where = f"`{r.command}`" if r.command is not None else r.source
     row = f"this row {r.row:g}; " if r.row is not None and f"{r.row:g}" not in r.gave else ""
-    return f"{r.tried} ({where}: {row}{r.gave})"
+    return f"{r.tried} ({where}: {row}{r.gave}{_this_run(r, audit)})"
 
 
-def _text(kind: str, cause: Cause | None, scene: str | None, value: float, tolerance: float) -> str:
+def _this_run(r: RuledOut, audit: dict[str, float]) -> str:
+    """This run's figure of a candidate's audit variant (``audit``: variant -> accuracy %, of this row's
+    method), when it ran and rounds otherwise than the cited ``row``."""
+    fresh = audit.get(r.variant) if r.variant is not None else None
+    if fresh is None or r.row is None or round(fresh, 1) == round(r.row, 1):
+        return ""
+    return f"; this report's own audit gave {fresh:.1f} %"
+
+
+def _text(kind: str, cause: Cause | None, scene: str | None, value: float, tolerance: float,
+          audit: dict[str, float]) -> str:
     if cause is None:
         return f"synthetic data of scene {scene}" if scene else "no cause known"
     if kind == "measured":
@@ -44,24 +54,25 @@ def _text(kind: str, cause: Cause | None, scene: str | None, value: float, toler
     excluded = [r for r in cause.ruled_out if r.excludes(value, tolerance)]
     others = [r for r in cause.ruled_out if not r.excludes(value, tolerance)]
     if excluded:
-        parts.append("ruled out: " + "; ".join(_tried(r) for r in excluded))
+        parts.append("ruled out: " + "; ".join(_tried(r, audit) for r in excluded))
     if others:
-        parts.append(("also tried: " if excluded else "tried: ") + "; ".join(_tried(r) for r in others))
+        parts.append(("also tried: " if excluded else "tried: ") + "; ".join(_tried(r, audit) for r in others))
     return "; ".join(parts) or "no cause known"
 
 
 def cause_cell(within: bool | None, cause: Cause | None, scene: str | None, value: float,
-               tolerance: float) -> tuple[str | None, str]:
+               tolerance: float, audit: dict[str, float] | None = None) -> tuple[str | None, str]:
     """The kind (``None`` unless the number is outside tolerance; the rule's,
     :func:`touchbench.protocols.expected.kind_by_rule`) and the cause column's text of the paper
     number ``value`` (``tolerance`` its tolerance); ``scene`` is the scene's name where the data are
-    synthetic."""
+    synthetic; ``audit``: this report's leakage audit of the number's method, variant -> accuracy %
+    (a candidate cited from an audit variant gets this run's figure beside it where they differ)."""
     if within is None:
         return None, "not run"
     if within:
         return None, f"reproduced on scene {scene}" if scene else "reproduced"
     kind = "unexplained" if cause is None else kind_by_rule(cause, value, tolerance)
-    text = f"**{KIND_LABELS[kind]}:** {_text(kind, cause, scene, value, tolerance)}"
+    text = f"**{KIND_LABELS[kind]}:** {_text(kind, cause, scene, value, tolerance, audit or {})}"
     return kind, text.replace("|", "\\|")
 
 

@@ -18,7 +18,7 @@ from ..reports.audit import audit_markdown
 from ..reports.stats import NO_VARIANCE, ZERO_DIFFERENCE, corrected_resampled_t, holm
 from ..results.store import PREDICTED, TRUE, read_results_table
 
-__all__ = ["audit_dir", "audit_section", "fmt", "ok_tasks", "other_sections", "read_run", "rel", "seed_spread"]
+__all__ = ["audit_dir", "audit_figures", "audit_section", "fmt", "ok_tasks", "other_sections", "read_run", "rel", "seed_spread"]
 
 
 def fmt(v: float | None, d: int = 1) -> str:
@@ -217,6 +217,36 @@ def audit_dir(out: Path) -> Path:
     return out.parent / f"{out.name}-audit"
 
 
+def audit_figures(proto, out: Path) -> dict[str, dict[str, float]]:
+    """This report's leakage audit of ``proto`` (its ``audit.json`` beside ``out``), method -> variant ->
+    accuracy %; {} when it did not run."""
+    path = audit_dir(out) / "audit.json"
+    if proto.audit is None or not path.is_file():
+        return {}
+    figures: dict[str, dict[str, float]] = {}
+    for row in json.loads(path.read_text())["rows"]:
+        if row.get("accuracy") is not None and math.isfinite(row["accuracy"]):
+            figures.setdefault(row["method"], {})[row["variant"]] = 100.0 * float(row["accuracy"])
+    return figures
+
+
+def _cited_audit(proto, out: Path) -> list[str]:
+    """The figures the protocol's causes cite from its audit (a candidate's ``row`` and ``variant``)
+    that this report's audit rounds otherwise, one line each; [] when all agree."""
+    figures, lines = audit_figures(proto, out), []
+    for e in (proto.expected.results if proto.expected is not None and figures else []):
+        method = f"{proto.features_label_of(list(e.features))} / {e.classifier}"
+        for r in (e.cause.ruled_out if e.cause is not None else []):
+            fresh = figures.get(method, {}).get(r.variant) if r.variant is not None else None
+            if fresh is not None and round(fresh, 1) != round(r.row, 1):
+                lines.append(f"- {method}, {r.variant}: the protocol cites {r.row:g} %, this audit gave {fresh:.1f} %")
+    if not lines:
+        return []
+    return ["", "**The protocol cites figures of this audit that this run did not give** (the same code, data and "
+                "seed can train a network to other weights on another machine; the causes' kinds follow the "
+                "cited figures):", "", *lines]
+
+
 def audit_section(proto, out: Path) -> list[str]:
     """The leakage audit of a protocol, as measured (its ``audit.json``), with the variants that
     come within the paper's tolerance; or how to run it."""
@@ -239,6 +269,7 @@ def audit_section(proto, out: Path) -> list[str]:
         lines.append(f"**{method}: the paper's {pub['value']:g} % (tolerance {pub['tolerance']:g}) is reproduced by "
                      + (", ".join(f"`{v}`" for v in hits) if hits else "no variant")
                      + (f"; the honest figure is {100 * float(honest.iloc[0]):.1f} %." if len(honest) else ".") + "**")
+    lines += _cited_audit(proto, out)
     for check in (proto.expected.confusions if proto.expected is not None else []):
         lines += ["", *_audit_confusion(check, audit_dir(out), list(dict.fromkeys(table["variant"])))]
     return lines + [""]

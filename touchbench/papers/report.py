@@ -25,7 +25,7 @@ from ..results.manifest import git_revision
 from ..results.summary import check_expected
 from ..scenes import load_scene
 from .causes import KIND_SHORT, cause_cell, kind_counts
-from .comparisons import audit_section, fmt, other_sections, read_run, rel, seed_spread
+from .comparisons import audit_figures, audit_section, fmt, other_sections, read_run, rel, seed_spread
 from .profiles import Profile, apply_profile
 from .timing import timing_text
 
@@ -70,15 +70,17 @@ def _data_kind(ref: str) -> str:
 
 
 
-def _expected_rows(proto, scores: pd.DataFrame, preds: pd.DataFrame | None) -> list[dict[str, Any]]:
+def _expected_rows(proto, scores: pd.DataFrame, preds: pd.DataFrame | None, out: Path) -> list[dict[str, Any]]:
     if proto.expected is None:
         return []
     rows = check_expected(proto.expected, scores, preds, proto.features_label_of)
     parsed = parse_dataset_ref(proto.dataset.name)
     scene = parsed.value if parsed.kind == "scene" else None
+    audit = audit_figures(proto, out)
     for r, e in zip(rows, proto.expected.results):
         r["cell"] = e.source or ""
-        r["kind"], r["cause"] = cause_cell(r["within"], e.cause, scene, e.value, r["tolerance"])
+        method = f"{proto.features_label_of(list(e.features))} / {e.classifier}"
+        r["kind"], r["cause"] = cause_cell(r["within"], e.cause, scene, e.value, r["tolerance"], audit.get(method))
     return rows
 
 
@@ -151,7 +153,7 @@ def _protocol_section(r: ProtocolRun, profile: Profile) -> _Section:
         err = str(scores[scores["status"] != "ok"]["error"].iloc[0]).splitlines()[0]
         sec.problems.append(f"{r.name}: {n_fail} of {len(scores)} tasks failed ({err})")
     body.append("")
-    rows = _expected_rows(proto, scores, preds)
+    rows = _expected_rows(proto, scores, preds, r.out)
     if rows:
         agg = proto.expected.aggregate
         over = ('mean over folds' if agg == 'mean' else 'pooled over the folds') + (' and seeds' if seeds else '')

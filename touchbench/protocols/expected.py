@@ -9,6 +9,7 @@ from pydantic import Field, field_validator, model_validator
 
 from .entries import _Model
 from .errors import _ErrorAt
+from .specs import AuditVariant
 
 
 CAUSE_KINDS = ("measured", "ruled_out", "unexplained")
@@ -42,13 +43,17 @@ class RuledOut(_Model):
     runs it, or else the ``source`` that reports it, such as a note under ``docs/research/``) and
     what it gave. ``row``: this row's accuracy (%) in the command's own run of this row with the
     candidate changed (of several settings, the one nearest the paper's number); a candidate whose
-    ``row`` is outside the row's tolerance is excluded (:data:`KIND_RULE`)."""
+    ``row`` is outside the row's tolerance is excluded (:data:`KIND_RULE`). ``variant``: when the
+    command is the protocol's leakage audit, the variant whose figure ``row`` is, so that a report
+    which ran the audit gives this run's figure beside the one cited (the same code, data and seed
+    can train a network to other weights on another machine, and so to another accuracy)."""
 
     tried: str = Field(min_length=1)
     command: str | None = Field(default=None, min_length=1)
     source: str | None = Field(default=None, min_length=1)
     gave: str = Field(min_length=1)
     row: float | None = None
+    variant: AuditVariant | None = None
 
     @model_validator(mode="after")
     def _where(self) -> "RuledOut":
@@ -59,6 +64,9 @@ class RuledOut(_Model):
         if self.row is not None and self.command is None:
             raise _ErrorAt(("row",), "row is what a run of this row gave: it needs the command that ran it "
                                      "(a source reports, it does not run the row)")
+        if self.variant is not None and (self.row is None or not (self.command or "").startswith("touchbench audit ")):
+            raise _ErrorAt(("variant",), "variant names the leakage audit's variant that gave row: it needs row and "
+                                         "the command that ran the audit (touchbench audit PROTOCOL)")
         return self
 
     def excludes(self, value: float, tolerance: float) -> bool:

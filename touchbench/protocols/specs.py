@@ -6,7 +6,7 @@ columns (:class:`ReportSpec`), the evaluations
 from __future__ import annotations
 
 import re
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -178,14 +178,16 @@ class EvaluationSpec(_Model):
     _name_ok = field_validator("name")(_folder_name)
 
 
+#: the leakage audit's variants (:mod:`touchbench.engine.audit`), in the order it runs them
+AuditVariant = Literal["honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test", "stopped-on-test"]
+AUDIT_VARIANTS: tuple[str, ...] = get_args(AuditVariant)
+
+
 class AuditSpec(_Model):
     """How ``touchbench audit`` and ``papers reproduce --audit`` audit this protocol: the leaky
     variants to run, the folds of the k-fold ones, the window of window-kfold, the grid tuned on test."""
 
-    variants: list[Literal["honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test",
-                           "stopped-on-test"]] = Field(
-        default_factory=lambda: ["honest", "capture-kfold", "window-kfold", "subject-id", "tuned-on-test",
-                                 "stopped-on-test"])
+    variants: list[AuditVariant] = Field(default_factory=lambda: list(AUDIT_VARIANTS))
     k: int = Field(default=10, ge=2)
     window_seconds: float = Field(default=2.0, gt=0)
     tune: dict[str, list[Any]] = Field(default_factory=dict)
