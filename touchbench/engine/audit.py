@@ -139,6 +139,11 @@ def _entry_name(spec: dict[str, Any]) -> str | None:
     return spec.get("name", spec.get("estimator"))
 
 
+def _entry_label(spec: Any) -> Any:
+    """An entry's label as the protocol gives it (its label, else its name; a bare name as it is)."""
+    return (spec.get("label") or _entry_name(spec)) if isinstance(spec, dict) else spec
+
+
 def _one_window(spec: Any) -> None:
     """An entry with sub-windows of its own (an ``L``) on windows: ``L = 1``, in place; a CNN's early
     stopping drawn over the windows and what cannot matter with one window (:data:`ONE_WINDOW_MOOT`) dropped."""
@@ -156,8 +161,8 @@ def _twin_key(spec: Any, labels: list[str]) -> str | None:
     the entry's own."""
     if not isinstance(spec, dict):
         return None
-    label = spec.get("label") or _entry_name(spec)
-    if any(isinstance(v, dict) and "grid" in v for v in (spec.get("params") or {}).values()) or labels.count(label) != 1:
+    grid = any(isinstance(v, dict) and "grid" in v for v in (spec.get("params") or {}).values())
+    if grid or labels.count(_entry_label(spec)) != 1:
         return None
     spec = copy.deepcopy(spec)
     _one_window(spec)
@@ -170,7 +175,7 @@ def window_twins(data: dict[str, Any]) -> dict[str, str]:
     twins: dict[str, str] = {}
     for key in ("classifiers", "methods"):
         specs = data.get(key) or []
-        labels = [s.get("label") or _entry_name(s) if isinstance(s, dict) else s for s in specs]
+        labels = [_entry_label(s) for s in specs]
         seen: dict[str, str] = {}
         for spec, label in zip(specs, labels):
             ident = _twin_key(spec, labels)
@@ -181,17 +186,17 @@ def window_twins(data: dict[str, Any]) -> dict[str, str]:
     return twins
 
 
-def _window_entries(data: dict[str, Any], frames: int) -> dict[str, Any]:
+def _window_entries(data: dict[str, Any], frames: int, twins: dict[str, str]) -> dict[str, Any]:
     """The protocol's entries on windows: raw-window's frames set to the window, an L set to 1
-    (:func:`_one_window`), an entry that is then an earlier one's twin (:func:`window_twins`) left out."""
-    twins = window_twins(data)
+    (:func:`_one_window`), an entry that is then an earlier one's twin (``twins``, :func:`window_twins`)
+    left out."""
     for combo in data.get("features") or []:
         for ref in (combo if isinstance(combo, list) else [combo]):
             if isinstance(ref, dict) and ref.get("name") == CAPTURES:
                 ref.setdefault("params", {})["frames"] = frames
     for key in ("classifiers", "methods"):
         if data.get(key):
-            data[key] = [s for s in data[key] if not (isinstance(s, dict) and (s.get("label") or _entry_name(s)) in twins)]
+            data[key] = [s for s in data[key] if not (isinstance(s, dict) and _entry_label(s) in twins)]
             for spec in data[key]:
                 _one_window(spec)
     return data
@@ -280,12 +285,13 @@ def audit_protocols(protocol: Protocol, *, k: int = 10, window_seconds: float = 
         ds = prepare_evaluation(protocol).dataset  # the data, to size the windows
         frames, first, why = _window_frames(protocol, int(ds.n_frames.min()), ds.sensor.frame_rate, window_seconds)
         scheme = _window_scheme(frames, first, k, window_folds)
-        out["window-kfold"] = _window_entries(dict(copy.deepcopy(base), scheme=scheme), frames)
+        twins = window_twins(base)
+        out["window-kfold"] = _window_entries(dict(copy.deepcopy(base), scheme=scheme), frames, twins)
         notes.append(f"window-kfold: windows of {frames} frames ({why}), no overlap, stratified {k}-fold over "
                      "the windows" + (f", its first {scheme['folds']} folds run" if "folds" in scheme else ""))
         notes += [f"window-kfold: with L = 1 (one window a capture) {twin} is the same method as {kept} (which "
                   "windows it takes and how they vote cannot matter): run once, reported for both"
-                  for twin, kept in window_twins(base).items()]
+                  for twin, kept in twins.items()]
     if "subject-id" in variants:
         entries = _subject_id_entries(protocol)
         if entries:
@@ -349,6 +355,8 @@ class AuditPlan:
     protocols: dict[str, Protocol]
     plans: dict[str, tuple[Plan, Path]]
     notes: list[str] = field(default_factory=list)
+    #: the window variant's entries left out as an earlier entry's twin (:func:`window_twins`)
+    twins: dict[str, str] = field(default_factory=dict)
 
     @property
     def n_tasks(self) -> int:
@@ -374,7 +382,8 @@ def plan_audit(protocol: Protocol, out: str | Path, *, k: int = 10, window_secon
     if "honest" not in protos:
         raise TouchbenchError("the audit needs the honest variant to measure inflation against")
     plans = {variant: plan_protocol(proto, Path(out) / variant)[0] for variant, proto in protos.items()}
-    return AuditPlan(protocols=protos, plans=plans, notes=notes)
+    twins = window_twins(_base_data(protocol)) if "window-kfold" in protos else {}
+    return AuditPlan(protocols=protos, plans=plans, notes=notes, twins=twins)
 
 
 def run_audit(protocol: Protocol, out: str | Path, *, jobs: int = 1, k: int = 10, window_seconds: float = 2.0,
@@ -395,7 +404,7 @@ def run_audit(protocol: Protocol, out: str | Path, *, jobs: int = 1, k: int = 10
         make_results_dir(folder)
         atomic_write_bytes(folder / "protocol.yaml", protos[variant].text.encode())
         res = run_plan(plan, folder, jobs=jobs, progress=progress, reuse=[*reuse, *folders.values()])
-        accs[variant] = (_window_accuracies(res.scores, protos[variant], protos["honest"], window_twins(_base_data(protocol)))
+        accs[variant] = (_window_accuracies(res.scores, protos[variant], protos["honest"], planned.twins)
                          if variant == "window-kfold" else _accuracies(res.scores))
         folders[variant] = folder
     rows = []
@@ -408,8 +417,7 @@ def run_audit(protocol: Protocol, out: str | Path, *, jobs: int = 1, k: int = 10
     if protocol.expected is not None:
         for r in protocol.expected.results:
             tol = r.tolerance if r.tolerance is not None else protocol.expected.tolerance
-            key = f"{protocol.features_label_of(list(r.features))} / {r.classifier}"  # as the results name it
-            published[key] = {"value": r.value, "tolerance": tol, "source": r.source or protocol.expected.source}
+            published[protocol.method_name_of(r)] = {"value": r.value, "tolerance": tol, "source": r.source or protocol.expected.source}
     table = pd.DataFrame(rows)
     if published and len(table):
         pub = table["method"].map(lambda m: published.get(m, {}).get("value", math.nan))

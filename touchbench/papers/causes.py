@@ -26,16 +26,9 @@ KIND_SHORT = {"measured": "cause measured", "ruled_out": "cause open, candidates
 def _tried(r: RuledOut, audit: dict[str, float]) -> str:
     where = f"`{r.command}`" if r.command is not None else r.source
     row = f"this row {r.row:g}; " if r.row is not None and f"{r.row:g}" not in r.gave else ""
-    return f"{r.tried} ({where}: {row}{r.gave}{_this_run(r, audit)})"
-
-
-def _this_run(r: RuledOut, audit: dict[str, float]) -> str:
-    """This run's figure of a candidate's audit variant (``audit``: variant -> accuracy %, of this row's
-    method), when it ran and rounds otherwise than the cited ``row``."""
-    fresh = audit.get(r.variant) if r.variant is not None else None
-    if fresh is None or r.row is None or round(fresh, 1) == round(r.row, 1):
-        return ""
-    return f"; this report's own audit gave {fresh:.1f} %"
+    fresh = r.this_run(audit)
+    this_run = f"; this report's own audit gave {fresh:.1f} %" if fresh is not None else ""
+    return f"{r.tried} ({where}: {row}{r.gave}{this_run})"
 
 
 def _text(kind: str, cause: Cause | None, scene: str | None, value: float, tolerance: float,

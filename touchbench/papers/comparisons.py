@@ -235,10 +235,10 @@ def _cited_audit(proto, out: Path) -> list[str]:
     that this report's audit rounds otherwise, one line each; [] when all agree."""
     figures, lines = audit_figures(proto, out), []
     for e in (proto.expected.results if proto.expected is not None and figures else []):
-        method = f"{proto.features_label_of(list(e.features))} / {e.classifier}"
+        method = proto.method_name_of(e)
         for r in (e.cause.ruled_out if e.cause is not None else []):
-            fresh = figures.get(method, {}).get(r.variant) if r.variant is not None else None
-            if fresh is not None and round(fresh, 1) != round(r.row, 1):
+            fresh = r.this_run(figures.get(method, {}))
+            if fresh is not None:
                 lines.append(f"- {method}, {r.variant}: the protocol cites {r.row:g} %, this audit gave {fresh:.1f} %")
     if not lines:
         return []

@@ -79,8 +79,8 @@ def _expected_rows(proto, scores: pd.DataFrame, preds: pd.DataFrame | None, out:
     audit = audit_figures(proto, out)
     for r, e in zip(rows, proto.expected.results):
         r["cell"] = e.source or ""
-        method = f"{proto.features_label_of(list(e.features))} / {e.classifier}"
-        r["kind"], r["cause"] = cause_cell(r["within"], e.cause, scene, e.value, r["tolerance"], audit.get(method))
+        r["kind"], r["cause"] = cause_cell(r["within"], e.cause, scene, e.value, r["tolerance"],
+                                           audit.get(proto.method_name_of(e)))
     return rows
 
 

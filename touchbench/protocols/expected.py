@@ -69,6 +69,12 @@ class RuledOut(_Model):
                                          "the command that ran the audit (touchbench audit PROTOCOL)")
         return self
 
+    def this_run(self, audit: dict[str, float]) -> float | None:
+        """This run's figure of the audit ``variant`` this candidate cites (``audit``: variant ->
+        accuracy % of the row's method), where it rounds otherwise than the cited ``row``; else None."""
+        fresh = audit.get(self.variant) if self.variant is not None and self.row is not None else None
+        return fresh if fresh is not None and round(fresh, 1) != round(self.row, 1) else None
+
     def excludes(self, value: float, tolerance: float) -> bool:
         """Whether this candidate is excluded for a paper number ``value``: a run of the row that left
         it outside ``tolerance``."""

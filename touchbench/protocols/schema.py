@@ -409,6 +409,10 @@ class Protocol(_Model):
                   if c.names == list(names) or c.label == key}
         return labels.pop() if len(labels) == 1 else key
 
+    def method_name_of(self, result) -> str:
+        """The name reports give the method of an ``expected`` result (``features / classifier``)."""
+        return f"{self.features_label_of(list(result.features))} / {result.classifier}"
+
     def best_label(self, best: ExpectedBest) -> str:
         """The label of the classifier entry that ``best`` (an entry of
         ``expected.best_parameters``) says is the best, e.g. ``cnn(L=30)``."""
